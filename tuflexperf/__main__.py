@@ -1,0 +1,3 @@
+from tuflexperf.cli import main
+
+main()

@@ -1,0 +1,249 @@
+"""Schemas and loaders for the case (requirement file), aircraft and propulsion files (SPEC 4)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import Field, model_validator
+
+from tuflexperf.errors import InputError
+from tuflexperf.io.yamlio import StrictModel, load_model
+from tuflexperf.models.aircraft import Aircraft, TakeoffConfig
+from tuflexperf.models.atmosphere import isa_density_kg_m3
+from tuflexperf.models.thrust import POLY22_TERMS, Engine, Propulsion
+
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+Fraction = Annotated[float, Field(ge=0, le=1)]
+
+
+# --- aircraft -------------------------------------------------------------------------------
+class TakeoffSchema(StrictModel):
+    cl_ground: NonNegative
+    rolling_friction: Annotated[float, Field(ge=0, le=1)] = 0.04
+    liftoff_speed_m_s: Positive | None = None
+    cd0_ground: Positive | None = None
+    k_ground: NonNegative | None = None
+
+
+class AircraftSchema(StrictModel):
+    name: str
+    mass_kg: Positive
+    wing_area_m2: Positive
+    cd0: Positive
+    k: Positive
+    cl_max: Positive
+    takeoff: TakeoffSchema
+
+
+# --- propulsion -----------------------------------------------------------------------------
+class Poly22Schema(StrictModel):
+    p00: float
+    p10: float
+    p01: float
+    p20: float
+    p11: float
+    p02: float
+
+
+class EngineSchema(StrictModel):
+    name: Annotated[str, Field(min_length=1)]
+    coefficients: Poly22Schema
+    r2: float | None = None
+    rmse_n: NonNegative | None = None
+    standard_errors: Poly22Schema | None = None
+    n_points: Annotated[int, Field(ge=0)] | None = None
+
+
+class PropulsionSchema(StrictModel):
+    name: str
+    model: Literal["poly22"]
+    tested_airspeed_m_s: Annotated[list[float], Field(min_length=2, max_length=2)]
+    delay_s: NonNegative = 0.0
+    reference_density_kg_m3: Positive | None = None
+    throttle_unit: Literal["fraction", "percent"] = "fraction"
+    engines: Annotated[list[EngineSchema], Field(min_length=1)]
+    source: dict[str, Any] | None = None  # free-form provenance written by `fit`
+
+    @model_validator(mode="after")
+    def _check(self) -> PropulsionSchema:
+        low, high = self.tested_airspeed_m_s
+        if not low < high:
+            raise ValueError(f"tested_airspeed_m_s: low {low} must be below high {high}")
+        names = [engine.name for engine in self.engines]
+        if len(set(names)) != len(names):
+            raise ValueError(f"engines: duplicate engine names {names}")
+        return self
+
+
+# --- case -----------------------------------------------------------------------------------
+class AtmosphereSchema(StrictModel):
+    altitude_m: Annotated[float, Field(ge=-1000, le=20000)] = 0.0
+    temperature_offset_k: Annotated[float, Field(ge=-80, le=80)] = 0.0
+
+
+class TakeoffRequirement(StrictModel):
+    max_ground_roll_m: Positive
+
+
+class EnvelopeRequirement(StrictModel):
+    min_airspeed_m_s: Positive
+    max_airspeed_m_s: Positive
+    max_trim_throttle: Fraction = 1.0
+
+    @model_validator(mode="after")
+    def _check(self) -> EnvelopeRequirement:
+        if not self.min_airspeed_m_s < self.max_airspeed_m_s:
+            raise ValueError(
+                f"min_airspeed_m_s ({self.min_airspeed_m_s}) must be below "
+                f"max_airspeed_m_s ({self.max_airspeed_m_s})"
+            )
+        return self
+
+
+class OeiRequirement(StrictModel):
+    dead_engine: Literal["windmilling", "zero"] = "windmilling"
+    max_throttle: Fraction = 1.0
+
+
+class EnduranceRequirement(StrictModel):
+    throttle: Fraction
+    min_flight_time_min: Positive
+
+
+class Requirements(StrictModel):
+    takeoff: TakeoffRequirement | None = None
+    envelope: EnvelopeRequirement | None = None
+    oei: OeiRequirement | None = None
+    endurance: EnduranceRequirement | None = None
+
+
+class CaseSchema(StrictModel):
+    name: str
+    aircraft: str
+    propulsion: str
+    battery: str | None = None
+    atmosphere: AtmosphereSchema = AtmosphereSchema()
+    requirements: Requirements = Requirements()
+
+
+# --- loaded objects -------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Case:
+    """A loaded, validated case: the model objects plus the requirement blocks."""
+
+    name: str
+    path: Path
+    aircraft: Aircraft
+    propulsion: Propulsion
+    atmosphere: AtmosphereSchema
+    requirements: Requirements
+    aircraft_path: Path
+    propulsion_path: Path
+    battery_path: Path | None
+
+    @property
+    def density_kg_m3(self) -> float:
+        """ISA density at the case's altitude and temperature offset."""
+        return float(
+            isa_density_kg_m3(self.atmosphere.altitude_m, self.atmosphere.temperature_offset_k)
+        )
+
+
+def aircraft_from_schema(schema: AircraftSchema) -> Aircraft:
+    to = schema.takeoff
+    return Aircraft(
+        name=schema.name,
+        mass_kg=schema.mass_kg,
+        wing_area_m2=schema.wing_area_m2,
+        cd0=schema.cd0,
+        k=schema.k,
+        cl_max=schema.cl_max,
+        takeoff=TakeoffConfig(
+            cl_ground=to.cl_ground,
+            rolling_friction=to.rolling_friction,
+            liftoff_speed_m_s=to.liftoff_speed_m_s,
+            cd0_ground=to.cd0_ground,
+            k_ground=to.k_ground,
+        ),
+    )
+
+
+def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
+    scale = 100.0 if schema.throttle_unit == "percent" else 1.0
+    engines = tuple(
+        Engine(
+            name=e.name,
+            coefficients={term: getattr(e.coefficients, term) for term in POLY22_TERMS},
+            throttle_scale=scale,
+        )
+        for e in schema.engines
+    )
+    low, high = schema.tested_airspeed_m_s
+    return Propulsion(
+        name=schema.name,
+        engines=engines,
+        tested_airspeed_m_s=(low, high),
+        delay_s=schema.delay_s,
+        reference_density_kg_m3=schema.reference_density_kg_m3,
+        metadata={"source": schema.source} if schema.source else {},
+    )
+
+
+def load_aircraft(path: Path) -> Aircraft:
+    """Load and validate an aircraft file."""
+    return aircraft_from_schema(load_model(Path(path), AircraftSchema))
+
+
+def load_propulsion(path: Path) -> Propulsion:
+    """Load and validate a propulsion file."""
+    return propulsion_from_schema(load_model(Path(path), PropulsionSchema))
+
+
+def _resolve(case_path: Path, key: str, value: str) -> Path:
+    target = (case_path.parent / value).resolve()
+    if not target.is_file():
+        raise InputError(f"{case_path}: {key}: file not found: {value} (resolved to {target})")
+    return target
+
+
+def shipped_case_path() -> Path:
+    """The TU-Flex case shipped with the package (wheel) or the checkout (editable install)."""
+    here = Path(__file__).resolve().parent.parent
+    for candidate in (
+        here / "_shipped" / "requirements" / "tuflex.yaml",
+        here.parent / "requirements" / "tuflex.yaml",
+    ):
+        if candidate.is_file():
+            return candidate
+    raise InputError("the shipped TU-Flex case is missing from this installation; pass a CASE")
+
+
+def load_case(path: Path | str | None = None) -> Case:
+    """Load a requirement file and the aircraft/propulsion files it names (paths relative to it)."""
+    case_path = Path(path) if path is not None else shipped_case_path()
+    if case_path.is_dir():
+        raise InputError(f"{case_path}: is a directory, expected a requirement file (.yaml)")
+    schema = load_model(case_path, CaseSchema)
+    aircraft_path = _resolve(case_path, "aircraft", schema.aircraft)
+    propulsion_path = _resolve(case_path, "propulsion", schema.propulsion)
+    battery_path = _resolve(case_path, "battery", schema.battery) if schema.battery else None
+    aircraft = load_aircraft(aircraft_path)
+    propulsion = load_propulsion(propulsion_path)
+    case = Case(
+        name=schema.name,
+        path=case_path,
+        aircraft=aircraft,
+        propulsion=propulsion,
+        atmosphere=schema.atmosphere,
+        requirements=schema.requirements,
+        aircraft_path=aircraft_path,
+        propulsion_path=propulsion_path,
+        battery_path=battery_path,
+    )
+    if not math.isfinite(case.density_kg_m3) or case.density_kg_m3 <= 0:
+        raise InputError(f"{case_path}: atmosphere: gives no valid density")
+    return case

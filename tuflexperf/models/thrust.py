@@ -1,0 +1,120 @@
+"""Electric ducted fan thrust: the paper's 2x2 polynomial per engine and the n-engine sum.
+
+Paper section 4: ``T = p00 + p10 x + p01 v + p20 x^2 + p11 x v + p02 v^2`` with
+``x`` the throttle and ``v`` the airspeed in m/s (MATLAB ``fit(..., 'poly22')``).
+Every function takes floats, numpy arrays or CasADi symbols.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from tuflexperf.models._math import fmin
+
+POLY22_TERMS: tuple[str, ...] = ("p00", "p10", "p01", "p20", "p11", "p02")
+DeadEngineMode = Literal["windmilling", "zero"]
+
+
+def poly22(x: Any, v: Any, coefficients: Mapping[str, float]) -> Any:
+    """Evaluate ``p00 + p10 x + p01 v + p20 x^2 + p11 x v + p02 v^2`` (paper section 4)."""
+    c = coefficients
+    return (
+        c["p00"]
+        + c["p10"] * x
+        + c["p01"] * v
+        + c["p20"] * x * x
+        + c["p11"] * x * v
+        + c["p02"] * v * v
+    )
+
+
+@dataclass(frozen=True)
+class Engine:
+    """One fan's thrust model.
+
+    ``throttle_scale`` maps the interface throttle fraction to the variable the
+    coefficients were fitted against (1 for a fraction, 100 for percent).
+    """
+
+    name: str
+    coefficients: Mapping[str, float]
+    throttle_scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class Propulsion:
+    """The aircraft's engines and what their model is valid for.
+
+    ``tested_airspeed_m_s`` is the (low, high) airspeed range the model was
+    fitted on; beyond it the polynomial extrapolates. ``reference_density_kg_m3``
+    is the test day's density, or ``None`` when thrust is used as measured.
+    """
+
+    name: str
+    engines: tuple[Engine, ...]
+    tested_airspeed_m_s: tuple[float, float]
+    delay_s: float = 0.0
+    reference_density_kg_m3: float | None = None
+    metadata: Mapping[str, Any] = field(default_factory=dict)
+
+
+def density_ratio(propulsion: Propulsion, density_kg_m3: Any) -> Any:
+    """Thrust scale ``rho / rho_ref`` (1 when the model has no reference density)."""
+    if propulsion.reference_density_kg_m3 is None:
+        return 1.0
+    return density_kg_m3 / propulsion.reference_density_kg_m3
+
+
+def engine_thrust_n(
+    engine: Engine, throttle: Any, airspeed_m_s: Any, density_scale: Any = 1.0
+) -> Any:
+    """Thrust of one engine in N at ``throttle`` (fraction) and ``airspeed_m_s`` (m/s).
+
+    ``density_scale`` is ``rho / rho_ref`` (see :func:`density_ratio`).
+    """
+    return density_scale * poly22(throttle * engine.throttle_scale, airspeed_m_s, engine.coefficients)
+
+
+def windmilling_thrust_n(engine: Engine, airspeed_m_s: Any, density_scale: Any = 1.0) -> Any:
+    """A dead engine's contribution: ``min(T(0, V), 0)``, drag but never thrust (SPEC 3)."""
+    return fmin(engine_thrust_n(engine, 0.0, airspeed_m_s, density_scale), 0.0)
+
+
+def total_thrust_n(
+    propulsion: Propulsion,
+    throttle: Any | Sequence[Any],
+    airspeed_m_s: Any,
+    density_kg_m3: Any,
+    dead_engine: int | None = None,
+    dead_engine_mode: DeadEngineMode = "windmilling",
+) -> Any:
+    """Sum of all engines' thrust in N, optionally with engine ``dead_engine`` inoperative.
+
+    ``throttle`` is one value for all engines or a sequence with one per engine.
+    A ``windmilling`` dead engine adds its own ``min(T(0, V), 0)``; a ``zero`` one adds nothing.
+    """
+    engines = propulsion.engines
+    throttles = (
+        list(throttle)
+        if isinstance(throttle, (list, tuple))
+        else [throttle] * len(engines)
+    )
+    if len(throttles) != len(engines):
+        raise ValueError(f"{len(throttles)} throttles for {len(engines)} engines")
+    scale = density_ratio(propulsion, density_kg_m3)
+    total: Any = 0.0
+    for index, (engine, x) in enumerate(zip(engines, throttles, strict=True)):
+        if index == dead_engine:
+            if dead_engine_mode == "windmilling":
+                total = total + windmilling_thrust_n(engine, airspeed_m_s, scale)
+        else:
+            total = total + engine_thrust_n(engine, x, airspeed_m_s, scale)
+    return total
+
+
+def is_extrapolated(propulsion: Propulsion, airspeed_m_s: float) -> bool:
+    """True when ``airspeed_m_s`` lies outside the model's tested airspeed range."""
+    low, high = propulsion.tested_airspeed_m_s
+    return bool(airspeed_m_s < low - 1e-9 or airspeed_m_s > high + 1e-9)
