@@ -5,6 +5,7 @@ Exit codes (SPEC 5): 0 done / all met, 1 not met or not attainable, 2 bad input.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import sys
@@ -58,6 +59,164 @@ def fail_input(message: str) -> None:
 # ---- performance core: check, takeoff, trim, oei (issue 2) ---------------------------------
 
 
+def _fmt(value: float | None, digits: int = 3) -> str:
+    return "n/a" if value is None else f"{value:.{digits}f}"
+
+
+def _print_warnings(warnings: list[str]) -> None:
+    for line in warnings:
+        typer.echo(f"  note: {line}")
+
+
+@app.command()
+def check(
+    case_file: Path | None = typer.Argument(None, help="Requirement file (default: TU-Flex)."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Verify every requirement in the case: value, limit, margin, PASS/FAIL."""
+    from tuflexperf.analysis.requirements import check_case
+    from tuflexperf.io.case import load_case
+
+    case = load_case(case_file)
+    verdicts = check_case(case)
+    passed = all(v.passed for v in verdicts)
+    if as_json:
+        emit_json(
+            {
+                "case": case.name,
+                "case_file": str(case.path),
+                "passed": passed,
+                "results": [v.to_dict() for v in verdicts],
+            }
+        )
+    else:
+        typer.echo(f"{case.name}  ({case.path})")
+        header = f"{'requirement':<22}{'value':>10}{'limit':>10}{'unit':>10}{'margin':>10}  verdict"
+        typer.echo(header)
+        typer.echo("-" * len(header))
+        for v in verdicts:
+            typer.echo(
+                f"{v.name:<22}{_fmt(v.value):>10}{_fmt(v.limit):>10}{v.unit:>10}"
+                f"{_fmt(v.margin):>10}  {'PASS' if v.passed else 'FAIL'}"
+            )
+            typer.echo(f"  {v.reason}")
+            _print_warnings(v.details.get("warnings", []))
+        if not verdicts:
+            typer.echo("(the case states no requirements)")
+        typer.echo(f"overall: {'PASS' if passed else 'FAIL'}")
+    raise typer.Exit(0 if passed else 1)
+
+
+@app.command()
+def takeoff(case_file: Path | None = CaseOption, as_json: bool = JsonOption) -> None:
+    """Take-off ground roll at full throttle, from rest to lift-off speed."""
+    from tuflexperf.analysis.takeoff import solve_takeoff
+    from tuflexperf.io.case import load_case
+
+    case = load_case(case_file)
+    result = solve_takeoff(case)
+    requirement = case.requirements.takeoff
+    met = requirement is None or result.ground_roll_m <= requirement.max_ground_roll_m
+    if as_json:
+        payload = result.to_dict()
+        if requirement is not None:
+            payload["max_ground_roll_m"] = requirement.max_ground_roll_m
+            payload["passed"] = met
+        emit_json(payload)
+    else:
+        typer.echo(f"{case.name}: take-off at full throttle")
+        typer.echo(f"  ground roll     {result.ground_roll_m:8.2f} m")
+        typer.echo(f"  lift-off speed  {result.liftoff_speed_m_s:8.2f} m/s")
+        typer.echo(f"  time            {result.time_s:8.2f} s")
+        if requirement is not None:
+            typer.echo(
+                f"  runway limit    {requirement.max_ground_roll_m:8.2f} m  "
+                f"{'PASS' if met else 'FAIL'}"
+            )
+        _print_warnings(list(result.warnings))
+    raise typer.Exit(0 if met else 1)
+
+
+def _throttle_table(airspeeds: list[float], throttles: list[float | None]) -> None:
+    typer.echo(f"  {'airspeed m/s':>12}  {'throttle':>8}")
+    for v, x in zip(airspeeds, throttles, strict=True):
+        typer.echo(f"  {v:12.1f}  {'  > 1 (not attainable)' if x is None else f'{x:8.3f}'}")
+
+
+@app.command()
+def trim(
+    case_file: Path | None = CaseOption,
+    as_json: bool = JsonOption,
+    table: bool = typer.Option(False, "--table", help="Print the throttle at every airspeed."),
+) -> None:
+    """Least throttle for level flight at each airspeed of the envelope (0.5 m/s grid)."""
+    from tuflexperf.analysis.trim import solve_trim
+    from tuflexperf.io.case import load_case
+
+    case = load_case(case_file)
+    result = solve_trim(case)
+    data = result.to_dict()
+    limit = case.requirements.envelope.max_trim_throttle
+    met = result.all_feasible and result.max_throttle <= limit + 1e-12
+    if as_json:
+        emit_json({**data, "max_trim_throttle": limit, "passed": met})
+    else:
+        v = data["airspeed_m_s"]
+        typer.echo(f"{case.name}: trim over {v[0]:g}-{v[-1]:g} m/s ({len(v)} airspeeds)")
+        typer.echo(
+            f"  least throttle   {_fmt(result.min_throttle)} at "
+            f"{_fmt(result.airspeed_at_min_throttle_m_s, 1)} m/s"
+        )
+        typer.echo(f"  highest throttle {_fmt(result.max_throttle)} (limit {limit:g})")
+        if not result.all_feasible:
+            bad = result.unattainable_airspeed_m_s
+            typer.echo(f"  NOT ATTAINABLE at {min(bad):g}-{max(bad):g} m/s: needs > full throttle")
+        if table:
+            _throttle_table(v, data["throttle"])
+        _print_warnings(data["warnings"])
+    raise typer.Exit(0 if met else 1)
+
+
+@app.command()
+def oei(
+    case_file: Path | None = CaseOption,
+    as_json: bool = JsonOption,
+    dead_engine: str | None = typer.Option(
+        None, "--dead-engine", help="windmilling or zero (default: the case's oei block)."
+    ),
+) -> None:
+    """Level flight with one engine inoperative; each engine dead in turn, worse case."""
+    from tuflexperf.analysis.oei import solve_oei
+    from tuflexperf.io.case import load_case
+
+    if dead_engine is not None and dead_engine not in ("windmilling", "zero"):
+        fail_input(f"--dead-engine: must be windmilling or zero, got {dead_engine!r}")
+    case = load_case(case_file)
+    result = solve_oei(case, dead_engine)  # type: ignore[arg-type]
+    data = result.to_dict()
+    requirement = case.requirements.oei
+    limit = requirement.max_throttle if requirement is not None else 1.0
+    worst = result.critical
+    met = worst.min_throttle is not None and worst.min_throttle <= limit + 1e-12
+    if as_json:
+        emit_json({**data, "max_throttle": limit, "passed": met})
+    else:
+        typer.echo(f"{case.name}: one engine inoperative ({result.dead_engine_mode} dead engine)")
+        for c in result.cases:
+            span = c.level_flight_airspeed_range_m_s
+            typer.echo(
+                f"  {c.dead_engine} dead: least throttle {_fmt(c.min_throttle)} at "
+                f"{_fmt(c.airspeed_at_min_throttle_m_s, 1)} m/s; level flight "
+                + ("nowhere in the envelope" if span is None else f"{span[0]:g}-{span[1]:g} m/s")
+            )
+        typer.echo(
+            f"  worse case: {worst.dead_engine} dead, throttle {_fmt(worst.min_throttle)} "
+            f"(limit {limit:g})  {'PASS' if met else 'FAIL'}"
+        )
+        _print_warnings(data["warnings"])
+    raise typer.Exit(0 if met else 1)
+
+
 # ---- endurance (issue 3) -------------------------------------------------------------------
 
 
@@ -70,26 +229,39 @@ def fail_input(message: str) -> None:
 # ---- export (issue 6) ----------------------------------------------------------------------
 
 
+def _guarded(callback: Any) -> Any:
+    """Turn InputError into exit 2 and NotAttainable into exit 1, one line on stderr each."""
+
+    @functools.wraps(callback)
+    def run(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return callback(*args, **kwargs)
+        except InputError as exc:
+            sys.stderr.write(f"tuflexperf: error: {exc}\n")
+            raise typer.Exit(2) from None
+        except NotAttainable as exc:
+            sys.stderr.write(f"tuflexperf: not attainable: {exc}\n")
+            raise typer.Exit(1) from None
+
+    return run
+
+
+for _info in app.registered_commands:  # every command above, whichever section wrote it
+    _info.callback = _guarded(_info.callback)
+
+
 def main(argv: list[str] | None = None) -> None:
-    """Console entry point: usage errors and InputError become one line and exit 2."""
-    import click
+    """Console entry point: usage errors become one line on stderr and exit 2."""
+    from typer.exceptions import Abort, TyperException
 
     try:
-        code = app(args=argv, standalone_mode=False)
-    except click.exceptions.UsageError as exc:
-        flag = f"{exc.param.get_error_hint(exc.ctx)}: " if getattr(exc, "param", None) else ""
-        message = exc.format_message() if not flag else exc.format_message()
-        sys.stderr.write(f"tuflexperf: error: {message}\n")
-        sys.exit(2)
-    except click.exceptions.Abort:
+        code = app(args=argv, standalone_mode=False, prog_name="tuflexperf")
+    except Abort:
         sys.stderr.write("tuflexperf: aborted\n")
         sys.exit(130)
-    except InputError as exc:
-        sys.stderr.write(f"tuflexperf: error: {exc}\n")
-        sys.exit(2)
-    except NotAttainable as exc:
-        sys.stderr.write(f"tuflexperf: not attainable: {exc}\n")
-        sys.exit(1)
-    except click.exceptions.Exit as exc:
-        sys.exit(exc.exit_code)
+    except TyperException as exc:
+        if type(exc).__name__ == "NoArgsIsHelpError":
+            app(args=["--help"], prog_name="tuflexperf")
+        sys.stderr.write(f"tuflexperf: error: {exc.format_message()}\n")
+        sys.exit(getattr(exc, "exit_code", 2) or 2)
     sys.exit(code if isinstance(code, int) else 0)

@@ -1,0 +1,1 @@
+"""Performance analyses, each a CasADi problem built once per case and reused."""

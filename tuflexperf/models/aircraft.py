@@ -81,7 +81,9 @@ def liftoff_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
 def minimum_drag_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
     """Airspeed of least level-flight drag, ``sqrt(2W/(rho S) sqrt(k/cd0))`` (Anderson eq. 5.34)."""
     return sqrt(
-        2.0 * aircraft.weight_n / (density_kg_m3 * aircraft.wing_area_m2)
+        2.0
+        * aircraft.weight_n
+        / (density_kg_m3 * aircraft.wing_area_m2)
         * sqrt(aircraft.k / aircraft.cd0)
     )
 

@@ -20,23 +20,27 @@ GAS_CONSTANT_J_KG_K = 287.05287
 G0_M_S2 = 9.80665
 _EXPONENT = G0_M_S2 / (GAS_CONSTANT_J_KG_K * LAPSE_RATE_K_M)  # 5.25588
 _TROPOPAUSE_TEMPERATURE_K = SEA_LEVEL_TEMPERATURE_K - LAPSE_RATE_K_M * TROPOPAUSE_M
-_TROPOPAUSE_PRESSURE_PA = SEA_LEVEL_PRESSURE_PA * (
-    _TROPOPAUSE_TEMPERATURE_K / SEA_LEVEL_TEMPERATURE_K
-) ** _EXPONENT
+_TROPOPAUSE_PRESSURE_PA = (
+    SEA_LEVEL_PRESSURE_PA * (_TROPOPAUSE_TEMPERATURE_K / SEA_LEVEL_TEMPERATURE_K) ** _EXPONENT
+)
 
 
 def isa_temperature_k(altitude_m: Any, temperature_offset_k: Any = 0.0) -> Any:
     """Static air temperature in K at ``altitude_m`` (m) with an offset (K) from the standard day."""
-    return SEA_LEVEL_TEMPERATURE_K - LAPSE_RATE_K_M * fmin(altitude_m, TROPOPAUSE_M) + (
-        temperature_offset_k
+    return (
+        SEA_LEVEL_TEMPERATURE_K
+        - LAPSE_RATE_K_M * fmin(altitude_m, TROPOPAUSE_M)
+        + (temperature_offset_k)
     )
 
 
 def isa_pressure_pa(altitude_m: Any) -> Any:
     """Static pressure in Pa at ``altitude_m`` (m); the temperature offset does not change it."""
-    troposphere = SEA_LEVEL_PRESSURE_PA * (
-        1.0 - LAPSE_RATE_K_M * fmin(altitude_m, TROPOPAUSE_M) / SEA_LEVEL_TEMPERATURE_K
-    ) ** _EXPONENT
+    troposphere = (
+        SEA_LEVEL_PRESSURE_PA
+        * (1.0 - LAPSE_RATE_K_M * fmin(altitude_m, TROPOPAUSE_M) / SEA_LEVEL_TEMPERATURE_K)
+        ** _EXPONENT
+    )
     stratosphere = _TROPOPAUSE_PRESSURE_PA * exp(
         -G0_M_S2 * (altitude_m - TROPOPAUSE_M) / (GAS_CONSTANT_J_KG_K * _TROPOPAUSE_TEMPERATURE_K)
     )

@@ -74,7 +74,9 @@ def engine_thrust_n(
 
     ``density_scale`` is ``rho / rho_ref`` (see :func:`density_ratio`).
     """
-    return density_scale * poly22(throttle * engine.throttle_scale, airspeed_m_s, engine.coefficients)
+    return density_scale * poly22(
+        throttle * engine.throttle_scale, airspeed_m_s, engine.coefficients
+    )
 
 
 def windmilling_thrust_n(engine: Engine, airspeed_m_s: Any, density_scale: Any = 1.0) -> Any:
@@ -96,11 +98,7 @@ def total_thrust_n(
     A ``windmilling`` dead engine adds its own ``min(T(0, V), 0)``; a ``zero`` one adds nothing.
     """
     engines = propulsion.engines
-    throttles = (
-        list(throttle)
-        if isinstance(throttle, (list, tuple))
-        else [throttle] * len(engines)
-    )
+    throttles = list(throttle) if isinstance(throttle, (list, tuple)) else [throttle] * len(engines)
     if len(throttles) != len(engines):
         raise ValueError(f"{len(throttles)} throttles for {len(engines)} engines")
     scale = density_ratio(propulsion, density_kg_m3)

@@ -1,0 +1,119 @@
+"""One engine inoperative: level flight on the remaining engine(s) (paper section 4).
+
+Each engine in turn is the dead one (SPEC 3): a ``windmilling`` dead engine adds
+``min(T(0, V), 0)`` of its own model, a ``zero`` one nothing. For each case the
+least throttle over the envelope grid is found; the worse case (the higher least
+throttle) is reported.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tuflexperf.analysis.level_flight import (
+    LeastThrottleSolver,
+    airspeed_grid,
+    least_throttle_solver,
+)
+from tuflexperf.analysis.trim import envelope_of, extrapolation_note
+from tuflexperf.errors import InputError
+from tuflexperf.io.case import Case
+from tuflexperf.models.aircraft import level_flight_drag_n
+from tuflexperf.models.thrust import DeadEngineMode, total_thrust_n
+
+_cache: dict[Any, LeastThrottleSolver] = {}
+
+
+def oei_solver(case: Case, dead_engine: int, mode: DeadEngineMode) -> LeastThrottleSolver:
+    """Least-throttle solver with engine ``dead_engine`` out, built once per case."""
+    key = (repr(case.aircraft), repr(case.propulsion), case.density_kg_m3, dead_engine, mode)
+    if key not in _cache:
+        aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
+
+        def excess(throttle: Any, airspeed: Any) -> Any:
+            thrust = total_thrust_n(propulsion, throttle, airspeed, rho, dead_engine, mode)
+            return thrust - level_flight_drag_n(aircraft, airspeed, rho)
+
+        _cache[key] = least_throttle_solver(excess)
+    return _cache[key]
+
+
+@dataclass(frozen=True)
+class DeadEngineCase:
+    dead_engine: str
+    airspeed_m_s: np.ndarray
+    throttle: np.ndarray  # NaN where level flight is not attainable
+
+    @property
+    def min_throttle(self) -> float | None:
+        finite = self.throttle[np.isfinite(self.throttle)]
+        return float(finite.min()) if finite.size else None
+
+    @property
+    def airspeed_at_min_throttle_m_s(self) -> float | None:
+        if self.min_throttle is None:
+            return None
+        return float(self.airspeed_m_s[np.nanargmin(self.throttle)])
+
+    @property
+    def level_flight_airspeed_range_m_s(self) -> list[float] | None:
+        feasible = self.airspeed_m_s[np.isfinite(self.throttle)]
+        return [float(feasible.min()), float(feasible.max())] if feasible.size else None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "dead_engine": self.dead_engine,
+            "min_throttle": self.min_throttle,
+            "airspeed_at_min_throttle_m_s": self.airspeed_at_min_throttle_m_s,
+            "level_flight_airspeed_range_m_s": self.level_flight_airspeed_range_m_s,
+            "airspeed_m_s": [float(v) for v in self.airspeed_m_s],
+            "throttle": [float(x) if np.isfinite(x) else None for x in self.throttle],
+        }
+
+
+@dataclass(frozen=True)
+class OeiResult:
+    dead_engine_mode: str
+    cases: tuple[DeadEngineCase, ...]
+    extrapolated: bool
+    warnings: tuple[str, ...]
+
+    @property
+    def critical(self) -> DeadEngineCase:
+        """The worse case: unattainable first, else the higher least throttle."""
+
+        def badness(c: DeadEngineCase) -> float:
+            return np.inf if c.min_throttle is None else c.min_throttle
+
+        return max(self.cases, key=badness)
+
+    def to_dict(self) -> dict[str, Any]:
+        worst = self.critical
+        return {
+            "min_throttle": worst.min_throttle,
+            "airspeed_at_min_throttle_m_s": worst.airspeed_at_min_throttle_m_s,
+            "level_flight_airspeed_range_m_s": worst.level_flight_airspeed_range_m_s,
+            "critical_dead_engine": worst.dead_engine,
+            "dead_engine_mode": self.dead_engine_mode,
+            "cases": [c.to_dict() for c in self.cases],
+            "extrapolated": self.extrapolated,
+            "warnings": list(self.warnings),
+        }
+
+
+def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
+    """Level flight with each engine dead in turn over the case's envelope grid."""
+    if len(case.propulsion.engines) < 2:
+        raise InputError(f"{case.propulsion_path}: engines: OEI needs at least two engines")
+    if mode is None:
+        mode = case.requirements.oei.dead_engine if case.requirements.oei else "windmilling"
+    speeds = airspeed_grid(*envelope_of(case))
+    cases = tuple(
+        DeadEngineCase(engine.name, speeds, oei_solver(case, index, mode)(speeds))
+        for index, engine in enumerate(case.propulsion.engines)
+    )
+    extrapolated, warnings = extrapolation_note(case, speeds)
+    return OeiResult(mode, cases, extrapolated, tuple(warnings))

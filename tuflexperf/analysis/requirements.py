@@ -1,0 +1,151 @@
+"""Requirement verdicts: every requirement block present in the case -> value, limit, margin, PASS/FAIL.
+
+Margins are signed so that positive means met: ``limit - value`` for upper
+limits (ground roll, throttle), ``value - limit`` for lower limits (endurance).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from tuflexperf.errors import NotAttainable
+from tuflexperf.io.case import Case
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One requirement: ``value`` is ``None`` when the analysis found it not attainable."""
+
+    name: str
+    value: float | None
+    limit: float
+    unit: str
+    kind: str  # "max" (value <= limit) or "min" (value >= limit)
+    reason: str = ""
+    details: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def margin(self) -> float | None:
+        if self.value is None:
+            return None
+        return self.limit - self.value if self.kind == "max" else self.value - self.limit
+
+    @property
+    def passed(self) -> bool:
+        return self.margin is not None and self.margin >= -1e-12
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "value": self.value,
+            "limit": self.limit,
+            "unit": self.unit,
+            "margin": self.margin,
+            "passed": self.passed,
+            "reason": self.reason,
+            **self.details,
+        }
+
+
+def _takeoff(case: Case) -> Verdict:
+    from tuflexperf.analysis.takeoff import solve_takeoff
+
+    limit = case.requirements.takeoff.max_ground_roll_m
+    try:
+        result = solve_takeoff(case)
+    except NotAttainable as exc:
+        return Verdict("takeoff_ground_roll", None, limit, "m", "max", str(exc))
+    return Verdict(
+        "takeoff_ground_roll",
+        result.ground_roll_m,
+        limit,
+        "m",
+        "max",
+        f"lift-off at {result.liftoff_speed_m_s:.1f} m/s after {result.time_s:.1f} s",
+        {"warnings": list(result.warnings)},
+    )
+
+
+def _trim(case: Case) -> Verdict:
+    from tuflexperf.analysis.trim import solve_trim
+
+    envelope = case.requirements.envelope
+    result = solve_trim(case)
+    span = f"{envelope.min_airspeed_m_s:g}-{envelope.max_airspeed_m_s:g} m/s"
+    if not result.all_feasible:
+        bad = result.unattainable_airspeed_m_s
+        reason = (
+            f"level flight needs more than full throttle at {min(bad):g}-{max(bad):g} m/s "
+            f"({len(bad)} of {len(result.airspeed_m_s)} grid airspeeds)"
+        )
+    else:
+        reason = (
+            f"highest trim throttle over {span}; least {result.min_throttle:.3f} "
+            f"at {result.airspeed_at_min_throttle_m_s:g} m/s"
+        )
+    return Verdict(
+        "trim_throttle_max",
+        result.max_throttle,
+        envelope.max_trim_throttle,
+        "fraction",
+        "max",
+        reason,
+        {"min_throttle": result.min_throttle, "warnings": list(result.warnings)},
+    )
+
+
+def _oei(case: Case) -> Verdict:
+    from tuflexperf.analysis.oei import solve_oei
+
+    requirement = case.requirements.oei
+    result = solve_oei(case, requirement.dead_engine)
+    worst = result.critical
+    if worst.min_throttle is None:
+        reason = f"no level flight anywhere in the envelope with {worst.dead_engine} dead"
+    else:
+        low, high = worst.level_flight_airspeed_range_m_s
+        reason = (
+            f"{worst.dead_engine} dead ({requirement.dead_engine}): least throttle at "
+            f"{worst.airspeed_at_min_throttle_m_s:g} m/s, level flight {low:g}-{high:g} m/s"
+        )
+    return Verdict(
+        "oei_min_throttle",
+        worst.min_throttle,
+        requirement.max_throttle,
+        "fraction",
+        "max",
+        reason,
+        {"warnings": list(result.warnings)},
+    )
+
+
+def _endurance(case: Case) -> Verdict:
+    from tuflexperf.analysis.endurance import solve_endurance
+
+    requirement = case.requirements.endurance
+    try:
+        result = solve_endurance(case, requirement.throttle)
+    except NotAttainable as exc:
+        return Verdict(
+            "flight_endurance", None, requirement.min_flight_time_min, "min", "min", str(exc)
+        )
+    data = result.to_dict()
+    return Verdict(
+        "flight_endurance",
+        data["flight_endurance_min"],
+        requirement.min_flight_time_min,
+        "min",
+        "min",
+        f"at throttle {requirement.throttle:g}, {data['airspeed_m_s']:.1f} m/s, "
+        f"{data['electrical_power_w']:.0f} W per fan",
+    )
+
+
+CHECKS = {"takeoff": _takeoff, "envelope": _trim, "oei": _oei, "endurance": _endurance}
+
+
+def check_case(case: Case) -> list[Verdict]:
+    """Verdicts for every requirement block present in ``case``, in the file's order."""
+    present = [name for name in CHECKS if getattr(case.requirements, name) is not None]
+    return [CHECKS[name](case) for name in present]

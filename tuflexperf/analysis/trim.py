@@ -1,0 +1,125 @@
+"""Minimum-throttle trim over the flight envelope (paper section 4, Fig. 18).
+
+At each airspeed of the envelope grid: the least throttle, equal on all engines,
+with total thrust >= level-flight drag (SPEC 3). ``None`` where more than full
+throttle would be needed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tuflexperf.analysis.level_flight import (
+    LeastThrottleSolver,
+    airspeed_grid,
+    least_throttle_solver,
+)
+from tuflexperf.errors import InputError
+from tuflexperf.io.case import Case
+from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
+from tuflexperf.models.thrust import total_thrust_n
+
+_cache: dict[Any, LeastThrottleSolver] = {}
+
+
+def envelope_of(case: Case) -> tuple[float, float]:
+    """The case's envelope (min, max airspeed in m/s); trim and OEI need it."""
+    envelope = case.requirements.envelope
+    if envelope is None:
+        raise InputError(
+            f"{case.path}: requirements.envelope: missing; trim and OEI need "
+            "min_airspeed_m_s and max_airspeed_m_s"
+        )
+    return envelope.min_airspeed_m_s, envelope.max_airspeed_m_s
+
+
+def extrapolation_note(case: Case, airspeeds_m_s: np.ndarray) -> tuple[bool, list[str]]:
+    """Whether airspeeds leave the thrust model's tested range, and the warning saying so."""
+    low, high = case.propulsion.tested_airspeed_m_s
+    outside = (airspeeds_m_s < low - 1e-9) | (airspeeds_m_s > high + 1e-9)
+    if not outside.any():
+        return False, []
+    beyond = airspeeds_m_s[outside]
+    return True, [
+        f"thrust model extrapolated at {beyond.min():g}-{beyond.max():g} m/s "
+        f"(tested {low:g}-{high:g} m/s)"
+    ]
+
+
+def trim_solver(case: Case) -> LeastThrottleSolver:
+    """Least-throttle solver for level flight on all engines, built once per case."""
+    key = (repr(case.aircraft), repr(case.propulsion), case.density_kg_m3)
+    if key not in _cache:
+        aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
+
+        def excess(throttle: Any, airspeed: Any) -> Any:
+            return total_thrust_n(propulsion, throttle, airspeed, rho) - level_flight_drag_n(
+                aircraft, airspeed, rho
+            )
+
+        _cache[key] = least_throttle_solver(excess)
+    return _cache[key]
+
+
+@dataclass(frozen=True)
+class TrimResult:
+    airspeed_m_s: np.ndarray
+    throttle: np.ndarray  # NaN where not attainable
+    stall_speed_m_s: float
+    extrapolated: bool
+    warnings: tuple[str, ...]
+
+    @property
+    def all_feasible(self) -> bool:
+        return bool(np.all(np.isfinite(self.throttle)))
+
+    @property
+    def min_throttle(self) -> float | None:
+        finite = self.throttle[np.isfinite(self.throttle)]
+        return float(finite.min()) if finite.size else None
+
+    @property
+    def airspeed_at_min_throttle_m_s(self) -> float | None:
+        if self.min_throttle is None:
+            return None
+        return float(self.airspeed_m_s[np.nanargmin(self.throttle)])
+
+    @property
+    def max_throttle(self) -> float | None:
+        """Highest trim throttle over the envelope; ``None`` if some airspeed is unattainable."""
+        return float(self.throttle.max()) if self.all_feasible else None
+
+    @property
+    def unattainable_airspeed_m_s(self) -> list[float]:
+        return [float(v) for v in self.airspeed_m_s[~np.isfinite(self.throttle)]]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "airspeed_m_s": [float(v) for v in self.airspeed_m_s],
+            "throttle": [float(x) if np.isfinite(x) else None for x in self.throttle],
+            "min_throttle": self.min_throttle,
+            "airspeed_at_min_throttle_m_s": self.airspeed_at_min_throttle_m_s,
+            "max_throttle": self.max_throttle,
+            "all_feasible": self.all_feasible,
+            "unattainable_airspeed_m_s": self.unattainable_airspeed_m_s,
+            "stall_speed_m_s": self.stall_speed_m_s,
+            "extrapolated": self.extrapolated,
+            "warnings": list(self.warnings),
+        }
+
+
+def solve_trim(case: Case) -> TrimResult:
+    """Least level-flight throttle at every airspeed of the case's envelope grid."""
+    v_min, v_max = envelope_of(case)
+    speeds = airspeed_grid(v_min, v_max)
+    throttle = trim_solver(case)(speeds)
+    extrapolated, warnings = extrapolation_note(case, speeds)
+    stall = float(stall_speed_m_s(case.aircraft, case.density_kg_m3))
+    if v_min < stall:
+        warnings.append(
+            f"envelope starts at {v_min:g} m/s, below the stall speed {stall:.1f} m/s (CL > cl_max)"
+        )
+    return TrimResult(speeds, throttle, stall, extrapolated, tuple(warnings))
