@@ -1,4 +1,4 @@
-"""Requirement verdicts: every requirement block present in the case -> value, limit, margin, PASS/FAIL.
+"""Requirement verdicts: each requirement block in the case -> value, limit, margin, PASS/FAIL.
 
 Margins are signed so that positive means met: ``limit - value`` for upper
 limits (ground roll, throttle), ``value - limit`` for lower limits (endurance).

@@ -26,7 +26,7 @@ _TROPOPAUSE_PRESSURE_PA = (
 
 
 def isa_temperature_k(altitude_m: Any, temperature_offset_k: Any = 0.0) -> Any:
-    """Static air temperature in K at ``altitude_m`` (m) with an offset (K) from the standard day."""
+    """Static air temperature in K at ``altitude_m`` (m), offset by ``temperature_offset_k``."""
     return (
         SEA_LEVEL_TEMPERATURE_K
         - LAPSE_RATE_K_M * fmin(altitude_m, TROPOPAUSE_M)
