@@ -227,6 +227,26 @@ def oei(
 
 
 # ---- export (issue 6) ----------------------------------------------------------------------
+@app.command("export")
+def export_command(
+    case_file: Path | None = CaseOption,
+    formats: str = typer.Option(
+        "c,casadi,json", "--format", help="Comma list of c, casadi, json (default: all three)."
+    ),
+    out: Path = typer.Option(..., "--out", help="Directory to write the model files into."),
+    as_json: bool = JsonOption,
+) -> None:
+    """The thrust model for simulation and flight software: CasADi functions, C99, JSON."""
+    from tuflexperf.export import export_model, parse_formats
+
+    result = export_model(case_file, parse_formats(formats), out)
+    if as_json:
+        emit_json(result.as_dict())
+        return
+    prop = result.model.propulsion
+    typer.echo(f"{prop.name}: {result.model.n_engines} engines, delay {prop.delay_s:g} s")
+    for path in result.files:
+        typer.echo(f"  wrote {path}")
 
 
 def _guarded(callback: Any) -> Any:

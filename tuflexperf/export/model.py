@@ -1,0 +1,312 @@
+"""The exported thrust model: what it is, where it came from, its CasADi functions and its inverse.
+
+Everything the exporters write (CasADi, C, JSON) is derived here from the one physics code path,
+:func:`tuflexperf.models.thrust.engine_thrust_n` / :func:`~tuflexperf.models.thrust.total_thrust_n`
+(the paper's poly22 surfaces, section 4), evaluated on CasADi symbols where a formula is needed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tuflexperf.io.case import PropulsionSchema, load_case, propulsion_from_schema
+from tuflexperf.io.yamlio import load_model
+from tuflexperf.models._math import fmin, sqrt, where
+from tuflexperf.models.thrust import (
+    POLY22_TERMS,
+    Propulsion,
+    density_ratio,
+    engine_thrust_n,
+    total_thrust_n,
+)
+
+_INF = float("inf")
+
+#: What a user of the exported model must be told about its range of validity.
+EXTRAPOLATION_WARNING = (
+    "The polynomial was fitted on wind-tunnel data over the tested airspeed range only; "
+    "outside it (e.g. the upper flight envelope) thrust is an extrapolation, not a measurement. "
+    "Throttle outside [0, 1] is outside the model."
+)
+
+
+@dataclass(frozen=True)
+class SourceFile:
+    """A file the exported model was built from, with its sha256 (provenance)."""
+
+    role: str
+    path: Path
+    sha256: str
+
+
+@dataclass(frozen=True)
+class ExportModel:
+    """A propulsion model ready for export.
+
+    ``propulsion`` is the physics object every formula is evaluated from; ``schema`` keeps what only
+    the file carries (throttle unit, per-engine fit statistics, free-form ``source`` provenance).
+    """
+
+    propulsion: Propulsion
+    schema: PropulsionSchema
+    files: tuple[SourceFile, ...]
+
+    @property
+    def n_engines(self) -> int:
+        """Number of engines."""
+        return len(self.propulsion.engines)
+
+    @property
+    def throttle_scale(self) -> float:
+        """Factor from the interface throttle fraction to the coefficients' throttle variable."""
+        return float(self.propulsion.engines[0].throttle_scale)
+
+    @property
+    def propulsion_sha256(self) -> str:
+        """sha256 of the propulsion file."""
+        return next(f.sha256 for f in self.files if f.role == "propulsion")
+
+
+def sha256_of(path: Path) -> str:
+    """Hex sha256 of a file's bytes."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def load_export_model(case_path: Path | str | None = None) -> ExportModel:
+    """Load and validate a case (default: the shipped TU-Flex case) and describe its propulsion.
+
+    Raises :class:`~tuflexperf.errors.InputError` (exit 2) on any bad input.
+    """
+    case = load_case(case_path)
+    schema = load_model(case.propulsion_path, PropulsionSchema)
+    files = (
+        SourceFile("case", case.path.resolve(), sha256_of(case.path)),
+        SourceFile("propulsion", case.propulsion_path, sha256_of(case.propulsion_path)),
+    )
+    return ExportModel(propulsion=propulsion_from_schema(schema), schema=schema, files=files)
+
+
+def model_from_propulsion_file(path: Path | str) -> ExportModel:
+    """An :class:`ExportModel` straight from a propulsion file (no case), for tests and scripts."""
+    path = Path(path).resolve()
+    schema = load_model(path, PropulsionSchema)
+    return ExportModel(
+        propulsion=propulsion_from_schema(schema),
+        schema=schema,
+        files=(SourceFile("propulsion", path, sha256_of(path)),),
+    )
+
+
+# --- CasADi functions from the physics code ---------------------------------------------------
+def thrust_function(propulsion: Propulsion) -> Any:
+    """CasADi ``tfp_thrust(throttle[n], airspeed_m_s, density_kg_m3) -> (thrust_n[n], total)``.
+
+    Built by evaluating :func:`engine_thrust_n` and :func:`total_thrust_n` on SX symbols, so it
+    is the package's model itself, not a re-typed polynomial. Throttle is a fraction per engine,
+    thrust in N, scaled by ``rho / reference_density_kg_m3`` where the model has one (SPEC 3).
+    """
+    import casadi as ca
+
+    n = len(propulsion.engines)
+    throttle = ca.SX.sym("throttle", n)
+    airspeed = ca.SX.sym("airspeed_m_s")
+    density = ca.SX.sym("density_kg_m3")
+    scale = density_ratio(propulsion, density)
+    per_engine = ca.vertcat(
+        *[
+            engine_thrust_n(engine, throttle[i], airspeed, scale)
+            for i, engine in enumerate(propulsion.engines)
+        ]
+    )
+    total = total_thrust_n(propulsion, [throttle[i] for i in range(n)], airspeed, density)
+    return ca.Function(
+        "tfp_thrust",
+        [throttle, airspeed, density],
+        [per_engine, total],
+        ["throttle", "airspeed_m_s", "density_kg_m3"],
+        ["thrust_n", "total_thrust_n"],
+    )
+
+
+def _common_throttle_quadratic(propulsion: Propulsion) -> tuple[Any, Any, Any, Any, Any, Any]:
+    """Symbols ``(x, v, rho)`` and SX ``(a, b, c0)``: total thrust = ``a x^2 + b x + c0``.
+
+    ``x`` is the throttle fraction common to all engines. The coefficients are Taylor terms of
+    :func:`total_thrust_n` at ``x = 0`` (exact for a polynomial); a non-zero third derivative would
+    mean the model is not quadratic in throttle, and the closed-form inverse would be wrong.
+    """
+    import casadi as ca
+
+    x = ca.SX.sym("x")
+    v = ca.SX.sym("airspeed_m_s")
+    rho = ca.SX.sym("density_kg_m3")
+    total = total_thrust_n(propulsion, x, v, rho)
+    first = ca.jacobian(total, x)
+    second = ca.jacobian(first, x)
+    third = ca.simplify(ca.jacobian(second, x))
+    if not third.is_zero():
+        raise ValueError("total thrust is not quadratic in throttle; no closed-form inverse")
+
+    def at_zero(expr: Any) -> Any:
+        return ca.substitute(expr, x, ca.SX(0.0))
+
+    return x, v, rho, 0.5 * at_zero(second), at_zero(first), at_zero(total)
+
+
+def quadratic_coefficients(propulsion: Propulsion) -> dict[str, float]:
+    """Total thrust at a common throttle fraction ``x`` as a polynomial in ``x`` and ``v``.
+
+    ``total / s = qa x^2 + (qb0 + qb1 v) x + (qc0 + qc1 v + qc2 v^2)`` with ``s`` the density
+    ratio. Derived from the physics code (:func:`_common_throttle_quadratic`), evaluated at
+    ``s = 1``; used by the C inverse and the numpy reference.
+    """
+    import casadi as ca
+
+    _, v, rho, a, b, c0 = _common_throttle_quadratic(propulsion)
+    reference = propulsion.reference_density_kg_m3 or 1.0
+    a, b, c0 = (ca.substitute(e, rho, ca.SX(reference)) for e in (a, b, c0))
+    zero = ca.SX(0.0)
+
+    def value(expr: Any) -> float:
+        return float(ca.evalf(ca.substitute(expr, v, zero)))
+
+    return {
+        "qa": value(a),
+        "qb0": value(b),
+        "qb1": value(ca.jacobian(b, v)),
+        "qc0": value(c0),
+        "qc1": value(ca.jacobian(c0, v)),
+        "qc2": value(0.5 * ca.jacobian(ca.jacobian(c0, v), v)),
+    }
+
+
+def least_throttle_reaching(a: Any, b: Any, c: Any) -> tuple[Any, Any]:
+    """Least ``x`` in [0, 1] with ``a x^2 + b x + c >= 0``, and whether one exists.
+
+    Backend-neutral (floats, numpy arrays, CasADi SX). ``x = 0`` when ``c >= 0`` (idle suffices).
+    Otherwise ``f(0) < 0`` and the answer is the least root in (0, 1]: the roots come from the
+    cancellation-free form ``q = -(b + sign(b) sqrt(b^2 - 4ac)) / 2``, ``x = c / q`` and ``q / a``
+    (Press et al., Numerical Recipes, 3rd ed., section 5.6), which stays accurate as ``a -> 0``
+    (the linear case) and handles non-monotonic ``f`` (both roots are candidates). When no
+    throttle reaches it, ``x`` is the throttle of the most thrust in [0, 1] and ``reached`` is 0.
+    The generated C (:mod:`tuflexperf.export.c_code`) runs the same steps.
+    """
+    disc = b * b - 4.0 * a * c
+    root_disc = sqrt(where(disc > 0.0, disc, 0.0))
+    q = -0.5 * (b + where(b >= 0.0, root_disc, -root_disc))
+    r_near = where(q != 0.0, c / where(q != 0.0, q, 1.0), _INF)
+    r_far = where(a != 0.0, q / where(a != 0.0, a, 1.0), _INF)
+
+    def candidate(r: Any) -> Any:
+        return where(disc >= 0.0, where(r > 0.0, where(r <= 1.0, r, _INF), _INF), _INF)
+
+    root = fmin(candidate(r_near), candidate(r_far))
+    f_full = a + b + c
+    # most thrust in [0, 1]: the vertex of a concave f if inside, else the better end
+    vertex = -b / where(a != 0.0, 2.0 * a, 1.0)
+    best_end = where(f_full > c, 1.0, 0.0)
+    best = where(a < 0.0, where(vertex > 0.0, where(vertex < 1.0, vertex, best_end), best_end),
+                 best_end)
+    # f(1) >= 0 with no root <= 1 only happens by rounding when the demand is T(1) itself
+    throttle = where(c >= 0.0, 0.0, where(root <= 1.0, root, where(f_full >= 0.0, 1.0, best)))
+    reached = where(c >= 0.0, 1.0, where(root <= 1.0, 1.0, where(f_full >= 0.0, 1.0, 0.0)))
+    return throttle, reached
+
+
+def throttle_for_thrust(
+    propulsion: Propulsion, total_thrust_n_: Any, airspeed_m_s: Any, density_kg_m3: Any
+) -> tuple[Any, Any]:
+    """Least common throttle fraction whose total thrust reaches ``total_thrust_n_`` (numpy).
+
+    Returns ``(throttle, reached)``; see :func:`least_throttle_reaching`. Vectorised reference
+    for the exported C and CasADi inverses (same coefficients, same steps).
+    """
+    import numpy as np
+
+    q = quadratic_coefficients(propulsion)
+    v = np.asarray(airspeed_m_s, dtype=float)
+    s = np.asarray(density_ratio(propulsion, np.asarray(density_kg_m3, dtype=float)), dtype=float)
+    a = s * q["qa"]
+    b = s * (q["qb0"] + q["qb1"] * v)
+    c = s * (q["qc0"] + q["qc1"] * v + q["qc2"] * v * v) - np.asarray(total_thrust_n_, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        throttle, reached = least_throttle_reaching(a, b, c)
+    return np.asarray(throttle, dtype=float), np.asarray(reached, dtype=bool)
+
+
+def inverse_function(propulsion: Propulsion) -> Any:
+    """CasADi ``tfp_throttle_for_thrust(total_thrust_n, airspeed_m_s, density_kg_m3)``.
+
+    Outputs ``throttle`` (least common throttle fraction reaching the demand, or the throttle of
+    the most thrust when none does) and ``reached`` (1/0). The quadratic's coefficients are
+    derivatives of :func:`total_thrust_n` on SX symbols, so this is the physics code inverted.
+    """
+    import casadi as ca
+
+    _, v, rho, a, b, c0 = _common_throttle_quadratic(propulsion)
+    demand = ca.SX.sym("total_thrust_n")
+    throttle, reached = least_throttle_reaching(a, b, c0 - demand)
+    return ca.Function(
+        "tfp_throttle_for_thrust",
+        [demand, v, rho],
+        [throttle, reached],
+        ["total_thrust_n", "airspeed_m_s", "density_kg_m3"],
+        ["throttle", "reached"],
+    )
+
+
+# --- JSON description ----------------------------------------------------------------------------
+def model_description(model: ExportModel) -> dict[str, Any]:
+    """The model as a JSON-ready dict: coefficients, units, validity, delay, density, provenance."""
+    from tuflexperf import __version__ as version
+
+    prop = model.propulsion
+    engines = []
+    for engine, entry in zip(prop.engines, model.schema.engines, strict=True):
+        item: dict[str, Any] = {
+            "name": engine.name,
+            "coefficients": {t: float(engine.coefficients[t]) for t in POLY22_TERMS},
+        }
+        for key in ("r2", "rmse_n", "n_points"):
+            if getattr(entry, key) is not None:
+                item[key] = getattr(entry, key)
+        if entry.standard_errors is not None:
+            item["standard_errors"] = entry.standard_errors.model_dump()
+        engines.append(item)
+    low, high = prop.tested_airspeed_m_s
+    source: Mapping[str, Any] | None = model.schema.source
+    return {
+        "format": "tuflexperf-thrust-model",
+        "format_version": 1,
+        "generator": f"tuflexperf {version}",
+        "name": prop.name,
+        "model": "poly22",
+        "equation": (
+            "thrust_n = s * (p00 + p10*x + p01*v + p20*x^2 + p11*x*v + p02*v^2), "
+            "x = throttle * throttle_scale, v = airspeed_m_s, "
+            "s = density_kg_m3 / reference_density_kg_m3 (1 without a reference density)"
+        ),
+        "throttle_unit": model.schema.throttle_unit,
+        "throttle_scale": model.throttle_scale,
+        "throttle_interface": "fraction in [0, 1] per engine",
+        "airspeed_unit": "m/s",
+        "thrust_unit": "N per engine, positive forward",
+        "engines": engines,
+        "reference_density_kg_m3": prop.reference_density_kg_m3,
+        "delay_s": prop.delay_s,
+        "validity": {
+            "tested_airspeed_m_s": [low, high],
+            "throttle": [0.0, 1.0],
+            "extrapolation_warning": EXTRAPOLATION_WARNING,
+        },
+        "provenance": {
+            "files": [
+                {"role": f.role, "path": str(f.path), "sha256": f.sha256} for f in model.files
+            ],
+            "source": dict(source) if source else None,
+        },
+    }

@@ -1,0 +1,145 @@
+"""``tuflexperf export``: write the model as CasADi functions, C99 source and JSON, atomically.
+
+Everything is built in a temporary directory beside ``--out`` and moved into place only when
+all requested files exist, so a failure never leaves partial output (SPEC 5).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import secrets
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tuflexperf.errors import InputError
+from tuflexperf.export.model import (
+    ExportModel,
+    inverse_function,
+    load_export_model,
+    model_description,
+    thrust_function,
+)
+
+FORMATS: tuple[str, ...] = ("c", "casadi", "json")
+
+#: The files each format writes (fixed names, so flight-software builds can rely on them).
+FILES: dict[str, tuple[str, ...]] = {
+    "c": ("tfp_thrust.c", "tfp_thrust.h"),
+    "casadi": ("tfp_thrust.casadi", "tfp_throttle_for_thrust.casadi"),
+    "json": ("tfp_thrust.json",),
+}
+
+
+@dataclass(frozen=True)
+class ExportResult:
+    """What ``export`` wrote."""
+
+    out_dir: Path
+    formats: tuple[str, ...]
+    files: tuple[Path, ...]
+    model: ExportModel
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready summary for ``--json``."""
+        prop = self.model.propulsion
+        return {
+            "out": str(self.out_dir),
+            "formats": list(self.formats),
+            "files": [str(f) for f in self.files],
+            "model": prop.name,
+            "n_engines": self.model.n_engines,
+            "delay_s": prop.delay_s,
+            "reference_density_kg_m3": prop.reference_density_kg_m3,
+            "tested_airspeed_m_s": list(prop.tested_airspeed_m_s),
+            "propulsion_sha256": self.model.propulsion_sha256,
+        }
+
+
+def parse_formats(text: str) -> tuple[str, ...]:
+    """``"c,json"`` -> ``("c", "json")`` in canonical order; unknown or empty -> InputError."""
+    requested = [part.strip().lower() for part in str(text).split(",") if part.strip()]
+    if not requested:
+        raise InputError(f"--format: no format given (choose from {', '.join(FORMATS)})")
+    unknown = [part for part in requested if part not in FORMATS]
+    if unknown:
+        raise InputError(
+            f"--format: unknown format {unknown[0]!r} (choose from {', '.join(FORMATS)})"
+        )
+    return tuple(f for f in FORMATS if f in requested)
+
+
+def _write_format(model: ExportModel, fmt: str, directory: Path) -> None:
+    """Write one format's files into ``directory``."""
+    if fmt == "c":
+        from tuflexperf.export.c_code import header_text, source_text
+
+        source, header = FILES["c"]
+        (directory / header).write_text(header_text(model), encoding="ascii")
+        (directory / source).write_text(source_text(model), encoding="ascii")
+    elif fmt == "casadi":
+        thrust_file, inverse_file = FILES["casadi"]
+        thrust_function(model.propulsion).save(str(directory / thrust_file))
+        inverse_function(model.propulsion).save(str(directory / inverse_file))
+    elif fmt == "json":
+        text = json.dumps(model_description(model), indent=2, allow_nan=False) + "\n"
+        (directory / FILES["json"][0]).write_text(text, encoding="utf-8")
+    else:  # parse_formats guards this
+        raise InputError(f"--format: unknown format {fmt!r}")
+
+
+def _check_out(out_dir: Path) -> None:
+    """``--out`` must be a directory or not exist yet, under a writable existing directory."""
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"--out: {out_dir} exists and is not a directory")
+    existing = next(p for p in (out_dir.parent, *out_dir.parent.parents) if p.exists())
+    if not existing.is_dir():
+        raise InputError(f"--out: {existing} is not a directory")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise InputError(f"--out: cannot write in {existing}")
+
+
+def export_model(
+    case_path: Path | str | None, formats: tuple[str, ...], out_dir: Path | str
+) -> ExportResult:
+    """Export the case's propulsion model in ``formats`` into ``out_dir``.
+
+    Validates every input first (case, formats, ``--out``), builds all files in a temporary
+    sibling directory, then renames it into place (or, if ``out_dir`` exists, replaces the
+    exported files in it one by one; other files there are left alone). Raises
+    :class:`InputError` on bad input, leaving nothing behind.
+    """
+    out_dir = Path(out_dir)
+    unknown = [f for f in formats if f not in FORMATS]
+    if unknown or not formats:
+        raise InputError(f"--format: unknown format {(unknown or [''])[0]!r}")
+    _check_out(out_dir)
+    model = load_export_model(case_path)
+
+    staging = out_dir.parent / f".{out_dir.name}.tmp-{secrets.token_hex(6)}"
+    try:
+        out_dir.parent.mkdir(parents=True, exist_ok=True)
+        staging.mkdir()
+    except OSError as exc:
+        raise InputError(f"--out: cannot create {out_dir}: {exc.strerror}") from None
+    try:
+        for fmt in formats:
+            _write_format(model, fmt, staging)
+        names = [name for fmt in formats for name in FILES[fmt]]
+        if out_dir.is_dir():
+            for name in names:
+                os.replace(staging / name, out_dir / name)
+            staging.rmdir()
+        else:
+            os.replace(staging, out_dir)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return ExportResult(
+        out_dir=out_dir,
+        formats=formats,
+        files=tuple(out_dir / name for name in names),
+        model=model,
+    )
