@@ -1,0 +1,157 @@
+"""Malformed files and flags: exit 2, one line on stderr naming the file and key, no traceback."""
+
+from __future__ import annotations
+
+import copy
+import subprocess
+import sys
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from tests.conftest import MADE_UP_AIRCRAFT, MADE_UP_PROPULSION, MADE_UP_REQUIREMENTS, write_case
+from tuflexperf.cli import app
+
+runner = CliRunner()
+
+
+def _assert_bad(result, *needles):
+    assert result.exit_code == 2, result.output
+    message = result.stderr.strip()
+    assert message.count("\n") == 0, message
+    assert "Traceback" not in result.output
+    for needle in needles:
+        assert needle in message, message
+    assert result.stdout == ""
+
+
+def _mutated(section, path, value):
+    data = copy.deepcopy(
+        {
+            "aircraft": MADE_UP_AIRCRAFT,
+            "propulsion": MADE_UP_PROPULSION,
+            "requirements": MADE_UP_REQUIREMENTS,
+        }[section]
+    )
+    target = data
+    for key in path[:-1]:
+        target = target[key]
+    if value is _DELETE:
+        del target[path[-1]]
+    else:
+        target[path[-1]] = value
+    return {section: data}
+
+
+_DELETE = object()
+
+CASES = [
+    # (section, key path, value, file that must be named, key text that must be named)
+    ("aircraft", ["mass_kg"], -3.0, "aircraft.yaml", "mass_kg"),
+    ("aircraft", ["mass_kg"], "heavy", "aircraft.yaml", "mass_kg"),
+    ("aircraft", ["mass_kg"], float("nan"), "aircraft.yaml", "mass_kg"),
+    ("aircraft", ["cd0"], _DELETE, "aircraft.yaml", "cd0"),
+    ("aircraft", ["wingarea_m2"], 1.0, "aircraft.yaml", "wingarea_m2"),
+    (
+        "aircraft",
+        ["takeoff", "rolling_frcition"],
+        0.05,
+        "aircraft.yaml",
+        "takeoff.rolling_frcition",
+    ),
+    ("propulsion", ["model"], "poly33", "propulsion.yaml", "model"),
+    ("propulsion", ["tested_airspeed_m_s"], [30, 0], "propulsion.yaml", "tested_airspeed_m_s"),
+    ("propulsion", ["engines"], [], "propulsion.yaml", "engines"),
+    (
+        "propulsion",
+        ["engines", 0, "coefficients", "p12"],
+        1.0,
+        "propulsion.yaml",
+        "engines[0].coefficients.p12",
+    ),
+    (
+        "propulsion",
+        ["engines", 1, "coefficients", "p02"],
+        float("inf"),
+        "propulsion.yaml",
+        "engines[1].coefficients.p02",
+    ),
+    ("propulsion", ["delay_s"], -0.1, "propulsion.yaml", "delay_s"),
+    ("requirements", ["takeof"], {"max_ground_roll_m": 60}, "case.yaml", "requirements.takeof"),
+    ("requirements", ["envelope", "max_airspeed_m_s"], 10, "case.yaml", "envelope"),
+    ("requirements", ["oei", "max_throttle"], 1.5, "case.yaml", "requirements.oei.max_throttle"),
+    (
+        "requirements",
+        ["oei", "dead_engine"],
+        "feathered",
+        "case.yaml",
+        "requirements.oei.dead_engine",
+    ),
+    (
+        "requirements",
+        ["endurance"],
+        {"throttle": -0.1, "min_flight_time_min": 15},
+        "case.yaml",
+        "throttle",
+    ),
+]
+
+
+@pytest.mark.parametrize(("section", "path", "value", "file", "key"), CASES)
+def test_malformed_files_exit_2_naming_file_and_key(tmp_path, section, path, value, file, key):
+    case = write_case(tmp_path, **_mutated(section, path, value))
+    _assert_bad(runner.invoke(app, ["check", str(case)]), file, key)
+
+
+def test_case_level_problems(tmp_path):
+    case = write_case(tmp_path, atmosphere={"altitude_m": 0, "temprature_offset_k": 10})
+    _assert_bad(
+        runner.invoke(app, ["check", str(case)]), "case.yaml", "atmosphere.temprature_offset_k"
+    )
+    case = write_case(tmp_path, atmosphere={"altitude_m": 90000})
+    _assert_bad(runner.invoke(app, ["trim", "--case", str(case)]), "atmosphere.altitude_m")
+    case = write_case(tmp_path, surprise=1)
+    _assert_bad(runner.invoke(app, ["check", str(case)]), "surprise")
+
+
+def test_missing_and_unreadable_files(tmp_path):
+    _assert_bad(
+        runner.invoke(app, ["check", str(tmp_path / "absent.yaml")]), "absent.yaml", "not found"
+    )
+    _assert_bad(runner.invoke(app, ["check", str(tmp_path)]), "directory")
+    case = write_case(tmp_path)
+    text = case.read_text().replace("aircraft.yaml", "nowhere/aircraft.yaml")
+    case.write_text(text)
+    _assert_bad(
+        runner.invoke(app, ["check", str(case)]), "case.yaml", "aircraft", "nowhere/aircraft.yaml"
+    )
+
+
+def test_invalid_yaml_duplicate_keys_and_non_mapping(tmp_path):
+    case = write_case(tmp_path)
+    (tmp_path / "aircraft.yaml").write_text("name: [unclosed\nmass_kg: 3\n")
+    _assert_bad(runner.invoke(app, ["check", str(case)]), "aircraft.yaml", "invalid YAML")
+    (tmp_path / "aircraft.yaml").write_text(yaml.safe_dump(MADE_UP_AIRCRAFT) + "mass_kg: 40\n")
+    _assert_bad(
+        runner.invoke(app, ["check", str(case)]), "aircraft.yaml", "duplicate key 'mass_kg'"
+    )
+    (tmp_path / "aircraft.yaml").write_text("- just\n- a list\n")
+    _assert_bad(runner.invoke(app, ["check", str(case)]), "aircraft.yaml", "mapping")
+
+
+def test_trim_without_envelope_names_the_missing_block(tmp_path):
+    case = write_case(tmp_path, requirements={"takeoff": {"max_ground_roll_m": 60}})
+    _assert_bad(
+        runner.invoke(app, ["trim", "--case", str(case)]), "case.yaml", "requirements.envelope"
+    )
+
+
+def test_bad_flags_give_one_line_and_exit_2():
+    for argv in (["check", "--bogus"], ["trim", "--case"], ["nosuchcommand"]):
+        done = subprocess.run(
+            [sys.executable, "-m", "tuflexperf", *argv], capture_output=True, text=True
+        )
+        assert done.returncode == 2, (argv, done.stderr)
+        assert done.stderr.strip().count("\n") == 0, done.stderr
+        assert "Traceback" not in done.stderr

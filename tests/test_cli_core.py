@@ -1,0 +1,125 @@
+"""check/takeoff/trim/oei through typer's CliRunner and one real subprocess run."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from tests.conftest import write_case
+from tuflexperf.cli import app
+
+runner = CliRunner()
+
+
+def run(*args: str):
+    return runner.invoke(app, list(args))
+
+
+def test_check_json_keys_and_exit_code():
+    result = run("check", "--json")
+    data = json.loads(result.stdout)
+    assert result.exit_code == (0 if data["passed"] else 1)
+    assert set(data) >= {"passed", "results"}
+    for item in data["results"]:
+        assert set(item) >= {"name", "value", "limit", "unit", "margin", "passed"}
+
+
+def test_check_human_table_names_each_requirement():
+    result = run("check")
+    assert "takeoff_ground_roll" in result.stdout and "PASS" in result.stdout
+
+
+def test_takeoff_trim_oei_json_keys():
+    takeoff = json.loads(run("takeoff", "--json").stdout)
+    assert set(takeoff) >= {"ground_roll_m", "liftoff_speed_m_s", "time_s"}
+    trim = json.loads(run("trim", "--json").stdout)
+    assert set(trim) >= {"airspeed_m_s", "throttle", "min_throttle", "max_throttle", "all_feasible"}
+    assert len(trim["airspeed_m_s"]) == len(trim["throttle"]) == 61
+    oei = json.loads(run("oei", "--json").stdout)
+    assert set(oei) >= {
+        "min_throttle",
+        "airspeed_at_min_throttle_m_s",
+        "level_flight_airspeed_range_m_s",
+    }
+
+
+def test_trim_exit_1_when_full_throttle_is_not_enough(tmp_path):
+    case = write_case(
+        tmp_path, requirements={"envelope": {"min_airspeed_m_s": 14, "max_airspeed_m_s": 48}}
+    )
+    result = run("trim", "--case", str(case), "--json")
+    assert result.exit_code == 1
+    data = json.loads(result.stdout)
+    assert data["all_feasible"] is False and data["throttle"][-1] is None
+
+
+def test_check_fails_with_exit_1_and_reason(tmp_path):
+    requirements = {"takeoff": {"max_ground_roll_m": 5}}
+    case = write_case(tmp_path, requirements=requirements)
+    result = run("check", str(case), "--json")
+    assert result.exit_code == 1
+    item = json.loads(result.stdout)["results"][0]
+    assert item["passed"] is False and item["margin"] < 0
+
+
+def test_takeoff_not_attainable_is_exit_1_with_reason(tmp_path):
+    from tests.conftest import MADE_UP_AIRCRAFT
+
+    heavy = {**MADE_UP_AIRCRAFT, "mass_kg": 200.0}
+    case = write_case(tmp_path, aircraft=heavy)
+    result = run("takeoff", "--case", str(case))
+    assert result.exit_code == 1
+    assert "never" in result.stderr and "Traceback" not in result.output
+    check = run("check", str(case), "--json")
+    assert check.exit_code == 1
+    item = json.loads(check.stdout)["results"][0]
+    assert item["value"] is None and item["passed"] is False and "never" in item["reason"]
+
+
+def test_oei_dead_engine_flag(tmp_path):
+    case = write_case(tmp_path)
+    zero = json.loads(run("oei", "--case", str(case), "--dead-engine", "zero", "--json").stdout)
+    wind = json.loads(run("oei", "--case", str(case), "--json").stdout)
+    assert zero["min_throttle"] < wind["min_throttle"]
+    bad = run("oei", "--dead-engine", "sleepy")
+    assert bad.exit_code == 2 and "--dead-engine" in bad.stderr
+
+
+def test_installed_script_runs_from_any_directory(tmp_path):
+    script = shutil.which("tuflexperf", path=str(Path(sys.executable).parent)) or shutil.which(
+        "tuflexperf"
+    )
+    if script is None:
+        pytest.skip("console script not installed")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    done = subprocess.run(
+        [script, "check", "--json"], cwd=tmp_path, capture_output=True, text=True, env=env
+    )
+    assert done.returncode in (0, 1), done.stderr
+    assert json.loads(done.stdout)["results"]
+    bad = subprocess.run(
+        [script, "check", "nope.yaml"], cwd=tmp_path, capture_output=True, text=True, env=env
+    )
+    assert bad.returncode == 2
+    assert bad.stderr.strip().count("\n") == 0 and "nope.yaml" in bad.stderr
+    assert bad.stdout == ""
+
+
+def test_check_does_not_import_plotting_or_dataframes():
+    code = (
+        "import sys\n"
+        "from tuflexperf.cli import main\n"
+        "try:\n    main(['check', '--json'])\n"
+        "except SystemExit:\n    pass\n"
+        "bad = [m for m in ('matplotlib', 'pandas', 'scipy') if m in sys.modules]\n"
+        "sys.stderr.write(','.join(bad))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.stderr == "", f"check imported: {done.stderr}"

@@ -1,0 +1,65 @@
+"""The shipped TU-Flex case against the paper's published values (SPEC 6), tolerances stated."""
+
+from __future__ import annotations
+
+import pytest
+
+from tuflexperf.analysis.oei import solve_oei
+from tuflexperf.analysis.requirements import check_case
+from tuflexperf.analysis.takeoff import solve_takeoff
+from tuflexperf.analysis.trim import solve_trim
+from tuflexperf.io.case import load_case
+from tuflexperf.models.thrust import engine_thrust_n
+
+PUBLISHED_FULL_THROTTLE_N = {  # paper section 4: 0, 30, 40 m/s
+    "EDF1": (55.12, 40.02, 35.26),
+    "EDF2": (55.41, 41.76, 37.76),
+}
+
+
+@pytest.fixture(scope="module")
+def case():
+    return load_case()
+
+
+def test_full_throttle_thrust_within_0_1_n(case):
+    for engine in case.propulsion.engines:
+        for v, published in zip(
+            (0.0, 30.0, 40.0), PUBLISHED_FULL_THROTTLE_N[engine.name], strict=True
+        ):
+            assert float(engine_thrust_n(engine, 1.0, v)) == pytest.approx(published, abs=0.1)
+
+
+def test_thrust_model_is_physical(case):
+    for engine in case.propulsion.engines:
+        assert abs(float(engine_thrust_n(engine, 0.0, 0.0))) < 1.0  # about zero at idle and rest
+        for x in (0.0, 0.3, 0.6, 1.0):  # thrust falls with airspeed over the envelope
+            t = [float(engine_thrust_n(engine, x, v)) for v in range(0, 46)]
+            assert all(b < a for a, b in zip(t, t[1:], strict=False))
+        assert float(engine_thrust_n(engine, 0.1, 40.0)) < 0  # drag at low throttle, high speed
+
+
+def test_takeoff_ground_roll_55_5_m(case):
+    assert solve_takeoff(case).ground_roll_m == pytest.approx(55.5, abs=1.0)
+
+
+def test_least_trim_throttle_41_percent(case):
+    assert solve_trim(case).min_throttle == pytest.approx(0.41, abs=0.01)
+
+
+def test_least_oei_throttle_56_percent(case):
+    assert solve_oei(case).to_dict()["min_throttle"] == pytest.approx(0.56, abs=0.01)
+
+
+def test_trim_beyond_30_m_s_is_flagged_as_extrapolated(case):
+    result = solve_trim(case)
+    assert result.extrapolated
+    assert any("extrapolated" in w for w in result.warnings)
+
+
+def test_all_requirements_met(case):
+    verdicts = check_case(case)
+    assert {"takeoff_ground_roll", "trim_throttle_max", "oei_min_throttle"} <= {
+        v.name for v in verdicts
+    }
+    assert all(v.passed for v in verdicts)
