@@ -1,0 +1,159 @@
+"""Battery file (SPEC 4, "Battery file"): the pack, its discharge runs and the mission budget.
+
+The keys are this project's design (the SPEC leaves them open)::
+
+    name: SLS Quantum 5000mAh 12S1P 44.4V 40C
+    cells_in_series: 12
+    capacity_ah: 5.0                   # rated capacity of one pack
+    nominal_voltage_v: 44.4            # optional; checked against 3.7 V x cells
+    max_discharge_c: 40                # optional; continuous C rating
+    packs_in_parallel_per_engine: 2
+    cutoff_voltage_per_cell_v: 3.4     # under load (the ESC's low-voltage cut-off)
+    runs:                              # discharge runs, paths relative to this file
+      - {file: endurance/edf1_endurance_50.csv, engine: EDF1}
+    fan_power:                         # published fan data (paper Table 1)
+      published_power_range_w: [2400, 4100]
+      published_static_thrust_range_n: [41, 59]
+      jet_velocity_m_s: 90
+    mission:
+      pattern_altitude_m: 100          # launch = full-throttle ground roll + climb to this
+      landing_reserve_fraction: 0.2    # of each pack's rated capacity, kept for landing
+
+Run files use the SPEC's run format (``time_s, force_n, airspeed_m_s, throttle,
+voltage_v, current_a``); they are only checked to exist here, and are read when
+the discharge model is fitted (:mod:`tuflexperf.models.battery`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated
+
+from pydantic import Field, model_validator
+
+from tuflexperf.errors import InputError
+from tuflexperf.io.yamlio import StrictModel, load_model
+
+Positive = Annotated[float, Field(gt=0)]
+
+
+class RunSchema(StrictModel):
+    file: Annotated[str, Field(min_length=1)]
+    engine: str | None = None
+
+
+class FanPowerSchema(StrictModel):
+    published_power_range_w: Annotated[list[Positive], Field(min_length=2, max_length=2)]
+    published_static_thrust_range_n: Annotated[list[Positive], Field(min_length=2, max_length=2)]
+    jet_velocity_m_s: Positive
+
+    @model_validator(mode="after")
+    def _check(self) -> FanPowerSchema:
+        for key in ("published_power_range_w", "published_static_thrust_range_n"):
+            low, high = getattr(self, key)
+            if not low < high:
+                raise ValueError(f"{key}: low {low} must be below high {high}")
+        return self
+
+
+class MissionSchema(StrictModel):
+    pattern_altitude_m: Annotated[float, Field(ge=0, le=5000)] = 100.0
+    landing_reserve_fraction: Annotated[float, Field(ge=0, lt=1)] = 0.2
+
+
+class BatterySchema(StrictModel):
+    name: str
+    cells_in_series: Annotated[int, Field(ge=1, le=100)]
+    capacity_ah: Positive
+    nominal_voltage_v: Positive | None = None
+    max_discharge_c: Positive | None = None
+    packs_in_parallel_per_engine: Annotated[int, Field(ge=1, le=20)] = 1
+    cutoff_voltage_per_cell_v: Annotated[float, Field(ge=2.5, le=4.2)]
+    runs: Annotated[list[RunSchema], Field(min_length=1)]
+    fan_power: FanPowerSchema
+    mission: MissionSchema = MissionSchema()
+
+    @model_validator(mode="after")
+    def _check(self) -> BatterySchema:
+        if self.nominal_voltage_v is not None:
+            per_cell = self.nominal_voltage_v / self.cells_in_series
+            # LiPo/Li-ion nominal is 3.6-3.85 V per cell; anything else is a typo in one key.
+            if not 3.0 <= per_cell <= 4.2:
+                raise ValueError(
+                    f"nominal_voltage_v: {self.nominal_voltage_v} V is {per_cell:.2f} V per cell "
+                    f"for {self.cells_in_series} cells (expected 3.0-4.2)"
+                )
+        return self
+
+
+@dataclass(frozen=True)
+class DischargeRunRef:
+    """One discharge run named by the battery file (absolute path)."""
+
+    path: Path
+    engine: str | None
+
+
+@dataclass(frozen=True)
+class Battery:
+    """A loaded, validated battery file (SI units; charge in Ah as on the pack label)."""
+
+    name: str
+    path: Path
+    cells_in_series: int
+    capacity_ah: float
+    packs_in_parallel_per_engine: int
+    cutoff_voltage_per_cell_v: float
+    runs: tuple[DischargeRunRef, ...]
+    published_power_range_w: tuple[float, float]
+    published_static_thrust_range_n: tuple[float, float]
+    jet_velocity_m_s: float
+    pattern_altitude_m: float
+    landing_reserve_fraction: float
+    nominal_voltage_v: float | None = None
+    max_discharge_c: float | None = None
+
+    @property
+    def cutoff_voltage_v(self) -> float:
+        """Pack cut-off voltage under load in V (cells x per-cell cut-off)."""
+        return self.cells_in_series * self.cutoff_voltage_per_cell_v
+
+
+def load_battery(path: Path | str) -> Battery:
+    """Load and validate a battery file; every run file it names must exist.
+
+    Raises :class:`InputError` naming the file and key on any problem.
+    """
+    path = Path(path)
+    schema = load_model(path, BatterySchema)
+    runs = []
+    for index, run in enumerate(schema.runs):
+        target = (path.parent / run.file).resolve()
+        if not target.is_file():
+            raise InputError(f"{path}: runs[{index}].file: file not found: {run.file}")
+        if target.suffix.lower() not in (".csv", ".mat"):
+            raise InputError(
+                f"{path}: runs[{index}].file: expected a .csv or .mat run file, got {run.file}"
+            )
+        runs.append(DischargeRunRef(path=target, engine=run.engine))
+    fan, mission = schema.fan_power, schema.mission
+    return Battery(
+        name=schema.name,
+        path=path.resolve(),
+        cells_in_series=schema.cells_in_series,
+        capacity_ah=schema.capacity_ah,
+        packs_in_parallel_per_engine=schema.packs_in_parallel_per_engine,
+        cutoff_voltage_per_cell_v=schema.cutoff_voltage_per_cell_v,
+        runs=tuple(runs),
+        published_power_range_w=(fan.published_power_range_w[0], fan.published_power_range_w[1]),
+        published_static_thrust_range_n=(
+            fan.published_static_thrust_range_n[0],
+            fan.published_static_thrust_range_n[1],
+        ),
+        jet_velocity_m_s=fan.jet_velocity_m_s,
+        pattern_altitude_m=mission.pattern_altitude_m,
+        landing_reserve_fraction=mission.landing_reserve_fraction,
+        nominal_voltage_v=schema.nominal_voltage_v,
+        max_discharge_c=schema.max_discharge_c,
+    )
