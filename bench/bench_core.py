@@ -1,0 +1,133 @@
+"""Performance-core benchmark: prints measured figures and ratios (not a test).
+
+* whole-process time of ``tuflexperf check`` vs ``python -c "import casadi"`` (target <= 2.5x)
+  and vs importing AeroSandbox when it is installed;
+* each analysis' solve time after its CasADi functions are built (targets: take-off <= 5 ms,
+  trim sweep <= 10 ms);
+* the same analyses done the naive SciPy way in the same run (``solve_ivp`` with a lift-off
+  event; ``brentq`` per airspeed), as ratios.
+
+Run: ``python bench/bench_core.py``
+"""
+
+from __future__ import annotations
+
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from tuflexperf.analysis.oei import solve_oei
+from tuflexperf.analysis.takeoff import net_force_n, solve_takeoff
+from tuflexperf.analysis.trim import solve_trim
+from tuflexperf.io.case import load_case
+from tuflexperf.models.aircraft import level_flight_drag_n, liftoff_speed_m_s
+from tuflexperf.models.thrust import total_thrust_n
+
+
+def wall(argv: list[str], repeats: int = 7) -> float:
+    """Median wall time in s of a whole process."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        subprocess.run(argv, capture_output=True, check=False)
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def per_call(fn, repeats: int = 200) -> float:
+    """Median time in s of one call (after a warm-up call that builds what it needs)."""
+    fn()
+    samples = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        samples.append(time.perf_counter() - start)
+    return statistics.median(samples)
+
+
+def naive_takeoff(case) -> float:
+    from scipy.integrate import solve_ivp
+
+    ac, prop, rho = case.aircraft, case.propulsion, case.density_kg_m3
+    v_lo = float(liftoff_speed_m_s(ac, rho))
+
+    def rhs(_t, y):
+        return [float(net_force_n(ac, prop, y[0], rho)) / ac.mass_kg, y[0]]
+
+    def lift_off(_t, y):
+        return y[0] - v_lo
+
+    lift_off.terminal = True
+    sol = solve_ivp(rhs, (0, 120), [0.0, 0.0], events=lift_off, rtol=1e-10, atol=1e-10)
+    return float(sol.y_events[0][0][1])
+
+
+def naive_trim(case, speeds: np.ndarray) -> list[float]:
+    from scipy.optimize import brentq
+
+    ac, prop, rho = case.aircraft, case.propulsion, case.density_kg_m3
+    out = []
+    for v in speeds:
+        def excess(x, v=v):
+            return float(total_thrust_n(prop, x, v, rho) - level_flight_drag_n(ac, v, rho))
+
+        if excess(0.0) >= 0:
+            out.append(0.0)
+        elif excess(1.0) < 0:
+            out.append(float("nan"))
+        else:
+            out.append(brentq(excess, 0.0, 1.0, xtol=1e-12))
+    return out
+
+
+def main() -> None:
+    exe = shutil.which("tuflexperf", path=str(Path(sys.executable).parent)) or "tuflexperf"
+    check_s = wall([exe, "check"])
+    casadi_s = wall([sys.executable, "-c", "import casadi"])
+    python_s = wall([sys.executable, "-c", "pass"])
+    print("whole process (median of 7)")
+    print(f"  python -c pass                {python_s * 1e3:8.1f} ms")
+    print(f"  python -c 'import casadi'     {casadi_s * 1e3:8.1f} ms")
+    print(f"  tuflexperf check              {check_s * 1e3:8.1f} ms   "
+          f"ratio to import casadi {check_s / casadi_s:5.2f} (target <= 2.5)")
+    try:
+        import importlib.util
+
+        if importlib.util.find_spec("aerosandbox") is not None:
+            asb_s = wall([sys.executable, "-c", "import aerosandbox"], repeats=3)
+            print(f"  python -c 'import aerosandbox'{asb_s * 1e3:8.1f} ms   "
+                  f"check / that = {check_s / asb_s:5.2f}")
+        else:
+            print("  (aerosandbox not installed: its import time not measured)")
+    except Exception as exc:  # noqa: BLE001 - the benchmark reports, never fails
+        print(f"  aerosandbox import failed: {exc}")
+
+    case = load_case()
+    start = time.perf_counter()
+    solve_takeoff(case), solve_trim(case), solve_oei(case)
+    build_s = time.perf_counter() - start
+    takeoff_s = per_call(lambda: solve_takeoff(case))
+    trim_s = per_call(lambda: solve_trim(case))
+    oei_s = per_call(lambda: solve_oei(case))
+    speeds = solve_trim(case).airspeed_m_s
+    naive_takeoff_s = per_call(lambda: naive_takeoff(case), repeats=20)
+    naive_trim_s = per_call(lambda: naive_trim(case, speeds), repeats=20)
+    ours, theirs = solve_takeoff(case).ground_roll_m, naive_takeoff(case)
+    print(f"\nanalyses on the shipped case (build of all three: {build_s * 1e3:.1f} ms)")
+    print(f"  take-off solve        {takeoff_s * 1e3:8.3f} ms (target <= 5)   "
+          f"naive solve_ivp+event {naive_takeoff_s * 1e3:8.3f} ms  ratio {naive_takeoff_s / takeoff_s:6.1f}x")
+    print(f"     ground roll ours {ours:.6f} m, naive {theirs:.6f} m")
+    print(f"  trim sweep ({speeds.size} pts)  {trim_s * 1e3:8.3f} ms (target <= 10)  "
+          f"naive brentq per airspeed {naive_trim_s * 1e3:8.3f} ms  ratio {naive_trim_s / trim_s:6.1f}x")
+    diff = np.nanmax(np.abs(solve_trim(case).throttle - np.array(naive_trim(case, speeds))))
+    print(f"     largest throttle difference ours vs brentq {diff:.2e}")
+    print(f"  OEI (2 dead-engine sweeps) {oei_s * 1e3:8.3f} ms")
+
+
+if __name__ == "__main__":
+    main()
