@@ -19,8 +19,12 @@ STRICT_CFLAGS: tuple[str, ...] = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", 
 
 
 def find_compiler() -> str | None:
-    """Path of the C compiler (``$CC`` or ``gcc``), or None when there is none."""
-    return shutil.which(os.environ.get("CC", "gcc"))
+    """Path of the C compiler (``$CC``, else ``gcc``, else ``cc``), or None when there is none."""
+    for name in (os.environ.get("CC", ""), "gcc", "cc"):
+        found = shutil.which(name) if name else None
+        if found:
+            return found
+    return None
 
 
 def compile_shared(

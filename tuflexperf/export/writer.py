@@ -116,6 +116,10 @@ def export_model(
     if unknown or not formats:
         raise InputError(f"--format: unknown format {(unknown or [''])[0]!r}")
     _check_out(out_dir)
+    names = [name for fmt in formats for name in FILES[fmt]]
+    for name in names:
+        if (out_dir / name).is_dir():
+            raise InputError(f"--out: {out_dir / name} is a directory; cannot write the file")
     model = load_export_model(case_path)
 
     staging = out_dir.parent / f".{out_dir.name}.tmp-{secrets.token_hex(6)}"
@@ -127,7 +131,6 @@ def export_model(
     try:
         for fmt in formats:
             _write_format(model, fmt, staging)
-        names = [name for fmt in formats for name in FILES[fmt]]
         if out_dir.is_dir():
             for name in names:
                 os.replace(staging / name, out_dir / name)
