@@ -1,0 +1,676 @@
+"""Endurance at a throttle: level-flight airspeed, electrical power, pack and flight time.
+
+Paper section 4: one 12S 5000 mAh pack lasts "nearly up to 10 min" at 50 % throttle in
+the tunnel at 30 m/s; with two packs per fan and the launch's energy, "a flight time of
+15 minutes can be estimated". This module makes that estimate from the discharge runs:
+
+1. **Battery**: the equivalent-circuit model of :mod:`tuflexperf.models.battery` fitted
+   to all runs of the battery file (CasADi/IPOPT), and cross-validated: fitted on each
+   run alone, it predicts the other runs' time to cut-off.
+2. **Power**: ``P(x, V) = P_s x^n (1 - (V/V_j)^2)`` per fan, fitted to the runs' mean
+   ``V I`` and the published full-throttle figure (:func:`fit_fan_power`).
+3. **Level flight**: the faster root of ``T(x, V) = D(V)`` (front side of the drag
+   curve), all engines at throttle ``x`` (SPEC 3).
+4. **Pack endurance**: one pack on one fan at ``P(x, V)`` from full to the cut-off
+   under load: ``t = 3600 * integral_0^{q_c} dq / i(q, P)`` (constant-power discharge).
+5. **Flight endurance**: each fan on its ``n`` parallel packs. The launch (full-throttle
+   ground roll from :func:`solve_takeoff`, then a full-throttle climb at the best rate of
+   climb to the battery file's pattern altitude) draws charge first; cruise at ``P(x, V)``
+   then runs until each pack has given ``(1 - reserve)`` of its rated capacity (the
+   landing reserve) or reaches the cut-off, whichever comes first.
+   ``flight_endurance_min`` = climb + cruise time (airborne).
+
+Steps 3-5 are one CasADi function (Newton rootfinders on the level-flight excess thrust
+and on the cut-off condition, Gauss-Legendre quadrature of the discharge) built once per
+case and battery and called per throttle. ``--best`` solves two small IPOPT NLPs: the
+throttle and airspeed of longest flight, and of longest cruise distance.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tuflexperf.errors import InputError, NotAttainable
+from tuflexperf.io.battery import Battery, load_battery
+from tuflexperf.io.case import Case
+from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
+from tuflexperf.models.battery import (
+    DischargeFit,
+    DischargeParameters,
+    DischargeRun,
+    FanPowerModel,
+    PowerFit,
+    current_at_power_a,
+    cutoff_residual_v,
+    discharge_time_s,
+    fit_discharge,
+    fit_fan_power,
+    published_static_power_w,
+    read_discharge_run,
+    time_to_cutoff_s,
+)
+from tuflexperf.models.thrust import engine_thrust_n, is_extrapolated, total_thrust_n
+
+# Level flight is searched between the stall speed and this multiple of it.
+_MAX_SPEED_OVER_STALL = 8.0
+_SPEED_GRID_POINTS = 4001
+# Least airspeed for the --best NLPs: the usual 20 % margin over the 1-g stall speed.
+BEST_MIN_AIRSPEED_OVER_STALL = 1.2
+_LAUNCH_STEP_S = 0.25
+_characterisation_cache: dict[Any, BatteryCharacterisation] = {}
+_model_cache: dict[Any, EnduranceModel] = {}
+
+
+# --- battery characterisation (fit + cross-validation + power), cached per file contents ---
+@dataclass(frozen=True)
+class CrossValidation:
+    """A model fitted on one run predicting another run's time to cut-off."""
+
+    fitted_on: str
+    predicted_run: str
+    observed_min: float
+    predicted_min: float
+
+    @property
+    def error_percent(self) -> float:
+        return 100.0 * (self.predicted_min - self.observed_min) / self.observed_min
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "fitted_on": self.fitted_on,
+            "predicted_run": self.predicted_run,
+            "observed_min": self.observed_min,
+            "predicted_min": self.predicted_min,
+            "error_percent": self.error_percent,
+        }
+
+
+@dataclass(frozen=True)
+class BatteryCharacterisation:
+    """Everything the discharge runs give: pack model, its validation, fan power model."""
+
+    battery: Battery
+    runs: tuple[DischargeRun, ...]
+    fit: DischargeFit
+    cross_validation: tuple[CrossValidation, ...]
+    power: PowerFit
+
+
+def _file_key(path: Path) -> tuple[str, float, int]:
+    stat = path.stat()
+    return (str(path), stat.st_mtime, stat.st_size)
+
+
+def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisation:
+    """Fit the pack model to all runs, cross-validate run against run, fit the fan power.
+
+    The full-throttle static power is the published range interpolated at the static
+    thrust of the runs' engine (the first engine when the runs name none).
+    Cached on the battery file, the run files and the propulsion model.
+    """
+    key = (
+        _file_key(battery.path),
+        tuple(_file_key(r.path) for r in battery.runs),
+        repr(case.propulsion),
+    )
+    if key in _characterisation_cache:
+        return _characterisation_cache[key]
+    runs = tuple(read_discharge_run(r.path) for r in battery.runs)
+    cells, capacity = battery.cells_in_series, battery.capacity_ah
+    fit = fit_discharge(runs, cells, capacity)
+    checks = []
+    if len(runs) > 1:
+        for k, source in enumerate(runs):
+            alone = fit_discharge([source], cells, capacity).parameters
+            for j, target in enumerate(runs):
+                if j == k:
+                    continue
+                predicted = time_to_cutoff_s(
+                    alone, target.mean_power_w, battery.cutoff_voltage_v, 1, target.start_charge_ah
+                )
+                checks.append(
+                    CrossValidation(
+                        source.path.name,
+                        target.path.name,
+                        target.time_to_cutoff_s / 60.0,
+                        predicted / 60.0,
+                    )
+                )
+    engine_name = next((r.engine for r in battery.runs if r.engine), None)
+    engines = {e.name: e for e in case.propulsion.engines}
+    if engine_name is not None and engine_name not in engines:
+        raise InputError(
+            f"{battery.path}: runs: engine {engine_name!r} is not in the propulsion file "
+            f"(engines: {', '.join(engines)})"
+        )
+    engine = engines[engine_name] if engine_name else case.propulsion.engines[0]
+    static_n = float(engine_thrust_n(engine, 1.0, 0.0))
+    if static_n <= 0:
+        raise InputError(
+            f"{case.propulsion_path}: {engine.name}: no static thrust at full throttle"
+        )
+    static_w = published_static_power_w(
+        static_n, battery.published_power_range_w, battery.published_static_thrust_range_n
+    )
+    power = fit_fan_power(runs, static_w, battery.jet_velocity_m_s)
+    result = BatteryCharacterisation(battery, runs, fit, tuple(checks), power)
+    _characterisation_cache[key] = result
+    return result
+
+
+# --- launch: ground roll + climb at full throttle -------------------------------------------
+@dataclass(frozen=True)
+class LaunchBudget:
+    """Charge and energy per fan for the ground roll and the climb to pattern altitude."""
+
+    ground_roll_time_s: float
+    liftoff_speed_m_s: float
+    climb_airspeed_m_s: float
+    climb_rate_m_s: float
+    climb_time_s: float
+    pattern_altitude_m: float
+    charge_ah: float
+    energy_wh: float
+
+    def to_dict(self) -> dict[str, float]:
+        return dict(self.__dict__)
+
+
+def _best_climb(case: Case) -> tuple[float, float]:
+    """Airspeed (m/s) and rate (m/s) of the best full-throttle climb, ``(T - D) V / W``.
+
+    Small-angle climb with ``L = W`` (Anderson, *Aircraft Performance and Design*, 5.10).
+    Searched between the lift-off speed and the full-throttle level-flight speed.
+    """
+    from tuflexperf.models.aircraft import liftoff_speed_m_s
+
+    aircraft, rho = case.aircraft, case.density_kg_m3
+    low = float(liftoff_speed_m_s(aircraft, rho))
+    speeds = np.linspace(low, _MAX_SPEED_OVER_STALL * float(stall_speed_m_s(aircraft, rho)), 4001)
+    thrust = total_thrust_n(case.propulsion, 1.0, speeds, rho)
+    excess = np.asarray(thrust - level_flight_drag_n(aircraft, speeds, rho), dtype=float)
+    rate = excess * speeds / aircraft.weight_n
+    best = int(np.argmax(rate))
+    return float(speeds[best]), float(rate[best])
+
+
+def launch_budget(
+    case: Case, battery: Battery, params: DischargeParameters, power: FanPowerModel
+) -> LaunchBudget:
+    """Charge drawn per fan (its ``n`` parallel packs) by the take-off and the climb.
+
+    Ground roll: the full-throttle roll of :func:`solve_takeoff`, power ``P(1, V(t))``
+    along its time history. Climb: at the best-rate airspeed to the pattern altitude.
+    The charge is integrated by RK4 at constant-power current ``i(q, P)`` (0.25 s steps).
+    Raises :class:`NotAttainable` when the aircraft cannot take off or climb.
+    """
+    from tuflexperf.analysis.takeoff import solve_takeoff
+
+    takeoff = solve_takeoff(case)
+    packs = battery.packs_in_parallel_per_engine
+    height = battery.pattern_altitude_m
+    climb_speed, climb_rate = _best_climb(case)
+    if height > 0 and climb_rate <= 0:
+        raise NotAttainable("cannot climb at full throttle: no excess power after lift-off")
+    climb_time = height / climb_rate if height > 0 else 0.0
+    roll_t = np.asarray(takeoff.history_time_s, dtype=float)
+    roll_v = np.asarray(takeoff.history_airspeed_m_s, dtype=float)
+    climb_power = float(power.electrical_power_w(1.0, climb_speed))
+
+    def power_at(t: float) -> float:
+        if t < takeoff.time_s:
+            return float(power.electrical_power_w(1.0, np.interp(t, roll_t, roll_v)))
+        return climb_power
+
+    total_s = takeoff.time_s + climb_time
+    steps = max(1, math.ceil(total_s / _LAUNCH_STEP_S))
+    dt = total_s / steps
+    q, energy = 0.0, 0.0
+
+    def rate(t: float, charge: float) -> float:
+        return float(current_at_power_a(params, charge, power_at(t), packs)) / 3600.0
+
+    for k in range(steps):
+        t = k * dt
+        k1 = rate(t, q)
+        k2 = rate(t + dt / 2, q + dt / 2 * k1)
+        k3 = rate(t + dt / 2, q + dt / 2 * k2)
+        k4 = rate(t + dt, q + dt * k3)
+        q += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        energy += dt / 6 * (power_at(t) + 4 * power_at(t + dt / 2) + power_at(t + dt))
+    return LaunchBudget(
+        ground_roll_time_s=float(takeoff.time_s),
+        liftoff_speed_m_s=float(takeoff.liftoff_speed_m_s),
+        climb_airspeed_m_s=climb_speed,
+        climb_rate_m_s=climb_rate,
+        climb_time_s=climb_time,
+        pattern_altitude_m=height,
+        charge_ah=q,
+        energy_wh=energy / 3600.0,
+    )
+
+
+# --- results --------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class EnduranceResult:
+    """Endurance at one throttle (SI units; times in minutes as the SPEC's keys say)."""
+
+    throttle: float
+    airspeed_m_s: float
+    electrical_power_w: float  # per fan
+    battery_endurance_min: float  # one pack on one fan, full to cut-off
+    flight_endurance_min: float  # climb + cruise to the landing reserve
+    cruise_time_min: float
+    pack_current_a: float  # one pack, full, at this power
+    pack_energy_wh: float  # one pack, full to cut-off at this power
+    cutoff_charge_ah: float
+    cruise_end_charge_ah: float  # per fan (all its packs)
+    cruise_ends_at: str  # "landing reserve" or "cut-off"
+    engines: int
+    packs_in_parallel_per_engine: int
+    landing_reserve_fraction: float
+    min_throttle: float
+    min_throttle_airspeed_m_s: float
+    extrapolated: bool
+    launch: LaunchBudget
+    characterisation: BatteryCharacterisation = field(repr=False)
+    warnings: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict[str, Any]:
+        ch = self.characterisation
+        return {
+            "throttle": self.throttle,
+            "airspeed_m_s": self.airspeed_m_s,
+            "electrical_power_w": self.electrical_power_w,
+            "total_electrical_power_w": self.electrical_power_w * self.engines,
+            "battery_endurance_min": self.battery_endurance_min,
+            "flight_endurance_min": self.flight_endurance_min,
+            "cruise_time_min": self.cruise_time_min,
+            "pack_current_a": self.pack_current_a,
+            "pack_energy_wh": self.pack_energy_wh,
+            "cutoff_charge_ah": self.cutoff_charge_ah,
+            "cutoff_voltage_v": ch.battery.cutoff_voltage_v,
+            "cruise_end_charge_ah": self.cruise_end_charge_ah,
+            "cruise_ends_at": self.cruise_ends_at,
+            "packs_in_parallel_per_engine": self.packs_in_parallel_per_engine,
+            "landing_reserve_fraction": self.landing_reserve_fraction,
+            "min_throttle": self.min_throttle,
+            "min_throttle_airspeed_m_s": self.min_throttle_airspeed_m_s,
+            "extrapolated": self.extrapolated,
+            "launch": self.launch.to_dict(),
+            "battery_fit": {
+                "rms_v": ch.fit.rms_v,
+                "max_abs_v": ch.fit.max_abs_v,
+                "n_points": ch.fit.n_points,
+                "runs": list(ch.fit.runs),
+                "parameters": ch.fit.parameters.to_dict(),
+            },
+            "cross_validation": [c.to_dict() for c in ch.cross_validation],
+            "power_model": {
+                **ch.power.model.to_dict(),
+                "rms_log_error": ch.power.rms_log_error,
+                "points": list(ch.power.points),
+            },
+            "warnings": list(self.warnings),
+        }
+
+
+@dataclass(frozen=True)
+class BestResult:
+    """Throttle and airspeed of the longest flight and of the longest cruise distance."""
+
+    endurance: EnduranceResult
+    range_throttle: float
+    range_airspeed_m_s: float
+    range_km: float
+    range_flight_endurance_min: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "best_endurance": {
+                "throttle": self.endurance.throttle,
+                "airspeed_m_s": self.endurance.airspeed_m_s,
+                "electrical_power_w": self.endurance.electrical_power_w,
+                "battery_endurance_min": self.endurance.battery_endurance_min,
+                "flight_endurance_min": self.endurance.flight_endurance_min,
+            },
+            "best_range": {
+                "throttle": self.range_throttle,
+                "airspeed_m_s": self.range_airspeed_m_s,
+                "cruise_range_km": self.range_km,
+                "flight_endurance_min": self.range_flight_endurance_min,
+            },
+        }
+
+
+# --- the CasADi model, built once per case + battery -----------------------------------------
+class EnduranceModel:
+    """Level flight, power and discharge of one case as CasADi functions (build once)."""
+
+    def __init__(self, case: Case, battery: Battery) -> None:
+        import casadi as ca
+
+        self.case, self.battery = case, battery
+        self.ch = characterise_battery(battery, case)
+        self.params = self.ch.fit.parameters
+        self.power = self.ch.power.model
+        aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
+        self.packs = battery.packs_in_parallel_per_engine
+        self.cutoff_v = battery.cutoff_voltage_v
+        self.stall_m_s = float(stall_speed_m_s(aircraft, rho))
+        # Cruise ends when each pack has given (1 - reserve) of its rated capacity.
+        usable = 1.0 - battery.landing_reserve_fraction
+        self.reserve_ah = self.packs * battery.capacity_ah * usable
+        self.launch = launch_budget(case, battery, self.params, self.power)
+        self.min_throttle, self.min_throttle_airspeed = self._least_throttle()
+
+        def excess(x: Any, v: Any) -> Any:
+            return total_thrust_n(propulsion, x, v, rho) - level_flight_drag_n(aircraft, v, rho)
+
+        self.excess = excess
+        x, v, q, p = (ca.SX.sym(n) for n in ("x", "v", "q", "p"))
+        sym = self.params
+        level = ca.Function("level_excess", [v, x], [excess(x, v)])
+        cut_1 = ca.Function("cutoff_1", [q, p], [cutoff_residual_v(sym, q, p, self.cutoff_v, 1)])
+        cut_n = ca.Function(
+            "cutoff_n", [q, p], [cutoff_residual_v(sym, q, p, self.cutoff_v, self.packs)]
+        )
+        opts = {"abstol": 1e-10, "max_iter": 200, "error_on_fail": False}
+        self._rf_level = ca.rootfinder("level_speed", "newton", level, opts)
+        rf_cut_1 = ca.rootfinder("cutoff_charge_1", "newton", cut_1, opts)
+        rf_cut_n = ca.rootfinder("cutoff_charge_n", "newton", cut_n, opts)
+        a, b = ca.SX.sym("a"), ca.SX.sym("b")
+        time_1 = ca.Function("time_1", [p, a, b], [discharge_time_s(sym, p, a, b, 1)])
+        time_n = ca.Function("time_n", [p, a, b], [discharge_time_s(sym, p, a, b, self.packs)])
+        self._power = ca.Function("power", [x, v], [self.power.electrical_power_w(x, v)])
+        self._current = ca.Function("current", [q, p], [current_at_power_a(sym, q, p, 1)])
+
+        xm, v0, q10, qn0 = (ca.MX.sym(n) for n in ("x", "v0", "q1_0", "qn_0"))
+        speed = self._rf_level(v0, xm)
+        pw = self._power(xm, speed)
+        q_cut_1 = rf_cut_1(q10, pw)
+        q_cut_n = rf_cut_n(qn0, pw)
+        q_launch = self.launch.charge_ah
+        q_end = ca.fmin(q_cut_n, self.reserve_ah)
+        span = ca.fmax(q_end - q_launch, 0.0)
+        outputs = [
+            speed,
+            pw,
+            q_cut_1,
+            q_cut_n,
+            time_1(pw, 0.0, q_cut_1),
+            time_n(pw, q_launch, q_launch + span),
+            level(speed, xm),
+            cut_1(q_cut_1, pw),
+            cut_n(q_cut_n, pw),
+        ]
+        self._solve = ca.Function("endurance", [xm, v0, q10, qn0], outputs)
+        # Pole of the knee term (charge per fan): Newton starts just left of it, where the
+        # residual is concave and decreasing, so it converges monotonically from the right.
+        pole = self.params.max_capacity_ah
+        self._q_guess = (pole * (1 - 1e-4), self.packs * pole * (1 - 1e-4))
+        self._nlp: dict[str, Any] = {}
+
+    # -- least throttle for level flight (closed form per airspeed, numpy) -------------------
+    def _least_throttle(self) -> tuple[float, float]:
+        """Least throttle (all engines) holding level flight at some speed >= stall, and that speed.
+
+        Total thrust is quadratic in the throttle (poly22), ``T = a(V) + b(V) x + c x^2``;
+        its coefficients come from three evaluations of :func:`total_thrust_n`, the
+        required throttle from the quadratic formula, its least value from a grid plus
+        golden-section refinement. ``inf`` when no throttle in [0, 1] flies.
+        """
+        case = self.case
+        aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
+
+        def required(v: np.ndarray) -> np.ndarray:
+            t0 = np.asarray(total_thrust_n(propulsion, 0.0, v, rho), dtype=float)
+            th = np.asarray(total_thrust_n(propulsion, 0.5, v, rho), dtype=float)
+            t1 = np.asarray(total_thrust_n(propulsion, 1.0, v, rho), dtype=float)
+            c = 2.0 * (t1 - 2.0 * th + t0)
+            b = t1 - t0 - c
+            a = t0 - np.asarray(level_flight_drag_n(aircraft, v, rho), dtype=float)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                disc = b * b - 4.0 * c * a
+                root = np.where(
+                    np.abs(c) > 1e-12,
+                    (-b + np.sqrt(np.maximum(disc, 0.0))) / (2.0 * c),
+                    -a / b,
+                )
+            root = np.where(a >= 0.0, 0.0, root)
+            ok = (disc >= 0.0) & np.isfinite(root) & (root <= 1.0 + 1e-12)
+            return np.where(ok, np.maximum(root, 0.0), np.inf)
+
+        speeds = np.linspace(self.stall_m_s, _MAX_SPEED_OVER_STALL * self.stall_m_s,
+                             _SPEED_GRID_POINTS)
+        values = required(speeds)
+        k = int(np.argmin(values))
+        if not np.isfinite(values[k]):
+            return math.inf, math.nan
+        low = speeds[max(k - 1, 0)]
+        high = speeds[min(k + 1, speeds.size - 1)]
+        golden = (math.sqrt(5.0) - 1.0) / 2.0
+        for _ in range(80):
+            a = high - golden * (high - low)
+            b = low + golden * (high - low)
+            if required(np.array([a]))[0] <= required(np.array([b]))[0]:
+                high = b
+            else:
+                low = a
+        speed = 0.5 * (low + high)
+        return float(required(np.array([speed]))[0]), float(speed)
+
+    def _speed_guess(self, throttle: float) -> float:
+        """An airspeed above the fast level-flight root (excess thrust < 0), in m/s."""
+        speed = max(self.min_throttle_airspeed, self.stall_m_s) * 1.25
+        for _ in range(60):
+            if float(self.excess(throttle, speed)) < 0.0:
+                return speed
+            speed *= 1.25
+        raise NotAttainable(f"throttle {throttle:g}: no upper level-flight airspeed found")
+
+    def _fast_root_fallback(self, throttle: float, high: float) -> float:
+        low = self.min_throttle_airspeed
+        for _ in range(200):
+            mid = 0.5 * (low + high)
+            if float(self.excess(throttle, mid)) >= 0.0:
+                low = mid
+            else:
+                high = mid
+        return 0.5 * (low + high)
+
+    def check_throttle(self, throttle: float) -> None:
+        """Raise :class:`NotAttainable` if ``throttle`` cannot hold level flight."""
+        if not math.isfinite(self.min_throttle):
+            raise NotAttainable("no throttle up to full holds level flight at any airspeed")
+        if throttle < self.min_throttle - 1e-9:
+            raise NotAttainable(
+                f"throttle {throttle:.2f} is below {self.min_throttle:.3f}, the least throttle "
+                f"that holds level flight (at {self.min_throttle_airspeed:.1f} m/s)"
+            )
+
+    def solve(self, throttle: float) -> EnduranceResult:
+        """Endurance at ``throttle`` (fraction, all engines)."""
+        self.check_throttle(throttle)
+        guess = self._speed_guess(throttle)
+        out = [float(val) for val in self._solve(throttle, guess, *self._q_guess)]
+        speed, power_w, q1, qn, t1, tn, res_level, res_1, res_n = out
+        # Verify the Newton answers; fall back to bisection (robust, slower) if any failed.
+        if not (abs(res_level) < 1e-6 and speed >= self.min_throttle_airspeed - 1e-6):
+            speed = self._fast_root_fallback(throttle, guess)
+            out = [float(val) for val in self._solve(throttle, speed, *self._q_guess)]
+            _, power_w, q1, qn, t1, tn, _, res_1, res_n = out
+        if not (abs(res_1) < 1e-6 and abs(res_n) < 1e-6 and 0 < q1 and 0 < qn):
+            raise NotAttainable(
+                f"throttle {throttle:g}: the pack is below its cut-off voltage at "
+                f"{power_w:.0f} W per fan from the start"
+            )
+        return self._result(throttle, speed, power_w, q1, qn, t1, tn)
+
+    def _result(
+        self, throttle: float, speed: float, power_w: float, q1: float, qn: float, t1: float,
+        tn: float,
+    ) -> EnduranceResult:
+        warnings: list[str] = []
+        extrapolated = is_extrapolated(self.case.propulsion, speed)
+        if extrapolated:
+            low, high = self.case.propulsion.tested_airspeed_m_s
+            warnings.append(
+                f"level-flight airspeed {speed:.1f} m/s is outside the thrust model's tested "
+                f"range {low:g}-{high:g} m/s (extrapolated)"
+            )
+        envelope = self.case.requirements.envelope
+        if envelope is not None and not (
+            envelope.min_airspeed_m_s - 1e-9 <= speed <= envelope.max_airspeed_m_s + 1e-9
+        ):
+            warnings.append(
+                f"level-flight airspeed {speed:.1f} m/s is outside the envelope "
+                f"{envelope.min_airspeed_m_s:g}-{envelope.max_airspeed_m_s:g} m/s"
+            )
+        ends_at = "landing reserve" if self.reserve_ah <= qn else "cut-off"
+        if self.launch.charge_ah >= min(qn, self.reserve_ah):
+            warnings.append("the launch alone uses the charge available before the reserve")
+        cruise_min = tn / 60.0
+        return EnduranceResult(
+            throttle=throttle,
+            airspeed_m_s=speed,
+            electrical_power_w=power_w,
+            battery_endurance_min=t1 / 60.0,
+            flight_endurance_min=cruise_min + self.launch.climb_time_s / 60.0,
+            cruise_time_min=cruise_min,
+            pack_current_a=float(self._current(0.0, power_w)),
+            pack_energy_wh=power_w * t1 / 3600.0,
+            cutoff_charge_ah=q1,
+            cruise_end_charge_ah=min(qn, self.reserve_ah),
+            cruise_ends_at=ends_at,
+            engines=len(self.case.propulsion.engines),
+            packs_in_parallel_per_engine=self.packs,
+            landing_reserve_fraction=self.battery.landing_reserve_fraction,
+            min_throttle=self.min_throttle,
+            min_throttle_airspeed_m_s=self.min_throttle_airspeed,
+            extrapolated=extrapolated,
+            launch=self.launch,
+            characterisation=self.ch,
+            warnings=tuple(warnings),
+        )
+
+    # -- best endurance and best range (IPOPT) ----------------------------------------------
+    def _best_solver(self, objective: str) -> Any:
+        """NLP over ``(x, V, q_end)``: maximise flight time or cruise distance.
+
+        Constraints: level flight ``T(x, V) = D(V)``; front side ``dE/dV <= 0``;
+        ``V >= 1.2 V_stall``; cruise ends before the cut-off (``residual(q_end) >= 0``)
+        and the landing reserve; ``0 <= x <= 1``.
+        """
+        if objective in self._nlp:
+            return self._nlp[objective]
+        import casadi as ca
+
+        w = ca.SX.sym("w", 3)
+        x, v, q_end = w[0], w[1], w[2]
+        sym = self.params
+        e = self.excess(x, v)
+        pw = self.power.electrical_power_w(x, v)
+        q_launch = self.launch.charge_ah
+        cruise_s = discharge_time_s(sym, pw, q_launch, q_end, self.packs)
+        if objective == "endurance":
+            f = -(cruise_s + self.launch.climb_time_s) / 60.0
+        else:
+            f = -v * cruise_s / 1000.0
+        g = ca.vertcat(e, ca.jacobian(e, v), cutoff_residual_v(sym, q_end, pw, self.cutoff_v,
+                                                                 self.packs))
+        solver = ca.nlpsol(
+            f"best_{objective}",
+            "ipopt",
+            {"x": w, "f": f, "g": g},
+            {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-10},
+        )
+        self._nlp[objective] = solver
+        return solver
+
+    def _solve_best(self, objective: str, start: EnduranceResult) -> tuple[float, float, float]:
+        solver = self._best_solver(objective)
+        q_launch = self.launch.charge_ah
+        v_low, v_high = self.best_airspeed_bounds()
+        lbx = [max(self.min_throttle - 1e-6, 0.0), v_low, q_launch]
+        ubx = [1.0, v_high, self.reserve_ah]
+        x0 = [start.throttle, start.airspeed_m_s, start.cruise_end_charge_ah]
+        sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=[0.0, -np.inf, 0.0], ubg=[0.0, 0.0, np.inf])
+        status = solver.stats()["return_status"]
+        if status not in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
+            raise NotAttainable(f"best {objective}: the optimiser did not converge ({status})")
+        w = np.asarray(sol["x"]).ravel()
+        return float(w[0]), float(w[1]), float(-sol["f"])
+
+    def best_airspeed_bounds(self) -> tuple[float, float]:
+        """Airspeed range (m/s) for ``--best``: the case's envelope, never below 1.2 V_stall."""
+        low = BEST_MIN_AIRSPEED_OVER_STALL * self.stall_m_s
+        high = _MAX_SPEED_OVER_STALL * self.stall_m_s
+        envelope = self.case.requirements.envelope
+        if envelope is not None:
+            low = max(low, envelope.min_airspeed_m_s)
+            high = envelope.max_airspeed_m_s
+        if not low < high:
+            raise NotAttainable(
+                f"no airspeed for --best: the envelope ends at {high:g} m/s, below 1.2 x stall "
+                f"speed {low:.1f} m/s"
+            )
+        return low, high
+
+    def best(self) -> BestResult:
+        """Throttle/airspeed of the longest flight, and of the longest cruise distance."""
+        self.check_throttle(1.0)
+        start = self.solve(min(1.0, self.min_throttle + 0.5 * (1.0 - self.min_throttle)))
+        x_e, _, _ = self._solve_best("endurance", start)
+        endurance = self.solve(min(max(x_e, self.min_throttle), 1.0))
+        x_r, _, range_km = self._solve_best("range", start)
+        at_range = self.solve(min(max(x_r, self.min_throttle), 1.0))
+        return BestResult(
+            endurance=endurance,
+            range_throttle=at_range.throttle,
+            range_airspeed_m_s=at_range.airspeed_m_s,
+            range_km=range_km,
+            range_flight_endurance_min=at_range.flight_endurance_min,
+        )
+
+
+def endurance_model(case: Case) -> EnduranceModel:
+    """The case's endurance model, built once and cached (case contents + battery files)."""
+    if case.battery_path is None:
+        raise InputError(
+            f"{case.path}: battery: the case names no battery file; endurance needs one"
+        )
+    battery = load_battery(case.battery_path)
+    key = (
+        repr(case.aircraft),
+        repr(case.propulsion),
+        case.density_kg_m3,
+        repr(battery),
+        tuple(_file_key(r.path) for r in battery.runs),
+    )
+    if key not in _model_cache:
+        _model_cache[key] = EnduranceModel(case, battery)
+    return _model_cache[key]
+
+
+def solve_endurance(case: Case, throttle: float) -> EnduranceResult:
+    """Level-flight airspeed, electrical power and endurance at ``throttle`` for ``case``.
+
+    Raises :class:`InputError` (naming the case file) when the case has no battery or
+    the throttle is not a fraction, and :class:`NotAttainable` with the reason when the
+    throttle cannot hold level flight.
+    """
+    if not (isinstance(throttle, (int, float)) and math.isfinite(throttle)
+            and 0.0 <= throttle <= 1.0):
+        raise InputError(f"throttle: must be a fraction in [0, 1], got {throttle!r}")
+    return endurance_model(case).solve(float(throttle))
+
+
+def solve_best(case: Case) -> BestResult:
+    """Throttle and airspeed of the longest flight and of the longest cruise range."""
+    return endurance_model(case).best()
