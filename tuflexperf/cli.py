@@ -218,6 +218,88 @@ def oei(
 
 
 # ---- endurance (issue 3) -------------------------------------------------------------------
+@app.command()
+def endurance(
+    throttle: float | None = typer.Option(
+        None, "--throttle", help="Throttle fraction in [0, 1], all engines."
+    ),
+    case_file: Path | None = CaseOption,
+    as_json: bool = JsonOption,
+    best: bool = typer.Option(
+        False, "--best", help="Also the throttle/airspeed of longest flight and of best range."
+    ),
+) -> None:
+    """Level-flight airspeed, electrical power, pack and flight endurance at a throttle."""
+    from tuflexperf.analysis.endurance import solve_best, solve_endurance
+    from tuflexperf.io.case import load_case
+
+    if throttle is None and not best:
+        fail_input("--throttle: required (a fraction in [0, 1]), or use --best")
+    if throttle is not None and not (math.isfinite(throttle) and 0.0 <= throttle <= 1.0):
+        fail_input(f"--throttle: must be a fraction in [0, 1], got {throttle!r}")
+    case = load_case(case_file)
+    best_result = solve_best(case) if best else None
+    result = (
+        solve_endurance(case, throttle) if throttle is not None else best_result.endurance
+    )
+    data = result.to_dict()
+    requirement = case.requirements.endurance
+    judged = requirement is not None and abs(requirement.throttle - result.throttle) < 1e-12
+    met = not judged or result.flight_endurance_min >= requirement.min_flight_time_min
+    if as_json:
+        payload = dict(data)
+        if best_result is not None:
+            payload["best"] = best_result.to_dict()
+        if judged:
+            payload["min_flight_time_min"] = requirement.min_flight_time_min
+            payload["passed"] = met
+        emit_json(payload)
+    else:
+        typer.echo(f"{case.name}: endurance at throttle {result.throttle:.3f}")
+        rows = [
+            ("level-flight airspeed", data["airspeed_m_s"], "m/s"),
+            ("electrical power per fan", data["electrical_power_w"], "W"),
+            ("pack current (full)", data["pack_current_a"], "A"),
+            ("one pack, full to cut-off", data["battery_endurance_min"], "min"),
+            ("flight (climb + cruise)", data["flight_endurance_min"], "min"),
+            ("  cruise", data["cruise_time_min"], "min"),
+            ("  launch charge per fan", data["launch"]["charge_ah"], "Ah"),
+        ]
+        for label, value, unit in rows:
+            typer.echo(f"  {label:<28}{value:10.2f} {unit}")
+        typer.echo(
+            f"  cruise ends at the {data['cruise_ends_at']} "
+            f"({data['packs_in_parallel_per_engine']} packs per fan, "
+            f"reserve {100 * data['landing_reserve_fraction']:g} %)"
+        )
+        typer.echo(
+            f"  battery fit: rms {data['battery_fit']['rms_v']:.3f} V over "
+            f"{data['battery_fit']['n_points']} samples"
+        )
+        for cv in data["cross_validation"]:
+            typer.echo(
+                f"  cross-check: fitted on {cv['fitted_on']}, {cv['predicted_run']} cut-off "
+                f"{cv['predicted_min']:.2f} min vs {cv['observed_min']:.2f} measured "
+                f"({cv['error_percent']:+.1f} %)"
+            )
+        if judged:
+            typer.echo(
+                f"  requirement: >= {requirement.min_flight_time_min:g} min  "
+                f"{'PASS' if met else 'FAIL'}"
+            )
+        if best_result is not None:
+            b = best_result.to_dict()
+            e, r = b["best_endurance"], b["best_range"]
+            typer.echo(
+                f"  longest flight: throttle {e['throttle']:.3f} at {e['airspeed_m_s']:.1f} m/s, "
+                f"{e['flight_endurance_min']:.2f} min"
+            )
+            typer.echo(
+                f"  best range: throttle {r['throttle']:.3f} at {r['airspeed_m_s']:.1f} m/s, "
+                f"{r['cruise_range_km']:.1f} km in cruise"
+            )
+        _print_warnings(data["warnings"])
+    raise typer.Exit(0 if met else 1)
 
 
 # ---- fit (issue 4) -------------------------------------------------------------------------

@@ -231,6 +231,10 @@ def load_case(path: Path | str | None = None) -> Case:
     aircraft_path = _resolve(case_path, "aircraft", schema.aircraft)
     propulsion_path = _resolve(case_path, "propulsion", schema.propulsion)
     battery_path = _resolve(case_path, "battery", schema.battery) if schema.battery else None
+    if battery_path is not None:
+        from tuflexperf.io.battery import load_battery  # validate now: bad keys fail early
+
+        load_battery(battery_path)
     aircraft = load_aircraft(aircraft_path)
     propulsion = load_propulsion(propulsion_path)
     case = Case(
