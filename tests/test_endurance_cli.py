@@ -1,0 +1,218 @@
+"""`tuflexperf endurance`: JSON keys, exit codes, bad flags, bad battery files."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from tests.validation.test_endurance_paper import shipped_with_battery
+from tuflexperf.cli import app
+from tuflexperf.errors import InputError
+from tuflexperf.io.battery import load_battery
+from tuflexperf.io.case import load_case
+
+ROOT = Path(__file__).resolve().parent.parent
+BATTERY = ROOT / "data" / "tuflex" / "battery.yaml"
+SPEC_KEYS = ("throttle", "airspeed_m_s", "electrical_power_w", "battery_endurance_min",
+             "flight_endurance_min")
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def case_path(tmp_path_factory) -> Path:
+    return shipped_with_battery(tmp_path_factory.mktemp("case"))
+
+
+def run(*args: str):
+    return runner.invoke(app, list(args))
+
+
+def test_json_has_the_spec_keys(case_path):
+    result = run("endurance", "--throttle", "0.5", "--case", str(case_path), "--json")
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    for key in SPEC_KEYS:
+        assert isinstance(data[key], float) and math.isfinite(data[key])
+    assert data["throttle"] == 0.5
+    assert data["passed"] is True and data["min_flight_time_min"] == 15
+    assert {"rms_v", "n_points"} <= set(data["battery_fit"])
+    assert data["cross_validation"] and data["launch"]["charge_ah"] > 0
+
+
+def test_human_table(case_path):
+    result = run("endurance", "--throttle", "0.6", "--case", str(case_path))
+    assert result.exit_code == 0, result.output
+    assert "level-flight airspeed" in result.stdout and "one pack" in result.stdout
+
+
+def test_best(case_path):
+    result = run("endurance", "--best", "--case", str(case_path), "--json")
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    best = data["best"]
+    # the longest flight is at the least throttle that flies, not above a bit over it
+    assert data["min_throttle"] - 1e-6 <= best["best_endurance"]["throttle"]
+    assert best["best_endurance"]["throttle"] <= data["min_throttle"] + 0.05
+    at_half = json.loads(
+        run("endurance", "--throttle", "0.5", "--case", str(case_path), "--json").stdout
+    )
+    assert best["best_endurance"]["flight_endurance_min"] >= at_half["flight_endurance_min"]
+    # best range inside the case's envelope
+    assert 15.0 <= best["best_range"]["airspeed_m_s"] <= 45.0 + 1e-6
+    assert best["best_range"]["cruise_range_km"] > 0
+
+
+def test_below_least_throttle_is_not_attainable(case_path):
+    result = run("endurance", "--throttle", "0.3", "--case", str(case_path))
+    assert result.exit_code == 1
+    assert "least throttle" in result.stderr and "0.30" in result.stderr
+
+
+@pytest.mark.parametrize("value", ["nan", "1.5", "-0.1", "inf", "abc", ""])
+def test_bad_throttle_is_exit_2_naming_the_flag(case_path, value):
+    result = run("endurance", "--throttle", value, "--case", str(case_path))
+    assert result.exit_code == 2
+    assert "--throttle" in result.stderr or "'--throttle'" in result.output
+
+
+def test_missing_throttle(case_path):
+    result = run("endurance", "--case", str(case_path))
+    assert result.exit_code == 2 and "--throttle" in result.stderr
+
+
+def test_case_without_battery_names_the_case_file(tmp_path):
+    data = yaml.safe_load((ROOT / "requirements" / "tuflex.yaml").read_text())
+    data.pop("battery", None)
+    (data.get("requirements") or {}).pop("endurance", None)
+    for key in ("aircraft", "propulsion"):
+        data[key] = str((ROOT / "requirements" / data[key]).resolve())
+    path = tmp_path / "nobattery.yaml"
+    path.write_text(yaml.safe_dump(data))
+    result = run("endurance", "--throttle", "0.5", "--case", str(path))
+    assert result.exit_code == 2
+    assert str(path) in result.stderr and "battery" in result.stderr
+    assert result.stderr.count("\n") == 1
+
+
+# --- bad battery files ------------------------------------------------------------------------
+def _battery_copy(folder: Path, edit) -> Path:
+    """A copy of the shipped battery file with its runs, changed by ``edit(dict)``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    shutil.copytree(BATTERY.parent / "endurance", folder / "endurance", dirs_exist_ok=True)
+    data = yaml.safe_load(BATTERY.read_text())
+    edit(data)
+    path = folder / "battery.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def _set(path: tuple, value):
+    def edit(data):
+        target = data
+        for key in path[:-1]:
+            target = target[key]
+        target[path[-1]] = value
+    return edit
+
+
+def _drop(key):
+    return lambda data: data.pop(key)
+
+
+BAD_BATTERIES = {
+    "misspelt key": (lambda d: d.update(capacity_mah=5000), "capacity_mah"),
+    "missing key": (_drop("cells_in_series"), "cells_in_series"),
+    "negative capacity": (_set(("capacity_ah",), -5.0), "capacity_ah"),
+    "nan cut-off": (_set(("cutoff_voltage_per_cell_v",), float("nan")), "cutoff_voltage"),
+    "string cells": (_set(("cells_in_series",), "12"), "cells_in_series"),
+    "no runs": (_set(("runs",), []), "runs"),
+    "missing run file": (_set(("runs",), [{"file": "endurance/nope.csv"}]), "runs[0].file"),
+    "misspelt mission key": (_set(("mission",), {"pattern_altitude": 100}), "mission"),
+    "reserve of 1": (_set(("mission", "landing_reserve_fraction"), 1.0), "landing_reserve"),
+    "inverted power range": (
+        _set(("fan_power", "published_power_range_w"), [4100, 2400]), "published_power_range_w"
+    ),
+    "nominal voltage for 6S": (_set(("nominal_voltage_v",), 22.2), "nominal_voltage_v"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD_BATTERIES))
+def test_bad_battery_file_is_one_line_naming_file_and_key(tmp_path, name):
+    edit, key = BAD_BATTERIES[name]
+    path = _battery_copy(tmp_path, edit)
+    with pytest.raises(InputError) as info:
+        load_battery(path)
+    message = str(info.value)
+    assert str(path) in message and key in message and "\n" not in message
+
+
+def test_bad_battery_fails_at_case_load_with_exit_2(tmp_path):
+    battery = _battery_copy(tmp_path / "b", lambda d: d.update(cells=12))
+    data = yaml.safe_load((ROOT / "requirements" / "tuflex.yaml").read_text())
+    for key in ("aircraft", "propulsion"):
+        data[key] = str((ROOT / "requirements" / data[key]).resolve())
+    data["battery"] = str(battery)
+    case = tmp_path / "case.yaml"
+    case.write_text(yaml.safe_dump(data))
+    with pytest.raises(InputError, match="cells"):
+        load_case(case)
+    result = run("check", str(case))
+    assert result.exit_code == 2 and "cells" in result.stderr
+
+
+def test_duplicate_key_in_battery_file(tmp_path):
+    path = _battery_copy(tmp_path, lambda d: None)
+    path.write_text(path.read_text() + "capacity_ah: 6.0\n")
+    with pytest.raises(InputError, match="duplicate key"):
+        load_battery(path)
+
+
+@pytest.mark.parametrize(
+    "content, problem",
+    [
+        ("time_s,force_n,airspeed_m_s,throttle,voltage_v\n0,0,30,0,50\n", "current_a"),
+        ("time_s,force_n,airspeed_m_s,throttle,voltage_v,current_a\n"
+         + "".join(f"{t},0,30,0.5,nan,20\n" for t in range(20)), "voltage_v"),
+        ("time_s,force_n,airspeed_m_s,throttle,voltage_v,current_a\n"
+         + "".join(f"{t % 5},0,30,0.5,48,20\n" for t in range(20)), "time_s"),
+        ("time_s,force_n,airspeed_m_s,throttle,voltage_v,current_a\n"
+         + "".join(f"{t},0,30,50,48,20\n" for t in range(20)), "throttle"),
+        ("time_s,force_n,airspeed_m_s,throttle,voltage_v,current_a\n0,0,x,0,1,1\n", "cannot read"),
+    ],
+)
+def test_bad_run_file_is_exit_2_naming_the_run(tmp_path, content, problem):
+    path = _battery_copy(tmp_path, lambda d: None)
+    run_file = path.parent / "endurance" / "edf1_endurance_75.csv"
+    run_file.write_text(content)
+    data = yaml.safe_load((ROOT / "requirements" / "tuflex.yaml").read_text())
+    for key in ("aircraft", "propulsion"):
+        data[key] = str((ROOT / "requirements" / data[key]).resolve())
+    data["battery"] = str(path)
+    case = tmp_path / "case.yaml"
+    case.write_text(yaml.safe_dump(data))
+    result = run("endurance", "--throttle", "0.5", "--case", str(case))
+    assert result.exit_code == 2, result.output
+    assert run_file.name in result.stderr and problem in result.stderr
+    assert result.stderr.count("\n") == 1
+
+
+def test_real_subprocess(case_path):
+    exe = Path(sys.executable).parent / "tuflexperf"
+    proc = subprocess.run(
+        [str(exe), "endurance", "--throttle", "0.5", "--case", str(case_path), "--json"],
+        capture_output=True, text=True, timeout=120, check=False,
+    )
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads(proc.stdout)
+    assert set(SPEC_KEYS) <= set(data)
+    bad = subprocess.run([str(exe), "endurance", "--throttle", "2"], capture_output=True,
+                         text=True, timeout=120, check=False)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--throttle" in bad.stderr
