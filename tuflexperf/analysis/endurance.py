@@ -64,6 +64,7 @@ BEST_MIN_AIRSPEED_OVER_STALL = 1.2
 _LAUNCH_STEP_S = 0.25
 _characterisation_cache: dict[Any, BatteryCharacterisation] = {}
 _model_cache: dict[Any, EnduranceModel] = {}
+_battery_cache: dict[Any, Battery] = {}
 
 
 # --- battery characterisation (fit + cross-validation + power), cached per file contents ---
@@ -645,7 +646,10 @@ def endurance_model(case: Case) -> EnduranceModel:
         raise InputError(
             f"{case.path}: battery: the case names no battery file; endurance needs one"
         )
-    battery = load_battery(case.battery_path)
+    battery_key = _file_key(case.battery_path)
+    battery = _battery_cache.get(battery_key)
+    if battery is None:  # parse the YAML once per file version, not per call
+        battery = _battery_cache[battery_key] = load_battery(case.battery_path)
     key = (
         repr(case.aircraft),
         repr(case.propulsion),
