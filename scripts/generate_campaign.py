@@ -1,0 +1,276 @@
+"""Generate the shipped synthetic test campaign (data/tuflex/campaign/).
+
+The paper's raw logs are not published, so the campaign that ``tuflexperf fit``
+ships with is synthetic, built from a *known* ground truth so the reduction can
+be checked against it (tests/validation/test_fit_campaign.py). Everything is
+seeded (:data:`SEED`); running the script again rewrites identical files.
+
+Ground truth (written to ``truth.yaml``):
+
+* thrust per fan: the shipped poly22 (data/tuflex/propulsion.yaml, reconstructed
+  from the paper's published thrusts) with small perturbations
+  (:data:`PERTURBATION`) so the fit cannot just echo the shipped file;
+* structure drag ``D = 0.5 rho CdA V^2`` with ``CdA = 0.0055 m^2`` (about 3 N at
+  30 m/s: the fairing and rods of the paper's Fig. 5/6 rig, estimated);
+* throttle-to-force dead time 0.05 s (published, section 4) and a first-order
+  spool-up lag of 0.08 s (estimated: "responds nearly instantaneous");
+* battery sag: effective throttle falls linearly by 1 % over a run (estimated;
+  the paper saw thrust change with battery state).
+
+What a real rig adds (all estimated, to exercise the reduction):
+
+* 1 kHz log (the paper's rate), tunnel speed a little off its set point with a
+  slow 0.3 % drift and 0.05 m/s pitot noise;
+* vibration noise growing with throttle: Gaussian 0.12 + 0.9 x N plus an
+  aliased blade-passing tone of 0.6 x N;
+* isolated spikes (about one per 2 s, 4-12 N) and two bursts of spikes per run;
+* a few NaN samples (dropped RS232 frames) in some runs;
+* values rounded to the logger's resolution: 1 ms, 0.01 N, 0.01 m/s, 0.001 throttle.
+
+Runs: for each fan, throttle steps from 100 % down to 10 % in 10 % steps (then 0)
+at 0, 15, 20, 22.5, 25, 27.5 and 30 m/s (about 4 s per step, varied by +-0.4 s);
+a linear sine sweep of the throttle between 25 % and 75 % rising from 0.2 to
+5 Hz at 0 and 30 m/s; one velocity sweep 0-30 m/s of the bare structure.
+
+To keep the repository small, EDF1's step runs and EDF2's sweeps are gzip CSV
+(``.csv.gz``), EDF2's step runs and EDF1's sweeps MATLAB v5 files compressed
+with ``scipy.io.savemat(..., do_compression=True)``, the drag sweep a plain
+``.csv``: every reader path is exercised.
+
+Run: ``.venv/bin/python scripts/generate_campaign.py`` (about 10 s).
+"""
+
+from __future__ import annotations
+
+import gzip
+import io
+from pathlib import Path
+
+import numpy as np
+import scipy.io
+import yaml
+from scipy.signal import lfilter
+
+SEED = 20240531
+ROOT = Path(__file__).resolve().parent.parent
+SHIPPED_PROPULSION = ROOT / "data" / "tuflex" / "propulsion.yaml"
+OUT = ROOT / "data" / "tuflex" / "campaign"
+
+SAMPLE_RATE_HZ = 1000.0
+AIR_DENSITY_KG_M3 = 1.225
+FAN_AREA_M2 = float(np.pi * 0.093**2 / 4)  # 93 mm fan (paper Table 1)
+TUNNEL_AREA_M2 = 0.16  # 400 mm x 400 mm open jet (paper 2.1)
+STRUCTURE_CDA_M2 = 0.0055
+DELAY_S = 0.05
+SPOOL_LAG_S = 0.08
+BATTERY_SAG = 0.01
+AIRSPEEDS_M_S = (0.0, 15.0, 20.0, 22.5, 25.0, 27.5, 30.0)
+SWEEP_AIRSPEEDS_M_S = (0.0, 30.0)
+STEP_S = 4.0
+PERTURBATION = {  # relative change of the shipped coefficients -> ground truth
+    "EDF1": {"p10": +0.03, "p20": -0.02, "p01": +0.05, "p11": -0.04, "p02": +0.10},
+    "EDF2": {"p10": -0.02, "p20": +0.01, "p01": -0.05, "p11": +0.03, "p02": -0.10},
+}
+RESOLUTION = {"time_s": 1e-3, "force_n": 0.01, "airspeed_m_s": 0.01, "throttle": 1e-3}
+
+
+def truth_coefficients() -> dict[str, dict[str, float]]:
+    """Shipped poly22 coefficients with :data:`PERTURBATION` applied (relative)."""
+    shipped = yaml.safe_load(SHIPPED_PROPULSION.read_text(encoding="utf-8"))
+    truth = {}
+    for engine in shipped["engines"]:
+        change = PERTURBATION[engine["name"]]
+        truth[engine["name"]] = {
+            term: round(float(value) * (1.0 + change.get(term, 0.0)), 6)
+            for term, value in engine["coefficients"].items()
+        }
+    return truth
+
+
+def poly22(x: np.ndarray, v: np.ndarray, c: dict[str, float]) -> np.ndarray:
+    return (
+        c["p00"]
+        + c["p10"] * x
+        + c["p01"] * v
+        + c["p20"] * x * x
+        + c["p11"] * x * v
+        + (c["p02"] * v * v)
+    )
+
+
+def structure_drag_n(v: np.ndarray) -> np.ndarray:
+    return 0.5 * AIR_DENSITY_KG_M3 * STRUCTURE_CDA_M2 * v * v
+
+
+def tunnel_airspeed(rng: np.random.Generator, nominal: np.ndarray | float, t: np.ndarray):
+    """True and measured tunnel speed: set-point error, slow drift, pitot noise."""
+    nominal = np.broadcast_to(np.asarray(nominal, dtype=float), t.shape)
+    offset = rng.normal(0.0, 0.05) if np.any(nominal > 0) else 0.0
+    drift = 0.003 * np.sin(2 * np.pi * 0.05 * t + rng.uniform(0, 2 * np.pi))
+    true = np.where(nominal > 0, (nominal + offset) * (1 + drift), 0.0)
+    measured = true + rng.normal(0.0, 0.05, t.size)
+    return true, measured
+
+
+def rig_response(
+    rng: np.random.Generator,
+    t: np.ndarray,
+    throttle_cmd: np.ndarray,
+    true_airspeed: np.ndarray,
+    coefficients: dict[str, float],
+) -> np.ndarray:
+    """Measured force: delayed, lagged, sagging thrust minus structure drag, plus rig noise."""
+    dt = 1.0 / SAMPLE_RATE_HZ
+    delayed = np.interp(t - DELAY_S, t, throttle_cmd, left=throttle_cmd[0])
+    alpha = np.exp(-dt / SPOOL_LAG_S)
+    lagged = lfilter([1 - alpha], [1, -alpha], delayed, zi=[alpha * delayed[0]])[0]
+    effective = lagged * (1.0 - BATTERY_SAG * (t - t[0]) / (t[-1] - t[0]))
+    force = poly22(effective, true_airspeed, coefficients) - structure_drag_n(true_airspeed)
+    tone_hz = 50.0 + 130.0 * lagged
+    phase = 2 * np.pi * np.cumsum(tone_hz) * dt
+    noise = rng.normal(0.0, 1.0, t.size) * (0.12 + 0.9 * lagged) + 0.6 * lagged * np.sin(phase)
+    return force + noise + spikes(rng, t.size)
+
+
+def spikes(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Isolated spikes (about one per 2 s) and two bursts of 30-60 ms."""
+    out = np.zeros(n)
+    count = rng.poisson(n / SAMPLE_RATE_HZ / 2.0)
+    where = rng.integers(0, n, count)
+    out[where] = rng.choice([-1.0, 1.0], count) * rng.uniform(4.0, 12.0, count)
+    for _ in range(2):
+        length = int(rng.uniform(0.03, 0.06) * SAMPLE_RATE_HZ)
+        start = int(rng.integers(0, max(n - length, 1)))
+        hit = rng.random(length) < 0.3
+        out[start : start + length][hit] += rng.normal(0.0, 8.0, int(hit.sum()))
+    return out
+
+
+def add_nans(rng: np.random.Generator, columns: dict[str, np.ndarray], count: int) -> None:
+    """A few dropped samples, as a logger's missed serial frames."""
+    n = columns["force_n"].size
+    for name in ("force_n", "airspeed_m_s")[: 1 + (count > 3)]:
+        columns[name][rng.integers(1, n - 1, count)] = np.nan
+
+
+def quantise(columns: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    return {
+        name: np.round(values / RESOLUTION[name]) * RESOLUTION[name]
+        for name, values in columns.items()
+    }
+
+
+def step_run(rng: np.random.Generator, airspeed: float, coefficients: dict[str, float]):
+    """Throttle 0 -> 100 % then down in 10 % steps to 10 %, then 0 (paper section 3)."""
+    levels = [0.0, *np.round(np.arange(1.0, 0.05, -0.1), 1), 0.0]
+    durations = [1.5, *(STEP_S + rng.uniform(-0.4, 0.4, len(levels) - 2)), 2.0]
+    edges = np.concatenate(([0.0], np.cumsum(durations)))
+    t = np.arange(0.0, edges[-1], 1.0 / SAMPLE_RATE_HZ)
+    throttle = np.asarray(levels)[np.searchsorted(edges, t, side="right") - 1]
+    true_v, measured_v = tunnel_airspeed(rng, airspeed, t)
+    force = rig_response(rng, t, throttle, true_v, coefficients)
+    return {"time_s": t, "force_n": force, "airspeed_m_s": measured_v, "throttle": throttle}
+
+
+def sweep_run(rng: np.random.Generator, airspeed: float, coefficients: dict[str, float]):
+    """Throttle sine sweep 25-75 %, frequency rising linearly from 0.2 to 5 Hz (section 3)."""
+    lead, sweep, tail = 3.0, 30.0, 2.0
+    t = np.arange(0.0, 1.0 + lead + sweep + tail, 1.0 / SAMPLE_RATE_HZ)
+    f0, f1 = 0.2, 5.0
+    ts = np.clip(t - 1.0 - lead, 0.0, sweep)
+    phase = 2 * np.pi * (f0 * ts + 0.5 * (f1 - f0) / sweep * ts * ts)
+    throttle = np.where(t < 1.0, 0.0, 0.5 + 0.25 * np.sin(phase))
+    throttle[t > 1.0 + lead + sweep] = 0.5
+    true_v, measured_v = tunnel_airspeed(rng, airspeed, t)
+    force = rig_response(rng, t, throttle, true_v, coefficients)
+    return {"time_s": t, "force_n": force, "airspeed_m_s": measured_v, "throttle": throttle}
+
+
+def drag_run(rng: np.random.Generator):
+    """Bare structure (no fan): tunnel speed held at 0, ramped to 30 m/s, held."""
+    t = np.arange(0.0, 18.0, 1.0 / SAMPLE_RATE_HZ)
+    nominal = np.clip((t - 3.0) / 12.0, 0.0, 1.0) * 30.0
+    true_v, measured_v = tunnel_airspeed(rng, nominal, t)
+    force = -structure_drag_n(true_v) + rng.normal(0.0, 0.08, t.size) + 0.3 * spikes(rng, t.size)
+    return {"time_s": t, "force_n": force, "airspeed_m_s": measured_v, "throttle": 0.0 * t}
+
+
+def write_run(path: Path, columns: dict[str, np.ndarray]) -> None:
+    columns = quantise(columns)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.suffix == ".mat":
+        scipy.io.savemat(path, columns, do_compression=True, oned_as="column")
+        return
+    text = io.StringIO()
+    text.write(",".join(columns) + "\n")
+    digits = {"time_s": 3, "force_n": 2, "airspeed_m_s": 2, "throttle": 3}
+    matrix = np.column_stack(list(columns.values()))
+    formats = [f"%.{digits[name]}f" for name in columns]
+    np.savetxt(text, matrix, fmt=formats, delimiter=",")
+    data = text.getvalue().replace("nan", "NaN").encode()
+    if path.name.endswith(".gz"):
+        path.write_bytes(gzip.compress(data, compresslevel=9, mtime=0))
+    else:
+        path.write_bytes(data)
+
+
+def main() -> None:
+    truth = truth_coefficients()
+    runs: list[dict[str, str]] = []
+    counter = 0
+
+    def rng_for() -> np.random.Generator:
+        nonlocal counter
+        counter += 1
+        return np.random.default_rng([SEED, counter])
+
+    for engine, ext in (("EDF1", ".csv.gz"), ("EDF2", ".mat")):
+        for v in AIRSPEEDS_M_S:
+            rng = rng_for()
+            name = f"runs/{engine.lower()}_v{v:04.1f}".replace(".", "p") + ext
+            columns = step_run(rng, v, truth[engine])
+            add_nans(rng, columns, int(rng.integers(0, 6)))
+            write_run(OUT / name, columns)
+            runs.append({"file": name, "engine": engine, "kind": "throttle_steps"})
+    for engine, ext in (("EDF1", ".mat"), ("EDF2", ".csv.gz")):
+        for v in SWEEP_AIRSPEEDS_M_S:
+            rng = rng_for()
+            name = f"runs/{engine.lower()}_sweep_v{v:02.0f}{ext}"
+            write_run(OUT / name, sweep_run(rng, v, truth[engine]))
+            runs.append({"file": name, "engine": engine, "kind": "sine_sweep"})
+    write_run(OUT / "runs/structure_drag.csv", drag_run(rng_for()))
+    runs.append({"file": "runs/structure_drag.csv", "kind": "drag_sweep"})
+
+    manifest = [
+        "# Synthetic TU-Flex test campaign; written by scripts/generate_campaign.py (seeded).",
+        "# Ground truth in truth.yaml; provenance in data/README.md (Test campaign).",
+        "name: TU-Flex EDF wind-tunnel campaign (synthetic)",
+        f"fan_area_m2: {FAN_AREA_M2:.6f}        # 93 mm fan (paper Table 1)",
+        f"tunnel_area_m2: {TUNNEL_AREA_M2}            # 400 mm x 400 mm open jet (paper 2.1)",
+        "runs:",
+    ]
+    for run in runs:
+        fields = ", ".join(f"{key}: {value}" for key, value in run.items())
+        manifest.append(f"  - {{{fields}}}")
+    (OUT / "campaign.yaml").write_text("\n".join(manifest) + "\n", encoding="utf-8")
+
+    truth_doc = {
+        "note": "Ground truth of the synthetic campaign (scripts/generate_campaign.py); "
+        "not an input of fit.",
+        "seed": SEED,
+        "sample_rate_hz": SAMPLE_RATE_HZ,
+        "delay_s": DELAY_S,
+        "spool_lag_s": SPOOL_LAG_S,
+        "battery_sag": BATTERY_SAG,
+        "air_density_kg_m3": AIR_DENSITY_KG_M3,
+        "structure_cda_m2": STRUCTURE_CDA_M2,
+        "perturbation": PERTURBATION,
+        "engines": [{"name": name, "coefficients": c} for name, c in truth.items()],
+    }
+    (OUT / "truth.yaml").write_text(yaml.safe_dump(truth_doc, sort_keys=False), encoding="utf-8")
+    total = sum(p.stat().st_size for p in OUT.rglob("*") if p.is_file())
+    print(f"wrote {len(runs)} runs to {OUT} ({total / 1e6:.2f} MB)")
+
+
+if __name__ == "__main__":
+    main()

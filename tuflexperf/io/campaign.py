@@ -1,0 +1,139 @@
+"""The test-campaign manifest (``campaign.yaml``, SPEC 4), the input of ``tuflexperf fit``.
+
+```yaml
+name: ...
+fan_area_m2: 0.0068          # fan cross-section A, for the Glauert check
+tunnel_area_m2: 0.16         # tunnel cross-section C
+air_density_kg_m3: 1.19      # optional: test-day density (default 1.225, ISA sea level)
+filters:                     # optional: the paper's filter settings (section 4)
+  outlier_window_s: 2.0
+  outlier_threshold: 1.5
+  median_window_s: 0.1
+runs:
+  - {file: runs/edf1_v00.csv, engine: EDF1, kind: throttle_steps}
+  - {file: runs/edf1_sweep_v30.mat, engine: EDF1, kind: sine_sweep}
+  - {file: runs/structure_drag.csv, kind: drag_sweep}
+  - {file: runs/edf1_endurance_50.csv, engine: EDF1, kind: endurance}   # ignored by fit
+```
+
+Paths are relative to the manifest. Unknown keys are errors.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from tuflexperf.errors import InputError
+from tuflexperf.io.yamlio import StrictModel, load_model
+
+Positive = Annotated[float, Field(gt=0)]
+RunKind = Literal["throttle_steps", "sine_sweep", "drag_sweep", "endurance"]
+ISA_SEA_LEVEL_DENSITY_KG_M3 = 1.225
+
+
+class RunEntry(StrictModel):
+    file: Annotated[str, Field(min_length=1)]
+    kind: RunKind
+    engine: Annotated[str, Field(min_length=1)] | None = None
+
+    @model_validator(mode="after")
+    def _engine_needed(self) -> RunEntry:
+        if self.kind != "drag_sweep" and self.engine is None:
+            raise ValueError(f"engine: required for a {self.kind} run")
+        return self
+
+
+class FilterSettings(StrictModel):
+    """Filter windows in seconds (never samples) and the outlier threshold (paper section 4)."""
+
+    outlier_window_s: Positive = 2.0
+    outlier_threshold: Positive = 1.5
+    median_window_s: Positive = 0.1
+
+
+class CampaignSchema(StrictModel):
+    name: Annotated[str, Field(min_length=1)]
+    fan_area_m2: Positive
+    tunnel_area_m2: Positive
+    air_density_kg_m3: Positive | None = None
+    filters: FilterSettings = FilterSettings()
+    runs: Annotated[list[RunEntry], Field(min_length=1)]
+
+    @model_validator(mode="after")
+    def _check(self) -> CampaignSchema:
+        if not self.fan_area_m2 < self.tunnel_area_m2:
+            raise ValueError(
+                f"fan_area_m2 ({self.fan_area_m2}) must be smaller than "
+                f"tunnel_area_m2 ({self.tunnel_area_m2})"
+            )
+        return self
+
+
+@dataclass(frozen=True)
+class CampaignRun:
+    """One manifest entry with its file resolved against the manifest's folder."""
+
+    index: int
+    file: str
+    path: Path
+    kind: str
+    engine: str | None
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """A validated manifest: settings plus the runs ``fit`` uses (endurance runs are kept
+    in ``ignored`` so the caller can report them)."""
+
+    path: Path
+    name: str
+    fan_area_m2: float
+    tunnel_area_m2: float
+    air_density_kg_m3: float
+    density_given: bool
+    filters: FilterSettings
+    runs: tuple[CampaignRun, ...]
+    ignored: tuple[CampaignRun, ...]
+
+    def of_kind(self, kind: str) -> list[CampaignRun]:
+        return [run for run in self.runs if run.kind == kind]
+
+
+def load_campaign(path: Path | str) -> Campaign:
+    """Load and validate a campaign manifest; run files must exist (endurance runs excepted).
+
+    Raises
+    ------
+    InputError
+        Naming the manifest and the key (``runs[3].file``) for any problem.
+    """
+    path = Path(path)
+    schema = load_model(path, CampaignSchema)
+    used: list[CampaignRun] = []
+    ignored: list[CampaignRun] = []
+    for index, entry in enumerate(schema.runs):
+        resolved = (path.parent / entry.file).resolve()
+        run = CampaignRun(index, entry.file, resolved, entry.kind, entry.engine)
+        if entry.kind == "endurance":
+            ignored.append(run)  # battery runs belong to the endurance model, not the fit
+            continue
+        if not resolved.is_file():
+            raise InputError(f"{path}: runs[{index}].file: file not found: {entry.file}")
+        used.append(run)
+    if not any(run.kind == "throttle_steps" for run in used):
+        raise InputError(f"{path}: runs: no throttle_steps run, nothing to fit")
+    return Campaign(
+        path=path,
+        name=schema.name,
+        fan_area_m2=schema.fan_area_m2,
+        tunnel_area_m2=schema.tunnel_area_m2,
+        air_density_kg_m3=schema.air_density_kg_m3 or ISA_SEA_LEVEL_DENSITY_KG_M3,
+        density_given=schema.air_density_kg_m3 is not None,
+        filters=schema.filters,
+        runs=tuple(used),
+        ignored=tuple(ignored),
+    )

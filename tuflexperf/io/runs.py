@@ -1,0 +1,357 @@
+"""Reading wind-tunnel run files (CSV or MATLAB .mat) and thrust tables (SPEC 4).
+
+A run file holds one 1-D column per name: ``time_s``, ``force_n``,
+``airspeed_m_s``, ``throttle`` (a fraction); endurance runs add ``voltage_v``
+and ``current_a``. CSV files have a header row and may be gzip-compressed
+(``.csv.gz``, read transparently). ``.mat`` files are MATLAB v5/v7 (read with
+``scipy.io.loadmat``); a file whose variables sit in one struct is accepted too.
+
+Every problem is an :class:`~tuflexperf.errors.InputError` naming the file and
+the column: missing columns, unreadable or empty files, non-numeric values,
+non-increasing time, too many NaN samples. A few NaN samples (at most
+:data:`MAX_NAN_FRACTION` of a column) are tolerated: in ``time_s`` their rows
+are dropped, elsewhere they are linearly interpolated in time; both are
+reported.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tuflexperf.errors import InputError
+
+RUN_COLUMNS: tuple[str, ...] = ("time_s", "force_n", "airspeed_m_s", "throttle")
+TABLE_COLUMNS: tuple[str, ...] = ("engine", "throttle", "airspeed_m_s", "thrust_n")
+MAX_NAN_FRACTION = 0.01
+"""Largest share of NaN samples per column that is repaired rather than refused."""
+MIN_SAMPLES = 10
+THROTTLE_TOLERANCE = 0.05
+"""A logged throttle may overshoot [0, 1] by this much (PWM rounding); beyond it is an error."""
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run file's columns as float arrays (SI units) and what was repaired."""
+
+    path: Path
+    time_s: NDArray[np.float64]
+    columns: dict[str, NDArray[np.float64]]
+    sample_rate_hz: float
+    nan_samples: dict[str, int] = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
+
+    def __getitem__(self, name: str) -> NDArray[np.float64]:
+        return self.columns[name]
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.time_s.size)
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.time_s[-1] - self.time_s[0])
+
+
+def _suffix(path: Path) -> str:
+    name = path.name.lower()
+    for suffix in (".csv.gz", ".csv", ".mat"):
+        if name.endswith(suffix):
+            return suffix
+    return path.suffix.lower()
+
+
+def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tuple[int, str]]]:
+    """Numeric columns, and for each column with a non-numeric cell its (line, text)."""
+    import pandas as pd
+
+    try:
+        frame = pd.read_csv(path, compression="infer", skipinitialspace=True)
+    except pd.errors.EmptyDataError:
+        raise InputError(f"{path}: empty file (expected a header row and data)") from None
+    except (pd.errors.ParserError, UnicodeDecodeError, OSError, EOFError, ValueError) as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(f"{path}: cannot read as CSV: {first}") from None
+    frame.columns = [str(c).strip() for c in frame.columns]
+    columns: dict[str, np.ndarray] = {}
+    bad_cells: dict[str, tuple[int, str]] = {}
+    for name in frame.columns:
+        raw = frame[name]
+        if raw.dtype.kind in "biuf":
+            columns[name] = raw.to_numpy(dtype=float)
+            continue
+        numeric = pd.to_numeric(raw, errors="coerce")
+        bad = numeric.isna() & raw.notna() & (raw.astype(str).str.strip() != "")
+        if bad.any():
+            row = int(np.flatnonzero(bad.to_numpy())[0])
+            bad_cells[name] = (row + 2, str(raw.iloc[row]))  # +2: header line, 1-based
+            continue  # only an error if the column is needed
+        columns[name] = numeric.to_numpy(dtype=float)
+    return columns, bad_cells
+
+
+def _read_mat_columns(path: Path) -> dict[str, np.ndarray]:
+    import scipy.io
+
+    try:
+        content = scipy.io.loadmat(path, squeeze_me=True, struct_as_record=False)
+    except NotImplementedError:
+        raise InputError(
+            f"{path}: MATLAB v7.3 (HDF5) files are not supported; save with save(..., '-v7')"
+        ) from None
+    except Exception as exc:  # noqa: BLE001 - scipy raises many types for a corrupt file
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(f"{path}: cannot read as a MATLAB .mat file: {first}") from None
+    variables = {k: v for k, v in content.items() if not k.startswith("__")}
+    if not variables:
+        raise InputError(f"{path}: empty .mat file (no variables)")
+    if not any(name in variables for name in RUN_COLUMNS):
+        # One struct holding the columns as fields (a common MATLAB export).
+        structs = [v for v in variables.values() if hasattr(v, "_fieldnames")]
+        if len(structs) == 1:
+            variables = {name: getattr(structs[0], name) for name in structs[0]._fieldnames}
+    columns: dict[str, np.ndarray] = {}
+    for name, value in variables.items():
+        array = np.asarray(value)
+        if array.dtype.kind not in "biuf":
+            continue  # strings, cells and structs are metadata, not columns
+        columns[name] = np.atleast_1d(array)
+    return columns
+
+
+def _numeric_column(
+    path: Path,
+    columns: dict[str, np.ndarray],
+    bad_cells: dict[str, tuple[int, str]],
+    name: str,
+) -> np.ndarray:
+    if name in bad_cells:
+        line, text = bad_cells[name]
+        raise InputError(f"{path}: column {name}: non-numeric value {text!r} (line {line})")
+    if name not in columns:
+        present = sorted(columns)
+        raise InputError(f"{path}: missing column {name!r} (found: {', '.join(present) or 'none'})")
+    array = columns[name]
+    if array.ndim != 1:
+        raise InputError(f"{path}: column {name}: expected a 1-D array, got shape {array.shape}")
+    return array.astype(float, copy=False)
+
+
+def _repair_nans(path: Path, name: str, time_s: np.ndarray, values: np.ndarray) -> int:
+    """Interpolate a few NaN samples in place; refuse when there are too many."""
+    bad = ~np.isfinite(values)
+    count = int(np.count_nonzero(bad))
+    if count == 0:
+        return 0
+    if count > MAX_NAN_FRACTION * values.size or count == values.size:
+        raise InputError(
+            f"{path}: column {name}: {count} of {values.size} samples are NaN or infinite "
+            f"(at most {MAX_NAN_FRACTION:.0%} can be repaired)"
+        )
+    good = ~bad
+    values[bad] = np.interp(time_s[bad], time_s[good], values[good])
+    return count
+
+
+def read_run(path: Path | str, required: Sequence[str] = RUN_COLUMNS) -> Run:
+    """Read one run file (``.csv``, ``.csv.gz`` or ``.mat``) and validate its columns.
+
+    Parameters
+    ----------
+    path : Path
+        The run file.
+    required : sequence of str
+        Column names that must be present (SPEC 4); ``time_s`` is always needed.
+
+    Returns
+    -------
+    Run
+        Columns as float64 arrays; the sample rate in Hz is ``1 / median(diff(time_s))``
+        (never assumed: the paper's rig logged 1 kHz, others do not).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: file not found")
+    if path.is_dir():
+        raise InputError(f"{path}: is a directory, expected a run file")
+    suffix = _suffix(path)
+    if suffix in (".csv", ".csv.gz"):
+        raw, bad_cells = _read_csv_columns(path)
+    elif suffix == ".mat":
+        raw, bad_cells = _read_mat_columns(path), {}
+    else:
+        raise InputError(f"{path}: unsupported run file type {suffix!r} (use .csv, .csv.gz, .mat)")
+
+    names = ["time_s", *[c for c in required if c != "time_s"]]
+    arrays = {
+        name: np.array(_numeric_column(path, raw, bad_cells, name), dtype=float) for name in names
+    }
+    lengths = {name: a.size for name, a in arrays.items()}
+    if len(set(lengths.values())) != 1:
+        raise InputError(f"{path}: columns have different lengths: {lengths}")
+    n = lengths["time_s"]
+    if n == 0:
+        raise InputError(f"{path}: no data rows")
+
+    warnings: list[str] = []
+    nan_samples: dict[str, int] = {}
+    time_s = arrays["time_s"]
+    bad_time = ~np.isfinite(time_s)
+    if bad_time.any():
+        count = int(np.count_nonzero(bad_time))
+        if count > MAX_NAN_FRACTION * n:
+            raise InputError(f"{path}: column time_s: {count} of {n} samples are NaN or infinite")
+        keep = ~bad_time
+        arrays = {name: a[keep] for name, a in arrays.items()}
+        time_s = arrays["time_s"]
+        nan_samples["time_s"] = count
+        warnings.append(f"{count} rows with a NaN time_s dropped")
+    if time_s.size < MIN_SAMPLES:
+        raise InputError(f"{path}: only {time_s.size} samples (need at least {MIN_SAMPLES})")
+    steps = np.diff(time_s)
+    if not np.all(steps > 0):
+        row = int(np.flatnonzero(steps <= 0)[0]) + 1
+        raise InputError(
+            f"{path}: column time_s: not strictly increasing at sample {row} "
+            f"({time_s[row - 1]!r} -> {time_s[row]!r})"
+        )
+    for name in names[1:]:
+        count = _repair_nans(path, name, time_s, arrays[name])
+        if count:
+            nan_samples[name] = count
+            warnings.append(f"{count} NaN samples in {name} interpolated")
+    if "throttle" in arrays:
+        throttle = arrays["throttle"]
+        high, low = float(throttle.max()), float(throttle.min())
+        if high > 1 + THROTTLE_TOLERANCE or low < -THROTTLE_TOLERANCE:
+            hint = " (percent? throttle is a fraction)" if high > 1.5 else ""
+            raise InputError(
+                f"{path}: column throttle: values from {low:g} to {high:g}, "
+                f"expected a fraction in [0, 1]{hint}"
+            )
+    step = float(np.median(steps))
+    if steps.max() > 10 * step:
+        gap = int(np.argmax(steps))
+        warnings.append(f"gap of {steps[gap]:.3g} s in time_s after t = {time_s[gap]:.6g} s")
+    arrays.pop("time_s")
+    return Run(
+        path=path,
+        time_s=time_s,
+        columns=arrays,
+        sample_rate_hz=1.0 / step,
+        nan_samples=nan_samples,
+        warnings=tuple(warnings),
+    )
+
+
+# --- thrust table ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ThrustTable:
+    """Scattered thrust points per engine, in the order engines first appear."""
+
+    path: Path | None
+    engine: tuple[str, ...]
+    throttle: NDArray[np.float64]
+    airspeed_m_s: NDArray[np.float64]
+    thrust_n: NDArray[np.float64]
+
+    def engines(self) -> list[str]:
+        return list(dict.fromkeys(self.engine))
+
+    def select(self, engine: str) -> tuple[NDArray[np.float64], ...]:
+        mask = np.array([e == engine for e in self.engine], dtype=bool)
+        return self.throttle[mask], self.airspeed_m_s[mask], self.thrust_n[mask]
+
+
+def read_thrust_table(path: Path | str) -> ThrustTable:
+    """Read a long-format thrust table ``engine,throttle,airspeed_m_s,thrust_n`` (SPEC 4).
+
+    Values are parsed with Python's ``float`` (correctly rounded), so a fit on the
+    table sees exactly the numbers in the file. Extra columns (the reduction writes
+    a few diagnostics) are ignored; the four SPEC columns are required.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: file not found")
+    if path.is_dir():
+        raise InputError(f"{path}: is a directory, expected a thrust table (.csv)")
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot read: {exc}") from None
+    rows = [r for r in csv.reader(io.StringIO(text)) if any(cell.strip() for cell in r)]
+    if not rows:
+        raise InputError(f"{path}: empty file (expected the header {','.join(TABLE_COLUMNS)})")
+    header = [cell.strip() for cell in rows[0]]
+    missing = [c for c in TABLE_COLUMNS if c not in header]
+    if missing:
+        raise InputError(
+            f"{path}: missing column {missing[0]!r} (header must include {','.join(TABLE_COLUMNS)})"
+        )
+    index = {name: header.index(name) for name in TABLE_COLUMNS}
+    engines: list[str] = []
+    values: dict[str, list[float]] = {c: [] for c in TABLE_COLUMNS[1:]}
+    for line, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise InputError(f"{path}: line {line}: {len(row)} fields, header has {len(header)}")
+        name = row[index["engine"]].strip()
+        if not name:
+            raise InputError(f"{path}: line {line}: engine: empty name")
+        engines.append(name)
+        for column in TABLE_COLUMNS[1:]:
+            cell = row[index[column]].strip()
+            try:
+                number = float(cell)
+            except ValueError:
+                raise InputError(f"{path}: line {line}: {column}: not a number: {cell!r}") from None
+            if not math.isfinite(number):
+                raise InputError(f"{path}: line {line}: {column}: {cell!r} is not finite")
+            values[column].append(number)
+    if not engines:
+        raise InputError(f"{path}: no data rows")
+    throttle = np.array(values["throttle"])
+    bad = np.flatnonzero((throttle < -THROTTLE_TOLERANCE) | (throttle > 1 + THROTTLE_TOLERANCE))
+    if bad.size:
+        hint = " (percent? throttle is a fraction)" if throttle.max() > 1.5 else ""
+        raise InputError(
+            f"{path}: line {bad[0] + 2}: throttle: {throttle[bad[0]]:g} is outside [0, 1]{hint}"
+        )
+    return ThrustTable(
+        path=path,
+        engine=tuple(engines),
+        throttle=throttle,
+        airspeed_m_s=np.array(values["airspeed_m_s"]),
+        thrust_n=np.array(values["thrust_n"]),
+    )
+
+
+def format_number(value: float) -> str:
+    """Ten significant digits: what the thrust table stores and the fit then reads back."""
+    return f"{value:.10g}"
+
+
+def render_thrust_table(rows: Sequence[dict[str, object]], extra: Sequence[str] = ()) -> str:
+    """CSV text of a thrust table: the SPEC columns first, then ``extra`` diagnostic columns."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    columns = [*TABLE_COLUMNS, *extra]
+    writer.writerow(columns)
+    for row in rows:
+        cells = []
+        for column in columns:
+            value = row.get(column)
+            if value is None:
+                cells.append("")
+            elif isinstance(value, float):
+                cells.append(format_number(value) if math.isfinite(value) else "")
+            else:
+                cells.append(str(value))
+        writer.writerow(cells)
+    return buffer.getvalue()

@@ -1,0 +1,709 @@
+"""``tuflexperf fit``: campaign manifest or thrust table -> propulsion file (paper section 4).
+
+Campaign path, in the paper's order:
+
+1. read every run (CSV, gzip CSV or .mat; a few NaN samples repaired and reported);
+2. sine sweeps -> dead time and spool lag per run (:mod:`.delay`), one mean delay;
+3. bare-structure velocity sweeps -> structure drag ``D(V)`` (:mod:`.drag`);
+4. throttle-step runs -> outliers filled (2 s moving mean, 1.5 local standard
+   deviations), moving median, change points in the force cross-checked against
+   the logged throttle steps, transients left out, steady segment means
+   (:mod:`.filters`, :mod:`.changepoints`, :mod:`.segments`);
+5. thrust = force + D(V); Glauert blockage ratio per point (:mod:`.glauert`),
+   applied to the airspeed only when asked;
+6. poly22 per engine by ordinary least squares (:mod:`.poly22fit`), and each run's
+   validation error: the model (minus structure drag) against the measured force
+   over the run's steady segments, as mean negative / mean positive error.
+
+Outputs are rendered in memory, the propulsion file is validated against the
+schema ``check`` uses, and only then are files written, atomically.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from tuflexperf.errors import InputError
+from tuflexperf.io.campaign import Campaign, CampaignRun, load_campaign
+from tuflexperf.io.runs import (
+    Run,
+    ThrustTable,
+    format_number,
+    read_run,
+    read_thrust_table,
+    render_thrust_table,
+)
+from tuflexperf.models.thrust import POLY22_TERMS
+from tuflexperf.reduction.changepoints import cross_check, force_changepoints, throttle_plateaus
+from tuflexperf.reduction.delay import estimate_delay
+from tuflexperf.reduction.drag import DragModel, fit_structure_drag
+from tuflexperf.reduction.filters import filloutliers_movmean, movmedian, window_samples
+from tuflexperf.reduction.glauert import glauert_ratio
+from tuflexperf.reduction.poly22fit import Poly22Fit, fit_poly22
+from tuflexperf.reduction.segments import MIN_STEADY_SHARE, SteadyMean, fit_transients, steady_mean
+
+Progress = Callable[[int, int, str], None]
+"""``progress(done, total, label)``: called before each run is reduced."""
+
+MIN_SEGMENT_S = 0.5
+TABLE_EXTRA_COLUMNS = (
+    "airspeed_measured_m_s",
+    "force_n",
+    "drag_n",
+    "force_std_n",
+    "n_samples",
+    "glauert_ratio",
+    "run",
+)
+
+
+@dataclass
+class Point:
+    """One steady segment turned into a thrust-table row."""
+
+    engine: str
+    run: str
+    throttle: float
+    airspeed_measured_m_s: float
+    force_n: float
+    drag_n: float
+    force_std_n: float
+    n_samples: int
+    glauert_ratio: float
+    airspeed_m_s: float = 0.0  # the airspeed the fit uses (corrected with --glauert)
+    thrust_n: float = 0.0
+
+
+@dataclass
+class StepRunResult:
+    run: CampaignRun
+    data: Run
+    segments: list[SteadyMean]
+    report: dict[str, Any]
+
+
+@dataclass
+class FitResult:
+    """Everything ``fit`` found: the JSON summary and the rendered output files."""
+
+    summary: dict[str, Any]
+    propulsion_text: str
+    table_text: str | None
+    engines: dict[str, Poly22Fit] = field(default_factory=dict)
+
+
+# --- run reduction --------------------------------------------------------------------------
+def _windows(campaign: Campaign, sample_rate_hz: float) -> tuple[int, float, int]:
+    f = campaign.filters
+    return (
+        window_samples(f.outlier_window_s, sample_rate_hz),
+        f.outlier_threshold,
+        window_samples(f.median_window_s, sample_rate_hz),
+    )
+
+
+def _clean(campaign: Campaign, run: Run, column: str = "force_n") -> tuple[np.ndarray, int]:
+    """The paper's filters over a whole run: outliers filled, then the moving median."""
+    k_out, threshold, k_med = _windows(campaign, run.sample_rate_hz)
+    filled, replaced = filloutliers_movmean(run[column], k_out, threshold)
+    return movmedian(filled, k_med), replaced
+
+
+def _run_header(run: CampaignRun, data: Run) -> dict[str, Any]:
+    return {
+        "file": run.file,
+        "engine": run.engine,
+        "kind": run.kind,
+        "sample_rate_hz": data.sample_rate_hz,
+        "n_samples": data.n_samples,
+        "duration_s": data.duration_s,
+        "nan_samples": dict(data.nan_samples),
+        "warnings": list(data.warnings),
+    }
+
+
+def reduce_step_run(
+    campaign: Campaign, run: CampaignRun, data: Run, delay_s: float
+) -> StepRunResult:
+    """Steady segment means of one throttle-step run (module docstring, step 4)."""
+    fs = data.sample_rate_hz
+    t = data.time_s
+    k_out, threshold, k_med = _windows(campaign, fs)
+    report = _run_header(run, data)
+    warnings: list[str] = report["warnings"]
+
+    plateaus = throttle_plateaus(data["throttle"], fs, min_duration_s=MIN_SEGMENT_S)
+    ramps = [p for p in plateaus if not p.steady]
+    for p in ramps:
+        warnings.append(
+            f"throttle not steady over {t[p.start]:.2f}-{t[p.stop - 1]:.2f} s "
+            f"(drifts by more than 2 %): segment skipped"
+        )
+    plateaus = [p for p in plateaus if p.steady]
+    delay = window_samples(delay_s, fs) if delay_s > 0 else 0
+    onsets = [
+        min(p.start + delay if p.step_index is None else p.step_index + delay, p.stop - 1)
+        for p in plateaus
+    ]
+    onsets = [max(o, p.start) for o, p in zip(onsets, plateaus, strict=True)]
+    despiked = movmedian(data["force_n"], k_med)
+    transients = fit_transients(t, despiked, onsets, [p.stop for p in plateaus], fs)
+
+    segments: list[SteadyMean] = []
+    settle_samples: list[int] = []
+    for p, onset, settle_s in zip(plateaus, onsets, transients.settle_s, strict=True):
+        settle = int(math.ceil(settle_s * fs))
+        latest = p.stop - max(int(MIN_STEADY_SHARE * (p.stop - onset)), 1)
+        start = min(onset + settle, latest)
+        if onset + settle > latest:
+            warnings.append(
+                f"step at {t[onset]:.2f} s not settled within its plateau "
+                f"(needs {settle_s:.2f} s): kept its last {MIN_STEADY_SHARE:.0%}"
+            )
+        settle_samples.append(start - onset)
+        if p.stop - start < 3:
+            warnings.append(f"plateau at {t[p.start]:.2f} s too short after the transient: skipped")
+            continue
+        segments.append(
+            steady_mean(
+                data["force_n"],
+                data["airspeed_m_s"],
+                data["throttle"],
+                start,
+                p.stop,
+                k_out,
+                threshold,
+                k_med,
+            )
+        )
+
+    cleaned, replaced = _clean(campaign, data)
+    changes = force_changepoints(cleaned, fs, min_segment_s=MIN_SEGMENT_S)
+    steps = [
+        (p.step_index, s)
+        for p, s in zip(plateaus, settle_samples, strict=True)
+        if p.step_index is not None
+    ]
+    # A smooth transition of a few tenths of a second is best cut by the l2 detector
+    # into an intermediate segment of at least MIN_SEGMENT_S, whose first change may
+    # come that long (plus the refinement's half segment) before the step.
+    margin = window_samples(1.5 * MIN_SEGMENT_S, fs)
+    check = cross_check(
+        [s for s, _ in steps],
+        changes,
+        before=margin,
+        after=[delay + settle + margin for _, settle in steps],
+        expected_lag=delay,
+    )
+    for change in check.changes_without_step:
+        warnings.append(f"force changes at {t[change]:.2f} s without a throttle step")
+    report.update(
+        {
+            "outliers_replaced": replaced,
+            "segments": len(segments),
+            "spool_lag_s": transients.tau_s,
+            "changepoints": {
+                "force_changes": len(changes),
+                "throttle_steps": len(steps),
+                "matched_steps": len(check.matched),
+                "force_lag_after_step_s": [
+                    float(t[c] - t[s]) for s, c in sorted(check.matched.items())
+                ],
+                "steps_without_change_s": [float(t[s]) for s in check.steps_without_change],
+                "changes_without_step_s": [float(t[c]) for c in check.changes_without_step],
+            },
+        }
+    )
+    return StepRunResult(run=run, data=data, segments=segments, report=report)
+
+
+def _sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for chunk in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def _mean_or_none(values: list[float]) -> float | None:
+    return float(np.mean(values)) if values else None
+
+
+def _validation(
+    result: StepRunResult,
+    fit: Poly22Fit,
+    drag: DragModel | None,
+    ratios: list[float],
+    glauert: bool,
+) -> dict[str, Any]:
+    """Model minus measured force over a run's steady segments (paper Fig. 16/17).
+
+    The model sees the airspeed the fit used (Glauert-corrected with ``--glauert``);
+    the structure drag is the measured airspeed's.
+    """
+    errors = []
+    for segment, ratio in zip(result.segments, ratios, strict=True):
+        v = result.data["airspeed_m_s"][segment.start : segment.stop]
+        v_model = v * ratio if glauert and math.isfinite(ratio) else v
+        model = fit.predict(np.full(v.size, segment.throttle), v_model)
+        if drag is not None:
+            model = model - drag.drag_n(v)
+        errors.append(model - segment.filtered_force_n)
+    if not errors:
+        return {"mean_negative_error_n": None, "mean_positive_error_n": None, "rms_error_n": None}
+    e = np.concatenate(errors)
+    return {
+        "mean_negative_error_n": _mean_or_none(list(e[e < 0])),
+        "mean_positive_error_n": _mean_or_none(list(e[e > 0])),
+        "mean_error_n": float(e.mean()),
+        "rms_error_n": float(np.sqrt(np.mean(e * e))),
+    }
+
+
+# --- campaign ---------------------------------------------------------------------------------
+def fit_campaign(
+    manifest: Path | str,
+    glauert: bool = False,
+    delay_s: float | None = None,
+    progress: Progress | None = None,
+) -> FitResult:
+    """Reduce a campaign and fit the poly22 per engine (module docstring)."""
+    campaign = load_campaign(Path(manifest))
+    total = len(campaign.runs)
+    done = 0
+
+    def tick(label: str) -> None:
+        nonlocal done
+        if progress is not None:
+            progress(done, total, label)
+        done += 1
+
+    run_reports: list[dict[str, Any]] = []
+    delay_runs: list[dict[str, Any]] = []
+    for run in campaign.of_kind("sine_sweep"):
+        tick(run.file)
+        data = read_run(run.path)
+        estimate = estimate_delay(
+            data.time_s, data["throttle"], data["force_n"], data.sample_rate_hz
+        )
+        delay_runs.append(
+            {
+                "file": run.file,
+                "engine": run.engine,
+                "delay_s": estimate.delay_s,
+                "lag_s": estimate.lag_s,
+                "r2": estimate.r2,
+                "xcorr_lag_s": estimate.xcorr_lag_s,
+            }
+        )
+        run_reports.append(
+            {
+                **_run_header(run, data),
+                "delay_s": estimate.delay_s,
+                "spool_lag_s": estimate.lag_s,
+                "fit_r2": estimate.r2,
+            }
+        )
+    measured_delay = _mean_or_none([d["delay_s"] for d in delay_runs])
+    delay = delay_s if delay_s is not None else measured_delay
+
+    drag: DragModel | None = None
+    sweeps = []
+    for run in campaign.of_kind("drag_sweep"):
+        tick(run.file)
+        data = read_run(run.path)
+        force, replaced = _clean(campaign, data)
+        _, _, k_med = _windows(campaign, data.sample_rate_hz)
+        sweeps.append((movmedian(data["airspeed_m_s"], k_med), force))
+        run_reports.append({**_run_header(run, data), "outliers_replaced": replaced})
+    if sweeps:
+        drag = fit_structure_drag(sweeps)
+
+    step_results: list[StepRunResult] = []
+    for run in campaign.of_kind("throttle_steps"):
+        tick(run.file)
+        data = read_run(run.path)
+        step_results.append(reduce_step_run(campaign, run, data, max(delay or 0.0, 0.0)))
+    if progress is not None:
+        progress(total, total, "fit")
+
+    points: list[Point] = []
+    point_ratios: dict[int, list[float]] = {}
+    for index, result in enumerate(step_results):
+        ratios = []
+        for segment in result.segments:
+            d = float(drag.drag_n(segment.airspeed_m_s)) if drag is not None else 0.0
+            thrust = segment.force_n + d
+            ratio = float(
+                glauert_ratio(
+                    thrust,
+                    segment.airspeed_m_s,
+                    campaign.air_density_kg_m3,
+                    campaign.fan_area_m2,
+                    campaign.tunnel_area_m2,
+                )
+            )
+            ratios.append(ratio)
+            used_v = (
+                segment.airspeed_m_s * ratio
+                if glauert and math.isfinite(ratio)
+                else (segment.airspeed_m_s)
+            )
+            # the table stores 10 significant digits; the fit uses exactly those numbers,
+            # so `tuflexperf fit TABLE` reproduces this fit
+            points.append(
+                Point(
+                    engine=str(result.run.engine),
+                    run=result.run.file,
+                    throttle=_rounded(segment.throttle),
+                    airspeed_measured_m_s=_rounded(segment.airspeed_m_s),
+                    force_n=_rounded(segment.force_n),
+                    drag_n=_rounded(d),
+                    force_std_n=_rounded(segment.force_std_n),
+                    n_samples=segment.n_samples,
+                    glauert_ratio=ratio,
+                    airspeed_m_s=_rounded(used_v),
+                    thrust_n=_rounded(thrust),
+                )
+            )
+        point_ratios[index] = ratios
+
+    engines = list(dict.fromkeys(str(r.run.engine) for r in step_results))
+    fits: dict[str, Poly22Fit] = {}
+    for engine in engines:
+        mine = [p for p in points if p.engine == engine]
+        fits[engine] = fit_poly22(
+            [p.throttle for p in mine],
+            [p.airspeed_m_s for p in mine],
+            [p.thrust_n for p in mine],
+            label=f"{campaign.path}: engine {engine}",
+        )
+    for index, result in enumerate(step_results):
+        result.report["validation"] = _validation(
+            result, fits[str(result.run.engine)], drag, point_ratios[index], glauert
+        )
+        run_reports.append(result.report)
+
+    valid = [p for p in points if math.isfinite(p.glauert_ratio)]
+    worst = max(valid, key=lambda p: abs(1 - p.glauert_ratio), default=None)
+    glauert_report: dict[str, Any] = {
+        "applied": glauert,
+        "air_density_kg_m3": campaign.air_density_kg_m3,
+        "points_with_correction": len(valid),
+        "max_correction_percent": 100 * abs(1 - worst.glauert_ratio) if worst else None,
+        "max_correction_m_s": (
+            abs(1 - worst.glauert_ratio) * worst.airspeed_measured_m_s if worst else None
+        ),
+        "at_airspeed_m_s": worst.airspeed_measured_m_s if worst else None,
+        "max_correction_at_top_airspeed_percent": None,
+    }
+    if valid:
+        top = max(p.airspeed_measured_m_s for p in valid)
+        at_top = [abs(1 - p.glauert_ratio) for p in valid if p.airspeed_measured_m_s > top - 1.0]
+        glauert_report["max_correction_at_top_airspeed_percent"] = 100 * max(at_top)
+
+    speeds = [p.airspeed_m_s for p in points]
+    files = [
+        {"file": r.file, "kind": r.kind, "engine": r.engine, "sha256": _sha256(r.path)}
+        for r in campaign.runs
+    ]
+    source = {
+        "tool": "tuflexperf fit",
+        "input": str(campaign.path.resolve()),
+        "input_sha256": _sha256(campaign.path),
+        "campaign": campaign.name,
+        "files": files,
+        "filters": campaign.filters.model_dump(),
+        "structure_drag": drag.as_dict() if drag else None,
+        "glauert_applied": glauert,
+        "delay_measured_s": measured_delay,
+    }
+    table_rows = [_table_row(p) for p in points]
+    summary = _summary(
+        kind="campaign",
+        input_path=campaign.path,
+        fits=fits,
+        delay=delay,
+        speeds=speeds,
+    )
+    summary.update(
+        {
+            "delay_measured_s": measured_delay,
+            "delay_runs": delay_runs,
+            "structure_drag": drag.as_dict() if drag else None,
+            "glauert": glauert_report,
+            "runs": run_reports,
+            "ignored_runs": [
+                {"file": r.file, "kind": r.kind, "engine": r.engine} for r in campaign.ignored
+            ],
+            "points": table_rows,
+        }
+    )
+    if drag is None:
+        summary["warnings"].append("no drag_sweep run: thrust not corrected for structure drag")
+    if not delay_runs and delay_s is None:
+        summary["warnings"].append("no sine_sweep run: delay not measured")
+    for report in run_reports:
+        summary["warnings"].extend(f"{report['file']}: {w}" for w in report.get("warnings", []))
+    propulsion = _propulsion_text(
+        name=campaign.name,
+        fits=fits,
+        speeds=speeds,
+        delay=delay,
+        density=campaign.air_density_kg_m3 if campaign.density_given else None,
+        source=source,
+    )
+    table = render_thrust_table(table_rows, TABLE_EXTRA_COLUMNS)
+    return FitResult(summary=summary, propulsion_text=propulsion, table_text=table, engines=fits)
+
+
+def _rounded(value: float) -> float:
+    return float(format_number(float(value)))
+
+
+def _table_row(p: Point) -> dict[str, Any]:
+    return {
+        "engine": p.engine,
+        "throttle": p.throttle,
+        "airspeed_m_s": p.airspeed_m_s,
+        "thrust_n": p.thrust_n,
+        "airspeed_measured_m_s": p.airspeed_measured_m_s,
+        "force_n": p.force_n,
+        "drag_n": p.drag_n,
+        "force_std_n": p.force_std_n,
+        "n_samples": p.n_samples,
+        "glauert_ratio": p.glauert_ratio if math.isfinite(p.glauert_ratio) else None,
+        "run": p.run,
+    }
+
+
+# --- table ----------------------------------------------------------------------------------
+def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
+    """Fit the poly22 per engine to a thrust table alone (no reduction)."""
+    table: ThrustTable = read_thrust_table(path)
+    fits = {
+        engine: fit_poly22(*table.select(engine), label=f"{table.path}: engine {engine}")
+        for engine in table.engines()
+    }
+    speeds = list(table.airspeed_m_s)
+    source = {
+        "tool": "tuflexperf fit",
+        "input": str(Path(path).resolve()),
+        "input_sha256": _sha256(Path(path)),
+    }
+    summary = _summary(kind="table", input_path=Path(path), fits=fits, delay=delay_s, speeds=speeds)
+    propulsion = _propulsion_text(
+        name=f"poly22 fit of {Path(path).name}",
+        fits=fits,
+        speeds=speeds,
+        delay=delay_s,
+        density=None,
+        source=source,
+    )
+    rows = [
+        {"engine": e, "throttle": x, "airspeed_m_s": v, "thrust_n": t}
+        for e, x, v, t in zip(
+            table.engine, table.throttle, table.airspeed_m_s, table.thrust_n, strict=True
+        )
+    ]
+    return FitResult(
+        summary=summary,
+        propulsion_text=propulsion,
+        table_text=render_thrust_table(rows),
+        engines=fits,
+    )
+
+
+# --- rendering --------------------------------------------------------------------------------
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def _tested_range(speeds: list[float]) -> list[float]:
+    """The data's airspeed range, to 0.1 m/s (the tunnel's set points are not more exact)."""
+    return [round(min(speeds), 1) + 0.0, round(max(speeds), 1) + 0.0]
+
+
+def _summary(
+    kind: str,
+    input_path: Path,
+    fits: dict[str, Poly22Fit],
+    delay: float | None,
+    speeds: list[float],
+) -> dict[str, Any]:
+    engines = []
+    for name, fit in fits.items():
+        engines.append(
+            {
+                "name": name,
+                "coefficients": fit.coefficients,
+                "r2": _finite_or_none(fit.r2),
+                "rmse_n": _finite_or_none(fit.rmse_n),
+                "standard_errors": {k: _finite_or_none(v) for k, v in fit.standard_errors.items()},
+                "n_points": fit.n_points,
+                "residuals_n": [float(r) for r in fit.residuals_n],
+                "full_throttle_thrust_n": {
+                    f"{v:g}": float(fit.predict([1.0], [v])[0]) for v in (0.0, 30.0, 40.0)
+                },
+            }
+        )
+    return {
+        "input": str(input_path),
+        "kind": kind,
+        "engines": engines,
+        "delay_s": delay,
+        "tested_airspeed_m_s": _tested_range(speeds),
+        "warnings": [],
+    }
+
+
+def _propulsion_text(
+    name: str,
+    fits: dict[str, Poly22Fit],
+    speeds: list[float],
+    delay: float | None,
+    density: float | None,
+    source: dict[str, Any],
+) -> str:
+    """The propulsion file (SPEC 4), validated against the schema ``check`` loads."""
+    from tuflexperf.io.case import PropulsionSchema
+
+    document: dict[str, Any] = {
+        "name": name,
+        "model": "poly22",
+        "tested_airspeed_m_s": _tested_range(speeds),
+    }
+    if delay is not None:
+        document["delay_s"] = max(float(delay), 0.0)
+    if density is not None:
+        document["reference_density_kg_m3"] = float(density)
+    document["engines"] = []
+    for engine, fit in fits.items():
+        entry: dict[str, Any] = {
+            "name": engine,
+            "coefficients": {t: fit.coefficients[t] for t in POLY22_TERMS},
+            "n_points": fit.n_points,
+        }
+        if math.isfinite(fit.r2):
+            entry["r2"] = fit.r2
+        if math.isfinite(fit.rmse_n):
+            entry["rmse_n"] = fit.rmse_n
+        if all(math.isfinite(v) for v in fit.standard_errors.values()):
+            entry["standard_errors"] = {t: fit.standard_errors[t] for t in POLY22_TERMS}
+        document["engines"].append(entry)
+    document["source"] = _plain(source)
+    header = (
+        "# Written by `tuflexperf fit` (poly22 by ordinary least squares, paper section 4).\n"
+        "# T = p00 + p10 x + p01 v + p20 x^2 + p11 x v + p02 v^2, x throttle fraction, v m/s.\n"
+    )
+    text = header + yaml.safe_dump(document, sort_keys=False, allow_unicode=True)
+    try:
+        PropulsionSchema.model_validate(yaml.safe_load(text))
+    except Exception as exc:  # noqa: BLE001 - the fit must never write a file check refuses
+        raise InputError(f"the fitted propulsion file would not be valid: {exc}") from None
+    return text
+
+
+def _plain(value: Any) -> Any:
+    """numpy scalars and NaN out, so the YAML is plain and loads strictly."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        return float(value) if math.isfinite(float(value)) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+# --- writing --------------------------------------------------------------------------------
+def write_files(files: dict[Path, str]) -> None:
+    """Write several files all-or-nothing: every temp file first, then the renames.
+
+    A failure before the renames leaves nothing behind; the renames themselves are
+    atomic per file.
+    """
+    staged: list[tuple[str, Path]] = []
+    try:
+        for path, text in files.items():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+            staged.append((tmp, path))
+            with os.fdopen(fd, "w", encoding="utf-8") as handle:
+                handle.write(text)
+        for tmp, path in staged:
+            os.replace(tmp, path)
+    except OSError as exc:
+        for tmp, _ in staged:
+            Path(tmp).unlink(missing_ok=True)
+        raise InputError(f"{exc.filename or 'output'}: cannot write: {exc.strerror}") from None
+
+
+def _check_output(path: Path, flag: str) -> None:
+    if path.is_dir():
+        raise InputError(f"{flag}: {path} is a directory, expected a file name")
+
+
+def is_thrust_table(path: Path) -> bool:
+    """A ``.csv`` input is a thrust table; anything else is a campaign manifest."""
+    return path.name.lower().endswith(".csv")
+
+
+def default_table_path(out: Path) -> Path:
+    """Where the campaign's thrust table goes without ``--table``: beside ``--out``."""
+    return out.with_name(f"{out.stem}_thrust_table.csv")
+
+
+def run_fit(
+    input_path: Path,
+    out: Path,
+    table: Path | None = None,
+    glauert: bool = False,
+    delay_s: float | None = None,
+    progress: Progress | None = None,
+) -> dict[str, Any]:
+    """The ``fit`` command: compute, validate, then write ``out`` (and the table).
+
+    Returns the JSON summary, with ``out`` and ``table`` set to the files written.
+    """
+    input_path = Path(input_path)
+    if not input_path.exists():
+        raise InputError(f"{input_path}: file not found")
+    if input_path.is_dir():
+        raise InputError(f"{input_path}: is a directory, expected campaign.yaml or a table .csv")
+    if delay_s is not None and not (math.isfinite(delay_s) and delay_s >= 0):
+        raise InputError(f"--delay-s: must be a finite number >= 0, got {delay_s}")
+    out = Path(out)
+    _check_output(out, "--out")
+    if is_thrust_table(input_path):
+        if glauert:
+            raise InputError("--glauert: needs a campaign (fan and tunnel areas), not a table")
+        result = fit_table(input_path, delay_s)
+    else:
+        result = fit_campaign(input_path, glauert=glauert, delay_s=delay_s, progress=progress)
+        if table is None:
+            table = default_table_path(out)
+    files = {out: result.propulsion_text}
+    if table is not None:
+        table = Path(table)
+        _check_output(table, "--table")
+        if table.resolve() == out.resolve():
+            raise InputError("--table: must differ from --out")
+        if result.table_text is not None:
+            files[table] = result.table_text
+    write_files(files)
+    summary = result.summary
+    summary["out"] = str(out)
+    summary["table"] = str(table) if table is not None else None
+    return summary
