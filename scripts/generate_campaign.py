@@ -8,8 +8,9 @@ seeded (:data:`SEED`); running the script again rewrites identical files.
 Ground truth (written to ``truth.yaml``):
 
 * thrust per fan: the shipped poly22 (data/tuflex/propulsion.yaml, reconstructed
-  from the paper's published thrusts) with small perturbations
-  (:data:`PERTURBATION`) so the fit cannot just echo the shipped file;
+  from the paper's published thrusts; frozen in :data:`BASE_COEFFICIENTS`) with
+  small perturbations (:data:`PERTURBATION`) so the fit cannot just echo the
+  shipped file;
 * structure drag ``D = 0.5 rho CdA V^2`` with ``CdA = 0.0055 m^2`` (about 3 N at
   30 m/s: the fairing and rods of the paper's Fig. 5/6 rig, estimated);
 * throttle-to-force dead time 0.05 s (published, section 4) and a first-order
@@ -51,9 +52,10 @@ import scipy.io
 import yaml
 from scipy.signal import lfilter
 
+from tuflexperf.models.thrust import poly22
+
 SEED = 20240531
 ROOT = Path(__file__).resolve().parent.parent
-SHIPPED_PROPULSION = ROOT / "data" / "tuflex" / "propulsion.yaml"
 OUT = ROOT / "data" / "tuflex" / "campaign"
 
 SAMPLE_RATE_HZ = 1000.0
@@ -67,35 +69,43 @@ BATTERY_SAG = 0.01
 AIRSPEEDS_M_S = (0.0, 15.0, 20.0, 22.5, 25.0, 27.5, 30.0)
 SWEEP_AIRSPEEDS_M_S = (0.0, 30.0)
 STEP_S = 4.0
+# data/tuflex/propulsion.yaml as shipped when the campaign was generated, frozen here so
+# the campaign does not change when that reconstruction is re-calibrated.
+BASE_COEFFICIENTS = {
+    "EDF1": {
+        "p00": 0.0,
+        "p10": 0.4490719572,
+        "p01": -0.13,
+        "p20": 54.67092804,
+        "p11": -0.3938333333,
+        "p02": 0.0006833333333,
+    },
+    "EDF2": {
+        "p00": 0.0,
+        "p10": 0.4514346362,
+        "p01": -0.13,
+        "p20": 54.95856536,
+        "p11": -0.36625,
+        "p02": 0.001375,
+    },
+}
 PERTURBATION = {  # relative change of the shipped coefficients -> ground truth
     "EDF1": {"p10": +0.03, "p20": -0.02, "p01": +0.05, "p11": -0.04, "p02": +0.10},
     "EDF2": {"p10": -0.02, "p20": +0.01, "p01": -0.05, "p11": +0.03, "p02": -0.10},
 }
+MAT_HEADER = "MATLAB 5.0 MAT-file, written by tuflexperf scripts/generate_campaign.py"
 RESOLUTION = {"time_s": 1e-3, "force_n": 0.01, "airspeed_m_s": 0.01, "throttle": 1e-3}
 
 
 def truth_coefficients() -> dict[str, dict[str, float]]:
-    """Shipped poly22 coefficients with :data:`PERTURBATION` applied (relative)."""
-    shipped = yaml.safe_load(SHIPPED_PROPULSION.read_text(encoding="utf-8"))
-    truth = {}
-    for engine in shipped["engines"]:
-        change = PERTURBATION[engine["name"]]
-        truth[engine["name"]] = {
-            term: round(float(value) * (1.0 + change.get(term, 0.0)), 6)
-            for term, value in engine["coefficients"].items()
+    """:data:`BASE_COEFFICIENTS` with :data:`PERTURBATION` applied (relative)."""
+    return {
+        engine: {
+            term: round(value * (1.0 + PERTURBATION[engine].get(term, 0.0)), 6)
+            for term, value in base.items()
         }
-    return truth
-
-
-def poly22(x: np.ndarray, v: np.ndarray, c: dict[str, float]) -> np.ndarray:
-    return (
-        c["p00"]
-        + c["p10"] * x
-        + c["p01"] * v
-        + c["p20"] * x * x
-        + c["p11"] * x * v
-        + (c["p02"] * v * v)
-    )
+        for engine, base in BASE_COEFFICIENTS.items()
+    }
 
 
 def structure_drag_n(v: np.ndarray) -> np.ndarray:
@@ -200,6 +210,11 @@ def write_run(path: Path, columns: dict[str, np.ndarray]) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     if path.suffix == ".mat":
         scipy.io.savemat(path, columns, do_compression=True, oned_as="column")
+        # the v5 header's 116 text bytes carry a creation date: fix them, for
+        # byte-identical files on every run
+        data = bytearray(path.read_bytes())
+        data[:116] = MAT_HEADER.ljust(116).encode("ascii")
+        path.write_bytes(bytes(data))
         return
     text = io.StringIO()
     text.write(",".join(columns) + "\n")

@@ -303,6 +303,118 @@ def endurance(
 
 
 # ---- fit (issue 4) -------------------------------------------------------------------------
+class _FitProgress:
+    """Rich progress bar on stderr while the campaign is reduced (silent when not a TTY)."""
+
+    def __enter__(self) -> _FitProgress:
+        from rich.console import Console
+        from rich.progress import BarColumn, Progress, TextColumn
+
+        console = Console(stderr=True)
+        self._bar = Progress(
+            TextColumn("reducing"),
+            BarColumn(),
+            TextColumn("{task.completed}/{task.total} {task.description}"),
+            console=console,
+            transient=True,
+            disable=not console.is_terminal,
+        )
+        self._bar.__enter__()
+        self._task = self._bar.add_task("", total=None)
+        return self
+
+    def __call__(self, done: int, total: int, label: str) -> None:
+        self._bar.update(self._task, completed=done, total=total, description=label)
+
+    def __exit__(self, *exc: object) -> None:
+        self._bar.__exit__(*exc)
+
+
+def _print_fit(summary: dict[str, Any]) -> None:
+    typer.echo(f"poly22 fit of {summary['input']} ({summary['kind']})")
+    header = (
+        f"{'engine':<8}{'n':>4}{'p00':>9}{'p10':>9}{'p01':>9}{'p20':>9}{'p11':>9}{'p02':>11}"
+        f"{'R^2':>9}{'RMSE N':>8}{'T(1,0)':>8}{'T(1,30)':>8}"
+    )
+    typer.echo(header)
+    typer.echo("-" * len(header))
+    for e in summary["engines"]:
+        c = e["coefficients"]
+        full = e["full_throttle_thrust_n"]
+        typer.echo(
+            f"{e['name']:<8}{e['n_points']:>4}{c['p00']:>9.4f}{c['p10']:>9.4f}{c['p01']:>9.4f}"
+            f"{c['p20']:>9.4f}{c['p11']:>9.4f}{c['p02']:>11.3e}{_fmt(e['r2'], 5):>9}"
+            f"{_fmt(e['rmse_n']):>8}{full['0']:>8.2f}{full['30']:>8.2f}"
+        )
+    delay = summary.get("delay_s")
+    runs = summary.get("delay_runs", [])
+    line = f"delay: {_fmt(delay)} s"
+    if runs:
+        values = [r["delay_s"] for r in runs]
+        lags = [r["lag_s"] for r in runs]
+        line += (
+            f" (mean of {len(runs)} sine sweeps, {min(values):.3f}-{max(values):.3f} s; "
+            f"spool lag {sum(lags) / len(lags):.3f} s)"
+        )
+    typer.echo(line)
+    drag = summary.get("structure_drag")
+    if drag:
+        typer.echo(
+            f"structure drag: D = {drag['c1_n_per_m_s']:.4g} V + {drag['c2_n_per_m2_s2']:.4g} V^2, "
+            f"{drag['drag_at_max_airspeed_n']:.2f} N at {drag['airspeed_range_m_s'][1]:.1f} m/s "
+            f"(R^2 {drag['r2']:.4f}); added to every point"
+        )
+    glauert = summary.get("glauert")
+    if glauert and glauert["max_correction_percent"] is not None:
+        typer.echo(
+            f"Glauert blockage: up to {glauert['max_correction_percent']:.1f} % "
+            f"({glauert['max_correction_m_s']:.2f} m/s) at {glauert['at_airspeed_m_s']:.1f} m/s, "
+            f"{glauert['max_correction_at_top_airspeed_percent']:.1f} % at the top airspeed; "
+            + ("applied" if glauert["applied"] else "not applied (--glauert applies it)")
+        )
+    runs = [r for r in summary.get("runs", []) if "validation" in r]
+    if runs:
+        typer.echo("validation, model - measured force over steady segments (mean -/+, N):")
+        for r in runs:
+            v = r["validation"]
+            typer.echo(
+                f"  {r['file']:<32}{r['engine']:<8}{_fmt(v['mean_negative_error_n'], 2):>7} / "
+                f"+{_fmt(v['mean_positive_error_n'], 2)}   {r['segments']} segments"
+            )
+    _print_warnings(summary.get("warnings", []))
+    typer.echo(f"wrote {summary['out']}" + (f" and {summary['table']}" if summary["table"] else ""))
+
+
+@app.command("fit")
+def fit_command(
+    input_file: Path = typer.Argument(
+        ..., help="Campaign manifest (campaign.yaml) or thrust table (.csv)."
+    ),
+    out: Path = typer.Option(
+        Path("propulsion_fit.yaml"), "--out", help="Propulsion file to write."
+    ),
+    table: Path | None = typer.Option(
+        None,
+        "--table",
+        help="Thrust table to write (campaign default: <out>_thrust_table.csv beside --out).",
+    ),
+    glauert: bool = typer.Option(
+        False, "--glauert", help="Fit against Glauert-corrected airspeeds (paper eq. 5)."
+    ),
+    delay_s: float | None = typer.Option(
+        None, "--delay-s", help="Delay in s to write instead of the measured one."
+    ),
+    as_json: bool = JsonOption,
+) -> None:
+    """Reduce raw runs (or a thrust table) to the poly22 propulsion file."""
+    from tuflexperf.reduction.pipeline import run_fit
+
+    with _FitProgress() as progress:
+        summary = run_fit(input_file, out, table, glauert, delay_s, progress)
+    if as_json:
+        emit_json(summary)
+    else:
+        _print_fit(summary)
 
 
 # ---- report (issue 5) ----------------------------------------------------------------------

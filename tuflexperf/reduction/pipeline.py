@@ -531,7 +531,7 @@ def _finite_or_none(value: float) -> float | None:
 
 def _tested_range(speeds: list[float]) -> list[float]:
     """The data's airspeed range, to 0.1 m/s (the tunnel's set points are not more exact)."""
-    return [round(min(speeds), 1) + 0.0, round(max(speeds), 1) + 0.0]
+    return [round(float(min(speeds)), 1) + 0.0, round(float(max(speeds)), 1) + 0.0]
 
 
 def _summary(
@@ -601,12 +601,12 @@ def _propulsion_text(
         if all(math.isfinite(v) for v in fit.standard_errors.values()):
             entry["standard_errors"] = {t: fit.standard_errors[t] for t in POLY22_TERMS}
         document["engines"].append(entry)
-    document["source"] = _plain(source)
+    document["source"] = source
     header = (
         "# Written by `tuflexperf fit` (poly22 by ordinary least squares, paper section 4).\n"
         "# T = p00 + p10 x + p01 v + p20 x^2 + p11 x v + p02 v^2, x throttle fraction, v m/s.\n"
     )
-    text = header + yaml.safe_dump(document, sort_keys=False, allow_unicode=True)
+    text = header + yaml.safe_dump(_plain(document), sort_keys=False, allow_unicode=True)
     try:
         PropulsionSchema.model_validate(yaml.safe_load(text))
     except Exception as exc:  # noqa: BLE001 - the fit must never write a file check refuses
