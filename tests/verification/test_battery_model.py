@@ -18,6 +18,7 @@ from tuflexperf.models.battery import (
     cutoff_residual_v,
     discharge_time_s,
     fit_discharge,
+    fit_discharge_ipopt,
     fit_fan_power,
     open_circuit_voltage_v,
     published_static_power_w,
@@ -147,6 +148,20 @@ def test_fit_recovers_the_model_it_was_given(tmp_path: Path) -> None:
         assert time_to_cutoff_s(fit.parameters, power, CUTOFF_V) == pytest.approx(
             time_to_cutoff_s(PACK, power, CUTOFF_V), rel=5e-3
         )
+
+
+def test_levenberg_marquardt_reaches_the_ipopt_optimum(tmp_path: Path) -> None:
+    """The fast fit used by check and the general NLP solver agree on the same problem."""
+    runs = [
+        read_discharge_run(_synthetic_run(tmp_path / "a.csv", 1300.0, 0.5)),
+        read_discharge_run(_synthetic_run(tmp_path / "b.csv", 2200.0, 0.75)),
+    ]
+    fast = fit_discharge(runs, cells_in_series=12, capacity_ah=5.0)
+    reference = fit_discharge_ipopt(runs, cells_in_series=12, capacity_ah=5.0)
+    assert np.allclose(
+        fast.parameters.as_vector(), reference.parameters.as_vector(), rtol=1e-6, atol=1e-9
+    )
+    assert fast.rms_v == pytest.approx(reference.rms_v, rel=1e-9)
 
 
 def test_published_static_power_interpolates_the_table() -> None:

@@ -28,6 +28,7 @@ throttle and airspeed of longest flight, and of longest cruise distance.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -98,8 +99,38 @@ class BatteryCharacterisation:
     battery: Battery
     runs: tuple[DischargeRun, ...]
     fit: DischargeFit
-    cross_validation: tuple[CrossValidation, ...]
     power: PowerFit
+
+    @functools.cached_property
+    def cross_validation(self) -> tuple[CrossValidation, ...]:
+        """Each run's model predicting every other run's time to cut-off.
+
+        Computed on first use only: ``check`` needs the fit, not its validation.
+        """
+        cells, capacity = self.battery.cells_in_series, self.battery.capacity_ah
+        checks = []
+        if len(self.runs) > 1:
+            for k, source in enumerate(self.runs):
+                alone = fit_discharge([source], cells, capacity).parameters
+                for j, target in enumerate(self.runs):
+                    if j == k:
+                        continue
+                    predicted = time_to_cutoff_s(
+                        alone,
+                        target.mean_power_w,
+                        self.battery.cutoff_voltage_v,
+                        1,
+                        target.start_charge_ah,
+                    )
+                    checks.append(
+                        CrossValidation(
+                            source.path.name,
+                            target.path.name,
+                            target.time_to_cutoff_s / 60.0,
+                            predicted / 60.0,
+                        )
+                    )
+        return tuple(checks)
 
 
 def _file_key(path: Path) -> tuple[str, float, int]:
@@ -108,7 +139,7 @@ def _file_key(path: Path) -> tuple[str, float, int]:
 
 
 def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisation:
-    """Fit the pack model to all runs, cross-validate run against run, fit the fan power.
+    """Fit the pack model to all runs and fit the fan power (cross-validation on demand).
 
     The full-throttle static power is the published range interpolated at the static
     thrust of the runs' engine (the first engine when the runs name none).
@@ -122,26 +153,7 @@ def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisatio
     if key in _characterisation_cache:
         return _characterisation_cache[key]
     runs = tuple(read_discharge_run(r.path) for r in battery.runs)
-    cells, capacity = battery.cells_in_series, battery.capacity_ah
-    fit = fit_discharge(runs, cells, capacity)
-    checks = []
-    if len(runs) > 1:
-        for k, source in enumerate(runs):
-            alone = fit_discharge([source], cells, capacity).parameters
-            for j, target in enumerate(runs):
-                if j == k:
-                    continue
-                predicted = time_to_cutoff_s(
-                    alone, target.mean_power_w, battery.cutoff_voltage_v, 1, target.start_charge_ah
-                )
-                checks.append(
-                    CrossValidation(
-                        source.path.name,
-                        target.path.name,
-                        target.time_to_cutoff_s / 60.0,
-                        predicted / 60.0,
-                    )
-                )
+    fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
     engine_name = next((r.engine for r in battery.runs if r.engine), None)
     engines = {e.name: e for e in case.propulsion.engines}
     if engine_name is not None and engine_name not in engines:
@@ -159,7 +171,7 @@ def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisatio
         static_n, battery.published_power_range_w, battery.published_static_thrust_range_n
     )
     power = fit_fan_power(runs, static_w, battery.jet_velocity_m_s)
-    result = BatteryCharacterisation(battery, runs, fit, tuple(checks), power)
+    result = BatteryCharacterisation(battery, runs, fit, power)
     _characterisation_cache[key] = result
     return result
 

@@ -130,15 +130,15 @@ def _endurance(case: Case) -> Verdict:
         return Verdict(
             "flight_endurance", None, requirement.min_flight_time_min, "min", "min", str(exc)
         )
-    data = result.to_dict()
     return Verdict(
         "flight_endurance",
-        data["flight_endurance_min"],
+        result.flight_endurance_min,
         requirement.min_flight_time_min,
         "min",
         "min",
-        f"at throttle {requirement.throttle:g}, {data['airspeed_m_s']:.1f} m/s, "
-        f"{data['electrical_power_w']:.0f} W per fan",
+        f"at throttle {requirement.throttle:g}, {result.airspeed_m_s:.1f} m/s, "
+        f"{result.electrical_power_w:.0f} W per fan",
+        {"warnings": list(result.warnings)},
     )
 
 
