@@ -81,6 +81,42 @@ class LeastThrottleSolver:
         return high
 
 
+@dataclass(frozen=True)
+class ThrottleSweep:
+    """Least level-flight throttle at each airspeed of a grid; NaN where not attainable."""
+
+    airspeed_m_s: np.ndarray
+    throttle: np.ndarray
+
+    @property
+    def all_feasible(self) -> bool:
+        return bool(np.all(np.isfinite(self.throttle)))
+
+    @property
+    def min_throttle(self) -> float | None:
+        finite = self.throttle[np.isfinite(self.throttle)]
+        return float(finite.min()) if finite.size else None
+
+    @property
+    def airspeed_at_min_throttle_m_s(self) -> float | None:
+        if self.min_throttle is None:
+            return None
+        return float(self.airspeed_m_s[np.nanargmin(self.throttle)])
+
+    @property
+    def level_flight_airspeed_range_m_s(self) -> list[float] | None:
+        """Lowest and highest grid airspeed where level flight is attainable."""
+        feasible = self.airspeed_m_s[np.isfinite(self.throttle)]
+        return [float(feasible.min()), float(feasible.max())] if feasible.size else None
+
+    def lists(self) -> dict[str, list[float | None]]:
+        """The grid as JSON lists (``None`` where not attainable)."""
+        return {
+            "airspeed_m_s": [float(v) for v in self.airspeed_m_s],
+            "throttle": [float(x) if np.isfinite(x) else None for x in self.throttle],
+        }
+
+
 def least_throttle_solver(excess: ExcessFunction) -> LeastThrottleSolver:
     """Build a solver for ``excess(throttle, airspeed)`` (one code path: numpy and CasADi)."""
     return LeastThrottleSolver(excess=excess, _rootfinders={})

@@ -15,6 +15,7 @@ import numpy as np
 
 from tuflexperf.analysis.level_flight import (
     LeastThrottleSolver,
+    ThrottleSweep,
     airspeed_grid,
     least_throttle_solver,
 )
@@ -42,26 +43,8 @@ def oei_solver(case: Case, dead_engine: int, mode: DeadEngineMode) -> LeastThrot
 
 
 @dataclass(frozen=True)
-class DeadEngineCase:
+class DeadEngineCase(ThrottleSweep):
     dead_engine: str
-    airspeed_m_s: np.ndarray
-    throttle: np.ndarray  # NaN where level flight is not attainable
-
-    @property
-    def min_throttle(self) -> float | None:
-        finite = self.throttle[np.isfinite(self.throttle)]
-        return float(finite.min()) if finite.size else None
-
-    @property
-    def airspeed_at_min_throttle_m_s(self) -> float | None:
-        if self.min_throttle is None:
-            return None
-        return float(self.airspeed_m_s[np.nanargmin(self.throttle)])
-
-    @property
-    def level_flight_airspeed_range_m_s(self) -> list[float] | None:
-        feasible = self.airspeed_m_s[np.isfinite(self.throttle)]
-        return [float(feasible.min()), float(feasible.max())] if feasible.size else None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -69,8 +52,7 @@ class DeadEngineCase:
             "min_throttle": self.min_throttle,
             "airspeed_at_min_throttle_m_s": self.airspeed_at_min_throttle_m_s,
             "level_flight_airspeed_range_m_s": self.level_flight_airspeed_range_m_s,
-            "airspeed_m_s": [float(v) for v in self.airspeed_m_s],
-            "throttle": [float(x) if np.isfinite(x) else None for x in self.throttle],
+            **self.lists(),
         }
 
 
@@ -112,7 +94,7 @@ def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
         mode = case.requirements.oei.dead_engine if case.requirements.oei else "windmilling"
     speeds = airspeed_grid(*envelope_of(case))
     cases = tuple(
-        DeadEngineCase(engine.name, speeds, oei_solver(case, index, mode)(speeds))
+        DeadEngineCase(speeds, oei_solver(case, index, mode)(speeds), engine.name)
         for index, engine in enumerate(case.propulsion.engines)
     )
     extrapolated, warnings = extrapolation_note(case, speeds)

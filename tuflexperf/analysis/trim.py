@@ -14,6 +14,7 @@ import numpy as np
 
 from tuflexperf.analysis.level_flight import (
     LeastThrottleSolver,
+    ThrottleSweep,
     airspeed_grid,
     least_throttle_solver,
 )
@@ -65,27 +66,10 @@ def trim_solver(case: Case) -> LeastThrottleSolver:
 
 
 @dataclass(frozen=True)
-class TrimResult:
-    airspeed_m_s: np.ndarray
-    throttle: np.ndarray  # NaN where not attainable
+class TrimResult(ThrottleSweep):
     stall_speed_m_s: float
     extrapolated: bool
     warnings: tuple[str, ...]
-
-    @property
-    def all_feasible(self) -> bool:
-        return bool(np.all(np.isfinite(self.throttle)))
-
-    @property
-    def min_throttle(self) -> float | None:
-        finite = self.throttle[np.isfinite(self.throttle)]
-        return float(finite.min()) if finite.size else None
-
-    @property
-    def airspeed_at_min_throttle_m_s(self) -> float | None:
-        if self.min_throttle is None:
-            return None
-        return float(self.airspeed_m_s[np.nanargmin(self.throttle)])
 
     @property
     def max_throttle(self) -> float | None:
@@ -98,8 +82,7 @@ class TrimResult:
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            "airspeed_m_s": [float(v) for v in self.airspeed_m_s],
-            "throttle": [float(x) if np.isfinite(x) else None for x in self.throttle],
+            **self.lists(),
             "min_throttle": self.min_throttle,
             "airspeed_at_min_throttle_m_s": self.airspeed_at_min_throttle_m_s,
             "max_throttle": self.max_throttle,
