@@ -50,7 +50,13 @@ from tuflexperf.reduction.drag import DragModel, fit_structure_drag
 from tuflexperf.reduction.filters import filloutliers_movmean, movmedian, window_samples
 from tuflexperf.reduction.glauert import glauert_ratio
 from tuflexperf.reduction.poly22fit import Poly22Fit, fit_poly22
-from tuflexperf.reduction.segments import MIN_STEADY_SHARE, SteadyMean, fit_transients, steady_mean
+from tuflexperf.reduction.segments import (
+    MIN_STEADY_SHARE,
+    SteadyMean,
+    fit_transients,
+    merge_test_points,
+    steady_mean,
+)
 
 Progress = Callable[[int, int, str], None]
 """``progress(done, total, label)``: called before each run is reduced."""
@@ -340,39 +346,36 @@ def fit_campaign(
     points: list[Point] = []
     point_ratios: dict[int, list[float]] = {}
     for index, result in enumerate(step_results):
-        ratios = []
-        for segment in result.segments:
-            d = float(drag.drag_n(segment.airspeed_m_s)) if drag is not None else 0.0
-            thrust = segment.force_n + d
+        ratios = [float("nan")] * len(result.segments)
+        for cell in merge_test_points(result.segments):
+            d = float(drag.drag_n(cell.airspeed_m_s)) if drag is not None else 0.0
+            thrust = cell.force_n + d
             ratio = float(
                 glauert_ratio(
                     thrust,
-                    segment.airspeed_m_s,
+                    cell.airspeed_m_s,
                     campaign.air_density_kg_m3,
                     campaign.fan_area_m2,
                     campaign.tunnel_area_m2,
                 )
             )
-            ratios.append(ratio)
-            used_v = (
-                segment.airspeed_m_s * ratio
-                if glauert and math.isfinite(ratio)
-                else (segment.airspeed_m_s)
-            )
+            for member in cell.members:
+                ratios[member] = ratio
+            used_v = cell.airspeed_m_s * ratio if glauert and math.isfinite(ratio) else None
             # the table stores 10 significant digits; the fit uses exactly those numbers,
             # so `tuflexperf fit TABLE` reproduces this fit
             points.append(
                 Point(
                     engine=str(result.run.engine),
                     run=result.run.file,
-                    throttle=_rounded(segment.throttle),
-                    airspeed_measured_m_s=_rounded(segment.airspeed_m_s),
-                    force_n=_rounded(segment.force_n),
+                    throttle=_rounded(cell.throttle),
+                    airspeed_measured_m_s=_rounded(cell.airspeed_m_s),
+                    force_n=_rounded(cell.force_n),
                     drag_n=_rounded(d),
-                    force_std_n=_rounded(segment.force_std_n),
-                    n_samples=segment.n_samples,
+                    force_std_n=_rounded(cell.force_std_n),
+                    n_samples=cell.n_samples,
                     glauert_ratio=ratio,
-                    airspeed_m_s=_rounded(used_v),
+                    airspeed_m_s=_rounded(cell.airspeed_m_s if used_v is None else used_v),
                     thrust_n=_rounded(thrust),
                 )
             )

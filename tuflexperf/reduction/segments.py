@@ -171,3 +171,56 @@ def steady_mean(
         outliers_replaced=replaced,
         filtered_force_n=smooth,
     )
+
+
+THROTTLE_MATCH = 0.005
+"""Steady segments of one run whose throttles differ by less than this are one test point."""
+
+
+@dataclass(frozen=True)
+class TestPoint:
+    """One cell of the paper's thrust matrix: a run's steady segments at one throttle."""
+
+    throttle: float
+    airspeed_m_s: float
+    force_n: float
+    force_std_n: float
+    n_samples: int
+    members: tuple[int, ...]
+
+
+def merge_test_points(segments: Sequence[SteadyMean]) -> list[TestPoint]:
+    """Combine a run's segments at the same throttle (e.g. idle before and after the steps).
+
+    The paper transfers each run's segment means into a thrust *matrix*, one value
+    per throttle and airspeed (section 4); a throttle visited twice in a run is one
+    cell, its value the sample-weighted mean, so no condition weighs double in the fit.
+    """
+    cells: list[list[int]] = []
+    for i, segment in enumerate(segments):
+        for cell in cells:
+            if abs(segments[cell[0]].throttle - segment.throttle) < THROTTLE_MATCH:
+                cell.append(i)
+                break
+        else:
+            cells.append([i])
+    points = []
+    for cell in cells:
+        members = [segments[i] for i in cell]
+        weights = np.array([m.n_samples for m in members], dtype=float)
+        force = np.array([m.force_n for m in members])
+        mean_force = float(np.average(force, weights=weights))
+        spread = np.array([m.force_std_n for m in members])
+        # pooled standard deviation, including the spread between the segments' means
+        pooled = np.average(spread**2 + (force - mean_force) ** 2, weights=weights)
+        points.append(
+            TestPoint(
+                throttle=float(np.average([m.throttle for m in members], weights=weights)),
+                airspeed_m_s=float(np.average([m.airspeed_m_s for m in members], weights=weights)),
+                force_n=mean_force,
+                force_std_n=float(np.sqrt(pooled)),
+                n_samples=int(weights.sum()),
+                members=tuple(cell),
+            )
+        )
+    return points
