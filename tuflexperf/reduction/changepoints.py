@@ -52,28 +52,42 @@ def throttle_plateaus(
     """Split a run at its logged throttle steps.
 
     The throttle is first median-filtered over 20 ms (isolated logging glitches
-    out, steps kept sharp). Samples where it moves by more than
-    :data:`THROTTLE_MOVE` (or 5 robust standard deviations of its sample-to-sample
-    change, if the log is noisy) are transitions; transitions closer than 0.1 s
-    merge. What lies between is a plateau; plateaus shorter than ``min_duration_s``
-    are dropped, and those whose throttle drifts by more than :data:`PLATEAU_SPREAD`
-    are kept but marked not ``steady``.
+    out, steps kept sharp). A sample is *moving* when the throttle differs from
+    its value 0.1 s earlier by more than :data:`THROTTLE_MOVE` (or 5 robust
+    standard deviations of those differences, if the log is noisy): comparing
+    over 0.1 s rather than sample to sample also catches slow ramps. Moving
+    stretches closer than 0.1 s merge into one transition; what lies between
+    transitions is a plateau. Plateaus shorter than ``min_duration_s`` are
+    dropped, and those whose throttle still drifts by more than
+    :data:`PLATEAU_SPREAD` are kept but marked not ``steady``.
     """
     x = np.asarray(throttle, dtype=float)
     k = window_samples(0.02, sample_rate_hz)
     if k >= 3:
         x = movmedian(x, k | 1)
-    moves = np.abs(np.diff(x))
+    lag = window_samples(0.1, sample_rate_hz)
+    if x.size <= lag:
+        lag = max(1, x.size // 4)
+    moves = np.abs(x[lag:] - x[:-lag])
     tolerance = max(THROTTLE_MOVE, 5.0 * robust_std(moves))
-    changes = np.flatnonzero(moves > tolerance)
-    merge = window_samples(0.1, sample_rate_hz)
-    transitions: list[tuple[int, int]] = []  # [first changed sample, first settled sample)
-    for index in changes:
-        if transitions and index + 1 - transitions[-1][1] <= merge:
-            transitions[-1] = (transitions[-1][0], int(index) + 2)
-        else:
-            transitions.append((int(index) + 1, int(index) + 2))
-    bounds = [(0, None)] + [(stop, start) for start, stop in transitions]
+    # moving[i]: the throttle changed between sample i - lag and i
+    moving = np.concatenate((np.zeros(lag, dtype=bool), moves > tolerance))
+    # a change at sample s makes samples s .. s + lag - 1 "moving"; its first sample is
+    # where the command changed (the step), the plateau starts after the last one.
+    index = np.flatnonzero(moving)
+    transitions: list[tuple[int, int]] = []  # [first moving sample, first settled sample)
+    if index.size:
+        breaks = np.flatnonzero(np.diff(index) > lag) + 1
+        for run in np.split(index, breaks):
+            first, last = int(run[0]), int(run[-1])
+            # the step is the first sample that differs from the level before it
+            before = x[max(first - 1, 0)]
+            span = x[first : last + 1]
+            moved = np.flatnonzero(np.abs(span - before) > tolerance)
+            step = first + int(moved[0]) if moved.size else first
+            transitions.append((step, last + 1))
+    bounds: list[tuple[int, int | None]] = [(0, None)]
+    bounds += [(stop, start) for start, stop in transitions]
     ends = [start for start, _ in transitions] + [x.size]
     minimum = max(3, window_samples(min_duration_s, sample_rate_hz))
     plateaus: list[Plateau] = []

@@ -1,0 +1,109 @@
+"""Moving-window filters against MATLAB's documented examples and hand-computed cases."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tuflexperf.reduction.filters import (
+    block_mean,
+    filloutliers_movmean,
+    isoutlier_movmean,
+    movmean,
+    movmedian,
+    movstd,
+    window_samples,
+)
+
+# MATLAB documentation, movmean / movmedian: "Centered Moving Average of Vector"
+A = np.array([4.0, 8.0, 6.0, -1.0, -2.0, -3.0, -1.0, 3.0, 4.0, 5.0])
+
+
+def test_movmean_matlab_doc_example() -> None:
+    # M = movmean(A,3) -> 6.0000 6.0000 4.3333 1.0000 -2.0000 -2.0000 -0.3333 2.0000 4.0000 4.5000
+    expected = [6.0, 6.0, 13 / 3, 1.0, -2.0, -2.0, -1 / 3, 2.0, 4.0, 4.5]
+    np.testing.assert_allclose(movmean(A, 3), expected, rtol=0, atol=1e-12)
+
+
+def test_movmedian_matlab_doc_example() -> None:
+    # M = movmedian(A,3) -> 6 6 6 -1 -2 -2 -1 3 4 4.5
+    expected = [6.0, 6.0, 6.0, -1.0, -2.0, -2.0, -1.0, 3.0, 4.0, 4.5]
+    np.testing.assert_array_equal(movmedian(A, 3), expected)
+
+
+def test_movstd_hand_computed_shrinking_ends() -> None:
+    # window [4 8] at the start: std = sqrt(((4-6)^2 + (8-6)^2) / 1) = 2*sqrt(2)
+    # window [8 6 -1]: mean 13/3, deviations 11/3, 5/3, -16/3 -> var = (121+25+256)/9/2
+    out = movstd(A, 3)
+    assert out[0] == pytest.approx(2 * np.sqrt(2))
+    assert out[2] == pytest.approx(np.sqrt((121 + 25 + 256) / 18))
+    assert out[-1] == pytest.approx(np.sqrt(0.5))  # [4 5]
+
+
+def test_even_window_spans_half_before_and_half_minus_one_after() -> None:
+    # MATLAB: an even window k is centred on the current and previous elements:
+    # k/2 samples before, k/2 - 1 after. movmean(1:6, 4) at index 3 (value 3): mean(1:4).
+    x = np.arange(1.0, 7.0)
+    assert movmean(x, 4)[2] == pytest.approx(np.mean([1, 2, 3, 4]))
+    assert movmean(x, 4)[0] == pytest.approx(np.mean([1, 2]))  # shrunk: [1 2]
+    assert movmedian(x, 4)[2] == pytest.approx(2.5)  # average of the two middle values
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 7, 10, 33, 200])
+def test_moving_filters_equal_brute_force(k: int) -> None:
+    rng = np.random.default_rng(k)
+    x = rng.normal(size=97) * 3 + np.repeat([0.0, 5.0, -2.0], [30, 40, 27])
+    before, after = k // 2, k - 1 - k // 2
+    windows = [x[max(i - before, 0) : i + after + 1] for i in range(x.size)]
+    np.testing.assert_allclose(movmean(x, k), [w.mean() for w in windows], atol=1e-12)
+    np.testing.assert_allclose(movmedian(x, k), [np.median(w) for w in windows], atol=1e-12)
+    stds = [w.std(ddof=1) if w.size > 1 else 0.0 for w in windows]
+    np.testing.assert_allclose(movstd(x, k), stds, atol=1e-9)
+
+
+def test_isoutlier_mean_matlab_doc_example() -> None:
+    # MATLAB isoutlier doc, "Outliers Using Mean Detection": only 300 is 3 std from the mean.
+    # A moving window covering the whole vector reduces to that global method.
+    b = np.array([57, 59, 60, 100, 59, 58, 57, 58, 300, 61, 62, 60, 62, 58, 57], dtype=float)
+    flagged = isoutlier_movmean(b, k=2 * b.size + 1, threshold=3.0)
+    assert list(np.flatnonzero(flagged)) == [8]
+
+
+def test_filloutliers_center_replaces_with_local_mean() -> None:
+    # 21 ones with a spike of 11 in the middle, window 21 (all), threshold 1.5:
+    # mean = 1 + 10/21; the spike is 200/21 = 9.52 above it, std = sqrt(42000/441/20) = 2.18,
+    # i.e. 4.4 std (an outlier); the ones are 0.48 = 0.22 std below (kept)
+    x = np.ones(21)
+    x[10] = 11.0
+    filled, count = filloutliers_movmean(x, 21, threshold=1.5)
+    assert count == 1
+    centre = np.mean(x[0:21])  # window of sample 10 covers all 21 samples
+    assert filled[10] == pytest.approx(centre)
+    np.testing.assert_array_equal(np.delete(filled, 10), np.ones(20))
+
+
+def test_filloutliers_short_window_keeps_a_spike_it_dominates() -> None:
+    # window 3 around a spike h: |h - mean| = 2h/3, std = h/sqrt(3): ratio 1.15 < 1.5
+    x = np.array([0.0, 0.0, 0.0, 9.0, 0.0, 0.0, 0.0])
+    _, count = filloutliers_movmean(x, 3, threshold=1.5)
+    assert count == 0
+
+
+def test_threshold_is_strict() -> None:
+    # [0 0 1 0 0] whole window: mean 0.2, std sqrt(0.2) ~ 0.447; |1 - 0.2| = 0.8 = 1.789 std
+    x = np.array([0.0, 0.0, 1.0, 0.0, 0.0])
+    ratio = 0.8 / np.sqrt(0.2)
+    assert isoutlier_movmean(x, 11, threshold=ratio * (1 - 1e-9))[2]
+    assert not isoutlier_movmean(x, 11, threshold=ratio * (1 + 1e-9))[2]
+
+
+def test_window_samples_from_seconds() -> None:
+    assert window_samples(2.0, 1000.0) == 2000  # the paper's 2 s at 1 kHz
+    assert window_samples(2.0, 250.0) == 500
+    assert window_samples(0.001, 100.0) == 1  # never zero
+    with pytest.raises(ValueError):
+        window_samples(0.0, 100.0)
+
+
+def test_block_mean_drops_partial_block() -> None:
+    np.testing.assert_array_equal(block_mean(np.arange(7.0), 3), [1.0, 4.0])
