@@ -1,0 +1,284 @@
+"""``tuflexperf report``: every figure of the design review as PNG, and one PDF (``review.pdf``).
+
+All or nothing: the case is loaded and validated before anything is written; the
+report is then built in a temporary directory beside ``--out`` and moved into place
+at the end (``os.replace``), so a failing run leaves no partial output. An existing
+``--out`` is replaced only when it is empty or holds an earlier report (a
+``review.pdf``); any other directory is refused rather than overwritten.
+
+Progress goes to stderr as a step counter; stdout stays for the result.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+from tuflexperf.errors import InputError
+
+PDF_NAME = "review.pdf"
+PNG_DPI = 150
+
+
+@dataclass
+class ReportResult:
+    """What ``report`` wrote: the directory, its files (PNGs then the PDF) and the PDF's pages."""
+
+    out_dir: Path
+    files: list[Path]
+    pdf: Path
+    pages: int
+    passed: bool
+    seconds: float
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "out": str(self.out_dir),
+            "files": [str(p) for p in self.files],
+            "pdf": str(self.pdf),
+            "pages": self.pages,
+            "figures": [str(p) for p in self.files if p.suffix == ".png"],
+            "passed": self.passed,
+            "seconds": self.seconds,
+            "notes": self.notes,
+        }
+
+
+class StepCounter:
+    """``report [k/n] label`` lines on stderr (never stdout: ``--json`` keeps it clean)."""
+
+    def __init__(self, total: int, stream: Any = None, enabled: bool = True) -> None:
+        self.total, self.done, self.enabled = total, 0, enabled
+        self.stream = stream if stream is not None else sys.stderr
+        self.started = time.perf_counter()
+
+    def __call__(self, label: str) -> None:
+        self.done += 1
+        self.total = max(self.total, self.done)
+        if self.enabled:
+            elapsed = time.perf_counter() - self.started
+            self.stream.write(f"report [{self.done}/{self.total}] {label} ({elapsed:.1f} s)\n")
+            self.stream.flush()
+
+
+def _safe_name(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_") or "engine"
+
+
+def _check_out(out: Path) -> None:
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out: {out} exists and is not a directory")
+    if out.is_dir() and any(out.iterdir()) and not (out / PDF_NAME).is_file():
+        raise InputError(
+            f"--out: {out} is a non-empty directory without a previous report ({PDF_NAME}); "
+            "refusing to replace it, choose a new directory"
+        )
+
+
+def _make_parents(parent: Path) -> list[Path]:
+    """Create missing parent directories; return those created (removed again on failure)."""
+    created = []
+    for folder in [parent, *parent.parents][::-1]:
+        if not folder.exists():
+            try:
+                folder.mkdir()
+            except OSError as exc:
+                raise InputError(f"--out: cannot create {folder}: {exc.strerror}") from None
+            created.append(folder)
+    return created
+
+
+def _move_into_place(staging: Path, out: Path) -> None:
+    if out.exists():
+        old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
+        os.replace(out, old / "report")
+        os.replace(staging, out)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(staging, out)
+
+
+def build_report(
+    case_file: Path | str | None,
+    out: Path | str,
+    campaign: Path | str | None = None,
+    progress: bool = True,
+    stream: Any = None,
+) -> ReportResult:
+    """Build the design-review report for a case (``None``: the shipped TU-Flex case).
+
+    Parameters
+    ----------
+    case_file : path or None
+        Requirement file.
+    out : path
+        Directory to write; created, or replaced if it holds an earlier report.
+    campaign : path or None
+        Campaign manifest or thrust table with the measured data (default: see
+        :func:`tuflexperf.report.data.find_measured_source`).
+    progress : bool
+        Write the step counter to ``stream`` (stderr).
+
+    Returns
+    -------
+    ReportResult
+    """
+    from tuflexperf.io.case import load_case
+
+    started = time.perf_counter()
+    out = Path(out).absolute()
+    case = load_case(case_file)  # bad input fails here, before anything is written
+    campaign_path = Path(campaign) if campaign is not None else None
+    if campaign_path is not None and not campaign_path.is_file():
+        raise InputError(f"--campaign: file not found: {campaign_path}")
+    _check_out(out)
+    created = _make_parents(out.parent)
+    try:
+        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    except OSError as exc:
+        for folder in reversed(created):
+            folder.rmdir()
+        raise InputError(f"--out: cannot write in {out.parent}: {exc.strerror}") from None
+    try:
+        result = _render(case, staging, campaign_path, StepCounter(14, stream, progress))
+        _move_into_place(staging, out)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        for folder in reversed(created):
+            try:
+                folder.rmdir()
+            except OSError:
+                pass
+        raise
+    files = [out / p.name for p in result.files]
+    return ReportResult(
+        out_dir=out,
+        files=files,
+        pdf=out / PDF_NAME,
+        pages=result.pages,
+        passed=result.passed,
+        seconds=time.perf_counter() - started,
+        notes=result.notes,
+    )
+
+
+def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -> ReportResult:
+    from tuflexperf.report import figures as fg
+
+    fg.use_agg()
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    from tuflexperf.report.data import load_measured, run_analyses
+
+    analyses = run_analyses(case)
+    step("analyses: check, take-off, trim, OEI, endurance")
+    measured = load_measured(case, campaign)
+    step(f"measured data: {measured.kind}" + (f" {measured.source.name}" if measured.source
+                                              else ""))
+
+    pages: list[tuple[str | None, Callable[[], Any]]] = [
+        (None, lambda: _title_page(case, measured, analyses)),
+        ("01_requirements", lambda: fg.requirement_table(case, analyses)),
+        ("02_thrust_required_available", lambda: fg.thrust_required_available(case, analyses)),
+    ]
+    for index, engine in enumerate(case.propulsion.engines):
+        pages.append(
+            (
+                f"03_thrust_surface_{_safe_name(engine.name)}",
+                lambda i=index: fg.thrust_surface(case, measured, i),
+            )
+        )
+    if measured.processed is not None:
+        pages.append(("04_run_processing", lambda: fg.run_processing(measured.processed)))
+    if measured.sweep is not None:
+        pages.append(("05_sine_sweep", lambda: fg.sine_sweep(measured)))
+    if measured.comparisons:
+        pages.append(("06_model_vs_measured", lambda: fg.model_vs_measured(case, measured)))
+    pages.append(("07_takeoff", lambda: fg.takeoff_history(case, analyses)))
+    if analyses.trim is not None:
+        pages.append(("08_trim_oei_throttle", lambda: fg.trim_oei_throttle(case, analyses)))
+    if analyses.characterisation is not None:
+        pages.append(("09_endurance", lambda: fg.endurance(case, analyses)))
+    notes = measured.notes + analyses.notes
+    step.total = step.done + len(pages) + 1
+
+    files: list[Path] = []
+    pdf_path = folder / PDF_NAME
+    from tuflexperf import __version__
+
+    with PdfPages(
+        pdf_path,
+        metadata={"Title": f"Design review: {case.name}", "Creator": f"tuflexperf {__version__}"},
+    ) as pdf:
+        for name, draw in pages:
+            fig = draw()
+            if name is not None:
+                png = folder / f"{name}.png"
+                fig.savefig(png, dpi=PNG_DPI)
+                files.append(png)
+            pdf.savefig(fig)
+            step(name or "title page")
+        page_count = len(pages)
+        if notes:
+            pdf.savefig(fg.text_page("What this report leaves out, and why",
+                                     [f"- {n}" for n in notes]))
+            page_count += 1
+        step("review.pdf")
+    files.append(pdf_path)
+    return ReportResult(
+        out_dir=folder,
+        files=files,
+        pdf=pdf_path,
+        pages=page_count,
+        passed=all(v.passed for v in analyses.verdicts),
+        seconds=0.0,
+        notes=notes,
+    )
+
+
+def _title_page(case: Any, measured: Any, analyses: Any) -> Any:
+    from tuflexperf import __version__
+    from tuflexperf.report import figures as fg
+    from tuflexperf.report.data import input_files, sha256_of
+
+    verdicts = analyses.verdicts
+    passed = all(v.passed for v in verdicts)
+    now = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    lines = [
+        f"case        {case.name}",
+        f"file        {case.path}",
+        f"aircraft    {case.aircraft.name}, {case.aircraft.mass_kg:g} kg, "
+        f"S = {case.aircraft.wing_area_m2:g} m^2, CD = {case.aircraft.cd0:g} + "
+        f"{case.aircraft.k:g} CL^2",
+        f"propulsion  {case.propulsion.name}: {len(case.propulsion.engines)} engines "
+        f"({', '.join(e.name for e in case.propulsion.engines)}), poly22, tested "
+        f"{case.propulsion.tested_airspeed_m_s[0]:g}-{case.propulsion.tested_airspeed_m_s[1]:g}"
+        f" m/s, delay {case.propulsion.delay_s:g} s",
+        f"atmosphere  ISA {case.atmosphere.altitude_m:g} m, "
+        f"dT {case.atmosphere.temperature_offset_k:+g} K, rho = {case.density_kg_m3:.4f} kg/m^3",
+        f"verdict     {len(verdicts)} requirements, "
+        + ("all met" if passed else f"{sum(not v.passed for v in verdicts)} NOT met"),
+        "",
+        f"tool        tuflexperf {__version__}",
+        f"date        {now}",
+        "",
+        "data (sha256):",
+    ]
+    root = case.path.parent
+    for role, path in input_files(case, measured):
+        try:
+            shown = os.path.relpath(path, root)
+        except ValueError:
+            shown = str(path)
+        lines.append(f"  {sha256_of(path)}  {role:<13} {shown}")
+    return fg.text_page(f"Design review: {case.name}", lines, size=(11.0, 8.5))

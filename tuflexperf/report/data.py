@@ -1,0 +1,365 @@
+"""What the design-review report draws: the case's analyses and the data behind the model.
+
+Everything here is computed by the project's own modules; nothing is re-derived:
+
+- verdicts: :func:`tuflexperf.analysis.requirements.check_case`;
+- take-off, trim, OEI: :func:`solve_takeoff`, :func:`solve_trim`, :func:`solve_oei`;
+- measured thrust points, delay, structure drag: :func:`tuflexperf.reduction.pipeline.fit_campaign`
+  on the campaign (or :func:`tuflexperf.io.runs.read_thrust_table` on a table);
+- one reduced run: :func:`tuflexperf.reduction.pipeline.reduce_step_run` plus the campaign's
+  filters (:mod:`tuflexperf.reduction.filters`) and change points
+  (:func:`tuflexperf.reduction.changepoints.force_changepoints`);
+- endurance: :func:`tuflexperf.analysis.endurance.solve_endurance` and its battery
+  characterisation (fitted pack model and discharge runs).
+
+Where the measured data come from (first that applies):
+
+1. ``--campaign FILE`` (a campaign manifest or a thrust-table CSV);
+2. the propulsion file's ``source.input`` as written by ``tuflexperf fit``;
+3. ``campaign/campaign.yaml`` beside the propulsion file (the shipped TU-Flex layout).
+
+When none applies, the report draws the model alone and says so.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tuflexperf.errors import InputError, NotAttainable
+from tuflexperf.io.case import Case
+
+CAMPAIGN_BESIDE_PROPULSION = Path("campaign") / "campaign.yaml"
+
+
+def sha256_of(path: Path) -> str:
+    """Hex sha256 of a file's bytes (the title page lists every input by it)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for chunk in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+# --- measured data ----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class MeasuredPoints:
+    """Thrust-table points (per engine name): throttle fraction, airspeed m/s, thrust N."""
+
+    engine: tuple[str, ...]
+    throttle: np.ndarray
+    airspeed_m_s: np.ndarray
+    thrust_n: np.ndarray
+
+    def select(self, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        mask = np.array([e == name for e in self.engine], dtype=bool)
+        return self.throttle[mask], self.airspeed_m_s[mask], self.thrust_n[mask]
+
+
+@dataclass(frozen=True)
+class ProcessedRun:
+    """One throttle-step run, raw and cleaned, with its change points and steady segments."""
+
+    file: str
+    engine: str
+    time_s: np.ndarray
+    throttle: np.ndarray
+    airspeed_m_s: np.ndarray
+    force_raw_n: np.ndarray
+    force_clean_n: np.ndarray
+    changepoints: tuple[int, ...]
+    segments: tuple[tuple[int, int, float], ...]  # (start, stop, mean force N)
+    outliers_replaced: int
+
+    @property
+    def mean_airspeed_m_s(self) -> float:
+        return float(np.mean(self.airspeed_m_s))
+
+
+@dataclass(frozen=True)
+class SweepRun:
+    """A sine-sweep run and its measured dead time (s)."""
+
+    file: str
+    engine: str
+    time_s: np.ndarray
+    throttle: np.ndarray
+    force_n: np.ndarray
+    airspeed_m_s: float
+    delay_s: float
+    lag_s: float
+
+
+@dataclass
+class Measured:
+    """The measured side of the report; any part may be missing (``notes`` say why)."""
+
+    source: Path | None = None
+    kind: str = "none"  # "campaign", "table" or "none"
+    points: MeasuredPoints | None = None
+    fit_summary: dict[str, Any] | None = None
+    processed: ProcessedRun | None = None
+    sweep: SweepRun | None = None
+    comparisons: list[ProcessedRun] = field(default_factory=list)
+    density_kg_m3: float | None = None
+    drag_c1_c2: tuple[float, float] | None = None
+    files: list[Path] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+
+def find_measured_source(case: Case, explicit: Path | None) -> Path | None:
+    """Where the measured data for ``case``'s propulsion model are (module docstring)."""
+    if explicit is not None:
+        if not explicit.is_file():
+            raise InputError(f"--campaign: file not found: {explicit}")
+        return explicit
+    source = case.propulsion.metadata.get("source") or {}
+    given = source.get("input") if isinstance(source, dict) else None
+    if isinstance(given, str):
+        candidate = Path(given)
+        if not candidate.is_absolute():
+            candidate = case.propulsion_path.parent / candidate
+        if candidate.is_file():
+            return candidate
+    beside = case.propulsion_path.parent / CAMPAIGN_BESIDE_PROPULSION
+    return beside if beside.is_file() else None
+
+
+def _points_from_rows(rows: list[dict[str, Any]]) -> MeasuredPoints:
+    return MeasuredPoints(
+        engine=tuple(str(r["engine"]) for r in rows),
+        throttle=np.array([float(r["throttle"]) for r in rows]),
+        airspeed_m_s=np.array([float(r["airspeed_m_s"]) for r in rows]),
+        thrust_n=np.array([float(r["thrust_n"]) for r in rows]),
+    )
+
+
+def _processed_run(campaign: Any, run: Any, delay_s: float) -> ProcessedRun:
+    """Reduce one throttle-step run with the campaign's own settings (paper Fig. 10).
+
+    Adapter: ``fit_campaign`` keeps only summaries, so the run is reduced again with
+    the pipeline's public ``reduce_step_run``; the whole-run cleaned force is the
+    campaign's two filters (outliers against a moving mean, then the moving median).
+    """
+    from tuflexperf.io.runs import read_run
+    from tuflexperf.reduction.changepoints import force_changepoints
+    from tuflexperf.reduction.filters import filloutliers_movmean, movmedian, window_samples
+    from tuflexperf.reduction.pipeline import MIN_SEGMENT_S, reduce_step_run
+
+    data = read_run(run.path)
+    result = reduce_step_run(campaign, run, data, delay_s)
+    fs = data.sample_rate_hz
+    f = campaign.filters
+    filled, replaced = filloutliers_movmean(
+        data["force_n"], window_samples(f.outlier_window_s, fs), f.outlier_threshold
+    )
+    clean = movmedian(filled, window_samples(f.median_window_s, fs))
+    changes = force_changepoints(clean, fs, min_segment_s=MIN_SEGMENT_S)
+    return ProcessedRun(
+        file=run.file,
+        engine=str(run.engine),
+        time_s=data.time_s,
+        throttle=data["throttle"],
+        airspeed_m_s=data["airspeed_m_s"],
+        force_raw_n=data["force_n"],
+        force_clean_n=clean,
+        changepoints=tuple(int(c) for c in changes),
+        segments=tuple((s.start, s.stop, s.force_n) for s in result.segments),
+        outliers_replaced=replaced,
+    )
+
+
+def _mean_airspeed(summary_runs: dict[str, dict[str, Any]], file: str) -> float:
+    """A run's airspeed from the fit's points (mean of its segments), else NaN."""
+    return summary_runs.get(file, {}).get("airspeed", math.nan)
+
+
+def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Measured:
+    """Measured points, one processed run, one sweep and two model comparisons."""
+    source = find_measured_source(case, explicit)
+    measured = Measured(source=source)
+    if source is None:
+        measured.notes.append(
+            "no measured data for this propulsion model (no --campaign, no source.input in "
+            f"{case.propulsion_path.name}, no {CAMPAIGN_BESIDE_PROPULSION} beside it): "
+            "the thrust surfaces are drawn alone"
+        )
+        return measured
+    measured.files.append(source)
+    if source.name.lower().endswith(".csv"):
+        from tuflexperf.io.runs import read_thrust_table
+
+        table = read_thrust_table(source)
+        measured.kind = "table"
+        measured.points = MeasuredPoints(
+            table.engine, table.throttle, table.airspeed_m_s, table.thrust_n
+        )
+        measured.notes.append(
+            f"measured points from the thrust table {source.name}; no raw runs, so the run, "
+            "sine-sweep and model-vs-run figures are left out"
+        )
+        return measured
+
+    from tuflexperf.io.campaign import load_campaign
+    from tuflexperf.io.runs import read_run
+    from tuflexperf.reduction.pipeline import fit_campaign
+
+    campaign = load_campaign(source)
+    measured.kind = "campaign"
+    measured.density_kg_m3 = campaign.air_density_kg_m3
+    measured.files.extend(run.path for run in campaign.runs)
+    result = fit_campaign(source, progress=progress)
+    summary = result.summary
+    measured.fit_summary = summary
+    measured.points = _points_from_rows(summary["points"])
+    drag = summary.get("structure_drag")
+    if drag:
+        measured.drag_c1_c2 = (drag["c1_n_per_m_s"], drag["c2_n_per_m2_s2"])
+    delay = float(summary.get("delay_s") or case.propulsion.delay_s or 0.0)
+
+    airspeeds: dict[str, dict[str, Any]] = {}
+    for row in summary["points"]:
+        entry = airspeeds.setdefault(row["run"], {"values": []})
+        entry["values"].append(float(row["airspeed_measured_m_s"]))
+    for entry in airspeeds.values():
+        entry["airspeed"] = float(np.mean(entry["values"]))
+
+    steps = campaign.of_kind("throttle_steps")
+    engines = list(dict.fromkeys(str(r.engine) for r in steps))
+    if steps:
+        # Paper Fig. 10: the run at the highest airspeed (30 m/s) of the first engine.
+        first = [r for r in steps if str(r.engine) == engines[0]]
+        fastest = max(first, key=lambda r: _mean_airspeed(airspeeds, r.file))
+        measured.processed = _processed_run(campaign, fastest, delay)
+        # Paper Figs. 16-17: first engine at its lowest airspeed, last at its highest.
+        slowest = min(first, key=lambda r: _mean_airspeed(airspeeds, r.file))
+        last = [r for r in steps if str(r.engine) == engines[-1]]
+        top = max(last, key=lambda r: _mean_airspeed(airspeeds, r.file))
+        measured.comparisons = [
+            _processed_run(campaign, slowest, delay) if slowest is not fastest
+            else measured.processed,
+            _processed_run(campaign, top, delay) if top is not fastest else measured.processed,
+        ]
+
+    sweeps = campaign.of_kind("sine_sweep")
+    if sweeps:
+        by_file = {d["file"]: d for d in summary.get("delay_runs", [])}
+        loaded = [(run, read_run(run.path)) for run in sweeps]
+        # Paper Figs. 13-14: the sweep at the highest airspeed, of the last engine on a tie.
+        run, data = max(
+            enumerate(loaded),
+            key=lambda item: (round(float(np.mean(item[1][1]["airspeed_m_s"])), 0), item[0]),
+        )[1]
+        estimate = by_file.get(run.file, {})
+        measured.sweep = SweepRun(
+            file=run.file,
+            engine=str(run.engine),
+            time_s=data.time_s,
+            throttle=data["throttle"],
+            force_n=data["force_n"],
+            airspeed_m_s=float(np.mean(data["airspeed_m_s"])),
+            delay_s=float(estimate.get("delay_s", math.nan)),
+            lag_s=float(estimate.get("lag_s", math.nan)),
+        )
+    else:
+        measured.notes.append(f"{source.name}: no sine_sweep run, delay figure left out")
+    return measured
+
+
+# --- the case's analyses ----------------------------------------------------------------------
+@dataclass
+class Analyses:
+    """The performance results the figures draw (``None`` where the case has no input)."""
+
+    verdicts: list[Any]
+    takeoff: Any | None
+    takeoff_note: str | None
+    trim: Any | None
+    oei: Any | None
+    endurance_curve: list[tuple[float, Any]] = field(default_factory=list)
+    endurance_at_requirement: Any | None = None
+    characterisation: Any | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+ENDURANCE_CURVE_POINTS = 15
+
+
+def run_analyses(case: Case) -> Analyses:
+    """Every analysis the case allows; "not attainable" becomes a note, never a crash."""
+    from tuflexperf.analysis.requirements import check_case
+    from tuflexperf.analysis.takeoff import solve_takeoff
+
+    verdicts = check_case(case)
+    notes: list[str] = []
+    takeoff, takeoff_note = None, None
+    try:
+        takeoff = solve_takeoff(case)
+    except NotAttainable as exc:
+        takeoff_note = str(exc)
+    trim = oei = None
+    if case.requirements.envelope is not None:
+        from tuflexperf.analysis.oei import solve_oei
+        from tuflexperf.analysis.trim import solve_trim
+
+        trim = solve_trim(case)
+        if len(case.propulsion.engines) >= 2:
+            oei = solve_oei(case)
+        else:
+            notes.append("one engine only: no one-engine-inoperative case")
+    else:
+        notes.append("the case has no envelope requirement: trim and OEI are not drawn")
+    analyses = Analyses(verdicts, takeoff, takeoff_note, trim, oei, notes=notes)
+    if case.battery_path is None:
+        notes.append("the case names no battery file: the endurance figure is left out")
+        return analyses
+    _endurance(case, analyses)
+    return analyses
+
+
+def _endurance(case: Case, analyses: Analyses) -> None:
+    from tuflexperf.analysis.endurance import endurance_model, solve_endurance
+
+    model = endurance_model(case)
+    analyses.characterisation = model.ch
+    least = model.min_throttle
+    if not math.isfinite(least):
+        analyses.notes.append("no throttle up to full holds level flight: no endurance curve")
+        return
+    for x in np.linspace(min(max(least, 0.0), 1.0), 1.0, ENDURANCE_CURVE_POINTS):
+        try:
+            analyses.endurance_curve.append((float(x), solve_endurance(case, float(x))))
+        except NotAttainable:
+            continue
+    requirement = case.requirements.endurance
+    if requirement is not None:
+        try:
+            analyses.endurance_at_requirement = solve_endurance(case, requirement.throttle)
+        except NotAttainable as exc:
+            analyses.notes.append(f"endurance at throttle {requirement.throttle:g}: {exc}")
+
+
+def input_files(case: Case, measured: Measured) -> list[tuple[str, Path]]:
+    """(role, path) of every file the report's numbers come from, for the title page."""
+    files: list[tuple[str, Path]] = [
+        ("case", case.path),
+        ("aircraft", case.aircraft_path),
+        ("propulsion", case.propulsion_path),
+    ]
+    if case.battery_path is not None:
+        files.append(("battery", case.battery_path))
+        try:
+            from tuflexperf.io.battery import load_battery
+
+            files.extend(("discharge run", r.path) for r in load_battery(case.battery_path).runs)
+        except InputError:
+            pass
+    for k, path in enumerate(measured.files):
+        files.append(("campaign" if k == 0 and measured.kind == "campaign" else
+                      "thrust table" if measured.kind == "table" else "campaign run", path))
+    return files
