@@ -1,0 +1,137 @@
+"""`tuflexperf fit` through typer's CliRunner and one real subprocess run."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from tuflexperf.cli import app
+from tuflexperf.io.case import load_propulsion
+from tuflexperf.models.thrust import poly22
+
+runner = CliRunner()
+COEFFICIENTS = {"p00": 0.2, "p10": 5.0, "p01": -0.12, "p20": 40.0, "p11": -0.3, "p02": 0.0007}
+
+
+def write_table(path: Path, scale: float = 1.0) -> Path:
+    rows = ["engine,throttle,airspeed_m_s,thrust_n"]
+    rng = np.random.default_rng(0)
+    for engine in ("L", "R"):
+        for v in (0.0, 10.0, 20.0, 30.0):
+            for x in np.round(np.arange(0.1, 1.01, 0.1), 1):
+                thrust = poly22(x, v, COEFFICIENTS) + rng.normal(0, 0.2)
+                rows.append(f"{engine},{float(x * scale)!r},{v!r},{float(thrust)!r}")
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def test_table_fit_json_keys_and_files(tmp_path: Path) -> None:
+    table = write_table(tmp_path / "table.csv")
+    out = tmp_path / "fit.yaml"
+    result = runner.invoke(app, ["fit", str(table), "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert data["delay_s"] is None
+    assert [e["name"] for e in data["engines"]] == ["L", "R"]
+    for engine in data["engines"]:
+        assert set(engine) >= {"name", "coefficients", "r2", "rmse_n"}
+        assert engine["coefficients"]["p20"] == pytest.approx(40.0, abs=2.0)
+    model = load_propulsion(out)  # the schema `check` uses
+    assert model.delay_s == 0.0 and model.tested_airspeed_m_s == (0.0, 30.0)
+    assert data["table"] is None and not list(tmp_path.glob("*_thrust_table.csv"))
+
+
+def test_delay_flag_and_human_output(tmp_path: Path) -> None:
+    table = write_table(tmp_path / "table.csv")
+    out = tmp_path / "fit.yaml"
+    result = runner.invoke(app, ["fit", str(table), "--out", str(out), "--delay-s", "0.04"])
+    assert result.exit_code == 0, result.stderr
+    assert "R^2" in result.stdout and "wrote" in result.stdout
+    assert yaml.safe_load(out.read_text())["delay_s"] == 0.04
+
+
+def test_default_out_is_propulsion_fit_yaml_in_the_current_directory(tmp_path: Path) -> None:
+    table = write_table(tmp_path / "table.csv")
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        result = runner.invoke(app, ["fit", "table.csv"])
+    finally:
+        os.chdir(cwd)
+    assert result.exit_code == 0, result.stderr
+    assert (tmp_path / "propulsion_fit.yaml").is_file()
+    assert table.is_file()
+
+
+def broken_campaign(folder: Path) -> Path:
+    """A campaign whose step run lacks the force column: must fail before writing."""
+    folder.mkdir()
+    t = np.arange(0, 5, 0.01)
+    rows = ["time_s,airspeed_m_s,throttle"] + [f"{x},10,0.5" for x in t]
+    (folder / "run.csv").write_text("\n".join(rows) + "\n")
+    manifest = {
+        "name": "broken",
+        "fan_area_m2": 0.0068,
+        "tunnel_area_m2": 0.16,
+        "runs": [{"file": "run.csv", "engine": "E", "kind": "throttle_steps"}],
+    }
+    path = folder / "campaign.yaml"
+    path.write_text(yaml.safe_dump(manifest))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["nope.yaml"], "nope.yaml: file not found"),
+        (["{percent}"], "percent"),
+        (["{table}", "--glauert"], "--glauert"),
+        (["{table}", "--delay-s", "-1"], "--delay-s"),
+        (["{table}", "--out", "{tmp}"], "--out"),
+        (["{campaign}"], "missing column 'force_n'"),
+    ],
+)
+def test_bad_input_exit_2_one_line_no_output(tmp_path: Path, args: list[str], message: str) -> None:
+    table = write_table(tmp_path / "table.csv")
+    percent = write_table(tmp_path / "percent.csv", scale=100.0)
+    campaign = broken_campaign(tmp_path / "camp")
+    out = tmp_path / "out" / "fit.yaml"
+    names = {"table": table, "percent": percent, "campaign": campaign, "tmp": tmp_path}
+    argv = ["fit", *[a.format(**names) for a in args]]
+    if "--out" not in argv:
+        argv += ["--out", str(out)]
+    result = runner.invoke(app, argv)
+    assert result.exit_code == 2
+    assert message in result.stderr
+    assert result.stderr.strip().count("\n") == 0 and "Traceback" not in result.output
+    assert result.stdout == ""
+    assert not (tmp_path / "out").exists()  # no partial output
+
+
+def test_installed_script_fits_a_table(tmp_path: Path) -> None:
+    script = shutil.which("tuflexperf", path=str(Path(sys.executable).parent))
+    if script is None:
+        pytest.skip("console script not installed")
+    write_table(tmp_path / "table.csv")
+    done = subprocess.run(
+        [script, "fit", "table.csv", "--out", "p.yaml", "--json"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["engines"][0]["name"] == "L"
+    assert done.stderr == ""  # no progress bar or notes outside a terminal
+    bad = subprocess.run(
+        [script, "fit", "missing.csv"], cwd=tmp_path, capture_output=True, text=True
+    )
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "missing.csv" in bad.stderr

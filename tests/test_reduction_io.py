@@ -1,0 +1,181 @@
+"""Run-file, thrust-table and campaign-manifest readers: good files and broken ones."""
+
+from __future__ import annotations
+
+import gzip
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.io
+import yaml
+
+from tuflexperf.errors import InputError
+from tuflexperf.io.campaign import load_campaign
+from tuflexperf.io.runs import read_run, read_thrust_table
+
+N = 400
+
+
+def columns(n: int = N, fs: float = 250.0) -> dict[str, np.ndarray]:
+    t = np.arange(n) / fs
+    return {
+        "time_s": t,
+        "force_n": 10 + np.sin(t),
+        "airspeed_m_s": np.full(n, 15.0),
+        "throttle": np.where(t < 0.5, 0.0, 0.6),
+    }
+
+
+def write_csv(path: Path, data: dict[str, np.ndarray], gz: bool = False) -> Path:
+    lines = [",".join(data)]
+    lines += [",".join(repr(float(v)) for v in row) for row in zip(*data.values(), strict=True)]
+    text = "\n".join(lines).replace("nan", "NaN") + "\n"
+    if gz:
+        path.write_bytes(gzip.compress(text.encode()))
+    else:
+        path.write_text(text)
+    return path
+
+
+def test_csv_mat_and_gzip_read_alike(tmp_path: Path) -> None:
+    data = columns()
+    runs = [
+        read_run(write_csv(tmp_path / "a.csv", data)),
+        read_run(write_csv(tmp_path / "a.csv.gz", data, gz=True)),
+    ]
+    scipy.io.savemat(tmp_path / "a.mat", data, do_compression=True)  # row vectors (1 x n)
+    runs.append(read_run(tmp_path / "a.mat"))
+    scipy.io.savemat(tmp_path / "b.mat", {"run": data}, oned_as="column")  # one struct
+    runs.append(read_run(tmp_path / "b.mat"))
+    for run in runs:
+        assert run.sample_rate_hz == pytest.approx(250.0)
+        np.testing.assert_allclose(run["force_n"], data["force_n"])
+        np.testing.assert_allclose(run.time_s, data["time_s"])
+        assert run.nan_samples == {}
+
+
+def test_few_nans_repaired_and_reported(tmp_path: Path) -> None:
+    data = columns()
+    data["force_n"][[50, 51, 200]] = np.nan
+    data["time_s"] = data["time_s"].copy()
+    data["time_s"][300] = np.nan
+    run = read_run(write_csv(tmp_path / "n.csv", data))
+    assert run.nan_samples == {"time_s": 1, "force_n": 3}
+    assert run.n_samples == N - 1
+    assert np.isfinite(run["force_n"]).all()
+    expected = 10 + np.sin(50 / 250.0)
+    assert run["force_n"][50] == pytest.approx(expected, abs=1e-3)  # interpolated in time
+    assert any("NaN" in w for w in run.warnings)
+
+
+@pytest.mark.parametrize(
+    ("mutate", "message"),
+    [
+        (lambda d: d.pop("throttle"), "missing column 'throttle'"),
+        (lambda d: d["force_n"].__setitem__(slice(0, 40), np.nan), "force_n: 40 of 400"),
+        (lambda d: d["time_s"].__setitem__(100, d["time_s"][99]), "not strictly increasing"),
+        (lambda d: d["throttle"].__setitem__(slice(None), 60.0), "percent"),
+    ],
+)
+def test_broken_csv_is_input_error(tmp_path: Path, mutate, message: str) -> None:
+    data = columns()
+    mutate(data)
+    with pytest.raises(InputError, match=message) as err:
+        read_run(write_csv(tmp_path / "bad.csv", data))
+    assert "bad.csv" in str(err.value)
+
+
+def test_empty_and_unreadable_files(tmp_path: Path) -> None:
+    (tmp_path / "empty.csv").write_text("")
+    (tmp_path / "header.csv").write_text("time_s,force_n,airspeed_m_s,throttle\n")
+    (tmp_path / "junk.mat").write_bytes(b"\x00\x01not a mat file" * 20)
+    (tmp_path / "text.csv").write_text("time_s,force_n,airspeed_m_s,throttle\n0,abc,1,0\n")
+    (tmp_path / "run.txt").write_text("x")
+    cases = {
+        "empty.csv": "empty file",
+        "header.csv": "no data rows",
+        "junk.mat": "cannot read as a MATLAB",
+        "text.csv": "non-numeric value 'abc'",
+        "run.txt": "unsupported run file type",
+        "missing.csv": "file not found",
+    }
+    for name, message in cases.items():
+        with pytest.raises(InputError, match=message):
+            read_run(tmp_path / name)
+
+
+def test_mat_with_mismatched_lengths(tmp_path: Path) -> None:
+    data = columns()
+    data["airspeed_m_s"] = data["airspeed_m_s"][:-3]
+    scipy.io.savemat(tmp_path / "m.mat", data)
+    with pytest.raises(InputError, match="different lengths"):
+        read_run(tmp_path / "m.mat")
+
+
+def test_thrust_table_reading_and_errors(tmp_path: Path) -> None:
+    good = tmp_path / "t.csv"
+    good.write_text("engine,throttle,airspeed_m_s,thrust_n,note\nA,0.5,10,12.25,x\nB,1,0,55.1,y\n")
+    table = read_thrust_table(good)
+    assert table.engines() == ["A", "B"]
+    assert table.thrust_n.tolist() == [12.25, 55.1]  # exactly the file's numbers
+    bad = {
+        "engine,throttle,airspeed_m_s\nA,1,2\n": "missing column 'thrust_n'",
+        "engine,throttle,airspeed_m_s,thrust_n\nA,50,2,3\n": "percent",
+        "engine,throttle,airspeed_m_s,thrust_n\nA,0.5,x,3\n": "line 2: airspeed_m_s",
+        "engine,throttle,airspeed_m_s,thrust_n\nA,0.5,1,nan\n": "not finite",
+        "engine,throttle,airspeed_m_s,thrust_n\n": "no data rows",
+        "": "empty file",
+    }
+    for text, message in bad.items():
+        path = tmp_path / "bad.csv"
+        path.write_text(text)
+        with pytest.raises(InputError, match=message):
+            read_thrust_table(path)
+
+
+def manifest(tmp_path: Path, **changes) -> Path:
+    write_csv(tmp_path / "r.csv", columns())
+    doc = {
+        "name": "test",
+        "fan_area_m2": 0.0068,
+        "tunnel_area_m2": 0.16,
+        "runs": [
+            {"file": "r.csv", "engine": "E", "kind": "throttle_steps"},
+            {"file": "elsewhere/e.csv", "engine": "E", "kind": "endurance"},
+        ],
+    }
+    doc.update(changes)
+    path = tmp_path / "campaign.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    return path
+
+
+def test_campaign_manifest_resolves_paths_and_ignores_endurance(tmp_path: Path) -> None:
+    campaign = load_campaign(manifest(tmp_path, air_density_kg_m3=1.19))
+    assert [r.path for r in campaign.runs] == [(tmp_path / "r.csv").resolve()]
+    assert [r.kind for r in campaign.ignored] == ["endurance"]  # its file need not exist
+    assert campaign.air_density_kg_m3 == 1.19 and campaign.density_given
+    assert load_campaign(manifest(tmp_path)).air_density_kg_m3 == 1.225
+    assert campaign.filters.outlier_window_s == 2.0 and campaign.filters.outlier_threshold == 1.5
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"tunnel_area_m2s": 0.16}, "tunnel_area_m2s: unknown key"),
+        ({"filters": {"median_window": 0.1}}, "filters.median_window: unknown key"),
+        (
+            {"runs": [{"file": "nope.csv", "engine": "E", "kind": "throttle_steps"}]},
+            r"runs\[0\].file: file not found",
+        ),
+        ({"runs": [{"file": "r.csv", "kind": "throttle_steps"}]}, "engine: required"),
+        ({"runs": [{"file": "r.csv", "engine": "E", "kind": "steps"}]}, r"runs\[0\].kind"),
+        ({"runs": [{"file": "r.csv", "kind": "drag_sweep"}]}, "no throttle_steps run"),
+        ({"fan_area_m2": 0.5}, "must be smaller than"),
+    ],
+)
+def test_bad_manifest(tmp_path: Path, changes: dict, message: str) -> None:
+    with pytest.raises(InputError, match=message) as err:
+        load_campaign(manifest(tmp_path, **changes))
+    assert "campaign.yaml" in str(err.value)

@@ -1,0 +1,89 @@
+"""Delay from sine sweeps, structure drag and the Glauert correction against known answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+from tuflexperf.reduction.delay import estimate_delay
+from tuflexperf.reduction.drag import fit_structure_drag
+from tuflexperf.reduction.glauert import glauert_ratio
+
+
+def sweep(fs: float, delay: float, tau: float, lag_first: bool, seed: int = 0):
+    """Throttle 25-75 % sine rising 0.2 -> 5 Hz; force = fan(delayed throttle) + noise."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 30.0, 1.0 / fs)
+    ts = np.clip(t - 2.0, 0.0, 26.0)
+    x = np.where(t < 1.0, 0.0, 0.5 + 0.25 * np.sin(2 * np.pi * (0.2 * ts + 0.5 * 4.8 / 26 * ts**2)))
+    u = np.interp(t - delay, t, x, left=0.0)
+
+    def lag(v: np.ndarray) -> np.ndarray:
+        if tau == 0:
+            return v
+        a = np.exp(-1.0 / fs / tau)
+        return lfilter([1 - a], [1, -a], v)
+
+    force = 52 * lag(u) ** 2 + 2 * lag(u) if lag_first else lag(52 * u**2 + 2 * u)
+    force = force - 3.0 + rng.normal(0, 0.8, t.size)
+    spikes = rng.random(t.size) < 1e-3
+    force[spikes] += rng.choice([-12.0, 12.0], int(spikes.sum()))
+    return t, x, force
+
+
+@pytest.mark.parametrize(
+    ("fs", "delay", "tau", "lag_first"),
+    [
+        (1000.0, 0.05, 0.08, True),  # the paper's rate and delay, with spool lag
+        (1000.0, 0.05, 0.08, False),  # lag acting on thrust rather than rpm
+        (250.0, 0.12, 0.0, True),  # pure dead time, other rate
+        (100.0, 0.03, 0.15, True),  # slow log, long lag
+    ],
+)
+def test_delay_recovered_within_12_ms(fs: float, delay: float, tau: float, lag_first: bool) -> None:
+    t, x, force = sweep(fs, delay, tau, lag_first)
+    estimate = estimate_delay(t, x, force, fs)
+    assert estimate.delay_s == pytest.approx(delay, abs=0.012)
+    assert estimate.lag_s == pytest.approx(tau, abs=0.02)
+    if tau >= 0.08:
+        # why the lag is fitted: plain cross-correlation reports dead time plus lag
+        assert abs(estimate.xcorr_lag_s - delay) > 0.012
+
+
+def test_structure_drag_exact_on_noise_free_sweep_with_tare() -> None:
+    v = np.linspace(0, 30, 500)
+    drag = 0.0006 * v + 0.0031 * v * v
+    model = fit_structure_drag([(v, 0.25 - drag), (v[::2], -0.1 - drag[::2])])
+    assert model.c1_n_per_m_s == pytest.approx(0.0006, abs=1e-12)
+    assert model.c2_n_per_m2_s2 == pytest.approx(0.0031, abs=1e-12)
+    assert model.tares_n == pytest.approx((0.25, -0.1), abs=1e-10)
+    assert model.drag_n(0.0) == 0.0
+    assert model.r2 == pytest.approx(1.0)
+
+
+def test_structure_drag_least_squares_with_noise() -> None:
+    rng = np.random.default_rng(5)
+    v = np.linspace(0, 30, 20_000)
+    force = -0.5 * 1.225 * 0.0055 * v * v + rng.normal(0, 0.1, v.size)
+    model = fit_structure_drag([(v, force)])
+    assert float(model.drag_n(30.0)) == pytest.approx(0.5 * 1.225 * 0.0055 * 900, abs=0.02)
+
+
+def test_glauert_matches_hand_computation_and_paper_bound() -> None:
+    # T = 40 N, V = 30 m/s, rho = 1.225, A = 0.0068 m^2, C = 0.16 m^2 (SPEC 3 form)
+    t_n, v, rho, area, tunnel = 40.0, 30.0, 1.225, 0.0068, 0.16
+    tau = t_n / (rho * area * v * v)
+    expected = 1 - (t_n / (rho * tunnel * v * v)) / (2 * np.sqrt(1 + 2 * tau))
+    ratio = float(glauert_ratio(t_n, v, rho, area, tunnel))
+    assert ratio == pytest.approx(expected, rel=1e-14)
+    # the paper: under 4 % and under 1 m/s at 30 m/s
+    assert 0 < 1 - ratio < 0.04
+    assert (1 - ratio) * v < 1.0
+
+
+def test_glauert_undefined_at_rest_and_for_strong_windmilling() -> None:
+    ratios = glauert_ratio([50.0, -20.0, 10.0], [0.0, 5.0, 20.0], 1.225, 0.0068, 0.16)
+    assert np.isnan(ratios[0])  # no stream to correct
+    assert np.isnan(ratios[1])  # 1 + 2 tau < 0
+    assert 0.9 < ratios[2] < 1.0
