@@ -418,6 +418,34 @@ def fit_command(
 
 
 # ---- report (issue 5) ----------------------------------------------------------------------
+@app.command("report")
+def report_command(
+    case_file: Path | None = CaseOption,
+    out: Path = typer.Option(..., "--out", help="Directory for the PNG figures and review.pdf."),
+    campaign: Path | None = typer.Option(
+        None,
+        "--campaign",
+        help="Measured data: campaign manifest or thrust-table CSV (default: the propulsion "
+        "file's source, else campaign/campaign.yaml beside it).",
+    ),
+    as_json: bool = JsonOption,
+) -> None:
+    """Design-review figures (PNG, 150 dpi) and one multi-page PDF, review.pdf."""
+    from tuflexperf.report import build_report  # lazy: matplotlib stays out of `check`
+
+    result = build_report(case_file, out, campaign=campaign)
+    if as_json:
+        emit_json(result.to_dict())
+        return
+    typer.echo(
+        f"wrote {len(result.files)} files to {result.out_dir} "
+        f"({result.pages}-page {result.pdf.name}, {result.seconds:.1f} s); requirements "
+        + ("all met" if result.passed else "NOT all met")
+    )
+    for path in result.files:
+        typer.echo(f"  {path.name}")
+    for note in result.notes:
+        typer.echo(f"  note: {note}")
 
 
 # ---- export (issue 6) ----------------------------------------------------------------------

@@ -98,6 +98,12 @@ def _make_parents(parent: Path) -> list[Path]:
     return created
 
 
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def _move_into_place(staging: Path, out: Path) -> None:
     if out.exists():
         old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
@@ -145,6 +151,7 @@ def build_report(
     created = _make_parents(out.parent)
     try:
         staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+        staging.chmod(0o777 & ~_umask())  # mkdtemp makes it private; the report is not
     except OSError as exc:
         for folder in reversed(created):
             folder.rmdir()
@@ -183,8 +190,9 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
     analyses = run_analyses(case)
     step("analyses: check, take-off, trim, OEI, endurance")
     measured = load_measured(case, campaign)
-    step(f"measured data: {measured.kind}" + (f" {measured.source.name}" if measured.source
-                                              else ""))
+    step(
+        f"measured data: {measured.kind}" + (f" {measured.source.name}" if measured.source else "")
+    )
 
     pages: list[tuple[str | None, Callable[[], Any]]] = [
         (None, lambda: _title_page(case, measured, analyses)),
@@ -230,8 +238,9 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
             step(name or "title page")
         page_count = len(pages)
         if notes:
-            pdf.savefig(fg.text_page("What this report leaves out, and why",
-                                     [f"- {n}" for n in notes]))
+            pdf.savefig(
+                fg.text_page("What this report leaves out, and why", [f"- {n}" for n in notes])
+            )
             page_count += 1
         step("review.pdf")
     files.append(pdf_path)

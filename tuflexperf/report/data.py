@@ -241,7 +241,8 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
         last = [r for r in steps if str(r.engine) == engines[-1]]
         top = max(last, key=lambda r: _mean_airspeed(airspeeds, r.file))
         measured.comparisons = [
-            _processed_run(campaign, slowest, delay) if slowest is not fastest
+            _processed_run(campaign, slowest, delay)
+            if slowest is not fastest
             else measured.processed,
             _processed_run(campaign, top, delay) if top is not fastest else measured.processed,
         ]
@@ -360,6 +361,14 @@ def input_files(case: Case, measured: Measured) -> list[tuple[str, Path]]:
         except InputError:
             pass
     for k, path in enumerate(measured.files):
-        files.append(("campaign" if k == 0 and measured.kind == "campaign" else
-                      "thrust table" if measured.kind == "table" else "campaign run", path))
+        files.append(
+            (
+                "campaign"
+                if k == 0 and measured.kind == "campaign"
+                else "thrust table"
+                if measured.kind == "table"
+                else "campaign run",
+                path,
+            )
+        )
     return files

@@ -80,8 +80,17 @@ def _max_airspeed(case: Case) -> float:
 
 
 def _note(ax: Any, text: str) -> None:
-    ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", wrap=True,
-            fontsize=11, color="0.3")
+    ax.text(
+        0.5,
+        0.5,
+        text,
+        transform=ax.transAxes,
+        ha="center",
+        va="center",
+        wrap=True,
+        fontsize=11,
+        color="0.3",
+    )
     ax.set_xticks([])
     ax.set_yticks([])
 
@@ -105,8 +114,15 @@ def requirement_table(case: Case, analyses: Analyses) -> Any:
         return "not attainable" if value is None else f"{value:.3f}"
 
     rows = [
-        [v.name, fmt(v.value), f"{v.limit:g}", v.unit, fmt(v.margin),
-         "max" if v.kind == "max" else "min", "PASS" if v.passed else "FAIL"]
+        [
+            v.name,
+            fmt(v.value),
+            f"{v.limit:g}",
+            v.unit,
+            fmt(v.margin),
+            "max" if v.kind == "max" else "min",
+            "PASS" if v.passed else "FAIL",
+        ]
         for v in verdicts
     ]
     if rows:
@@ -125,13 +141,23 @@ def requirement_table(case: Case, analyses: Analyses) -> Any:
                 cell.set_text_props(weight="bold")
             else:
                 cell.set_facecolor(PASS_COLOUR if verdicts[r - 1].passed else FAIL_COLOUR)
-    lines = ["Margin: positive when met (limit - value for a maximum, value - limit for a "
-             "minimum)."]
+    lines = [
+        "Margin: positive when met (limit - value for a maximum, value - limit for a minimum)."
+    ]
     for v in verdicts:
         lines.append(f"{v.name}: {v.reason}")
         lines.extend(f"    note: {w}" for w in v.details.get("warnings", []))
-    ax.text(0.0, 0.5, "\n".join(lines), transform=ax.transAxes, va="top", ha="left",
-            fontsize=9, family="monospace", wrap=True)
+    ax.text(
+        0.0,
+        0.5,
+        "\n".join(lines),
+        transform=ax.transAxes,
+        va="top",
+        ha="left",
+        fontsize=9,
+        family="monospace",
+        wrap=True,
+    )
     return fig
 
 
@@ -148,10 +174,30 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
     _shade_extrapolated(ax, case, right)
     cmap = mpl.colormaps["viridis"]
     throttles = np.round(np.arange(0.3, 1.0001, 0.1), 2)
-    for x in throttles:
+    for k, x in enumerate(throttles):
         t = np.asarray(total_thrust_n(propulsion, float(x), v, rho), dtype=float)
-        ax.plot(v, t, color=cmap((x - 0.3) / 0.7), linewidth=1.0,
-                label=f"available, all engines at {100 * x:.0f} %")
+        colour = cmap(0.9 * (x - 0.3) / 0.7)
+        ax.plot(
+            v,
+            t,
+            color=colour,
+            linewidth=1.0,
+            label="available, all engines (throttle at the line's end)" if k == 0 else None,
+        )
+        # label each line where it ends (or where it leaves the plot at zero thrust)
+        inside = np.flatnonzero(t >= 0.0)
+        if inside.size:
+            j = inside[-1]
+            ax.annotate(
+                f"{100 * x:.0f} %",
+                (v[j], t[j]),
+                textcoords="offset points",
+                xytext=(2, 2),
+                fontsize=8,
+                color=colour,
+                ha="right" if j < v.size - 1 else "left",
+                va="bottom",
+            )
     stall = float(stall_speed_m_s(aircraft, rho))
     vd = v[v >= stall]
     drag = np.asarray(level_flight_drag_n(aircraft, vd, rho), dtype=float)
@@ -161,36 +207,57 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
     if trim is not None and trim.min_throttle is not None:
         x = trim.min_throttle
         t = np.asarray(total_thrust_n(propulsion, x, v, rho), dtype=float)
-        ax.plot(v, t, color="tab:blue", linewidth=2.2, linestyle="-.",
-                label=f"least trim throttle {100 * x:.1f} % (all engines)")
+        ax.plot(
+            v,
+            t,
+            color="tab:blue",
+            linewidth=2.2,
+            linestyle="-.",
+            label=f"least trim throttle {100 * x:.1f} % (all engines)",
+        )
         va = trim.airspeed_at_min_throttle_m_s
         ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], "o", color="tab:blue")
     oei = analyses.oei
     if oei is not None:
         worst = oei.critical
         index = [e.name for e in propulsion.engines].index(worst.dead_engine)
-        full = np.asarray(total_thrust_n(propulsion, 1.0, v, rho, index, oei.dead_engine_mode),
-                          dtype=float)
-        ax.plot(v, full, color="tab:red", linewidth=2.0,
-                label=f"OEI: {worst.dead_engine} dead ({oei.dead_engine_mode}), others 100 %")
+        full = np.asarray(
+            total_thrust_n(propulsion, 1.0, v, rho, index, oei.dead_engine_mode), dtype=float
+        )
+        ax.plot(
+            v,
+            full,
+            color="tab:red",
+            linewidth=2.0,
+            label=f"OEI: {worst.dead_engine} dead ({oei.dead_engine_mode}), others 100 %",
+        )
         if worst.min_throttle is not None:
             x = worst.min_throttle
-            t = np.asarray(total_thrust_n(propulsion, x, v, rho, index, oei.dead_engine_mode),
-                           dtype=float)
-            ax.plot(v, t, color="tab:red", linewidth=2.0, linestyle="-.",
-                    label=f"OEI least throttle {100 * x:.1f} %")
+            t = np.asarray(
+                total_thrust_n(propulsion, x, v, rho, index, oei.dead_engine_mode), dtype=float
+            )
+            ax.plot(
+                v,
+                t,
+                color="tab:red",
+                linewidth=2.0,
+                linestyle="-.",
+                label=f"OEI least throttle {100 * x:.1f} %",
+            )
             va = worst.airspeed_at_min_throttle_m_s
             ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], "o", color="tab:red")
     _envelope_lines(ax, case)
     ax.set_xlim(0, right)
-    ax.set_ylim(bottom=0)
+    top = float(np.max(total_thrust_n(propulsion, 1.0, v, rho)))
+    ax.set_ylim(0, 1.3 * top)  # headroom for the legend
     ax.set_xlabel("true airspeed V (m/s)")
     ax.set_ylabel("thrust, drag (N)")
-    ax.set_title(
-        f"Required and available thrust, {case.name} at rho = {rho:.3f} kg/m^3 (paper Fig. 18)"
+    fig.suptitle(
+        "Required and available thrust in level flight (paper Fig. 18)\n"
+        f"{case.name}, rho = {rho:.3f} kg/m^3"
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper right", ncols=2)
+    ax.legend(fontsize=8, loc="upper right", ncols=2, framealpha=0.95)
     return fig
 
 
@@ -216,6 +283,7 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
     ax3.set_ylabel("airspeed V (m/s)")
     ax3.set_zlabel("thrust T (N)")
     ax3.view_init(elev=22, azim=-130)
+    ax3.set_box_aspect(None, zoom=0.85)  # room for the z label
     ax_r = fig.add_subplot(1, 2, 2)
     points = measured.points.select(engine.name) if measured.points is not None else None
     title = f"Thrust model of {engine.name}: poly22 surface"
@@ -237,18 +305,31 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
     fig.colorbar(sc, ax=ax_r, label="airspeed V (m/s)")
     ax_r.axhline(0.0, color="black", linewidth=0.8)
     for sign in (-1, 1):
-        ax_r.axhline(sign * ACCURACY_GOAL_N, color=LIMIT_COLOUR, linestyle="--",
-                     label="accuracy goal +-0.5 N (paper)" if sign > 0 else None)
+        ax_r.axhline(
+            sign * ACCURACY_GOAL_N,
+            color=LIMIT_COLOUR,
+            linestyle="--",
+            label="accuracy goal +-0.5 N (paper)" if sign > 0 else None,
+        )
     rmse = float(np.sqrt(np.mean(residual**2)))
     sst = float(np.sum((pt - pt.mean()) ** 2))
     r2 = 1.0 - float(np.sum(residual**2)) / sst if sst > 0 else math.nan
     text = f"against this model: R^2 = {r2:.5f}, RMSE = {rmse:.3f} N, n = {pt.size}"
     refit = _refit(measured, engine.name)
     if refit is not None:
-        text += f"\ncampaign re-fit (tuflexperf fit): R^2 = {refit['r2']:.5f}, " \
-                f"RMSE = {refit['rmse_n']:.3f} N"
-    ax_r.text(0.02, 0.02, text, transform=ax_r.transAxes, fontsize=8, va="bottom",
-              bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "0.7"})
+        text += (
+            f"\ncampaign re-fit (tuflexperf fit): R^2 = {refit['r2']:.5f}, "
+            f"RMSE = {refit['rmse_n']:.3f} N"
+        )
+    ax_r.text(
+        0.02,
+        0.02,
+        text,
+        transform=ax_r.transAxes,
+        fontsize=8,
+        va="bottom",
+        bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "0.7"},
+    )
     ax_r.set_xlabel("throttle (fraction)")
     ax_r.set_ylabel("measured - model thrust (N)")
     ax_r.set_title("residuals of the measured points")
@@ -283,14 +364,30 @@ def run_processing(run: ProcessedRun) -> Any:
     axt = fig.add_subplot(gs[1], sharex=ax)
     t = run.time_s
     ax.plot(t, run.force_raw_n, color="0.7", linewidth=0.4, label="raw force")
-    ax.plot(t, run.force_clean_n, color="tab:blue", linewidth=1.0,
-            label=f"processed (outliers filled: {run.outliers_replaced}, moving median)")
+    ax.plot(
+        t,
+        run.force_clean_n,
+        color="tab:blue",
+        linewidth=1.0,
+        label=f"processed (outliers filled: {run.outliers_replaced}, moving median)",
+    )
     for k, (start, stop, mean) in enumerate(run.segments):
-        ax.plot([t[start], t[stop - 1]], [mean, mean], color="tab:red", linewidth=3,
-                solid_capstyle="butt", label="steady segment mean" if k == 0 else None)
+        ax.plot(
+            [t[start], t[stop - 1]],
+            [mean, mean],
+            color="tab:red",
+            linewidth=3,
+            solid_capstyle="butt",
+            label="steady segment mean" if k == 0 else None,
+        )
     for k, c in enumerate(run.changepoints):
-        ax.axvline(t[c], color="tab:green", linestyle=":", linewidth=0.9,
-                   label="detected change point" if k == 0 else None)
+        ax.axvline(
+            t[c],
+            color="tab:green",
+            linestyle=":",
+            linewidth=0.9,
+            label="detected change point" if k == 0 else None,
+        )
     ax.set_ylabel("balance force (N)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper right")
@@ -310,40 +407,60 @@ def run_processing(run: ProcessedRun) -> Any:
 # --- 6. sine sweep and delay (paper Figs. 13-14) ------------------------------------------------
 def sine_sweep(measured: Measured) -> Any:
     """Normalised throttle and force of a sine sweep, and its end with the measured delay."""
+    from tuflexperf.reduction.filters import movmedian, window_samples
+
     sweep = measured.sweep
     fig = new_figure()
     ax = fig.add_subplot(2, 1, 1)
     az = fig.add_subplot(2, 1, 2)
     t = sweep.time_s
+    rate = (t.size - 1) / (t[-1] - t[0])
+    # a 20 ms moving median takes the balance's spikes out without shifting the phase
+    force = movmedian(sweep.force_n, window_samples(0.02, rate) | 1)
     x = sweep.throttle / np.max(np.abs(sweep.throttle))
-    f = sweep.force_n / np.max(np.abs(sweep.force_n))
-    ax.plot(t, f, color="tab:orange", linewidth=0.4, label="force / max force")
+    f = force / np.max(np.abs(force))
+    ax.plot(t, f, color="tab:orange", linewidth=0.5, label="force / max force (20 ms median)")
     ax.plot(t, x, color="black", linewidth=0.7, label="throttle / max throttle")
     ax.set_xlabel("time t (s)")
     ax.set_ylabel("normalised (-)")
     ax.set_title(f"whole sweep ({sweep.file})")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower left")
-    end = t >= t[-1] - 2.0
+    # the sweep ends where the throttle last leaves the value it holds at the end of the log
+    moving = np.flatnonzero(np.abs(sweep.throttle - sweep.throttle[-1]) > 0.01)
+    t_end = t[moving[-1]] if moving.size else t[-1]
+    end = (t >= t_end - 1.5) & (t <= t_end + 0.3)
     az.plot(t[end], f[end], color="tab:orange", linewidth=0.8, label="force / max force")
     az.plot(t[end], x[end], color="black", linewidth=1.0, label="throttle / max throttle")
     if math.isfinite(sweep.delay_s):
         delayed = np.interp(t[end] - sweep.delay_s, t, x)
-        az.plot(t[end], delayed, color="tab:blue", linestyle="--", linewidth=1.0,
-                label=f"throttle delayed by the measured {1000 * sweep.delay_s:.0f} ms")
+        az.plot(
+            t[end],
+            delayed,
+            color="tab:blue",
+            linestyle="--",
+            linewidth=1.0,
+            label=f"throttle delayed by the measured {1000 * sweep.delay_s:.0f} ms",
+        )
     az.set_xlabel("time t (s)")
     az.set_ylabel("normalised (-)")
-    az.set_title("end of the sweep (highest frequency)")
+    az.set_title(
+        "end of the sweep (highest frequency): the force lags by the dead time plus "
+        "the fan's spool lag"
+    )
     az.grid(alpha=0.3)
     az.legend(fontsize=8, loc="lower left")
-    delay = (f"dead time {1000 * sweep.delay_s:.0f} ms, spool lag {1000 * sweep.lag_s:.0f} ms"
-             if math.isfinite(sweep.delay_s) else "delay not estimated")
+    delay = (
+        f"dead time {1000 * sweep.delay_s:.0f} ms, spool lag {1000 * sweep.lag_s:.0f} ms"
+        if math.isfinite(sweep.delay_s)
+        else "delay not estimated"
+    )
     model = measured.fit_summary.get("delay_s") if measured.fit_summary else None
     if model is not None:
         delay += f"; campaign mean delay {1000 * model:.0f} ms"
     fig.suptitle(
         f"Sine sweep of {sweep.engine} at {sweep.airspeed_m_s:.1f} m/s, normalised by each "
-        f"maximum: {delay} (paper Figs. 13-14)"
+        f"maximum (paper Figs. 13-14)\n{delay}"
     )
     return fig
 
@@ -381,8 +498,7 @@ def model_vs_measured(case: Case, measured: Measured) -> Any:
         model = model_force_n(case, measured, run)
         t = run.time_s
         ax.plot(t, run.force_raw_n, color="0.75", linewidth=0.4, label="measured (raw)")
-        ax.plot(t, run.force_clean_n, color="tab:blue", linewidth=1.0,
-                label="measured (processed)")
+        ax.plot(t, run.force_clean_n, color="tab:blue", linewidth=1.0, label="measured (processed)")
         ax.set_title(f"{run.engine} at {run.mean_airspeed_m_s:.1f} m/s ({run.file})", fontsize=10)
         ax.set_ylabel("balance force (N)")
         ax.grid(alpha=0.3)
@@ -394,8 +510,13 @@ def model_vs_measured(case: Case, measured: Measured) -> Any:
             _note(ae, f"the case's propulsion has no engine {run.engine!r}")
             ax.legend(fontsize=8)
             continue
-        ax.plot(t, model, color="tab:red", linewidth=1.2,
-                label=f"model (delay {1000 * case.propulsion.delay_s:.0f} ms, minus structure drag)")
+        ax.plot(
+            t,
+            model,
+            color="tab:red",
+            linewidth=1.2,
+            label=f"model (delay {1000 * case.propulsion.delay_s:.0f} ms, minus structure drag)",
+        )
         ax.legend(fontsize=8, loc="upper right")
         error = model - run.force_clean_n
         steady = np.zeros(t.size, dtype=bool)
@@ -407,11 +528,18 @@ def model_vs_measured(case: Case, measured: Measured) -> Any:
         e = error[steady]
         neg = e[e < 0].mean() if np.any(e < 0) else 0.0
         pos = e[e > 0].mean() if np.any(e > 0) else 0.0
-        ae.text(0.01, 0.95, f"steady segments: mean error {neg:+.2f} / {pos:+.2f} N; "
-                "dashed: +-0.5 N goal", transform=ae.transAxes, fontsize=8, va="top")
+        ae.text(
+            0.01,
+            0.95,
+            f"steady segments: mean error {neg:+.2f} / {pos:+.2f} N; dashed: +-0.5 N goal",
+            transform=ae.transAxes,
+            fontsize=8,
+            va="top",
+        )
         ae.set_ylim(-3, 3)
-    fig.suptitle("Thrust model driven by the logged throttle against the measured force "
-                 "(paper Figs. 16-17)")
+    fig.suptitle(
+        "Thrust model driven by the logged throttle against the measured force (paper Figs. 16-17)"
+    )
     return fig
 
 
@@ -430,25 +558,43 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     t = result.history_time_s
     high = case.propulsion.tested_airspeed_m_s[1]
     av.plot(t, result.history_airspeed_m_s, color="tab:blue", label="airspeed")
-    av.axhline(result.liftoff_speed_m_s, color="black", linestyle=":",
-               label=f"lift-off speed {result.liftoff_speed_m_s:.1f} m/s")
+    av.axhline(
+        result.liftoff_speed_m_s,
+        color="black",
+        linestyle=":",
+        label=f"lift-off speed {result.liftoff_speed_m_s:.1f} m/s",
+    )
     if result.liftoff_speed_m_s > high:
-        av.axhspan(high, result.liftoff_speed_m_s * 1.05, color=EXTRAPOLATED_COLOUR, zorder=0,
-                   label="thrust model extrapolated")
+        av.axhspan(
+            high,
+            result.liftoff_speed_m_s * 1.05,
+            color=EXTRAPOLATED_COLOUR,
+            zorder=0,
+            label="thrust model extrapolated",
+        )
     av.set_xlabel("time t (s)")
     av.set_ylabel("airspeed V (m/s)")
     av.set_title("airspeed")
     av.grid(alpha=0.3)
     av.legend(fontsize=8, loc="lower right")
     ad.plot(t, result.history_distance_m, color="tab:blue", label="distance rolled")
-    ad.plot([result.time_s], [result.ground_roll_m], "o", color="tab:blue",
-            label=f"lift-off: {result.ground_roll_m:.1f} m after {result.time_s:.1f} s")
+    ad.plot(
+        [result.time_s],
+        [result.ground_roll_m],
+        "o",
+        color="tab:blue",
+        label=f"lift-off: {result.ground_roll_m:.1f} m after {result.time_s:.1f} s",
+    )
     requirement = case.requirements.takeoff
     if requirement is not None:
         limit = requirement.max_ground_roll_m
         met = result.ground_roll_m <= limit
-        ad.axhline(limit, color=LIMIT_COLOUR, linestyle="--",
-                   label=f"runway limit {limit:g} m ({'PASS' if met else 'FAIL'})")
+        ad.axhline(
+            limit,
+            color=LIMIT_COLOUR,
+            linestyle="--",
+            label=f"runway limit {limit:g} m ({'PASS' if met else 'FAIL'})",
+        )
         ad.set_ylim(0, 1.1 * max(limit, result.ground_roll_m))
     ad.set_xlabel("time t (s)")
     ad.set_ylabel("ground roll distance s (m)")
@@ -471,39 +617,81 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
     right = _max_airspeed(case)
     _shade_extrapolated(ax, case, right)
     envelope = case.requirements.envelope
-    ax.plot(trim.airspeed_m_s, trim.throttle, color="tab:blue", linewidth=2,
-            label="trim, all engines")
+    ax.plot(
+        trim.airspeed_m_s, trim.throttle, color="tab:blue", linewidth=2, label="trim, all engines"
+    )
     if trim.min_throttle is not None:
         ax.plot([trim.airspeed_at_min_throttle_m_s], [trim.min_throttle], "o", color="tab:blue")
-        ax.annotate(f"least {100 * trim.min_throttle:.1f} %",
-                    (trim.airspeed_at_min_throttle_m_s, trim.min_throttle),
-                    textcoords="offset points", xytext=(8, -14), color="tab:blue")
-    ax.axhline(envelope.max_trim_throttle, color=LIMIT_COLOUR, linestyle="--",
-               label=f"max trim throttle {envelope.max_trim_throttle:g}")
+        ax.annotate(
+            f"least {100 * trim.min_throttle:.1f} %",
+            (trim.airspeed_at_min_throttle_m_s, trim.min_throttle),
+            textcoords="offset points",
+            xytext=(8, -14),
+            color="tab:blue",
+        )
+    if trim.max_throttle is not None:
+        k = int(np.argmax(trim.throttle))
+        ax.plot([trim.airspeed_m_s[k]], [trim.max_throttle], "s", color="tab:blue")
+        ax.annotate(
+            f"highest {100 * trim.max_throttle:.1f} % (the verdict)",
+            (trim.airspeed_m_s[k], trim.max_throttle),
+            textcoords="offset points",
+            xytext=(-10, -16),
+            ha="right",
+            color="tab:blue",
+        )
+    ax.axhline(
+        envelope.max_trim_throttle,
+        color=LIMIT_COLOUR,
+        linestyle="--",
+        label=f"max trim throttle {envelope.max_trim_throttle:g}",
+    )
     styles = ["-", "--", ":", "-."]
     if oei is not None:
         for k, c in enumerate(oei.cases):
             critical = c is oei.critical
-            ax.plot(c.airspeed_m_s, c.throttle, color="tab:red", linestyle=styles[k % 4],
-                    linewidth=2 if critical else 1.2,
-                    label=f"OEI, {c.dead_engine} dead ({oei.dead_engine_mode})"
-                    + (" - worse case" if critical else ""))
+            ax.plot(
+                c.airspeed_m_s,
+                c.throttle,
+                color="tab:red",
+                linestyle=styles[k % 4],
+                linewidth=2 if critical else 1.2,
+                label=f"OEI, {c.dead_engine} dead ({oei.dead_engine_mode})"
+                + (" - worse case" if critical else ""),
+            )
         worst = oei.critical
         if worst.min_throttle is not None:
-            ax.plot([worst.airspeed_at_min_throttle_m_s], [worst.min_throttle], "o",
-                    color="tab:red")
-            ax.annotate(f"least {100 * worst.min_throttle:.1f} %",
-                        (worst.airspeed_at_min_throttle_m_s, worst.min_throttle),
-                        textcoords="offset points", xytext=(8, 8), color="tab:red")
+            ax.plot(
+                [worst.airspeed_at_min_throttle_m_s], [worst.min_throttle], "o", color="tab:red"
+            )
+            ax.annotate(
+                f"least {100 * worst.min_throttle:.1f} %",
+                (worst.airspeed_at_min_throttle_m_s, worst.min_throttle),
+                textcoords="offset points",
+                xytext=(8, 8),
+                color="tab:red",
+            )
         requirement = case.requirements.oei
-        if requirement is not None and abs(requirement.max_throttle -
-                                           envelope.max_trim_throttle) > 1e-9:
-            ax.axhline(requirement.max_throttle, color=LIMIT_COLOUR, linestyle=":",
-                       label=f"OEI max throttle {requirement.max_throttle:g}")
+        if (
+            requirement is not None
+            and abs(requirement.max_throttle - envelope.max_trim_throttle) > 1e-9
+        ):
+            ax.axhline(
+                requirement.max_throttle,
+                color=LIMIT_COLOUR,
+                linestyle=":",
+                label=f"OEI max throttle {requirement.max_throttle:g}",
+            )
     bad = trim.unattainable_airspeed_m_s
     if bad:
-        ax.axvspan(min(bad), max(bad), color=FAIL_COLOUR, alpha=0.6, zorder=0,
-                   label="trim not attainable (> full throttle)")
+        ax.axvspan(
+            min(bad),
+            max(bad),
+            color=FAIL_COLOUR,
+            alpha=0.6,
+            zorder=0,
+            label="trim not attainable (> full throttle)",
+        )
     _envelope_lines(ax, case)
     ax.set_xlim(0, right)
     ax.set_ylim(0, 1.08)
@@ -528,48 +716,86 @@ def endurance(case: Case, analyses: Analyses) -> Any:
     for k, run in enumerate(ch.runs):
         colour = colours[k % len(colours)]
         minutes = (run.time_s - run.time_s[0]) / 60.0
-        model = np.asarray(terminal_voltage_v(ch.fit.parameters, run.charge_ah, run.current_a),
-                           dtype=float)
+        model = np.asarray(
+            terminal_voltage_v(ch.fit.parameters, run.charge_ah, run.current_a), dtype=float
+        )
         label = f"{run.path.name} (throttle {run.throttle_setting:.2f})"
-        av.plot(minutes, run.voltage_v, color=colour, linewidth=0.8, alpha=0.6,
-                label=f"data: {label}")
-        av.plot(minutes, model, color=colour, linestyle="--", linewidth=1.5, label="model")
-    av.axhline(ch.battery.cutoff_voltage_v, color=LIMIT_COLOUR, linestyle="--",
-               label=f"cut-off {ch.battery.cutoff_voltage_v:.1f} V")
+        av.plot(
+            minutes, run.voltage_v, color=colour, linewidth=3.0, alpha=0.35, label=f"data: {label}"
+        )
+        av.plot(
+            minutes,
+            model,
+            color="black",
+            linestyle="--",
+            linewidth=0.9,
+            label="model (fitted equivalent circuit)" if k == 0 else None,
+        )
+    av.axhline(
+        ch.battery.cutoff_voltage_v,
+        color=LIMIT_COLOUR,
+        linestyle="--",
+        label=f"cut-off {ch.battery.cutoff_voltage_v:.1f} V",
+    )
     av.set_xlabel("time t (min)")
     av.set_ylabel("pack terminal voltage (V)")
     av.set_title(f"discharge runs, one pack; model rms error {ch.fit.rms_v:.3f} V", fontsize=10)
     av.grid(alpha=0.3)
-    av.legend(fontsize=7, loc="lower left")
+    av.legend(fontsize=7, loc="upper right")
     curve = analyses.endurance_curve
     if curve:
         x = np.array([c[0] for c in curve])
         flight = np.array([c[1].flight_endurance_min for c in curve])
         pack = np.array([c[1].battery_endurance_min for c in curve])
-        af.plot(x, flight, "o-", color="tab:blue", markersize=3,
-                label=f"flight ({ch.battery.packs_in_parallel_per_engine} packs per fan, "
-                "launch and landing reserve)")
-        af.plot(x, pack, "s-", color="tab:gray", markersize=3,
-                label="one pack on one fan, full to cut-off")
+        af.plot(
+            x,
+            flight,
+            "o-",
+            color="tab:blue",
+            markersize=3,
+            label=f"flight ({ch.battery.packs_in_parallel_per_engine} packs per fan, "
+            "launch and landing reserve)",
+        )
+        af.plot(
+            x,
+            pack,
+            "s-",
+            color="tab:gray",
+            markersize=3,
+            label="one pack on one fan, full to cut-off",
+        )
     requirement = case.requirements.endurance
     result = analyses.endurance_at_requirement
     if requirement is not None:
-        af.axhline(requirement.min_flight_time_min, color=LIMIT_COLOUR, linestyle="--",
-                   label=f"required >= {requirement.min_flight_time_min:g} min")
-        af.axvline(requirement.throttle, color=LIMIT_COLOUR, linestyle=":",
-                   label=f"at throttle {requirement.throttle:g}")
+        af.axhline(
+            requirement.min_flight_time_min,
+            color=LIMIT_COLOUR,
+            linestyle="--",
+            label=f"required >= {requirement.min_flight_time_min:g} min",
+        )
+        af.axvline(
+            requirement.throttle,
+            color=LIMIT_COLOUR,
+            linestyle=":",
+            label=f"at throttle {requirement.throttle:g}",
+        )
         if result is not None:
             met = result.flight_endurance_min >= requirement.min_flight_time_min
-            af.plot([requirement.throttle], [result.flight_endurance_min], "D",
-                    color="tab:green" if met else LIMIT_COLOUR, markersize=8,
-                    label=f"{result.flight_endurance_min:.1f} min at "
-                    f"{result.airspeed_m_s:.1f} m/s ({'PASS' if met else 'FAIL'})")
+            af.plot(
+                [requirement.throttle],
+                [result.flight_endurance_min],
+                "D",
+                color="tab:green" if met else LIMIT_COLOUR,
+                markersize=8,
+                label=f"{result.flight_endurance_min:.1f} min at "
+                f"{result.airspeed_m_s:.1f} m/s ({'PASS' if met else 'FAIL'})",
+            )
     af.set_xlabel("throttle, all engines (fraction)")
     af.set_ylabel("endurance (min)")
     af.set_title("level flight: endurance against throttle", fontsize=10)
     af.set_ylim(bottom=0)
     af.grid(alpha=0.3)
-    af.legend(fontsize=7, loc="lower left")
+    af.legend(fontsize=7, loc="upper right")
     fig.suptitle(f"Endurance of {case.name} with {ch.battery.name}")
     return fig
 
@@ -581,6 +807,14 @@ def text_page(title: str, lines: list[str], size: tuple[float, float] = LANDSCAP
     ax = fig.add_subplot()
     ax.axis("off")
     fig.suptitle(title, fontsize=15, weight="bold")
-    ax.text(0.0, 1.0, "\n".join(lines), transform=ax.transAxes, va="top", ha="left",
-            fontsize=7.5, family="monospace")
+    ax.text(
+        0.0,
+        1.0,
+        "\n".join(lines),
+        transform=ax.transAxes,
+        va="top",
+        ha="left",
+        fontsize=7.5,
+        family="monospace",
+    )
     return fig
