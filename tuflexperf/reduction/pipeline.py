@@ -322,6 +322,13 @@ def fit_campaign(
         )
     measured_delay = _mean_or_none([d["delay_s"] for d in delay_runs])
     delay = delay_s if delay_s is not None else measured_delay
+    # where the steady part of a step starts: the engine's own sweeps if it has any
+    onset_delay = {
+        str(engine): delay_s
+        if delay_s is not None
+        else _mean_or_none([d["delay_s"] for d in delay_runs if d["engine"] == engine])
+        for engine in {r.engine for r in campaign.runs}
+    }
 
     drag: DragModel | None = None
     sweeps = []
@@ -339,7 +346,8 @@ def fit_campaign(
     for run in campaign.of_kind("throttle_steps"):
         tick(run.file)
         data = read_run(run.path)
-        step_results.append(reduce_step_run(campaign, run, data, max(delay or 0.0, 0.0)))
+        onset = onset_delay.get(str(run.engine)) or delay or 0.0
+        step_results.append(reduce_step_run(campaign, run, data, max(onset, 0.0)))
     if progress is not None:
         progress(total, total, "fit")
 
