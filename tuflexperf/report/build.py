@@ -256,8 +256,15 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
 
 
 def _title_page(case: Any, measured: Any, analyses: Any) -> Any:
-    from tuflexperf import __version__
     from tuflexperf.report import figures as fg
+
+    lines = title_lines(case, measured, analyses)
+    return fg.text_page(f"Design review: {case.name}", lines, size=(11.0, 8.5))
+
+
+def title_lines(case: Any, measured: Any, analyses: Any) -> list[str]:
+    """The title page: case, model, verdict, tool version, date, every input by sha256."""
+    from tuflexperf import __version__
     from tuflexperf.report.data import input_files, sha256_of
 
     verdicts = analyses.verdicts
@@ -277,6 +284,12 @@ def _title_page(case: Any, measured: Any, analyses: Any) -> Any:
         f"dT {case.atmosphere.temperature_offset_k:+g} K, rho = {case.density_kg_m3:.4f} kg/m^3",
         f"verdict     {len(verdicts)} requirements, "
         + ("all met" if passed else f"{sum(not v.passed for v in verdicts)} NOT met"),
+        "measured    "
+        + (
+            f"{measured.kind} {measured.source}"
+            if measured.source is not None
+            else "none (the thrust model is drawn alone)"
+        ),
         "",
         f"tool        tuflexperf {__version__}",
         f"date        {now}",
@@ -290,4 +303,4 @@ def _title_page(case: Any, measured: Any, analyses: Any) -> Any:
         except ValueError:
             shown = str(path)
         lines.append(f"  {sha256_of(path)}  {role:<13} {shown}")
-    return fg.text_page(f"Design review: {case.name}", lines, size=(11.0, 8.5))
+    return lines

@@ -1,0 +1,299 @@
+"""`tuflexperf report`: figures and one PDF, headless; all-or-nothing output; bad input exit 2.
+
+The shipped case is rendered once per module (module-scoped fixture); the made-up
+case of ``conftest.write_case`` (no campaign, no battery) covers the "model alone" path.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from tests.conftest import write_case
+from tuflexperf.cli import app
+
+runner = CliRunner()
+MIN_PNG_SIZE_PX = (1000, 600)  # 11 x 6.5 in at 150 dpi is 1650 x 975
+
+
+def pdf_page_count(path: Path) -> int:
+    """Page objects in a PDF (``/Type /Page``, not ``/Pages``), no PDF library needed."""
+    return len(re.findall(rb"/Type\s*/Page(?![a-zA-Z])", path.read_bytes()))
+
+
+def png_pixels(path: Path) -> np.ndarray:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.image import imread
+
+    return imread(path)
+
+
+def siblings(folder: Path) -> set[str]:
+    return {p.name for p in folder.iterdir()}
+
+
+@pytest.fixture(scope="module")
+def shipped(tmp_path_factory):
+    parent = tmp_path_factory.mktemp("shipped")
+    out = parent / "review"
+    result = runner.invoke(app, ["report", "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    return parent, out, json.loads(result.stdout)
+
+
+@pytest.fixture(scope="module")
+def made_up(tmp_path_factory):
+    parent = tmp_path_factory.mktemp("made_up")
+    case = write_case(parent / "case")
+    out = parent / "out"
+    result = runner.invoke(app, ["report", "--case", str(case), "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    return case, out, json.loads(result.stdout)
+
+
+# --- the shipped case ------------------------------------------------------------------------
+def test_shipped_report_has_at_least_eight_real_non_blank_pngs(shipped):
+    _, out, data = shipped
+    pngs = sorted(out.glob("*.png"))
+    assert len(pngs) >= 8
+    assert [str(p) for p in pngs] == sorted(data["figures"])
+    for png in pngs:
+        pixels = png_pixels(png)
+        height, width = pixels.shape[:2]
+        assert width >= MIN_PNG_SIZE_PX[0] and height >= MIN_PNG_SIZE_PX[1], png.name
+        assert float(pixels[..., :3].std()) > 0.02, f"{png.name} looks blank"
+
+
+def test_shipped_report_has_exactly_one_pdf_with_every_page(shipped):
+    _, out, data = shipped
+    pdfs = list(out.glob("*.pdf"))
+    assert [p.name for p in pdfs] == ["review.pdf"]
+    pages = pdf_page_count(pdfs[0])
+    assert pages >= 8
+    # title page + one page per PNG (+ a notes page when something is left out)
+    assert pages == data["pages"] >= len(data["figures"]) + 1
+
+
+def test_shipped_report_draws_every_paper_figure(shipped):
+    _, out, _ = shipped
+    names = {p.stem for p in out.glob("*.png")}
+    for expected in (
+        "01_requirements",
+        "02_thrust_required_available",
+        "03_thrust_surface_EDF1",
+        "03_thrust_surface_EDF2",
+        "04_run_processing",
+        "05_sine_sweep",
+        "06_model_vs_measured",
+        "07_takeoff",
+        "08_trim_oei_throttle",
+        "09_endurance",
+    ):
+        assert expected in names
+
+
+def test_json_lists_the_files_written_and_nothing_else_is_left(shipped):
+    parent, out, data = shipped
+    assert sorted(data["files"]) == sorted(str(p) for p in out.iterdir())
+    assert siblings(parent) == {"review"}  # no temporary or old directory beside it
+    assert data["passed"] is True  # the shipped case meets its requirements
+
+
+def test_title_page_names_every_input_by_sha256_with_version_and_date(shipped):
+    import hashlib
+
+    import tuflexperf
+    from tuflexperf.io.case import load_case
+    from tuflexperf.report.build import title_lines
+    from tuflexperf.report.data import Measured
+
+    case = load_case(None)
+    lines = title_lines(case, Measured(), SimpleNamespace(verdicts=[]))
+    text = "\n".join(lines)
+    for path in (case.path, case.aircraft_path, case.propulsion_path, case.battery_path):
+        assert hashlib.sha256(path.read_bytes()).hexdigest() in text
+    assert f"tuflexperf {tuflexperf.__version__}" in text
+    assert re.search(r"date\s+\d{4}-\d{2}-\d{2}", text)
+
+
+# --- every figure: units on the axes, a title, limits ----------------------------------------
+@pytest.fixture(scope="module")
+def figures_of_shipped_case():
+    from tuflexperf.io.case import load_case
+    from tuflexperf.report import figures as fg
+    from tuflexperf.report.data import load_measured, run_analyses
+
+    fg.use_agg()
+    case = load_case(None)
+    measured = load_measured(case, None)
+    analyses = run_analyses(case)
+    return {
+        "thrust": fg.thrust_required_available(case, analyses),
+        "surface": fg.thrust_surface(case, measured, 0),
+        "run": fg.run_processing(measured.processed),
+        "sweep": fg.sine_sweep(measured),
+        "model": fg.model_vs_measured(case, measured),
+        "takeoff": fg.takeoff_history(case, analyses),
+        "trim": fg.trim_oei_throttle(case, analyses),
+        "endurance": fg.endurance(case, analyses),
+    }
+
+
+def test_every_axis_has_a_unit_and_every_figure_a_title(figures_of_shipped_case):
+    unit = re.compile(r"\((m/s|N|s|m|V|min|fraction|-)\)")
+    for name, fig in figures_of_shipped_case.items():
+        assert fig._suptitle is not None or any(a.get_title() for a in fig.axes), name
+        for ax in fig.axes:
+            if not ax.get_xticks().size and not ax.get_yticks().size:
+                continue  # a note panel
+            if ax.get_label() == "<colorbar>":
+                assert unit.search(ax.get_ylabel()), f"{name}: colorbar {ax.get_ylabel()!r}"
+                continue
+            # stacked panels share one x axis: the bottom one carries its label
+            x_labels = [a.get_xlabel() for a in ax.get_shared_x_axes().get_siblings(ax)]
+            assert any(unit.search(x) for x in x_labels), f"{name}: x label {x_labels!r}"
+            assert unit.search(ax.get_ylabel()), f"{name}: y label {ax.get_ylabel()!r}"
+
+
+def test_multi_line_axes_have_legends(figures_of_shipped_case):
+    for name, fig in figures_of_shipped_case.items():
+        for ax in fig.axes:
+            labelled = [h for h in ax.get_legend_handles_labels()[1] if h and not h.startswith("_")]
+            if len(ax.get_lines()) > 1 and labelled:
+                assert ax.get_legend() is not None, name
+
+
+def test_requirement_limits_are_drawn(figures_of_shipped_case):
+    from tuflexperf.io.case import load_case
+
+    case = load_case(None)
+    limit = case.requirements.takeoff.max_ground_roll_m
+    distance = figures_of_shipped_case["takeoff"].axes[1]
+    assert any(np.allclose(line.get_ydata(), limit) for line in distance.get_lines())
+    envelope = case.requirements.envelope
+    trim = figures_of_shipped_case["trim"].axes[0]
+    verticals = [
+        line.get_xdata()[0] for line in trim.get_lines() if len(set(line.get_xdata())) == 1
+    ]
+    assert envelope.min_airspeed_m_s in verticals and envelope.max_airspeed_m_s in verticals
+
+
+def test_model_force_is_the_thrust_model_minus_structure_drag(figures_of_shipped_case):
+    """Where the throttle has been steady longer than the delay, the model force is
+    ``T(x, V) - c1 V - c2 V^2`` exactly."""
+    from tuflexperf.io.case import load_case
+    from tuflexperf.models.thrust import engine_thrust_n
+    from tuflexperf.report.data import load_measured
+    from tuflexperf.report.figures import model_force_n
+
+    case = load_case(None)
+    measured = load_measured(case, None)
+    run = measured.comparisons[1]
+    force = model_force_n(case, measured, run)
+    engine = next(e for e in case.propulsion.engines if e.name == run.engine)
+    c1, c2 = measured.drag_c1_c2
+    start, stop, _ = run.segments[len(run.segments) // 2]
+    v, x = run.airspeed_m_s[start:stop], run.throttle[start:stop]
+    assert np.ptp(x) == 0.0
+    expected = engine_thrust_n(engine, x, v) - c1 * v - c2 * v * v
+    np.testing.assert_allclose(force[start:stop], expected, rtol=0, atol=1e-9)
+
+
+# --- a case without measured data or battery ---------------------------------------------------
+def test_made_up_case_draws_the_model_alone_and_says_so(made_up):
+    _, out, data = made_up
+    names = {p.stem for p in out.glob("*.png")}
+    assert {"03_thrust_surface_left", "03_thrust_surface_right", "07_takeoff"} <= names
+    assert not {"04_run_processing", "05_sine_sweep", "09_endurance"} & names
+    assert any("no measured data" in n for n in data["notes"])
+    assert any("battery" in n for n in data["notes"])
+    assert pdf_page_count(out / "review.pdf") == data["pages"] == len(data["figures"]) + 2
+
+
+def test_rerun_replaces_an_earlier_report_without_leftovers(made_up):
+    case, out, _ = made_up
+    stale = out / "stale.png"
+    stale.write_bytes(b"old")
+    result = runner.invoke(app, ["report", "--case", str(case), "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    assert not stale.exists()
+    assert siblings(out.parent) == {"case", "out"}
+
+
+# --- bad input: exit 2, nothing left behind ----------------------------------------------------
+def test_malformed_case_exits_2_and_leaves_nothing(tmp_path):
+    case = write_case(tmp_path / "case", requirements={"takeof": {"max_ground_roll_m": 60}})
+    out = tmp_path / "new" / "review"
+    result = runner.invoke(app, ["report", "--case", str(case), "--out", str(out)])
+    assert result.exit_code == 2
+    assert "takeof" in result.stderr and "Traceback" not in result.output
+    assert siblings(tmp_path) == {"case"}
+
+
+def test_failure_during_the_build_leaves_nothing(tmp_path):
+    """The campaign is read after the staging directory exists: it must be removed."""
+    case = write_case(tmp_path / "case")
+    manifest = tmp_path / "case" / "campaign.yaml"
+    manifest.write_text("name: broken\nfan_area_m2: 0.0068\ntunnel_area_m2: 0.16\nruns: []\n")
+    out = tmp_path / "deeper" / "review"
+    result = runner.invoke(
+        app, ["report", "--case", str(case), "--out", str(out), "--campaign", str(manifest)]
+    )
+    assert result.exit_code == 2
+    assert "campaign.yaml" in result.stderr
+    assert siblings(tmp_path) == {"case"}
+
+
+def test_out_that_is_a_file_or_a_foreign_directory_is_refused(tmp_path):
+    case = write_case(tmp_path / "case")
+    a_file = tmp_path / "file.txt"
+    a_file.write_text("keep")
+    foreign = tmp_path / "foreign"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("keep")
+    for target in (a_file, foreign):
+        result = runner.invoke(app, ["report", "--case", str(case), "--out", str(target)])
+        assert result.exit_code == 2 and "--out" in result.stderr
+    assert a_file.read_text() == "keep" and siblings(foreign) == {"notes.txt"}
+
+
+def test_missing_out_flag_is_a_usage_error():
+    result = runner.invoke(app, ["report"])
+    assert result.exit_code == 2
+
+
+# --- import path and the real console script ---------------------------------------------------
+def test_cli_and_report_package_do_not_import_matplotlib():
+    code = (
+        "import sys, tuflexperf.cli, tuflexperf.report; "
+        "bad = [m for m in ('matplotlib', 'pandas', 'scipy') if m in sys.modules]; "
+        "assert not bad, bad"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_console_script_keeps_stdout_for_json_and_progress_on_stderr(made_up, tmp_path):
+    case, _, _ = made_up
+    exe = Path(sys.executable).with_name("tuflexperf")
+    command = [str(exe)] if exe.exists() else [sys.executable, "-m", "tuflexperf"]
+    out = tmp_path / "review"
+    proc = subprocess.run(
+        [*command, "report", "--case", str(case), "--out", str(out), "--json"],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "MPLBACKEND": "TkAgg"},  # Agg is forced whatever the environment
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["pdf"] == str(out / "review.pdf")
+    assert re.search(r"report \[\d+/\d+\]", proc.stderr)
