@@ -42,7 +42,9 @@ class RunEntry(StrictModel):
 
     @model_validator(mode="after")
     def _engine_needed(self) -> RunEntry:
-        if self.kind != "drag_sweep" and self.engine is None:
+        # the fit needs to know whose thrust or delay a run measures; drag sweeps
+        # have no fan and endurance runs are not the fit's (it ignores them)
+        if self.kind in ("throttle_steps", "sine_sweep") and self.engine is None:
             raise ValueError(f"engine: required for a {self.kind} run")
         return self
 
