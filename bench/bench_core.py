@@ -73,6 +73,7 @@ def naive_trim(case, speeds: np.ndarray) -> list[float]:
     ac, prop, rho = case.aircraft, case.propulsion, case.density_kg_m3
     out = []
     for v in speeds:
+
         def excess(x, v=v):
             return float(total_thrust_n(prop, x, v, rho) - level_flight_drag_n(ac, v, rho))
 
@@ -93,15 +94,19 @@ def main() -> None:
     print("whole process (median of 7)")
     print(f"  python -c pass                {python_s * 1e3:8.1f} ms")
     print(f"  python -c 'import casadi'     {casadi_s * 1e3:8.1f} ms")
-    print(f"  tuflexperf check              {check_s * 1e3:8.1f} ms   "
-          f"ratio to import casadi {check_s / casadi_s:5.2f} (target <= 2.5)")
+    print(
+        f"  tuflexperf check              {check_s * 1e3:8.1f} ms   "
+        f"ratio to import casadi {check_s / casadi_s:5.2f} (target <= 2.5)"
+    )
     try:
         import importlib.util
 
         if importlib.util.find_spec("aerosandbox") is not None:
             asb_s = wall([sys.executable, "-c", "import aerosandbox"], repeats=3)
-            print(f"  python -c 'import aerosandbox'{asb_s * 1e3:8.1f} ms   "
-                  f"check / that = {check_s / asb_s:5.2f}")
+            print(
+                f"  python -c 'import aerosandbox'{asb_s * 1e3:8.1f} ms   "
+                f"check / that = {check_s / asb_s:5.2f}"
+            )
         else:
             print("  (aerosandbox not installed: its import time not measured)")
     except Exception as exc:  # noqa: BLE001 - the benchmark reports, never fails
@@ -119,11 +124,17 @@ def main() -> None:
     naive_trim_s = per_call(lambda: naive_trim(case, speeds), repeats=20)
     ours, theirs = solve_takeoff(case).ground_roll_m, naive_takeoff(case)
     print(f"\nanalyses on the shipped case (build of all three: {build_s * 1e3:.1f} ms)")
-    print(f"  take-off solve        {takeoff_s * 1e3:8.3f} ms (target <= 5)   "
-          f"naive solve_ivp+event {naive_takeoff_s * 1e3:8.3f} ms  ratio {naive_takeoff_s / takeoff_s:6.1f}x")
+    print(
+        f"  take-off solve        {takeoff_s * 1e3:8.3f} ms (target <= 5)   "
+        f"naive solve_ivp+event {naive_takeoff_s * 1e3:8.3f} ms  "
+        f"ratio {naive_takeoff_s / takeoff_s:6.1f}x"
+    )
     print(f"     ground roll ours {ours:.6f} m, naive {theirs:.6f} m")
-    print(f"  trim sweep ({speeds.size} pts)  {trim_s * 1e3:8.3f} ms (target <= 10)  "
-          f"naive brentq per airspeed {naive_trim_s * 1e3:8.3f} ms  ratio {naive_trim_s / trim_s:6.1f}x")
+    print(
+        f"  trim sweep ({speeds.size} pts)  {trim_s * 1e3:8.3f} ms (target <= 10)  "
+        f"naive brentq per airspeed {naive_trim_s * 1e3:8.3f} ms  "
+        f"ratio {naive_trim_s / trim_s:6.1f}x"
+    )
     diff = np.nanmax(np.abs(solve_trim(case).throttle - np.array(naive_trim(case, speeds))))
     print(f"     largest throttle difference ours vs brentq {diff:.2e}")
     print(f"  OEI (2 dead-engine sweeps) {oei_s * 1e3:8.3f} ms")

@@ -1,1 +1,1 @@
-"""Reading and validating the project's files (YAML, CSV, .mat): the only place that touches disk."""
+"""Reading and validating the project's files (YAML, CSV, .mat); analyses never touch disk."""
