@@ -297,3 +297,24 @@ def test_console_script_keeps_stdout_for_json_and_progress_on_stderr(made_up, tm
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["pdf"] == str(out / "review.pdf")
     assert re.search(r"report \[\d+/\d+\]", proc.stderr)
+
+
+def test_a_failing_case_is_still_reported_with_its_reasons(tmp_path):
+    """Not attainable take-off and trim are answers to draw, not crashes (exit 0, passed false)."""
+    from tests.conftest import MADE_UP_AIRCRAFT
+
+    case = write_case(
+        tmp_path / "case",
+        aircraft={**MADE_UP_AIRCRAFT, "mass_kg": 120.0},
+        requirements={
+            "takeoff": {"max_ground_roll_m": 60},
+            "envelope": {"min_airspeed_m_s": 14, "max_airspeed_m_s": 48},
+        },
+    )
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["report", "--case", str(case), "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert data["passed"] is False
+    assert {"07_takeoff", "08_trim_oei_throttle"} <= {Path(f).stem for f in data["figures"]}
+    assert pdf_page_count(out / "review.pdf") == data["pages"]

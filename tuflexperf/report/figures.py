@@ -248,8 +248,10 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
             ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], "o", color="tab:red")
     _envelope_lines(ax, case)
     ax.set_xlim(0, right)
-    top = float(np.max(total_thrust_n(propulsion, 1.0, v, rho)))
-    ax.set_ylim(0, 1.3 * top)  # headroom for the legend
+    top = 1.3 * float(np.max(total_thrust_n(propulsion, 1.0, v, rho)))  # room for the legend
+    if drag.size:
+        top = max(top, 1.1 * float(drag.max()))
+    ax.set_ylim(0, top)
     ax.set_xlabel("true airspeed V (m/s)")
     ax.set_ylabel("thrust, drag (N)")
     fig.suptitle(
@@ -551,8 +553,22 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     ad = fig.add_subplot(1, 2, 2)
     result = analyses.takeoff
     if result is None:
+        from tuflexperf.analysis.takeoff import net_force_n
+        from tuflexperf.models.aircraft import liftoff_speed_m_s
+
         _note(av, _wrap(f"take-off not attainable: {analyses.takeoff_note}", 50))
-        _note(ad, "")
+        rho = case.density_kg_m3
+        v_lo = float(liftoff_speed_m_s(case.aircraft, rho))
+        v = np.linspace(0.0, 1.05 * v_lo, 300)
+        force = np.asarray(net_force_n(case.aircraft, case.propulsion, v, rho), dtype=float)
+        ad.plot(v, force, color="tab:blue", label="accelerating force at full throttle")
+        ad.axhline(0.0, color="black", linewidth=0.8)
+        ad.axvline(v_lo, color=LIMIT_COLOUR, linestyle="--", label=f"lift-off speed {v_lo:.1f} m/s")
+        ad.set_xlabel("airspeed V (m/s)")
+        ad.set_ylabel("net force on the runway (N)")
+        ad.set_title("why: the net force on the runway")
+        ad.grid(alpha=0.3)
+        ad.legend(fontsize=8)
         fig.suptitle(f"Take-off of {case.name}: not attainable")
         return fig
     t = result.history_time_s
@@ -660,6 +676,15 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
                 + (" - worse case" if critical else ""),
             )
         worst = oei.critical
+        missing = ~np.isfinite(worst.throttle)
+        if missing.any():
+            ax.plot(
+                worst.airspeed_m_s[missing],
+                np.ones(int(missing.sum())),
+                "x",
+                color="tab:red",
+                label=f"OEI ({worst.dead_engine} dead) not attainable: needs > full throttle",
+            )
         if worst.min_throttle is not None:
             ax.plot(
                 [worst.airspeed_at_min_throttle_m_s], [worst.min_throttle], "o", color="tab:red"
