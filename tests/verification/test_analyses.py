@@ -209,3 +209,21 @@ def test_airspeed_grid_steps_at_most_half_a_metre_per_second(low, high, n):
     grid = airspeed_grid(low, high)
     assert grid[0] == low and grid[-1] == high and grid.size == n
     assert np.all(np.diff(grid) <= 0.5 + 1e-12)
+
+
+def test_percent_throttle_file_gives_the_same_answers(tmp_path):
+    """Coefficients fitted against percent (throttle_unit: percent) mean the same aircraft."""
+    percent = copy.deepcopy(MADE_UP_PROPULSION)
+    percent["throttle_unit"] = "percent"
+    for engine in percent["engines"]:
+        c = engine["coefficients"]
+        c["p10"] /= 100.0
+        c["p11"] /= 100.0
+        c["p20"] /= 10000.0
+    fraction_case = load_case(write_case(tmp_path / "fraction"))
+    percent_case = load_case(write_case(tmp_path / "percent", propulsion=percent))
+    a, b = solve_trim(fraction_case), solve_trim(percent_case)
+    assert np.allclose(a.throttle, b.throttle, atol=1e-9, equal_nan=True)
+    assert solve_takeoff(percent_case).ground_roll_m == pytest.approx(
+        solve_takeoff(fraction_case).ground_roll_m, rel=1e-9
+    )
