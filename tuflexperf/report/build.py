@@ -70,6 +70,16 @@ class StepCounter:
             self.stream.write(f"report [{self.done}/{self.total}] {label} ({elapsed:.1f} s)\n")
             self.stream.flush()
 
+    def detail(self, done: int, total: int, label: str) -> None:
+        """A sub-step of the next step (``fit_campaign``'s progress callback signature)."""
+        if self.enabled and done < total:
+            elapsed = time.perf_counter() - self.started
+            self.stream.write(
+                f"report [{self.done + 1}/{self.total}]   reducing {done + 1}/{total} {label} "
+                f"({elapsed:.1f} s)\n"
+            )
+            self.stream.flush()
+
 
 def _safe_name(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_") or "engine"
@@ -189,7 +199,7 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
 
     analyses = run_analyses(case)
     step("analyses: check, take-off, trim, OEI, endurance")
-    measured = load_measured(case, campaign)
+    measured = load_measured(case, campaign, progress=step.detail)
     step(
         f"measured data: {measured.kind}" + (f" {measured.source.name}" if measured.source else "")
     )
