@@ -15,7 +15,7 @@ Ground truth (written to ``truth.yaml``):
   30 m/s: the fairing and rods of the paper's Fig. 5/6 rig, estimated);
 * throttle-to-force dead time 0.05 s (published, section 4) and a first-order
   spool-up lag of 0.08 s (estimated: "responds nearly instantaneous");
-* battery sag: effective throttle falls linearly by 1 % over a run (estimated;
+* battery sag: effective throttle falls linearly by 0.5 % over a run (estimated;
   the paper saw thrust change with battery state).
 
 What a real rig adds (all estimated, to exercise the reduction):
@@ -65,7 +65,7 @@ TUNNEL_AREA_M2 = 0.16  # 400 mm x 400 mm open jet (paper 2.1)
 STRUCTURE_CDA_M2 = 0.0055
 DELAY_S = 0.05
 SPOOL_LAG_S = 0.08
-BATTERY_SAG = 0.01
+BATTERY_SAG = 0.005
 AIRSPEEDS_M_S = (0.0, 15.0, 20.0, 22.5, 25.0, 27.5, 30.0)
 SWEEP_AIRSPEEDS_M_S = (0.0, 30.0)
 STEP_S = 4.0
@@ -89,9 +89,13 @@ BASE_COEFFICIENTS = {
         "p02": 0.001375,
     },
 }
-PERTURBATION = {  # relative change of the shipped coefficients -> ground truth
-    "EDF1": {"p10": +0.03, "p20": -0.02, "p01": +0.05, "p11": -0.04, "p02": +0.10},
-    "EDF2": {"p10": -0.02, "p20": +0.01, "p01": -0.05, "p11": +0.03, "p02": -0.10},
+# Relative change of the shipped coefficients -> ground truth. Small enough that the
+# shipped model stays within the paper's +-0.5 N accuracy goal of the campaign's points
+# (the sag below costs about 0.3 N at full throttle), large enough that a fit that only
+# echoed the shipped file would miss the truth by more than its standard errors.
+PERTURBATION = {
+    "EDF1": {"p10": +0.03, "p20": +0.003, "p01": +0.03, "p11": -0.015, "p02": +0.05},
+    "EDF2": {"p10": -0.02, "p20": +0.004, "p01": -0.03, "p11": +0.015, "p02": -0.05},
 }
 MAT_HEADER = "MATLAB 5.0 MAT-file, written by tuflexperf scripts/generate_campaign.py"
 RESOLUTION = {"time_s": 1e-3, "force_n": 0.01, "airspeed_m_s": 0.01, "throttle": 1e-3}

@@ -405,7 +405,9 @@ def fit_campaign(
         )
         run_reports.append(result.report)
 
-    valid = [p for p in points if math.isfinite(p.glauert_ratio)]
+    # The summary speaks of thrusting points, as the paper's check did: for a windmilling
+    # fan's drag, 1 + 2 tau nears zero and eq. 5 (derived for a thrusting rotor) blows up.
+    valid = [p for p in points if math.isfinite(p.glauert_ratio) and p.thrust_n > 0]
     worst = max(valid, key=lambda p: abs(1 - p.glauert_ratio), default=None)
     glauert_report: dict[str, Any] = {
         "applied": glauert,
