@@ -7,13 +7,13 @@ Everything the exporters write (CasADi, C, JSON) is derived here from the one ph
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from tuflexperf.io.case import PropulsionSchema, load_case, propulsion_from_schema
+from tuflexperf.io.files import sha256_of
 from tuflexperf.io.yamlio import load_model
 from tuflexperf.models._math import fmin, sqrt, where
 from tuflexperf.models.thrust import (
@@ -69,11 +69,6 @@ class ExportModel:
     def propulsion_sha256(self) -> str:
         """sha256 of the propulsion file."""
         return next(f.sha256 for f in self.files if f.role == "propulsion")
-
-
-def sha256_of(path: Path) -> str:
-    """Hex sha256 of a file's bytes."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def load_export_model(case_path: Path | str | None = None) -> ExportModel:

@@ -21,7 +21,6 @@ schema ``check`` uses, and only then are files written, atomically.
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 import tempfile
@@ -35,6 +34,7 @@ import yaml
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.campaign import Campaign, CampaignRun, load_campaign
+from tuflexperf.io.files import sha256_of
 from tuflexperf.io.runs import (
     Run,
     ThrustTable,
@@ -233,14 +233,6 @@ def reduce_step_run(
     return StepRunResult(run=run, data=data, segments=segments, report=report)
 
 
-def _sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for chunk in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
-
-
 def _mean_or_none(values: list[float]) -> float | None:
     return float(np.mean(values)) if values else None
 
@@ -427,13 +419,13 @@ def fit_campaign(
 
     speeds = [p.airspeed_m_s for p in points]
     files = [
-        {"file": r.file, "kind": r.kind, "engine": r.engine, "sha256": _sha256(r.path)}
+        {"file": r.file, "kind": r.kind, "engine": r.engine, "sha256": sha256_of(r.path)}
         for r in campaign.runs
     ]
     source = {
         "tool": "tuflexperf fit",
         "input": str(campaign.path.resolve()),
-        "input_sha256": _sha256(campaign.path),
+        "input_sha256": sha256_of(campaign.path),
         "campaign": campaign.name,
         "files": files,
         "filters": campaign.filters.model_dump(),
@@ -512,7 +504,7 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
     source = {
         "tool": "tuflexperf fit",
         "input": str(Path(path).resolve()),
-        "input_sha256": _sha256(Path(path)),
+        "input_sha256": sha256_of(Path(path)),
     }
     summary = _summary(kind="table", input_path=Path(path), fits=fits, delay=delay_s, speeds=speeds)
     propulsion = _propulsion_text(

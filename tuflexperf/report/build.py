@@ -275,7 +275,8 @@ def _title_page(case: Any, measured: Any, analyses: Any) -> Any:
 def title_lines(case: Any, measured: Any, analyses: Any) -> list[str]:
     """The title page: case, model, verdict, tool version, date, every input by sha256."""
     from tuflexperf import __version__
-    from tuflexperf.report.data import input_files, sha256_of
+    from tuflexperf.io.files import sha256_of
+    from tuflexperf.report.data import input_files
 
     verdicts = analyses.verdicts
     passed = all(v.passed for v in verdicts)

@@ -23,7 +23,6 @@ When none applies, the report draws the model alone and says so.
 
 from __future__ import annotations
 
-import hashlib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,15 +34,6 @@ from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
 
 CAMPAIGN_BESIDE_PROPULSION = Path("campaign") / "campaign.yaml"
-
-
-def sha256_of(path: Path) -> str:
-    """Hex sha256 of a file's bytes (the title page lists every input by it)."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for chunk in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
 
 
 # --- measured data ----------------------------------------------------------------------------
