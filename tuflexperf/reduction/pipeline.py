@@ -118,8 +118,11 @@ def _windows(campaign: Campaign, sample_rate_hz: float) -> tuple[int, float, int
     )
 
 
-def _clean(campaign: Campaign, run: Run, column: str = "force_n") -> tuple[np.ndarray, int]:
-    """The paper's filters over a whole run: outliers filled, then the moving median."""
+def clean_run(campaign: Campaign, run: Run, column: str = "force_n") -> tuple[np.ndarray, int]:
+    """The paper's filters over a whole run: outliers filled, then the moving median.
+
+    Returns the cleaned column and how many outliers were replaced.
+    """
     k_out, threshold, k_med = _windows(campaign, run.sample_rate_hz)
     filled, replaced = filloutliers_movmean(run[column], k_out, threshold)
     return movmedian(filled, k_med), replaced
@@ -193,7 +196,7 @@ def reduce_step_run(
             )
         )
 
-    cleaned, replaced = _clean(campaign, data)
+    cleaned, replaced = clean_run(campaign, data)
     changes = force_changepoints(cleaned, fs, min_segment_s=MIN_SEGMENT_S)
     steps = [
         (p.step_index, s)
@@ -327,7 +330,7 @@ def fit_campaign(
     for run in campaign.of_kind("drag_sweep"):
         tick(run.file)
         data = read_run(run.path)
-        force, replaced = _clean(campaign, data)
+        force, replaced = clean_run(campaign, data)
         _, _, k_med = _windows(campaign, data.sample_rate_hz)
         sweeps.append((movmedian(data["airspeed_m_s"], k_med), force))
         run_reports.append({**_run_header(run, data), "outliers_replaced": replaced})

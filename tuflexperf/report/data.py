@@ -134,21 +134,16 @@ def _processed_run(campaign: Any, run: Any, delay_s: float) -> ProcessedRun:
 
     Adapter: ``fit_campaign`` keeps only summaries, so the run is reduced again with
     the pipeline's public ``reduce_step_run``; the whole-run cleaned force is the
-    campaign's two filters (outliers against a moving mean, then the moving median).
+    pipeline's own ``clean_run``.
     """
     from tuflexperf.io.runs import read_run
     from tuflexperf.reduction.changepoints import force_changepoints
-    from tuflexperf.reduction.filters import filloutliers_movmean, movmedian, window_samples
-    from tuflexperf.reduction.pipeline import MIN_SEGMENT_S, reduce_step_run
+    from tuflexperf.reduction.pipeline import MIN_SEGMENT_S, clean_run, reduce_step_run
 
     data = read_run(run.path)
     result = reduce_step_run(campaign, run, data, delay_s)
     fs = data.sample_rate_hz
-    f = campaign.filters
-    filled, replaced = filloutliers_movmean(
-        data["force_n"], window_samples(f.outlier_window_s, fs), f.outlier_threshold
-    )
-    clean = movmedian(filled, window_samples(f.median_window_s, fs))
+    clean, replaced = clean_run(campaign, data)
     changes = force_changepoints(clean, fs, min_segment_s=MIN_SEGMENT_S)
     return ProcessedRun(
         file=run.file,
