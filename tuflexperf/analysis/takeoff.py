@@ -111,7 +111,15 @@ def solve_takeoff(case: Case) -> TakeoffResult:
             f"never reaches lift-off: the net force vanishes at {stuck:.1f} m/s, below the "
             f"lift-off speed {v_lo:.1f} m/s"
         )
-    states = np.asarray(_integrator_for(case)(v_lo))
+    try:
+        states = np.asarray(_integrator_for(case)(v_lo))
+    except RuntimeError:  # CVODES failed: the net force nearly vanishes between check points
+        states = np.full((2, HISTORY_POINTS - 1), np.nan)
+    if not np.all(np.isfinite(states)):
+        raise NotAttainable(
+            f"never reaches lift-off: the net force all but vanishes below the lift-off speed "
+            f"{v_lo:.1f} m/s (least {force.min():.3g} N)"
+        )
     distance = np.concatenate([[0.0], states[0, :]])
     time = np.concatenate([[0.0], states[1, :]])
     history_speed = np.linspace(0.0, v_lo, distance.size)
