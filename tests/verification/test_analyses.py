@@ -227,3 +227,33 @@ def test_percent_throttle_file_gives_the_same_answers(tmp_path):
     assert solve_takeoff(percent_case).ground_roll_m == pytest.approx(
         solve_takeoff(fraction_case).ground_roll_m, rel=1e-9
     )
+
+
+def test_least_throttle_solver_on_random_surfaces_equals_exact_roots():
+    """Seeded random poly22-like surfaces, convex and concave in throttle, against closed form."""
+    from tuflexperf.analysis.level_flight import least_throttle_solver
+
+    rng = np.random.default_rng(20261122)
+    speeds = airspeed_grid(10.0, 45.0)
+    checked = 0
+    for _ in range(60):
+        p00, p10, p01 = rng.uniform(-1, 1), rng.uniform(0, 60), rng.uniform(-0.3, 0.0)
+        p20, p11, p02 = rng.uniform(-40, 60), rng.uniform(-0.8, 0.1), rng.uniform(-2e-3, 2e-3)
+        d0 = rng.uniform(2.0, 40.0)
+
+        def drag(v, d0=d0):
+            return d0 * (0.5 + (v / 30.0) ** 2)
+
+        def excess(x, v, c=(p00, p10, p01, p20, p11, p02), drag=drag):
+            return c[0] + c[1] * x + c[2] * v + c[3] * x * x + c[4] * x * v + c[5] * v * v - drag(v)
+
+        got = least_throttle_solver(excess)(speeds)
+        for v, x in zip(speeds, got, strict=True):
+            expected = _exact_least_throttle(
+                p20, p10 + p11 * v, p00 + p01 * v + p02 * v * v - drag(v)
+            )
+            assert math.isnan(x) == math.isnan(expected), (v, x, expected)
+            if not math.isnan(expected):
+                assert x == pytest.approx(expected, abs=1e-9)
+                checked += 1
+    assert checked > 1000  # the random cases are mostly attainable, not vacuous
