@@ -375,10 +375,11 @@ def _print_fit(summary: dict[str, Any]) -> None:
     runs = [r for r in summary.get("runs", []) if "validation" in r]
     if runs:
         typer.echo("validation, model - measured force over steady segments (mean -/+, N):")
+        width = max(len(str(r["file"])) for r in runs) + 2
         for r in runs:
             v = r["validation"]
             typer.echo(
-                f"  {r['file']:<32}{r['engine']:<8}{_fmt(v['mean_negative_error_n'], 2):>7} / "
+                f"  {r['file']:<{width}}{r['engine']:<8}{_fmt(v['mean_negative_error_n'], 2):>7} / "
                 f"+{_fmt(v['mean_positive_error_n'], 2)}   {r['segments']} segments"
             )
     _print_warnings(summary.get("warnings", []))
