@@ -789,6 +789,20 @@ def endurance(case: Case, analyses: Analyses) -> Any:
             markersize=3,
             label="one pack on one fan, full to cut-off",
         )
+        speeds = np.array([c[1].airspeed_m_s for c in curve])
+        tested_high = case.propulsion.tested_airspeed_m_s[1]
+        envelope = case.requirements.envelope
+        for limit, alpha, what in (
+            (tested_high, 0.12, f"level flight faster than the tested {tested_high:g} m/s"),
+            (
+                envelope.max_airspeed_m_s if envelope is not None else None,
+                0.22,
+                "... and beyond the envelope",
+            ),
+        ):
+            beyond = x[speeds > limit] if limit is not None else x[:0]
+            if beyond.size:
+                af.axvspan(beyond.min(), x.max(), color="0.5", alpha=alpha, linewidth=0, label=what)
     requirement = case.requirements.endurance
     result = analyses.endurance_at_requirement
     if requirement is not None:
