@@ -55,7 +55,12 @@ from tuflexperf.models.battery import (
     read_discharge_run,
     time_to_cutoff_s,
 )
-from tuflexperf.models.thrust import engine_thrust_n, is_extrapolated, total_thrust_n
+from tuflexperf.models.thrust import (
+    engine_thrust_n,
+    is_extrapolated,
+    least_throttle_reaching,
+    total_thrust_n,
+)
 
 # Level flight is searched between the stall speed and this multiple of it.
 _MAX_SPEED_OVER_STALL = 8.0
@@ -435,7 +440,8 @@ class EnduranceModel:
 
         Total thrust is quadratic in the throttle (poly22), ``T = a(V) + b(V) x + c x^2``;
         its coefficients come from three evaluations of :func:`total_thrust_n`, the
-        required throttle from the quadratic formula, its least value from a grid plus
+        required throttle from :func:`least_throttle_reaching` (the export's closed form),
+        its least value from a grid plus
         golden-section refinement. ``inf`` when no throttle in [0, 1] flies.
         """
         case = self.case
@@ -445,19 +451,12 @@ class EnduranceModel:
             t0 = np.asarray(total_thrust_n(propulsion, 0.0, v, rho), dtype=float)
             th = np.asarray(total_thrust_n(propulsion, 0.5, v, rho), dtype=float)
             t1 = np.asarray(total_thrust_n(propulsion, 1.0, v, rho), dtype=float)
-            c = 2.0 * (t1 - 2.0 * th + t0)
-            b = t1 - t0 - c
-            a = t0 - np.asarray(level_flight_drag_n(aircraft, v, rho), dtype=float)
+            quadratic = 2.0 * (t1 - 2.0 * th + t0)
+            linear = t1 - t0 - quadratic
+            constant = t0 - np.asarray(level_flight_drag_n(aircraft, v, rho), dtype=float)
             with np.errstate(invalid="ignore", divide="ignore"):
-                disc = b * b - 4.0 * c * a
-                root = np.where(
-                    np.abs(c) > 1e-12,
-                    (-b + np.sqrt(np.maximum(disc, 0.0))) / (2.0 * c),
-                    -a / b,
-                )
-            root = np.where(a >= 0.0, 0.0, root)
-            ok = (disc >= 0.0) & np.isfinite(root) & (root <= 1.0 + 1e-12)
-            return np.where(ok, np.maximum(root, 0.0), np.inf)
+                throttle, reached = least_throttle_reaching(quadratic, linear, constant)
+            return np.where(np.asarray(reached) > 0.5, np.asarray(throttle, dtype=float), np.inf)
 
         speeds = np.linspace(self.stall_m_s, _MAX_SPEED_OVER_STALL * self.stall_m_s,
                              _SPEED_GRID_POINTS)

@@ -4,7 +4,7 @@ The C is written from the same numbers and steps as the Python model: the per-en
 coefficients in :data:`~tuflexperf.models.thrust.POLY22_TERMS` order, evaluated term by term in
 the order :func:`~tuflexperf.models.thrust.poly22` uses (so results agree to rounding), and the
 common-throttle quadratic of :func:`~tuflexperf.export.model.quadratic_coefficients` solved with
-the steps of :func:`~tuflexperf.export.model.least_throttle_reaching`. Tests compile it with
+the steps of :func:`~tuflexperf.models.thrust.least_throttle_reaching`. Tests compile it with
 ``gcc -std=c99 -Wall -Wextra -Wpedantic -Werror`` and compare it with the Python model.
 
 Why not CasADi's code generator: its output needs its own work-array calling convention and a

@@ -7,11 +7,12 @@ Every function takes floats, numpy arrays or CasADi symbols.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from tuflexperf.models._math import fmin
+from tuflexperf.models._math import fmin, sqrt, where
 
 POLY22_TERMS: tuple[str, ...] = ("p00", "p10", "p01", "p20", "p11", "p02")
 DeadEngineMode = Literal["windmilling", "zero"]
@@ -116,3 +117,37 @@ def is_extrapolated(propulsion: Propulsion, airspeed_m_s: float) -> bool:
     """True when ``airspeed_m_s`` lies outside the model's tested airspeed range."""
     low, high = propulsion.tested_airspeed_m_s
     return bool(airspeed_m_s < low - 1e-9 or airspeed_m_s > high + 1e-9)
+
+
+def least_throttle_reaching(a: Any, b: Any, c: Any) -> tuple[Any, Any]:
+    """Least ``x`` in [0, 1] with ``a x^2 + b x + c >= 0``, and whether one exists.
+
+    Backend-neutral (floats, numpy arrays, CasADi SX). ``x = 0`` when ``c >= 0`` (idle suffices).
+    Otherwise ``f(0) < 0`` and the answer is the least root in (0, 1]: the roots come from the
+    cancellation-free form ``q = -(b + sign(b) sqrt(b^2 - 4ac)) / 2``, ``x = c / q`` and ``q / a``
+    (Press et al., Numerical Recipes, 3rd ed., section 5.6), which stays accurate as ``a -> 0``
+    (the linear case) and handles non-monotonic ``f`` (both roots are candidates). When no
+    throttle reaches it, ``x`` is the throttle of the most thrust in [0, 1] and ``reached`` is 0.
+    The export's generated C (``tuflexperf.export.c_code``) runs the same steps; the
+    endurance analysis uses it for the least throttle of level flight.
+    """
+    disc = b * b - 4.0 * a * c
+    root_disc = sqrt(where(disc > 0.0, disc, 0.0))
+    q = -0.5 * (b + where(b >= 0.0, root_disc, -root_disc))
+    r_near = where(q != 0.0, c / where(q != 0.0, q, 1.0), math.inf)
+    r_far = where(a != 0.0, q / where(a != 0.0, a, 1.0), math.inf)
+
+    def candidate(r: Any) -> Any:
+        return where(disc >= 0.0, where(r > 0.0, where(r <= 1.0, r, math.inf), math.inf), math.inf)
+
+    root = fmin(candidate(r_near), candidate(r_far))
+    f_full = a + b + c
+    # most thrust in [0, 1]: the vertex of a concave f if inside, else the better end
+    vertex = -b / where(a != 0.0, 2.0 * a, 1.0)
+    best_end = where(f_full > c, 1.0, 0.0)
+    best = where(a < 0.0, where(vertex > 0.0, where(vertex < 1.0, vertex, best_end), best_end),
+                 best_end)
+    # f(1) >= 0 with no root <= 1 only happens by rounding when the demand is T(1) itself
+    throttle = where(c >= 0.0, 0.0, where(root <= 1.0, root, where(f_full >= 0.0, 1.0, best)))
+    reached = where(c >= 0.0, 1.0, where(root <= 1.0, 1.0, where(f_full >= 0.0, 1.0, 0.0)))
+    return throttle, reached
