@@ -37,6 +37,7 @@ from tuflexperf.analysis.trim import solve_trim
 from tuflexperf.io.case import load_case
 from tuflexperf.models.aircraft import Aircraft, TakeoffConfig, stall_speed_m_s
 from tuflexperf.models.thrust import Engine, Propulsion
+from tuflexperf.reduction.uncertainty import PAPER_ACCURACY_N, published_grid_uncertainty
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "data" / "tuflex"
@@ -44,6 +45,8 @@ DATA = ROOT / "data" / "tuflex"
 # Published: paper section 4 (SPEC 6), full-throttle thrust in N at 0, 30, 40 m/s.
 PUBLISHED_FULL_THROTTLE_N = {"EDF1": (55.12, 40.02, 35.26), "EDF2": (55.41, 41.76, 37.76)}
 PUBLISHED_AIRSPEEDS_M_S = (0.0, 30.0, 40.0)
+# Published: largest average model error at 30 m/s (paper section 4, SPEC 6) in N.
+PUBLISHED_EDGE_ERROR_N = {"EDF1": 0.73, "EDF2": 0.50}
 TARGET_TRIM_THROTTLE = 0.41
 TARGET_OEI_THROTTLE = 0.56
 TARGET_GROUND_ROLL_M = 55.5
@@ -142,7 +145,22 @@ def render_propulsion(propulsion: Propulsion, p10_share: float) -> str:
     for engine in propulsion.engines:
         lines += [f"  - name: {engine.name}", "    coefficients:"]
         lines += [f"      {t}: {engine.coefficients[t]:.10g}" for t in engine.coefficients]
+        lines += uncertainty_lines(engine.name)
     return "\n".join(lines) + "\n"
+
+
+def uncertainty_lines(name: str) -> list[str]:
+    """Covariance from the paper's test grid and +-0.5 N (derived; data/README.md)."""
+    u = published_grid_uncertainty(PAPER_ACCURACY_N, PUBLISHED_EDGE_ERROR_N[name]).to_yaml_dict()
+    lines = ["    # derived: sigma^2 (X^T X)^-1 on the paper's 7 x 10 test grid, sigma = 0.5 N"]
+    lines.append("    covariance:")
+    lines += [f"      - [{', '.join(f'{c:.6g}' for c in row)}]" for row in u["covariance"]]
+    lines.append(f"    residual_sd_n: {u['residual_sd_n']:g}   # published accuracy +-0.5 N")
+    lines.append(
+        f"    extrapolation_sd_n: {u['extrapolation_sd_n']:.4g}   # derived: max(leave-30-m/s-out"
+        f" error, published error at 30 m/s {PUBLISHED_EDGE_ERROR_N[name]:g} N)"
+    )
+    return lines
 
 
 def render_aircraft(aircraft: Aircraft) -> str:

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
+import numpy as np
 from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
@@ -56,6 +57,27 @@ class EngineSchema(StrictModel):
     rmse_n: NonNegative | None = None
     standard_errors: Poly22Schema | None = None
     n_points: Annotated[int, Field(ge=0)] | None = None
+    covariance: list[list[float]] | None = None  # of p00..p02 (POLY22_TERMS order) [N^2]
+    residual_sd_n: NonNegative | None = None
+    extrapolation_sd_n: NonNegative | None = None
+
+    @model_validator(mode="after")
+    def _check_covariance(self) -> EngineSchema:
+        if self.covariance is None:
+            return self
+        matrix = self.covariance
+        if len(matrix) != len(POLY22_TERMS) or any(len(r) != len(POLY22_TERMS) for r in matrix):
+            raise ValueError("covariance: must be a 6x6 matrix (p00, p10, p01, p20, p11, p02)")
+        values = [v for row in matrix for v in row]
+        if not all(math.isfinite(v) for v in values):
+            raise ValueError("covariance: must be finite")
+        array = np.asarray(matrix, dtype=float)
+        scale = max(float(np.abs(array).max()), 1e-300)
+        if not np.allclose(array, array.T, rtol=1e-6, atol=1e-9 * scale):
+            raise ValueError("covariance: must be symmetric")
+        if float(np.linalg.eigvalsh(array).min()) < -1e-9 * scale:
+            raise ValueError("covariance: must be positive semi-definite")
+        return self
 
 
 class PropulsionSchema(StrictModel):
@@ -179,6 +201,13 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
             name=e.name,
             coefficients={term: getattr(e.coefficients, term) for term in POLY22_TERMS},
             throttle_scale=scale,
+            covariance=(
+                tuple(tuple(float(c) for c in row) for row in e.covariance)
+                if e.covariance is not None
+                else None
+            ),
+            residual_sd_n=e.residual_sd_n,
+            extrapolation_sd_n=e.extrapolation_sd_n,
         )
         for e in schema.engines
     )

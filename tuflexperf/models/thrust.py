@@ -37,11 +37,16 @@ class Engine:
 
     ``throttle_scale`` maps the interface throttle fraction to the variable the
     coefficients were fitted against (1 for a fraction, 100 for percent).
+    ``covariance`` (6x6, :data:`POLY22_TERMS` order, N^2 in the coefficients' units),
+    ``residual_sd_n`` and ``extrapolation_sd_n`` (N) are the fit's uncertainty, when known.
     """
 
     name: str
     coefficients: Mapping[str, float]
     throttle_scale: float = 1.0
+    covariance: tuple[tuple[float, ...], ...] | None = None
+    residual_sd_n: float | None = None
+    extrapolation_sd_n: float | None = None
 
 
 @dataclass(frozen=True)

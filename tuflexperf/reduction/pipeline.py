@@ -559,6 +559,7 @@ def _summary(
                 "rmse_n": _finite_or_none(fit.rmse_n),
                 "standard_errors": {k: _finite_or_none(v) for k, v in fit.standard_errors.items()},
                 "n_points": fit.n_points,
+                **{k: v for k, v in _uncertainty_entry(fit).items() if k != "covariance"},
                 "residuals_n": [float(r) for r in fit.residuals_n],
                 "full_throttle_thrust_n": {
                     f"{v:g}": float(fit.predict([1.0], [v])[0]) for v in (0.0, 30.0, 40.0)
@@ -608,6 +609,7 @@ def _propulsion_text(
             entry["rmse_n"] = fit.rmse_n
         if all(math.isfinite(v) for v in fit.standard_errors.values()):
             entry["standard_errors"] = {t: fit.standard_errors[t] for t in POLY22_TERMS}
+        entry.update(_uncertainty_entry(fit))
         document["engines"].append(entry)
     document["source"] = source
     header = (
@@ -620,6 +622,21 @@ def _propulsion_text(
     except Exception as exc:  # noqa: BLE001 - the fit must never write a file check refuses
         raise InputError(f"the fitted propulsion file would not be valid: {exc}") from None
     return text
+
+
+def _uncertainty_entry(fit: Poly22Fit) -> dict[str, Any]:
+    """The fit's covariance, residual and leave-one-airspeed-out error (SPEC 4), if defined."""
+    from tuflexperf.reduction.uncertainty import leave_one_airspeed_out
+
+    entry: dict[str, Any] = {}
+    if np.all(np.isfinite(fit.covariance)):
+        entry["covariance"] = [[float(c) for c in row] for row in fit.covariance]
+        entry["residual_sd_n"] = float(fit.residual_sd_n)
+    if fit.points:
+        extrapolation = leave_one_airspeed_out(*fit.points).extrapolation_sd_n
+        if extrapolation is not None and math.isfinite(extrapolation):
+            entry["extrapolation_sd_n"] = extrapolation
+    return entry
 
 
 def _plain(value: Any) -> Any:

@@ -4,14 +4,17 @@
 squares on the scattered points (x throttle fraction, v airspeed m/s, T N), with
 MATLAB's goodness-of-fit: ``R^2 = 1 - SSE/SST``, ``RMSE = sqrt(SSE / (n - p))``
 (p = 6 coefficients), and the coefficients' standard errors
-``sqrt(diag((X^T X)^-1) SSE / (n - p))``. Solved through the SVD of the design
-matrix, so an ill-conditioned table (throttle ~1, airspeed ~30) loses no digits
-and a rank-deficient one is caught instead of returning arbitrary numbers.
+``sqrt(diag((X^T X)^-1) SSE / (n - p))``, and their full covariance
+``(X^T X)^-1 SSE / (n - p)`` (the unbiased residual variance, n - p degrees of freedom;
+Montgomery & Runger, *Applied Statistics and Probability for Engineers*, 12-2).
+Solved through the SVD of the design matrix, so an ill-conditioned table (throttle ~1,
+airspeed ~30) loses no digits and a rank-deficient one is caught instead of returning arbitrary
+numbers.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -40,6 +43,14 @@ class Poly22Fit:
     sse: float
     n_points: int
     residuals_n: NDArray[np.float64]
+    covariance: NDArray[np.float64]  # 6x6, POLY22_TERMS order; NaN when n <= 6
+    # the fitted (throttle, airspeed, thrust) points, for leave-one-airspeed-out
+    points: tuple[NDArray[np.float64], ...] = field(default=(), repr=False)
+
+    @property
+    def residual_sd_n(self) -> float:
+        """Scatter of the points about the fit, ``sqrt(SSE / (n - 6))`` in N."""
+        return self.rmse_n
 
     def predict(self, throttle: ArrayLike, airspeed_m_s: ArrayLike) -> NDArray[np.float64]:
         """Thrust in N at ``throttle`` (fraction) and ``airspeed_m_s`` (m/s)."""
@@ -81,6 +92,9 @@ def fit_poly22(
     mse = sse / dfe if dfe > 0 else float("nan")
     covariance_diag = np.sum((vt.T / s) ** 2, axis=1)  # diag((X^T X)^-1) from the SVD
     errors = np.sqrt(covariance_diag * mse) if dfe > 0 else np.full(N_TERMS, np.nan)
+    unscaled = (vt.T / s) @ (vt.T / s).T  # (X^T X)^-1 from the SVD
+    unscaled = 0.5 * (unscaled + unscaled.T)
+    covariance = unscaled * mse if dfe > 0 else np.full((N_TERMS, N_TERMS), np.nan)
     return Poly22Fit(
         coefficients={t: float(b) for t, b in zip(POLY22_TERMS, beta, strict=True)},
         standard_errors={t: float(e) for t, e in zip(POLY22_TERMS, errors, strict=True)},
@@ -89,4 +103,6 @@ def fit_poly22(
         sse=sse,
         n_points=n,
         residuals_n=residuals,
+        covariance=covariance,
+        points=(design[:, 1].copy(), design[:, 2].copy(), y.copy()),
     )

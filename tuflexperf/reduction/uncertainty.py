@@ -1,0 +1,210 @@
+"""Where the thrust model's uncertainty comes from: fit covariance and leave-one-airspeed-out.
+
+Three numbers per engine go into the propulsion file (SPEC 4):
+
+- ``covariance``: of the six poly22 coefficients, ``s^2 (X^T X)^-1`` with
+  ``s^2 = SSE / (n - 6)`` (least squares with its correct degrees of freedom), or, for a
+  model reconstructed from published values, ``sigma^2 (X^T X)^-1`` on the published test
+  grid with the published measurement accuracy ``sigma`` (:func:`design_covariance`);
+- ``residual_sd_n``: the points' scatter about the fit, ``s``;
+- ``extrapolation_sd_n``: each tested airspeed in turn is left out, the surface refitted
+  on the others and its error measured at the left-out points; the RMS error at the
+  highest tested airspeed is what a model extrapolated beyond its tunnel carries
+  (:func:`leave_one_airspeed_out`).
+
+References
+----------
+Montgomery, D. C. & Runger, G. C., *Applied Statistics and Probability for Engineers*,
+section 12-2 (covariance of least-squares estimates). Hastie, Tibshirani & Friedman,
+*The Elements of Statistical Learning*, 7.10 (cross-validation by left-out groups).
+Paper section 4: test airspeeds 0-30 m/s, throttle 10-100 % in 10 % steps, +-0.5 N aim.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from tuflexperf.reduction.poly22fit import N_TERMS, fit_poly22, poly22_design
+
+# Points whose airspeeds differ by less than this belong to one tunnel set point [m/s].
+AIRSPEED_GROUP_GAP_M_S = 1.0
+# The paper's test grid (section 4): airspeeds [m/s] and throttles [fraction].
+PAPER_TEST_AIRSPEEDS_M_S: tuple[float, ...] = (0.0, 15.0, 20.0, 22.5, 25.0, 27.5, 30.0)
+PAPER_TEST_THROTTLES: tuple[float, ...] = tuple(round(0.1 * k, 1) for k in range(1, 11))
+PAPER_ACCURACY_N = 0.5
+
+
+def design_covariance(
+    throttle: ArrayLike, airspeed_m_s: ArrayLike, sigma_n: float
+) -> NDArray[np.float64]:
+    """Covariance [N^2 in the coefficients' units] of a poly22 fit on these points.
+
+    ``sigma^2 (X^T X)^-1`` for independent measurement errors of standard deviation
+    ``sigma_n`` [N] at the points ``(throttle [fraction], airspeed_m_s [m/s])``.
+
+    References
+    ----------
+    Montgomery & Runger, *Applied Statistics and Probability for Engineers*, 12-2.
+    """
+    design = poly22_design(throttle, airspeed_m_s)
+    _, s, vt = np.linalg.svd(design, full_matrices=False)
+    scaled = vt.T / s
+    covariance = float(sigma_n) ** 2 * (scaled @ scaled.T)
+    return 0.5 * (covariance + covariance.T)  # exactly symmetric for the file
+
+
+def paper_grid() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The paper's test grid as flat (throttle [fraction], airspeed [m/s]) arrays.
+
+    References
+    ----------
+    Paper section 4: airspeeds 0, 15, 20, 22.5, 25, 27.5, 30 m/s; throttle 100 % down in
+    10 % steps.
+    """
+    x, v = np.meshgrid(PAPER_TEST_THROTTLES, PAPER_TEST_AIRSPEEDS_M_S)
+    return x.ravel(), v.ravel()
+
+
+def airspeed_groups(airspeed_m_s: ArrayLike) -> list[NDArray[np.bool_]]:
+    """Masks of the points per tunnel set point (airspeeds closer than 1 m/s), ascending."""
+    v = np.asarray(airspeed_m_s, dtype=float)
+    order = np.sort(np.unique(v))
+    edges = [order[0]]
+    for low, high in zip(order[:-1], order[1:], strict=True):
+        if high - low > AIRSPEED_GROUP_GAP_M_S:
+            edges.append(high)
+    bounds = [*edges[1:], np.inf]
+    return [(v >= low) & (v < high) for low, high in zip(edges, bounds, strict=True)]
+
+
+@dataclass(frozen=True)
+class LeaveOneAirspeedOut:
+    """RMS error [N] at each tested airspeed when that airspeed is left out of the fit."""
+
+    airspeed_m_s: tuple[float, ...]
+    rms_error_n: tuple[float | None, ...]  # None where the rest cannot determine a surface
+
+    @property
+    def extrapolation_sd_n(self) -> float | None:
+        """The error at the highest tested airspeed [N] (what extrapolation carries)."""
+        return self.rms_error_n[-1] if self.rms_error_n else None
+
+
+def leave_one_airspeed_out(
+    throttle: ArrayLike, airspeed_m_s: ArrayLike, thrust_n: ArrayLike
+) -> LeaveOneAirspeedOut:
+    """Leave each tested airspeed out in turn, refit poly22, and measure the error there.
+
+    Parameters
+    ----------
+    throttle : array
+        Throttle of each point [fraction, or the file's unit].
+    airspeed_m_s : array
+        Airspeed of each point [m/s]; points within 1 m/s are one set point.
+    thrust_n : array
+        Measured thrust [N].
+
+    Returns
+    -------
+    LeaveOneAirspeedOut
+        Mean airspeed [m/s] and RMS prediction error [N] per set point; ``None`` where the
+        remaining points cannot determine the six coefficients.
+
+    References
+    ----------
+    Hastie, Tibshirani & Friedman, *The Elements of Statistical Learning*, 7.10.
+    """
+    x = np.asarray(throttle, dtype=float)
+    v = np.asarray(airspeed_m_s, dtype=float)
+    y = np.asarray(thrust_n, dtype=float)
+    speeds: list[float] = []
+    errors: list[float | None] = []
+    for mask in airspeed_groups(v):
+        speeds.append(float(v[mask].mean()))
+        rest = ~mask
+        if rest.sum() <= N_TERMS or np.unique(np.round(v[rest])).size < 3:
+            errors.append(None)
+            continue
+        try:
+            refit = fit_poly22(x[rest], v[rest], y[rest])
+        except Exception:  # noqa: BLE001 - a degenerate remainder has no prediction
+            errors.append(None)
+            continue
+        error = refit.predict(x[mask], v[mask]) - y[mask]
+        errors.append(float(np.sqrt(np.mean(error**2))))
+    return LeaveOneAirspeedOut(tuple(speeds), tuple(errors))
+
+
+def expected_extrapolation_sd_n(
+    throttle: ArrayLike, airspeed_m_s: ArrayLike, sigma_n: float
+) -> float:
+    """Expected leave-highest-airspeed-out RMS error [N] from measurement noise alone.
+
+    With the highest set point left out, a new point there differs from the refit's
+    prediction by ``sigma^2 (1 + g^T (X_-^T X_-)^-1 g)`` in variance, ``g`` its design row;
+    the RMS over that set point's throttles is returned.
+
+    References
+    ----------
+    Montgomery & Runger, *Applied Statistics and Probability for Engineers*, 12-4
+    (prediction interval of a new observation).
+    """
+    x = np.asarray(throttle, dtype=float)
+    v = np.asarray(airspeed_m_s, dtype=float)
+    top = airspeed_groups(v)[-1]
+    covariance = design_covariance(x[~top], v[~top], sigma_n)
+    rows = poly22_design(x[top], v[top])
+    variance = sigma_n**2 + np.einsum("ij,jk,ik->i", rows, covariance, rows)
+    return float(np.sqrt(np.mean(variance)))
+
+
+@dataclass(frozen=True)
+class PublishedGridUncertainty:
+    """Uncertainty of a model reconstructed from published values (no raw points)."""
+
+    covariance: NDArray[np.float64]  # 6x6 [N^2 in the coefficients' units]
+    residual_sd_n: float  # [N]
+    extrapolation_sd_n: float  # [N]
+
+    def to_yaml_dict(self) -> dict[str, object]:
+        """The propulsion file's per-engine keys (SPEC 4), plain floats."""
+        return {
+            "covariance": [[float(f"{c:.6g}") for c in row] for row in self.covariance],
+            "residual_sd_n": float(f"{self.residual_sd_n:.6g}"),
+            "extrapolation_sd_n": float(f"{self.extrapolation_sd_n:.6g}"),
+        }
+
+
+def published_grid_uncertainty(
+    accuracy_n: float = PAPER_ACCURACY_N, edge_error_n: float = 0.0
+) -> PublishedGridUncertainty:
+    """Covariance and extrapolation error of a poly22 fitted on the paper's test grid.
+
+    Parameters
+    ----------
+    accuracy_n : float
+        Measurement accuracy [N], taken as one standard deviation (paper: +-0.5 N).
+    edge_error_n : float
+        Largest published model error at the highest tested airspeed [N] (paper: 0.73 N
+        for EDF1, 0.50 N for EDF2 at 30 m/s); the extrapolation error is at least this.
+
+    Returns
+    -------
+    PublishedGridUncertainty
+        ``sigma^2 (X^T X)^-1`` on the 7 x 10 grid, ``residual_sd_n = sigma``, and
+        ``extrapolation_sd_n = max(expected leave-30-m/s-out error, edge_error_n)``.
+
+    References
+    ----------
+    Paper section 4 (test grid, +-0.5 N, errors at 30 m/s); Montgomery & Runger 12-2, 12-4.
+    """
+    x, v = paper_grid()
+    expected = expected_extrapolation_sd_n(x, v, accuracy_n)
+    return PublishedGridUncertainty(
+        covariance=design_covariance(x, v, accuracy_n),
+        residual_sd_n=float(accuracy_n),
+        extrapolation_sd_n=max(expected, float(edge_error_n)),
+    )
