@@ -109,29 +109,55 @@ def check(
 
 @app.command()
 def takeoff(case_file: Path | None = CaseOption, as_json: bool = JsonOption) -> None:
-    """Take-off ground roll at full throttle, from rest to lift-off speed."""
+    """Take-off at full throttle: ground roll, rotation, transition arc, climb to the obstacle."""
+    from tuflexperf.analysis.requirements import takeoff_verdicts
     from tuflexperf.analysis.takeoff import solve_takeoff
     from tuflexperf.io.case import load_case
 
     case = load_case(case_file)
     result = solve_takeoff(case)
     requirement = case.requirements.takeoff
-    met = requirement is None or result.ground_roll_m <= requirement.max_ground_roll_m
+    verdicts = takeoff_verdicts(requirement, result) if requirement is not None else []
+    met = all(v.passed for v in verdicts)
     if as_json:
         payload = result.to_dict()
         if requirement is not None:
             payload["max_ground_roll_m"] = requirement.max_ground_roll_m
+            payload["max_distance_to_obstacle_m"] = requirement.max_distance_to_obstacle_m
             payload["passed"] = met
+            payload["results"] = [v.to_dict() for v in verdicts]
         emit_json(payload)
     else:
-        typer.echo(f"{case.name}: take-off at full throttle")
-        typer.echo(f"  ground roll     {result.ground_roll_m:8.2f} m")
-        typer.echo(f"  lift-off speed  {result.liftoff_speed_m_s:8.2f} m/s")
-        typer.echo(f"  time            {result.time_s:8.2f} s")
-        if requirement is not None:
+        r = result
+        typer.echo(f"{case.name}: take-off at full throttle ({r.density_kg_m3:.4f} kg/m^3)")
+        typer.echo(
+            f"  lift-off speed     {r.liftoff_speed_m_s:8.2f} m/s  "
+            f"({r.liftoff_speed_eas_m_s:.2f} m/s EAS; stall {r.stall_speed_m_s:.2f} m/s)"
+        )
+        typer.echo(f"  acceleration       {r.acceleration_distance_m:8.2f} m")
+        typer.echo(
+            f"  rotation           {r.rotation_distance_m:8.2f} m  ({r.rotation_time_s:g} s)"
+        )
+        typer.echo(f"  ground roll        {r.ground_roll_m:8.2f} m  in {r.time_s:.2f} s")
+        typer.echo(
+            f"  transition arc     {r.transition_distance_m:8.2f} m  (R {r.transition_radius_m:.1f}"
+            f" m at {r.transition_speed_m_s:.2f} m/s, n {r.transition_load_factor:g})"
+        )
+        angle = r.climb_angle_deg
+        typer.echo(
+            f"  climb              {_fmt(r.climb_distance_m, 2):>8} m  (gradient "
+            f"{r.climb_gradient:.3f}" + ("" if angle is None else f", {angle:.1f} deg") + ")"
+        )
+        typer.echo(
+            f"  to {r.obstacle_height_m:g} m obstacle  {_fmt(r.distance_to_obstacle_m, 2):>8} m"
+            + ("  (cleared in the arc)" if r.obstacle_cleared_in_transition else "")
+        )
+        if r.obstacle_reason:
+            typer.echo(f"  {r.obstacle_reason}")
+        for v in verdicts:
             typer.echo(
-                f"  runway limit    {requirement.max_ground_roll_m:8.2f} m  "
-                f"{'PASS' if met else 'FAIL'}"
+                f"  {v.name:<30} {_fmt(v.value, 2)} <= {v.limit:g} m  "
+                f"{'PASS' if v.passed else 'FAIL'}"
             )
         _print_warnings(list(result.warnings))
     raise typer.Exit(0 if met else 1)

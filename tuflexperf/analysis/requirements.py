@@ -48,23 +48,76 @@ class Verdict:
         }
 
 
-def _takeoff(case: Case) -> Verdict:
+def _takeoff(case: Case) -> list[Verdict]:
     from tuflexperf.analysis.takeoff import solve_takeoff
 
-    limit = case.requirements.takeoff.max_ground_roll_m
+    requirement = case.requirements.takeoff
+    verdicts: list[Verdict] = []
     try:
         result = solve_takeoff(case)
     except NotAttainable as exc:
-        return Verdict("takeoff_ground_roll", None, limit, "m", "max", str(exc))
-    return Verdict(
-        "takeoff_ground_roll",
-        result.ground_roll_m,
-        limit,
-        "m",
-        "max",
-        f"lift-off at {result.liftoff_speed_m_s:.1f} m/s after {result.time_s:.1f} s",
-        {"warnings": list(result.warnings)},
+        if requirement.max_ground_roll_m is not None:
+            verdicts.append(
+                Verdict("takeoff_ground_roll", None, requirement.max_ground_roll_m, "m", "max",
+                        str(exc))
+            )
+        if requirement.max_distance_to_obstacle_m is not None:
+            verdicts.append(
+                Verdict("takeoff_distance_to_obstacle", None,
+                        requirement.max_distance_to_obstacle_m, "m", "max", str(exc))
+            )
+        return verdicts
+    return takeoff_verdicts(requirement, result)
+
+
+def takeoff_verdicts(requirement: Any, result: Any) -> list[Verdict]:
+    """Ground-roll and distance-to-obstacle verdicts of a solved take-off (either may be absent).
+
+    ``requirement`` is the case's ``TakeoffRequirement``, ``result`` a ``TakeoffResult``.
+    """
+    verdicts: list[Verdict] = []
+    warnings = {"warnings": list(result.warnings)}
+    rotation = (
+        f" (incl. {result.rotation_distance_m:.1f} m of rotation)"
+        if result.rotation_time_s > 0 else ""
     )
+    if requirement.max_ground_roll_m is not None:
+        verdicts.append(
+            Verdict(
+                "takeoff_ground_roll",
+                result.ground_roll_m,
+                requirement.max_ground_roll_m,
+                "m",
+                "max",
+                f"lift-off at {result.liftoff_speed_m_s:.1f} m/s "
+                f"({result.liftoff_speed_eas_m_s:.1f} m/s EAS) after {result.time_s:.1f} s"
+                + rotation,
+                warnings,
+            )
+        )
+    if requirement.max_distance_to_obstacle_m is not None:
+        if result.distance_to_obstacle_m is None:
+            reason = result.obstacle_reason
+        else:
+            reason = (
+                f"ground roll {result.ground_roll_m:.1f} m + airborne "
+                f"{result.airborne_distance_m:.1f} m to {result.obstacle_height_m:g} m "
+                + ("(cleared in the transition arc)" if result.obstacle_cleared_in_transition
+                   else f"(arc {result.transition_distance_m:.1f} m, climb "
+                        f"{result.climb_distance_m:.1f} m at {result.climb_angle_deg:.1f} deg)")
+            )
+        verdicts.append(
+            Verdict(
+                "takeoff_distance_to_obstacle",
+                result.distance_to_obstacle_m,
+                requirement.max_distance_to_obstacle_m,
+                "m",
+                "max",
+                reason,
+                warnings,
+            )
+        )
+    return verdicts
 
 
 def _trim(case: Case) -> Verdict:
@@ -148,4 +201,8 @@ CHECKS = {"takeoff": _takeoff, "envelope": _trim, "oei": _oei, "endurance": _end
 def check_case(case: Case) -> list[Verdict]:
     """Verdicts for every requirement block present in ``case``, in the file's order."""
     present = [name for name in CHECKS if getattr(case.requirements, name) is not None]
-    return [CHECKS[name](case) for name in present]
+    verdicts: list[Verdict] = []
+    for name in present:
+        result = CHECKS[name](case)
+        verdicts.extend(result if isinstance(result, list) else [result])
+    return verdicts

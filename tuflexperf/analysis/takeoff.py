@@ -1,22 +1,43 @@
-"""Take-off ground roll at full throttle, from rest to lift-off speed.
+"""Take-off at full throttle: ground roll, rotation, transition arc and climb to the obstacle.
 
 Equation of motion on the runway (Raymer, *Aircraft Design*, section 17.8.1):
-``m dV/dt = T(1, V) - D_g(V) - mu (W - L_g(V))``. With the airspeed as the
+``m dV/dt = T(1, V) - D_g(V) - mu max(W - L_g(V), 0)``. With the airspeed as the
 independent variable, ``ds/dV = m V / F(V)`` and ``dt/dV = m / F(V)``, integrated by
-CasADi's CVODES from 0 to the lift-off speed (no wind, level runway).
+CasADi's CVODES from 0 to the lift-off true airspeed (no wind, level runway). Rotation
+adds ``V_LO t_R`` (Raymer 17.8.2); the airborne part is an arc at ``1.15 V_stall`` and
+load factor ``n`` followed by the full-throttle straight climb (Anderson, *Aircraft
+Performance and Design*, 6.7.2).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from tuflexperf.errors import NotAttainable
+from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
-from tuflexperf.models.aircraft import Aircraft, ground_roll_net_force_n, liftoff_speed_m_s
-from tuflexperf.models.thrust import Propulsion, is_extrapolated, total_thrust_n
+from tuflexperf.models.aircraft import (
+    DEFAULT_OBSTACLE_HEIGHT_M,
+    Aircraft,
+    climb_gradient,
+    ground_roll_net_force_n,
+    liftoff_speed_eas_m_s,
+    liftoff_speed_m_s,
+    obstacle_distances_m,
+    stall_speed_eas_m_s,
+    stall_speed_m_s,
+    transition_radius_m,
+    transition_speed_m_s,
+)
+from tuflexperf.models.thrust import (
+    Propulsion,
+    is_extrapolated,
+    total_thrust_n,
+    unlapsed_density_warning,
+)
 
 HISTORY_POINTS = 101
 _CHECK_POINTS = 2001
@@ -33,7 +54,14 @@ def net_force_n(
 
 @dataclass(frozen=True)
 class TakeoffResult:
-    """Ground roll in m, lift-off speed in m/s, time in s, and the time history of the roll."""
+    """Take-off to the obstacle (SI units; airspeeds true unless named ``_eas``).
+
+    ``ground_roll_m`` and ``time_s`` run from rest to the end of rotation (the
+    acceleration plus ``V_LO t_R``); ``distance_to_obstacle_m`` adds the airborne
+    part (transition arc and straight climb) and is ``None`` when the obstacle is
+    never cleared (``obstacle_reason`` says why). The history covers the
+    acceleration only.
+    """
 
     ground_roll_m: float
     liftoff_speed_m_s: float
@@ -43,12 +71,56 @@ class TakeoffResult:
     history_distance_m: np.ndarray = field(repr=False)
     extrapolated: bool = False
     warnings: tuple[str, ...] = ()
+    liftoff_speed_eas_m_s: float = math.nan
+    stall_speed_m_s: float = math.nan
+    density_kg_m3: float = math.nan
+    acceleration_distance_m: float = math.nan
+    rotation_time_s: float = 0.0
+    rotation_distance_m: float = 0.0
+    transition_speed_m_s: float = math.nan
+    transition_load_factor: float = math.nan
+    transition_radius_m: float = math.nan
+    climb_gradient: float = math.nan
+    transition_distance_m: float = math.nan
+    transition_height_m: float = math.nan
+    climb_distance_m: float | None = None
+    airborne_distance_m: float | None = None
+    distance_to_obstacle_m: float | None = None
+    obstacle_height_m: float = DEFAULT_OBSTACLE_HEIGHT_M
+    obstacle_cleared_in_transition: bool = False
+    obstacle_reason: str = ""
+
+    @property
+    def climb_angle_deg(self) -> float | None:
+        """Full-throttle climb angle after the arc [deg]; ``None`` if it cannot climb."""
+        if not (math.isfinite(self.climb_gradient) and -1.0 <= self.climb_gradient <= 1.0):
+            return None
+        return math.degrees(math.asin(self.climb_gradient))
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "ground_roll_m": self.ground_roll_m,
             "liftoff_speed_m_s": self.liftoff_speed_m_s,
+            "liftoff_speed_eas_m_s": self.liftoff_speed_eas_m_s,
             "time_s": self.time_s,
+            "stall_speed_m_s": self.stall_speed_m_s,
+            "density_kg_m3": self.density_kg_m3,
+            "acceleration_distance_m": self.acceleration_distance_m,
+            "rotation_time_s": self.rotation_time_s,
+            "rotation_distance_m": self.rotation_distance_m,
+            "transition_speed_m_s": self.transition_speed_m_s,
+            "transition_load_factor": self.transition_load_factor,
+            "transition_radius_m": self.transition_radius_m,
+            "transition_distance_m": self.transition_distance_m,
+            "transition_height_m": self.transition_height_m,
+            "climb_gradient": self.climb_gradient,
+            "climb_angle_deg": self.climb_angle_deg,
+            "climb_distance_m": self.climb_distance_m,
+            "airborne_distance_m": self.airborne_distance_m,
+            "obstacle_height_m": self.obstacle_height_m,
+            "obstacle_cleared_in_transition": self.obstacle_cleared_in_transition,
+            "distance_to_obstacle_m": self.distance_to_obstacle_m,
+            "obstacle_reason": self.obstacle_reason,
             "extrapolated": self.extrapolated,
             "warnings": list(self.warnings),
         }
@@ -94,10 +166,38 @@ def _integrator_for(case: Case) -> Any:
     return _cache[key]
 
 
-def solve_takeoff(case: Case) -> TakeoffResult:
-    """Ground roll at full throttle for ``case``; raises :class:`NotAttainable` with the reason."""
+def obstacle_height_of(case: Case) -> float:
+    """The case's obstacle height [m] (requirements.takeoff.obstacle_height_m, default 15 m)."""
+    requirement = case.requirements.takeoff
+    if requirement is None or requirement.obstacle_height_m is None:
+        return DEFAULT_OBSTACLE_HEIGHT_M
+    return float(requirement.obstacle_height_m)
+
+
+def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> TakeoffResult:
+    """Take-off at full throttle for ``case``: ground roll, rotation, arc and climb to the obstacle.
+
+    Raises :class:`NotAttainable` with the reason when lift-off is never reached.
+    The lift-off speed is an EAS converted to true airspeed at the case's density
+    (SPEC 3); thrust is scaled by ``rho / rho_ref`` where the model has a reference
+    density.
+
+    References
+    ----------
+    Raymer, *Aircraft Design*, sections 17.8.1-17.8.3; Anderson, *Aircraft
+    Performance and Design*, section 6.7.
+    """
     aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
+    to = aircraft.takeoff
+    height = obstacle_height_of(case) if obstacle_height_m is None else float(obstacle_height_m)
     v_lo = float(liftoff_speed_m_s(aircraft, rho))
+    stall = float(stall_speed_m_s(aircraft, rho))
+    if v_lo < stall * (1.0 - 1e-12):
+        raise InputError(
+            f"{case.aircraft_path}: takeoff.liftoff_speed_m_s: lift-off speed "
+            f"{liftoff_speed_eas_m_s(aircraft):.2f} m/s EAS is below the stall speed "
+            f"{stall_speed_eas_m_s(aircraft):.2f} m/s EAS"
+        )
     speeds = np.linspace(0.0, v_lo, _CHECK_POINTS)
     force = np.asarray(net_force_n(aircraft, propulsion, speeds, rho), dtype=float)
     if force[0] <= 0.0:
@@ -123,21 +223,62 @@ def solve_takeoff(case: Case) -> TakeoffResult:
     distance = np.concatenate([[0.0], states[0, :]])
     time = np.concatenate([[0.0], states[1, :]])
     history_speed = np.linspace(0.0, v_lo, distance.size)
-    warnings: list[str] = []
-    extrapolated = is_extrapolated(propulsion, v_lo)
-    if extrapolated:
-        low, high = propulsion.tested_airspeed_m_s
-        warnings.append(
-            f"lift-off speed {v_lo:.1f} m/s is outside the thrust model's tested airspeed "
-            f"range {low:g}-{high:g} m/s (extrapolated)"
+    rotation_m = v_lo * to.rotation_time_s  # Raymer 17.8.2: rotation at the lift-off speed
+
+    # transition arc at 1.15 V_stall and n, then the full-throttle climb (Anderson 6.7.2)
+    v_tr = float(transition_speed_m_s(aircraft, rho))
+    radius = float(transition_radius_m(v_tr, to.transition_load_factor))
+    thrust_tr = total_thrust_n(propulsion, 1.0, v_tr, rho)
+    gradient = float(climb_gradient(aircraft, thrust_tr, v_tr, rho))
+    arc_m, climb_m, arc_top_m = (float(x) for x in obstacle_distances_m(radius, gradient, height))
+    cleared_in_arc = climb_m == 0.0
+    airborne: float | None = arc_m + climb_m
+    reason = ""
+    if not math.isfinite(airborne):
+        airborne = None
+        reason = (
+            f"the {height:g} m obstacle is never cleared: the arc tops out at {arc_top_m:.1f} m "
+            f"and the full-throttle climb gradient at {v_tr:.1f} m/s is {gradient:.3f} (no climb)"
         )
+    ground_roll = float(distance[-1]) + rotation_m
+
+    warnings: list[str] = []
+    low, high = propulsion.tested_airspeed_m_s
+    beyond = [v for v in (v_lo, v_tr) if is_extrapolated(propulsion, v)]
+    extrapolated = bool(beyond)
+    if extrapolated:
+        warnings.append(
+            f"take-off airspeed {max(beyond):.1f} m/s is outside the thrust model's tested "
+            f"airspeed range {low:g}-{high:g} m/s (extrapolated)"
+        )
+    density_note = unlapsed_density_warning(propulsion, rho)
+    if density_note:
+        warnings.append(density_note)
     return TakeoffResult(
-        ground_roll_m=float(distance[-1]),
+        ground_roll_m=ground_roll,
         liftoff_speed_m_s=v_lo,
-        time_s=float(time[-1]),
+        time_s=float(time[-1]) + to.rotation_time_s,
         history_time_s=time,
         history_airspeed_m_s=history_speed,
         history_distance_m=distance,
         extrapolated=extrapolated,
         warnings=tuple(warnings),
+        liftoff_speed_eas_m_s=float(liftoff_speed_eas_m_s(aircraft)),
+        stall_speed_m_s=stall,
+        density_kg_m3=rho,
+        acceleration_distance_m=float(distance[-1]),
+        rotation_time_s=to.rotation_time_s,
+        rotation_distance_m=rotation_m,
+        transition_speed_m_s=v_tr,
+        transition_load_factor=to.transition_load_factor,
+        transition_radius_m=radius,
+        climb_gradient=gradient,
+        transition_distance_m=arc_m,
+        transition_height_m=arc_top_m,
+        climb_distance_m=climb_m if math.isfinite(climb_m) else None,
+        airborne_distance_m=airborne,
+        distance_to_obstacle_m=None if airborne is None else ground_roll + airborne,
+        obstacle_height_m=height,
+        obstacle_cleared_in_transition=cleared_in_arc,
+        obstacle_reason=reason,
     )

@@ -12,8 +12,15 @@ from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.yamlio import StrictModel, load_model
-from tuflexperf.models.aircraft import Aircraft, TakeoffConfig
-from tuflexperf.models.atmosphere import isa_density_kg_m3
+from tuflexperf.models.aircraft import (
+    DEFAULT_LIFTOFF_SPEED_FACTOR,
+    DEFAULT_OBSTACLE_HEIGHT_M,
+    DEFAULT_TRANSITION_LOAD_FACTOR,
+    EAS_REFERENCE_DENSITY_KG_M3,
+    Aircraft,
+    TakeoffConfig,
+)
+from tuflexperf.models.atmosphere import G0_M_S2, isa_density_kg_m3
 from tuflexperf.models.thrust import POLY22_TERMS, Engine, Propulsion
 
 Positive = Annotated[float, Field(gt=0)]
@@ -25,7 +32,10 @@ Fraction = Annotated[float, Field(ge=0, le=1)]
 class TakeoffSchema(StrictModel):
     cl_ground: NonNegative
     rolling_friction: Annotated[float, Field(ge=0, le=1)] = 0.04
-    liftoff_speed_m_s: Positive | None = None
+    liftoff_speed_m_s: Positive | None = None  # EAS; replaces the factor
+    liftoff_speed_factor: Annotated[float, Field(ge=1, le=3)] = DEFAULT_LIFTOFF_SPEED_FACTOR
+    rotation_time_s: Annotated[float, Field(ge=0, le=30)] = 0.0
+    transition_load_factor: Annotated[float, Field(gt=1, le=5)] = DEFAULT_TRANSITION_LOAD_FACTOR
     cd0_ground: Positive | None = None
     k_ground: NonNegative | None = None
 
@@ -38,6 +48,22 @@ class AircraftSchema(StrictModel):
     k: Positive
     cl_max: Positive
     takeoff: TakeoffSchema
+
+    @model_validator(mode="after")
+    def _check(self) -> AircraftSchema:
+        # the stall EAS is the same at every density, so the check belongs to the file
+        liftoff = self.takeoff.liftoff_speed_m_s
+        if liftoff is not None:
+            stall = math.sqrt(
+                2.0 * self.mass_kg * G0_M_S2
+                / (EAS_REFERENCE_DENSITY_KG_M3 * self.wing_area_m2 * self.cl_max)
+            )
+            if liftoff < stall:
+                raise ValueError(
+                    f"takeoff.liftoff_speed_m_s: {liftoff:g} m/s (EAS) is below the stall speed "
+                    f"{stall:.2f} m/s EAS (mass_kg, wing_area_m2, cl_max); lift-off needs >= stall"
+                )
+        return self
 
 
 # --- propulsion -----------------------------------------------------------------------------
@@ -108,13 +134,24 @@ class AtmosphereSchema(StrictModel):
 
 
 class TakeoffRequirement(StrictModel):
-    max_ground_roll_m: Positive
+    max_ground_roll_m: Positive | None = None
+    max_distance_to_obstacle_m: Positive | None = None
+    obstacle_height_m: Positive = DEFAULT_OBSTACLE_HEIGHT_M  # FAR 23: 50 ft
+
+    @model_validator(mode="after")
+    def _check(self) -> TakeoffRequirement:
+        if self.max_ground_roll_m is None and self.max_distance_to_obstacle_m is None:
+            raise ValueError(
+                "give max_ground_roll_m and/or max_distance_to_obstacle_m (nothing to check)"
+            )
+        return self
 
 
 class EnvelopeRequirement(StrictModel):
     min_airspeed_m_s: Positive
     max_airspeed_m_s: Positive
     max_trim_throttle: Fraction = 1.0
+    stall_margin: Annotated[float, Field(ge=1, le=3)] = 1.0  # level flight needs V >= this x stall
 
     @model_validator(mode="after")
     def _check(self) -> EnvelopeRequirement:
@@ -190,6 +227,9 @@ def aircraft_from_schema(schema: AircraftSchema) -> Aircraft:
             liftoff_speed_m_s=to.liftoff_speed_m_s,
             cd0_ground=to.cd0_ground,
             k_ground=to.k_ground,
+            liftoff_speed_factor=to.liftoff_speed_factor,
+            rotation_time_s=to.rotation_time_s,
+            transition_load_factor=to.transition_load_factor,
         ),
     )
 

@@ -30,6 +30,15 @@ def fmin(a: Any, b: Any) -> Any:
     return np.minimum(a, b)
 
 
+def fmax(a: Any, b: Any) -> Any:
+    """Element-wise maximum for numpy or CasADi operands."""
+    if is_symbolic(a, b):
+        import casadi as ca
+
+        return ca.fmax(a, b)
+    return np.maximum(a, b)
+
+
 def sqrt(a: Any) -> Any:
     """Square root for numpy or CasADi operands."""
     if is_symbolic(a):

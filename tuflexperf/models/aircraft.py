@@ -1,28 +1,60 @@
-"""Aircraft aerodynamics: parabolic drag polar, level flight, stall and lift-off speed.
+"""Aircraft aerodynamics: drag polar, level flight, stall, lift-off, climb and the obstacle.
 
 Drag polar ``CD = cd0 + k CL^2`` (Anderson, *Aircraft Performance and Design*,
-eq. 2.47); level flight ``L = W`` (SPEC 3). Every function takes floats, numpy
-arrays or CasADi symbols.
+eq. 2.47); level flight ``L = W`` (SPEC 3). Airspeeds the pilot sets are
+equivalent airspeeds (EAS); physics uses true airspeed (TAS),
+``V = EAS sqrt(rho0 / rho)``. Every function takes floats, numpy arrays or CasADi
+symbols through one code path (``tuflexperf.models._math``).
+
+References
+----------
+Anderson, J. D., *Aircraft Performance and Design*, McGraw-Hill, 1999: ch. 5
+(steady flight, climb) and 6.7 (take-off). Raymer, D. P., *Aircraft Design: A
+Conceptual Approach*, AIAA, section 17.8 (take-off analysis).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
-from tuflexperf.models._math import sqrt
-from tuflexperf.models.atmosphere import G0_M_S2
+from tuflexperf.models._math import fmax, sqrt, where
+from tuflexperf.models.atmosphere import (
+    G0_M_S2,
+    GAS_CONSTANT_J_KG_K,
+    SEA_LEVEL_PRESSURE_PA,
+    SEA_LEVEL_TEMPERATURE_K,
+)
+
+DEFAULT_LIFTOFF_SPEED_FACTOR = 1.1
+DEFAULT_TRANSITION_LOAD_FACTOR = 1.19
+TRANSITION_SPEED_OVER_STALL = 1.15
+DEFAULT_OBSTACLE_HEIGHT_M = 15.0
+# rho0 of EAS: the ISA's own sea-level density (1.2250 kg/m^3 to 8 digits), so EAS = TAS there
+EAS_REFERENCE_DENSITY_KG_M3 = SEA_LEVEL_PRESSURE_PA / (
+    GAS_CONSTANT_J_KG_K * SEA_LEVEL_TEMPERATURE_K
+)
 
 
 @dataclass(frozen=True)
 class TakeoffConfig:
-    """Ground-roll configuration; ``None`` fields fall back to the clean polar."""
+    """Ground-roll and transition configuration; ``None`` fields fall back to the clean polar.
+
+    ``liftoff_speed_m_s`` is an equivalent airspeed [m/s]; when given it replaces
+    ``liftoff_speed_factor`` (x stall speed). ``rotation_time_s`` [s] is spent on
+    the ground at the lift-off speed (Raymer 17.8.2); ``transition_load_factor``
+    [-] is the arc's load factor after lift-off (Anderson 6.7.2).
+    """
 
     cl_ground: float
     rolling_friction: float = 0.04
     liftoff_speed_m_s: float | None = None
     cd0_ground: float | None = None
     k_ground: float | None = None
+    liftoff_speed_factor: float = DEFAULT_LIFTOFF_SPEED_FACTOR
+    rotation_time_s: float = 0.0
+    transition_load_factor: float = DEFAULT_TRANSITION_LOAD_FACTOR
 
 
 @dataclass(frozen=True)
@@ -44,42 +76,106 @@ class Aircraft:
 
 
 def dynamic_pressure_pa(density_kg_m3: Any, airspeed_m_s: Any) -> Any:
-    """``q = rho V^2 / 2`` in Pa."""
+    """``q = rho V^2 / 2`` [Pa] from density [kg/m^3] and true airspeed [m/s]."""
     return 0.5 * density_kg_m3 * airspeed_m_s * airspeed_m_s
 
 
 def polar_drag_coefficient(cl: Any, cd0: float, k: float) -> Any:
-    """Parabolic polar ``CD = cd0 + k CL^2``."""
+    """Parabolic polar ``CD = cd0 + k CL^2`` [-] (Anderson eq. 2.47)."""
     return cd0 + k * cl * cl
 
 
+def true_airspeed_m_s(equivalent_airspeed_m_s: Any, density_kg_m3: Any) -> Any:
+    """True airspeed [m/s] from an equivalent airspeed [m/s]: ``EAS sqrt(rho0 / rho)``.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, section 3.5 (equivalent airspeed),
+    with ``rho0 = 1.225 kg/m^3`` (ISA sea level).
+    """
+    return equivalent_airspeed_m_s * sqrt(EAS_REFERENCE_DENSITY_KG_M3 / density_kg_m3)
+
+
+def equivalent_airspeed_m_s(true_airspeed: Any, density_kg_m3: Any) -> Any:
+    """Equivalent airspeed [m/s] from a true airspeed [m/s]: ``V sqrt(rho / rho0)``.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, section 3.5.
+    """
+    return true_airspeed * sqrt(density_kg_m3 / EAS_REFERENCE_DENSITY_KG_M3)
+
+
 def level_flight_cl(aircraft: Aircraft, airspeed_m_s: Any, density_kg_m3: Any) -> Any:
-    """Lift coefficient for ``L = W`` at ``airspeed_m_s``."""
+    """Lift coefficient [-] for ``L = W`` at true airspeed [m/s] and density [kg/m^3]."""
     return aircraft.weight_n / (
         dynamic_pressure_pa(density_kg_m3, airspeed_m_s) * aircraft.wing_area_m2
     )
 
 
 def level_flight_drag_n(aircraft: Aircraft, airspeed_m_s: Any, density_kg_m3: Any) -> Any:
-    """Drag in N in steady level flight: ``q S cd0 + k W^2 / (q S)``."""
+    """Drag [N] in steady level flight: ``q S cd0 + k W^2 / (q S)`` (Anderson eq. 5.18)."""
     q_s = dynamic_pressure_pa(density_kg_m3, airspeed_m_s) * aircraft.wing_area_m2
     return q_s * aircraft.cd0 + aircraft.k * aircraft.weight_n**2 / q_s
 
 
 def stall_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
-    """1-g stall speed ``sqrt(2 W / (rho S CL_max))`` in m/s."""
+    """1-g stall speed, true airspeed [m/s]: ``sqrt(2 W / (rho S CL_max))``.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, eq. 5.67.
+    """
     return sqrt(2.0 * aircraft.weight_n / (density_kg_m3 * aircraft.wing_area_m2 * aircraft.cl_max))
 
 
+def stall_speed_eas_m_s(aircraft: Aircraft) -> float:
+    """1-g stall speed as an equivalent airspeed [m/s]; the same at every density.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, eq. 5.67 at ``rho0 = 1.225 kg/m^3``.
+    """
+    return math.sqrt(
+        2.0
+        * aircraft.weight_n
+        / (EAS_REFERENCE_DENSITY_KG_M3 * aircraft.wing_area_m2 * aircraft.cl_max)
+    )
+
+
+def liftoff_speed_eas_m_s(aircraft: Aircraft) -> float:
+    """Lift-off speed as an equivalent airspeed [m/s] (SPEC 3).
+
+    The file's ``liftoff_speed_m_s`` (an EAS) where given, else
+    ``liftoff_speed_factor`` (default 1.1) times the stall EAS.
+
+    References
+    ----------
+    Raymer, *Aircraft Design*, section 17.8.1 (lift-off at about 1.1 V_stall).
+    """
+    to = aircraft.takeoff
+    if to.liftoff_speed_m_s is not None:
+        return float(to.liftoff_speed_m_s)
+    return to.liftoff_speed_factor * stall_speed_eas_m_s(aircraft)
+
+
 def liftoff_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
-    """Lift-off speed in m/s: the given one, else 1.1 x stall speed (Raymer 17.8.2)."""
-    if aircraft.takeoff.liftoff_speed_m_s is not None:
-        return aircraft.takeoff.liftoff_speed_m_s
-    return 1.1 * stall_speed_m_s(aircraft, density_kg_m3)
+    """Lift-off true airspeed [m/s] at density [kg/m^3]: the lift-off EAS times ``sqrt(rho0/rho)``.
+
+    References
+    ----------
+    Raymer, *Aircraft Design*, section 17.8.1; SPEC 3 (airspeeds the pilot sets are EAS).
+    """
+    return true_airspeed_m_s(liftoff_speed_eas_m_s(aircraft), density_kg_m3)
 
 
 def minimum_drag_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
-    """Airspeed of least level-flight drag, ``sqrt(2W/(rho S) sqrt(k/cd0))`` (Anderson eq. 5.34)."""
+    """True airspeed [m/s] of least level-flight drag, ``sqrt(2W/(rho S) sqrt(k/cd0))``.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, eq. 5.34.
+    """
     return sqrt(
         2.0
         * aircraft.weight_n
@@ -89,16 +185,54 @@ def minimum_drag_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
 
 
 def minimum_drag_n(aircraft: Aircraft) -> float:
-    """Least level-flight drag ``2 W sqrt(cd0 k)`` in N (independent of density)."""
+    """Least level-flight drag ``2 W sqrt(cd0 k)`` [N] (independent of density).
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, eq. 5.30 (``(L/D)_max = 1 / (2 sqrt(cd0 k))``).
+    """
     return 2.0 * aircraft.weight_n * (aircraft.cd0 * aircraft.k) ** 0.5
+
+
+def climb_gradient(aircraft: Aircraft, thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any) -> Any:
+    """Steady climb gradient ``sin(gamma) = (T - D) / W`` [-], drag at ``L = W``.
+
+    Thrust [N], true airspeed [m/s], density [kg/m^3]. The small-angle assumption
+    (lift equal to weight) is the textbooks'; it overstates drag by under 1 % of
+    the induced part at gradients below 0.14.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, eqs. 5.77-5.79 (section 5.10).
+    """
+    return (thrust_n - level_flight_drag_n(aircraft, airspeed_m_s, density_kg_m3)) / (
+        aircraft.weight_n
+    )
+
+
+def climb_rate_m_s(aircraft: Aircraft, thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any) -> Any:
+    """Steady rate of climb ``R/C = V (T - D) / W`` [m/s] (Anderson eq. 5.80), drag at ``L = W``.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, eq. 5.80.
+    """
+    return airspeed_m_s * climb_gradient(aircraft, thrust_n, airspeed_m_s, density_kg_m3)
 
 
 def ground_roll_net_force_n(
     aircraft: Aircraft, thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any
 ) -> Any:
-    """Accelerating force on the ground roll, ``T - D - mu (W - L)`` in N (Raymer eq. 17.97).
+    """Accelerating force on the ground roll, ``T - D - mu max(W - L, 0)`` [N].
 
-    Uses the ground configuration's ``cl_ground`` and, where given, ``cd0_ground``/``k_ground``.
+    Thrust [N], true airspeed [m/s], density [kg/m^3]. Uses the ground
+    configuration's ``cl_ground`` and, where given, ``cd0_ground``/``k_ground``.
+    Friction acts on the wheel load ``max(W - L, 0)``: with more lift than weight
+    the runway carries nothing, it never pushes (SPEC 3).
+
+    References
+    ----------
+    Raymer, *Aircraft Design*, eq. 17.97; Anderson, *Aircraft Performance and Design*, eq. 6.77.
     """
     to = aircraft.takeoff
     cd0 = aircraft.cd0 if to.cd0_ground is None else to.cd0_ground
@@ -106,4 +240,65 @@ def ground_roll_net_force_n(
     q_s = dynamic_pressure_pa(density_kg_m3, airspeed_m_s) * aircraft.wing_area_m2
     lift = q_s * to.cl_ground
     drag = q_s * polar_drag_coefficient(to.cl_ground, cd0, k)
-    return thrust_n - drag - to.rolling_friction * (aircraft.weight_n - lift)
+    return thrust_n - drag - to.rolling_friction * fmax(aircraft.weight_n - lift, 0.0)
+
+
+def transition_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
+    """Mean true airspeed [m/s] of the transition arc after lift-off, ``1.15 V_stall``.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, section 6.7.2 (from 1.1 V_stall at
+    lift-off to 1.2 V_stall at the obstacle); Raymer, *Aircraft Design*, section 17.8.3.
+    """
+    return TRANSITION_SPEED_OVER_STALL * stall_speed_m_s(aircraft, density_kg_m3)
+
+
+def transition_radius_m(airspeed_m_s: Any, load_factor: Any) -> Any:
+    """Radius [m] of the pull-up arc at true airspeed [m/s] and load factor [-]: ``V^2/(g (n-1))``.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, eq. 6.41 (pull-up) and 6.98.
+    """
+    return airspeed_m_s * airspeed_m_s / (G0_M_S2 * (load_factor - 1.0))
+
+
+def obstacle_distances_m(
+    radius_m: Any, climb_gradient_: Any, obstacle_height_m: Any
+) -> tuple[Any, Any, Any]:
+    """Horizontal distances [m] from lift-off to an obstacle: (arc, straight climb, arc top [m]).
+
+    The arc of ``radius_m`` [m] turns the path up to the climb angle ``gamma`` with
+    ``sin(gamma) = climb_gradient_`` [-]; it reaches ``h_TR = R (1 - cos gamma)``.
+    If the obstacle ``h`` [m] is cleared during the arc (``h_TR >= h``) the airborne
+    distance is ``R sin(acos(1 - h/R)) = sqrt(h (2R - h))`` and the climb part is 0;
+    otherwise the arc covers ``R sin(gamma)`` and the straight climb
+    ``(h - h_TR) / tan(gamma)``. With no positive climb gradient an obstacle
+    above the arc is never cleared: the climb part is ``inf``.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, eqs. 6.99-6.100 (section 6.7.2);
+    Raymer, *Aircraft Design*, eqs. 17.108-17.111.
+    """
+    g = climb_gradient_
+    positive = g > 0.0
+    sin_g = where(positive, g, 0.0)
+    cos_g = sqrt(1.0 - _at_most_one(sin_g * sin_g))
+    arc_height = radius_m * (1.0 - cos_g)
+    cleared_in_arc = arc_height >= obstacle_height_m
+    within = sqrt(fmax(obstacle_height_m * (2.0 * radius_m - obstacle_height_m), 0.0))
+    safe_sin = where(positive, sin_g, 1.0)
+    climb = where(
+        positive, (obstacle_height_m - arc_height) * cos_g / safe_sin, math.inf
+    )
+    arc = where(cleared_in_arc, within, radius_m * sin_g)
+    climb = where(cleared_in_arc, 0.0, climb)
+    # where the obstacle is cleared in the arc, the arc is flown only up to its height
+    return arc, climb, where(cleared_in_arc, obstacle_height_m, arc_height)
+
+
+def _at_most_one(value: Any) -> Any:
+    """``min(value, 1)`` element-wise: keeps ``sqrt(1 - s^2)`` real when rounding exceeds 1."""
+    return where(value < 1.0, value, 1.0)

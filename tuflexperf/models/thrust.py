@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from tuflexperf.models._math import fmin, sqrt, where
+from tuflexperf.models.atmosphere import SEA_LEVEL_DENSITY_KG_M3
 
 POLY22_TERMS: tuple[str, ...] = ("p00", "p10", "p01", "p20", "p11", "p02")
 DeadEngineMode = Literal["windmilling", "zero"]
@@ -71,6 +72,30 @@ def density_ratio(propulsion: Propulsion, density_kg_m3: Any) -> Any:
     if propulsion.reference_density_kg_m3 is None:
         return 1.0
     return density_kg_m3 / propulsion.reference_density_kg_m3
+
+
+def unlapsed_density_warning(propulsion: Propulsion, density_kg_m3: float) -> str | None:
+    """A warning when a model without reference density is used away from ISA sea level.
+
+    Thrust scales with ``rho / rho_ref`` only where the propulsion file gives the
+    test day's ``reference_density_kg_m3`` (SPEC 3); without it thrust is used as
+    measured, which is only right near the density it was measured at. ISA sea
+    level (1.225 kg/m^3) is taken as that density; beyond 0.5 % off it, say so.
+
+    References
+    ----------
+    Raymer, *Aircraft Design*, section 13.3 (installed thrust varies with density ratio).
+    """
+    if propulsion.reference_density_kg_m3 is not None:
+        return None
+    change = density_kg_m3 / SEA_LEVEL_DENSITY_KG_M3 - 1.0
+    if abs(change) <= 0.005:
+        return None
+    return (
+        f"propulsion model {propulsion.name!r} gives no reference_density_kg_m3: thrust is used "
+        f"as measured at {density_kg_m3:.3f} kg/m^3 ({100 * change:+.0f} % vs ISA sea level), "
+        "not scaled with density"
+    )
 
 
 def engine_thrust_n(
