@@ -15,8 +15,20 @@ Ground truth (written to ``truth.yaml``):
   30 m/s: the fairing and rods of the paper's Fig. 5/6 rig, estimated);
 * throttle-to-force dead time 0.05 s (published, section 4) and a first-order
   spool-up lag of 0.08 s (estimated: "responds nearly instantaneous");
-* battery sag: effective throttle falls linearly by 0.5 % over a run (estimated;
-  the paper saw thrust change with battery state).
+* pack voltage: thrust ``T = T_ref(x, V) (U / U_ref)^2`` (SPEC 3's voltage law, exponent 2:
+  rpm ~ duty x voltage, thrust ~ rpm^2) with ``U`` the loaded voltage of the pack feeding
+  the fan (the paper saw thrust change with the battery). Each fan runs its step runs on
+  one pair of fresh 12S 5 Ah packs in parallel (as in flight) from 0 to 27.5 m/s, and
+  the 30 m/s run on a fresh pair ("the battery needed to be changed due to low voltage",
+  paper section 4); open-circuit voltage per cell ``4.05 - 0.06 q + 0.12 exp(-3 q) -
+  0.02 q / (5.25 - q)`` (q Ah drawn per pack, as scripts/generate_discharge.py), 40 mOhm
+  per pack (20 mOhm for the pair);
+* electrical power consistent with the thrust by momentum theory:
+  ``P_el = T (V + v_e) / 2 / eta + P_idle`` with ``T = rho A_jet v_e (v_e - V)``,
+  ``A_jet`` = 0.0050 m^2 (derived from Table 1: 41-59 N at 82-98 m/s exit velocity),
+  ``eta`` = 0.70 (Table 1's 70-71 % "efficiency" is exactly ``T v_e / 2 / P_el`` of its
+  own figures), ``P_idle`` 0.25 A at the pack (ESC idle); the step runs log ``voltage_v``
+  and ``current_a = P_el / U``.
 
 What a real rig adds (all estimated, to exercise the reduction):
 
@@ -65,10 +77,20 @@ TUNNEL_AREA_M2 = 0.16  # 400 mm x 400 mm open jet (paper 2.1)
 STRUCTURE_CDA_M2 = 0.0055
 DELAY_S = 0.05
 SPOOL_LAG_S = 0.08
-BATTERY_SAG = 0.005
+REFERENCE_VOLTAGE_V = 47.5  # U_ref of the thrust truth: mid of the loaded full-throttle voltages
+VOLTAGE_EXPONENT = 2.0
+CELLS = 12
+PACKS_IN_PARALLEL = 2
+PACK_RESISTANCE_OHM = 0.040
+JET_AREA_M2 = 0.0050
+FAN_EFFICIENCY = 0.70
+IDLE_CURRENT_A = 0.25
+ELECTRICAL_NOISE = {"voltage_v": 0.02, "current_a": 0.2}
 AIRSPEEDS_M_S = (0.0, 15.0, 20.0, 22.5, 25.0, 27.5, 30.0)
 SWEEP_AIRSPEEDS_M_S = (0.0, 30.0)
 STEP_S = 4.0
+PACK_CHANGE_AIRSPEED_M_S = 30.0
+SWEEP_CHARGE_AH = 0.5  # the sweeps run on a pair of packs 0.5 Ah into their charge
 # data/tuflex/propulsion.yaml as shipped when the campaign was generated, frozen here so
 # the campaign does not change when that reconstruction is re-calibrated.
 BASE_COEFFICIENTS = {
@@ -98,7 +120,14 @@ PERTURBATION = {
     "EDF2": {"p10": -0.02, "p20": +0.004, "p01": -0.03, "p11": +0.015, "p02": -0.05},
 }
 MAT_HEADER = "MATLAB 5.0 MAT-file, written by tuflexperf scripts/generate_campaign.py"
-RESOLUTION = {"time_s": 1e-3, "force_n": 0.01, "airspeed_m_s": 0.01, "throttle": 1e-3}
+RESOLUTION = {
+    "time_s": 1e-3,
+    "force_n": 0.01,
+    "airspeed_m_s": 0.01,
+    "throttle": 1e-3,
+    "voltage_v": 0.01,
+    "current_a": 0.1,
+}
 
 
 def truth_coefficients() -> dict[str, dict[str, float]]:
@@ -126,24 +155,66 @@ def tunnel_airspeed(rng: np.random.Generator, nominal: np.ndarray | float, t: np
     return true, measured
 
 
+def open_circuit_voltage_v(charge_ah: np.ndarray | float) -> np.ndarray:
+    """Open-circuit voltage of the packs (V) after ``charge_ah`` drawn from each pack."""
+    q = np.asarray(charge_ah, dtype=float)
+    cell = 4.05 - 0.06 * q + 0.12 * np.exp(-3.0 * q) - 0.02 * q / (5.25 - q)
+    return CELLS * cell
+
+
+def electrical_power_w(thrust_n: np.ndarray, airspeed: np.ndarray, volts: np.ndarray) -> np.ndarray:
+    """Momentum-theory power of the thrust over the fan's efficiency, plus the ESC's idle draw."""
+    t = np.maximum(thrust_n, 0.0)
+    v_exit = 0.5 * (airspeed + np.sqrt(airspeed**2 + 4 * t / (AIR_DENSITY_KG_M3 * JET_AREA_M2)))
+    return t * (airspeed + v_exit) / 2.0 / FAN_EFFICIENCY + IDLE_CURRENT_A * volts
+
+
+def powertrain(
+    t: np.ndarray, lagged: np.ndarray, airspeed: np.ndarray, coefficients: dict[str, float],
+    start_charge_ah: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Thrust (N), pack voltage (V) and current (A) per sample, and the charge at the end.
+
+    The pack's loaded voltage sets the thrust (``(U/U_ref)^2``), the thrust the power and
+    the power the current: a fixed point, converged in a few passes.
+    """
+    dt = 1.0 / SAMPLE_RATE_HZ
+    thrust_ref = poly22(lagged, airspeed, coefficients)
+    resistance = PACK_RESISTANCE_OHM / PACKS_IN_PARALLEL
+    charge = np.full(t.size, start_charge_ah)
+    volts = open_circuit_voltage_v(charge)
+    for _ in range(6):
+        thrust = thrust_ref * (volts / REFERENCE_VOLTAGE_V) ** VOLTAGE_EXPONENT
+        power = electrical_power_w(thrust, airspeed, volts)
+        ocv = open_circuit_voltage_v(charge)
+        # terminal voltage at constant power: U = (E + sqrt(E^2 - 4 R P)) / 2
+        volts = 0.5 * (ocv + np.sqrt(ocv**2 - 4.0 * resistance * power))
+        amps = power / volts
+        charge = start_charge_ah + np.cumsum(amps) * dt / 3600.0 / PACKS_IN_PARALLEL
+    return thrust, volts, amps, float(charge[-1])
+
+
 def rig_response(
     rng: np.random.Generator,
     t: np.ndarray,
     throttle_cmd: np.ndarray,
     true_airspeed: np.ndarray,
     coefficients: dict[str, float],
-) -> np.ndarray:
-    """Measured force: delayed, lagged, sagging thrust minus structure drag, plus rig noise."""
+    start_charge_ah: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Measured force (thrust minus structure drag, plus rig noise), voltage, current, charge."""
     dt = 1.0 / SAMPLE_RATE_HZ
     delayed = np.interp(t - DELAY_S, t, throttle_cmd, left=throttle_cmd[0])
     alpha = np.exp(-dt / SPOOL_LAG_S)
     lagged = lfilter([1 - alpha], [1, -alpha], delayed, zi=[alpha * delayed[0]])[0]
-    effective = lagged * (1.0 - BATTERY_SAG * (t - t[0]) / (t[-1] - t[0]))
-    force = poly22(effective, true_airspeed, coefficients) - structure_drag_n(true_airspeed)
+    thrust, volts, amps, end_charge = powertrain(
+        t, lagged, true_airspeed, coefficients, start_charge_ah
+    )
+    force = thrust - structure_drag_n(true_airspeed)
     tone_hz = 50.0 + 130.0 * lagged
     phase = 2 * np.pi * np.cumsum(tone_hz) * dt
     noise = rng.normal(0.0, 1.0, t.size) * (0.12 + 0.9 * lagged) + 0.6 * lagged * np.sin(phase)
-    return force + noise + spikes(rng, t.size)
+    return force + noise + spikes(rng, t.size), volts, amps, end_charge
 
 
 def spikes(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -174,16 +245,33 @@ def quantise(columns: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     }
 
 
-def step_run(rng: np.random.Generator, airspeed: float, coefficients: dict[str, float]):
-    """Throttle 0 -> 100 % then down in 10 % steps to 10 %, then 0 (paper section 3)."""
+def step_run(
+    rng: np.random.Generator, airspeed: float, coefficients: dict[str, float], charge_ah: float
+):
+    """Throttle 0 -> 100 % then down in 10 % steps to 10 %, then 0 (paper section 3).
+
+    Returns the columns and the charge drawn from each pack by the end of the run.
+    """
     levels = [0.0, *np.round(np.arange(1.0, 0.05, -0.1), 1), 0.0]
     durations = [1.5, *(STEP_S + rng.uniform(-0.4, 0.4, len(levels) - 2)), 2.0]
     edges = np.concatenate(([0.0], np.cumsum(durations)))
     t = np.arange(0.0, edges[-1], 1.0 / SAMPLE_RATE_HZ)
     throttle = np.asarray(levels)[np.searchsorted(edges, t, side="right") - 1]
     true_v, measured_v = tunnel_airspeed(rng, airspeed, t)
-    force = rig_response(rng, t, throttle, true_v, coefficients)
-    return {"time_s": t, "force_n": force, "airspeed_m_s": measured_v, "throttle": throttle}
+    force, volts, amps, charge_ah = rig_response(
+        rng, t, throttle, true_v, coefficients, charge_ah
+    )
+    volts = volts + rng.normal(0.0, ELECTRICAL_NOISE["voltage_v"], t.size)
+    amps = amps + rng.normal(0.0, ELECTRICAL_NOISE["current_a"], t.size)
+    columns = {
+        "time_s": t,
+        "force_n": force,
+        "airspeed_m_s": measured_v,
+        "throttle": throttle,
+        "voltage_v": volts,
+        "current_a": amps,
+    }
+    return columns, charge_ah
 
 
 def sweep_run(rng: np.random.Generator, airspeed: float, coefficients: dict[str, float]):
@@ -196,7 +284,7 @@ def sweep_run(rng: np.random.Generator, airspeed: float, coefficients: dict[str,
     throttle = np.where(t < 1.0, 0.0, 0.5 + 0.25 * np.sin(phase))
     throttle[t > 1.0 + lead + sweep] = 0.5
     true_v, measured_v = tunnel_airspeed(rng, airspeed, t)
-    force = rig_response(rng, t, throttle, true_v, coefficients)
+    force = rig_response(rng, t, throttle, true_v, coefficients, SWEEP_CHARGE_AH)[0]
     return {"time_s": t, "force_n": force, "airspeed_m_s": measured_v, "throttle": throttle}
 
 
@@ -222,7 +310,10 @@ def write_run(path: Path, columns: dict[str, np.ndarray]) -> None:
         return
     text = io.StringIO()
     text.write(",".join(columns) + "\n")
-    digits = {"time_s": 3, "force_n": 2, "airspeed_m_s": 2, "throttle": 3}
+    digits = {
+        "time_s": 3, "force_n": 2, "airspeed_m_s": 2, "throttle": 3, "voltage_v": 2,
+        "current_a": 1,
+    }
     matrix = np.column_stack(list(columns.values()))
     formats = [f"%.{digits[name]}f" for name in columns]
     np.savetxt(text, matrix, fmt=formats, delimiter=",")
@@ -243,11 +334,16 @@ def main() -> None:
         counter += 1
         return np.random.default_rng([SEED, counter])
 
+    charge_log: dict[str, list[float]] = {}
     for engine, ext in (("EDF1", ".csv.gz"), ("EDF2", ".mat")):
+        charge = 0.0
         for v in AIRSPEEDS_M_S:
             rng = rng_for()
             name = f"runs/{engine.lower()}_v{v:04.1f}".replace(".", "p") + ext
-            columns = step_run(rng, v, truth[engine])
+            if v == PACK_CHANGE_AIRSPEED_M_S:
+                charge = 0.0  # the paper's pack change before the last run
+            charge_log.setdefault(engine, []).append(round(charge, 4))
+            columns, charge = step_run(rng, v, truth[engine], charge)
             add_nans(rng, columns, int(rng.integers(0, 6)))
             write_run(OUT / name, columns)
             runs.append({"file": name, "engine": engine, "kind": "throttle_steps"})
@@ -280,7 +376,14 @@ def main() -> None:
         "sample_rate_hz": SAMPLE_RATE_HZ,
         "delay_s": DELAY_S,
         "spool_lag_s": SPOOL_LAG_S,
-        "battery_sag": BATTERY_SAG,
+        "reference_voltage_v": REFERENCE_VOLTAGE_V,
+        "voltage_exponent": VOLTAGE_EXPONENT,
+        "packs_in_parallel": PACKS_IN_PARALLEL,
+        "pack_resistance_ohm": PACK_RESISTANCE_OHM,
+        "jet_area_m2": JET_AREA_M2,
+        "fan_efficiency": FAN_EFFICIENCY,
+        "idle_current_a": IDLE_CURRENT_A,
+        "start_charge_ah_per_pack": charge_log,
         "air_density_kg_m3": AIR_DENSITY_KG_M3,
         "structure_cda_m2": STRUCTURE_CDA_M2,
         "perturbation": PERTURBATION,

@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.powertrain import PowerAgreement, agreement_at
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.battery import Battery, load_battery
 from tuflexperf.io.case import Case
@@ -298,6 +299,8 @@ class EnduranceResult:
     launch: LaunchBudget
     characterisation: BatteryCharacterisation = field(repr=False)
     warnings: tuple[str, ...] = ()
+    # thrust against electrical power at the cruise point, per engine (SPEC 3)
+    power_agreement: tuple[PowerAgreement, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         ch = self.characterisation
@@ -334,6 +337,7 @@ class EnduranceResult:
                 "rms_log_error": ch.power.rms_log_error,
                 "points": list(ch.power.points),
             },
+            "power_agreement": [a.to_dict() for a in self.power_agreement],
             "warnings": list(self.warnings),
         }
 
@@ -548,6 +552,11 @@ class EnduranceModel:
         if self.launch.charge_ah >= min(qn, self.reserve_ah):
             warnings.append("the launch alone uses the charge available before the reserve")
         cruise_min = tn / 60.0
+        agreement = agreement_at(
+            f"endurance at throttle {throttle:.2f}", self.case.propulsion, throttle, speed,
+            self.case.density_kg_m3, power_w,
+        )
+        warnings.extend(w for a in agreement for w in a.warnings)
         return EnduranceResult(
             throttle=throttle,
             airspeed_m_s=speed,
@@ -569,6 +578,7 @@ class EnduranceModel:
             launch=self.launch,
             characterisation=self.ch,
             warnings=tuple(warnings),
+            power_agreement=agreement,
         )
 
     # -- best endurance and best range (IPOPT) ----------------------------------------------

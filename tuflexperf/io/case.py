@@ -76,6 +76,16 @@ class Poly22Schema(StrictModel):
     p02: float
 
 
+class PowerSurfaceSchema(StrictModel):
+    """Electrical power of one fan, W, vs throttle fraction and airspeed (SPEC 4)."""
+
+    model: Literal["poly22"]
+    coefficients: Poly22Schema
+    r2: float | None = None
+    rmse_w: NonNegative | None = None
+    n_points: Annotated[int, Field(ge=0)] | None = None
+
+
 class EngineSchema(StrictModel):
     name: Annotated[str, Field(min_length=1)]
     coefficients: Poly22Schema
@@ -104,6 +114,8 @@ class EngineSchema(StrictModel):
         if float(np.linalg.eigvalsh(array).min()) < -1e-9 * scale:
             raise ValueError("covariance: must be positive semi-definite")
         return self
+    windmilling_drag_coefficient: NonNegative | None = None
+    power: PowerSurfaceSchema | None = None
 
 
 class PropulsionSchema(StrictModel):
@@ -112,6 +124,9 @@ class PropulsionSchema(StrictModel):
     tested_airspeed_m_s: Annotated[list[float], Field(min_length=2, max_length=2)]
     delay_s: NonNegative = 0.0
     reference_density_kg_m3: Positive | None = None
+    reference_voltage_v: Positive | None = None
+    voltage_exponent: float = 2.0
+    fan_area_m2: Positive | None = None
     throttle_unit: Literal["fraction", "percent"] = "fraction"
     engines: Annotated[list[EngineSchema], Field(min_length=1)]
     source: dict[str, Any] | None = None  # free-form provenance written by `fit`
@@ -124,6 +139,11 @@ class PropulsionSchema(StrictModel):
         names = [engine.name for engine in self.engines]
         if len(set(names)) != len(names):
             raise ValueError(f"engines: duplicate engine names {names}")
+        for engine in self.engines:
+            if engine.windmilling_drag_coefficient is not None and self.fan_area_m2 is None:
+                raise ValueError(
+                    f"engines: {engine.name}: windmilling_drag_coefficient needs fan_area_m2"
+                )
         return self
 
 
@@ -248,6 +268,12 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
             ),
             residual_sd_n=e.residual_sd_n,
             extrapolation_sd_n=e.extrapolation_sd_n,
+            windmilling_drag_coefficient=e.windmilling_drag_coefficient,
+            power_coefficients=(
+                {term: getattr(e.power.coefficients, term) for term in POLY22_TERMS}
+                if e.power is not None
+                else None
+            ),
         )
         for e in schema.engines
     )
@@ -259,6 +285,9 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
         delay_s=schema.delay_s,
         reference_density_kg_m3=schema.reference_density_kg_m3,
         metadata={"source": schema.source} if schema.source else {},
+        fan_area_m2=schema.fan_area_m2,
+        reference_voltage_v=schema.reference_voltage_v,
+        voltage_exponent=schema.voltage_exponent,
     )
 
 

@@ -160,7 +160,11 @@ def _repair_nans(path: Path, name: str, time_s: np.ndarray, values: np.ndarray) 
     return count
 
 
-def read_run(path: Path | str, required: Sequence[str] = RUN_COLUMNS) -> Run:
+def read_run(
+    path: Path | str,
+    required: Sequence[str] = RUN_COLUMNS,
+    optional: Sequence[str] = ("voltage_v", "current_a"),
+) -> Run:
     """Read one run file (``.csv``, ``.csv.gz`` or ``.mat``) and validate its columns.
 
     Parameters
@@ -169,6 +173,9 @@ def read_run(path: Path | str, required: Sequence[str] = RUN_COLUMNS) -> Run:
         The run file.
     required : sequence of str
         Column names that must be present (SPEC 4); ``time_s`` is always needed.
+    optional : sequence of str
+        Columns read and repaired like the required ones when the file has them (SPEC 4:
+        any run may carry ``voltage_v`` and ``current_a``).
 
     Returns
     -------
@@ -190,6 +197,7 @@ def read_run(path: Path | str, required: Sequence[str] = RUN_COLUMNS) -> Run:
         raise InputError(f"{path}: unsupported run file type {suffix!r} (use .csv, .csv.gz, .mat)")
 
     names = ["time_s", *[c for c in required if c != "time_s"]]
+    names += [c for c in optional if c in raw and c not in names]
     arrays = {
         name: np.array(_numeric_column(path, raw, bad_cells, name), dtype=float) for name in names
     }

@@ -48,6 +48,10 @@ class Engine:
     covariance: tuple[tuple[float, ...], ...] | None = None
     residual_sd_n: float | None = None
     extrapolation_sd_n: float | None = None
+    # C_d,wm on the propulsion's fan_area_m2 (SPEC 3); None: min(T(0, V), 0) instead
+    windmilling_drag_coefficient: float | None = None
+    # poly22 electrical power surface in W (throttle fraction, airspeed m/s); None if unknown
+    power_coefficients: Mapping[str, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -65,6 +69,9 @@ class Propulsion:
     delay_s: float = 0.0
     reference_density_kg_m3: float | None = None
     metadata: Mapping[str, Any] = field(default_factory=dict)
+    fan_area_m2: float | None = None  # momentum theory and windmilling drag (SPEC 3)
+    reference_voltage_v: float | None = None  # the tests' pack voltage (SPEC 3)
+    voltage_exponent: float = 2.0  # thrust ~ (U / U_ref)^n
 
 
 def density_ratio(propulsion: Propulsion, density_kg_m3: Any) -> Any:
@@ -110,8 +117,25 @@ def engine_thrust_n(
     )
 
 
-def windmilling_thrust_n(engine: Engine, airspeed_m_s: Any, density_scale: Any = 1.0) -> Any:
-    """A dead engine's contribution: ``min(T(0, V), 0)``, drag but never thrust (SPEC 3)."""
+def windmilling_thrust_n(
+    engine: Engine,
+    airspeed_m_s: Any,
+    density_scale: Any = 1.0,
+    density_kg_m3: Any = None,
+    fan_area_m2: float | None = None,
+) -> Any:
+    """A dead engine's contribution in N, a drag and never a thrust (SPEC 3).
+
+    With the engine's ``windmilling_drag_coefficient`` and the propulsion's ``fan_area_m2``
+    (and the density): ``-Cd_wm q A_fan``; otherwise ``min(T(0, V), 0)`` of its own model.
+
+    References
+    ----------
+    SPEC 3 (one engine inoperative, windmilling drag); Hoerner, *Fluid-Dynamic Drag*, ch. 3.
+    """
+    cd = engine.windmilling_drag_coefficient
+    if cd is not None and fan_area_m2 is not None and density_kg_m3 is not None:
+        return -abs(cd) * 0.5 * density_kg_m3 * airspeed_m_s * airspeed_m_s * fan_area_m2
     return fmin(engine_thrust_n(engine, 0.0, airspeed_m_s, density_scale), 0.0)
 
 
@@ -126,7 +150,7 @@ def total_thrust_n(
     """Sum of all engines' thrust in N, optionally with engine ``dead_engine`` inoperative.
 
     ``throttle`` is one value for all engines or a sequence with one per engine.
-    A ``windmilling`` dead engine adds its own ``min(T(0, V), 0)``; a ``zero`` one adds nothing.
+    A ``windmilling`` dead engine adds :func:`windmilling_thrust_n`; a ``zero`` one adds nothing.
     """
     engines = propulsion.engines
     throttles = list(throttle) if isinstance(throttle, (list, tuple)) else [throttle] * len(engines)
@@ -137,7 +161,9 @@ def total_thrust_n(
     for index, (engine, x) in enumerate(zip(engines, throttles, strict=True)):
         if index == dead_engine:
             if dead_engine_mode == "windmilling":
-                total = total + windmilling_thrust_n(engine, airspeed_m_s, scale)
+                total = total + windmilling_thrust_n(
+                    engine, airspeed_m_s, scale, density_kg_m3, propulsion.fan_area_m2
+                )
         else:
             total = total + engine_thrust_n(engine, x, airspeed_m_s, scale)
     return total

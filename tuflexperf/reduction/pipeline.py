@@ -13,7 +13,11 @@ Campaign path, in the paper's order:
    applied to the airspeed only when asked;
 6. poly22 per engine by ordinary least squares (:mod:`.poly22fit`), and each run's
    validation error: the model (minus structure drag) against the measured force
-   over the run's steady segments, as mean negative / mean positive error.
+   over the run's steady segments, as mean negative / mean positive error;
+7. where the step runs log ``voltage_v`` and ``current_a`` (:mod:`.power`): the voltage
+   exponent (thrust brought to the reference voltage before step 6 when the runs determine
+   it), the electrical power surface per engine, and the windmilling drag coefficient
+   from the zero-throttle points.
 
 Outputs are rendered in memory, the propulsion file is validated against the
 schema ``check`` uses, and only then are files written, atomically.
@@ -50,6 +54,13 @@ from tuflexperf.reduction.drag import DragModel, fit_structure_drag
 from tuflexperf.reduction.filters import filloutliers_movmean, movmedian, window_samples
 from tuflexperf.reduction.glauert import glauert_ratio
 from tuflexperf.reduction.poly22fit import Poly22Fit, fit_poly22
+from tuflexperf.reduction.power import (
+    VoltageFit,
+    WindmillingFit,
+    fit_power_surface,
+    fit_voltage_exponent,
+    fit_windmilling,
+)
 from tuflexperf.reduction.segments import (
     MIN_STEADY_SHARE,
     SteadyMean,
@@ -70,7 +81,12 @@ TABLE_EXTRA_COLUMNS = (
     "n_samples",
     "glauert_ratio",
     "run",
+    "thrust_at_voltage_n",
+    "voltage_v",
+    "current_a",
+    "electrical_power_w",
 )
+ELECTRICAL_COLUMNS = ("voltage_v", "current_a")
 
 
 @dataclass
@@ -87,7 +103,11 @@ class Point:
     n_samples: int
     glauert_ratio: float
     airspeed_m_s: float = 0.0  # the airspeed the fit uses (corrected with --glauert)
-    thrust_n: float = 0.0
+    thrust_n: float = 0.0  # what the fit uses: at the reference voltage when one is fitted
+    thrust_at_voltage_n: float = math.nan  # as measured, at the point's pack voltage
+    voltage_v: float = math.nan
+    current_a: float = math.nan
+    electrical_power_w: float = math.nan
 
 
 @dataclass
@@ -106,6 +126,7 @@ class FitResult:
     propulsion_text: str
     table_text: str | None
     engines: dict[str, Poly22Fit] = field(default_factory=dict)
+    power: dict[str, Poly22Fit] = field(default_factory=dict)
 
 
 # --- run reduction --------------------------------------------------------------------------
@@ -246,17 +267,22 @@ def _validation(
     drag: DragModel | None,
     ratios: list[float],
     glauert: bool,
+    voltage: VoltageFit | None = None,
 ) -> dict[str, Any]:
     """Model minus measured force over a run's steady segments (paper Fig. 16/17).
 
-    The model sees the airspeed the fit used (Glauert-corrected with ``--glauert``);
-    the structure drag is the measured airspeed's.
+    The model sees the airspeed the fit used (Glauert-corrected with ``--glauert``) and,
+    with a fitted voltage exponent, the logged pack voltage; the structure drag is the
+    measured airspeed's.
     """
     errors = []
     for segment, ratio in zip(result.segments, ratios, strict=True):
         v = result.data["airspeed_m_s"][segment.start : segment.stop]
         v_model = v * ratio if glauert and math.isfinite(ratio) else v
         model = fit.predict(np.full(v.size, segment.throttle), v_model)
+        if voltage is not None and voltage.identified:
+            u = result.data["voltage_v"][segment.start : segment.stop]
+            model = model * (u / voltage.reference_voltage_v) ** voltage.exponent
         if drag is not None:
             model = model - drag.drag_n(v)
         errors.append(model - segment.filtered_force_n)
@@ -365,6 +391,7 @@ def fit_campaign(
             for member in cell.members:
                 ratios[member] = ratio
             used_v = cell.airspeed_m_s * ratio if glauert and math.isfinite(ratio) else None
+            volts, amps, watts = _electrical(result, cell.members)
             # the table stores 10 significant digits; the fit uses exactly those numbers,
             # so `tuflexperf fit TABLE` reproduces this fit
             points.append(
@@ -380,11 +407,16 @@ def fit_campaign(
                     glauert_ratio=ratio,
                     airspeed_m_s=_rounded(cell.airspeed_m_s if used_v is None else used_v),
                     thrust_n=_rounded(thrust),
+                    thrust_at_voltage_n=_rounded(thrust),
+                    voltage_v=volts,
+                    current_a=amps,
+                    electrical_power_w=watts,
                 )
             )
         point_ratios[index] = ratios
 
     engines = list(dict.fromkeys(str(r.run.engine) for r in step_results))
+    electrical = _electrical_fits(campaign, engines, points)
     fits: dict[str, Poly22Fit] = {}
     for engine in engines:
         mine = [p for p in points if p.engine == engine]
@@ -396,7 +428,8 @@ def fit_campaign(
         )
     for index, result in enumerate(step_results):
         result.report["validation"] = _validation(
-            result, fits[str(result.run.engine)], drag, point_ratios[index], glauert
+            result, fits[str(result.run.engine)], drag, point_ratios[index], glauert,
+            electrical.voltage.get(str(result.run.engine)),
         )
         run_reports.append(result.report)
 
@@ -455,8 +488,24 @@ def fit_campaign(
                 {"file": r.file, "kind": r.kind, "engine": r.engine} for r in campaign.ignored
             ],
             "points": table_rows,
+            "electrical": electrical.summary(),
         }
     )
+    summary["warnings"].extend(electrical.warnings)
+    for entry in summary["engines"]:
+        name = entry["name"]
+        if name in electrical.power:
+            fit = electrical.power[name]
+            entry["power"] = {
+                "model": "poly22",
+                "coefficients": fit.coefficients,
+                "r2": _finite_or_none(fit.r2),
+                "rmse_w": _finite_or_none(fit.rmse_n),
+                "n_points": fit.n_points,
+            }
+        if name in electrical.windmilling:
+            wm = electrical.windmilling[name]
+            entry["windmilling_drag_coefficient"] = wm.drag_coefficient
     if drag is None:
         summary["warnings"].append("no drag_sweep run: thrust not corrected for structure drag")
     if not delay_runs and delay_s is None:
@@ -470,9 +519,181 @@ def fit_campaign(
         delay=delay,
         density=campaign.air_density_kg_m3 if campaign.density_given else None,
         source=source,
+        electrical=electrical,
+        fan_area_m2=campaign.fan_area_m2,
     )
     table = render_thrust_table(table_rows, TABLE_EXTRA_COLUMNS)
-    return FitResult(summary=summary, propulsion_text=propulsion, table_text=table, engines=fits)
+    return FitResult(
+        summary=summary,
+        propulsion_text=propulsion,
+        table_text=table,
+        engines=fits,
+        power=electrical.power,
+    )
+
+
+# --- electrical: voltage effect, power surface, windmilling (module docstring, step 7) -------
+def _electrical(result: StepRunResult, members: tuple[int, ...]) -> tuple[float, float, float]:
+    """Sample-weighted mean pack voltage (V), current (A) and ``U I`` (W) of a test point.
+
+    ``nan`` for all three when the run does not log both columns.
+    """
+    data = result.data
+    if not all(name in data.columns for name in ELECTRICAL_COLUMNS):
+        return math.nan, math.nan, math.nan
+    volts, amps = [], []
+    for member in members:
+        segment = result.segments[member]
+        volts.append(data["voltage_v"][segment.start : segment.stop])
+        amps.append(data["current_a"][segment.start : segment.stop])
+    u, i = np.concatenate(volts), np.concatenate(amps)
+    ok = np.isfinite(u) & np.isfinite(i)
+    if not np.any(ok):
+        return math.nan, math.nan, math.nan
+    return (
+        _rounded(float(np.mean(u[ok]))),
+        _rounded(float(np.mean(i[ok]))),
+        _rounded(float(np.mean(u[ok] * i[ok]))),
+    )
+
+
+@dataclass
+class ElectricalFits:
+    """What the logged voltage and current give, per engine (empty when nothing is logged)."""
+
+    reference_voltage_v: float | None = None
+    voltage: dict[str, VoltageFit] = field(default_factory=dict)
+    power: dict[str, Poly22Fit] = field(default_factory=dict)
+    windmilling: dict[str, WindmillingFit] = field(default_factory=dict)
+    agreement: dict[str, dict[str, Any]] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def exponent(self) -> float | None:
+        """One exponent for the file: the mean over engines, if every engine determines it."""
+        fits = list(self.voltage.values())
+        if not fits or not all(f.identified for f in fits):
+            return None
+        return float(np.mean([f.exponent for f in fits]))
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "reference_voltage_v": self.reference_voltage_v,
+            "voltage_exponent": self.exponent,
+            "voltage_fits": {name: f.to_dict() for name, f in self.voltage.items()},
+            "power": {
+                name: {"r2": _finite_or_none(f.r2), "rmse_w": _finite_or_none(f.rmse_n),
+                       "n_points": f.n_points}
+                for name, f in self.power.items()
+            },
+            "windmilling": {name: f.to_dict() for name, f in self.windmilling.items()},
+            "thrust_power_agreement": self.agreement,
+        }
+
+
+def _electrical_fits(campaign: Campaign, engines: list[str], points: list[Point]) -> ElectricalFits:
+    """Voltage exponent, power surface and windmilling drag per engine (module docstring, 7).
+
+    With a determined voltage exponent every point's ``thrust_n`` is brought to the
+    reference voltage in place (``T (U_ref / U)^n``), so the poly22 holds at ``U_ref``.
+    """
+    out = ElectricalFits()
+    logged = [p for p in points if math.isfinite(p.voltage_v) and p.voltage_v > 0]
+    if logged:
+        # the voltage the full-throttle thrust was measured at (mean over those points, to
+        # 0.1 V), else over the thrusting points: where a published maximum thrust holds
+        full = [p.voltage_v for p in logged if p.throttle >= 0.95]
+        thrusting = [p.voltage_v for p in logged if p.thrust_n > 0]
+        chosen = full or thrusting or [p.voltage_v for p in logged]
+        out.reference_voltage_v = round(float(np.mean(chosen)), 1)
+    for engine in engines:
+        mine = [p for p in points if p.engine == engine]
+        label = f"{campaign.path}: engine {engine}"
+        with_volts = [p for p in mine if math.isfinite(p.voltage_v) and p.voltage_v > 0]
+        if out.reference_voltage_v is not None and len(with_volts) == len(mine):
+            # idle points carry no thrust to scale: the exponent is fitted on thrusting ones
+            fit_pts = [p for p in mine if p.throttle > 1e-3]
+            out.voltage[engine] = fit_voltage_exponent(
+                [p.throttle for p in fit_pts],
+                [p.airspeed_m_s for p in fit_pts],
+                [p.thrust_n for p in fit_pts],
+                [p.voltage_v for p in fit_pts],
+                out.reference_voltage_v,
+            )
+        elif with_volts:
+            out.warnings.append(
+                f"{label}: only {len(with_volts)} of {len(mine)} points log voltage and "
+                "current: no voltage effect fitted"
+            )
+        with_power = [p for p in mine if math.isfinite(p.electrical_power_w)]
+        if len(with_power) >= 6:
+            try:
+                out.power[engine] = fit_power_surface(
+                    [p.throttle for p in with_power],
+                    [p.airspeed_m_s for p in with_power],
+                    [p.electrical_power_w for p in with_power],
+                    label=label,
+                )
+            except InputError as exc:
+                out.warnings.append(f"no power surface: {exc}")
+    exponent = out.exponent
+    for name, fit in out.voltage.items():
+        if not fit.identified:
+            out.warnings.append(
+                f"{campaign.path}: engine {name}: voltage exponent not determined by the runs "
+                f"({fit.reason}); the SPEC default 2 applies"
+            )
+    if exponent is not None and out.reference_voltage_v is not None:
+        for p in points:
+            p.thrust_n = _rounded(p.thrust_at_voltage_n
+                                  * (out.reference_voltage_v / p.voltage_v) ** exponent)
+    for engine in engines:
+        mine = [p for p in points if p.engine == engine]
+        wm = fit_windmilling(
+            [p.throttle for p in mine],
+            [p.airspeed_m_s for p in mine],
+            [p.thrust_n for p in mine],
+            campaign.air_density_kg_m3,
+            campaign.fan_area_m2,
+        )
+        if wm is not None:
+            out.windmilling[engine] = wm
+        _agreement(campaign, engine, mine, out)
+    return out
+
+
+# A test point is a working point of the fan (checked for T V / P_el) from this share of the
+# engine's largest measured thrust: near zero thrust the ESC's idle draw rules the ratio.
+WORKING_THRUST_SHARE = 0.1
+
+
+def _agreement(campaign: Campaign, engine: str, mine: list[Point], out: ElectricalFits) -> None:
+    """Measured thrust against measured ``U I`` at the engine's working points (SPEC 3)."""
+    from tuflexperf.analysis.powertrain import power_agreement
+
+    measured = [p for p in mine if math.isfinite(p.electrical_power_w)]
+    if not measured:
+        return
+    largest = max(p.thrust_at_voltage_n for p in measured)
+    working = [p for p in measured if p.thrust_at_voltage_n >= WORKING_THRUST_SHARE * largest]
+    checks = [
+        power_agreement(
+            f"{campaign.path.name} test point", engine, p.throttle, p.airspeed_m_s,
+            p.thrust_at_voltage_n, p.electrical_power_w, campaign.air_density_kg_m3,
+            campaign.fan_area_m2, warn_efficiency=False,
+        )
+        for p in working
+    ]
+    merits = [c.figure_of_merit for c in checks if c.figure_of_merit is not None]
+    efficiencies = [c.overall_efficiency for c in checks if c.overall_efficiency is not None]
+    out.agreement[engine] = {
+        "working_points": len(checks),
+        "figure_of_merit_range": [min(merits), max(merits)] if merits else None,
+        "overall_efficiency_range": (
+            [min(efficiencies), max(efficiencies)] if efficiencies else None
+        ),
+    }
+    out.warnings.extend(w for c in checks for w in c.warnings)
 
 
 def _rounded(value: float) -> float:
@@ -492,6 +713,12 @@ def _table_row(p: Point) -> dict[str, Any]:
         "n_samples": p.n_samples,
         "glauert_ratio": p.glauert_ratio if math.isfinite(p.glauert_ratio) else None,
         "run": p.run,
+        "thrust_at_voltage_n": p.thrust_at_voltage_n,
+        "voltage_v": p.voltage_v if math.isfinite(p.voltage_v) else None,
+        "current_a": p.current_a if math.isfinite(p.current_a) else None,
+        "electrical_power_w": (
+            p.electrical_power_w if math.isfinite(p.electrical_power_w) else None
+        ),
     }
 
 
@@ -583,6 +810,8 @@ def _propulsion_text(
     delay: float | None,
     density: float | None,
     source: dict[str, Any],
+    electrical: ElectricalFits | None = None,
+    fan_area_m2: float | None = None,
 ) -> str:
     """The propulsion file (SPEC 4), validated against the schema ``check`` loads."""
     from tuflexperf.io.case import PropulsionSchema
@@ -596,6 +825,12 @@ def _propulsion_text(
         document["delay_s"] = max(float(delay), 0.0)
     if density is not None:
         document["reference_density_kg_m3"] = float(density)
+    if electrical is not None and electrical.reference_voltage_v is not None:
+        document["reference_voltage_v"] = electrical.reference_voltage_v
+        if electrical.exponent is not None:
+            document["voltage_exponent"] = round(electrical.exponent, 3)
+    if fan_area_m2 is not None:
+        document["fan_area_m2"] = float(fan_area_m2)
     document["engines"] = []
     for engine, fit in fits.items():
         entry: dict[str, Any] = {
@@ -610,6 +845,21 @@ def _propulsion_text(
         if all(math.isfinite(v) for v in fit.standard_errors.values()):
             entry["standard_errors"] = {t: fit.standard_errors[t] for t in POLY22_TERMS}
         entry.update(_uncertainty_entry(fit))
+        if electrical is not None and engine in electrical.windmilling:
+            entry["windmilling_drag_coefficient"] = round(
+                electrical.windmilling[engine].drag_coefficient, 4
+            )
+        if electrical is not None and engine in electrical.power:
+            power = electrical.power[engine]
+            entry["power"] = {
+                "model": "poly22",
+                "coefficients": {t: power.coefficients[t] for t in POLY22_TERMS},
+                "n_points": power.n_points,
+            }
+            if math.isfinite(power.r2):
+                entry["power"]["r2"] = power.r2
+            if math.isfinite(power.rmse_n):
+                entry["power"]["rmse_w"] = power.rmse_n
         document["engines"].append(entry)
     document["source"] = source
     header = (

@@ -1,0 +1,190 @@
+"""Fan power and momentum theory: electrical power surface, ideal power, efficiencies, windmilling.
+
+A ducted fan that makes thrust ``T`` at airspeed ``V`` accelerates the air through its jet
+area ``A`` to the exit velocity ``v_e`` with ``T = rho A v_e (v_e - V)`` (momentum theory,
+actuator disc with the wake at the exit). The least (ideal) power that thrust can cost is
+``P_i = T (V + v_e) / 2``; the electrical power ``P_el`` a real fan draws is larger. So
+
+- the figure of merit ``P_i / P_el`` is at most 1 (above 1 the thrust is more than the
+  power can make), and
+- the overall efficiency ``T V / P_el`` in flight is the share of electrical power turned
+  into useful work (SPEC 3, "thrust and power agree").
+
+The electrical power surface is a poly22 in throttle and airspeed like the thrust
+(``q00 + q10 x + q01 v + q20 x^2 + q11 x v + q02 v^2``, W), fitted by ``fit`` from runs that
+log ``voltage_v`` and ``current_a``. Every function takes floats, numpy arrays or CasADi
+symbols.
+
+References
+----------
+Leishman, *Principles of Helicopter Aerodynamics*, 2nd ed., sections 2.2-2.8 (momentum
+theory, ideal power, figure of merit). Hoerner, *Fluid-Dynamic Drag*, 1965, ch. 3
+(drag of a disc/windmilling rotor, ``C_D = D / (q A)``). Paper section 2.1, Table 1
+(DS-51-DIA HST: exit velocity 82-98 m/s, power 2.4-4.1 kW, efficiency 70-71 %).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from tuflexperf.models._math import fmax, sqrt, where
+from tuflexperf.models.thrust import Engine, poly22
+
+# In-flight overall efficiency below this is implausible for a working fan (SPEC 3).
+MIN_OVERALL_EFFICIENCY = 0.2
+# A figure of merit above this means the thrust needs more power than is drawn (SPEC 3).
+MAX_FIGURE_OF_MERIT = 1.0
+
+
+def electrical_power_w(throttle: Any, airspeed_m_s: Any, coefficients: Mapping[str, float]) -> Any:
+    """Electrical power of one fan from its fitted poly22 power surface.
+
+    Parameters
+    ----------
+    throttle : float or array or CasADi
+        Throttle fraction [-], the variable the surface was fitted against.
+    airspeed_m_s : float or array or CasADi
+        True airspeed [m/s].
+    coefficients : mapping
+        ``p00 .. p02`` of the power surface [W, W/(m/s), ...].
+
+    Returns
+    -------
+    Electrical power [W] (``V I`` at the pack).
+
+    References
+    ----------
+    SPEC 4, propulsion file ``power: {model: poly22}``; paper section 4 (poly22 form).
+    """
+    return poly22(throttle, airspeed_m_s, coefficients)
+
+
+def engine_power_w(engine: Engine, throttle: Any, airspeed_m_s: Any) -> Any:
+    """Electrical power [W] of ``engine`` from its fitted power surface (``None`` if none).
+
+    Parameters
+    ----------
+    engine : Engine
+        The fan; its surface shares the thrust's throttle variable (``throttle_scale``).
+    throttle : float or array or CasADi
+        Throttle fraction [-].
+    airspeed_m_s : float or array or CasADi
+        True airspeed [m/s].
+
+    References
+    ----------
+    SPEC 4 (``power: {model: poly22}``).
+    """
+    if engine.power_coefficients is None:
+        return None
+    return electrical_power_w(
+        throttle * engine.throttle_scale, airspeed_m_s, engine.power_coefficients
+    )
+
+
+def exit_velocity_m_s(thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any, area_m2: Any) -> Any:
+    """Jet exit velocity of a fan making ``thrust_n``: the root of ``T = rho A v_e (v_e - V)``.
+
+    Parameters
+    ----------
+    thrust_n : float or array or CasADi
+        Thrust of the fan [N]; a drag (``T <= 0``) gives ``v_e = V`` (no jet).
+    airspeed_m_s : float or array or CasADi
+        Free-stream airspeed ``V`` [m/s].
+    density_kg_m3 : float or array or CasADi
+        Air density [kg/m^3].
+    area_m2 : float
+        Jet (fan) area ``A`` [m^2].
+
+    Returns
+    -------
+    ``v_e = (V + sqrt(V^2 + 4 T / (rho A))) / 2`` [m/s].
+
+    References
+    ----------
+    Leishman, *Principles of Helicopter Aerodynamics*, eq. 2.10-2.14 (momentum theory in
+    axial flight).
+    """
+    t = fmax(thrust_n, 0.0)
+    return 0.5 * (airspeed_m_s + sqrt(airspeed_m_s * airspeed_m_s
+                                      + 4.0 * t / (density_kg_m3 * area_m2)))
+
+
+def ideal_power_w(thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any, area_m2: Any) -> Any:
+    """Momentum-theory (ideal) power of a fan: ``P_i = T (V + v_e) / 2``.
+
+    Parameters
+    ----------
+    thrust_n : float or array or CasADi
+        Thrust [N]; no ideal power for a drag (``T <= 0`` gives 0).
+    airspeed_m_s : float or array or CasADi
+        Airspeed [m/s].
+    density_kg_m3 : float or array or CasADi
+        Air density [kg/m^3].
+    area_m2 : float
+        Jet (fan) area [m^2].
+
+    Returns
+    -------
+    Ideal power [W]: the least power any fan of that area needs for that thrust.
+
+    References
+    ----------
+    Leishman, *Principles of Helicopter Aerodynamics*, eq. 2.15 (``P = T (V + v_i)``,
+    ``v_e = V + 2 v_i``).
+    """
+    t = fmax(thrust_n, 0.0)
+    return t * (airspeed_m_s + exit_velocity_m_s(t, airspeed_m_s, density_kg_m3, area_m2)) / 2.0
+
+
+def figure_of_merit(
+    thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any, area_m2: Any, power_w: Any
+) -> Any:
+    """Ideal over electrical power, ``P_i / P_el`` [-]; above 1 the power cannot make the thrust.
+
+    ``nan`` where the electrical power is not positive.
+
+    References
+    ----------
+    Leishman, *Principles of Helicopter Aerodynamics*, eq. 2.41 (figure of merit), extended
+    to axial flight with the momentum-theory ideal power.
+    """
+    ideal = ideal_power_w(thrust_n, airspeed_m_s, density_kg_m3, area_m2)
+    return where(power_w > 0.0, ideal / where(power_w > 0.0, power_w, 1.0), float("nan"))
+
+
+def overall_efficiency(thrust_n: Any, airspeed_m_s: Any, power_w: Any) -> Any:
+    """Useful over electrical power in flight, ``T V / P_el`` [-] (``nan`` if ``P_el <= 0``).
+
+    References
+    ----------
+    McCormick, *Aerodynamics, Aeronautics and Flight Mechanics*, 2nd ed., 6.2 (propulsive
+    efficiency ``T V / P``).
+    """
+    return where(power_w > 0.0, thrust_n * airspeed_m_s / where(power_w > 0.0, power_w, 1.0),
+                 float("nan"))
+
+
+def windmilling_drag_n(
+    drag_coefficient: float, airspeed_m_s: Any, density_kg_m3: Any, area_m2: float
+) -> Any:
+    """A dead fan's contribution to thrust: ``-C_d,wm q A_fan`` [N], always a drag.
+
+    Parameters
+    ----------
+    drag_coefficient : float
+        ``C_d,wm`` on the fan area [-] (``fit`` estimates it from the idle points).
+    airspeed_m_s : float or array or CasADi
+        Airspeed [m/s].
+    density_kg_m3 : float or array or CasADi
+        Air density [kg/m^3].
+    area_m2 : float
+        The propulsion file's ``fan_area_m2`` [m^2].
+
+    References
+    ----------
+    SPEC 3 (windmilling drag); Hoerner, *Fluid-Dynamic Drag*, 1965, ch. 3 (disc drag on
+    its frontal area).
+    """
+    return -abs(drag_coefficient) * 0.5 * density_kg_m3 * airspeed_m_s * airspeed_m_s * area_m2
