@@ -55,12 +55,3 @@ def exp(a: Any) -> Any:
 
         return ca.exp(a)
     return np.exp(a)
-
-
-def fmax(a: Any, b: Any) -> Any:
-    """Element-wise maximum for numpy or CasADi operands."""
-    if is_symbolic(a, b):
-        import casadi as ca
-
-        return ca.fmax(a, b)
-    return np.maximum(a, b)
