@@ -243,6 +243,54 @@ def oei(
     raise typer.Exit(0 if met else 1)
 
 
+@app.command()
+def performance(case_file: Path | None = CaseOption, as_json: bool = JsonOption) -> None:
+    """Point performance: stall, V_md, level speeds, climb (Vx, Vy), ceilings, OEI, obstacle."""
+    from tuflexperf.analysis.performance import solve_performance
+    from tuflexperf.io.case import load_case
+
+    case = load_case(case_file)
+    result = solve_performance(case)
+    data = result.to_dict()
+    attainable = result.min_level_speed_m_s is not None
+    if as_json:
+        emit_json({**data, "attainable": attainable})
+    else:
+        r = result
+        typer.echo(
+            f"{case.name}: point performance at {r.altitude_m:g} m "
+            f"({r.density_kg_m3:.4f} kg/m^3), full throttle; true airspeeds"
+        )
+        rows = [
+            ("stall speed", r.stall_speed_m_s, "m/s"),
+            (f"least airspeed (stall x {r.stall_margin:g})", r.least_airspeed_m_s, "m/s"),
+            ("minimum-drag speed", r.minimum_drag_speed_m_s, "m/s"),
+            ("least level speed", r.min_level_speed_m_s, "m/s"),
+            ("max level speed", r.max_level_speed_m_s, "m/s"),
+            ("max rate of climb", r.max_climb_rate_m_s, "m/s"),
+            ("  at Vy", r.best_climb_rate_speed_m_s, "m/s"),
+            ("max climb gradient", r.max_climb_gradient, "-"),
+            ("  at Vx", r.best_climb_angle_speed_m_s, "m/s"),
+            ("service ceiling (0.5 m/s)", r.service_ceiling_m, "m"),
+            ("absolute ceiling", r.absolute_ceiling_m, "m"),
+            (f"OEI max climb gradient ({r.oei_dead_engine_mode})", r.oei_max_climb_gradient, "-"),
+            ("OEI max level speed", r.oei_max_level_speed_m_s, "m/s"),
+            (f"take-off to {r.takeoff_obstacle_height_m:g} m obstacle",
+             r.takeoff_distance_to_obstacle_m, "m"),
+        ]
+        for label, value, unit in rows:
+            typer.echo(f"  {label:<36}{_fmt(value, 3 if unit == '-' else 2):>10} {unit}")
+        worst = r.oei_critical
+        if worst is not None:
+            typer.echo(f"  (OEI worse case: {worst.dead_engine} dead)")
+        for note in r.notes:
+            typer.echo(f"  {note}")
+        if not attainable:
+            typer.echo("  NOT ATTAINABLE: no level flight at full throttle above stall")
+        _print_warnings(list(r.warnings))
+    raise typer.Exit(0 if attainable else 1)
+
+
 # ---- endurance (issue 3) -------------------------------------------------------------------
 @app.command()
 def endurance(

@@ -1,0 +1,495 @@
+"""Point performance: stall, minimum-drag speed, level-speed range, climb, ceilings, OEI.
+
+Every answer is bounded by stall (SPEC 3): no airspeed below ``stall_margin x V_stall``
+counts. Each quantity is one small CasADi/IPOPT problem built once per case
+(:class:`PerformanceProblems`) and started from a vectorised scan of the same model
+functions, which also brackets it (so the local NLP finds the global answer to the
+scan's resolution and refines it to IPOPT's tolerance):
+
+- max / min level speed: ``max V`` (``min V``) s.t. ``T(1, V) - D(V) >= 0``;
+- best rate of climb ``Vy``: ``max V (T - D) / W``; best angle ``Vx``: ``max (T - D) / W``;
+- ceilings: ``max h`` s.t. ``R/C(V, h) >= c`` and ``V >= margin V_stall(h)``, with
+  ``c = 0.5 m/s`` (service) and ``0`` (absolute); density from the ISA at ``h`` with the
+  case's temperature offset, thrust scaled by ``rho / rho_ref`` (SPEC 3);
+- one engine inoperative: max level speed and max climb gradient, each engine dead in
+  turn, the worse reported.
+
+Climb uses the small-angle model (drag at ``L = W``), Anderson, *Aircraft Performance
+and Design*, section 5.10. The search for level flight ends where full thrust falls
+below parasite drag alone (an exact quadratic bound); a thrust model that keeps up with
+parasite drag at every speed has no maximum speed, and the result says so.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from tuflexperf.errors import NotAttainable
+from tuflexperf.io.case import Case
+from tuflexperf.models.aircraft import (
+    climb_gradient,
+    climb_rate_m_s,
+    level_flight_drag_n,
+    minimum_drag_speed_m_s,
+    stall_speed_m_s,
+)
+from tuflexperf.models.atmosphere import isa_density_kg_m3
+from tuflexperf.models.thrust import (
+    DeadEngineMode,
+    is_extrapolated,
+    total_thrust_n,
+    unlapsed_density_warning,
+)
+
+SERVICE_CEILING_CLIMB_RATE_M_S = 0.5
+CEILING_SEARCH_TOP_M = 20_000.0  # the ISA model's range
+_SCAN_POINTS = 1201
+_CEILING_SCAN_ALTITUDES = 201
+_CEILING_SCAN_SPEEDS = 301
+_CLIMB_TABLE_STEP_M_S = 0.5
+_CLIMB_TABLE_MAX_POINTS = 401
+_IPOPT = {
+    "ipopt.print_level": 0,
+    "ipopt.sb": "yes",
+    "print_time": False,
+    "ipopt.tol": 1e-12,
+    "ipopt.acceptable_tol": 1e-9,
+    "ipopt.max_iter": 200,
+}
+
+
+def stall_margin_of(case: Case) -> float:
+    """The envelope's ``stall_margin`` [-] (1.0 without an envelope block)."""
+    envelope = case.requirements.envelope
+    return 1.0 if envelope is None else float(envelope.stall_margin)
+
+
+def _dead_mode(case: Case) -> DeadEngineMode:
+    oei = case.requirements.oei
+    return "windmilling" if oei is None else oei.dead_engine
+
+
+@dataclass(frozen=True)
+class OeiPerformance:
+    """One engine dead: its max level speed [m/s] and max climb gradient [-] (and its speed)."""
+
+    dead_engine: str
+    max_level_speed_m_s: float | None
+    max_climb_gradient: float
+    max_climb_gradient_speed_m_s: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "dead_engine": self.dead_engine,
+            "max_level_speed_m_s": self.max_level_speed_m_s,
+            "max_climb_gradient": self.max_climb_gradient,
+            "max_climb_gradient_speed_m_s": self.max_climb_gradient_speed_m_s,
+        }
+
+
+@dataclass(frozen=True)
+class PerformanceResult:
+    """Point performance of a case at its atmosphere (true airspeeds, SI units).
+
+    ``None`` marks what does not exist (no level flight, a ceiling below the
+    search's foot or above 20 km); ``notes`` say why.
+    """
+
+    density_kg_m3: float
+    altitude_m: float
+    stall_speed_m_s: float
+    stall_margin: float
+    least_airspeed_m_s: float
+    polar_minimum_drag_speed_m_s: float
+    minimum_drag_speed_m_s: float
+    min_level_speed_m_s: float | None
+    max_level_speed_m_s: float | None
+    max_climb_rate_m_s: float
+    best_climb_rate_speed_m_s: float
+    max_climb_gradient: float
+    best_climb_angle_speed_m_s: float
+    service_ceiling_m: float | None
+    absolute_ceiling_m: float | None
+    oei: tuple[OeiPerformance, ...]
+    oei_dead_engine_mode: str
+    takeoff_distance_to_obstacle_m: float | None
+    takeoff_obstacle_height_m: float
+    climb_airspeed_m_s: np.ndarray = field(repr=False)
+    climb_rate_curve_m_s: np.ndarray = field(repr=False)
+    notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def oei_critical(self) -> OeiPerformance | None:
+        """The dead engine with the lower climb gradient (None for a single engine)."""
+        return min(self.oei, key=lambda c: c.max_climb_gradient) if self.oei else None
+
+    @property
+    def oei_max_climb_gradient(self) -> float | None:
+        worst = self.oei_critical
+        return None if worst is None else worst.max_climb_gradient
+
+    @property
+    def oei_max_level_speed_m_s(self) -> float | None:
+        if not self.oei:
+            return None
+        speeds = [c.max_level_speed_m_s for c in self.oei]
+        return None if any(s is None for s in speeds) else min(speeds)
+
+    def to_dict(self) -> dict[str, Any]:
+        worst = self.oei_critical
+        return {
+            "density_kg_m3": self.density_kg_m3,
+            "altitude_m": self.altitude_m,
+            "stall_speed_m_s": self.stall_speed_m_s,
+            "stall_margin": self.stall_margin,
+            "least_airspeed_m_s": self.least_airspeed_m_s,
+            "minimum_drag_speed_m_s": self.minimum_drag_speed_m_s,
+            "polar_minimum_drag_speed_m_s": self.polar_minimum_drag_speed_m_s,
+            "min_level_speed_m_s": self.min_level_speed_m_s,
+            "max_level_speed_m_s": self.max_level_speed_m_s,
+            "max_climb_rate_m_s": self.max_climb_rate_m_s,
+            "best_climb_rate_speed_m_s": self.best_climb_rate_speed_m_s,
+            "max_climb_gradient": self.max_climb_gradient,
+            "best_climb_angle_speed_m_s": self.best_climb_angle_speed_m_s,
+            "service_ceiling_m": self.service_ceiling_m,
+            "service_ceiling_climb_rate_m_s": SERVICE_CEILING_CLIMB_RATE_M_S,
+            "absolute_ceiling_m": self.absolute_ceiling_m,
+            "oei_max_climb_gradient": self.oei_max_climb_gradient,
+            "oei_max_level_speed_m_s": self.oei_max_level_speed_m_s,
+            "oei_critical_dead_engine": None if worst is None else worst.dead_engine,
+            "oei_dead_engine_mode": self.oei_dead_engine_mode,
+            "oei": [c.to_dict() for c in self.oei],
+            "takeoff_distance_to_obstacle_m": self.takeoff_distance_to_obstacle_m,
+            "takeoff_obstacle_height_m": self.takeoff_obstacle_height_m,
+            "climb": {
+                "airspeed_m_s": [float(v) for v in self.climb_airspeed_m_s],
+                "climb_rate_m_s": [float(v) for v in self.climb_rate_curve_m_s],
+            },
+            "notes": list(self.notes),
+            "warnings": list(self.warnings),
+        }
+
+
+class PerformanceProblems:
+    """The case's point-performance problems, each a CasADi function / IPOPT NLP built once.
+
+    Parameters
+    ----------
+    case : Case
+        The loaded case (aircraft, propulsion, atmosphere, requirements).
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, sections 5.4 (max speed), 5.10 (rate of
+    climb, Vx, Vy), 5.11 (absolute and service ceilings).
+    """
+
+    def __init__(self, case: Case) -> None:
+        import casadi as ca
+
+        self.case = case
+        self.aircraft = case.aircraft
+        self.propulsion = case.propulsion
+        self.margin = stall_margin_of(case)
+        self.offset_k = case.atmosphere.temperature_offset_k
+        self.mode = _dead_mode(case)
+        n_engines = len(self.propulsion.engines)
+        self.dead_cases: tuple[int | None, ...] = (None,) + (
+            tuple(range(n_engines)) if n_engines >= 2 else ()
+        )
+        v = ca.SX.sym("airspeed_m_s")
+        rho = ca.SX.sym("density_kg_m3")
+        self._excess: dict[int | None, Any] = {}
+        self._max_speed: dict[int | None, Any] = {}
+        self._max_gradient: dict[int | None, Any] = {}
+        self._min_speed: dict[int | None, Any] = {}
+        for dead in self.dead_cases:
+            thrust = total_thrust_n(self.propulsion, 1.0, v, rho, dead, self.mode)
+            excess = thrust - level_flight_drag_n(self.aircraft, v, rho)
+            self._excess[dead] = ca.Function("excess", [v, rho], [excess])
+            gradient = climb_gradient(self.aircraft, thrust, v, rho)
+            self._max_speed[dead] = ca.nlpsol(
+                "max_level_speed", "ipopt", {"x": v, "p": rho, "f": -v, "g": excess}, _IPOPT
+            )
+            self._min_speed[dead] = ca.nlpsol(
+                "min_level_speed", "ipopt", {"x": v, "p": rho, "f": v, "g": excess}, _IPOPT
+            )
+            self._max_gradient[dead] = ca.nlpsol(
+                "max_climb_gradient", "ipopt", {"x": v, "p": rho, "f": -gradient}, _IPOPT
+            )
+        thrust = total_thrust_n(self.propulsion, 1.0, v, rho)
+        rate = climb_rate_m_s(self.aircraft, thrust, v, rho)
+        self._max_rate = ca.nlpsol(
+            "max_climb_rate", "ipopt", {"x": v, "p": rho, "f": -rate}, _IPOPT
+        )
+        # ceiling: altitude in km (scaling), density from the ISA at that altitude
+        h_km = ca.SX.sym("altitude_km")
+        target = ca.SX.sym("climb_rate_m_s")
+        rho_h = isa_density_kg_m3(1000.0 * h_km, self.offset_k)
+        thrust_h = total_thrust_n(self.propulsion, 1.0, v, rho_h)
+        rate_h = climb_rate_m_s(self.aircraft, thrust_h, v, rho_h)
+        stall_h = self.margin * stall_speed_m_s(self.aircraft, rho_h)
+        self._ceiling = ca.nlpsol(
+            "ceiling",
+            "ipopt",
+            {
+                "x": ca.vertcat(v, h_km),
+                "p": target,
+                "f": -h_km,
+                "g": ca.vertcat(rate_h - target, v - stall_h),
+            },
+            _IPOPT,
+        )
+
+    # --- the model on numpy (the same functions as the NLPs, through the backend) ----------
+    def least_airspeed_m_s(self, rho: Any) -> Any:
+        """Stall speed times the envelope's margin [m/s] at density ``rho`` [kg/m^3]."""
+        return self.margin * stall_speed_m_s(self.aircraft, rho)
+
+    def excess_n(self, v: Any, rho: Any, dead: int | None = None) -> Any:
+        """Full-throttle thrust minus level-flight drag [N] (numpy)."""
+        thrust = total_thrust_n(self.propulsion, 1.0, v, rho, dead, self.mode)
+        return thrust - level_flight_drag_n(self.aircraft, v, rho)
+
+    def climb_rate(self, v: Any, rho: Any) -> Any:
+        """Full-throttle rate of climb [m/s], all engines (numpy)."""
+        return climb_rate_m_s(
+            self.aircraft, total_thrust_n(self.propulsion, 1.0, v, rho), v, rho
+        )
+
+    def gradient(self, v: Any, rho: Any, dead: int | None = None) -> Any:
+        """Full-throttle climb gradient [-] (numpy)."""
+        thrust = total_thrust_n(self.propulsion, 1.0, v, rho, dead, self.mode)
+        return climb_gradient(self.aircraft, thrust, v, rho)
+
+    def speed_cap_m_s(self, rho: Any) -> Any:
+        """Speed [m/s] above which full thrust stays below parasite drag (``inf`` if none).
+
+        All engines' full-throttle thrust is a quadratic in V (scaled by ``rho / rho_ref``);
+        drag is at least ``q S cd0``, so beyond the largest root of ``T(V) - q S cd0`` there
+        is no level flight (a dead engine only adds drag). Vectorised over ``rho``.
+        """
+        rho = np.asarray(rho, dtype=float)
+        t0, t1, t2 = (
+            np.asarray(total_thrust_n(self.propulsion, 1.0, x, rho), dtype=float) + 0.0 * rho
+            for x in (0.0, 1.0, 2.0)
+        )
+        a = 0.5 * (t2 - 2.0 * t1 + t0)
+        b = t1 - t0 - a
+        a = a - 0.5 * rho * self.aircraft.wing_area_m2 * self.aircraft.cd0
+        disc = b * b - 4.0 * a * t0
+        safe_a = np.where(a < 0.0, a, -1.0)
+        root = np.sqrt(np.where(disc > 0.0, disc, 0.0))
+        largest = np.maximum((-b - root) / (2.0 * safe_a), (-b + root) / (2.0 * safe_a))
+        cap = np.where(a >= 0.0, np.inf, np.where(disc < 0.0, 0.0, largest))
+        return float(cap) if cap.ndim == 0 else cap
+
+    # --- solves ------------------------------------------------------------------------------
+    def _bounded(self, solver: Any, rho: float, low: float, high: float, guess: float) -> float:
+        sol = solver(x0=guess, lbx=low, ubx=high, lbg=0.0, ubg=math.inf, p=rho)
+        return float(sol["x"])
+
+    def _unconstrained(self, solver: Any, rho: float, low: float, high: float,
+                       guess: float) -> float:
+        sol = solver(x0=guess, lbx=low, ubx=high, p=rho)
+        return float(sol["x"])
+
+    def scan(self, rho: float) -> tuple[np.ndarray, float]:
+        """Airspeed grid [m/s] from the least airspeed to the speed cap, and that cap."""
+        low = float(self.least_airspeed_m_s(rho))
+        cap = self.speed_cap_m_s(rho)
+        top = cap if math.isfinite(cap) else 10.0 * low
+        top = max(top * 1.001, low * 1.001)
+        return np.linspace(low, top, _SCAN_POINTS), cap
+
+    def level_speed_range(
+        self, rho: float, dead: int | None = None
+    ) -> tuple[float | None, float | None, bool]:
+        """(least, greatest) airspeed [m/s] of level flight at full throttle, stall-bounded.
+
+        The third value is False when the greatest speed is unbounded within the model
+        (then it is ``None``). ``(None, None, True)``: no level flight at any speed.
+        """
+        grid, cap = self.scan(rho)
+        ok = np.asarray(self.excess_n(grid, rho, dead), dtype=float) >= 0.0
+        if not ok.any():
+            return None, None, True
+        first, last = int(np.argmax(ok)), int(len(ok) - 1 - np.argmax(ok[::-1]))
+        if first == 0:
+            least = float(grid[0])
+        else:
+            least = self._bounded(self._min_speed[dead], rho, float(grid[first - 1]),
+                                  float(grid[first]), float(grid[first]))
+        if last == len(grid) - 1 and not math.isfinite(cap):
+            return least, None, False
+        high = float(grid[min(last + 1, len(grid) - 1)])
+        greatest = self._bounded(self._max_speed[dead], rho, float(grid[last]), high,
+                                 float(grid[last]))
+        return least, greatest, True
+
+    def best(self, values: np.ndarray, grid: np.ndarray) -> tuple[float, float, float]:
+        """Scan bracket around the grid's best value: (low, high, guess) [m/s]."""
+        i = int(np.nanargmax(values))
+        return float(grid[max(i - 1, 0)]), float(grid[min(i + 1, len(grid) - 1)]), float(grid[i])
+
+    def max_climb_rate(self, rho: float) -> tuple[float, float]:
+        """(max rate of climb [m/s], Vy [m/s]) at density ``rho``, V >= margin x stall."""
+        grid, _ = self.scan(rho)
+        low, high, guess = self.best(np.asarray(self.climb_rate(grid, rho), dtype=float), grid)
+        vy = self._unconstrained(self._max_rate, rho, low, high, guess)
+        return float(self.climb_rate(vy, rho)), vy
+
+    def max_gradient(self, rho: float, dead: int | None = None) -> tuple[float, float]:
+        """(max climb gradient [-], Vx [m/s]) at density ``rho``, V >= margin x stall."""
+        grid, _ = self.scan(rho)
+        low, high, guess = self.best(np.asarray(self.gradient(grid, rho, dead), dtype=float), grid)
+        vx = self._unconstrained(self._max_gradient[dead], rho, low, high, guess)
+        return float(self.gradient(vx, rho, dead)), vx
+
+    def ceiling_m(self, climb_rate_target: float) -> tuple[float | None, str]:
+        """Highest altitude [m] where the best rate of climb reaches the target [m/s].
+
+        Searched from ``min(0, case altitude)`` to 20 km. ``None`` with a note when the
+        target is not reached at the foot, or is still exceeded at 20 km.
+        """
+        foot = min(0.0, float(self.case.atmosphere.altitude_m))
+        altitudes = np.linspace(foot, CEILING_SEARCH_TOP_M, _CEILING_SCAN_ALTITUDES)
+        rho = np.asarray(isa_density_kg_m3(altitudes, self.offset_k), dtype=float)[:, None]
+        low = np.asarray(self.least_airspeed_m_s(rho), dtype=float)
+        cap = self.speed_cap_m_s(rho)
+        top = np.where(np.isfinite(cap), cap, 10.0 * low)
+        grid = low + (np.maximum(top, 1.001 * low) - low) * np.linspace(0.0, 1.0,
+                                                                      _CEILING_SCAN_SPEEDS)
+        rate = np.asarray(self.climb_rate(grid, rho), dtype=float)
+        j = np.argmax(rate, axis=1)
+        rows = np.arange(len(altitudes))
+        best, best_v = rate[rows, j], grid[rows, j]
+        reach = best >= climb_rate_target
+        if not reach[0]:
+            return None, (
+                f"the best rate of climb at {foot:g} m is {best[0]:.2f} m/s, below "
+                f"{climb_rate_target:g} m/s"
+            )
+        if reach[-1]:
+            return None, (
+                f"still climbing at {best[-1]:.2f} m/s at {CEILING_SEARCH_TOP_M:g} m, the top of "
+                "the ISA model" + ("" if self.propulsion.reference_density_kg_m3 is not None
+                                   else " (thrust not scaled with density: no reference density)")
+            )
+        k = int(len(reach) - 1 - np.argmax(reach[::-1]))
+        lbx = [0.0, altitudes[k] / 1000.0]
+        ubx = [math.inf, altitudes[k + 1] / 1000.0]
+        sol = self._ceiling(
+            x0=[best_v[k], altitudes[k] / 1000.0], lbx=lbx, ubx=ubx,
+            lbg=[0.0, 0.0], ubg=[math.inf, math.inf], p=climb_rate_target,
+        )
+        return 1000.0 * float(sol["x"][1]), ""
+
+
+def solve_performance(case: Case, problems: PerformanceProblems | None = None) -> PerformanceResult:
+    """Point performance of ``case`` at its atmosphere (see the module docstring).
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, ch. 5 (5.4 max speed, 5.10 climb,
+    5.11 ceilings) and 6.7 (take-off to the obstacle).
+    """
+    from tuflexperf.analysis.takeoff import obstacle_height_of, solve_takeoff
+
+    p = problems if problems is not None else PerformanceProblems(case)
+    ac, prop = case.aircraft, case.propulsion
+    rho = case.density_kg_m3
+    notes: list[str] = []
+    warnings: list[str] = []
+    stall = float(stall_speed_m_s(ac, rho))
+    least = float(p.least_airspeed_m_s(rho))
+    polar_vmd = float(minimum_drag_speed_m_s(ac, rho))
+    vmd = max(polar_vmd, least)
+    if polar_vmd < least:
+        notes.append(
+            f"the polar's minimum-drag speed {polar_vmd:.2f} m/s is below the least airspeed "
+            f"{least:.2f} m/s (stall x {p.margin:g}): least drag is at the stall bound"
+        )
+    v_min, v_max, bounded = p.level_speed_range(rho)
+    if v_min is None:
+        notes.append("no level flight at full throttle at any airspeed above stall")
+    elif not bounded:
+        notes.append(
+            "full-throttle thrust keeps up with parasite drag at every airspeed: the thrust "
+            "model gives no maximum level speed (extrapolation far beyond the tested range)"
+        )
+    max_rate, vy = p.max_climb_rate(rho)
+    max_grad, vx = p.max_gradient(rho)
+    if vx <= least * (1.0 + 1e-9):
+        notes.append(f"best climb angle at the least airspeed {least:.2f} m/s (stall-bounded)")
+    service, why = p.ceiling_m(SERVICE_CEILING_CLIMB_RATE_M_S)
+    if why:
+        notes.append(f"service ceiling: {why}")
+    absolute, why = p.ceiling_m(0.0)
+    if why:
+        notes.append(f"absolute ceiling: {why}")
+    oei: list[OeiPerformance] = []
+    for dead in p.dead_cases[1:]:
+        _, oei_max, _ = p.level_speed_range(rho, dead)
+        gradient, speed = p.max_gradient(rho, dead)
+        oei.append(OeiPerformance(prop.engines[dead].name, oei_max, gradient, speed))
+    height = obstacle_height_of(case)
+    try:
+        takeoff = solve_takeoff(case)
+        obstacle = takeoff.distance_to_obstacle_m
+        if obstacle is None:
+            notes.append(f"take-off: {takeoff.obstacle_reason}")
+    except NotAttainable as exc:
+        obstacle = None
+        notes.append(f"take-off: {exc}")
+    top = v_max if v_max is not None else float(p.scan(rho)[0][-1])
+    top = max(top, least)
+    n = min(_CLIMB_TABLE_MAX_POINTS, max(2, math.ceil((top - least) / _CLIMB_TABLE_STEP_M_S) + 1))
+    climb_v = np.linspace(least, top, n)
+    climb_rate = np.asarray(p.climb_rate(climb_v, rho), dtype=float)
+    speeds = [s for s in (v_max, vy, vx, least) if s is not None]
+    beyond = [s for s in speeds if is_extrapolated(prop, s)]
+    if beyond:
+        low, high = prop.tested_airspeed_m_s
+        warnings.append(
+            f"thrust model extrapolated at {min(beyond):.1f}-{max(beyond):.1f} m/s "
+            f"(tested {low:g}-{high:g} m/s)"
+        )
+    density_note = unlapsed_density_warning(prop, rho)
+    if density_note:
+        warnings.append(density_note)
+    if prop.reference_density_kg_m3 is None:
+        warnings.append(
+            "ceilings use thrust as measured at every altitude (no reference_density_kg_m3): "
+            "they are optimistic"
+        )
+    return PerformanceResult(
+        density_kg_m3=rho,
+        altitude_m=float(case.atmosphere.altitude_m),
+        stall_speed_m_s=stall,
+        stall_margin=p.margin,
+        least_airspeed_m_s=least,
+        polar_minimum_drag_speed_m_s=polar_vmd,
+        minimum_drag_speed_m_s=vmd,
+        min_level_speed_m_s=v_min,
+        max_level_speed_m_s=v_max,
+        max_climb_rate_m_s=max_rate,
+        best_climb_rate_speed_m_s=vy,
+        max_climb_gradient=max_grad,
+        best_climb_angle_speed_m_s=vx,
+        service_ceiling_m=service,
+        absolute_ceiling_m=absolute,
+        oei=tuple(oei),
+        oei_dead_engine_mode=p.mode,
+        takeoff_distance_to_obstacle_m=obstacle,
+        takeoff_obstacle_height_m=height,
+        climb_airspeed_m_s=climb_v,
+        climb_rate_curve_m_s=climb_rate,
+        notes=tuple(notes),
+        warnings=tuple(warnings),
+    )
