@@ -68,27 +68,61 @@ def _print_warnings(warnings: list[str]) -> None:
         typer.echo(f"  note: {line}")
 
 
+SamplesOption = typer.Option(
+    None, "--samples", help="Monte Carlo samples (default: the case's uncertainty block)."
+)
+SeedOption = typer.Option(None, "--seed", help="Seed of the samples (default: the block's, or 1).")
+WorkersOption = typer.Option(
+    None, "--workers", help="Run sample/sweep chunks in N local processes."
+)
+DaskOption = typer.Option(
+    None, "--dask", help="Send sample/sweep chunks to a Dask scheduler (tcp://HOST:PORT)."
+)
+
+
 @app.command()
 def check(
     case_file: Path | None = typer.Argument(None, help="Requirement file (default: TU-Flex)."),
     as_json: bool = JsonOption,
+    samples: int | None = SamplesOption,
+    seed: int | None = SeedOption,
+    workers: int | None = WorkersOption,
+    dask: str | None = DaskOption,
 ) -> None:
     """Verify every requirement in the case: value, limit, margin, PASS/FAIL."""
     from tuflexperf.analysis.requirements import check_case
     from tuflexperf.io.case import load_case
 
     case = load_case(case_file)
+    if workers is not None and workers < 1:
+        fail_input(f"--workers: must be at least 1, got {workers}")
+    if seed is not None and seed < 0:
+        fail_input(f"--seed: must be >= 0, got {seed}")
     verdicts = check_case(case)
     passed = all(v.passed for v in verdicts)
+    probabilistic: dict[str, Any] = {}
+    plan = None
+    if samples is not None or case.uncertainty is not None:
+        from tuflexperf.analysis.requirements import probabilistic_verdicts
+        from tuflexperf.analysis.uncertainty import plan_for, run_samples
+
+        plan = plan_for(case, samples, seed)
+        probabilistic = probabilistic_verdicts(run_samples(case, plan, workers, dask))
+        passed = passed and all(p.passed for p in probabilistic.values())
     if as_json:
-        emit_json(
-            {
-                "case": case.name,
-                "case_file": str(case.path),
-                "passed": passed,
-                "results": [v.to_dict() for v in verdicts],
-            }
-        )
+        results = [
+            {**v.to_dict(), **(probabilistic[v.name].to_dict() if v.name in probabilistic else {})}
+            for v in verdicts
+        ]
+        payload: dict[str, Any] = {
+            "case": case.name,
+            "case_file": str(case.path),
+            "passed": passed,
+            "results": results,
+        }
+        if plan is not None:
+            payload["uncertainty"] = plan.to_dict()
+        emit_json(payload)
     else:
         typer.echo(f"{case.name}  ({case.path})")
         header = f"{'requirement':<22}{'value':>10}{'limit':>10}{'unit':>10}{'margin':>10}  verdict"
@@ -103,8 +137,31 @@ def check(
             _print_warnings(v.details.get("warnings", []))
         if not verdicts:
             typer.echo("(the case states no requirements)")
+        if plan is not None:
+            _print_probabilities(plan, probabilistic)
         typer.echo(f"overall: {'PASS' if passed else 'FAIL'}")
     raise typer.Exit(0 if passed else 1)
+
+
+def _print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
+    typer.echo("")
+    typer.echo(
+        f"Monte Carlo: {plan.samples} samples, seed {plan.seed}; a requirement passes when the "
+        f"95 % interval of P(met) lies at or above {plan.required_probability:g}"
+    )
+    header = (f"{'requirement':<22}{'P(met)':>8}{'95 % CI':>17}{'p05':>10}{'p50':>10}"
+              f"{'p95':>10}{'n/a':>7}  verdict")
+    typer.echo(header)
+    typer.echo("-" * len(header))
+    for name, p in probabilistic.items():
+        low, high = p.probability_ci
+        p05, p50, p95 = p.quantiles
+        typer.echo(
+            f"{name:<22}{p.probability:>8.4f}{f'[{low:.4f}, {high:.4f}]':>17}{_fmt(p05):>10}"
+            f"{_fmt(p50):>10}{_fmt(p95):>10}{p.not_attainable:>7}  "
+            f"{'PASS' if p.passed else 'FAIL'}"
+        )
+    typer.echo("  (n/a: samples where the requirement is not attainable; they count as not met)")
 
 
 @app.command()

@@ -9,8 +9,25 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
 from tuflexperf.errors import NotAttainable
 from tuflexperf.io.case import Case
+
+MARGIN_TOLERANCE = 1e-12
+
+
+def requirement_met(values: ArrayLike, limits: ArrayLike, kind: str) -> NDArray[np.bool_]:
+    """Met per element by the same rule as :attr:`Verdict.passed`; NaN (not attainable) is not.
+
+    ``kind`` "max": ``value <= limit``; "min": ``value >= limit`` (margin >= -1e-12).
+    """
+    v = np.asarray(values, dtype=float)
+    limit = np.asarray(limits, dtype=float)
+    margin = limit - v if kind == "max" else v - limit
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(v) & (margin >= -MARGIN_TOLERANCE)
 
 
 @dataclass(frozen=True)
@@ -33,7 +50,7 @@ class Verdict:
 
     @property
     def passed(self) -> bool:
-        return self.margin is not None and self.margin >= -1e-12
+        return self.margin is not None and self.margin >= -MARGIN_TOLERANCE
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -206,3 +223,71 @@ def check_case(case: Case) -> list[Verdict]:
         result = CHECKS[name](case)
         verdicts.extend(result if isinstance(result, list) else [result])
     return verdicts
+
+
+# --- probabilistic verdicts (check --samples, SPEC 4 uncertainty block) --------------------
+CONFIDENCE = 0.95
+
+
+@dataclass(frozen=True)
+class ProbabilisticVerdict:
+    """How likely one requirement is met over the samples, and whether that is enough.
+
+    ``passed`` when the lower end of the two-sided 95 % Clopper-Pearson interval of
+    P(met) is at least ``required_probability`` (Hanson & Beard, NASA/TP-2010-216447:
+    a requirement shown met in y % of cases at a stated confidence). A not-attainable
+    sample counts as not met.
+    """
+
+    name: str
+    samples: int
+    met: int
+    not_attainable: int
+    probability_ci: tuple[float, float]
+    quantiles: tuple[float | None, float | None, float | None]
+    required_probability: float
+
+    @property
+    def probability(self) -> float:
+        return self.met / self.samples
+
+    @property
+    def passed(self) -> bool:
+        return self.probability_ci[0] >= self.required_probability
+
+    def to_dict(self) -> dict[str, Any]:
+        p05, p50, p95 = self.quantiles
+        return {
+            "probability": self.probability,
+            "probability_ci": list(self.probability_ci),
+            "p05": p05,
+            "p50": p50,
+            "p95": p95,
+            "samples": self.samples,
+            "samples_met": self.met,
+            "samples_not_attainable": self.not_attainable,
+            "required_probability": self.required_probability,
+            "probability_passed": self.passed,
+        }
+
+
+def probabilistic_verdicts(samples: Any) -> dict[str, ProbabilisticVerdict]:
+    """Per requirement of a :class:`tuflexperf.analysis.uncertainty.SampleSet`."""
+    from tuflexperf.analysis.probability import clopper_pearson
+    from tuflexperf.analysis.uncertainty import quantiles
+
+    out: dict[str, ProbabilisticVerdict] = {}
+    for name, values in samples.values.items():
+        kind = samples.kinds[name]
+        met = int(np.count_nonzero(requirement_met(values, samples.limits[name], kind)))
+        n = int(values.size)
+        out[name] = ProbabilisticVerdict(
+            name=name,
+            samples=n,
+            met=met,
+            not_attainable=int(np.count_nonzero(~np.isfinite(values))),
+            probability_ci=clopper_pearson(met, n, CONFIDENCE),
+            quantiles=tuple(quantiles(values, kind)),  # type: ignore[arg-type]
+            required_probability=samples.plan.required_probability,
+        )
+    return out

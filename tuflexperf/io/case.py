@@ -200,6 +200,52 @@ class Requirements(StrictModel):
     endurance: EnduranceRequirement | None = None
 
 
+class DistributionSchema(StrictModel):
+    """Exactly one of: ``normal: [mean, sd]``, ``uniform: [low, high]``,
+    ``truncated_normal: [mean, sd, low, high]``."""
+
+    normal: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
+    uniform: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
+    truncated_normal: Annotated[list[float], Field(min_length=4, max_length=4)] | None = None
+
+    @model_validator(mode="after")
+    def _check(self) -> DistributionSchema:
+        given = [k for k in ("normal", "uniform", "truncated_normal") if getattr(self, k)]
+        if len(given) != 1:
+            raise ValueError("give exactly one of normal, uniform, truncated_normal")
+        values = getattr(self, given[0])
+        if not all(math.isfinite(v) for v in values):
+            raise ValueError(f"{given[0]}: values must be finite")
+        if given[0] == "normal" and values[1] < 0:
+            raise ValueError("normal: [mean, sd] needs sd >= 0")
+        if given[0] == "uniform" and not values[0] <= values[1]:
+            raise ValueError("uniform: [low, high] needs low <= high")
+        if given[0] == "truncated_normal" and not (values[1] > 0 and values[2] < values[3]):
+            raise ValueError("truncated_normal: [mean, sd, low, high] needs sd > 0, low < high")
+        return self
+
+    @property
+    def kind(self) -> str:
+        return next(k for k in ("normal", "uniform", "truncated_normal") if getattr(self, k))
+
+    @property
+    def arguments(self) -> list[float]:
+        return list(getattr(self, self.kind))
+
+
+class PropulsionUncertaintySchema(StrictModel):
+    covariance: bool = True
+    extrapolation: bool = True
+
+
+class UncertaintySchema(StrictModel):
+    samples: Annotated[int, Field(ge=1, le=100_000_000)] = 10_000
+    seed: Annotated[int, Field(ge=0)] = 1
+    required_probability: Annotated[float, Field(gt=0, le=1)] = 0.95
+    propulsion: PropulsionUncertaintySchema = PropulsionUncertaintySchema()
+    parameters: dict[str, DistributionSchema] = {}
+
+
 class CaseSchema(StrictModel):
     name: str
     aircraft: str
@@ -207,6 +253,7 @@ class CaseSchema(StrictModel):
     battery: str | None = None
     atmosphere: AtmosphereSchema = AtmosphereSchema()
     requirements: Requirements = Requirements()
+    uncertainty: UncertaintySchema | None = None
 
 
 # --- loaded objects -------------------------------------------------------------------------
@@ -223,6 +270,7 @@ class Case:
     aircraft_path: Path
     propulsion_path: Path
     battery_path: Path | None
+    uncertainty: UncertaintySchema | None = None
 
     @property
     def density_kg_m3(self) -> float:
@@ -345,7 +393,13 @@ def load_case(path: Path | str | None = None) -> Case:
         aircraft_path=aircraft_path,
         propulsion_path=propulsion_path,
         battery_path=battery_path,
+        uncertainty=schema.uncertainty,
     )
     if not math.isfinite(case.density_kg_m3) or case.density_kg_m3 <= 0:
         raise InputError(f"{case_path}: atmosphere: gives no valid density")
+    if schema.uncertainty is not None:
+        from tuflexperf.io.dotted import check_key  # dotted keys need the loaded case
+
+        for key in schema.uncertainty.parameters:
+            check_key(case, key, f"{case_path}: uncertainty.parameters")
     return case

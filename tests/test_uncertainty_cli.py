@@ -1,0 +1,145 @@
+"""`check --samples`: JSON keys, verdict rule, exit codes, seeds, workers and a Dask cluster."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from tests.conftest import SHIPPED_CASE, write_case
+from tuflexperf.analysis.uncertainty import plan_for, run_samples
+from tuflexperf.cli import app
+from tuflexperf.io.case import load_case
+
+runner = CliRunner()
+
+
+def shipped_with(tmp_path, uncertainty: dict, requirements: dict | None = None):
+    data = yaml.safe_load(SHIPPED_CASE.read_text())
+    for key in ("aircraft", "propulsion", "battery"):
+        data[key] = str((SHIPPED_CASE.parent / data[key]).resolve())
+    data["uncertainty"] = uncertainty
+    if requirements is not None:
+        data["requirements"] = requirements
+    path = tmp_path / "case.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def test_samples_add_probability_columns_and_keep_the_deterministic_ones() -> None:
+    plain = json.loads(runner.invoke(app, ["check", "--json"]).stdout)
+    result = runner.invoke(app, ["check", "--json", "--samples", "3000", "--seed", "5"])
+    assert result.exit_code == 0, result.stdout
+    data = json.loads(result.stdout)
+    for before, after in zip(plain["results"], data["results"], strict=True):
+        for key in ("name", "value", "limit", "unit", "margin", "passed"):
+            assert after[key] == before[key]
+        assert set(after) >= {"probability", "probability_ci", "p05", "p50", "p95"}
+        low, high = after["probability_ci"]
+        assert 0.0 <= low <= after["probability"] <= high <= 1.0
+        assert after["p05"] <= after["p50"] <= after["p95"]
+    assert data["uncertainty"]["samples"] == 3000 and data["uncertainty"]["seed"] == 5
+    again = json.loads(runner.invoke(app, ["check", "--json", "--samples", "3000", "--seed",
+                                           "5"]).stdout)
+    assert again == data  # reproducible by seed
+    other = json.loads(runner.invoke(app, ["check", "--json", "--samples", "3000", "--seed",
+                                           "6"]).stdout)
+    assert other["results"][0]["p50"] != data["results"][0]["p50"]
+
+
+def test_not_attainable_samples_count_as_not_met_and_fail_the_verdict(tmp_path) -> None:
+    path = shipped_with(tmp_path, {
+        "samples": 2000, "seed": 2, "required_probability": 0.9,
+        "parameters": {"aircraft.mass_kg": {"uniform": [22.0, 60.0]}},
+    })
+    result = runner.invoke(app, ["check", str(path), "--json"])
+    assert result.exit_code == 1
+    data = json.loads(result.stdout)
+    assert data["passed"] is False
+    by_name = {r["name"]: r for r in data["results"]}
+    endurance = by_name["flight_endurance"]
+    assert endurance["samples_not_attainable"] > 0
+    assert endurance["samples_met"] + endurance["samples_not_attainable"] <= 2000
+    assert endurance["probability"] < 0.9 and endurance["probability_passed"] is False
+    assert endurance["passed"] is True  # the nominal (deterministic) column is unchanged
+    human = runner.invoke(app, ["check", str(path)])
+    assert human.exit_code == 1 and "P(met)" in human.stdout and "FAIL" in human.stdout
+
+
+def test_verdict_needs_the_lower_confidence_bound(tmp_path) -> None:
+    """All samples met but too few of them to show 0.999 at 95 % confidence: FAIL."""
+    path = shipped_with(tmp_path, {"samples": 100, "seed": 1, "required_probability": 0.999},
+                        {"takeoff": {"max_ground_roll_m": 60}})
+    data = json.loads(runner.invoke(app, ["check", str(path), "--json"]).stdout)
+    result = data["results"][0]
+    assert result["probability"] == 1.0 and result["probability_ci"][0] < 0.999
+    assert result["probability_passed"] is False and data["passed"] is False
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--samples", "0"], "--samples"),
+        (["--workers", "0"], "--workers"),
+    ],
+)
+def test_bad_flags_exit_2_one_line(args: list[str], message: str) -> None:
+    result = runner.invoke(app, ["check", *args])
+    assert result.exit_code == 2
+    assert message in result.stderr and result.stderr.count("\n") == 1
+
+
+def test_bad_uncertainty_block_names_the_key(tmp_path) -> None:
+    path = shipped_with(tmp_path, {"parameters": {"aircraft.mass_kgg": {"normal": [22, 1]}}})
+    result = runner.invoke(app, ["check", str(path)])
+    assert result.exit_code == 2
+    assert "aircraft.mass_kgg" in result.stderr and "aircraft.mass_kg" in result.stderr
+    path = shipped_with(tmp_path, {"parameters": {"aircraft.mass_kg": {"normal": [22, 1],
+                                                                       "uniform": [1, 2]}}})
+    result = runner.invoke(app, ["check", str(path)])
+    assert result.exit_code == 2 and "exactly one" in result.stderr
+
+
+def _uncertain_made_up(tmp_path):
+    path = write_case(tmp_path / "m", uncertainty={
+        "samples": 6000, "seed": 11,
+        "parameters": {"aircraft.mass_kg": {"normal": [18.0, 1.5]},
+                       "aircraft.cd0": {"truncated_normal": [0.03, 0.005, 0.02, 0.05]},
+                       "atmosphere.temperature_offset_k": {"uniform": [-10, 25]}},
+    })
+    return load_case(path)
+
+
+def test_workers_give_the_same_numbers(tmp_path) -> None:
+    case = _uncertain_made_up(tmp_path)
+    plan = plan_for(case)
+    here = run_samples(case, plan)
+    there = run_samples(case, plan, workers=2)
+    assert len(plan.chunks) > 1
+    for name in here.values:
+        np.testing.assert_array_equal(here.values[name], there.values[name])
+
+
+def test_dask_local_cluster_gives_the_same_numbers(tmp_path) -> None:
+    distributed = pytest.importorskip("distributed")
+    case = _uncertain_made_up(tmp_path)
+    plan = plan_for(case)
+    here = run_samples(case, plan)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        there = run_samples(case, plan, dask_address=cluster.scheduler_address)
+        result = runner.invoke(app, ["check", str(case.path), "--json", "--dask",
+                                     cluster.scheduler_address])
+    for name in here.values:
+        np.testing.assert_array_equal(here.values[name], there.values[name])
+    local = json.loads(runner.invoke(app, ["check", str(case.path), "--json"]).stdout)
+    assert json.loads(result.stdout)["results"] == local["results"]
+
+
+def test_unreachable_dask_scheduler_is_bad_input() -> None:
+    pytest.importorskip("distributed")
+    result = runner.invoke(app, ["check", "--samples", "10", "--dask", "tcp://127.0.0.1:9"])
+    assert result.exit_code == 2 and "--dask" in result.stderr

@@ -1,0 +1,442 @@
+"""Every requirement for a batch of parameter sets at once (samples, sweep grids, margins).
+
+The batch is vectorised, never a loop of single-case analyses: the model functions of
+:mod:`tuflexperf.models` are called once with array-valued aircraft, engines and
+densities (shape ``(B, 1)`` against airspeed nodes ``(1, K)``), and each analysis's
+iteration is replaced by its closed form or a fixed-node rule:
+
+- **take-off**: ``s = int_0^V_LO m V / F(V) dV`` and ``t = int m / F dV`` by composite
+  Gauss-Legendre quadrature, split where the friction clamp ``max(W - L, 0)`` kinks;
+  "never reaches lift-off" where ``F <= 0`` on the check grid (as :mod:`.takeoff`);
+- **trim / OEI**: the least throttle per envelope airspeed is the least root of the
+  thrust excess, a quadratic in throttle (poly22), by
+  :func:`tuflexperf.models.thrust.least_throttle_reaching`;
+- **endurance**: the same steps as :class:`tuflexperf.analysis.endurance.EnduranceModel`
+  (launch charge by the same RK4, level-flight speed, cut-off charge, Gauss-Legendre
+  discharge time) with bisection vectorised over the batch instead of Newton per case.
+
+A not-attainable parameter set gives NaN, never a dropped row. The thrust model may be
+perturbed per sample: coefficients ``(E, B, 6)`` and an extrapolation error ``(E, B)``
+[N] added beyond the tested airspeed range (SPEC 4, uncertainty block).
+``tests/verification/test_batch_equals_deterministic.py`` holds this module to the
+deterministic analyses.
+
+References
+----------
+Raymer, *Aircraft Design*, 17.8 (ground roll); Anderson, *Aircraft Performance and
+Design*, 5.3 (level flight); Abramowitz & Stegun 25.4.29 (Gauss-Legendre).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tuflexperf.analysis.level_flight import airspeed_grid
+from tuflexperf.io.case import Case
+from tuflexperf.models.aircraft import (
+    Aircraft,
+    ground_roll_net_force_n,
+    level_flight_drag_n,
+    liftoff_speed_m_s,
+    stall_speed_m_s,
+)
+from tuflexperf.models.atmosphere import isa_density_kg_m3
+from tuflexperf.models.thrust import (
+    POLY22_TERMS,
+    Propulsion,
+    density_ratio,
+    engine_thrust_n,
+    least_throttle_reaching,
+    total_thrust_n,
+    windmilling_thrust_n,
+)
+
+Array = NDArray[np.float64]
+_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(16)
+_PANELS = 4  # composite rule: 4 panels x 16 nodes per smooth piece
+_HISTORY_POINTS = 101  # as analysis.takeoff.HISTORY_POINTS: check grid and time history
+
+
+@dataclass(frozen=True)
+class Requirement:
+    """One requirement of the case: its name, unit, kind ("max"/"min") and block."""
+
+    name: str
+    unit: str
+    kind: str
+    block: str
+    limit_key: str
+
+
+REQUIREMENTS: dict[str, Requirement] = {
+    "takeoff": Requirement("takeoff_ground_roll", "m", "max", "takeoff", "max_ground_roll_m"),
+    "envelope": Requirement("trim_throttle_max", "fraction", "max", "envelope",
+                            "max_trim_throttle"),
+    "oei": Requirement("oei_min_throttle", "fraction", "max", "oei", "max_throttle"),
+    "endurance": Requirement("flight_endurance", "min", "min", "endurance",
+                             "min_flight_time_min"),
+}
+
+
+def present_requirements(case: Case) -> list[Requirement]:
+    """The case's requirement blocks, in the order ``check`` reports them."""
+    return [r for key, r in REQUIREMENTS.items() if getattr(case.requirements, key) is not None]
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Per requirement: values (NaN = not attainable) and limits, each of shape ``(B,)``."""
+
+    values: dict[str, Array]
+    limits: dict[str, Array]
+    kinds: dict[str, str] = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
+
+    def met(self, name: str) -> NDArray[np.bool_]:
+        """Met per sample, by the verdict rule of :mod:`tuflexperf.analysis.requirements`."""
+        from tuflexperf.analysis.requirements import requirement_met
+
+        return requirement_met(self.values[name], self.limits[name], self.kinds[name])
+
+
+def _column(values: Mapping[str, Array], key: str, nominal: Any, size: int) -> Any:
+    """The batch's values of ``key`` as ``(B, 1)``, or the nominal when it does not vary."""
+    if key in values:
+        return np.asarray(values[key], dtype=float).reshape(size, 1)
+    return nominal
+
+
+class BatchEvaluator:
+    """All requirements of one case for batches of parameter values (build once per case).
+
+    Parameters
+    ----------
+    case : Case
+        The nominal case; its keys not in a batch keep their nominal values.
+    """
+
+    def __init__(self, case: Case) -> None:
+        self.case = case
+        self.requirements = present_requirements(case)
+        self._endurance: Any = None
+        if case.requirements.endurance is not None:
+            from tuflexperf.analysis.endurance import endurance_model
+
+            self._endurance = endurance_model(case)
+
+    # -- the batch's model objects -----------------------------------------------------------
+    def _aircraft(self, values: Mapping[str, Array], size: int) -> Aircraft:
+        base = self.case.aircraft
+        top = {f.name: _column(values, f"aircraft.{f.name}", getattr(base, f.name), size)
+               for f in dataclasses.fields(base) if f.name not in ("name", "takeoff")}
+        takeoff = dataclasses.replace(
+            base.takeoff,
+            **{f.name: _column(values, f"aircraft.takeoff.{f.name}",
+                               getattr(base.takeoff, f.name), size)
+               for f in dataclasses.fields(base.takeoff)},
+        )
+        return dataclasses.replace(base, **top, takeoff=takeoff)
+
+    def _density(self, values: Mapping[str, Array], size: int) -> Any:
+        if not any(key.startswith("atmosphere.") for key in values):
+            return self.case.density_kg_m3
+        atmosphere = self.case.atmosphere
+        altitude = _column(values, "atmosphere.altitude_m", atmosphere.altitude_m, size)
+        offset = _column(values, "atmosphere.temperature_offset_k",
+                         atmosphere.temperature_offset_k, size)
+        return np.asarray(isa_density_kg_m3(altitude * np.ones((size, 1)), offset), dtype=float)
+
+    def _propulsion(self, coefficients: Array | None) -> Propulsion:
+        base = self.case.propulsion
+        if coefficients is None:
+            return base
+        engines = tuple(
+            dataclasses.replace(
+                engine,
+                coefficients={t: coefficients[j, :, i][:, None]
+                              for i, t in enumerate(POLY22_TERMS)},
+            )
+            for j, engine in enumerate(base.engines)
+        )
+        return dataclasses.replace(base, engines=engines)
+
+    def _limit(self, values: Mapping[str, Array], requirement: Requirement, size: int) -> Array:
+        block = getattr(self.case.requirements, requirement.block)
+        key = f"requirements.{requirement.block}.{requirement.limit_key}"
+        nominal = float(getattr(block, requirement.limit_key))
+        column = np.asarray(_column(values, key, nominal, size), dtype=float)
+        return np.broadcast_to(column.reshape(-1), (size,)).copy()
+
+    # -- evaluation ---------------------------------------------------------------------------
+    def evaluate(
+        self,
+        values: Mapping[str, Array] | None = None,
+        size: int | None = None,
+        coefficients: Array | None = None,
+        extrapolation_n: Array | None = None,
+    ) -> BatchResult:
+        """Every requirement's value for each of ``B`` parameter sets.
+
+        Parameters
+        ----------
+        values : mapping of dotted key to array ``(B,)``
+            Parameter values (SI units as the key names); absent keys stay nominal.
+        size : int, optional
+            ``B``; inferred from ``values`` or ``coefficients`` when omitted.
+        coefficients : array ``(E, B, 6)``, optional
+            Thrust coefficients per engine and sample (POLY22_TERMS order, the file's units).
+        extrapolation_n : array ``(E, B)``, optional
+            Thrust error [N] per engine and sample added beyond the tested airspeed range.
+
+        Returns
+        -------
+        BatchResult
+            NaN where a requirement is not attainable for that parameter set.
+        """
+        values = dict(values or {})
+        if size is None:
+            if values:
+                size = int(np.asarray(next(iter(values.values()))).size)
+            elif coefficients is not None:
+                size = int(coefficients.shape[1])
+            else:
+                size = 1
+        model = _Model(
+            aircraft=self._aircraft(values, size),
+            propulsion=self._propulsion(coefficients),
+            density=self._density(values, size),
+            extrapolation_n=extrapolation_n,
+            size=size,
+        )
+        out: dict[str, Array] = {}
+        limits: dict[str, Array] = {}
+        roll: tuple[Array, Array, Array, Array] | None = None
+        for requirement in self.requirements:
+            limits[requirement.name] = self._limit(values, requirement, size)
+            if requirement.block == "takeoff":
+                roll = roll or model.ground_roll()
+                out[requirement.name] = roll[0]
+            elif requirement.block == "envelope":
+                out[requirement.name] = model.trim_max_throttle(self._grid())
+            elif requirement.block == "oei":
+                mode = self.case.requirements.oei.dead_engine
+                out[requirement.name] = model.oei_min_throttle(self._grid(), mode)
+            else:
+                roll = roll or model.ground_roll()
+                key = "requirements.endurance.throttle"
+                throttle = _column(values, key, self.case.requirements.endurance.throttle, size)
+                throttle = np.asarray(throttle, dtype=float).reshape(-1) * np.ones(size)
+                out[requirement.name] = model.flight_endurance_min(
+                    self._endurance, throttle, roll
+                )
+        return BatchResult(
+            values=out,
+            limits=limits,
+            kinds={r.name: r.kind for r in self.requirements},
+            units={r.name: r.unit for r in self.requirements},
+        )
+
+    def _grid(self) -> Array:
+        if getattr(self, "_grid_cache", None) is not None:
+            return self._grid_cache
+        envelope = self.case.requirements.envelope
+        if envelope is None:
+            from tuflexperf.analysis.trim import envelope_of
+
+            envelope_of(self.case)  # raises the InputError naming the case
+        self._grid_cache = airspeed_grid(envelope.min_airspeed_m_s, envelope.max_airspeed_m_s)
+        return self._grid_cache
+
+
+@dataclass
+class _Model:
+    """The batch's physics: array-valued aircraft/engines through the model functions."""
+
+    aircraft: Aircraft
+    propulsion: Propulsion
+    density: Any
+    extrapolation_n: Array | None
+    size: int
+    _uniform: Array | None = None
+    _terms: Any = None
+
+    def thrust(self, throttle: Any, speed: Array, dead: int | None = None,
+               mode: str = "windmilling") -> Array:
+        """Total thrust [N]; the extrapolation error adds to each live engine beyond the range."""
+        total = total_thrust_n(self.propulsion, throttle, speed, self.density, dead, mode)
+        if self.extrapolation_n is not None:
+            low, high = self.propulsion.tested_airspeed_m_s
+            outside = ((speed > high + 1e-9) | (speed < low - 1e-9)).astype(float)
+            scale = density_ratio(self.propulsion, self.density)
+            for j in range(len(self.propulsion.engines)):
+                if j != dead:
+                    total = total + scale * outside * self.extrapolation_n[j][:, None]
+        total = np.asarray(total, dtype=float)
+        return np.broadcast_to(total, np.broadcast_shapes(total.shape, (self.size, 1)))
+
+    # -- take-off -----------------------------------------------------------------------------
+    def net_force(self, speed: Array) -> Array:
+        thrust = self.thrust(1.0, speed)
+        return np.asarray(
+            ground_roll_net_force_n(self.aircraft, thrust, speed, self.density), dtype=float
+        ) * np.ones((self.size, 1))
+
+    def liftoff_speed(self) -> Array:
+        return np.asarray(liftoff_speed_m_s(self.aircraft, self.density), dtype=float) \
+            * np.ones((self.size, 1))
+
+    def _breaks(self, v_lo: Array) -> list[Array]:
+        """Where the integrand kinks in [0, V_LO]: friction clamp (L = W), tested range end."""
+        to = self.aircraft.takeoff
+        with np.errstate(divide="ignore", invalid="ignore"):
+            clamp = np.sqrt(2.0 * self.aircraft.weight_n
+                            / (self.density * self.aircraft.wing_area_m2 * to.cl_ground))
+        clamp = np.where(np.isfinite(clamp), clamp, np.inf) * np.ones_like(v_lo)
+        edge = np.full_like(v_lo, self.propulsion.tested_airspeed_m_s[1])
+        first = np.minimum(np.minimum(clamp, edge), v_lo)
+        second = np.minimum(np.maximum(clamp, edge), v_lo)
+        return [np.zeros_like(v_lo), first, second, v_lo]
+
+    def _integrate(self, low: Array, high: Array, panels: int) -> tuple[Array, Array]:
+        """Composite Gauss-Legendre of ``m V / F`` and ``m / F`` over [low, high] per row."""
+        width = (high - low) / panels
+        starts = low + width * np.arange(panels)[None, :]
+        nodes = (starts[:, :, None] + 0.5 * width[:, :, None] * (_GL_NODES + 1.0)).reshape(
+            self.size, -1)
+        weights = np.tile(_GL_WEIGHTS, panels)[None, :] * 0.5 * width
+        force = self.net_force(nodes)
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            distance = np.sum(weights * mass * nodes / force, axis=1)
+            time = np.sum(weights * mass / force, axis=1)
+        return distance, time
+
+    def uniform_force(self) -> Array:
+        """Net force [N] at 101 equally spaced airspeeds from rest to V_LO (memoised)."""
+        if self._uniform is None:
+            v_lo = self.liftoff_speed()
+            speeds = v_lo * np.linspace(0.0, 1.0, _HISTORY_POINTS)[None, :]
+            self._uniform = self.net_force(speeds)
+        return self._uniform
+
+    def ground_roll(self) -> tuple[Array, Array, Array, Array]:
+        """Ground roll [m], time [s], lift-off speed [m/s], and attainable (1/0) per row.
+
+        Not attainable where the net force is not positive on the 101-point check grid
+        from rest to the lift-off speed (a vanishing force means no lift-off).
+        """
+        v_lo = self.liftoff_speed()
+        attainable = np.all(self.uniform_force() > 0.0, axis=1)
+        breaks = self._breaks(v_lo)
+        distance = np.zeros(self.size)
+        time = np.zeros(self.size)
+        for low, high in zip(breaks[:-1], breaks[1:], strict=True):
+            if np.all(high <= low):
+                continue  # this kink lies beyond lift-off for every row
+            d, t = self._integrate(low, high, _PANELS)
+            distance, time = distance + d, time + t
+        ok = attainable & np.isfinite(distance) & np.isfinite(time)
+        return (np.where(ok, distance, np.nan), np.where(ok, time, np.nan), v_lo[:, 0],
+                ok.astype(float))
+
+    def roll_history(self) -> Array:
+        """Time [s] at 101 equally spaced airspeeds from rest to V_LO (as the CVODES history).
+
+        Cumulative integral of ``m / F`` on the uniform nodes by the four-point rule
+        ``h/24 (-g_{i-1} + 13 g_i + 13 g_{i+1} - g_{i+2})`` (trapezoid-corrected, O(h^5) per
+        panel; one-sided at the ends), from the same force values as the check grid.
+        """
+        v_lo = self.liftoff_speed()
+        h = v_lo / (_HISTORY_POINTS - 1)
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float).reshape(-1, 1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g = mass / self.uniform_force()
+        left = np.concatenate([2 * g[:, :1] - g[:, 1:2], g[:, :-2]], axis=1)
+        right = np.concatenate([g[:, 2:], 2 * g[:, -1:] - g[:, -2:-1]], axis=1)
+        pieces = h / 24.0 * (-left + 13.0 * g[:, :-1] + 13.0 * g[:, 1:] - right)
+        return np.concatenate([np.zeros((self.size, 1)), np.cumsum(pieces, axis=1)], axis=1)
+
+    # -- level flight --------------------------------------------------------------------------
+    def _engine_thrusts(self, speed: Array) -> tuple[list[list[Array]], list[Array]]:
+        """Per engine: thrust [N] at throttle 0, 1/2, 1 (with its extrapolation error), and
+        its dead-engine contribution, as :func:`total_thrust_n` sums them."""
+        scale = density_ratio(self.propulsion, self.density)
+        outside = None
+        if self.extrapolation_n is not None:
+            low, high = self.propulsion.tested_airspeed_m_s
+            outside = ((speed > high + 1e-9) | (speed < low - 1e-9)).astype(float)
+        live, dead = [], []
+        for j, engine in enumerate(self.propulsion.engines):
+            error = 0.0 if outside is None else scale * outside * self.extrapolation_n[j][:, None]
+            live.append([engine_thrust_n(engine, x, speed, scale) + error for x in (0.0, 0.5, 1.0)])
+            dead.append(windmilling_thrust_n(engine, speed, scale))
+        return live, dead
+
+    def least_throttle(self, speed: Array, dead: int | None = None,
+                       mode: str = "windmilling",
+                       terms: tuple[list[list[Array]], list[Array]] | None = None) -> Array:
+        """Least throttle [fraction] for level flight at each airspeed; NaN where none.
+
+        The total thrust is quadratic in throttle (poly22): its coefficients from its values
+        at throttle 0, 1/2 and 1, the least root by :func:`least_throttle_reaching` (one
+        closed form for trim, OEI, endurance and the export). ``terms`` reuses the engines'
+        thrusts at these airspeeds across dead-engine cases.
+        """
+        live, windmill = terms if terms is not None else self._engine_thrusts(speed)
+        t0, th, t1 = (
+            sum(live[j][i] for j in range(len(live)) if j != dead) for i in range(3)
+        )
+        if dead is not None and mode == "windmilling":
+            t0, th, t1 = t0 + windmill[dead], th + windmill[dead], t1 + windmill[dead]
+        quadratic = 2.0 * (t1 - 2.0 * th + t0)
+        linear = t1 - t0 - quadratic
+        drag = np.asarray(level_flight_drag_n(self.aircraft, speed, self.density), dtype=float)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            throttle, reached = least_throttle_reaching(quadratic, linear, t0 - drag)
+        throttle = np.where(np.asarray(reached) > 0.5, np.asarray(throttle, dtype=float), np.nan)
+        return np.broadcast_to(throttle, np.broadcast_shapes(throttle.shape, (self.size, 1)))
+
+    def trim_max_throttle(self, grid: Array) -> Array:
+        """Highest least throttle over the envelope grid; NaN if any airspeed is not attainable."""
+        throttle = self.least_throttle(grid[None, :], terms=self._grid_terms(grid))
+        return np.where(np.all(np.isfinite(throttle), axis=1), np.max(throttle, axis=1), np.nan)
+
+    def oei_min_throttle(self, grid: Array, mode: str) -> Array:
+        """Worse dead engine's least throttle over the grid; NaN if one has no level flight."""
+        worst = np.full(self.size, -np.inf)
+        terms = self._grid_terms(grid)
+        for dead in range(len(self.propulsion.engines)):
+            throttle = self.least_throttle(grid[None, :], dead, mode, terms)
+            best = np.min(np.where(np.isfinite(throttle), throttle, np.inf), axis=1)
+            worst = np.maximum(worst, best)
+        return np.where(np.isfinite(worst), worst, np.nan)
+
+    def _grid_terms(self, grid: Array) -> tuple[list[list[Array]], list[Array]]:
+        if self._terms is None or self._terms[0] is not grid:
+            self._terms = (grid, self._engine_thrusts(grid[None, :]))
+        return self._terms[1]
+
+    # -- endurance ----------------------------------------------------------------------------
+    def flight_endurance_min(self, model: Any, throttle: Array,
+                             roll: tuple[Array, Array, Array, Array]) -> Array:
+        """Flight endurance [min] at ``throttle`` per row (see :class:`EnduranceModel`)."""
+        from tuflexperf.analysis import batch_endurance
+
+        return batch_endurance.flight_endurance_min(self, model, throttle, roll)
+
+
+def stall_speed(model: _Model) -> Array:
+    """1-g stall speed [m/s] per row."""
+    return np.asarray(stall_speed_m_s(model.aircraft, model.density), dtype=float).reshape(-1) \
+        * np.ones(model.size)
+
+
+def nominal_engines(propulsion: Propulsion) -> Array:
+    """The nominal coefficients as ``(E, 6)`` (POLY22_TERMS order)."""
+    return np.array([[e.coefficients[t] for t in POLY22_TERMS] for e in propulsion.engines])

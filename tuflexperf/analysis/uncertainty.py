@@ -1,0 +1,236 @@
+"""Monte Carlo over the case's uncertain parameters and thrust model, in seeded chunks.
+
+The samples are split in chunks of :data:`CHUNK_SIZE`; chunk ``i`` draws from
+``numpy.random.default_rng(SeedSequence(seed).spawn(n_chunks)[i])`` and is evaluated by
+:class:`tuflexperf.analysis.batch.BatchEvaluator` as one batch. The chunking does not
+depend on where chunks run, so in-process, ``--workers N`` local processes and a Dask
+cluster give the same numbers for the same seed.
+
+Draws per chunk, in this order: each declared parameter (sorted by key) -- normal
+``[mean, sd]``, uniform ``[low, high]``, truncated normal ``[mean, sd, low, high]`` by
+inverse CDF; then per engine the six thrust coefficients from the multivariate normal of
+the fit's covariance; then per engine the thrust error beyond the tested airspeed range,
+normal with standard deviation ``extrapolation_sd_n``.
+
+References
+----------
+Hanson & Beard (2010), "Applying Monte Carlo simulation to launch vehicle design and
+requirements verification", NASA/TP-2010-216447; O'Neill (2015), "PCG" / numpy
+``SeedSequence`` (independent streams by spawning).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tuflexperf.analysis.batch import BatchEvaluator, BatchResult, nominal_engines
+from tuflexperf.analysis.probability import normal_cdf, normal_ppf
+from tuflexperf.errors import InputError
+from tuflexperf.io.case import Case, UncertaintySchema
+
+Array = NDArray[np.float64]
+CHUNK_SIZE = 2500
+_evaluators: dict[str, BatchEvaluator] = {}
+
+
+@dataclass(frozen=True)
+class SamplingPlan:
+    """What to draw: ``parameters`` key -> (kind, arguments); thrust model switches."""
+
+    samples: int
+    seed: int
+    required_probability: float
+    parameters: tuple[tuple[str, str, tuple[float, ...]], ...]
+    covariance: bool
+    extrapolation: bool
+
+    @property
+    def chunks(self) -> list[int]:
+        """Sizes of the chunks (all :data:`CHUNK_SIZE` but the last)."""
+        full, rest = divmod(self.samples, CHUNK_SIZE)
+        return [CHUNK_SIZE] * full + ([rest] if rest else [])
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "samples": self.samples,
+            "seed": self.seed,
+            "required_probability": self.required_probability,
+            "chunk_size": CHUNK_SIZE,
+            "chunks": len(self.chunks),
+            "parameters": {key: {kind: list(args)} for key, kind, args in self.parameters},
+            "propulsion": {"covariance": self.covariance, "extrapolation": self.extrapolation},
+        }
+
+
+def plan_for(case: Case, samples: int | None = None, seed: int | None = None) -> SamplingPlan:
+    """The case's ``uncertainty:`` block, with ``--samples`` / ``--seed`` taking precedence."""
+    block = case.uncertainty or UncertaintySchema()
+    n = block.samples if samples is None else samples
+    if n < 1:
+        raise InputError(f"--samples: must be at least 1, got {n}")
+    return SamplingPlan(
+        samples=int(n),
+        seed=int(block.seed if seed is None else seed),
+        required_probability=float(block.required_probability),
+        parameters=tuple(
+            (key, dist.kind, tuple(dist.arguments))
+            for key, dist in sorted(block.parameters.items())
+        ),
+        covariance=bool(block.propulsion.covariance),
+        extrapolation=bool(block.propulsion.extrapolation),
+    )
+
+
+def _draw(rng: np.random.Generator, kind: str, args: Sequence[float], size: int) -> Array:
+    if kind == "normal":
+        return rng.normal(args[0], args[1], size)
+    if kind == "uniform":
+        return rng.uniform(args[0], args[1], size)
+    mean, sd, low, high = args
+    lo, hi = normal_cdf((low - mean) / sd), normal_cdf((high - mean) / sd)
+    u = lo + (hi - lo) * rng.uniform(0.0, 1.0, size)
+    return np.clip(mean + sd * normal_ppf(u), low, high)
+
+
+def _square_root(covariance: Array) -> Array:
+    """``L`` with ``L L^T = C`` for a positive semi-definite ``C`` (eigen-decomposition)."""
+    w, v = np.linalg.eigh(covariance)
+    return v * np.sqrt(np.maximum(w, 0.0))
+
+
+@dataclass(frozen=True)
+class ChunkDraw:
+    values: dict[str, Array]
+    coefficients: Array | None
+    extrapolation_n: Array | None
+    size: int
+
+
+def draw_chunk(case: Case, plan: SamplingPlan, index: int) -> ChunkDraw:
+    """The samples of chunk ``index`` (its own spawned seed; see the module docstring)."""
+    size = plan.chunks[index]
+    child = np.random.SeedSequence(plan.seed).spawn(len(plan.chunks))[index]
+    rng = np.random.default_rng(child)
+    values = {key: _draw(rng, kind, args, size) for key, kind, args in plan.parameters}
+    engines = case.propulsion.engines
+    coefficients = None
+    if plan.covariance and any(e.covariance is not None for e in engines):
+        nominal = nominal_engines(case.propulsion)
+        coefficients = np.empty((len(engines), size, nominal.shape[1]))
+        for j, engine in enumerate(engines):
+            z = rng.standard_normal((size, nominal.shape[1]))
+            spread = (z @ _square_root(np.asarray(engine.covariance)).T
+                      if engine.covariance is not None else 0.0)
+            coefficients[j] = nominal[j] + spread
+    extrapolation = None
+    if plan.extrapolation and any(e.extrapolation_sd_n for e in engines):
+        extrapolation = np.stack([
+            rng.standard_normal(size) * float(e.extrapolation_sd_n or 0.0) for e in engines
+        ])
+    return ChunkDraw(values, coefficients, extrapolation, size)
+
+
+def evaluator_for(case: Case) -> BatchEvaluator:
+    """One :class:`BatchEvaluator` per case and process (workers build theirs once)."""
+    key = repr(case)
+    if key not in _evaluators:
+        _evaluators.clear()  # one case per process at a time is all the CLI needs
+        _evaluators[key] = BatchEvaluator(case)
+    return _evaluators[key]
+
+
+def evaluate_chunk(case: Case, plan: SamplingPlan, index: int) -> dict[str, Array]:
+    """Draw and evaluate chunk ``index``: per requirement its values (NaN = not attainable).
+
+    A module-level function of picklable arguments, so local processes and Dask workers
+    run it as they are.
+    """
+    draw = draw_chunk(case, plan, index)
+    result = evaluator_for(case).evaluate(
+        draw.values, draw.size, draw.coefficients, draw.extrapolation_n
+    )
+    out = {f"value:{k}": v for k, v in result.values.items()}
+    out.update({f"limit:{k}": v for k, v in result.limits.items()})
+    return out
+
+
+def run_chunks(
+    function: Callable[..., dict[str, Array]],
+    arguments: Sequence[tuple[Any, ...]],
+    workers: int | None = None,
+    dask_address: str | None = None,
+) -> list[dict[str, Array]]:
+    """``function(*a)`` for each argument tuple, in order: here, in processes, or on Dask."""
+    if dask_address:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise InputError(
+                "--dask: dask.distributed is not installed (pip install 'tuflexperf[dask]')"
+            ) from None
+        try:
+            client = Client(dask_address, timeout="10s")
+        except (OSError, TimeoutError) as exc:
+            raise InputError(f"--dask: cannot reach the scheduler at {dask_address}: {exc}") \
+                from None
+        try:
+            futures = [client.submit(function, *a, pure=False) for a in arguments]
+            return list(client.gather(futures))
+        finally:
+            client.close()
+    if workers is not None and workers > 1 and len(arguments) > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            return list(pool.map(function, *zip(*arguments, strict=True)))
+    return [function(*a) for a in arguments]
+
+
+@dataclass(frozen=True)
+class SampleSet:
+    """Every sample's value per requirement (NaN = not attainable) and the plan."""
+
+    plan: SamplingPlan
+    values: dict[str, Array]
+    limits: dict[str, Array]
+    kinds: dict[str, str] = field(default_factory=dict)
+
+
+def run_samples(
+    case: Case,
+    plan: SamplingPlan,
+    workers: int | None = None,
+    dask_address: str | None = None,
+) -> SampleSet:
+    """All chunks of ``plan`` for ``case``; the same numbers wherever the chunks run."""
+    parts = run_chunks(
+        evaluate_chunk,
+        [(case, plan, i) for i in range(len(plan.chunks))],
+        workers,
+        dask_address,
+    )
+    names = [k.split(":", 1)[1] for k in parts[0] if k.startswith("value:")]
+    values = {n: np.concatenate([p[f"value:{n}"] for p in parts]) for n in names}
+    limits = {n: np.concatenate([p[f"limit:{n}"] for p in parts]) for n in names}
+    kinds = {r.name: r.kind for r in evaluator_for(case).requirements}
+    return SampleSet(plan, values, limits, kinds)
+
+
+def as_batch(samples: SampleSet) -> BatchResult:
+    """The samples as a :class:`BatchResult` (to use its verdict rule)."""
+    return BatchResult(samples.values, samples.limits, samples.kinds)
+
+
+def quantiles(values: Array, kind: str) -> list[float | None]:
+    """5/50/95 % values; a not-attainable sample counts as the worst value (None if reached)."""
+    worst = math.inf if kind == "max" else -math.inf
+    filled = np.where(np.isfinite(values), values, worst)
+    q = np.quantile(filled, [0.05, 0.5, 0.95], method="inverted_cdf")
+    return [float(x) if math.isfinite(x) else None for x in q]
+

@@ -1,0 +1,107 @@
+"""Dotted parameter keys of a case (``aircraft.mass_kg``, ``atmosphere.altitude_m``, ...).
+
+One place that lists a case's numeric keys with their nominal values and builds a case
+with some of them changed, validated by the same schemas as the files. Used by the
+``uncertainty:`` block, ``margins`` and ``sweep --vary``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+from collections.abc import Mapping
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from tuflexperf.errors import InputError
+from tuflexperf.io.case import AircraftSchema, Case, Requirements
+from tuflexperf.models.aircraft import Aircraft
+
+# Keys that are numbers but not parameters one may vary (the envelope's grid, labels).
+_FIXED = {
+    "requirements.envelope.min_airspeed_m_s",
+    "requirements.envelope.max_airspeed_m_s",
+}
+
+
+def _flatten(prefix: str, value: Any, out: dict[str, float]) -> None:
+    if isinstance(value, Mapping):
+        for key, item in value.items():
+            _flatten(f"{prefix}.{key}", item, out)
+    elif isinstance(value, (int, float)) and not isinstance(value, bool):
+        out[prefix] = float(value)
+
+
+def numeric_keys(case: Case) -> dict[str, float]:
+    """Every numeric key of the case, aircraft and atmosphere that may vary, with its value."""
+    out: dict[str, float] = {}
+    _flatten("aircraft", dataclasses.asdict(case.aircraft), out)
+    _flatten("atmosphere", case.atmosphere.model_dump(), out)
+    _flatten("requirements", case.requirements.model_dump(exclude_none=True), out)
+    for key in _FIXED:
+        out.pop(key, None)
+    return out
+
+
+def check_key(case: Case, key: str, where: str) -> None:
+    """Raise :class:`InputError` naming ``where`` and the closest key if ``key`` is unknown."""
+    known = numeric_keys(case)
+    if key in known:
+        return
+    if key.startswith("battery.") or key.startswith("propulsion."):
+        raise InputError(
+            f"{where}: {key}: battery and propulsion keys cannot be varied here "
+            "(the thrust model's uncertainty is `uncertainty.propulsion`)"
+        )
+    close = difflib.get_close_matches(key, list(known), n=1)
+    hint = f" (did you mean {close[0]}?)" if close else ""
+    raise InputError(f"{where}: unknown or non-numeric key {key!r}{hint}")
+
+
+def _replace_pydantic(model: BaseModel, path: list[str], value: float) -> BaseModel:
+    data = model.model_dump()
+    node = data
+    for part in path[:-1]:
+        node = node[part]
+    node[path[-1]] = value
+    return type(model).model_validate(data)
+
+
+def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -> Case:
+    """The case with the dotted keys set to ``values``, validated like the files.
+
+    Raises
+    ------
+    InputError
+        Naming ``where`` and the key when a key is unknown or a value out of range.
+    """
+    aircraft = dataclasses.asdict(case.aircraft)
+    atmosphere, requirements = case.atmosphere, case.requirements
+    for key, value in values.items():
+        check_key(case, key, where)
+        head, *rest = key.split(".")
+        try:
+            if head == "aircraft":
+                node = aircraft
+                for part in rest[:-1]:
+                    node = node[part]
+                node[rest[-1]] = float(value)
+            elif head == "atmosphere":
+                atmosphere = _replace_pydantic(atmosphere, rest, float(value))
+            else:
+                requirements = _replace_pydantic(requirements, rest, float(value))
+        except ValidationError as exc:
+            raise InputError(f"{where}: {key}={value:g}: {exc.errors()[0]['msg']}") from None
+    try:
+        AircraftSchema.model_validate({k: v for k, v in aircraft.items()})
+    except ValidationError as exc:
+        error = exc.errors()[0]
+        loc = ".".join(str(p) for p in error["loc"])
+        raise InputError(f"{where}: aircraft.{loc}: {error['msg']}") from None
+    takeoff = dataclasses.replace(case.aircraft.takeoff, **aircraft.pop("takeoff"))
+    new_aircraft = Aircraft(**{**aircraft, "takeoff": takeoff})
+    assert isinstance(requirements, Requirements)
+    return dataclasses.replace(
+        case, aircraft=new_aircraft, atmosphere=atmosphere, requirements=requirements
+    )
