@@ -38,13 +38,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis.level_flight import airspeed_grid
+from tuflexperf.analysis.takeoff import obstacle_height_of
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     Aircraft,
+    climb_gradient,
     ground_roll_net_force_n,
     level_flight_drag_n,
     liftoff_speed_m_s,
+    obstacle_distances_m,
     stall_speed_m_s,
+    transition_radius_m,
+    transition_speed_m_s,
 )
 from tuflexperf.models.atmosphere import isa_density_kg_m3
 from tuflexperf.models.thrust import (
@@ -74,19 +79,24 @@ class Requirement:
     limit_key: str
 
 
-REQUIREMENTS: dict[str, Requirement] = {
-    "takeoff": Requirement("takeoff_ground_roll", "m", "max", "takeoff", "max_ground_roll_m"),
-    "envelope": Requirement("trim_throttle_max", "fraction", "max", "envelope",
-                            "max_trim_throttle"),
-    "oei": Requirement("oei_min_throttle", "fraction", "max", "oei", "max_throttle"),
-    "endurance": Requirement("flight_endurance", "min", "min", "endurance",
-                             "min_flight_time_min"),
-}
+REQUIREMENTS: tuple[Requirement, ...] = (
+    Requirement("takeoff_ground_roll", "m", "max", "takeoff", "max_ground_roll_m"),
+    Requirement("takeoff_distance_to_obstacle", "m", "max", "takeoff",
+                "max_distance_to_obstacle_m"),
+    Requirement("trim_throttle_max", "fraction", "max", "envelope", "max_trim_throttle"),
+    Requirement("oei_min_throttle", "fraction", "max", "oei", "max_throttle"),
+    Requirement("flight_endurance", "min", "min", "endurance", "min_flight_time_min"),
+)
 
 
 def present_requirements(case: Case) -> list[Requirement]:
-    """The case's requirement blocks, in the order ``check`` reports them."""
-    return [r for key, r in REQUIREMENTS.items() if getattr(case.requirements, key) is not None]
+    """The case's requirements, in the order ``check`` reports them."""
+    out = []
+    for r in REQUIREMENTS:
+        block = getattr(case.requirements, r.block)
+        if block is not None and getattr(block, r.limit_key) is not None:
+            out.append(r)
+    return out
 
 
 @dataclass(frozen=True)
@@ -168,7 +178,7 @@ class BatchEvaluator:
 
     def _limit(self, values: Mapping[str, Array], requirement: Requirement, size: int) -> Array:
         block = getattr(self.case.requirements, requirement.block)
-        key = f"requirements.{requirement.block}.{requirement.limit_key}"
+        key = f"requirements.{requirement.block}.{requirement.limit_key}"  # a dotted key
         nominal = float(getattr(block, requirement.limit_key))
         column = np.asarray(_column(values, key, nominal, size), dtype=float)
         return np.broadcast_to(column.reshape(-1), (size,)).copy()
@@ -219,9 +229,14 @@ class BatchEvaluator:
         roll: tuple[Array, Array, Array, Array] | None = None
         for requirement in self.requirements:
             limits[requirement.name] = self._limit(values, requirement, size)
-            if requirement.block == "takeoff":
+            if requirement.name == "takeoff_ground_roll":
                 roll = roll or model.ground_roll()
                 out[requirement.name] = roll[0]
+            elif requirement.name == "takeoff_distance_to_obstacle":
+                roll = roll or model.ground_roll()
+                height = _column(values, "requirements.takeoff.obstacle_height_m",
+                                 obstacle_height_of(self.case), size)
+                out[requirement.name] = model.distance_to_obstacle(roll, height)
             elif requirement.block == "envelope":
                 out[requirement.name] = model.trim_max_throttle(self._grid())
             elif requirement.block == "oei":
@@ -332,7 +347,10 @@ class _Model:
         from rest to the lift-off speed (a vanishing force means no lift-off).
         """
         v_lo = self.liftoff_speed()
-        attainable = np.all(self.uniform_force() > 0.0, axis=1)
+        # a sampled lift-off speed below stall cannot lift off (bad input for one case)
+        stall = stall_speed(self)[:, None]
+        attainable = np.all(self.uniform_force() > 0.0, axis=1) & (
+            v_lo >= stall * (1.0 - 1e-12))[:, 0]
         breaks = self._breaks(v_lo)
         distance = np.zeros(self.size)
         time = np.zeros(self.size)
@@ -342,8 +360,24 @@ class _Model:
             d, t = self._integrate(low, high, _PANELS)
             distance, time = distance + d, time + t
         ok = attainable & np.isfinite(distance) & np.isfinite(time)
+        # rotation on the ground at the lift-off speed (Raymer 17.8.2: S_R = V_LO t_R)
+        rotation = np.asarray(self.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
+            * np.ones(self.size)
+        distance = distance + v_lo[:, 0] * rotation
+        time = time + rotation
         return (np.where(ok, distance, np.nan), np.where(ok, time, np.nan), v_lo[:, 0],
                 ok.astype(float))
+
+    def distance_to_obstacle(self, roll: tuple[Array, Array, Array, Array],
+                             height: Any) -> Array:
+        """Ground roll + transition arc + climb to the obstacle [m] (as :func:`solve_takeoff`)."""
+        v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
+                          dtype=float).reshape(-1, 1) * np.ones((self.size, 1))
+        radius = transition_radius_m(v_tr, self.aircraft.takeoff.transition_load_factor)
+        gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
+        arc, climb, _ = obstacle_distances_m(radius, gradient, height)
+        total = roll[0] + (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
+        return np.where(np.isfinite(total), total, np.nan)
 
     def roll_history(self) -> Array:
         """Time [s] at 101 equally spaced airspeeds from rest to V_LO (as the CVODES history).
@@ -375,7 +409,8 @@ class _Model:
         for j, engine in enumerate(self.propulsion.engines):
             error = 0.0 if outside is None else scale * outside * self.extrapolation_n[j][:, None]
             live.append([engine_thrust_n(engine, x, speed, scale) + error for x in (0.0, 0.5, 1.0)])
-            dead.append(windmilling_thrust_n(engine, speed, scale))
+            dead.append(windmilling_thrust_n(engine, speed, scale, self.density,
+                                             self.propulsion.fan_area_m2))
         return live, dead
 
     def least_throttle(self, speed: Array, dead: int | None = None,

@@ -129,21 +129,21 @@ def stall_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
     return sqrt(2.0 * aircraft.weight_n / (density_kg_m3 * aircraft.wing_area_m2 * aircraft.cl_max))
 
 
-def stall_speed_eas_m_s(aircraft: Aircraft) -> float:
+def stall_speed_eas_m_s(aircraft: Aircraft) -> Any:
     """1-g stall speed as an equivalent airspeed [m/s]; the same at every density.
 
     References
     ----------
     Anderson, *Aircraft Performance and Design*, eq. 5.67 at ``rho0 = 1.225 kg/m^3``.
     """
-    return math.sqrt(
+    return sqrt(  # backend-neutral: the batched analyses pass array-valued aircraft
         2.0
         * aircraft.weight_n
         / (EAS_REFERENCE_DENSITY_KG_M3 * aircraft.wing_area_m2 * aircraft.cl_max)
     )
 
 
-def liftoff_speed_eas_m_s(aircraft: Aircraft) -> float:
+def liftoff_speed_eas_m_s(aircraft: Aircraft) -> Any:
     """Lift-off speed as an equivalent airspeed [m/s] (SPEC 3).
 
     The file's ``liftoff_speed_m_s`` (an EAS) where given, else
@@ -155,7 +155,7 @@ def liftoff_speed_eas_m_s(aircraft: Aircraft) -> float:
     """
     to = aircraft.takeoff
     if to.liftoff_speed_m_s is not None:
-        return float(to.liftoff_speed_m_s)
+        return to.liftoff_speed_m_s
     return to.liftoff_speed_factor * stall_speed_eas_m_s(aircraft)
 
 
