@@ -18,6 +18,14 @@ Mapping onto this project: one constant-thrust engine, T = (K_T + mu) W;
 stall speed. The book's own climb angle is not printed; the test checks that the
 obstacle is cleared in the arc (as in the book).
 
+The same book's Example 6.7 (landing of that airplane) works the same geometry
+backwards: a 3 deg straight approach from 50 ft, then a flare arc of
+R = V_f^2 / (0.2 g) with V_f = 202.3 ft/s: **R = 6,354.9 ft**, flare height
+**h_f = 8.71 ft**, approach **788 ft**, flare **333 ft**. Flown forwards this is the
+take-off's arc to a 3 deg climb (n = 1.2) and the straight climb to 50 ft, the branch
+Example 6.6 does not reach (it clears its obstacle in the arc);
+:func:`obstacle_distances_m` must give the book's numbers.
+
 Tolerance 0.5 %: the book rounds K_T to three digits (+-0.17 % in the ground
 roll), uses g = 32.2 ft/s^2 (0.08 % from 9.80665 m/s^2) and 6.96 for
 1.15^2/0.19 = 6.9605; the example's answers are printed to 3-4 digits.
@@ -32,6 +40,7 @@ import pytest
 from tests.conftest import write_case
 from tuflexperf.analysis.takeoff import solve_takeoff
 from tuflexperf.io.case import load_case
+from tuflexperf.models.aircraft import obstacle_distances_m, transition_radius_m
 
 FT = 0.3048
 LB = 4.4482216152605
@@ -98,3 +107,12 @@ def test_airborne_distance_to_35_ft(result):
     assert result.airborne_distance_m / FT == pytest.approx(BOOK_AIRBORNE_FT, rel=TOLERANCE)
     total = BOOK_GROUND_ROLL_FT + BOOK_AIRBORNE_FT
     assert result.distance_to_obstacle_m / FT == pytest.approx(total, rel=TOLERANCE)
+
+
+def test_arc_then_straight_path_anderson_example_6_7():
+    radius = float(transition_radius_m(202.3 * FT, 1.2))
+    assert radius / FT == pytest.approx(6354.9, rel=TOLERANCE)
+    arc, straight, arc_top = obstacle_distances_m(radius, math.sin(math.radians(3.0)), 50 * FT)
+    assert float(arc_top) / FT == pytest.approx(8.71, rel=TOLERANCE)
+    assert float(straight) / FT == pytest.approx(788.0, rel=TOLERANCE)
+    assert float(arc) / FT == pytest.approx(333.0, rel=TOLERANCE)
