@@ -193,7 +193,7 @@ def test_model_force_is_the_thrust_model_minus_structure_drag(figures_of_shipped
     """Where the throttle has been steady longer than the delay, the model force is
     ``T(x, V) - c1 V - c2 V^2`` exactly."""
     from tuflexperf.io.case import load_case
-    from tuflexperf.models.thrust import engine_thrust_n
+    from tuflexperf.models.thrust import density_ratio, engine_thrust_n
     from tuflexperf.report.data import load_measured
     from tuflexperf.report.figures import model_force_n
 
@@ -206,7 +206,9 @@ def test_model_force_is_the_thrust_model_minus_structure_drag(figures_of_shipped
     start, stop, _ = run.segments[len(run.segments) // 2]
     v, x = run.airspeed_m_s[start:stop], run.throttle[start:stop]
     assert np.ptp(x) == 0.0
-    expected = engine_thrust_n(engine, x, v) - c1 * v - c2 * v * v
+    rho = measured.density_kg_m3
+    scale = 1.0 if rho is None else float(density_ratio(case.propulsion, rho))
+    expected = engine_thrust_n(engine, x, v, scale) - c1 * v - c2 * v * v
     np.testing.assert_allclose(force[start:stop], expected, rtol=0, atol=1e-9)
 
 

@@ -2,9 +2,10 @@
 
 Paper: one 12S 5000 mAh pack "last[s] nearly up to 10 min" at 50 % throttle; with two
 packs per fan and the launch, "a flight time of 15 minutes can be estimated", and the
-requirements are met. Tolerances: pack 9-10.5 min ("nearly 10"), flight 15-17 min
-("about 15", and >= 15 so the requirement holds), both robust to small changes of the
-reconstructed aircraft.
+requirements are met. Both numbers are in the reconstruction's least squares, so they are
+pinned (with their residuals) in tests/verification/test_reconstruction_pins.py; here
+only what the reconstruction does not fit: the model's own consistency (cross-validation,
+monotonic trends, plausible power and current, the requirement verdict).
 """
 
 from __future__ import annotations
@@ -43,14 +44,8 @@ def case(tmp_path_factory):
     return load_case(shipped_with_battery(tmp_path_factory.mktemp("case")))
 
 
-def test_pack_lasts_nearly_ten_minutes_at_half_throttle(case):
+def test_flight_uses_both_packs_less_launch_and_reserve(case):
     result = solve_endurance(case, 0.5)
-    assert 9.0 <= result.battery_endurance_min <= 10.5
-
-
-def test_flight_lasts_about_fifteen_minutes(case):
-    result = solve_endurance(case, 0.5)
-    assert 15.0 <= result.flight_endurance_min <= 17.0
     # flight time is more than one pack's but less than two packs' worth (launch + reserve)
     assert result.battery_endurance_min < result.flight_endurance_min
     assert result.flight_endurance_min < 2.2 * result.battery_endurance_min
@@ -87,12 +82,6 @@ def test_fitted_model_predicts_the_run_it_was_not_fitted_on(case):
         assert check["fitted_on"] != check["predicted_run"]
         assert abs(check["error_percent"]) < 5.0
     assert result.to_dict()["battery_fit"]["rms_v"] < 0.15  # 12S pack, volts
-
-
-def test_least_throttle_matches_trim(case):
-    """The endurance model's least level-flight throttle agrees with the paper's 41 %."""
-    model = endurance_model(case)
-    assert model.min_throttle == pytest.approx(0.41, abs=0.01)
 
 
 def test_endurance_requirement_is_checked_and_met(case):

@@ -1,12 +1,16 @@
-"""The shipped TU-Flex case against the paper's published values (SPEC 6), tolerances stated."""
+"""The shipped TU-Flex case against the paper's published thrust (SPEC 6), tolerances stated.
+
+The full-throttle thrust is the paper's measurement, reproduced by construction of the
+polynomial (derived). The performance results the reconstruction was fitted to (55.5 m,
+41 %, 56 %, 10 and 15 min) are regression pins in tests/verification/
+test_reconstruction_pins.py, not validations.
+"""
 
 from __future__ import annotations
 
 import pytest
 
-from tuflexperf.analysis.oei import solve_oei
 from tuflexperf.analysis.requirements import check_case
-from tuflexperf.analysis.takeoff import solve_takeoff
 from tuflexperf.analysis.trim import solve_trim
 from tuflexperf.io.case import load_case
 from tuflexperf.models.thrust import engine_thrust_n
@@ -37,18 +41,6 @@ def test_thrust_model_is_physical(case):
             t = [float(engine_thrust_n(engine, x, v)) for v in range(0, 46)]
             assert all(b < a for a, b in zip(t, t[1:], strict=False))
         assert float(engine_thrust_n(engine, 0.1, 40.0)) < 0  # drag at low throttle, high speed
-
-
-def test_takeoff_ground_roll_55_5_m(case):
-    assert solve_takeoff(case).ground_roll_m == pytest.approx(55.5, abs=1.0)
-
-
-def test_least_trim_throttle_41_percent(case):
-    assert solve_trim(case).min_throttle == pytest.approx(0.41, abs=0.01)
-
-
-def test_least_oei_throttle_56_percent(case):
-    assert solve_oei(case).to_dict()["min_throttle"] == pytest.approx(0.56, abs=0.01)
 
 
 def test_trim_beyond_30_m_s_is_flagged_as_extrapolated(case):

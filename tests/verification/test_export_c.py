@@ -239,6 +239,7 @@ def test_header_serves_a_plain_c99_program(built: dict, tmp_path: Path) -> None:
     out = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout.split()
     prop = model.propulsion
     for i, engine in enumerate(prop.engines):
-        assert float(out[i]) == pytest.approx(engine_thrust_n(engine, 1.0, 0.0), abs=1e-9)
+        scale = density_ratio(prop, 1.225)  # the call's density over the model's reference
+        assert float(out[i]) == pytest.approx(engine_thrust_n(engine, 1.0, 0.0, scale), abs=1e-9)
     assert float(out[2]) == 1.0  # 10 samples of 0.01 s, delay 5 samples: the command is through
     assert int(out[3]) == len(prop.engines)

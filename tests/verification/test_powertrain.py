@@ -140,3 +140,37 @@ def test_power_surface_and_windmilling_coefficient_recovered() -> None:
     assert wm is not None and wm.n_points == 4  # the static point carries no drag
     assert wm.drag_coefficient == pytest.approx(0.6, rel=1e-12) and wm.rms_n < 1e-12
     assert fit_windmilling(np.ones(5), speeds, drag, RHO, 0.006793) is None
+
+
+def _shipped_with_power(tmp_path, factor: float):
+    """The shipped case with every engine's power surface scaled by ``factor``."""
+    import yaml
+
+    from tuflexperf.io.case import load_case, shipped_case_path
+
+    shipped = shipped_case_path()
+    case = yaml.safe_load(shipped.read_text())
+    for key in ("aircraft", "battery"):
+        case[key] = str((shipped.parent / case[key]).resolve())
+    propulsion = yaml.safe_load((shipped.parent / case["propulsion"]).read_text())
+    for engine in propulsion["engines"]:
+        engine["power"]["coefficients"] = {
+            t: factor * c for t, c in engine["power"]["coefficients"].items()
+        }
+    (tmp_path / "propulsion.yaml").write_text(yaml.safe_dump(propulsion))
+    case["propulsion"] = str(tmp_path / "propulsion.yaml")
+    (tmp_path / "case.yaml").write_text(yaml.safe_dump(case))
+    return load_case(tmp_path / "case.yaml")
+
+
+@pytest.mark.parametrize("factor, warns", [(1.0, False), (2.5, True)])
+def test_endurance_warns_on_power_that_the_thrust_does_not_need(tmp_path, factor, warns):
+    from tuflexperf.analysis.endurance import solve_endurance
+
+    result = solve_endurance(_shipped_with_power(tmp_path, factor), 0.5)
+    flagged = [w for w in result.warnings if "overall efficiency" in w]
+    assert bool(flagged) is warns
+    for agreement in result.power_agreement:
+        # the overall efficiency goes as 1 / power: 2.5 x the power, 0.4 x the efficiency
+        assert agreement.electrical_power_w > 0
+        assert (agreement.overall_efficiency < 0.2) is warns

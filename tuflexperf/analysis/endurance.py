@@ -45,7 +45,6 @@ from tuflexperf.models.battery import (
     DischargeFit,
     DischargeParameters,
     DischargeRun,
-    FanPowerModel,
     PowerFit,
     current_at_power_a,
     cutoff_residual_v,
@@ -56,6 +55,7 @@ from tuflexperf.models.battery import (
     read_discharge_run,
     time_to_cutoff_s,
 )
+from tuflexperf.models.powertrain import PowerSurfaces, engine_power_w, power_surfaces
 from tuflexperf.models.thrust import (
     engine_thrust_n,
     is_extrapolated,
@@ -69,6 +69,8 @@ _SPEED_GRID_POINTS = 4001
 # Least airspeed for the --best NLPs: the usual 20 % margin over the 1-g stall speed.
 BEST_MIN_AIRSPEED_OVER_STALL = 1.2
 _LAUNCH_STEP_S = 0.25
+# A discharge run's measured power further than this from the power model is a warning.
+RUN_POWER_TOLERANCE = 0.10
 _characterisation_cache: dict[Any, BatteryCharacterisation] = {}
 _model_cache: dict[Any, EnduranceModel] = {}
 _battery_cache: dict[Any, Battery] = {}
@@ -219,7 +221,7 @@ def _best_climb(case: Case) -> tuple[float, float]:
 
 
 def launch_budget(
-    case: Case, battery: Battery, params: DischargeParameters, power: FanPowerModel
+    case: Case, battery: Battery, params: DischargeParameters, power: Any
 ) -> LaunchBudget:
     """Charge drawn per fan (its ``n`` parallel packs) by the take-off and the climb.
 
@@ -301,6 +303,7 @@ class EnduranceResult:
     warnings: tuple[str, ...] = ()
     # thrust against electrical power at the cruise point, per engine (SPEC 3)
     power_agreement: tuple[PowerAgreement, ...] = ()
+    power_used: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         ch = self.characterisation
@@ -337,6 +340,7 @@ class EnduranceResult:
                 "rms_log_error": ch.power.rms_log_error,
                 "points": list(ch.power.points),
             },
+            "power_used": self.power_used,
             "power_agreement": [a.to_dict() for a in self.power_agreement],
             "warnings": list(self.warnings),
         }
@@ -380,7 +384,11 @@ class EnduranceModel:
         self.case, self.battery = case, battery
         self.ch = characterise_battery(battery, case)
         self.params = self.ch.fit.parameters
-        self.power = self.ch.power.model
+        # the propulsion file's fitted power surfaces where every engine has one (SPEC 4),
+        # else the battery file's fan-power law fitted to the discharge runs
+        surfaces = power_surfaces(case.propulsion, case.density_kg_m3)
+        self.power: Any = surfaces if surfaces is not None else self.ch.power.model
+        self.run_checks = self._check_runs(battery)
         aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
         self.packs = battery.packs_in_parallel_per_engine
         self.cutoff_v = battery.cutoff_voltage_v
@@ -437,6 +445,44 @@ class EnduranceModel:
         pole = self.params.max_capacity_ah
         self._q_guess = (pole * (1 - 1e-4), self.packs * pole * (1 - 1e-4))
         self._nlp: dict[str, Any] = {}
+
+    # -- the discharge runs against the power and thrust models (SPEC 3) ---------------------
+    def _check_runs(self, battery: Battery) -> tuple[str, ...]:
+        """Warnings where a discharge run's measured power or force disagrees with the models.
+
+        Each run's mean ``V I`` under load is compared with the power model at the run's
+        throttle and airspeed (at the test day's density, as measured); more than
+        :data:`RUN_POWER_TOLERANCE` apart is a warning naming the run. The run's mean force
+        (thrust less the rig's drag, a lower bound on thrust) against its power goes
+        through the thrust/power agreement check.
+        """
+        from tuflexperf.analysis.powertrain import power_agreement
+
+        warnings: list[str] = []
+        engines = {e.name: e for e in self.case.propulsion.engines}
+        rho_ref = self.case.propulsion.reference_density_kg_m3
+        surfaces = isinstance(self.power, PowerSurfaces)
+        for ref, run in zip(battery.runs, self.ch.runs, strict=True):
+            x, v, measured = run.throttle_setting, run.airspeed_setting_m_s, run.mean_power_w
+            engine = engines.get(ref.engine or "", self.case.propulsion.engines[0])
+            # the run's own fan's surface as fitted (test day), else the battery's law
+            modelled = float(
+                engine_power_w(engine, x, v) if surfaces else self.power.electrical_power_w(x, v)
+            )
+            if abs(modelled - measured) > RUN_POWER_TOLERANCE * measured:
+                warnings.append(
+                    f"{run.path.name}: measured {measured:.0f} W at throttle {x:.2f}, "
+                    f"{v:.1f} m/s; the power model used here gives {modelled:.0f} W "
+                    f"({100 * (modelled / measured - 1):+.0f} %): thrust and power data disagree"
+                )
+            force = float(np.mean(run.force_n[run.loaded]))
+            check = power_agreement(
+                run.path.name, engine.name, x, v, force, measured,
+                rho_ref if rho_ref is not None else self.case.density_kg_m3,
+                self.case.propulsion.fan_area_m2,
+            )
+            warnings.extend(check.warnings)
+        return tuple(warnings)
 
     # -- least throttle for level flight (closed form per airspeed, numpy) -------------------
     def _least_throttle(self) -> tuple[float, float]:
@@ -557,6 +603,7 @@ class EnduranceModel:
             self.case.density_kg_m3, power_w,
         )
         warnings.extend(w for a in agreement for w in a.warnings)
+        warnings.extend(self.run_checks)
         return EnduranceResult(
             throttle=throttle,
             airspeed_m_s=speed,
@@ -579,6 +626,7 @@ class EnduranceModel:
             characterisation=self.ch,
             warnings=tuple(warnings),
             power_agreement=agreement,
+            power_used=self.power.to_dict(),
         )
 
     # -- best endurance and best range (IPOPT) ----------------------------------------------

@@ -147,8 +147,9 @@ def agreement_at(
 ) -> tuple[PowerAgreement, ...]:
     """:func:`power_agreement` for every engine of ``propulsion`` at one operating point.
 
-    The power is the engine's own power surface, else ``power_w`` (a per-fan power from
-    elsewhere, e.g. the battery file's fan-power law); engines with neither are skipped.
+    The power is the engine's own power surface (scaled by ``rho / rho_ref`` like the
+    thrust), else ``power_w`` (a per-fan power from elsewhere, e.g. the battery file's
+    fan-power law); engines with neither are skipped.
 
     References
     ----------
@@ -157,8 +158,9 @@ def agreement_at(
     scale = density_ratio(propulsion, density_kg_m3)
     out = []
     for engine in propulsion.engines:
-        power = engine_power_w(engine, throttle, airspeed_m_s)
-        power = power if power is not None else power_w
+        surface = engine_power_w(engine, throttle, airspeed_m_s)
+        # a fitted surface holds at the test day's density: scaled like the thrust
+        power = scale * surface if surface is not None else power_w
         if power is None:
             continue
         thrust = float(engine_thrust_n(engine, throttle, airspeed_m_s, scale))

@@ -26,10 +26,11 @@ theory, ideal power, figure of merit). Hoerner, *Fluid-Dynamic Drag*, 1965, ch. 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 from tuflexperf.models._math import fmax, sqrt, where
-from tuflexperf.models.thrust import Engine, poly22
+from tuflexperf.models.thrust import Engine, Propulsion, density_ratio, poly22
 
 # In-flight overall efficiency below this is implausible for a working fan (SPEC 3).
 MIN_OVERALL_EFFICIENCY = 0.2
@@ -188,3 +189,48 @@ def windmilling_drag_n(
     its frontal area).
     """
     return -abs(drag_coefficient) * 0.5 * density_kg_m3 * airspeed_m_s * airspeed_m_s * area_m2
+
+
+@dataclass(frozen=True)
+class PowerSurfaces:
+    """Per-fan electrical power from the propulsion file's power surfaces (all engines).
+
+    ``electrical_power_w`` is the largest engine's power at the throttle and airspeed (the
+    fan that empties its packs first sets the endurance), scaled by ``rho / rho_ref`` like
+    the thrust (at a fixed rpm a fan's thrust and power both go with density).
+    """
+
+    engines: tuple[Engine, ...]
+    density_scale: float = 1.0
+
+    def electrical_power_w(self, throttle: Any, airspeed_m_s: Any) -> Any:
+        """Per-fan electrical power [W] at ``throttle`` [-] and true airspeed [m/s].
+
+        References
+        ----------
+        SPEC 4 (``power: {model: poly22}``); SPEC 3 (thrust and density).
+        """
+        power: Any = None
+        for engine in self.engines:
+            p = engine_power_w(engine, throttle, airspeed_m_s)
+            power = p if power is None else fmax(power, p)
+        return self.density_scale * power
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "model": "propulsion power surfaces (poly22 per engine, the largest per fan)",
+            "density_scale": self.density_scale,
+            "engines": {e.name: dict(e.power_coefficients or {}) for e in self.engines},
+        }
+
+
+def power_surfaces(propulsion: Propulsion, density_kg_m3: float) -> PowerSurfaces | None:
+    """The propulsion's power surfaces as one per-fan power model, or ``None`` if any is missing.
+
+    References
+    ----------
+    SPEC 4 (propulsion file, ``power``).
+    """
+    if not propulsion.engines or any(e.power_coefficients is None for e in propulsion.engines):
+        return None
+    return PowerSurfaces(propulsion.engines, float(density_ratio(propulsion, density_kg_m3)))
