@@ -44,13 +44,13 @@ def critical_mass(case) -> float:
     def excess(mass: float) -> float:
         return solve_takeoff(with_values(case, {"aircraft.mass_kg": mass})).ground_roll_m - 60.0
 
-    return optimize.brentq(excess, 20.0, 30.0, xtol=1e-10)
+    return optimize.brentq(excess, 20.0, 40.0, xtol=1e-10)
 
 
 def test_mass_only_probability_equals_phi_of_the_critical_mass(tmp_path) -> None:
     nominal = load_case(SHIPPED_CASE)
     m_star = critical_mass(nominal)
-    assert 22.5 < m_star < 27.0
+    assert 26.0 < m_star < 31.0  # the shipped 27.5 kg rolls 55.5 m of the 60 allowed
     sd = 0.8
     mean = m_star - 0.6 * sd  # P = Phi(0.6) = 0.7257
     case = mass_only_case(tmp_path, mean, sd)

@@ -26,8 +26,23 @@ from numpy.typing import NDArray
 from tuflexperf.analysis import endurance as single
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import current_at_power_a, cutoff_residual_v, discharge_time_s
+from tuflexperf.models.powertrain import PowerSurfaces
+from tuflexperf.models.thrust import density_ratio
 
 Array = NDArray[np.float64]
+
+
+def _power_w(model: Any, m: Any, throttle: Any, speed: Any) -> Array:
+    """Per-fan electrical power [W] per row: the nominal model's power, a propulsion power
+    surface rescaled to the row's density (``rho / rho_ref``, as the single case does)."""
+    power = np.asarray(model.power.electrical_power_w(throttle, speed), dtype=float)
+    if not isinstance(model.power, PowerSurfaces):
+        return power
+    ratio = np.asarray(density_ratio(m.propulsion, m.density), dtype=float)
+    ratio = ratio / model.power.density_scale
+    if ratio.size == 1 or power.ndim == 0:
+        return power * ratio.reshape(-1)[0] if ratio.size == 1 else power * ratio.reshape(-1)
+    return power * ratio.reshape(-1, *([1] * (power.ndim - 1)))
 _GOLDEN_STEPS = 25
 _BISECTIONS = 60
 
@@ -104,8 +119,7 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     climb_time_safe = np.where(ok, climb_time, 0.0)
     t_hist = m.roll_history()
     v_hist = v_lo[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
-    power = model.power
-    climb_power = power.electrical_power_w(1.0, climb_speed)
+    climb_power = _power_w(model, m, 1.0, climb_speed)
     total = roll_time + climb_time_safe
     steps = np.maximum(1, np.ceil(total / single._LAUNCH_STEP_S)).astype(int)
     dt = total / steps
@@ -114,8 +128,8 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     rolling_stages = int(np.max(np.where(ok, np.ceil(2.0 * roll_time / np.where(dt > 0, dt, 1.0)),
                                          0))) + 1
     stage_t = dt[:, None] * 0.5 * np.arange(rolling_stages)[None, :]
-    rolling = power.electrical_power_w(1.0, _interp_rows(stage_t, np.where(ok[:, None], t_hist,
-                                                                            0.0), v_hist))
+    rolling = _power_w(model, m, 1.0, _interp_rows(stage_t, np.where(ok[:, None], t_hist, 0.0),
+                                                   v_hist))
     stage_power = np.where(stage_t < roll_time[:, None], rolling, climb_power[:, None])
 
     def power_at(j: int) -> Array:
@@ -228,7 +242,7 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     speed = _bracketed_root(
         lambda v: _excess(m, throttle, v), np.where(ok, least_speed, 1.0), np.where(ok, guess, 2.0)
     )
-    power_w = np.asarray(model.power.electrical_power_w(throttle, speed), dtype=float)
+    power_w = _power_w(model, m, throttle, speed)
     params, cutoff, packs = model.params, model.cutoff_v, model.packs
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, 1) > 0.0)
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs) > 0.0)
