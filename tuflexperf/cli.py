@@ -220,10 +220,12 @@ def takeoff(case_file: Path | None = CaseOption, as_json: bool = JsonOption) -> 
     raise typer.Exit(0 if met else 1)
 
 
-def _throttle_table(airspeeds: list[float], throttles: list[float | None]) -> None:
+def _throttle_table(
+    airspeeds: list[float], throttles: list[float | None], reasons: list[str | None]
+) -> None:
     typer.echo(f"  {'airspeed m/s':>12}  {'throttle':>8}")
-    for v, x in zip(airspeeds, throttles, strict=True):
-        typer.echo(f"  {v:12.1f}  {'  > 1 (not attainable)' if x is None else f'{x:8.3f}'}")
+    for v, x, why in zip(airspeeds, throttles, reasons, strict=True):
+        typer.echo(f"  {v:12.1f}  {f'  not attainable: {why}' if x is None else f'{x:8.3f}'}")
 
 
 @app.command()
@@ -251,11 +253,18 @@ def trim(
             f"{_fmt(result.airspeed_at_min_throttle_m_s, 1)} m/s"
         )
         typer.echo(f"  highest throttle {_fmt(result.max_throttle)} (limit {limit:g})")
+        typer.echo(
+            f"  stall {result.stall_speed_m_s:.2f} m/s x {result.stall_margin:g}; level flight "
+            + ("nowhere in the envelope" if result.attainable.low is None else
+               f"{result.attainable.low:.2f}-{result.attainable.high:.2f} m/s")
+        )
         if not result.all_feasible:
-            bad = result.unattainable_airspeed_m_s
-            typer.echo(f"  NOT ATTAINABLE at {min(bad):g}-{max(bad):g} m/s: needs > full throttle")
+            from tuflexperf.analysis.attainable import describe_unattainable
+
+            for phrase in describe_unattainable(result.airspeed_m_s, result.reasons):
+                typer.echo(f"  NOT ATTAINABLE: {phrase}")
         if table:
-            _throttle_table(v, data["throttle"])
+            _throttle_table(v, data["throttle"], data["not_attainable_reason"])
         _print_warnings(data["warnings"])
     raise typer.Exit(0 if met else 1)
 
@@ -290,8 +299,14 @@ def oei(
             typer.echo(
                 f"  {c.dead_engine} dead: least throttle {_fmt(c.min_throttle)} at "
                 f"{_fmt(c.airspeed_at_min_throttle_m_s, 1)} m/s; level flight "
-                + ("nowhere in the envelope" if span is None else f"{span[0]:g}-{span[1]:g} m/s")
+                + ("nowhere in the envelope" if span is None
+                   else f"{span[0]:.2f}-{span[1]:.2f} m/s")
             )
+            if c.min_throttle is None or not c.all_feasible:
+                from tuflexperf.analysis.attainable import describe_unattainable
+
+                for phrase in describe_unattainable(c.airspeed_m_s, c.reasons):
+                    typer.echo(f"    not attainable: {phrase}")
         typer.echo(
             f"  worse case: {worst.dead_engine} dead, throttle {_fmt(worst.min_throttle)} "
             f"(limit {limit:g})  {'PASS' if met else 'FAIL'}"

@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.attainable import least_airspeed_m_s
 from tuflexperf.analysis.powertrain import PowerAgreement, agreement_at
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.battery import Battery, load_battery
@@ -393,6 +394,8 @@ class EnduranceModel:
         self.packs = battery.packs_in_parallel_per_engine
         self.cutoff_v = battery.cutoff_voltage_v
         self.stall_m_s = float(stall_speed_m_s(aircraft, rho))
+        # level flight only counts at or above stall x the envelope's margin (SPEC 3)
+        self.least_m_s = least_airspeed_m_s(case)
         # Cruise ends when each pack has given (1 - reserve) of its rated capacity.
         usable = 1.0 - battery.landing_reserve_fraction
         self.reserve_ah = self.packs * battery.capacity_ah * usable
@@ -508,7 +511,7 @@ class EnduranceModel:
                 throttle, reached = least_throttle_reaching(quadratic, linear, constant)
             return np.where(np.asarray(reached) > 0.5, np.asarray(throttle, dtype=float), np.inf)
 
-        speeds = np.linspace(self.stall_m_s, _MAX_SPEED_OVER_STALL * self.stall_m_s,
+        speeds = np.linspace(self.least_m_s, _MAX_SPEED_OVER_STALL * self.stall_m_s,
                              _SPEED_GRID_POINTS)
         values = required(speeds)
         k = int(np.argmin(values))
@@ -567,6 +570,11 @@ class EnduranceModel:
             speed = self._fast_root_fallback(throttle, guess)
             out = [float(val) for val in self._solve(throttle, speed, *self._q_guess)]
             _, power_w, q1, qn, t1, tn, _, res_1, res_n = out
+        if speed < self.least_m_s * (1.0 - 1e-9):
+            raise NotAttainable(
+                f"throttle {throttle:g}: level flight at {speed:.1f} m/s is below stall "
+                f"({self.stall_m_s:.1f} m/s x {self.least_m_s / self.stall_m_s:g})"
+            )
         if not (abs(res_1) < 1e-6 and abs(res_n) < 1e-6 and 0 < q1 and 0 < qn):
             raise NotAttainable(
                 f"throttle {throttle:g}: the pack is below its cut-off voltage at "
@@ -723,6 +731,7 @@ def endurance_model(case: Case) -> EnduranceModel:
         repr(case.aircraft),
         repr(case.propulsion),
         case.density_kg_m3,
+        least_airspeed_m_s(case),  # the stall margin bounds level flight
         repr(battery),
         tuple(_file_key(r.path) for r in battery.runs),
     )

@@ -13,6 +13,13 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.attainable import (
+    AttainableRange,
+    attainable_range,
+    least_airspeed_m_s,
+    stall_bounded,
+    stall_margin_of,
+)
 from tuflexperf.analysis.level_flight import (
     LeastThrottleSolver,
     ThrottleSweep,
@@ -22,8 +29,8 @@ from tuflexperf.analysis.level_flight import (
 from tuflexperf.analysis.trim import envelope_of, extrapolation_note
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
-from tuflexperf.models.aircraft import level_flight_drag_n
-from tuflexperf.models.thrust import DeadEngineMode, total_thrust_n
+from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
+from tuflexperf.models.thrust import DeadEngineMode, total_thrust_n, unlapsed_density_warning
 
 _cache: dict[Any, LeastThrottleSolver] = {}
 
@@ -44,7 +51,16 @@ def oei_solver(case: Case, dead_engine: int, mode: DeadEngineMode) -> LeastThrot
 
 @dataclass(frozen=True)
 class DeadEngineCase(ThrottleSweep):
+    """One dead engine over the envelope grid; the attainable range is exact (not the grid's)."""
+
     dead_engine: str
+    reasons: tuple[str | None, ...] = ()
+    attainable: AttainableRange = AttainableRange(None, None)
+
+    @property
+    def level_flight_airspeed_range_m_s(self) -> list[float] | None:
+        """Exact [low, high] of level flight within the envelope (stall- and thrust-bounded)."""
+        return self.attainable.as_list()
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -52,7 +68,10 @@ class DeadEngineCase(ThrottleSweep):
             "min_throttle": self.min_throttle,
             "airspeed_at_min_throttle_m_s": self.airspeed_at_min_throttle_m_s,
             "level_flight_airspeed_range_m_s": self.level_flight_airspeed_range_m_s,
+            "least_attainable_airspeed_m_s": self.attainable.low,
+            "level_flight_contiguous": self.attainable.contiguous,
             **self.lists(),
+            "not_attainable_reason": list(self.reasons),
         }
 
 
@@ -62,6 +81,8 @@ class OeiResult:
     cases: tuple[DeadEngineCase, ...]
     extrapolated: bool
     warnings: tuple[str, ...]
+    stall_speed_m_s: float = float("nan")
+    stall_margin: float = 1.0
 
     @property
     def critical(self) -> DeadEngineCase:
@@ -78,6 +99,10 @@ class OeiResult:
             "min_throttle": worst.min_throttle,
             "airspeed_at_min_throttle_m_s": worst.airspeed_at_min_throttle_m_s,
             "level_flight_airspeed_range_m_s": worst.level_flight_airspeed_range_m_s,
+            "least_attainable_airspeed_m_s": worst.attainable.low,
+            "not_attainable_reason": list(worst.reasons),
+            "stall_speed_m_s": self.stall_speed_m_s,
+            "stall_margin": self.stall_margin,
             "critical_dead_engine": worst.dead_engine,
             "dead_engine_mode": self.dead_engine_mode,
             "cases": [c.to_dict() for c in self.cases],
@@ -92,10 +117,24 @@ def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
         raise InputError(f"{case.propulsion_path}: engines: OEI needs at least two engines")
     if mode is None:
         mode = case.requirements.oei.dead_engine if case.requirements.oei else "windmilling"
-    speeds = airspeed_grid(*envelope_of(case))
-    cases = tuple(
-        DeadEngineCase(speeds, oei_solver(case, index, mode)(speeds), engine.name)
-        for index, engine in enumerate(case.propulsion.engines)
-    )
+    v_min, v_max = envelope_of(case)
+    speeds = airspeed_grid(v_min, v_max)
+    least = least_airspeed_m_s(case)
+    aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
+    cases = []
+    for index, engine in enumerate(propulsion.engines):
+        throttle, reasons = stall_bounded(speeds, oei_solver(case, index, mode)(speeds), least)
+
+        def full_throttle_excess(v: np.ndarray, dead: int = index) -> np.ndarray:
+            thrust = total_thrust_n(propulsion, 1.0, v, rho, dead, mode)
+            return thrust - level_flight_drag_n(aircraft, v, rho)
+
+        attainable = attainable_range(full_throttle_excess, least, v_min, v_max)
+        cases.append(DeadEngineCase(speeds, throttle, engine.name, reasons, attainable))
     extrapolated, warnings = extrapolation_note(case, speeds)
-    return OeiResult(mode, cases, extrapolated, tuple(warnings))
+    density_note = unlapsed_density_warning(propulsion, rho)
+    if density_note:
+        warnings.append(density_note)
+    stall = float(stall_speed_m_s(aircraft, rho))
+    return OeiResult(mode, tuple(cases), extrapolated, tuple(warnings), stall,
+                     stall_margin_of(case))

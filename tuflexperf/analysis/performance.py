@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.errors import NotAttainable
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
@@ -60,12 +61,6 @@ _IPOPT = {
     "ipopt.acceptable_tol": 1e-9,
     "ipopt.max_iter": 200,
 }
-
-
-def stall_margin_of(case: Case) -> float:
-    """The envelope's ``stall_margin`` [-] (1.0 without an envelope block)."""
-    envelope = case.requirements.envelope
-    return 1.0 if envelope is None else float(envelope.stall_margin)
 
 
 def _dead_mode(case: Case) -> DeadEngineMode:

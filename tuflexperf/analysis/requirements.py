@@ -144,10 +144,12 @@ def _trim(case: Case) -> Verdict:
     result = solve_trim(case)
     span = f"{envelope.min_airspeed_m_s:g}-{envelope.max_airspeed_m_s:g} m/s"
     if not result.all_feasible:
-        bad = result.unattainable_airspeed_m_s
-        reason = (
-            f"level flight needs more than full throttle at {min(bad):g}-{max(bad):g} m/s "
-            f"({len(bad)} of {len(result.airspeed_m_s)} grid airspeeds)"
+        from tuflexperf.analysis.attainable import describe_unattainable
+
+        reason = "not attainable: " + "; ".join(
+            describe_unattainable(result.airspeed_m_s, result.reasons)
+        ) + (
+            f" (stall {result.stall_speed_m_s:.2f} m/s x {result.stall_margin:g})"
         )
     else:
         reason = (
@@ -172,12 +174,17 @@ def _oei(case: Case) -> Verdict:
     result = solve_oei(case, requirement.dead_engine)
     worst = result.critical
     if worst.min_throttle is None:
-        reason = f"no level flight anywhere in the envelope with {worst.dead_engine} dead"
+        from tuflexperf.analysis.attainable import describe_unattainable
+
+        reason = (
+            f"no level flight anywhere in the envelope with {worst.dead_engine} dead: "
+            + "; ".join(describe_unattainable(worst.airspeed_m_s, worst.reasons))
+        )
     else:
         low, high = worst.level_flight_airspeed_range_m_s
         reason = (
             f"{worst.dead_engine} dead ({requirement.dead_engine}): least throttle at "
-            f"{worst.airspeed_at_min_throttle_m_s:g} m/s, level flight {low:g}-{high:g} m/s"
+            f"{worst.airspeed_at_min_throttle_m_s:g} m/s, level flight {low:.2f}-{high:.2f} m/s"
         )
     return Verdict(
         "oei_min_throttle",

@@ -1,8 +1,8 @@
 """Minimum-throttle trim over the flight envelope (paper section 4, Fig. 18).
 
 At each airspeed of the envelope grid: the least throttle, equal on all engines,
-with total thrust >= level-flight drag (SPEC 3). ``None`` where more than full
-throttle would be needed.
+with total thrust >= level-flight drag (SPEC 3). ``None`` where not attainable:
+below stall (x the envelope's ``stall_margin``) or needing more than full throttle.
 """
 
 from __future__ import annotations
@@ -12,6 +12,13 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.attainable import (
+    AttainableRange,
+    attainable_range,
+    least_airspeed_m_s,
+    stall_bounded,
+    stall_margin_of,
+)
 from tuflexperf.analysis.level_flight import (
     LeastThrottleSolver,
     ThrottleSweep,
@@ -21,7 +28,7 @@ from tuflexperf.analysis.level_flight import (
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
-from tuflexperf.models.thrust import total_thrust_n
+from tuflexperf.models.thrust import total_thrust_n, unlapsed_density_warning
 
 _cache: dict[Any, LeastThrottleSolver] = {}
 
@@ -67,9 +74,18 @@ def trim_solver(case: Case) -> LeastThrottleSolver:
 
 @dataclass(frozen=True)
 class TrimResult(ThrottleSweep):
+    """Least trim throttle per envelope airspeed (NaN where not attainable, with the reason).
+
+    ``least_attainable_airspeed_m_s`` and ``attainable_airspeed_range_m_s`` are exact
+    (stall x margin, and the full-throttle roots of thrust = drag), clipped to the envelope.
+    """
+
     stall_speed_m_s: float
     extrapolated: bool
     warnings: tuple[str, ...]
+    stall_margin: float = 1.0
+    reasons: tuple[str | None, ...] = ()
+    attainable: AttainableRange = AttainableRange(None, None)
 
     @property
     def max_throttle(self) -> float | None:
@@ -88,7 +104,12 @@ class TrimResult(ThrottleSweep):
             "max_throttle": self.max_throttle,
             "all_feasible": self.all_feasible,
             "unattainable_airspeed_m_s": self.unattainable_airspeed_m_s,
+            "not_attainable_reason": list(self.reasons),
+            "least_attainable_airspeed_m_s": self.attainable.low,
+            "attainable_airspeed_range_m_s": self.attainable.as_list(),
             "stall_speed_m_s": self.stall_speed_m_s,
+            "stall_margin": self.stall_margin,
+            "least_airspeed_m_s": self.stall_margin * self.stall_speed_m_s,
             "extrapolated": self.extrapolated,
             "warnings": list(self.warnings),
         }
@@ -98,11 +119,21 @@ def solve_trim(case: Case) -> TrimResult:
     """Least level-flight throttle at every airspeed of the case's envelope grid."""
     v_min, v_max = envelope_of(case)
     speeds = airspeed_grid(v_min, v_max)
-    throttle = trim_solver(case)(speeds)
+    least = least_airspeed_m_s(case)
+    throttle, reasons = stall_bounded(speeds, trim_solver(case)(speeds), least)
     extrapolated, warnings = extrapolation_note(case, speeds)
     stall = float(stall_speed_m_s(case.aircraft, case.density_kg_m3))
-    if v_min < stall:
-        warnings.append(
-            f"envelope starts at {v_min:g} m/s, below the stall speed {stall:.1f} m/s (CL > cl_max)"
-        )
-    return TrimResult(speeds, throttle, stall, extrapolated, tuple(warnings))
+    aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
+
+    def full_throttle_excess(v: np.ndarray) -> np.ndarray:
+        thrust = total_thrust_n(propulsion, 1.0, v, rho)
+        return thrust - level_flight_drag_n(aircraft, v, rho)
+
+    attainable = attainable_range(full_throttle_excess, least, v_min, v_max)
+    density_note = unlapsed_density_warning(propulsion, rho)
+    if density_note:
+        warnings.append(density_note)
+    return TrimResult(
+        speeds, throttle, stall, extrapolated, tuple(warnings), stall_margin_of(case), reasons,
+        attainable,
+    )

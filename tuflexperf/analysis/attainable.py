@@ -1,0 +1,135 @@
+"""Where level flight is attainable: above stall (times the margin) and within full throttle.
+
+SPEC 3: level flight needs ``CL <= cl_max``; below ``stall_margin x V_stall`` it is
+*not attainable, below stall* — never a pass with a note. Trim, OEI and endurance mark
+each grid airspeed with why it is not attainable, and report the exact bounds of the
+attainable airspeeds (the stall bound, and the full-throttle roots of ``T(1, V) = D(V)``
+refined by bisection to 1e-12 m/s).
+
+References
+----------
+Anderson, *Aircraft Performance and Design*, sections 5.4 (thrust available and
+required) and 5.7 (stall speed, eq. 5.67).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from tuflexperf.io.case import Case
+from tuflexperf.models.aircraft import stall_speed_m_s
+
+BELOW_STALL = "below stall"
+NEEDS_MORE_THAN_FULL_THROTTLE = "needs more than full throttle"
+_SCAN_POINTS = 2001
+_BISECTIONS = 100
+
+
+def stall_margin_of(case: Case) -> float:
+    """The envelope's ``stall_margin`` [-] (1.0 without an envelope block)."""
+    envelope = case.requirements.envelope
+    return 1.0 if envelope is None else float(envelope.stall_margin)
+
+
+def least_airspeed_m_s(case: Case) -> float:
+    """Least airspeed of level flight [m/s] at the case's density: ``stall_margin x V_stall``.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, eq. 5.67.
+    """
+    return stall_margin_of(case) * float(stall_speed_m_s(case.aircraft, case.density_kg_m3))
+
+
+def stall_bounded(
+    airspeed_m_s: np.ndarray, throttle: np.ndarray, least_m_s: float
+) -> tuple[np.ndarray, tuple[str | None, ...]]:
+    """Throttles with points below ``least_m_s`` [m/s] made NaN, and each point's reason.
+
+    ``throttle`` holds the least throttle per airspeed (NaN where full throttle is not
+    enough). The reason is ``None`` where attainable, else ``below stall`` or
+    ``needs more than full throttle``.
+    """
+    v = np.asarray(airspeed_m_s, dtype=float)
+    x = np.asarray(throttle, dtype=float).copy()
+    below = v < least_m_s * (1.0 - 1e-12)
+    x[below] = np.nan
+    reasons = tuple(
+        BELOW_STALL if b else (None if np.isfinite(t) else NEEDS_MORE_THAN_FULL_THROTTLE)
+        for b, t in zip(below, x, strict=True)
+    )
+    return x, reasons
+
+
+@dataclass(frozen=True)
+class AttainableRange:
+    """Exact bounds [m/s] of attainable level flight within an airspeed interval.
+
+    ``low``/``high`` are ``None`` when nothing is attainable; ``contiguous`` is False
+    when the attainable set has a gap (then ``low``/``high`` are its outer bounds).
+    """
+
+    low: float | None
+    high: float | None
+    contiguous: bool = True
+
+    def as_list(self) -> list[float] | None:
+        return None if self.low is None else [self.low, self.high]
+
+
+def attainable_range(
+    full_throttle_excess: Callable[[np.ndarray], np.ndarray],
+    least_m_s: float,
+    low_m_s: float,
+    high_m_s: float,
+) -> AttainableRange:
+    """Airspeeds in ``[low_m_s, high_m_s]`` above ``least_m_s`` where ``excess(V) >= 0``.
+
+    ``full_throttle_excess`` is thrust at full throttle minus level-flight drag [N]
+    (vectorised over airspeed [m/s]). A scan of 2001 points brackets the boundaries,
+    bisection refines each to round-off.
+    """
+    start = max(low_m_s, least_m_s)
+    if start > high_m_s:
+        return AttainableRange(None, None)
+    grid = np.linspace(start, high_m_s, _SCAN_POINTS)
+    ok = np.asarray(full_throttle_excess(grid), dtype=float) >= 0.0
+    if not ok.any():
+        return AttainableRange(None, None)
+    first = int(np.argmax(ok))
+    last = int(ok.size - 1 - np.argmax(ok[::-1]))
+    contiguous = bool(ok[first : last + 1].all())
+
+    def boundary(inside: float, outside: float) -> float:
+        a, b = inside, outside
+        for _ in range(_BISECTIONS):  # to round-off: stops when the midpoint is an end
+            mid = 0.5 * (a + b)
+            if mid in (a, b):
+                break
+            if float(np.asarray(full_throttle_excess(np.array([mid])))[0]) >= 0.0:
+                a = mid
+            else:
+                b = mid
+        return a
+
+    low = float(grid[0]) if first == 0 else boundary(float(grid[first]), float(grid[first - 1]))
+    end = ok.size - 1
+    high = float(grid[-1]) if last == end else boundary(float(grid[last]), float(grid[last + 1]))
+    return AttainableRange(low, high, contiguous)
+
+
+def describe_unattainable(airspeed_m_s: np.ndarray, reasons: tuple[str | None, ...]) -> list[str]:
+    """One phrase per reason: ``below stall at 15-23 m/s (17 of 61 grid airspeeds)``."""
+    v = np.asarray(airspeed_m_s, dtype=float)
+    phrases = []
+    for reason in (BELOW_STALL, NEEDS_MORE_THAN_FULL_THROTTLE):
+        hit = np.array([r == reason for r in reasons], dtype=bool)
+        if hit.any():
+            phrases.append(
+                f"{reason} at {v[hit].min():g}-{v[hit].max():g} m/s "
+                f"({int(hit.sum())} of {v.size} grid airspeeds)"
+            )
+    return phrases
