@@ -10,8 +10,9 @@ in Example 5.18): **179.9 ft/s** at sea level, **156.6 ft/s** at 10,000 ft,
 The book lapses the turbofan's thrust as ``(rho/rho0)^0.6``; this project's thrust
 lapse is ``rho / rho_ref`` (SPEC 3), so at each altitude the propulsion file gets the
 reference density ``rho_ref = rho^0.4 rho0^0.6`` that gives the book's thrust there.
-What is checked is the project's own search for the best rate of climb (IPOPT on
-``V (T - D) / W`` with the parabolic polar at the ISA density), not the thrust model.
+What is checked is the project's own search for the best rate of climb (a scan and a
+Newton rootfinder on the derivative of ``V (T - D) / W``, parabolic polar, ISA
+density), not the thrust model.
 
 Tolerance: 0.5 % up to 20,000 ft (the book prints four digits and uses its own
 standard-atmosphere table and g = 32.2 ft/s^2); 1 % at 50,000 ft, where the book's

@@ -48,6 +48,8 @@ SETS = [
     {"aircraft.mass_kg": 75.0, "aircraft.cd0": 0.05, "aircraft.wing_area_m2": 0.8},
     {"aircraft.takeoff.cl_ground": 1.2, "requirements.endurance.throttle": 0.8,
      "requirements.takeoff.max_ground_roll_m": 40.0},
+    # stall bound (SPEC 3): the envelope's foot and the endurance speed below 1.9 x stall
+    {"requirements.envelope.stall_margin": 1.9, "aircraft.mass_kg": 21.0},
 ]
 
 

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.analysis.level_flight import airspeed_grid
 from tuflexperf.analysis.takeoff import obstacle_height_of
 from tuflexperf.io.case import Case
@@ -223,6 +224,8 @@ class BatchEvaluator:
             density=self._density(values, size),
             extrapolation_n=extrapolation_n,
             size=size,
+            stall_margin=_column(values, "requirements.envelope.stall_margin",
+                                 stall_margin_of(self.case), size),
         )
         out: dict[str, Array] = {}
         limits: dict[str, Array] = {}
@@ -278,8 +281,16 @@ class _Model:
     density: Any
     extrapolation_n: Array | None
     size: int
+    stall_margin: Any = 1.0  # envelope's stall_margin (scalar or per row)
     _uniform: Array | None = None
     _terms: Any = None
+
+    def least_airspeed(self) -> Array:
+        """Least level-flight airspeed [m/s] per row: stall x the envelope's margin (SPEC 3)."""
+        return np.asarray(self.stall_margin, dtype=float).reshape(-1) * stall_speed(self)
+
+    def _above_stall(self, grid: Array) -> Array:
+        return grid[None, :] >= self.least_airspeed()[:, None] * (1.0 - 1e-12)
 
     def thrust(self, throttle: Any, speed: Array, dead: int | None = None,
                mode: str = "windmilling") -> Array:
@@ -440,6 +451,7 @@ class _Model:
     def trim_max_throttle(self, grid: Array) -> Array:
         """Highest least throttle over the envelope grid; NaN if any airspeed is not attainable."""
         throttle = self.least_throttle(grid[None, :], terms=self._grid_terms(grid))
+        throttle = np.where(self._above_stall(grid), throttle, np.nan)  # below stall: none
         return np.where(np.all(np.isfinite(throttle), axis=1), np.max(throttle, axis=1), np.nan)
 
     def oei_min_throttle(self, grid: Array, mode: str) -> Array:
@@ -448,6 +460,7 @@ class _Model:
         terms = self._grid_terms(grid)
         for dead in range(len(self.propulsion.engines)):
             throttle = self.least_throttle(grid[None, :], dead, mode, terms)
+            throttle = np.where(self._above_stall(grid), throttle, np.nan)
             best = np.min(np.where(np.isfinite(throttle), throttle, np.inf), axis=1)
             worst = np.maximum(worst, best)
         return np.where(np.isfinite(worst), worst, np.nan)

@@ -228,7 +228,8 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
 
     stall = stall_speed(m)
     q_launch, climb_time = _launch_charge(m, model, roll, stall)
-    most, least_speed = _most_excess(m, throttle, stall)
+    # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
+    most, least_speed = _most_excess(m, throttle, m.least_airspeed())
     ok = np.isfinite(q_launch) & (most >= 0.0)
     # an airspeed above the fast level-flight root, as EnduranceModel._speed_guess
     guess = np.maximum(least_speed, stall) * 1.25

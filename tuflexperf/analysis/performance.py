@@ -1,14 +1,17 @@
 """Point performance: stall, minimum-drag speed, level-speed range, climb, ceilings, OEI.
 
 Every answer is bounded by stall (SPEC 3): no airspeed below ``stall_margin x V_stall``
-counts. Each quantity is one small CasADi/IPOPT problem built once per case
-(:class:`PerformanceProblems`) and started from a vectorised scan of the same model
-functions, which also brackets it (so the local NLP finds the global answer to the
-scan's resolution and refines it to IPOPT's tolerance):
+counts. Each quantity is one small CasADi problem built once per case
+(:class:`PerformanceProblems`), started from a vectorised scan of the same model
+functions that also brackets it (so the local solve finds the global answer to the
+scan's resolution and refines it to round-off):
 
-- max / min level speed: ``max V`` (``min V``) s.t. ``T(1, V) - D(V) >= 0``;
-- best rate of climb ``Vy``: ``max V (T - D) / W``; best angle ``Vx``: ``max (T - D) / W``;
-- ceilings: ``max h`` s.t. ``R/C(V, h) >= c`` and ``V >= margin V_stall(h)``, with
+- max / least level speed: Newton rootfinder on ``T(1, V) - D(V) = 0`` in its bracket;
+- best rate of climb ``Vy`` (max ``V (T - D) / W``) and best angle ``Vx`` (max
+  ``(T - D) / W``): Newton rootfinder on the derivative, or the stall bound;
+- ceilings: the highest ``h`` where the best ``R/C(V, h)`` over ``V >= margin V_stall(h)``
+  equals ``c`` — a 2x2 Newton rootfinder on ``R/C = c`` with ``dR/C/dV = 0`` (or ``V`` on
+  the stall bound) from a (h, V) scan, with
   ``c = 0.5 m/s`` (service) and ``0`` (absolute); density from the ISA at ``h`` with the
   case's temperature offset, thrust scaled by ``rho / rho_ref`` (SPEC 3);
 - one engine inoperative: max level speed and max climb gradient, each engine dead in
@@ -53,14 +56,6 @@ _CEILING_SCAN_ALTITUDES = 201
 _CEILING_SCAN_SPEEDS = 301
 _CLIMB_TABLE_STEP_M_S = 0.5
 _CLIMB_TABLE_MAX_POINTS = 401
-_IPOPT = {
-    "ipopt.print_level": 0,
-    "ipopt.sb": "yes",
-    "print_time": False,
-    "ipopt.tol": 1e-12,
-    "ipopt.acceptable_tol": 1e-9,
-    "ipopt.max_iter": 200,
-}
 
 
 def _dead_mode(case: Case) -> DeadEngineMode:
@@ -171,7 +166,7 @@ class PerformanceResult:
 
 
 class PerformanceProblems:
-    """The case's point-performance problems, each a CasADi function / IPOPT NLP built once.
+    """The case's point-performance problems, each a CasADi rootfinder built once.
 
     Parameters
     ----------
@@ -199,28 +194,26 @@ class PerformanceProblems:
         )
         v = ca.SX.sym("airspeed_m_s")
         rho = ca.SX.sym("density_kg_m3")
-        self._excess: dict[int | None, Any] = {}
-        self._max_speed: dict[int | None, Any] = {}
-        self._max_gradient: dict[int | None, Any] = {}
-        self._min_speed: dict[int | None, Any] = {}
+        newton = {"abstol": 1e-12, "max_iter": 60, "error_on_fail": False}
+        self._excess_root: dict[int | None, Any] = {}
+        self._gradient_peak: dict[int | None, Any] = {}
         for dead in self.dead_cases:
             thrust = total_thrust_n(self.propulsion, 1.0, v, rho, dead, self.mode)
             excess = thrust - level_flight_drag_n(self.aircraft, v, rho)
-            self._excess[dead] = ca.Function("excess", [v, rho], [excess])
             gradient = climb_gradient(self.aircraft, thrust, v, rho)
-            self._max_speed[dead] = ca.nlpsol(
-                "max_level_speed", "ipopt", {"x": v, "p": rho, "f": -v, "g": excess}, _IPOPT
+            # level-speed bounds: T(1, V) = D(V); Vx: d/dV (T - D)/W = 0 (Anderson 5.10)
+            self._excess_root[dead] = ca.rootfinder(
+                "level_speed", "newton", {"x": v, "p": rho, "g": excess}, newton
             )
-            self._min_speed[dead] = ca.nlpsol(
-                "min_level_speed", "ipopt", {"x": v, "p": rho, "f": v, "g": excess}, _IPOPT
-            )
-            self._max_gradient[dead] = ca.nlpsol(
-                "max_climb_gradient", "ipopt", {"x": v, "p": rho, "f": -gradient}, _IPOPT
+            self._gradient_peak[dead] = ca.rootfinder(
+                "best_angle_speed", "newton",
+                {"x": v, "p": rho, "g": ca.jacobian(gradient, v)}, newton,
             )
         thrust = total_thrust_n(self.propulsion, 1.0, v, rho)
         rate = climb_rate_m_s(self.aircraft, thrust, v, rho)
-        self._max_rate = ca.nlpsol(
-            "max_climb_rate", "ipopt", {"x": v, "p": rho, "f": -rate}, _IPOPT
+        # Vy: d/dV [V (T - D) / W] = 0
+        self._rate_peak = ca.rootfinder(
+            "best_rate_speed", "newton", {"x": v, "p": rho, "g": ca.jacobian(rate, v)}, newton
         )
         # ceiling: altitude in km (scaling), density from the ISA at that altitude
         h_km = ca.SX.sym("altitude_km")
@@ -229,17 +222,19 @@ class PerformanceProblems:
         thrust_h = total_thrust_n(self.propulsion, 1.0, v, rho_h)
         rate_h = climb_rate_m_s(self.aircraft, thrust_h, v, rho_h)
         stall_h = self.margin * stall_speed_m_s(self.aircraft, rho_h)
-        self._ceiling = ca.nlpsol(
-            "ceiling",
-            "ipopt",
-            {
-                "x": ca.vertcat(v, h_km),
-                "p": target,
-                "f": -h_km,
-                "g": ca.vertcat(rate_h - target, v - stall_h),
-            },
-            _IPOPT,
+        # ceiling (V, h): R/C = c at the best airspeed, dR/C/dV = 0 or V on the stall bound
+        x = ca.vertcat(v, h_km)
+        slope = ca.jacobian(rate_h, v)
+        self._ceiling_free = ca.rootfinder(
+            "ceiling", "newton", {"x": x, "p": target, "g": ca.vertcat(rate_h - target, slope)},
+            newton,
         )
+        self._ceiling_stall = ca.rootfinder(
+            "ceiling_at_stall", "newton",
+            {"x": x, "p": target, "g": ca.vertcat(rate_h - target, v - stall_h)}, newton,
+        )
+        self._rate_slope = ca.Function("rate_slope", [v, h_km], [slope])
+        self._ceiling_grid: tuple[np.ndarray, ...] | None = None
 
     # --- the model on numpy (the same functions as the NLPs, through the backend) ----------
     def least_airspeed_m_s(self, rho: Any) -> Any:
@@ -285,14 +280,54 @@ class PerformanceProblems:
         return float(cap) if cap.ndim == 0 else cap
 
     # --- solves ------------------------------------------------------------------------------
-    def _bounded(self, solver: Any, rho: float, low: float, high: float, guess: float) -> float:
-        sol = solver(x0=guess, lbx=low, ubx=high, lbg=0.0, ubg=math.inf, p=rho)
-        return float(sol["x"])
+    @staticmethod
+    def _root_in(rootfinder: Any, rho: float, low: float, high: float,
+                 residual: Any) -> float:
+        """Newton root in the scan's bracket [low, high] (a sign change of ``residual``).
 
-    def _unconstrained(self, solver: Any, rho: float, low: float, high: float,
-                       guess: float) -> float:
-        sol = solver(x0=guess, lbx=low, ubx=high, p=rho)
-        return float(sol["x"])
+        Newton from the midpoint of a bracket 1/1200 of the speed range wide converges
+        quadratically; should it leave the bracket, bisection on the residual's sign
+        (numpy, the same model) finishes the job.
+        """
+        x = float(rootfinder((low + high) / 2.0, rho))
+        if math.isfinite(x) and low <= x <= high:
+            return x
+        f_low = float(residual(low))
+        for _ in range(200):
+            mid = 0.5 * (low + high)
+            if mid in (low, high):
+                break
+            if (float(residual(mid)) >= 0.0) == (f_low >= 0.0):
+                low = mid
+            else:
+                high = mid
+        return 0.5 * (low + high)
+
+    @staticmethod
+    def _peak_in(rootfinder: Any, rho: float, grid: np.ndarray, values: np.ndarray,
+                 objective: Any) -> float:
+        """Airspeed [m/s] of the largest ``objective``: the scan's best point refined.
+
+        At the scan's first point (the stall bound) the answer is that bound; inside,
+        Newton on the objective's derivative from the best grid point, kept only if it
+        stays between the neighbours and does not lower the objective, else a golden
+        section on the objective between the neighbours.
+        """
+        i = int(np.nanargmax(values))
+        if i == 0 or i == len(grid) - 1:
+            return float(grid[i])
+        low, high, best = float(grid[i - 1]), float(grid[i + 1]), float(grid[i])
+        x = float(rootfinder(best, rho))
+        if math.isfinite(x) and low <= x <= high and float(objective(x)) >= values[i]:
+            return x
+        golden = (math.sqrt(5.0) - 1.0) / 2.0
+        for _ in range(100):
+            a, b = high - golden * (high - low), low + golden * (high - low)
+            if float(objective(a)) >= float(objective(b)):
+                high = b
+            else:
+                low = a
+        return 0.5 * (low + high)
 
     def scan(self, rho: float) -> tuple[np.ndarray, float]:
         """Airspeed grid [m/s] from the least airspeed to the speed cap, and that cap."""
@@ -315,35 +350,36 @@ class PerformanceProblems:
         if not ok.any():
             return None, None, True
         first, last = int(np.argmax(ok)), int(len(ok) - 1 - np.argmax(ok[::-1]))
+        rf = self._excess_root[dead]
+
+        def residual(v: float) -> float:
+            return float(self.excess_n(v, rho, dead))
+
         if first == 0:
             least = float(grid[0])
         else:
-            least = self._bounded(self._min_speed[dead], rho, float(grid[first - 1]),
-                                  float(grid[first]), float(grid[first]))
+            least = self._root_in(rf, rho, float(grid[first - 1]), float(grid[first]), residual)
         if last == len(grid) - 1 and not math.isfinite(cap):
             return least, None, False
-        high = float(grid[min(last + 1, len(grid) - 1)])
-        greatest = self._bounded(self._max_speed[dead], rho, float(grid[last]), high,
-                                 float(grid[last]))
+        if last == len(grid) - 1:
+            return least, float(grid[-1]), True
+        greatest = self._root_in(rf, rho, float(grid[last]), float(grid[last + 1]), residual)
         return least, greatest, True
-
-    def best(self, values: np.ndarray, grid: np.ndarray) -> tuple[float, float, float]:
-        """Scan bracket around the grid's best value: (low, high, guess) [m/s]."""
-        i = int(np.nanargmax(values))
-        return float(grid[max(i - 1, 0)]), float(grid[min(i + 1, len(grid) - 1)]), float(grid[i])
 
     def max_climb_rate(self, rho: float) -> tuple[float, float]:
         """(max rate of climb [m/s], Vy [m/s]) at density ``rho``, V >= margin x stall."""
         grid, _ = self.scan(rho)
-        low, high, guess = self.best(np.asarray(self.climb_rate(grid, rho), dtype=float), grid)
-        vy = self._unconstrained(self._max_rate, rho, low, high, guess)
+        values = np.asarray(self.climb_rate(grid, rho), dtype=float)
+        vy = self._peak_in(self._rate_peak, rho, grid, values,
+                           lambda v: self.climb_rate(v, rho))
         return float(self.climb_rate(vy, rho)), vy
 
     def max_gradient(self, rho: float, dead: int | None = None) -> tuple[float, float]:
         """(max climb gradient [-], Vx [m/s]) at density ``rho``, V >= margin x stall."""
         grid, _ = self.scan(rho)
-        low, high, guess = self.best(np.asarray(self.gradient(grid, rho, dead), dtype=float), grid)
-        vx = self._unconstrained(self._max_gradient[dead], rho, low, high, guess)
+        values = np.asarray(self.gradient(grid, rho, dead), dtype=float)
+        vx = self._peak_in(self._gradient_peak[dead], rho, grid, values,
+                           lambda v: self.gradient(v, rho, dead))
         return float(self.gradient(vx, rho, dead)), vx
 
     def ceiling_m(self, climb_rate_target: float) -> tuple[float | None, str]:
@@ -352,18 +388,8 @@ class PerformanceProblems:
         Searched from ``min(0, case altitude)`` to 20 km. ``None`` with a note when the
         target is not reached at the foot, or is still exceeded at 20 km.
         """
-        foot = min(0.0, float(self.case.atmosphere.altitude_m))
-        altitudes = np.linspace(foot, CEILING_SEARCH_TOP_M, _CEILING_SCAN_ALTITUDES)
-        rho = np.asarray(isa_density_kg_m3(altitudes, self.offset_k), dtype=float)[:, None]
-        low = np.asarray(self.least_airspeed_m_s(rho), dtype=float)
-        cap = self.speed_cap_m_s(rho)
-        top = np.where(np.isfinite(cap), cap, 10.0 * low)
-        grid = low + (np.maximum(top, 1.001 * low) - low) * np.linspace(0.0, 1.0,
-                                                                      _CEILING_SCAN_SPEEDS)
-        rate = np.asarray(self.climb_rate(grid, rho), dtype=float)
-        j = np.argmax(rate, axis=1)
-        rows = np.arange(len(altitudes))
-        best, best_v = rate[rows, j], grid[rows, j]
+        altitudes, best, best_v, at_stall = self._ceiling_scan()
+        foot = float(altitudes[0])
         reach = best >= climb_rate_target
         if not reach[0]:
             return None, (
@@ -377,13 +403,54 @@ class PerformanceProblems:
                                    else " (thrust not scaled with density: no reference density)")
             )
         k = int(len(reach) - 1 - np.argmax(reach[::-1]))
-        lbx = [0.0, altitudes[k] / 1000.0]
-        ubx = [math.inf, altitudes[k + 1] / 1000.0]
-        sol = self._ceiling(
-            x0=[best_v[k], altitudes[k] / 1000.0], lbx=lbx, ubx=ubx,
-            lbg=[0.0, 0.0], ubg=[math.inf, math.inf], p=climb_rate_target,
+        h_low, h_high = float(altitudes[k]), float(altitudes[k + 1])
+        order = (
+            (self._ceiling_stall, self._ceiling_free) if at_stall[k]
+            else (self._ceiling_free, self._ceiling_stall)
         )
-        return 1000.0 * float(sol["x"][1]), ""
+        for rootfinder in order:
+            sol = np.asarray(rootfinder([best_v[k], h_low / 1000.0], climb_rate_target)).ravel()
+            speed, altitude = float(sol[0]), 1000.0 * float(sol[1])
+            if not (np.all(np.isfinite(sol)) and h_low - 1e-6 <= altitude <= h_high + 1e-6):
+                continue
+            rho = float(isa_density_kg_m3(altitude, self.offset_k))
+            least = float(self.least_airspeed_m_s(rho))
+            slope = float(self._rate_slope(speed, altitude / 1000.0))
+            if rootfinder is self._ceiling_free and speed >= least * (1.0 - 1e-9):
+                return altitude, ""
+            if rootfinder is self._ceiling_stall and slope <= 1e-9:  # the peak lies below stall
+                return altitude, ""
+        # Newton left the bracket: bisection on the (stall-bounded) best rate of climb
+        for _ in range(80):
+            mid = 0.5 * (h_low + h_high)
+            rate, _ = self.max_climb_rate(float(isa_density_kg_m3(mid, self.offset_k)))
+            if rate >= climb_rate_target:
+                h_low = mid
+            else:
+                h_high = mid
+        return 0.5 * (h_low + h_high), ""
+
+    def _ceiling_scan(self) -> tuple[np.ndarray, ...]:
+        """Best full-throttle rate of climb per altitude on a 201 x 301 (h, V) grid, once.
+
+        Returns the altitudes [m], the best rate [m/s], its airspeed [m/s] and whether
+        that airspeed is the stall bound.
+        """
+        if self._ceiling_grid is None:
+            foot = min(0.0, float(self.case.atmosphere.altitude_m))
+            altitudes = np.linspace(foot, CEILING_SEARCH_TOP_M, _CEILING_SCAN_ALTITUDES)
+            rho = np.asarray(isa_density_kg_m3(altitudes, self.offset_k), dtype=float)[:, None]
+            low = np.asarray(self.least_airspeed_m_s(rho), dtype=float)
+            cap = self.speed_cap_m_s(rho)
+            top = np.where(np.isfinite(cap), cap, 10.0 * low)
+            grid = low + (np.maximum(top, 1.001 * low) - low) * np.linspace(
+                0.0, 1.0, _CEILING_SCAN_SPEEDS
+            )
+            rate = np.asarray(self.climb_rate(grid, rho), dtype=float)
+            j = np.argmax(rate, axis=1)
+            rows = np.arange(len(altitudes))
+            self._ceiling_grid = (altitudes, rate[rows, j], grid[rows, j], j == 0)
+        return self._ceiling_grid
 
 
 def solve_performance(case: Case, problems: PerformanceProblems | None = None) -> PerformanceResult:
