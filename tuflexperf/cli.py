@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import typer
 
 from tuflexperf.errors import InputError, NotAttainable
@@ -162,6 +163,105 @@ def _print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
             f"{'PASS' if p.passed else 'FAIL'}"
         )
     typer.echo("  (n/a: samples where the requirement is not attainable; they count as not met)")
+
+
+@app.command()
+def margins(
+    case_file: Path | None = CaseOption,
+    as_json: bool = JsonOption,
+) -> None:
+    """Per requirement and parameter: the value where it just holds, and d(value)/d(parameter)."""
+    from tuflexperf.analysis.margins import solve_margins
+    from tuflexperf.io.case import load_case
+
+    case = load_case(case_file)
+    rows = solve_margins(case)
+    if as_json:
+        emit_json({"case": case.name, "case_file": str(case.path),
+                   "margins": [m.to_dict() for m in rows]})
+        return
+    typer.echo(f"{case.name}  ({case.path})")
+    typer.echo("limit value: the parameter's value (others nominal) where the requirement "
+               "just holds, nearest the nominal; sensitivity by CasADi AD")
+    header = (f"{'requirement':<30}{'parameter':<40}{'nominal':>11}{'limit value':>13}"
+              f"{'sensitivity':>13}")
+    current = None
+    for m in rows:
+        if m.requirement != current:
+            current = m.requirement
+            typer.echo("")
+            typer.echo(header)
+            typer.echo("-" * len(header))
+        if m.limit_value is None:
+            limit = "none"
+        else:
+            limit = f"{m.limit_value:.5g}" + ("*" if m.binds == "not attainable" else "")
+        slope = "n/a" if m.sensitivity is None else f"{m.sensitivity:.4g}"
+        typer.echo(f"{m.requirement:<30}{m.parameter:<40}{m.value:>11.5g}{limit:>13}"
+                   f"{slope:>13}")
+    typer.echo("")
+    typer.echo("none: never binds in the searched range (0.5x-2x the nominal; altitude "
+               "-500..5000 m, temperature offset -50..50 K); *: binds by becoming not attainable")
+
+
+@app.command()
+def sweep(
+    vary: list[str] = typer.Option(..., "--vary", help="KEY=START:STOP:N (repeatable)."),
+    case_file: Path | None = CaseOption,
+    as_json: bool = JsonOption,
+    csv_out: Path | None = typer.Option(None, "--csv", help="Write the grid as CSV here."),
+    plot: Path | None = typer.Option(None, "--plot", help="Write a carpet plot (PNG) here."),
+    workers: int | None = WorkersOption,
+    dask: str | None = DaskOption,
+) -> None:
+    """Every requirement over a grid of parameter values."""
+    from tuflexperf.analysis.sweep import parse_vary, run_sweep
+    from tuflexperf.io.case import load_case
+    from tuflexperf.io.yamlio import atomic_write_bytes, atomic_write_text
+
+    case = load_case(case_file)
+    if workers is not None and workers < 1:
+        fail_input(f"--workers: must be at least 1, got {workers}")
+    inputs = {p.resolve() for p in (case.path, case.aircraft_path, case.propulsion_path,
+                                    case.battery_path) if p is not None}
+    for flag, target in (("--csv", csv_out), ("--plot", plot)):
+        if target is None:
+            continue
+        if target.resolve() in inputs:
+            fail_input(f"{flag} {target}: is one of the case's input files; not overwritten")
+        if target.is_dir():
+            fail_input(f"{flag} {target}: is a directory, expected a file")
+        if flag == "--plot" and target.suffix.lower() != ".png":
+            fail_input(f"--plot {target}: the carpet plot is written as PNG (use .png)")
+    if csv_out is not None and plot is not None and csv_out.resolve() == plot.resolve():
+        fail_input("--csv and --plot name the same file")
+    axes = [parse_vary(case, spec) for spec in vary]
+    result = run_sweep(case, axes, workers, dask)
+    if plot is not None:
+        from tuflexperf.report.sweep_plot import carpet_png
+
+        atomic_write_bytes(plot, carpet_png(result, f"{case.name}: sweep"))
+    if csv_out is not None:
+        atomic_write_text(csv_out, result.to_csv())
+    if as_json:
+        emit_json({"case": case.name, "case_file": str(case.path), **result.to_dict()})
+        return
+    names = list(result.values)
+    header = "".join(f"{k.split('.')[-1]:>16}" for k in result.parameters) + "".join(
+        f"{n:>30}" for n in names)
+    typer.echo(f"{case.name}  ({case.path}): {result.points.shape[0]} grid points")
+    typer.echo(header)
+    typer.echo("-" * len(header))
+    for i in range(result.points.shape[0]):
+        cells = "".join(f"{v:>16.5g}" for v in result.points[i])
+        for n in names:
+            value = result.values[n][i]
+            text = "not attainable" if not np.isfinite(value) else f"{value:.4g}"
+            cells += f"{text + (' PASS' if result.met[n][i] else ' FAIL'):>30}"
+        typer.echo(cells)
+    for target in (csv_out, plot):
+        if target is not None:
+            typer.echo(f"wrote {target}")
 
 
 @app.command()

@@ -59,6 +59,36 @@ def check_key(case: Case, key: str, where: str) -> None:
     raise InputError(f"{where}: unknown or non-numeric key {key!r}{hint}")
 
 
+def check_value(case: Case, key: str, value: float, where: str) -> None:
+    """Raise :class:`InputError` if ``value`` breaks the key's own bounds in its schema.
+
+    Only the field itself is checked (e.g. a positive mass); cross-field rules (a lift-off
+    speed below a heavier aircraft's stall) are the analyses' to report per point.
+    """
+    from typing import Annotated
+
+    from pydantic import TypeAdapter
+
+    from tuflexperf.io.case import AtmosphereSchema, TakeoffSchema
+
+    check_key(case, key, where)
+    head, *rest = key.split(".")
+    if head == "aircraft":
+        schema: Any = TakeoffSchema if rest[0] == "takeoff" and len(rest) > 1 else AircraftSchema
+    elif head == "atmosphere":
+        schema = AtmosphereSchema
+    else:
+        block = getattr(case.requirements, rest[0])
+        schema = type(block)
+    field = schema.model_fields[rest[-1]]
+    try:
+        kind = Annotated[(field.annotation, *field.metadata)] if field.metadata \
+            else field.annotation
+        TypeAdapter(kind).validate_python(value)
+    except ValidationError as exc:
+        raise InputError(f"{where}: {key}={value:g}: {exc.errors()[0]['msg']}") from None
+
+
 def _replace_pydantic(model: BaseModel, path: list[str], value: float) -> BaseModel:
     data = model.model_dump()
     node = data

@@ -1,0 +1,80 @@
+"""`tuflexperf sweep`: grid values equal the single-case analyses; CSV, JSON, carpet plot."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from tests.conftest import SHIPPED_CASE
+from tuflexperf.analysis.requirements import check_case
+from tuflexperf.analysis.sweep import parse_vary, run_sweep
+from tuflexperf.cli import app
+from tuflexperf.io.case import load_case
+from tuflexperf.io.dotted import with_values
+
+runner = CliRunner()
+
+
+def test_sweep_json_rows_equal_the_deterministic_check(tmp_path) -> None:
+    csv = tmp_path / "grid.csv"
+    png = tmp_path / "carpet.png"
+    result = runner.invoke(app, [
+        "sweep", "--vary", "aircraft.mass_kg=18:30:4", "--vary", "atmosphere.altitude_m=0:2000:3",
+        "--json", "--csv", str(csv), "--plot", str(png)])
+    assert result.exit_code == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert data["parameters"] == ["aircraft.mass_kg", "atmosphere.altitude_m"]
+    assert len(data["rows"]) == 12
+    case = load_case(SHIPPED_CASE)
+    for row in data["rows"][::5]:
+        single = with_values(case, {k: row[k] for k in data["parameters"]})
+        for verdict in check_case(single):
+            got = row[verdict.name]
+            assert got["passed"] == verdict.passed
+            if verdict.value is None:
+                assert got["value"] is None
+            else:
+                assert got["value"] == pytest.approx(verdict.value, rel=1e-6)
+    lines = csv.read_text().splitlines()
+    assert lines[0].startswith("aircraft.mass_kg,atmosphere.altitude_m,takeoff_ground_roll_value")
+    assert len(lines) == 13
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no staging debris
+
+
+def test_one_axis_human_output_and_workers_equal(tmp_path) -> None:
+    result = runner.invoke(app, ["sweep", "--vary", "aircraft.cd0=0.015:0.04:6",
+                                 "--plot", str(tmp_path / "line.png")])
+    assert result.exit_code == 0, result.stderr
+    assert "6 grid points" in result.stdout and "PASS" in result.stdout
+    case = load_case(SHIPPED_CASE)
+    axes = [parse_vary(case, "aircraft.mass_kg=15:60:3000")]
+    here = run_sweep(case, axes)
+    there = run_sweep(case, axes, workers=2)
+    for name in here.values:
+        np.testing.assert_array_equal(here.values[name], there.values[name])
+    assert (~here.met["takeoff_ground_roll"]).any() and here.met["takeoff_ground_roll"].any()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--vary", "aircraft.mass_kg=18:30"], "--vary"),
+    (["--vary", "aircraft.mass_kgg=18:30:3"], "aircraft.mass_kg"),
+    (["--vary", "aircraft.mass_kg=-5:30:3"], "aircraft.mass_kg"),
+    (["--vary", "aircraft.mass_kg=18:30:3", "--plot", "x.pdf"], "--plot"),
+])
+def test_bad_vary_is_exit_2_one_line(args: list[str], message: str) -> None:
+    result = runner.invoke(app, ["sweep", *args])
+    assert result.exit_code == 2
+    assert message in result.stderr and result.stderr.count("\n") == 1
+
+
+def test_an_input_file_is_never_overwritten(tmp_path) -> None:
+    target = SHIPPED_CASE.parent.parent / "data" / "tuflex" / "aircraft.yaml"
+    before = target.read_bytes()
+    result = runner.invoke(app, ["sweep", "--vary", "aircraft.mass_kg=18:30:3", "--csv",
+                                 str(target)])
+    assert result.exit_code == 2 and "input" in result.stderr
+    assert target.read_bytes() == before

@@ -1,0 +1,94 @@
+"""margins: limit values against an independent root-find, AD sensitivities against central
+differences of the deterministic analyses, and the symbolic values against the analyses."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from scipy import optimize
+from typer.testing import CliRunner
+
+from tests.conftest import SHIPPED_CASE
+from tuflexperf.analysis.margins import limit_values, margin_parameters
+from tuflexperf.analysis.requirements import check_case
+from tuflexperf.analysis.sensitivity import nominal_values, sensitivities
+from tuflexperf.cli import app
+from tuflexperf.io.case import load_case
+from tuflexperf.io.dotted import with_values
+
+
+def deterministic(case, key: str, value: float, name: str) -> float | None:
+    return {v.name: v.value for v in check_case(with_values(case, {key: value}))}[name]
+
+
+@pytest.fixture(scope="module")
+def case():
+    return load_case(SHIPPED_CASE)
+
+
+@pytest.fixture(scope="module")
+def limits(case):
+    return limit_values(case)
+
+
+@pytest.mark.parametrize("name, key, bracket", [
+    ("takeoff_ground_roll", "aircraft.mass_kg", (22.0, 26.0)),
+    ("takeoff_ground_roll", "atmosphere.temperature_offset_k", (0.0, 40.0)),
+    ("takeoff_ground_roll", "aircraft.takeoff.rolling_friction", (0.07, 0.14)),
+    ("flight_endurance", "requirements.endurance.throttle", (0.5, 0.6)),
+    ("flight_endurance", "aircraft.mass_kg", (25.0, 34.0)),
+])
+def test_limit_value_equals_an_independent_root_find(case, limits, name, key, bracket) -> None:
+    limit = {v.name: v.limit for v in check_case(case)}[name]
+    root = optimize.brentq(lambda x: deterministic(case, key, x, name) - limit, *bracket,
+                           xtol=1e-10)
+    got, binds, _ = limits[(name, key)]
+    assert binds == "limit"
+    assert got == pytest.approx(root, rel=1e-6)
+
+
+def test_none_in_range_when_it_never_binds(case, limits) -> None:
+    got, binds, (low, high) = limits[("trim_throttle_max", "aircraft.mass_kg")]
+    assert got is None and binds == "none in range"
+    for mass in (low, high):
+        assert deterministic(case, "aircraft.mass_kg", mass, "trim_throttle_max") < 1.0
+
+
+KEYS = ["aircraft.mass_kg", "aircraft.cd0", "aircraft.k", "aircraft.takeoff.rolling_friction",
+        "atmosphere.temperature_offset_k", "atmosphere.altitude_m",
+        "requirements.endurance.throttle"]
+
+
+def test_symbolic_values_equal_the_deterministic_analyses(case) -> None:
+    values = nominal_values(case, list(margin_parameters(case)))
+    for verdict in check_case(case):
+        assert values[verdict.name] == pytest.approx(verdict.value, rel=1e-7)
+
+
+def test_sensitivities_equal_central_differences(case) -> None:
+    """The deterministic endurance picks its climb speed on a 4001-point grid, so its value
+    jumps slightly where the grid point changes: its central difference uses a step below
+    that resolution (1e-6 relative); the others 1e-5 (their solvers' noise is ~1e-10)."""
+    slopes = sensitivities(case, KEYS)
+    nominal = margin_parameters(case)
+    for key in KEYS:
+        for verdict in check_case(case):
+            scale = 1e-6 if verdict.name == "flight_endurance" else 1e-5
+            step = scale * max(abs(nominal[key]), 1.0)
+            up = deterministic(case, key, nominal[key] + step, verdict.name)
+            down = deterministic(case, key, nominal[key] - step, verdict.name)
+            central = (up - down) / (2 * step)
+            noise = 1e-9 * abs(verdict.value) / step
+            got = slopes[verdict.name][key]
+            assert got == pytest.approx(central, rel=1e-3, abs=noise), (verdict.name, key)
+
+
+def test_margins_cli_json_keys() -> None:
+    result = CliRunner().invoke(app, ["margins", "--json"])
+    assert result.exit_code == 0, result.stderr
+    rows = json.loads(result.stdout)["margins"]
+    assert {"requirement", "parameter", "value", "limit_value", "sensitivity"} <= set(rows[0])
+    mass = next(r for r in rows if r["requirement"] == "takeoff_ground_roll"
+                and r["parameter"] == "aircraft.mass_kg")
+    assert 23.0 < mass["limit_value"] < 24.5 and mass["sensitivity"] > 0

@@ -1,0 +1,198 @@
+"""How much margin each requirement has in each parameter: limit values and sensitivities.
+
+For every requirement and every numeric parameter of the case (aircraft, atmosphere, the
+endurance throttle and the obstacle height):
+
+- **limit value**: the parameter's value at which the requirement just holds (the others
+  nominal), e.g. the largest mass for the 60 m ground roll. All parameters are scanned in
+  one batch (:class:`tuflexperf.analysis.batch.BatchEvaluator`) over their range, the
+  crossing nearest the nominal bracketed, and all brackets refined together by bisection
+  to 1e-12 of the range (a rootfinder on the met / not met boundary, so a requirement that
+  becomes not attainable binds too). "none in range" when it never binds.
+- **sensitivity** d(value)/d(parameter) at the nominal case by CasADi's automatic
+  differentiation of the requirement's value written with the model functions on CasADi
+  symbols -- not finite differences. Where the deterministic value is a discrete choice
+  (the grid airspeed of the highest trim throttle, the critical dead engine, the RK4 step
+  count of the launch) the derivative is the one of the active choice; implicit roots
+  (level-flight speed, cut-off charge) enter as one Newton step from the converged nominal
+  root, whose derivative is exactly the implicit-function theorem's.
+
+References
+----------
+Andersson et al. (2019), "CasADi", Math. Prog. Comp. 11, 1-36 (algorithmic
+differentiation); Raymer, *Aircraft Design*, 17.8; Anderson, *Aircraft Performance and
+Design*, 5.3, 6.7.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tuflexperf.analysis.batch import BatchEvaluator, present_requirements
+from tuflexperf.errors import InputError
+from tuflexperf.io.case import Case
+from tuflexperf.io.dotted import numeric_keys
+
+_SCAN_POINTS = 65
+_BISECTIONS = 45
+# Ranges where "0.5x to 2x the nominal" does not fit [low, high] in the key's unit.
+_RANGES: dict[str, tuple[float, float]] = {
+    "atmosphere.altitude_m": (-500.0, 5000.0),
+    "atmosphere.temperature_offset_k": (-50.0, 50.0),
+    "aircraft.takeoff.rotation_time_s": (0.0, 5.0),
+}
+_UPPER: dict[str, float] = {
+    "aircraft.takeoff.rolling_friction": 1.0,
+    "requirements.endurance.throttle": 1.0,
+}
+_LOWER: dict[str, float] = {
+    "aircraft.takeoff.liftoff_speed_factor": 1.0,
+    "aircraft.takeoff.transition_load_factor": 1.01,
+}
+_EXTRA_KEYS = ("requirements.endurance.throttle", "requirements.takeoff.obstacle_height_m")
+
+
+def margin_parameters(case: Case) -> dict[str, float]:
+    """The parameters ``margins`` varies, with their nominal values (SI units of their keys)."""
+    keys = numeric_keys(case)
+    return {k: v for k, v in keys.items()
+            if k.startswith(("aircraft.", "atmosphere.")) or k in _EXTRA_KEYS}
+
+
+def parameter_range(key: str, nominal: float) -> tuple[float, float]:
+    """Search range [unit of the key]: 0.5x to 2x the nominal, or the table's for offsets."""
+    if key in _RANGES:
+        low, high = _RANGES[key]
+        return min(low, nominal), max(high, nominal)
+    if nominal == 0.0:
+        return 0.0, 1.0
+    low, high = sorted((0.5 * nominal, 2.0 * nominal))
+    low = max(low, _LOWER.get(key, -math.inf))
+    high = min(high, _UPPER.get(key, math.inf))
+    return low, high
+
+
+@dataclass(frozen=True)
+class Margin:
+    """One requirement against one parameter (SPEC 5 ``margins`` keys, plus context)."""
+
+    requirement: str
+    parameter: str
+    value: float  # the parameter's nominal value
+    limit_value: float | None  # where the requirement just holds; None: none in range
+    sensitivity: float | None  # d(requirement value)/d(parameter) at the nominal
+    unit: str  # the requirement's unit
+    search_range: tuple[float, float]
+    binds: str  # "limit", "not attainable" or "none in range"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "requirement": self.requirement,
+            "parameter": self.parameter,
+            "value": self.value,
+            "limit_value": self.limit_value,
+            "sensitivity": self.sensitivity,
+            "unit": self.unit,
+            "search_range": list(self.search_range),
+            "binds": self.binds,
+        }
+
+
+def _rows(nominal: dict[str, float], keys: list[str], columns: list[np.ndarray]) -> dict:
+    """Batch values: row block ``i`` varies ``keys[i]`` over ``columns[i]``, others nominal."""
+    sizes = [c.size for c in columns]
+    total = sum(sizes)
+    values = {k: np.full(total, nominal[k]) for k in keys}
+    start = 0
+    for key, column in zip(keys, columns, strict=True):
+        values[key][start:start + column.size] = column
+        start += column.size
+    return values
+
+
+def limit_values(case: Case, parameters: dict[str, float] | None = None
+                 ) -> dict[tuple[str, str], tuple[float | None, str, tuple[float, float]]]:
+    """(requirement, parameter) -> (limit value, how it binds, search range); see module doc."""
+    nominal = parameters or margin_parameters(case)
+    keys = list(nominal)
+    evaluator = BatchEvaluator(case)
+    ranges = {k: parameter_range(k, nominal[k]) for k in keys}
+    grids = [np.unique(np.concatenate([np.linspace(*ranges[k], _SCAN_POINTS), [nominal[k]]]))
+             for k in keys]
+    scan = evaluator.evaluate(_rows(nominal, keys, grids))
+    names = list(scan.values)
+    out: dict[tuple[str, str], tuple[float | None, str, tuple[float, float]]] = {}
+    brackets: list[tuple[str, str, float, float, bool]] = []  # (req, key, lo, hi, met_at_lo)
+    start = 0
+    for key, grid in zip(keys, grids, strict=True):
+        part = slice(start, start + grid.size)
+        start += grid.size
+        for name in names:
+            met = scan.met(name)[part]
+            changes = np.nonzero(met[1:] != met[:-1])[0]
+            if changes.size == 0:
+                out[(name, key)] = (None, "none in range", ranges[key])
+                continue
+            # the crossing nearest the nominal value
+            distance = np.minimum(np.abs(grid[changes] - nominal[key]),
+                                  np.abs(grid[changes + 1] - nominal[key]))
+            j = int(changes[np.argmin(distance)])
+            brackets.append((name, key, grid[j], grid[j + 1], bool(met[j])))
+    if brackets:
+        low = np.array([b[2] for b in brackets])
+        high = np.array([b[3] for b in brackets])
+        met_low = np.array([b[4] for b in brackets])
+        for _ in range(_BISECTIONS):
+            mid = 0.5 * (low + high)
+            result = evaluator.evaluate(_rows_pairs(nominal, brackets, mid))
+            met_mid = np.array([result.met(b[0])[i] for i, b in enumerate(brackets)])
+            same = met_mid == met_low
+            low, high = np.where(same, mid, low), np.where(same, high, mid)
+        edge = evaluator.evaluate(_rows_pairs(nominal, brackets, 0.5 * (low + high)))
+        for i, (name, key, _, _, _) in enumerate(brackets):
+            root = 0.5 * (low[i] + high[i])
+            binds = "limit" if np.isfinite(edge.values[name][i]) else "not attainable"
+            out[(name, key)] = (float(root), binds, ranges[key])
+    return out
+
+
+def _rows_pairs(nominal: dict[str, float], brackets: list, column: np.ndarray) -> dict:
+    """Row ``i`` sets ``brackets[i]``'s parameter to ``column[i]``, the others nominal."""
+    keys = sorted({b[1] for b in brackets})
+    values = {k: np.full(len(brackets), nominal[k]) for k in keys}
+    for i, b in enumerate(brackets):
+        values[b[1]][i] = column[i]
+    return values
+
+
+def solve_margins(case: Case) -> list[Margin]:
+    """Every requirement against every parameter: limit value and AD sensitivity."""
+    from tuflexperf.analysis.sensitivity import sensitivities
+
+    requirements = present_requirements(case)
+    if not requirements:
+        raise InputError(f"{case.path}: requirements: the case states none; nothing to do")
+    nominal = margin_parameters(case)
+    limits = limit_values(case, nominal)
+    slopes = sensitivities(case, list(nominal))
+    margins = []
+    for requirement in requirements:
+        for key, value in nominal.items():
+            limit, binds, search = limits[(requirement.name, key)]
+            slope = slopes.get(requirement.name, {}).get(key)
+            margins.append(Margin(
+                requirement=requirement.name,
+                parameter=key,
+                value=value,
+                limit_value=limit,
+                sensitivity=slope,
+                unit=requirement.unit,
+                search_range=search,
+                binds=binds,
+            ))
+    return margins
+

@@ -1,0 +1,329 @@
+"""Sensitivities of every requirement's value to the case's parameters by CasADi AD.
+
+Each requirement's value is written once more on CasADi symbols with the same model
+functions (:mod:`tuflexperf.models` is backend-neutral), following the deterministic
+analysis at the nominal case: the same quadrature structure, the active grid point or dead
+engine, the launch's RK4 with its nominal step count, and one Newton step from each
+converged nominal root (exact first derivative by the implicit-function theorem). The
+symbolic value at the nominal equals the deterministic one (a test checks it), and its
+Jacobian is the sensitivity.
+
+References
+----------
+Andersson et al. (2019), "CasADi", Math. Prog. Comp. 11, 1-36; Griewank & Walther,
+*Evaluating Derivatives*, 2nd ed., ch. 15 (derivatives of implicitly defined functions).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+
+from tuflexperf.analysis.batch import present_requirements
+from tuflexperf.analysis.takeoff import obstacle_height_of
+from tuflexperf.io.case import Case
+from tuflexperf.models.aircraft import (
+    climb_gradient,
+    ground_roll_net_force_n,
+    level_flight_drag_n,
+    liftoff_speed_m_s,
+    obstacle_distances_m,
+    stall_speed_m_s,
+    transition_radius_m,
+    transition_speed_m_s,
+)
+from tuflexperf.models.atmosphere import isa_density_kg_m3
+from tuflexperf.models.battery import current_at_power_a, cutoff_residual_v, discharge_time_s
+from tuflexperf.models.thrust import least_throttle_reaching, total_thrust_n
+
+_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(64)
+
+
+class _Symbolic:
+    """The case with some parameters as CasADi symbols."""
+
+    def __init__(self, case: Case, keys: list[str]) -> None:
+        import casadi as ca
+
+        self.ca = ca
+        self.case = case
+        self.symbols = {key: ca.SX.sym(key) for key in keys}
+        base = case.aircraft
+
+        def pick(key: str, nominal: Any) -> Any:
+            return self.symbols.get(key, nominal)
+
+        takeoff = dataclasses.replace(base.takeoff, **{
+            f.name: pick(f"aircraft.takeoff.{f.name}", getattr(base.takeoff, f.name))
+            for f in dataclasses.fields(base.takeoff)})
+        self.aircraft = dataclasses.replace(base, takeoff=takeoff, **{
+            f.name: pick(f"aircraft.{f.name}", getattr(base, f.name))
+            for f in dataclasses.fields(base) if f.name not in ("name", "takeoff")})
+        atmosphere = case.atmosphere
+        altitude = pick("atmosphere.altitude_m", atmosphere.altitude_m)
+        offset = pick("atmosphere.temperature_offset_k", atmosphere.temperature_offset_k)
+        self.density = isa_density_kg_m3(altitude, offset)
+        self.propulsion = case.propulsion
+        endurance = case.requirements.endurance
+        self.throttle = pick("requirements.endurance.throttle",
+                             endurance.throttle if endurance else 0.0)
+        self.height = pick("requirements.takeoff.obstacle_height_m", obstacle_height_of(case))
+
+    # -- physics on symbols --------------------------------------------------------------------
+    def thrust(self, throttle: Any, speed: Any, dead: int | None = None,
+               mode: str = "windmilling") -> Any:
+        return total_thrust_n(self.propulsion, throttle, speed, self.density, dead, mode)
+
+    def force(self, speed: Any) -> Any:
+        return ground_roll_net_force_n(self.aircraft, self.thrust(1.0, speed), speed,
+                                       self.density)
+
+    def liftoff(self) -> Any:
+        return liftoff_speed_m_s(self.aircraft, self.density)
+
+    def ground_roll(self) -> tuple[Any, Any]:
+        """Ground roll [m] and its time [s]: Gauss-Legendre, split at the friction kink."""
+        ca = self.ca
+        ac, v_lo = self.aircraft, self.liftoff()
+        to = ac.takeoff
+        pieces = [(0.0, v_lo)]
+        if not (isinstance(to.cl_ground, (int, float)) and to.cl_ground == 0.0):
+            kink = ca.sqrt(2.0 * ac.weight_n / (self.density * ac.wing_area_m2 * to.cl_ground))
+            middle = ca.fmin(kink, v_lo)
+            pieces = [(0.0, middle), (middle, v_lo)]
+        distance, time = 0.0, 0.0
+        for low, high in pieces:
+            nodes = low + (high - low) * 0.5 * (ca.DM(_GL_NODES) + 1.0)
+            weights = ca.DM(_GL_WEIGHTS) * 0.5 * (high - low)
+            force = self.force(nodes)
+            distance = distance + ca.dot(weights, ac.mass_kg * nodes / force)
+            time = time + ca.dot(weights, ac.mass_kg / force)
+        return distance + v_lo * to.rotation_time_s, time + to.rotation_time_s
+
+    def least_throttle(self, speed: float, dead: int | None = None,
+                       mode: str = "windmilling") -> Any:
+        t0 = self.thrust(0.0, speed, dead, mode)
+        th = self.thrust(0.5, speed, dead, mode)
+        t1 = self.thrust(1.0, speed, dead, mode)
+        quadratic = 2.0 * (t1 - 2.0 * th + t0)
+        drag = level_flight_drag_n(self.aircraft, speed, self.density)
+        throttle, _ = least_throttle_reaching(quadratic, t1 - t0 - quadratic, t0 - drag)
+        return throttle
+
+    def newton_step(self, residual: Any, at: float) -> Any:
+        """One Newton step of ``residual(x)`` from its converged nominal root ``at``."""
+        ca = self.ca
+        x = ca.SX.sym("x")
+        r = residual(x)
+        slope = ca.jacobian(r, x)
+        return at - ca.substitute(r / slope, x, ca.SX(at))
+
+
+def _trim_value(s: _Symbolic) -> Any:
+    from tuflexperf.analysis.trim import solve_trim
+
+    result = solve_trim(s.case)
+    if not result.all_feasible:
+        return None
+    speed = float(result.airspeed_m_s[int(np.argmax(result.throttle))])
+    return s.least_throttle(speed)
+
+
+def _oei_value(s: _Symbolic) -> Any:
+    from tuflexperf.analysis.oei import solve_oei
+
+    mode = s.case.requirements.oei.dead_engine
+    result = solve_oei(s.case, mode)
+    worst = result.critical
+    if worst.min_throttle is None:
+        return None
+    dead = [c.dead_engine for c in result.cases].index(worst.dead_engine)
+    return s.least_throttle(worst.airspeed_at_min_throttle_m_s, dead, mode)
+
+
+def _endurance_value(s: _Symbolic) -> Any:
+    """Flight endurance [min] along the nominal solution's structure (see module doc)."""
+    from tuflexperf.analysis import endurance as single
+    from tuflexperf.errors import NotAttainable
+
+    ca = s.ca
+    model = single.endurance_model(s.case)
+    nominal_throttle = float(s.case.requirements.endurance.throttle)
+    try:
+        result = model.solve(nominal_throttle)
+    except NotAttainable:
+        return None
+    launch, battery = model.launch, model.battery
+    ac, rho = s.aircraft, s.density
+    # the roll's time history on 101 airspeeds (the launch interpolates power along it)
+    v_lo = s.liftoff()
+    count = 101
+    nodes = v_lo * ca.DM(np.linspace(0.0, 1.0, count))
+    g = ac.mass_kg / s.force(nodes)
+    h = v_lo / (count - 1)
+    left = ca.vertcat(2 * g[0] - g[1], g[0:count - 2])
+    right = ca.vertcat(g[2:count], 2 * g[count - 1] - g[count - 2])
+    pieces = h / 24.0 * (-left + 13.0 * g[0:count - 1] + 13.0 * g[1:count] - right)
+    t_hist = ca.vertcat(0.0, ca.cumsum(pieces))
+    v_hist = nodes
+    roll_time = t_hist[count - 1] + ac.takeoff.rotation_time_s
+    # best climb on the same grid point as the nominal
+    stall = stall_speed_m_s(ac, rho)
+    n = single._SPEED_GRID_POINTS
+    low0 = launch.liftoff_speed_m_s
+    top0 = single._MAX_SPEED_OVER_STALL * float(stall_speed_m_s(s.case.aircraft,
+                                                                  s.case.density_kg_m3))
+    k = round((launch.climb_airspeed_m_s - low0) / (top0 - low0) * (n - 1))
+    v_climb = v_lo + (single._MAX_SPEED_OVER_STALL * stall - v_lo) * k / (n - 1)
+    rate = (s.thrust(1.0, v_climb) - level_flight_drag_n(ac, v_climb, rho)) * v_climb \
+        / ac.weight_n
+    height = battery.pattern_altitude_m
+    climb_time = height / rate if height > 0 else 0.0
+    # the launch's RK4 with the nominal step count; power looked up as the nominal does
+    total0 = launch.ground_roll_time_s + launch.climb_time_s
+    steps = max(1, math.ceil(total0 / single._LAUNCH_STEP_S))
+    dt0 = total0 / steps
+    dt = (roll_time + climb_time) / steps
+    t_hist0 = np.asarray(ca.evalf(ca.substitute(t_hist, ca.vertcat(*s.symbols.values()),
+                                                _nominal_vector(s)))).ravel() \
+        if s.symbols else np.asarray(ca.evalf(t_hist)).ravel()
+    power = model.power
+    climb_power = power.electrical_power_w(1.0, v_climb)
+
+    def stage_power(j: int) -> Any:
+        t0_value = 0.5 * j * dt0
+        if t0_value >= launch.ground_roll_time_s:
+            return climb_power
+        index = min(max(int(np.searchsorted(t_hist0, t0_value, side="right")) - 1, 0),
+                    count - 2)
+        if t0_value >= t_hist0[-1]:
+            speed = v_hist[count - 1]
+        else:
+            t = 0.5 * j * dt
+            speed = v_hist[index] + (t - t_hist[index]) * (v_hist[index + 1] - v_hist[index]) \
+                / (t_hist[index + 1] - t_hist[index])
+        return power.electrical_power_w(1.0, speed)
+
+    packs = battery.packs_in_parallel_per_engine
+    q: Any = 0.0
+    for step in range(steps):
+        def rate_at(j: int, charge: Any) -> Any:
+            return current_at_power_a(model.params, charge, stage_power(j), packs) / 3600.0
+
+        k1 = rate_at(2 * step, q)
+        k2 = rate_at(2 * step + 1, q + dt / 2 * k1)
+        k3 = rate_at(2 * step + 1, q + dt / 2 * k2)
+        k4 = rate_at(2 * step + 2, q + dt * k3)
+        q = q + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    # level flight at the throttle (fast root) and the pack's cut-off charge
+    x = s.throttle
+    speed = s.newton_step(
+        lambda v: s.thrust(x, v) - level_flight_drag_n(ac, v, rho), result.airspeed_m_s)
+    power_w = power.electrical_power_w(x, speed)
+    q_cut = s.newton_step(
+        lambda c: cutoff_residual_v(model.params, c, power_w, model.cutoff_v, packs),
+        _nominal_cutoff(model, result))
+    end = model.reserve_ah if result.cruise_ends_at == "landing reserve" else q_cut
+    cruise = discharge_time_s(model.params, power_w, q, end, packs)
+    return cruise / 60.0 + climb_time / 60.0
+
+
+def _nominal_vector(s: _Symbolic) -> Any:
+    from tuflexperf.io.dotted import numeric_keys
+
+    nominal = numeric_keys(s.case)
+    return s.ca.DM([nominal[k] for k in s.symbols])
+
+
+def _nominal_cutoff(model: Any, result: Any) -> float:
+    """The nominal cut-off charge of the parallel packs [Ah] (the deterministic's root)."""
+    from tuflexperf.models.battery import cutoff_charge_ah
+
+    return float(cutoff_charge_ah(model.params, result.electrical_power_w, model.cutoff_v,
+                                  model.packs))
+
+
+def symbolic_values(case: Case, keys: list[str]) -> tuple[Any, dict[str, Any]]:
+    """CasADi symbols (in ``keys`` order) and each requirement's value as an expression."""
+    s = _Symbolic(case, keys)
+    values: dict[str, Any] = {}
+    roll = None
+    for requirement in present_requirements(case):
+        name = requirement.name
+        if name in ("takeoff_ground_roll", "takeoff_distance_to_obstacle"):
+            roll = roll or s.ground_roll()
+            if name == "takeoff_ground_roll":
+                values[name] = roll[0]
+            else:
+                v_tr = transition_speed_m_s(s.aircraft, s.density)
+                radius = transition_radius_m(v_tr, s.aircraft.takeoff.transition_load_factor)
+                gradient = climb_gradient(s.aircraft, s.thrust(1.0, v_tr), v_tr, s.density)
+                arc, climb, _ = obstacle_distances_m(radius, gradient, s.height)
+                values[name] = roll[0] + arc + climb
+        elif name == "trim_throttle_max":
+            values[name] = _trim_value(s)
+        elif name == "oei_min_throttle":
+            values[name] = _oei_value(s)
+        else:
+            values[name] = _endurance_value(s)
+    return s.ca.vertcat(*s.symbols.values()), values
+
+
+def sensitivities(case: Case, keys: list[str]) -> dict[str, dict[str, float | None]]:
+    """d(requirement value)/d(parameter) at the nominal case, by CasADi AD.
+
+    Parameters
+    ----------
+    case : Case
+        The nominal case.
+    keys : list of str
+        Dotted parameter keys (units as the keys name them).
+
+    Returns
+    -------
+    dict
+        requirement name -> parameter -> derivative [requirement unit / parameter unit];
+        None where the requirement is not attainable at the nominal case.
+
+    References
+    ----------
+    Andersson et al. (2019), "CasADi", Math. Prog. Comp. 11, 1-36.
+    """
+    import casadi as ca
+
+    from tuflexperf.io.dotted import numeric_keys
+
+    symbols, values = symbolic_values(case, keys)
+    nominal = numeric_keys(case)
+    point = [nominal[k] for k in keys]
+    out: dict[str, dict[str, float | None]] = {}
+    for name, expression in values.items():
+        if expression is None:
+            out[name] = {k: None for k in keys}
+            continue
+        gradient = ca.Function("gradient", [symbols], [ca.jacobian(expression, symbols)])
+        row = np.asarray(gradient(point), dtype=float).ravel()
+        out[name] = {k: float(v) if math.isfinite(v) else None for k, v in zip(keys, row,
+                                                                                  strict=True)}
+    return out
+
+
+def nominal_values(case: Case, keys: list[str]) -> dict[str, float | None]:
+    """The symbolic values at the nominal case (equal to the deterministic ones; tested)."""
+    import casadi as ca
+
+    from tuflexperf.io.dotted import numeric_keys
+
+    symbols, values = symbolic_values(case, keys)
+    nominal = numeric_keys(case)
+    point = [nominal[k] for k in keys]
+    out: dict[str, float | None] = {}
+    for name, expression in values.items():
+        if expression is None:
+            out[name] = None
+            continue
+        out[name] = float(ca.Function("value", [symbols], [expression])(point))
+    return out

@@ -1,0 +1,138 @@
+"""Every requirement over a grid of parameter values (``tuflexperf sweep --vary ...``).
+
+The grid is the Cartesian product of the ``--vary KEY=START:STOP:N`` axes (first axis
+slowest); all points are evaluated as batches by
+:class:`tuflexperf.analysis.batch.BatchEvaluator`, in chunks that may run in local
+processes or on a Dask cluster (the same numbers wherever they run: no randomness).
+
+References
+----------
+Raymer, *Aircraft Design*, 19.5 (carpet plots for design trades).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tuflexperf.errors import InputError
+from tuflexperf.io.case import Case
+from tuflexperf.io.dotted import check_value
+
+Array = NDArray[np.float64]
+CHUNK_ROWS = 2500
+MAX_POINTS = 1_000_000
+
+
+def parse_vary(case: Case, spec: str) -> tuple[str, Array]:
+    """``KEY=START:STOP:N`` -> (key, N values from START to STOP); bad input names the flag."""
+    if "=" not in spec:
+        raise InputError(f"--vary {spec!r}: expected KEY=START:STOP:N")
+    key, _, grid = spec.partition("=")
+    key = key.strip()
+    parts = grid.split(":")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise InputError(f"--vary {spec!r}: expected KEY=START:STOP:N (N a whole number)") \
+            from None
+    if count < 1 or not (np.isfinite(start) and np.isfinite(stop)):
+        raise InputError(f"--vary {spec!r}: need finite START, STOP and N >= 1")
+    for value in (start, stop):  # the key's own bounds, as in the files (a negative mass)
+        check_value(case, key, value, "--vary")
+    return key, np.linspace(start, stop, count)
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Grid points ``(rows, P)``, and per requirement its values, limits and met flags."""
+
+    parameters: tuple[str, ...]
+    axes: tuple[Array, ...]
+    points: Array
+    values: dict[str, Array]
+    limits: dict[str, Array]
+    met: dict[str, NDArray[np.bool_]]
+    units: dict[str, str]
+
+    def to_dict(self) -> dict[str, Any]:
+        rows = []
+        for i in range(self.points.shape[0]):
+            row: dict[str, Any] = {k: float(self.points[i, j])
+                                   for j, k in enumerate(self.parameters)}
+            for name in self.values:
+                value = float(self.values[name][i])
+                row[name] = {"value": value if np.isfinite(value) else None,
+                             "limit": float(self.limits[name][i]),
+                             "passed": bool(self.met[name][i])}
+            rows.append(row)
+        return {"parameters": list(self.parameters), "units": self.units, "rows": rows}
+
+    def to_csv(self) -> str:
+        header = list(self.parameters)
+        for name in self.values:
+            header += [f"{name}_value", f"{name}_limit", f"{name}_passed"]
+        lines = [",".join(header)]
+        for i in range(self.points.shape[0]):
+            cells = [repr(float(v)) for v in self.points[i]]
+            for name in self.values:
+                value = float(self.values[name][i])
+                cells += ["" if not np.isfinite(value) else repr(value),
+                          repr(float(self.limits[name][i])),
+                          "true" if self.met[name][i] else "false"]
+            lines.append(",".join(cells))
+        return "\n".join(lines) + "\n"
+
+
+def evaluate_rows(case: Case, keys: tuple[str, ...], points: Array) -> dict[str, Array]:
+    """One chunk of grid points as one batch (module level: picklable for processes/Dask)."""
+    from tuflexperf.analysis.requirements import requirement_met
+    from tuflexperf.analysis.uncertainty import evaluator_for
+
+    result = evaluator_for(case).evaluate({k: points[:, j] for j, k in enumerate(keys)},
+                                          size=points.shape[0])
+    out: dict[str, Array] = {}
+    for name, values in result.values.items():
+        out[f"value:{name}"] = values
+        out[f"limit:{name}"] = result.limits[name]
+        out[f"met:{name}"] = requirement_met(values, result.limits[name], result.kinds[name])
+    return out
+
+
+def run_sweep(case: Case, axes: list[tuple[str, Array]], workers: int | None = None,
+              dask_address: str | None = None) -> SweepResult:
+    """Every requirement at every grid point (first axis slowest)."""
+    from tuflexperf.analysis.batch import present_requirements
+    from tuflexperf.analysis.uncertainty import run_chunks
+
+    keys = tuple(k for k, _ in axes)
+    if len(set(keys)) != len(keys):
+        raise InputError(f"--vary: a key is given twice ({', '.join(keys)})")
+    count = int(np.prod([a.size for _, a in axes]))
+    if count > MAX_POINTS:
+        raise InputError(f"--vary: {count} grid points; at most {MAX_POINTS}")
+    if not present_requirements(case):
+        raise InputError(f"{case.path}: requirements: the case states none; nothing to sweep")
+    points = np.array(list(itertools.product(*[a for _, a in axes])), dtype=float)
+    chunks = [points[i:i + CHUNK_ROWS] for i in range(0, count, CHUNK_ROWS)]
+    parts = run_chunks(evaluate_rows, [(case, keys, c) for c in chunks], workers, dask_address)
+    names = [k.split(":", 1)[1] for k in parts[0] if k.startswith("value:")]
+
+    def join(prefix: str, name: str) -> Any:
+        return np.concatenate([p[f"{prefix}:{name}"] for p in parts])
+
+    return SweepResult(
+        parameters=keys,
+        axes=tuple(a for _, a in axes),
+        points=points,
+        values={n: join("value", n) for n in names},
+        limits={n: join("limit", n) for n in names},
+        met={n: join("met", n) for n in names},
+        units={r.name: r.unit for r in present_requirements(case)},
+    )
