@@ -190,8 +190,7 @@ def _endurance_value(s: _Symbolic) -> Any:
     t_hist0 = np.asarray(ca.evalf(ca.substitute(t_hist, ca.vertcat(*s.symbols.values()),
                                                 _nominal_vector(s)))).ravel() \
         if s.symbols else np.asarray(ca.evalf(t_hist)).ravel()
-    power = model.power
-    climb_power = power.electrical_power_w(1.0, v_climb)
+    climb_power = _power_w(s, model, 1.0, v_climb)
 
     def stage_power(j: int) -> Any:
         t0_value = 0.5 * j * dt0
@@ -205,7 +204,7 @@ def _endurance_value(s: _Symbolic) -> Any:
             t = 0.5 * j * dt
             speed = v_hist[index] + (t - t_hist[index]) * (v_hist[index + 1] - v_hist[index]) \
                 / (t_hist[index + 1] - t_hist[index])
-        return power.electrical_power_w(1.0, speed)
+        return _power_w(s, model, 1.0, speed)
 
     packs = battery.packs_in_parallel_per_engine
     q: Any = 0.0
@@ -222,13 +221,25 @@ def _endurance_value(s: _Symbolic) -> Any:
     x = s.throttle
     speed = s.newton_step(
         lambda v: s.thrust(x, v) - level_flight_drag_n(ac, v, rho), result.airspeed_m_s)
-    power_w = power.electrical_power_w(x, speed)
+    power_w = _power_w(s, model, x, speed)
     q_cut = s.newton_step(
         lambda c: cutoff_residual_v(model.params, c, power_w, model.cutoff_v, packs),
         _nominal_cutoff(model, result))
     end = model.reserve_ah if result.cruise_ends_at == "landing reserve" else q_cut
     cruise = discharge_time_s(model.params, power_w, q, end, packs)
     return cruise / 60.0 + climb_time / 60.0
+
+
+def _power_w(s: _Symbolic, model: Any, throttle: Any, speed: Any) -> Any:
+    """Per-fan electrical power [W] as the single case: a propulsion power surface follows
+    the density (``rho / rho_ref`` against the nominal's scale), a battery law does not."""
+    from tuflexperf.models.powertrain import PowerSurfaces
+    from tuflexperf.models.thrust import density_ratio
+
+    power = model.power.electrical_power_w(throttle, speed)
+    if isinstance(model.power, PowerSurfaces):
+        power = power * density_ratio(s.propulsion, s.density) / model.power.density_scale
+    return power
 
 
 def _nominal_vector(s: _Symbolic) -> Any:
