@@ -64,10 +64,22 @@ def test_limit_value_equals_an_independent_root_find(case, limits, name, key) ->
 
 
 def test_none_in_range_when_it_never_binds(case, limits) -> None:
-    got, binds, (low, high) = limits[("trim_throttle_max", "aircraft.mass_kg")]
+    key = "atmosphere.temperature_offset_k"
+    got, binds, (low, high) = limits[("oei_min_throttle", key)]
     assert got is None and binds == "none in range"
-    for mass in (low, high):
-        assert deterministic(case, "aircraft.mass_kg", mass, "trim_throttle_max") < 1.0
+    for value in (low, high):
+        assert deterministic(case, key, value, "oei_min_throttle") < 1.0
+
+
+def test_trim_binds_where_stall_reaches_the_envelope_foot(case, limits) -> None:
+    """SPEC 3: heavier than ``rho S cl_max V_min^2 / (2 g)`` the envelope's least airspeed
+    is below stall, so trim is not attainable there (the closed form of that mass)."""
+    got, binds, _ = limits[("trim_throttle_max", "aircraft.mass_kg")]
+    ac, v_min = case.aircraft, case.requirements.envelope.min_airspeed_m_s
+    margin = case.requirements.envelope.stall_margin
+    mass = case.density_kg_m3 * ac.wing_area_m2 * ac.cl_max * (v_min / margin) ** 2 / (
+        2 * 9.80665)
+    assert binds == "not attainable" and got == pytest.approx(mass, rel=1e-6)
 
 
 KEYS = ["aircraft.mass_kg", "aircraft.cd0", "aircraft.k", "aircraft.takeoff.rolling_friction",
