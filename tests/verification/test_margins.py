@@ -82,6 +82,29 @@ def test_trim_binds_where_stall_reaches_the_envelope_foot(case, limits) -> None:
     assert binds == "not attainable" and got == pytest.approx(mass, rel=1e-6)
 
 
+def test_none_in_range_means_the_same_verdict_at_both_ends(case, limits) -> None:
+    checked = 0
+    for (name, key), (_, binds, (low, high)) in limits.items():
+        if binds != "none in range" or key not in ("aircraft.mass_kg", "aircraft.cd0",
+                                                    "atmosphere.temperature_offset_k"):
+            continue
+        nominal = {v.name: v.passed for v in check_case(case)}[name]
+        for x in (low, high):
+            single = {v.name: v.passed for v in check_case(with_values(case, {key: x}))}
+            assert single[name] == nominal, (name, key, x)
+        checked += 1
+    assert checked > 0
+
+
+def test_binding_by_not_attainable_is_where_the_analysis_stops(case, limits) -> None:
+    for (name, key), (got, binds, _) in limits.items():
+        if binds != "not attainable" or not key.startswith("aircraft.mass"):
+            continue
+        step = 1e-6 * abs(got)
+        values = [deterministic(case, key, got + d, name) for d in (-step, step)]
+        assert sum(v is None for v in values) == 1, (name, key, values)
+
+
 KEYS = ["aircraft.mass_kg", "aircraft.cd0", "aircraft.k", "aircraft.takeoff.rolling_friction",
         "atmosphere.temperature_offset_k", "atmosphere.altitude_m",
         "requirements.endurance.throttle"]
