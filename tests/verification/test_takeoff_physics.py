@@ -250,3 +250,46 @@ def test_default_liftoff_is_1_1_stall_eas(tmp_path):
     ac = MADE_UP_AIRCRAFT
     stall_eas = math.sqrt(2 * ac["mass_kg"] * G / (RHO0 * ac["wing_area_m2"] * ac["cl_max"]))
     assert r.liftoff_speed_eas_m_s == pytest.approx(1.1 * stall_eas, rel=1e-7)
+
+
+def test_hot_and_high_on_the_shipped_files_equals_independent_integration(tmp_path):
+    """The audit's case: the shipped aircraft and propulsion at 1500 m, ISA + 20 K."""
+    import yaml
+
+    from tests.conftest import SHIPPED_CASE
+
+    root = SHIPPED_CASE.parent.parent / "data" / "tuflex"
+    aircraft = yaml.safe_load((root / "aircraft.yaml").read_text())
+    propulsion = yaml.safe_load((root / "propulsion.yaml").read_text())
+    assert propulsion.get("throttle_unit", "fraction") == "fraction"
+    case_path = tmp_path / "hot.yaml"
+    raw = yaml.safe_load(SHIPPED_CASE.read_text())
+    for key in ("aircraft", "propulsion", "battery"):
+        raw[key] = str((SHIPPED_CASE.parent / raw[key]).resolve())
+    raw["atmosphere"] = {"altitude_m": 1500, "temperature_offset_k": 20}
+    case_path.write_text(yaml.safe_dump(raw))
+    case = load_case(case_path)
+    rho = _isa_density(1500.0, 20.0)
+    result = solve_takeoff(case)
+    distance, time, v_lo = _independent_roll(aircraft, propulsion, rho)
+    assert result.liftoff_speed_m_s == pytest.approx(v_lo, rel=1e-7)
+    assert result.ground_roll_m == pytest.approx(distance, rel=1e-6)
+    assert result.time_s == pytest.approx(time, rel=1e-6)
+
+
+def test_takeoff_model_functions_are_backend_neutral():
+    """The same expressions on floats, numpy and CasADi SX (other analyses reuse them)."""
+    import casadi as ca
+
+    ac = Aircraft("t", 18.0, 1.1, 0.03, 0.04, 1.4, TakeoffConfig(cl_ground=2.0))
+    v, r, g, h = (ca.SX.sym(n) for n in ("v", "r", "g", "h"))
+    force = ca.Function("f", [v], [ground_roll_net_force_n(ac, 60.0, v, 1.2)])
+    geometry = ca.Function("o", [r, g, h], list(obstacle_distances_m(r, g, h)))
+    for speed in (0.0, 10.0, 25.0):
+        assert float(force(speed)) == pytest.approx(
+            float(ground_roll_net_force_n(ac, 60.0, np.array(speed), 1.2)), rel=1e-14)
+    for args in ((140.0, 0.39, 15.0), (500.0, 0.05, 15.0), (100.0, -0.1, 15.0)):
+        sym = [float(x) for x in geometry(*args)]
+        num = [float(x) for x in obstacle_distances_m(np.array(args[0]), np.array(args[1]),
+                                                      args[2])]
+        assert sym == pytest.approx(num, rel=1e-14)

@@ -518,9 +518,11 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
     beyond = [s for s in speeds if is_extrapolated(prop, s)]
     if beyond:
         low, high = prop.tested_airspeed_m_s
+        span = f"{min(beyond):.1f}" + (
+            f"-{max(beyond):.1f}" if max(beyond) - min(beyond) >= 0.05 else ""
+        )
         warnings.append(
-            f"thrust model extrapolated at {min(beyond):.1f}-{max(beyond):.1f} m/s "
-            f"(tested {low:g}-{high:g} m/s)"
+            f"thrust model extrapolated at {span} m/s (tested {low:g}-{high:g} m/s)"
         )
     density_note = unlapsed_density_warning(prop, rho)
     if density_note:

@@ -107,6 +107,7 @@ class TrimResult(ThrottleSweep):
             "not_attainable_reason": list(self.reasons),
             "least_attainable_airspeed_m_s": self.attainable.low,
             "attainable_airspeed_range_m_s": self.attainable.as_list(),
+            "level_flight_airspeed_range_m_s": self.attainable.as_list(),  # as OEI's key
             "stall_speed_m_s": self.stall_speed_m_s,
             "stall_margin": self.stall_margin,
             "least_airspeed_m_s": self.stall_margin * self.stall_speed_m_s,
