@@ -62,6 +62,7 @@ from tuflexperf.models.thrust import (
     is_extrapolated,
     least_throttle_reaching,
     total_thrust_n,
+    unlapsed_density_warning,
 )
 
 # Level flight is searched between the stall speed and this multiple of it.
@@ -602,6 +603,9 @@ class EnduranceModel:
                 f"level-flight airspeed {speed:.1f} m/s is outside the envelope "
                 f"{envelope.min_airspeed_m_s:g}-{envelope.max_airspeed_m_s:g} m/s"
             )
+        density_note = unlapsed_density_warning(self.case.propulsion, self.case.density_kg_m3)
+        if density_note:
+            warnings.append(density_note)
         ends_at = "landing reserve" if self.reserve_ah <= qn else "cut-off"
         if self.launch.charge_ah >= min(qn, self.reserve_ah):
             warnings.append("the launch alone uses the charge available before the reserve")
