@@ -60,6 +60,37 @@ def fail_input(message: str) -> None:
 # ---- performance core: check, takeoff, trim, oei (issue 2) ---------------------------------
 
 
+def _echo_electrical(electrical: dict[str, Any] | None) -> None:
+    """fit's voltage, power-surface, windmilling and thrust/power lines (logged V and I)."""
+    if not electrical or electrical.get("reference_voltage_v") is None:
+        return
+    fits = electrical["voltage_fits"]
+    per_engine = ", ".join(
+        f"{name} {_fmt(f['exponent'], 3)} +- {_fmt(f['standard_error'], 3)}"
+        for name, f in fits.items()
+    )
+    exponent = electrical["voltage_exponent"]
+    typer.echo(
+        f"pack voltage: reference {electrical['reference_voltage_v']:g} V; thrust ~ (U/U_ref)^n, "
+        + (f"n = {exponent:.3f} ({per_engine}); thrust brought to U_ref"
+           if exponent is not None else f"n not determined ({per_engine}); default 2")
+    )
+    for name, power in electrical["power"].items():
+        typer.echo(f"power surface {name}: poly22 in W, R^2 {_fmt(power['r2'], 4)}, "
+                   f"RMSE {_fmt(power['rmse_w'], 0)} W over {power['n_points']} points")
+    for name, wm in electrical["windmilling"].items():
+        typer.echo(f"windmilling {name}: Cd {wm['windmilling_drag_coefficient']:.3f} on the fan "
+                   f"area, rms {wm['rms_n']:.2f} N over {wm['n_points']} idle points")
+    for name, agree in electrical["thrust_power_agreement"].items():
+        merit, eff = agree["figure_of_merit_range"], agree["overall_efficiency_range"]
+        if merit:
+            typer.echo(
+                f"thrust vs power {name}: figure of merit {merit[0]:.2f}-{merit[1]:.2f}"
+                + (f", overall efficiency {eff[0]:.2f}-{eff[1]:.2f}" if eff else "")
+                + f" over {agree['working_points']} working points"
+            )
+
+
 def _fmt(value: float | None, digits: int = 3) -> str:
     return "n/a" if value is None else f"{value:.{digits}f}"
 
@@ -618,6 +649,7 @@ def _print_fit(summary: dict[str, Any]) -> None:
             f"{glauert['max_correction_at_top_airspeed_percent']:.1f} % at the top airspeed; "
             + ("applied" if glauert["applied"] else "not applied (--glauert applies it)")
         )
+    _echo_electrical(summary.get("electrical"))
     runs = [r for r in summary.get("runs", []) if "validation" in r]
     if runs:
         typer.echo("validation, model - measured force over steady segments (mean -/+, N):")

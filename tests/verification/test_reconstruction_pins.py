@@ -11,6 +11,7 @@ they cannot all hold together).
 from __future__ import annotations
 
 import pytest
+import yaml
 
 from tuflexperf.analysis.endurance import endurance_model, solve_endurance
 from tuflexperf.analysis.oei import solve_oei
@@ -60,3 +61,50 @@ def test_flight_endurance_pin(case):
     # thrust and power agree on the shipped case: no efficiency warning at cruise
     assert all(a.warnings == () for a in result.power_agreement)
     assert all(0.3 < a.overall_efficiency < 0.5 for a in result.power_agreement)
+
+
+def _assert_same_numbers(got, shipped) -> None:
+    """Equal structure; numbers within 1e-4 relative (IPOPT's optimum to its tolerance)."""
+    if isinstance(shipped, dict):
+        assert set(got) == set(shipped)
+        for key in shipped:
+            _assert_same_numbers(got[key], shipped[key])
+    elif isinstance(shipped, list):
+        assert len(got) == len(shipped)
+        for a, b in zip(got, shipped, strict=True):
+            _assert_same_numbers(a, b)
+    elif isinstance(shipped, float):
+        assert got == pytest.approx(shipped, rel=1e-4, abs=1e-6)
+    else:
+        assert got == shipped
+
+
+def _reconstruction_script():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "scripts" / "reconstruct_tuflex.py"
+    spec = importlib.util.spec_from_file_location("reconstruct_tuflex", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_shipped_files_are_the_least_squares_optimum_and_its_analyses_are_the_tools():
+    """The script's optimum renders the shipped files byte for byte, and the analyses inside
+    the least squares (quadrature ground roll, grid-bounded least throttles) equal the landed
+    ones on those files (CVODES take-off, trim/oei grids)."""
+    from pathlib import Path
+
+    script = _reconstruction_script()
+    landed = script.landed_values()
+    knobs, outputs, _, _, _ = script.solve(landed["launch_charge_ah"], landed["climb_min"])
+    data = Path(__file__).resolve().parents[2] / "data" / "tuflex"
+    for text, name in ((script.render_aircraft(knobs, outputs), "aircraft.yaml"),
+                       (script.render_propulsion(knobs), "propulsion.yaml")):
+        _assert_same_numbers(yaml.safe_load(text), yaml.safe_load((data / name).read_text()))
+    assert outputs["ground_roll_m"] == pytest.approx(landed["ground_roll_m"], abs=0.02)
+    assert outputs["trim_min_throttle"] == pytest.approx(landed["trim_min_throttle"], abs=1e-3)
+    assert outputs["oei_min_throttle"] == pytest.approx(landed["oei_min_throttle"], abs=1e-3)
+    # the files round the factor to 1e-4: 1.5e-3 m/s
+    assert outputs["liftoff_eas_m_s"] == pytest.approx(landed["liftoff_eas_m_s"], abs=2e-3)
