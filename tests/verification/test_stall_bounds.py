@@ -55,7 +55,8 @@ def _shipped_variant(tmp_path, **changes):
 
 
 def test_heavy_aircraft_trim_is_not_attainable_below_stall(tmp_path, capsys):
-    path, aircraft = _shipped_variant(tmp_path, mass_kg=60.0, cl_max=1.5)  # the audit's
+    # the audit's made-up aircraft: 60 kg on the polar and cl_max shipped at the time
+    path, aircraft = _shipped_variant(tmp_path, mass_kg=60.0, cl_max=1.5, cd0=0.02, k=0.025809)
     stall = _stall(aircraft)
     assert stall == pytest.approx(23.1, abs=0.05)  # the audit's 23.1 m/s
     trim = solve_trim(load_case(path))
@@ -85,7 +86,8 @@ def test_heavy_aircraft_trim_is_not_attainable_below_stall(tmp_path, capsys):
 
 
 def test_low_cl_max_fails_everything_with_the_reason(tmp_path, capsys):
-    path, aircraft = _shipped_variant(tmp_path, mass_kg=22.1732, cl_max=0.05)  # the audit's
+    # the audit's made-up aircraft: cl_max 0.05 on the mass (22.17 kg) shipped at the time
+    path, aircraft = _shipped_variant(tmp_path, cl_max=0.05, mass_kg=22.1732)
     assert _stall(aircraft) == pytest.approx(76.9, abs=0.05)
     verdicts = check_case(load_case(path))
     assert verdicts and not any(v.passed for v in verdicts)
