@@ -362,7 +362,8 @@ int tfp_throttle_for_thrust(double total_thrust_n, double airspeed_m_s, double d
         return TFP_OK;
     }}
     full = a + b + c;
-    if (full >= 0.0) {{
+    /* within rounding of zero (1e-12 of the terms): the demand is T(1) itself */
+    if (full >= -1e-12 * (fabs(a) + fabs(b) + fabs(c))) {{
         *throttle = 1.0; /* demand is full-throttle thrust itself, root lost to rounding */
         return TFP_OK;
     }}

@@ -204,6 +204,8 @@ def least_throttle_reaching(a: Any, b: Any, c: Any) -> tuple[Any, Any]:
     best = where(a < 0.0, where(vertex > 0.0, where(vertex < 1.0, vertex, best_end), best_end),
                  best_end)
     # f(1) >= 0 with no root <= 1 only happens by rounding when the demand is T(1) itself
-    throttle = where(c >= 0.0, 0.0, where(root <= 1.0, root, where(f_full >= 0.0, 1.0, best)))
-    reached = where(c >= 0.0, 1.0, where(root <= 1.0, 1.0, where(f_full >= 0.0, 1.0, 0.0)))
+    # within rounding of zero (1e-12 of the terms) the demand is T(1) itself (as the export's C)
+    full_ok = f_full >= -1e-12 * (abs(a) + abs(b) + abs(c))
+    throttle = where(c >= 0.0, 0.0, where(root <= 1.0, root, where(full_ok, 1.0, best)))
+    reached = where(c >= 0.0, 1.0, where(root <= 1.0, 1.0, where(full_ok, 1.0, 0.0)))
     return throttle, reached
