@@ -128,8 +128,9 @@ def describe_unattainable(airspeed_m_s: np.ndarray, reasons: tuple[str | None, .
     for reason in (BELOW_STALL, NEEDS_MORE_THAN_FULL_THROTTLE):
         hit = np.array([r == reason for r in reasons], dtype=bool)
         if hit.any():
+            low, high = v[hit].min(), v[hit].max()
+            span = f"{low:g}" if low == high else f"{low:g}-{high:g}"
             phrases.append(
-                f"{reason} at {v[hit].min():g}-{v[hit].max():g} m/s "
-                f"({int(hit.sum())} of {v.size} grid airspeeds)"
+                f"{reason} at {span} m/s ({int(hit.sum())} of {v.size} grid airspeeds)"
             )
     return phrases
