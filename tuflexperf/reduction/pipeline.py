@@ -85,6 +85,9 @@ TABLE_EXTRA_COLUMNS = (
     "voltage_v",
     "current_a",
     "electrical_power_w",
+    "ideal_power_w",
+    "figure_of_merit",
+    "overall_efficiency",
 )
 ELECTRICAL_COLUMNS = ("voltage_v", "current_a")
 
@@ -108,6 +111,9 @@ class Point:
     voltage_v: float = math.nan
     current_a: float = math.nan
     electrical_power_w: float = math.nan
+    ideal_power_w: float = math.nan  # momentum theory (SPEC 3), thrusting points
+    figure_of_merit: float = math.nan
+    overall_efficiency: float = math.nan
 
 
 @dataclass
@@ -674,6 +680,15 @@ def _agreement(campaign: Campaign, engine: str, mine: list[Point], out: Electric
     measured = [p for p in mine if math.isfinite(p.electrical_power_w)]
     if not measured:
         return
+    for p in measured:  # every point with a power carries the SPEC 3 figures in the table
+        a = power_agreement("", engine, p.throttle, p.airspeed_m_s, p.thrust_at_voltage_n,
+                            p.electrical_power_w, campaign.air_density_kg_m3,
+                            campaign.fan_area_m2, warn_efficiency=False)
+        p.ideal_power_w = _rounded(a.ideal_power_w) if a.ideal_power_w is not None else math.nan
+        p.figure_of_merit = (_rounded(a.figure_of_merit) if a.figure_of_merit is not None
+                             else math.nan)
+        p.overall_efficiency = (_rounded(a.overall_efficiency)
+                                if a.overall_efficiency is not None else math.nan)
     largest = max(p.thrust_at_voltage_n for p in measured)
     working = [p for p in measured if p.thrust_at_voltage_n >= WORKING_THRUST_SHARE * largest]
     checks = [
@@ -719,6 +734,14 @@ def _table_row(p: Point) -> dict[str, Any]:
         "electrical_power_w": (
             p.electrical_power_w if math.isfinite(p.electrical_power_w) else None
         ),
+        **{
+            key: value if math.isfinite(value) else None
+            for key, value in (
+                ("ideal_power_w", p.ideal_power_w),
+                ("figure_of_merit", p.figure_of_merit),
+                ("overall_efficiency", p.overall_efficiency),
+            )
+        },
     }
 
 
