@@ -64,7 +64,8 @@ def naive_takeoff(case) -> float:
 
     lift_off.terminal = True
     sol = solve_ivp(rhs, (0, 120), [0.0, 0.0], events=lift_off, rtol=1e-10, atol=1e-10)
-    return float(sol.y_events[0][0][1])
+    # the ground roll ends after rotation at the lift-off speed (Raymer 17.8.2)
+    return float(sol.y_events[0][0][1]) + v_lo * ac.takeoff.rotation_time_s
 
 
 def naive_trim(case, speeds: np.ndarray) -> list[float]:
