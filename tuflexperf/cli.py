@@ -193,7 +193,8 @@ def _print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
             f"{_fmt(p50):>10}{_fmt(p95):>10}{p.not_attainable:>7}  "
             f"{'PASS' if p.passed else 'FAIL'}"
         )
-    typer.echo("  (n/a: samples where the requirement is not attainable; they count as not met)")
+    typer.echo("  (n/a: samples where the requirement is not attainable; they count as not met "
+               "and as the worst value, so a percentile that falls on them shows n/a)")
 
 
 @app.command()

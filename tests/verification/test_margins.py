@@ -142,3 +142,18 @@ def test_margins_cli_json_keys() -> None:
     mass = next(r for r in rows if r["requirement"] == "takeoff_ground_roll"
                 and r["parameter"] == "aircraft.mass_kg")
     assert mass["limit_value"] > mass["value"] and mass["sensitivity"] > 0
+
+
+def test_tornado_bars_are_the_single_case_values(case) -> None:
+    from tuflexperf.analysis.margins import tornado
+
+    data = tornado(case, "takeoff_ground_roll")
+    assert data.nominal_value == pytest.approx(
+        {v.name: v.value for v in check_case(case)}["takeoff_ground_roll"], rel=1e-6)
+    swings = [b.swing for b in data.bars]
+    assert swings == sorted(swings, reverse=True)
+    for bar in data.bars[:3]:
+        for x, got in ((bar.low_parameter, bar.value_at_low),
+                       (bar.high_parameter, bar.value_at_high)):
+            expected = deterministic(case, bar.parameter, x, "takeoff_ground_roll")
+            assert got == pytest.approx(expected, rel=1e-6)

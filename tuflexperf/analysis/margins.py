@@ -196,3 +196,73 @@ def solve_margins(case: Case) -> list[Margin]:
             ))
     return margins
 
+
+
+@dataclass(frozen=True)
+class TornadoBar:
+    """A requirement's value with one parameter moved down and up (others nominal)."""
+
+    parameter: str
+    low_parameter: float
+    high_parameter: float
+    value_at_low: float | None  # None: not attainable there
+    value_at_high: float | None
+
+    @property
+    def swing(self) -> float:
+        """The bar's length [requirement unit] (inf when an end is not attainable)."""
+        if self.value_at_low is None or self.value_at_high is None:
+            return math.inf
+        return abs(self.value_at_high - self.value_at_low)
+
+
+@dataclass(frozen=True)
+class Tornado:
+    """Data of a tornado figure for one requirement: bars sorted longest first."""
+
+    requirement: str
+    unit: str
+    nominal_value: float | None
+    limit: float
+    relative_change: float
+    bars: tuple[TornadoBar, ...]
+
+
+def tornado(case: Case, requirement: str, relative_change: float = 0.1) -> Tornado:
+    """Each parameter moved by -/+ ``relative_change`` of its nominal (the temperature offset
+    by -/+ 10 K, the altitude by -/+ 500 m; never below its physical bound); one batch.
+
+    Returns
+    -------
+    Tornado
+        For the report's tornado figure (``report/`` draws it; nothing is computed there).
+    """
+    evaluator = BatchEvaluator(case)
+    nominal = margin_parameters(case)
+    offsets = {"atmosphere.temperature_offset_k": 10.0, "atmosphere.altitude_m": 500.0}
+    keys = [k for k in nominal if nominal[k] != 0.0 or k in offsets]
+    ends = []
+    for key in keys:
+        step = offsets.get(key, relative_change * abs(nominal[key]))
+        low, high = nominal[key] - step, nominal[key] + step
+        if not key.startswith("atmosphere."):  # physical quantities keep their sign
+            low = max(low, _LOWER.get(key, 0.0))
+        high = min(high, _UPPER.get(key, math.inf))
+        ends.append(np.array([low, high]))
+    result = evaluator.evaluate(_rows(nominal, keys, ends))
+    if requirement not in result.values:
+        raise InputError(f"{case.path}: requirements: no requirement named {requirement!r}")
+    values = result.values[requirement]
+    bars = []
+    for i, key in enumerate(keys):
+        low_v, high_v = values[2 * i], values[2 * i + 1]
+        bars.append(TornadoBar(key, float(ends[i][0]), float(ends[i][1]),
+                               float(low_v) if np.isfinite(low_v) else None,
+                               float(high_v) if np.isfinite(high_v) else None))
+    bars = [b for b in bars if b.swing > 0.0]
+    bars.sort(key=lambda b: b.swing, reverse=True)
+    base = evaluator.evaluate().values[requirement][0]
+    limit = float(result.limits[requirement][0])
+    unit = next(r.unit for r in present_requirements(case) if r.name == requirement)
+    return Tornado(requirement, unit, float(base) if np.isfinite(base) else None, limit,
+                   relative_change, tuple(bars))
