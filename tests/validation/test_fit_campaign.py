@@ -73,6 +73,9 @@ def test_delay_matches_ground_truth(fitted) -> None:
         assert run["delay_s"] == pytest.approx(TRUTH["delay_s"], abs=0.012)
         assert run["lag_s"] == pytest.approx(TRUTH["spool_lag_s"], abs=0.02)
     assert load_propulsion(fitted["out"]).delay_s == pytest.approx(summary["delay_s"])
+    # the dynamic model as fitted (issue 15): the spool lag is written beside the dead time
+    assert summary["lag_s"] == pytest.approx(TRUTH["spool_lag_s"], abs=0.01)
+    assert load_propulsion(fitted["out"]).lag_s == pytest.approx(summary["lag_s"], abs=1e-6)
 
 
 def test_structure_drag_and_glauert(fitted) -> None:

@@ -25,7 +25,12 @@ from tuflexperf.export.c_code import (
     source_text,
 )
 from tuflexperf.export.cbuild import CThrustModel, compile_shared, find_compiler
-from tuflexperf.export.model import ExportModel, model_from_propulsion_file, throttle_for_thrust
+from tuflexperf.export.model import (
+    ExportModel,
+    max_model_airspeed_m_s,
+    model_from_propulsion_file,
+    throttle_for_thrust,
+)
 from tuflexperf.models.thrust import density_ratio, engine_thrust_n, total_thrust_n
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -107,7 +112,7 @@ def test_c_thrust_equals_python_model(built: dict, key: str) -> None:
     rng = np.random.default_rng(42)
     n = 3000
     throttle = rng.uniform(0.0, 1.0, (n, model.n_engines))
-    airspeed = rng.uniform(0.0, 50.0, n)
+    airspeed = rng.uniform(0.0, min(50.0, max_model_airspeed_m_s(prop)), n)
     density = rng.uniform(0.8, 1.35, n)
     scale = density_ratio(prop, density)
     expected = np.column_stack(
@@ -144,7 +149,7 @@ def test_c_inverse_round_trip(built: dict, key: str) -> None:
     prop = model.propulsion
     rng = np.random.default_rng(9)
     n = 2000
-    airspeed = rng.uniform(0.0, 50.0, n)
+    airspeed = rng.uniform(0.0, min(50.0, max_model_airspeed_m_s(prop)), n)
     density = rng.uniform(0.8, 1.35, n)
     idle = total_thrust_n(prop, 0.0, airspeed, density)
     full = total_thrust_n(prop, 1.0, airspeed, density)
@@ -226,7 +231,7 @@ def test_header_serves_a_plain_c99_program(built: dict, tmp_path: Path) -> None:
         "int main(void) {\n"
         "    double t1, t2, x; tfp_delay_t d; int i;\n"
         "    if (tfp_thrust(1.0, 1.0, 0.0, 1.225, &t1, &t2) != TFP_OK) return 1;\n"
-        "    if (tfp_throttle_for_thrust(t1 + t2, 0.0, 1.225, &x) != TFP_OK) return 2;\n"
+        "    if (tfp_throttle_for_thrust(t1 + t2, 0.0, 1.225, &x, NULL) != TFP_OK) return 2;\n"
         "    if (tfp_delay_init(&d, 0.01, 0.0) != TFP_OK) return 3;\n"
         "    for (i = 0; i < 10; ++i) x = tfp_delay_step(&d, 1.0);\n"
         '    printf("%.17g %.17g %.17g %d %s\\n", t1, t2, x, TFP_N_ENGINES, TFP_MODEL_NAME);\n'

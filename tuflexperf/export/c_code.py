@@ -15,7 +15,13 @@ from __future__ import annotations
 
 import textwrap
 
-from tuflexperf.export.model import EXTRAPOLATION_WARNING, ExportModel, quadratic_coefficients
+from tuflexperf.export.model import (
+    AIRSPEED_CAP_FACTOR,
+    EXTRAPOLATION_WARNING,
+    ExportModel,
+    max_model_airspeed_m_s,
+    quadratic_coefficients,
+)
 from tuflexperf.models.thrust import POLY22_TERMS
 
 HEADER_NAME = "tfp_thrust.h"
@@ -28,6 +34,9 @@ RETURN_OK = 0
 RETURN_NOT_REACHABLE = 1
 RETURN_BAD_ARGUMENT = 2
 RETURN_CAPACITY = 3
+RETURN_NEGATIVE_AIRSPEED = 4
+RETURN_AIRSPEED_BEYOND_MODEL = 5
+RETURN_BAD_DENSITY = 6
 
 
 def c_double(value: float) -> str:
@@ -106,13 +115,15 @@ def _provenance_comment(model: ExportModel) -> str:
         f"Validity: tested airspeed {low!r} .. {high!r} m/s, throttle 0 .. 1.",
         "WARNING: " + warning,
         "tfp_is_extrapolated(v) says when an airspeed is outside the tested range.",
-        f"Throttle-to-thrust delay {prop.delay_s!r} s (sine sweep, paper section 4): TFP_DELAY_S,",
-        "applied by the tfp_delay_* ring buffer; tfp_thrust itself is static.",
+        f"Throttle-to-thrust dead time {prop.delay_s!r} s (sine sweep, paper section 4): "
+        "TFP_DELAY_S, applied by the tfp_delay_* ring buffer; then a first-order spool lag "
+        f"{prop.lag_s!r} s (TFP_LAG_S, tfp_lag_*; 0 = pure delay). tfp_step runs both per "
+        "engine; tfp_thrust itself is static.",
         "",
         "Provenance (sha256 of the files this was generated from):",
     ]
     for f in model.files:
-        lines += [f"  {f.role}: {f.path}", f"    sha256 {f.sha256}"]
+        lines += [f"  {f.role}: {f.label}", f"    sha256 {f.sha256}"]
     if model.schema.source:
         items = model.schema.source.items()
         lines.append("  fit source: " + ", ".join(f"{k}={v}" for k, v in items))
@@ -134,6 +145,7 @@ def header_text(model: ExportModel) -> str:
     has_reference = prop.reference_density_kg_m3 is not None
     reference = prop.reference_density_kg_m3 if has_reference else 0.0
     names = " ".join(f"{i + 1}={e.name}" for i, e in enumerate(prop.engines))
+    max_speed = max_model_airspeed_m_s(prop)
     per_engine = (
         "For this model with "
         f"{n} engine{'s' if n > 1 else ''}: throttle_1..throttle_{n} and thrust_1..thrust_{n}."
@@ -152,8 +164,10 @@ extern "C" {{
 #define TFP_ENGINE_NAMES {c_string(names)}
 #define TFP_PROPULSION_SHA256 {c_string(model.propulsion_sha256)}
 #define TFP_N_ENGINES {n}
-/* Throttle-to-thrust delay in s (paper section 4); apply it with tfp_delay_*. */
+/* Throttle-to-thrust dead time in s (paper section 4); apply it with tfp_delay_*. */
 #define TFP_DELAY_S {c_double(prop.delay_s)}
+/* First-order spool lag (time constant, s) on thrust after the dead time; 0 = pure delay. */
+#define TFP_LAG_S {c_double(prop.lag_s)}
 /* 1 when thrust scales with density / TFP_REFERENCE_DENSITY_KG_M3, 0 when density is ignored. */
 #define TFP_HAS_REFERENCE_DENSITY {int(has_reference)}
 #define TFP_REFERENCE_DENSITY_KG_M3 {c_double(reference)}
@@ -161,17 +175,25 @@ extern "C" {{
 #define TFP_THROTTLE_SCALE {c_double(model.throttle_scale)}
 #define TFP_TESTED_AIRSPEED_MIN_M_S {c_double(low)}
 #define TFP_TESTED_AIRSPEED_MAX_M_S {c_double(high)}
+/* Above this airspeed the polynomial no longer falls with airspeed (or it is more than
+ * {AIRSPEED_CAP_FACTOR:g} x the top tested airspeed): the inverses refuse it. */
+#define TFP_MAX_MODEL_AIRSPEED_M_S {c_double(max_speed)}
 
 /* Return codes. */
 #define TFP_OK {RETURN_OK}
 #define TFP_NOT_REACHABLE {RETURN_NOT_REACHABLE}
 #define TFP_BAD_ARGUMENT {RETURN_BAD_ARGUMENT}
 #define TFP_CAPACITY_EXCEEDED {RETURN_CAPACITY}
+#define TFP_NEGATIVE_AIRSPEED {RETURN_NEGATIVE_AIRSPEED}
+#define TFP_AIRSPEED_BEYOND_MODEL {RETURN_AIRSPEED_BEYOND_MODEL}
+#define TFP_BAD_DENSITY {RETURN_BAD_DENSITY}
 
 /*
  * Thrust of each engine in N at its throttle fraction, the airspeed (m/s) and the density
  * (kg/m^3). {per_engine} Throttles are not clamped: outside [0, 1] (and outside the tested
- * airspeeds) the polynomial extrapolates. Returns TFP_OK (TFP_BAD_ARGUMENT for a NULL output).
+ * airspeeds) the polynomial extrapolates. Returns TFP_OK; TFP_BAD_ARGUMENT for a NULL output
+ * or non-finite input, TFP_NEGATIVE_AIRSPEED, TFP_AIRSPEED_BEYOND_MODEL or TFP_BAD_DENSITY as
+ * tfp_throttle_for_thrust (the outputs are then NaN).
  */
 {thrust_signature(n)};
 
@@ -186,11 +208,25 @@ double tfp_total_thrust(double throttle, double airspeed_m_s, double density_kg_
  * The least throttle fraction in [0, 1], the same on all engines, whose total thrust reaches
  * total_thrust_n (0 when idle already does). Exact: total thrust is quadratic in a common
  * throttle, solved in closed form (least root in [0, 1]; linear and non-monotonic cases too).
+ * *extrapolated (may be NULL) is set to 1 when the airspeed is outside the tested range (the
+ * answer is an extrapolation), else 0.
  * Returns TFP_OK; TFP_NOT_REACHABLE when no throttle in [0, 1] reaches the demand (*throttle is
- * then the throttle of the most thrust); TFP_BAD_ARGUMENT for NULL or non-finite input.
+ * then the throttle of the most thrust); and, with *throttle left NaN:
+ * TFP_BAD_ARGUMENT for a NULL throttle or non-finite input, TFP_NEGATIVE_AIRSPEED for an
+ * airspeed below 0, TFP_AIRSPEED_BEYOND_MODEL above TFP_MAX_MODEL_AIRSPEED_M_S, TFP_BAD_DENSITY
+ * for a density <= 0.
  */
 int tfp_throttle_for_thrust(double total_thrust_n, double airspeed_m_s, double density_kg_m3,
-                            double *throttle);
+                            double *throttle, int *extrapolated);
+
+/*
+ * The same for one engine (index 0 .. TFP_N_ENGINES - 1, the order of TFP_ENGINE_NAMES): the
+ * least throttle fraction of that engine whose own thrust reaches thrust_n. For the one-engine-
+ * inoperative control law (the live engine must make the demand plus the dead one's drag).
+ * TFP_BAD_ARGUMENT also for an engine index out of range.
+ */
+int tfp_engine_throttle_for_thrust(int engine, double thrust_n, double airspeed_m_s,
+                                   double density_kg_m3, double *throttle, int *extrapolated);
 
 /* 1 when the airspeed (m/s) lies outside the tested range, i.e. the model extrapolates. */
 int tfp_is_extrapolated(double airspeed_m_s);
@@ -220,6 +256,42 @@ double tfp_delay_get(const tfp_delay_t *delay);
 double tfp_delay_step(tfp_delay_t *delay, double throttle_command);
 int tfp_delay_samples(const tfp_delay_t *delay);
 
+/*
+ * First-order spool lag on thrust, TFP_LAG_S, discretised exactly for the sample time dt:
+ * y_k = a y_(k-1) + (1 - a) u_k with a = exp(-dt / TFP_LAG_S) (a = 0 when TFP_LAG_S is 0, so
+ * y_k = u_k: the paper's pure delay). u_k is the static thrust at the delayed throttle.
+ */
+typedef struct tfp_lag {{
+    double factor; /* a */
+    double value;  /* y of the last step, N */
+}} tfp_lag_t;
+
+/* Returns TFP_OK or TFP_BAD_ARGUMENT (NULL, sample time not > 0 or not finite). */
+int tfp_lag_init(tfp_lag_t *lag, double sample_time_s, double initial_value);
+double tfp_lag_step(tfp_lag_t *lag, double input);
+
+/* The whole dynamic model of every engine: dead time, static thrust, spool lag. */
+typedef struct tfp_state {{
+    tfp_delay_t delay[TFP_N_ENGINES];
+    tfp_lag_t lag[TFP_N_ENGINES];
+}} tfp_state_t;
+
+/*
+ * Start every engine in steady state at its initial throttle (NULL: all 0) at the given
+ * airspeed and density. Returns the first failing code of tfp_delay_init, tfp_lag_init or the
+ * argument checks of tfp_thrust_v.
+ */
+int tfp_state_init(tfp_state_t *state, double sample_time_s, const double *initial_throttle,
+                   double airspeed_m_s, double density_kg_m3);
+
+/*
+ * One sample: push each engine's throttle command, and write its thrust in N after the dead
+ * time and the lag. Returns TFP_OK or the code of the argument checks of tfp_thrust (then
+ * thrust_n is NaN and the state is not advanced).
+ */
+int tfp_step(tfp_state_t *state, const double *throttle_command, double airspeed_m_s,
+             double density_kg_m3, double *thrust_n);
+
 #ifdef __cplusplus
 }}
 #endif
@@ -237,7 +309,17 @@ def source_text(model: ExportModel) -> str:
         values = ", ".join(c_double(engine.coefficients[t]) for t in POLY22_TERMS)
         rows.append(f"    {{{values}}}, /* {comment_safe(engine.name)} */")
     coefficient_table = "\n".join(rows)
-    q = quadratic_coefficients(prop)
+    q_keys = ("qa", "qb0", "qb1", "qc0", "qc1", "qc2")
+
+    def q_row(q: dict[str, float]) -> str:
+        return ", ".join(c_double(q[k]) for k in q_keys)
+
+    q_total = q_row(quadratic_coefficients(prop))
+    q_engines = "\n".join(
+        f"    {{{q_row(quadratic_coefficients(prop, i))}}}, /* {comment_safe(e.name)} */"
+        for i, e in enumerate(prop.engines)
+    )
+    nan_lines = "\n".join(f"        *thrust_{i + 1} = NAN;" for i in range(n))
     if prop.reference_density_kg_m3 is None:
         scale_body = (
             "    (void)density_kg_m3; /* no reference density: used as measured */\n"
@@ -261,15 +343,13 @@ static const double TFP_COEFFICIENTS[TFP_N_ENGINES][6] = {{
 {coefficient_table}
 }};
 
-/* Total thrust at a common throttle fraction x, divided by the density scale s:
- * TFP_QA x^2 + (TFP_QB0 + TFP_QB1 v) x + (TFP_QC0 + TFP_QC1 v + TFP_QC2 v^2),
- * the sums over engines (derived from the Python model's total thrust). */
-static const double TFP_QA = {c_double(q["qa"])};
-static const double TFP_QB0 = {c_double(q["qb0"])};
-static const double TFP_QB1 = {c_double(q["qb1"])};
-static const double TFP_QC0 = {c_double(q["qc0"])};
-static const double TFP_QC1 = {c_double(q["qc1"])};
-static const double TFP_QC2 = {c_double(q["qc2"])};
+/* Thrust at a throttle fraction x, divided by the density scale s, as
+ * qa x^2 + (qb0 + qb1 v) x + (qc0 + qc1 v + qc2 v^2), in the order qa, qb0, qb1, qc0, qc1, qc2:
+ * the total at a common throttle, and each engine's own (derived from the Python model). */
+static const double TFP_QTOTAL[6] = {{{q_total}}};
+static const double TFP_QENGINE[TFP_N_ENGINES][6] = {{
+{q_engines}
+}};
 
 /* p00 + p10 x + p01 v + p20 x^2 + p11 x v + p02 v^2, in the Python model's order of operations. */
 static double tfp_poly22(const double p[6], double x, double v)
@@ -282,11 +362,34 @@ static double tfp_density_scale(double density_kg_m3)
 {scale_body}
 }}
 
+/* Argument checks shared by every entry point: what is physically meaningless is refused. */
+static int tfp_check_point(double airspeed_m_s, double density_kg_m3)
+{{
+    if (!isfinite(airspeed_m_s) || !isfinite(density_kg_m3)) {{
+        return TFP_BAD_ARGUMENT;
+    }}
+    if (airspeed_m_s < 0.0) {{
+        return TFP_NEGATIVE_AIRSPEED;
+    }}
+    if (airspeed_m_s > TFP_MAX_MODEL_AIRSPEED_M_S) {{
+        return TFP_AIRSPEED_BEYOND_MODEL;
+    }}
+    if (!(density_kg_m3 > 0.0)) {{
+        return TFP_BAD_DENSITY;
+    }}
+    return TFP_OK;
+}}
+
 {thrust_signature(n)}
 {{
     const double scale = tfp_density_scale(density_kg_m3);
+    const int code = tfp_check_point(airspeed_m_s, density_kg_m3);
     if ({null_check}) {{
         return TFP_BAD_ARGUMENT;
+    }}
+    if (code != TFP_OK) {{
+{nan_lines}
+        return code;
     }}
 {thrust_lines}
     return TFP_OK;
@@ -296,15 +399,18 @@ int tfp_thrust_v(const double *throttle, double airspeed_m_s, double density_kg_
                  double *thrust_n)
 {{
     const double scale = tfp_density_scale(density_kg_m3);
+    const int code = tfp_check_point(airspeed_m_s, density_kg_m3);
     int i;
     if (!throttle || !thrust_n) {{
         return TFP_BAD_ARGUMENT;
     }}
     for (i = 0; i < TFP_N_ENGINES; ++i) {{
-        thrust_n[i] = scale * tfp_poly22(TFP_COEFFICIENTS[i], throttle[i] * TFP_THROTTLE_SCALE,
-                                         airspeed_m_s);
+        thrust_n[i] = code != TFP_OK ? NAN
+                                     : scale * tfp_poly22(TFP_COEFFICIENTS[i],
+                                                          throttle[i] * TFP_THROTTLE_SCALE,
+                                                          airspeed_m_s);
     }}
-    return TFP_OK;
+    return code;
 }}
 
 double tfp_total_thrust(double throttle, double airspeed_m_s, double density_kg_m3)
@@ -319,20 +425,10 @@ double tfp_total_thrust(double throttle, double airspeed_m_s, double density_kg_
     return total;
 }}
 
-int tfp_throttle_for_thrust(double total_thrust_n, double airspeed_m_s, double density_kg_m3,
-                            double *throttle)
+/* Least x in [0, 1] with a x^2 + b x + c >= 0 (the Python least_throttle_reaching). */
+static int tfp_least_root(double a, double b, double c, double *throttle)
 {{
-    const double v = airspeed_m_s;
-    double s, a, b, c, disc, q, r, root, full, vertex;
-    if (!throttle || !isfinite(total_thrust_n) || !isfinite(airspeed_m_s)
-        || !isfinite(density_kg_m3)) {{
-        return TFP_BAD_ARGUMENT;
-    }}
-    s = tfp_density_scale(density_kg_m3);
-    /* f(x) = a x^2 + b x + c: total thrust minus the demand at common throttle x */
-    a = s * TFP_QA;
-    b = s * (TFP_QB0 + TFP_QB1 * v);
-    c = s * (TFP_QC0 + TFP_QC1 * v + TFP_QC2 * v * v) - total_thrust_n;
+    double disc, q, r, root, full, vertex;
     if (c >= 0.0) {{
         *throttle = 0.0; /* idle already reaches the demand */
         return TFP_OK;
@@ -376,6 +472,53 @@ int tfp_throttle_for_thrust(double total_thrust_n, double airspeed_m_s, double d
         }}
     }}
     return TFP_NOT_REACHABLE;
+}}
+
+/* Checks, the extrapolation flag, then the closed form on s * (q-polynomial) - demand. */
+static int tfp_inverse(const double q[6], double demand_n, double airspeed_m_s,
+                       double density_kg_m3, double *throttle, int *extrapolated)
+{{
+    const double v = airspeed_m_s;
+    double s;
+    int code;
+    if (!throttle) {{
+        return TFP_BAD_ARGUMENT;
+    }}
+    *throttle = NAN;
+    if (extrapolated) {{
+        *extrapolated = tfp_is_extrapolated(airspeed_m_s);
+    }}
+    code = tfp_check_point(airspeed_m_s, density_kg_m3);
+    if (code != TFP_OK) {{
+        return code;
+    }}
+    if (!isfinite(demand_n)) {{
+        return TFP_BAD_ARGUMENT;
+    }}
+    s = tfp_density_scale(density_kg_m3);
+    /* f(x) = a x^2 + b x + c: thrust minus the demand at throttle x */
+    return tfp_least_root(s * q[0], s * (q[1] + q[2] * v),
+                          s * (q[3] + q[4] * v + q[5] * v * v) - demand_n, throttle);
+}}
+
+int tfp_throttle_for_thrust(double total_thrust_n, double airspeed_m_s, double density_kg_m3,
+                            double *throttle, int *extrapolated)
+{{
+    return tfp_inverse(TFP_QTOTAL, total_thrust_n, airspeed_m_s, density_kg_m3, throttle,
+                       extrapolated);
+}}
+
+int tfp_engine_throttle_for_thrust(int engine, double thrust_n, double airspeed_m_s,
+                                   double density_kg_m3, double *throttle, int *extrapolated)
+{{
+    if (engine < 0 || engine >= TFP_N_ENGINES) {{
+        if (throttle) {{
+            *throttle = NAN;
+        }}
+        return TFP_BAD_ARGUMENT;
+    }}
+    return tfp_inverse(TFP_QENGINE[engine], thrust_n, airspeed_m_s, density_kg_m3, throttle,
+                       extrapolated);
 }}
 
 int tfp_is_extrapolated(double airspeed_m_s)
@@ -424,5 +567,73 @@ double tfp_delay_step(tfp_delay_t *delay, double throttle_command)
 int tfp_delay_samples(const tfp_delay_t *delay)
 {{
     return delay->length - 1;
+}}
+
+int tfp_lag_init(tfp_lag_t *lag, double sample_time_s, double initial_value)
+{{
+    if (!lag || !isfinite(sample_time_s) || !(sample_time_s > 0.0)) {{
+        return TFP_BAD_ARGUMENT;
+    }}
+    lag->factor = TFP_LAG_S > 0.0 ? exp(-sample_time_s / TFP_LAG_S) : 0.0;
+    lag->value = initial_value;
+    return TFP_OK;
+}}
+
+double tfp_lag_step(tfp_lag_t *lag, double input)
+{{
+    lag->value = lag->factor * lag->value + (1.0 - lag->factor) * input;
+    return lag->value;
+}}
+
+int tfp_state_init(tfp_state_t *state, double sample_time_s, const double *initial_throttle,
+                   double airspeed_m_s, double density_kg_m3)
+{{
+    double throttle[TFP_N_ENGINES], thrust[TFP_N_ENGINES];
+    int i, code;
+    if (!state) {{
+        return TFP_BAD_ARGUMENT;
+    }}
+    for (i = 0; i < TFP_N_ENGINES; ++i) {{
+        throttle[i] = initial_throttle ? initial_throttle[i] : 0.0;
+    }}
+    code = tfp_thrust_v(throttle, airspeed_m_s, density_kg_m3, thrust);
+    if (code != TFP_OK) {{
+        return code;
+    }}
+    for (i = 0; i < TFP_N_ENGINES; ++i) {{
+        code = tfp_delay_init(&state->delay[i], sample_time_s, throttle[i]);
+        if (code == TFP_OK) {{
+            code = tfp_lag_init(&state->lag[i], sample_time_s, thrust[i]);
+        }}
+        if (code != TFP_OK) {{
+            return code;
+        }}
+    }}
+    return TFP_OK;
+}}
+
+int tfp_step(tfp_state_t *state, const double *throttle_command, double airspeed_m_s,
+             double density_kg_m3, double *thrust_n)
+{{
+    double delayed[TFP_N_ENGINES];
+    int i, code;
+    if (!state || !throttle_command || !thrust_n) {{
+        return TFP_BAD_ARGUMENT;
+    }}
+    code = tfp_check_point(airspeed_m_s, density_kg_m3);
+    if (code != TFP_OK) {{
+        for (i = 0; i < TFP_N_ENGINES; ++i) {{
+            thrust_n[i] = NAN;
+        }}
+        return code;
+    }}
+    for (i = 0; i < TFP_N_ENGINES; ++i) {{
+        delayed[i] = tfp_delay_step(&state->delay[i], throttle_command[i]);
+    }}
+    (void)tfp_thrust_v(delayed, airspeed_m_s, density_kg_m3, thrust_n);
+    for (i = 0; i < TFP_N_ENGINES; ++i) {{
+        thrust_n[i] = tfp_lag_step(&state->lag[i], thrust_n[i]);
+    }}
+    return TFP_OK;
 }}
 """

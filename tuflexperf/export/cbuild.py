@@ -70,8 +70,11 @@ class CThrustModel:
         lib.tfp_thrust_v.restype = ctypes.c_int
         lib.tfp_total_thrust.argtypes = [d, d, d]
         lib.tfp_total_thrust.restype = d
-        lib.tfp_throttle_for_thrust.argtypes = [d, d, d, p]
+        ip = ctypes.POINTER(ctypes.c_int)
+        lib.tfp_throttle_for_thrust.argtypes = [d, d, d, p, ip]
         lib.tfp_throttle_for_thrust.restype = ctypes.c_int
+        lib.tfp_engine_throttle_for_thrust.argtypes = [ctypes.c_int, d, d, d, p, ip]
+        lib.tfp_engine_throttle_for_thrust.restype = ctypes.c_int
         lib.tfp_is_extrapolated.argtypes = [d]
         lib.tfp_is_extrapolated.restype = ctypes.c_int
         delay_p = ctypes.POINTER(CDelay)
@@ -85,6 +88,10 @@ class CThrustModel:
         lib.tfp_delay_get.restype = d
         lib.tfp_delay_samples.argtypes = [delay_p]
         lib.tfp_delay_samples.restype = ctypes.c_int
+        lib.tfp_state_init.argtypes = [ctypes.c_void_p, d, p, d, d]
+        lib.tfp_state_init.restype = ctypes.c_int
+        lib.tfp_step.argtypes = [ctypes.c_void_p, p, d, d, p]
+        lib.tfp_step.restype = ctypes.c_int
 
     def thrust(
         self, throttles: Sequence[float], airspeed_m_s: float, density_kg_m3: float
@@ -118,11 +125,71 @@ class CThrustModel:
         self, total_thrust_n: float, airspeed_m_s: float, density_kg_m3: float
     ) -> tuple[int, float]:
         """``tfp_throttle_for_thrust``: (return code, throttle fraction)."""
-        out = ctypes.c_double(float("nan"))
-        code = self.lib.tfp_throttle_for_thrust(
-            float(total_thrust_n), float(airspeed_m_s), float(density_kg_m3), ctypes.byref(out)
+        code, throttle, _ = self.throttle_for_thrust_flagged(
+            total_thrust_n, airspeed_m_s, density_kg_m3
         )
-        return code, out.value
+        return code, throttle
+
+    def throttle_for_thrust_flagged(
+        self, total_thrust_n: float, airspeed_m_s: float, density_kg_m3: float
+    ) -> tuple[int, float, bool]:
+        """``tfp_throttle_for_thrust``: (return code, throttle fraction, extrapolated)."""
+        out = ctypes.c_double(float("nan"))
+        flag = ctypes.c_int(-1)
+        code = self.lib.tfp_throttle_for_thrust(
+            float(total_thrust_n),
+            float(airspeed_m_s),
+            float(density_kg_m3),
+            ctypes.byref(out),
+            ctypes.byref(flag),
+        )
+        return code, out.value, bool(flag.value)
+
+    def engine_throttle_for_thrust(
+        self, engine: int, thrust_n: float, airspeed_m_s: float, density_kg_m3: float
+    ) -> tuple[int, float, bool]:
+        """``tfp_engine_throttle_for_thrust``: (return code, throttle, extrapolated)."""
+        out = ctypes.c_double(float("nan"))
+        flag = ctypes.c_int(-1)
+        code = self.lib.tfp_engine_throttle_for_thrust(
+            int(engine),
+            float(thrust_n),
+            float(airspeed_m_s),
+            float(density_kg_m3),
+            ctypes.byref(out),
+            ctypes.byref(flag),
+        )
+        return code, out.value, bool(flag.value)
+
+    def simulate(
+        self,
+        sample_time_s: float,
+        commands: Sequence[Sequence[float]],
+        airspeed_m_s: float,
+        density_kg_m3: float,
+        initial_throttle: Sequence[float] | None = None,
+    ) -> tuple[int, list[list[float]]]:
+        """``tfp_state_init`` then ``tfp_step`` per row of ``commands`` (one throttle per
+        engine): (first non-OK code or 0, thrust per engine per step in N)."""
+        size = ctypes.sizeof(CDelay) + 2 * ctypes.sizeof(ctypes.c_double)
+        state = ctypes.create_string_buffer(size * self.n_engines + 64)
+        array = ctypes.c_double * self.n_engines
+        initial = array(*initial_throttle) if initial_throttle is not None else None
+        code = self.lib.tfp_state_init(
+            state, float(sample_time_s), initial, float(airspeed_m_s), float(density_kg_m3)
+        )
+        out: list[list[float]] = []
+        if code != 0:
+            return code, out
+        thrust = array()
+        for row in commands:
+            code = self.lib.tfp_step(
+                state, array(*row), float(airspeed_m_s), float(density_kg_m3), thrust
+            )
+            if code != 0:
+                return code, out
+            out.append(list(thrust))
+        return 0, out
 
     def is_extrapolated(self, airspeed_m_s: float) -> bool:
         """``tfp_is_extrapolated``."""

@@ -7,6 +7,7 @@ Everything the exporters write (CasADi, C, JSON) is derived here from the one ph
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,8 +19,11 @@ from tuflexperf.io.yamlio import load_model
 from tuflexperf.models.thrust import (
     POLY22_TERMS,
     Propulsion,
+    delay_samples,
     density_ratio,
     engine_thrust_n,
+    lag_factor,
+    lag_step,
     least_throttle_reaching,
     total_thrust_n,
 )
@@ -34,11 +38,16 @@ EXTRAPOLATION_WARNING = (
 
 @dataclass(frozen=True)
 class SourceFile:
-    """A file the exported model was built from, with its sha256 (provenance)."""
+    """A file the exported model was built from, with its sha256 (provenance).
+
+    ``label`` is what generated files print: a path relative to the case's folder (or the bare
+    file name), never an absolute local path (issue 14).
+    """
 
     role: str
     path: Path
     sha256: str
+    label: str = ""
 
 
 @dataclass(frozen=True)
@@ -75,12 +84,20 @@ def load_export_model(case_path: Path | str | None = None) -> ExportModel:
     Raises :class:`~tuflexperf.errors.InputError` (exit 2) on any bad input.
     """
     case = load_case(case_path)
-    schema = load_model(case.propulsion_path, PropulsionSchema)
+    # the Case already validated the propulsion file: use its objects, never parse it again
+    schema = case.propulsion_schema
+    if schema is None:  # a Case built by hand, not by load_case
+        schema = load_model(case.propulsion_path, PropulsionSchema)
+    case_path = case.path.resolve()
+    relative = os.path.relpath(case.propulsion_path, case_path.parent)
     files = (
-        SourceFile("case", case.path.resolve(), sha256_of(case.path)),
-        SourceFile("propulsion", case.propulsion_path, sha256_of(case.propulsion_path)),
+        SourceFile("case", case_path, sha256_of(case_path), case_path.name),
+        SourceFile(
+            "propulsion", case.propulsion_path, sha256_of(case.propulsion_path),
+            Path(relative).as_posix(),
+        ),
     )
-    return ExportModel(propulsion=propulsion_from_schema(schema), schema=schema, files=files)
+    return ExportModel(propulsion=case.propulsion, schema=schema, files=files)
 
 
 def model_from_propulsion_file(path: Path | str) -> ExportModel:
@@ -90,7 +107,7 @@ def model_from_propulsion_file(path: Path | str) -> ExportModel:
     return ExportModel(
         propulsion=propulsion_from_schema(schema),
         schema=schema,
-        files=(SourceFile("propulsion", path, sha256_of(path)),),
+        files=(SourceFile("propulsion", path, sha256_of(path), path.name),),
     )
 
 
@@ -125,24 +142,32 @@ def thrust_function(propulsion: Propulsion) -> Any:
     )
 
 
-def _common_throttle_quadratic(propulsion: Propulsion) -> tuple[Any, Any, Any, Any, Any, Any]:
-    """Symbols ``(x, v, rho)`` and SX ``(a, b, c0)``: total thrust = ``a x^2 + b x + c0``.
+def _common_throttle_quadratic(
+    propulsion: Propulsion, engine: int | None = None
+) -> tuple[Any, Any, Any, Any, Any, Any]:
+    """Symbols ``(x, v, rho)`` and SX ``(a, b, c0)``: thrust = ``a x^2 + b x + c0``.
 
-    ``x`` is the throttle fraction common to all engines. The coefficients are Taylor terms of
-    :func:`total_thrust_n` at ``x = 0`` (exact for a polynomial); a non-zero third derivative would
-    mean the model is not quadratic in throttle, and the closed-form inverse would be wrong.
+    ``x`` is the throttle fraction common to all engines (``engine=None``: total thrust) or of
+    engine number ``engine`` alone. The coefficients are Taylor terms at ``x = 0`` of
+    :func:`total_thrust_n` / :func:`engine_thrust_n` (exact for a polynomial); a non-zero third
+    derivative would mean the model is not quadratic in throttle, and the closed form wrong.
     """
     import casadi as ca
 
     x = ca.SX.sym("x")
     v = ca.SX.sym("airspeed_m_s")
     rho = ca.SX.sym("density_kg_m3")
-    total = total_thrust_n(propulsion, x, v, rho)
+    if engine is None:
+        total = total_thrust_n(propulsion, x, v, rho)
+    else:
+        total = engine_thrust_n(
+            propulsion.engines[engine], x, v, density_ratio(propulsion, rho)
+        )
     first = ca.jacobian(total, x)
     second = ca.jacobian(first, x)
     third = ca.simplify(ca.jacobian(second, x))
     if not third.is_zero():
-        raise ValueError("total thrust is not quadratic in throttle; no closed-form inverse")
+        raise ValueError("thrust is not quadratic in throttle; no closed-form inverse")
 
     def at_zero(expr: Any) -> Any:
         return ca.substitute(expr, x, ca.SX(0.0))
@@ -150,16 +175,17 @@ def _common_throttle_quadratic(propulsion: Propulsion) -> tuple[Any, Any, Any, A
     return x, v, rho, 0.5 * at_zero(second), at_zero(first), at_zero(total)
 
 
-def quadratic_coefficients(propulsion: Propulsion) -> dict[str, float]:
-    """Total thrust at a common throttle fraction ``x`` as a polynomial in ``x`` and ``v``.
+def quadratic_coefficients(propulsion: Propulsion, engine: int | None = None) -> dict[str, float]:
+    """Thrust at a throttle fraction ``x`` as a polynomial in ``x`` and ``v``.
 
-    ``total / s = qa x^2 + (qb0 + qb1 v) x + (qc0 + qc1 v + qc2 v^2)`` with ``s`` the density
-    ratio. Derived from the physics code (:func:`_common_throttle_quadratic`), evaluated at
-    ``s = 1``; used by the C inverse and the numpy reference.
+    ``T / s = qa x^2 + (qb0 + qb1 v) x + (qc0 + qc1 v + qc2 v^2)`` with ``s`` the density
+    ratio: the total at a common throttle (``engine=None``) or one engine's (its index).
+    Derived from the physics code (:func:`_common_throttle_quadratic`), evaluated at ``s = 1``;
+    used by the C inverses and the numpy reference.
     """
     import casadi as ca
 
-    _, v, rho, a, b, c0 = _common_throttle_quadratic(propulsion)
+    _, v, rho, a, b, c0 = _common_throttle_quadratic(propulsion, engine)
     reference = propulsion.reference_density_kg_m3 or 1.0
     a, b, c0 = (ca.substitute(e, rho, ca.SX(reference)) for e in (a, b, c0))
     zero = ca.SX(0.0)
@@ -175,6 +201,89 @@ def quadratic_coefficients(propulsion: Propulsion) -> dict[str, float]:
         "qc1": value(ca.jacobian(c0, v)),
         "qc2": value(0.5 * ca.jacobian(ca.jacobian(c0, v), v)),
     }
+
+
+#: The exported inverse refuses airspeeds above this many times the top tested airspeed, even
+#: where the polynomial still looks physical (an extrapolation that far is no model).
+AIRSPEED_CAP_FACTOR = 4.0
+
+
+def max_model_airspeed_m_s(propulsion: Propulsion) -> float:
+    """Airspeed above which the exported model refuses to answer [m/s].
+
+    A fan's thrust falls with airspeed (momentum theory, ``T = mdot (v_e - V)``); a poly22 with
+    ``p02 > 0`` turns back up beyond the vertex of its ``v^2`` term, where it reports absurd
+    thrust (e.g. ~100 N "idle thrust" at 300 m/s). The limit is the least airspeed at which any
+    engine's ``dT/dV`` (from :func:`engine_thrust_n` on CasADi symbols) reaches 0 at throttle 0
+    or 1 (``dT/dV`` is linear in throttle, so the ends bound it), but never below the top tested
+    airspeed (the data are what they are) and never above :data:`AIRSPEED_CAP_FACTOR` times it.
+
+    References
+    ----------
+    Paper section 4 (poly22, tested 0-30 m/s); momentum theory, e.g. Anderson, *Aircraft
+    Performance and Design*, section 3.3.
+    """
+    import casadi as ca
+
+    high = float(propulsion.tested_airspeed_m_s[1])
+    limit = AIRSPEED_CAP_FACTOR * high
+    x = ca.SX.sym("x")
+    v = ca.SX.sym("v")
+    for engine in propulsion.engines:
+        slope = ca.jacobian(engine_thrust_n(engine, x, v, 1.0), v)
+        curvature = ca.jacobian(slope, v)
+        for throttle in (0.0, 1.0):
+            at = {"x": throttle, "v": 0.0}
+            f = ca.Function("f", [x, v], [slope, curvature])
+            g0, g1 = (float(value) for value in f(at["x"], at["v"]))
+            if g1 > 0:
+                limit = min(limit, max(-g0 / g1, high))
+    return limit
+
+
+def thrust_step_function(propulsion: Propulsion, sample_time_s: float) -> Any:
+    """CasADi ``tfp_thrust_step``: one sample of the dynamic model (dead time, then spool lag).
+
+    Inputs ``delay_state`` (``n x N`` past commands, newest in the last column, ``N`` =
+    :func:`delay_samples`), ``lag_state`` (n, lagged thrust of the last sample [N]),
+    ``throttle_command`` (n), ``airspeed_m_s``, ``density_kg_m3``; outputs ``thrust_n`` (n),
+    ``total_thrust_n`` and the next ``delay_state`` and ``lag_state``. Per engine:
+    ``u = command N samples ago``, ``T_k = a T_(k-1) + (1 - a) T_static(u, V, rho)`` with
+    ``a = exp(-dt / lag_s)`` (:func:`lag_step`); ``lag_s = 0`` is the paper's pure delay.
+    The same recursion as the exported C's ``tfp_step``.
+    """
+    import casadi as ca
+
+    n = len(propulsion.engines)
+    steps = delay_samples(propulsion.delay_s, sample_time_s)
+    factor = lag_factor(propulsion.lag_s, sample_time_s)
+    width = max(steps, 1)
+    delay_state = ca.SX.sym("delay_state", n, width)
+    lag_state = ca.SX.sym("lag_state", n)
+    command = ca.SX.sym("throttle_command", n)
+    airspeed = ca.SX.sym("airspeed_m_s")
+    density = ca.SX.sym("density_kg_m3")
+    if steps == 0:
+        delayed, next_delay = command, delay_state
+    else:
+        delayed = delay_state[:, 0]  # pushed N samples ago
+        next_delay = ca.horzcat(delay_state[:, 1:], command)
+    scale = density_ratio(propulsion, density)
+    static = ca.vertcat(
+        *[engine_thrust_n(e, delayed[i], airspeed, scale) for i, e in enumerate(propulsion.engines)]
+    )
+    thrust = lag_step(lag_state, static, factor)
+    return ca.Function(
+        "tfp_thrust_step",
+        [delay_state, lag_state, command, airspeed, density],
+        [thrust, ca.sum1(thrust), next_delay, thrust],
+        ["delay_state", "lag_state", "throttle_command", "airspeed_m_s", "density_kg_m3"],
+        ["thrust_n", "total_thrust_n", "delay_state_next", "lag_state_next"],
+    )
+
+
+#: Sample time of the exported CasADi step function (the paper's rig logged at 1 kHz).
+STEP_SAMPLE_TIME_S = 0.001
 
 
 def throttle_for_thrust(
@@ -258,14 +367,21 @@ def model_description(model: ExportModel) -> dict[str, Any]:
         "engines": engines,
         "reference_density_kg_m3": prop.reference_density_kg_m3,
         "delay_s": prop.delay_s,
+        "lag_s": prop.lag_s,
+        "casadi_step_sample_time_s": STEP_SAMPLE_TIME_S,
+        "dynamics": (
+            "thrust_k = a * thrust_(k-1) + (1 - a) * thrust(throttle_(k - round(delay_s / dt)), "
+            "v, rho), a = exp(-dt / lag_s) (0 when lag_s = 0: the paper's pure delay)"
+        ),
         "validity": {
             "tested_airspeed_m_s": [low, high],
+            "max_model_airspeed_m_s": max_model_airspeed_m_s(prop),
             "throttle": [0.0, 1.0],
             "extrapolation_warning": EXTRAPOLATION_WARNING,
         },
         "provenance": {
             "files": [
-                {"role": f.role, "path": str(f.path), "sha256": f.sha256} for f in model.files
+                {"role": f.role, "path": f.label, "sha256": f.sha256} for f in model.files
             ],
             "source": dict(source) if source else None,
         },

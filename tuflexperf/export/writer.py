@@ -16,11 +16,13 @@ from typing import Any
 
 from tuflexperf.errors import InputError
 from tuflexperf.export.model import (
+    STEP_SAMPLE_TIME_S,
     ExportModel,
     inverse_function,
     load_export_model,
     model_description,
     thrust_function,
+    thrust_step_function,
 )
 
 FORMATS: tuple[str, ...] = ("c", "casadi", "json")
@@ -28,7 +30,7 @@ FORMATS: tuple[str, ...] = ("c", "casadi", "json")
 #: The files each format writes (fixed names, so flight-software builds can rely on them).
 FILES: dict[str, tuple[str, ...]] = {
     "c": ("tfp_thrust.c", "tfp_thrust.h"),
-    "casadi": ("tfp_thrust.casadi", "tfp_throttle_for_thrust.casadi"),
+    "casadi": ("tfp_thrust.casadi", "tfp_throttle_for_thrust.casadi", "tfp_thrust_step.casadi"),
     "json": ("tfp_thrust.json",),
 }
 
@@ -80,9 +82,11 @@ def _write_format(model: ExportModel, fmt: str, directory: Path) -> None:
         (directory / header).write_text(header_text(model), encoding="ascii")
         (directory / source).write_text(source_text(model), encoding="ascii")
     elif fmt == "casadi":
-        thrust_file, inverse_file = FILES["casadi"]
+        thrust_file, inverse_file, step_file = FILES["casadi"]
         thrust_function(model.propulsion).save(str(directory / thrust_file))
         inverse_function(model.propulsion).save(str(directory / inverse_file))
+        step = thrust_step_function(model.propulsion, STEP_SAMPLE_TIME_S)
+        step.save(str(directory / step_file))
     elif fmt == "json":
         text = json.dumps(model_description(model), indent=2, allow_nan=False) + "\n"
         (directory / FILES["json"][0]).write_text(text, encoding="utf-8")

@@ -14,7 +14,12 @@ runs:
   - {file: runs/edf1_sweep_v30.mat, engine: EDF1, kind: sine_sweep}
   - {file: runs/structure_drag.csv, kind: drag_sweep}
   - {file: runs/edf1_endurance_50.csv, engine: EDF1, kind: endurance}   # ignored by fit
+  - {file: runs/stand_v10.csv, engine: EDF1, kind: throttle_steps, format: rcbenchmark,
+     esc_pulse_us: [1000, 2000], thrust_sign: -1, airspeed_m_s: 10}
 ```
+
+``format`` (``run`` or ``rcbenchmark``), ``esc_pulse_us``, ``thrust_sign`` and ``airspeed_m_s``
+may also be given once at the top level for every run; a run's own keys win.
 
 Paths are relative to the manifest. Unknown keys are errors.
 """
@@ -28,14 +33,35 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
+from tuflexperf.io.vendor import VendorSettings
 from tuflexperf.io.yamlio import StrictModel, load_model
 
 Positive = Annotated[float, Field(gt=0)]
 RunKind = Literal["throttle_steps", "sine_sweep", "drag_sweep", "endurance"]
+#: ``run``: the project's own columns (SPEC 4); the others: :mod:`tuflexperf.io.vendor`.
+RunFormat = Literal["run", "rcbenchmark"]
 ISA_SEA_LEVEL_DENSITY_KG_M3 = 1.225
 
 
-class RunEntry(StrictModel):
+class ThrustStandKeys(StrictModel):
+    """Keys of a thrust-stand export (``format:`` other than ``run``), per run or for all runs."""
+
+    format: RunFormat | None = None
+    esc_pulse_us: Annotated[list[Positive], Field(min_length=2, max_length=2)] | None = None
+    thrust_sign: Literal[1, -1] | None = None
+    airspeed_m_s: Annotated[float, Field(ge=0)] | None = None
+
+    @model_validator(mode="after")
+    def _pulses(self) -> ThrustStandKeys:
+        if self.esc_pulse_us is not None and not self.esc_pulse_us[0] < self.esc_pulse_us[1]:
+            raise ValueError(
+                f"esc_pulse_us: idle {self.esc_pulse_us[0]:g} must be below full "
+                f"{self.esc_pulse_us[1]:g}"
+            )
+        return self
+
+
+class RunEntry(ThrustStandKeys):
     file: Annotated[str, Field(min_length=1)]
     kind: RunKind
     engine: Annotated[str, Field(min_length=1)] | None = None
@@ -57,7 +83,7 @@ class FilterSettings(StrictModel):
     median_window_s: Positive = 0.1
 
 
-class CampaignSchema(StrictModel):
+class CampaignSchema(ThrustStandKeys):
     name: Annotated[str, Field(min_length=1)]
     fan_area_m2: Positive
     tunnel_area_m2: Positive
@@ -84,6 +110,30 @@ class CampaignRun:
     path: Path
     kind: str
     engine: str | None
+    vendor: VendorSettings | None = None  # a thrust-stand export: how to read it
+
+
+def _vendor(schema: CampaignSchema, entry: RunEntry, index: int) -> VendorSettings | None:
+    """The run's thrust-stand settings: its own keys, else the manifest's, else the defaults."""
+    fmt = entry.format or schema.format or "run"
+    if fmt == "run":
+        for key in ("esc_pulse_us", "thrust_sign", "airspeed_m_s"):
+            if getattr(entry, key) is not None:
+                raise InputError(
+                    f"runs[{index}].{key}: only for a thrust-stand format "
+                    f"(format: rcbenchmark), this run is format: run"
+                )
+        return None
+    pulses = entry.esc_pulse_us or schema.esc_pulse_us or [1000.0, 2000.0]
+    sign = entry.thrust_sign or schema.thrust_sign or 1
+    airspeed = entry.airspeed_m_s if entry.airspeed_m_s is not None else schema.airspeed_m_s
+    return VendorSettings(
+        format=fmt,
+        esc_pulse_us=(float(pulses[0]), float(pulses[1])),
+        thrust_sign=float(sign),
+        airspeed_m_s=airspeed,
+        where=f"manifest runs[{index}]",
+    )
 
 
 @dataclass(frozen=True)
@@ -119,7 +169,11 @@ def load_campaign(path: Path | str) -> Campaign:
     ignored: list[CampaignRun] = []
     for index, entry in enumerate(schema.runs):
         resolved = (path.parent / entry.file).resolve()
-        run = CampaignRun(index, entry.file, resolved, entry.kind, entry.engine)
+        try:
+            vendor = _vendor(schema, entry, index)
+        except InputError as exc:
+            raise InputError(f"{path}: {exc}") from None
+        run = CampaignRun(index, entry.file, resolved, entry.kind, entry.engine, vendor)
         if entry.kind == "endurance":
             ignored.append(run)  # battery runs belong to the endurance model, not the fit
             continue

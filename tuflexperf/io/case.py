@@ -123,6 +123,7 @@ class PropulsionSchema(StrictModel):
     model: Literal["poly22"]
     tested_airspeed_m_s: Annotated[list[float], Field(min_length=2, max_length=2)]
     delay_s: NonNegative = 0.0
+    lag_s: NonNegative = 0.0  # first-order spool lag after delay_s (0 = pure delay)
     reference_density_kg_m3: Positive | None = None
     reference_voltage_v: Positive | None = None
     voltage_exponent: float = 2.0
@@ -271,6 +272,8 @@ class Case:
     propulsion_path: Path
     battery_path: Path | None
     uncertainty: UncertaintySchema | None = None
+    # the validated file behind ``propulsion`` (fit statistics, provenance) for the exports
+    propulsion_schema: PropulsionSchema | None = None
 
     @property
     def density_kg_m3(self) -> float:
@@ -331,6 +334,7 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
         engines=engines,
         tested_airspeed_m_s=(low, high),
         delay_s=schema.delay_s,
+        lag_s=schema.lag_s,
         reference_density_kg_m3=schema.reference_density_kg_m3,
         metadata={"source": schema.source} if schema.source else {},
         fan_area_m2=schema.fan_area_m2,
@@ -382,7 +386,8 @@ def load_case(path: Path | str | None = None) -> Case:
 
         load_battery(battery_path)
     aircraft = load_aircraft(aircraft_path)
-    propulsion = load_propulsion(propulsion_path)
+    propulsion_schema = load_model(propulsion_path, PropulsionSchema)
+    propulsion = propulsion_from_schema(propulsion_schema)
     case = Case(
         name=schema.name,
         path=case_path,
@@ -394,6 +399,7 @@ def load_case(path: Path | str | None = None) -> Case:
         propulsion_path=propulsion_path,
         battery_path=battery_path,
         uncertainty=schema.uncertainty,
+        propulsion_schema=propulsion_schema,
     )
     if not math.isfinite(case.density_kg_m3) or case.density_kg_m3 <= 0:
         raise InputError(f"{case_path}: atmosphere: gives no valid density")

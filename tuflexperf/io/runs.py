@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.errors import InputError
+from tuflexperf.io.vendor import VendorSettings, read_vendor_columns
 
 RUN_COLUMNS: tuple[str, ...] = ("time_s", "force_n", "airspeed_m_s", "throttle")
 TABLE_COLUMNS: tuple[str, ...] = ("engine", "throttle", "airspeed_m_s", "thrust_n")
@@ -163,7 +164,8 @@ def _repair_nans(path: Path, name: str, time_s: np.ndarray, values: np.ndarray) 
 def read_run(
     path: Path | str,
     required: Sequence[str] = RUN_COLUMNS,
-    optional: Sequence[str] = ("voltage_v", "current_a"),
+    optional: Sequence[str] = ("voltage_v", "current_a", "rpm"),
+    vendor: VendorSettings | None = None,
 ) -> Run:
     """Read one run file (``.csv``, ``.csv.gz`` or ``.mat``) and validate its columns.
 
@@ -176,6 +178,9 @@ def read_run(
     optional : sequence of str
         Columns read and repaired like the required ones when the file has them (SPEC 4:
         any run may carry ``voltage_v`` and ``current_a``).
+    vendor : VendorSettings, optional
+        A thrust-stand export in its vendor's format (manifest ``format:``), converted to these
+        columns by :mod:`tuflexperf.io.vendor` and then validated like any run.
 
     Returns
     -------
@@ -189,7 +194,9 @@ def read_run(
     if path.is_dir():
         raise InputError(f"{path}: is a directory, expected a run file")
     suffix = _suffix(path)
-    if suffix in (".csv", ".csv.gz"):
+    if vendor is not None:
+        raw, bad_cells = read_vendor_columns(path, vendor)
+    elif suffix in (".csv", ".csv.gz"):
         raw, bad_cells = _read_csv_columns(path)
     elif suffix == ".mat":
         raw, bad_cells = _read_mat_columns(path), {}

@@ -72,6 +72,8 @@ class Propulsion:
     fan_area_m2: float | None = None  # momentum theory and windmilling drag (SPEC 3)
     reference_voltage_v: float | None = None  # the tests' pack voltage (SPEC 3)
     voltage_exponent: float = 2.0  # thrust ~ (U / U_ref)^n
+    # first-order spool lag (s) on thrust after the dead time delay_s; 0 = the paper's pure delay
+    lag_s: float = 0.0
 
 
 def density_ratio(propulsion: Propulsion, density_kg_m3: Any) -> Any:
@@ -209,3 +211,77 @@ def least_throttle_reaching(a: Any, b: Any, c: Any) -> tuple[Any, Any]:
     throttle = where(c >= 0.0, 0.0, where(root <= 1.0, root, where(full_ok, 1.0, best)))
     reached = where(c >= 0.0, 1.0, where(root <= 1.0, 1.0, where(full_ok, 1.0, 0.0)))
     return throttle, reached
+
+
+def delay_samples(delay_s: float, sample_time_s: float) -> int:
+    """Dead time in whole samples: ``round(delay_s / sample_time_s)``, half away from zero.
+
+    Parameters
+    ----------
+    delay_s : float
+        Throttle-to-thrust dead time [s].
+    sample_time_s : float
+        Sample time of the discrete simulation [s], > 0.
+
+    Returns
+    -------
+    int
+        Samples by which a throttle command is held back (the exported C uses the same rule).
+
+    References
+    ----------
+    Paper section 4 (delay measured with a sine sweep).
+    """
+    if not (math.isfinite(sample_time_s) and sample_time_s > 0):
+        raise ValueError(f"sample time must be a finite number > 0, got {sample_time_s}")
+    return int(math.floor(delay_s / sample_time_s + 0.5))
+
+
+def lag_factor(lag_s: float, sample_time_s: float) -> float:
+    """Pole ``a = exp(-dt / lag_s)`` of the exact discrete first-order lag (0 for no lag).
+
+    Parameters
+    ----------
+    lag_s : float
+        Time constant of the spool lag [s]; 0 means none (the paper's pure delay).
+    sample_time_s : float
+        Sample time [s], > 0.
+
+    Returns
+    -------
+    float
+        ``a`` in ``y_k = a y_(k-1) + (1 - a) u_k`` [-].
+
+    References
+    ----------
+    Franklin, Powell & Workman, *Digital Control of Dynamic Systems*, 3rd ed., section 4.3.3
+    (zero-order-hold equivalent of ``1 / (tau s + 1)``); the same recursion as the reduction's
+    lag (``tuflexperf.reduction.delay``).
+    """
+    if not (math.isfinite(sample_time_s) and sample_time_s > 0):
+        raise ValueError(f"sample time must be a finite number > 0, got {sample_time_s}")
+    return math.exp(-sample_time_s / lag_s) if lag_s > 0 else 0.0
+
+
+def lag_step(previous: Any, target: Any, factor: Any) -> Any:
+    """One step of the spool lag: ``factor * previous + (1 - factor) * target``.
+
+    Parameters
+    ----------
+    previous : float, array or CasADi
+        Lagged thrust at the previous sample [N].
+    target : float, array or CasADi
+        Static thrust at this sample's delayed throttle [N].
+    factor : float
+        :func:`lag_factor` [-].
+
+    Returns
+    -------
+    float, array or CasADi
+        Lagged thrust at this sample [N]; equal to ``target`` when there is no lag.
+
+    References
+    ----------
+    See :func:`lag_factor`.
+    """
+    return factor * previous + (1.0 - factor) * target

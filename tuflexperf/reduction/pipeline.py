@@ -325,7 +325,7 @@ def fit_campaign(
     delay_runs: list[dict[str, Any]] = []
     for run in campaign.of_kind("sine_sweep"):
         tick(run.file)
-        data = read_run(run.path)
+        data = read_run(run.path, vendor=run.vendor)
         estimate = estimate_delay(
             data.time_s, data["throttle"], data["force_n"], data.sample_rate_hz
         )
@@ -348,6 +348,8 @@ def fit_campaign(
             }
         )
     measured_delay = _mean_or_none([d["delay_s"] for d in delay_runs])
+    # the spool lag after the dead time (issue 15): the sweeps' mean, written as lag_s
+    measured_lag = _mean_or_none([d["lag_s"] for d in delay_runs])
     delay = delay_s if delay_s is not None else measured_delay
     # where the steady part of a step starts: the engine's own sweeps if it has any
     onset_delay = {
@@ -361,7 +363,7 @@ def fit_campaign(
     sweeps = []
     for run in campaign.of_kind("drag_sweep"):
         tick(run.file)
-        data = read_run(run.path)
+        data = read_run(run.path, vendor=run.vendor)
         force, replaced = clean_run(campaign, data)
         _, _, k_med = _windows(campaign, data.sample_rate_hz)
         sweeps.append((movmedian(data["airspeed_m_s"], k_med), force))
@@ -372,7 +374,7 @@ def fit_campaign(
     step_results: list[StepRunResult] = []
     for run in campaign.of_kind("throttle_steps"):
         tick(run.file)
-        data = read_run(run.path)
+        data = read_run(run.path, vendor=run.vendor)
         onset = onset_delay.get(str(run.engine)) or delay or 0.0
         step_results.append(reduce_step_run(campaign, run, data, max(onset, 0.0)))
     if progress is not None:
@@ -518,11 +520,13 @@ def fit_campaign(
         summary["warnings"].append("no sine_sweep run: delay not measured")
     for report in run_reports:
         summary["warnings"].extend(f"{report['file']}: {w}" for w in report.get("warnings", []))
+    summary["lag_s"] = measured_lag
     propulsion = _propulsion_text(
         name=campaign.name,
         fits=fits,
         speeds=speeds,
         delay=delay,
+        lag=measured_lag,
         density=campaign.air_density_kg_m3 if campaign.density_given else None,
         source=source,
         electrical=electrical,
@@ -821,6 +825,7 @@ def _summary(
         "kind": kind,
         "engines": engines,
         "delay_s": delay,
+        "lag_s": None,
         "tested_airspeed_m_s": _tested_range(speeds),
         "warnings": [],
     }
@@ -833,6 +838,7 @@ def _propulsion_text(
     delay: float | None,
     density: float | None,
     source: dict[str, Any],
+    lag: float | None = None,
     electrical: ElectricalFits | None = None,
     fan_area_m2: float | None = None,
 ) -> str:
@@ -846,6 +852,8 @@ def _propulsion_text(
     }
     if delay is not None:
         document["delay_s"] = max(float(delay), 0.0)
+    if lag is not None and math.isfinite(lag):
+        document["lag_s"] = round(max(float(lag), 0.0), 6)
     if density is not None:
         document["reference_density_kg_m3"] = float(density)
     if electrical is not None and electrical.reference_voltage_v is not None:

@@ -140,7 +140,7 @@ def _processed_run(campaign: Any, run: Any, delay_s: float) -> ProcessedRun:
     from tuflexperf.reduction.changepoints import force_changepoints
     from tuflexperf.reduction.pipeline import MIN_SEGMENT_S, clean_run, reduce_step_run
 
-    data = read_run(run.path)
+    data = read_run(run.path, vendor=run.vendor)
     result = reduce_step_run(campaign, run, data, delay_s)
     fs = data.sample_rate_hz
     clean, replaced = clean_run(campaign, data)
@@ -235,7 +235,7 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
     sweeps = campaign.of_kind("sine_sweep")
     if sweeps:
         by_file = {d["file"]: d for d in summary.get("delay_runs", [])}
-        loaded = [(run, read_run(run.path)) for run in sweeps]
+        loaded = [(run, read_run(run.path, vendor=run.vendor)) for run in sweeps]
         # Paper Figs. 13-14: the sweep at the highest airspeed, of the last engine on a tie.
         run, data = max(
             enumerate(loaded),

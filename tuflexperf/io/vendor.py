@@ -1,0 +1,249 @@
+"""Thrust-stand exports in their vendor's own format, converted to the project's run columns.
+
+A campaign manifest names the format of a run with ``format:`` (SPEC 4). Supported:
+
+``rcbenchmark``
+    The CSV written by Tyto Robotics' RCbenchmark / Flight Stand software (Series 1520, 1580,
+    1585, 1780): a header row of ``Name (unit)`` cells such as ``Time (s)``,
+    ``ESC signal (µs)``, ``Thrust (kgf)`` (or ``N``, ``lbf``, ``gf``, ``ozf``), ``Voltage (V)``,
+    ``Current (A)``, ``Motor Electrical Speed (RPM)``, ``Electrical Power (W)``, text columns
+    (``App message``) and whatever the stand logs besides; plus, for a stand in a wind tunnel, an
+    airspeed column the user adds by hand (``Airspeed (m/s)``, ``km/h``, ``kt``, ``mph``,
+    ``ft/s``).
+
+Units come from the header, never assumed. Throttle is the ESC pulse mapped linearly by the
+manifest's ``esc_pulse_us: [idle, full]``; the force is ``thrust_sign`` times the logged thrust
+(stands are mounted both ways round); a run without an airspeed column takes the manifest's
+``airspeed_m_s``. The result holds the columns :func:`tuflexperf.io.runs.read_run` validates:
+``time_s``, ``force_n``, ``airspeed_m_s``, ``throttle`` and, when logged, ``voltage_v``,
+``current_a``, ``rpm``.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from tuflexperf.errors import InputError
+
+VENDOR_FORMATS: tuple[str, ...] = ("rcbenchmark",)
+
+#: Standard gravity [m/s^2] (CGPM 1901): 1 kgf = 9.80665 N exactly.
+G0 = 9.80665
+#: 1 lbf = 0.45359237 kg x g0 exactly (international pound).
+LBF_N = 0.45359237 * G0
+
+THRUST_UNITS_N: dict[str, float] = {
+    "n": 1.0,
+    "kgf": G0,
+    "kg": G0,  # some exports label kilogram-force as kg
+    "gf": G0 / 1000.0,
+    "g": G0 / 1000.0,
+    "lbf": LBF_N,
+    "lb": LBF_N,
+    "ozf": LBF_N / 16.0,
+    "oz": LBF_N / 16.0,
+}
+SPEED_UNITS_M_S: dict[str, float] = {
+    "m/s": 1.0,
+    "km/h": 1.0 / 3.6,
+    "kph": 1.0 / 3.6,
+    "kt": 1852.0 / 3600.0,
+    "kn": 1852.0 / 3600.0,
+    "kts": 1852.0 / 3600.0,
+    "knots": 1852.0 / 3600.0,
+    "mph": 1609.344 / 3600.0,
+    "ft/s": 0.3048,
+    "fps": 0.3048,
+}
+TIME_UNITS_S: dict[str, float] = {"s": 1.0, "ms": 1e-3}
+MICROSECONDS = ("µs", "μs", "us", "âµs", "microseconds", "usec")
+AIRSPEED_NAMES = ("airspeed", "air speed", "wind speed", "tunnel speed", "freestream speed")
+RPM_NAMES = ("motor electrical speed", "motor optical speed", "motor speed", "rpm")
+#: ESC pulses may overshoot the manifest's range by this share of it (calibration rounding).
+PULSE_TOLERANCE = 0.05
+
+
+@dataclass(frozen=True)
+class VendorSettings:
+    """How to read one vendor run: its format and the manifest keys it needs.
+
+    ``esc_pulse_us`` is the (idle, full) ESC pulse width in microseconds, ``thrust_sign`` +1 or
+    -1, ``airspeed_m_s`` the tunnel speed for runs without an airspeed column; ``where`` names
+    the manifest entry in messages.
+    """
+
+    format: str
+    esc_pulse_us: tuple[float, float] = (1000.0, 2000.0)
+    thrust_sign: float = 1.0
+    airspeed_m_s: float | None = None
+    where: str = ""
+
+
+_HEADER = re.compile(r"^(?P<name>.*?)\s*[\(\[](?P<unit>[^\)\]]*)[\)\]]\s*$")
+
+
+def _split_header(cell: str) -> tuple[str, str]:
+    """``"Thrust (kgf)"`` -> ``("thrust", "kgf")``; no unit -> ``(name, "")``."""
+    text = " ".join(str(cell).replace("\ufeff", "").split())
+    match = _HEADER.match(text)
+    if match is None:
+        return text.lower(), ""
+    return match.group("name").strip().lower(), match.group("unit").strip().lower()
+
+
+def _read_table(path: Path) -> object:
+    """The CSV as a pandas DataFrame; the vendor software writes UTF-8 (older versions Latin-1)."""
+    import pandas as pd
+
+    last: Exception | None = None
+    for encoding in ("utf-8-sig", "latin-1"):
+        try:
+            return pd.read_csv(path, encoding=encoding, skipinitialspace=True, dtype=str)
+        except UnicodeDecodeError as exc:
+            last = exc
+        except pd.errors.EmptyDataError:
+            raise InputError(f"{path}: empty file (expected the thrust stand's header)") from None
+        except (pd.errors.ParserError, OSError, ValueError) as exc:
+            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            raise InputError(f"{path}: cannot read as CSV: {first}") from None
+    raise InputError(f"{path}: cannot decode as text: {last}")
+
+
+def read_rcbenchmark(
+    path: Path, settings: VendorSettings
+) -> tuple[dict[str, np.ndarray], dict[str, tuple[int, str]]]:
+    """Columns of an RCbenchmark CSV in the project's names and SI units.
+
+    Parameters
+    ----------
+    path : Path
+        The vendor CSV.
+    settings : VendorSettings
+        ``esc_pulse_us``, ``thrust_sign``, ``airspeed_m_s`` from the manifest.
+
+    Returns
+    -------
+    tuple
+        ``(columns, bad_cells)``: float arrays ``time_s`` [s], ``force_n`` [N],
+        ``airspeed_m_s`` [m/s], ``throttle`` [fraction], and when logged ``voltage_v`` [V],
+        ``current_a`` [A], ``rpm`` [1/min]; ``bad_cells`` maps a column with a non-numeric cell
+        to its (line, text), as :func:`tuflexperf.io.runs.read_run` expects.
+
+    References
+    ----------
+    Tyto Robotics, *RCbenchmark / Flight Stand software manual*, data logging (CSV columns);
+    BIPM SI Brochure, 9th ed., table 8 (kgf = 9.80665 N); NIST SP 811 (lbf, kt, mph).
+    """
+    import pandas as pd
+
+    frame = _read_table(path)
+    headers = {str(c): _split_header(str(c)) for c in frame.columns}
+    where = f" ({settings.where})" if settings.where else ""
+
+    def find(test: Callable[[str, str], bool]) -> str | None:
+        return next((raw for raw, (name, unit) in headers.items() if test(name, unit)), None)
+
+    columns: dict[str, np.ndarray] = {}
+    bad_cells: dict[str, tuple[int, str]] = {}
+
+    def numeric(raw: str, target: str) -> np.ndarray | None:
+        cells = frame[raw]
+        values = pd.to_numeric(cells, errors="coerce")
+        bad = values.isna() & cells.notna() & (cells.astype(str).str.strip() != "")
+        if bad.any():
+            row = int(np.flatnonzero(bad.to_numpy())[0])
+            bad_cells[target] = (row + 2, f"{cells.iloc[row]} in {raw!r}")
+            return None
+        return values.to_numpy(dtype=float)
+
+    def need(raw: str | None, what: str) -> str:
+        if raw is None:
+            found = ", ".join(repr(c) for c in headers) or "none"
+            raise InputError(f"{path}: missing column {what}{where} (found: {found})")
+        return raw
+
+    def convert(target: str, raw: str, factor: float) -> None:
+        values = numeric(raw, target)
+        if values is not None:
+            columns[target] = values * factor
+
+    time_raw = need(find(lambda n, u: n == "time" and u in TIME_UNITS_S), "'Time (s)'")
+    convert("time_s", time_raw, TIME_UNITS_S[headers[time_raw][1]])
+
+    thrust_raw = need(
+        find(lambda n, u: n == "thrust" and u in THRUST_UNITS_N),
+        "'Thrust (kgf)' (or N, lbf, gf, ozf)",
+    )
+    convert("force_n", thrust_raw, settings.thrust_sign * THRUST_UNITS_N[headers[thrust_raw][1]])
+
+    esc_raw = need(
+        find(lambda n, u: n.startswith("esc") and u in MICROSECONDS), "'ESC signal (µs)'"
+    )
+    pulse = numeric(esc_raw, "throttle")
+    if pulse is not None:
+        idle, full = settings.esc_pulse_us
+        span = full - idle
+        finite = pulse[np.isfinite(pulse)]
+        low, high = idle - PULSE_TOLERANCE * span, full + PULSE_TOLERANCE * span
+        if finite.size and (finite.min() < low or finite.max() > high):
+            raise InputError(
+                f"{path}: column {esc_raw!r}: pulses from {finite.min():g} to {finite.max():g} us "
+                f"are outside esc_pulse_us [{idle:g}, {full:g}]{where}"
+            )
+        columns["throttle"] = (pulse - idle) / span
+
+    speed_raw = find(lambda n, u: any(n.startswith(a) for a in AIRSPEED_NAMES))
+    if speed_raw is not None:
+        unit = headers[speed_raw][1]
+        if unit not in SPEED_UNITS_M_S:
+            raise InputError(
+                f"{path}: column {speed_raw!r}: unknown airspeed unit {unit!r} "
+                f"(use one of {', '.join(SPEED_UNITS_M_S)})"
+            )
+        convert("airspeed_m_s", speed_raw, SPEED_UNITS_M_S[unit])
+    elif settings.airspeed_m_s is not None:
+        columns["airspeed_m_s"] = np.full(len(frame), float(settings.airspeed_m_s))
+    else:
+        raise InputError(
+            f"{path}: no airspeed column (e.g. 'Airspeed (m/s)') and no airspeed_m_s in the "
+            f"manifest{where}"
+        )
+
+    optional = {
+        "voltage_v": find(lambda n, u: n == "voltage" and u == "v"),
+        "current_a": find(lambda n, u: n == "current" and u == "a"),
+        "rpm": next(
+            (r for name in RPM_NAMES for r in [find(lambda n, u, m=name: n == m and u == "rpm")]
+             if r is not None),
+            None,
+        ),
+    }
+    for target, raw in optional.items():
+        if raw is not None:
+            values = numeric(raw, target)
+            if values is not None:
+                columns[target] = values
+            else:
+                bad_cells.pop(target)  # an unreadable optional column is left out, not fatal
+    return columns, bad_cells
+
+
+READERS = {"rcbenchmark": read_rcbenchmark}
+
+
+def read_vendor_columns(
+    path: Path, settings: VendorSettings
+) -> tuple[dict[str, np.ndarray], dict[str, tuple[int, str]]]:
+    """Dispatch on ``settings.format`` (one of :data:`VENDOR_FORMATS`)."""
+    reader = READERS.get(settings.format)
+    if reader is None:
+        raise InputError(
+            f"{path}: unknown run format {settings.format!r} "
+            f"(choose from run, {', '.join(VENDOR_FORMATS)})"
+        )
+    return reader(path, settings)
