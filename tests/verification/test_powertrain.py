@@ -174,3 +174,27 @@ def test_endurance_warns_on_power_that_the_thrust_does_not_need(tmp_path, factor
         # the overall efficiency goes as 1 / power: 2.5 x the power, 0.4 x the efficiency
         assert agreement.electrical_power_w > 0
         assert (agreement.overall_efficiency < 0.2) is warns
+
+
+def test_propulsion_keys_are_validated(tmp_path) -> None:
+    import yaml
+
+    from tuflexperf.errors import InputError
+    from tuflexperf.io.case import load_case, load_propulsion
+
+    shipped = load_case().propulsion_path
+    document = yaml.safe_load(shipped.read_text())
+    del document["fan_area_m2"]  # a windmilling coefficient refers to the fan area
+    (tmp_path / "a.yaml").write_text(yaml.safe_dump(document))
+    with pytest.raises(InputError, match="windmilling_drag_coefficient needs fan_area_m2"):
+        load_propulsion(tmp_path / "a.yaml")
+    document = yaml.safe_load(shipped.read_text())
+    document["engines"][1]["power"]["model"] = "poly33"
+    (tmp_path / "b.yaml").write_text(yaml.safe_dump(document))
+    with pytest.raises(InputError, match=r"engines\[1\]\.power\.model"):
+        load_propulsion(tmp_path / "b.yaml")
+    document = yaml.safe_load(shipped.read_text())
+    document["engines"][0]["windmilling_drag_coefficient"] = -0.3
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(document))
+    with pytest.raises(InputError, match="windmilling_drag_coefficient"):
+        load_propulsion(tmp_path / "c.yaml")
