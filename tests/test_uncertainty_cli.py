@@ -143,3 +143,27 @@ def test_unreachable_dask_scheduler_is_bad_input() -> None:
     pytest.importorskip("distributed")
     result = runner.invoke(app, ["check", "--samples", "10", "--dask", "tcp://127.0.0.1:9"])
     assert result.exit_code == 2 and "--dask" in result.stderr
+
+
+def test_check_with_samples_imports_no_scipy_pandas_or_matplotlib() -> None:
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from tuflexperf.cli import main\n"
+        "try:\n    main(['check', '--json', '--samples', '500'])\n"
+        "except SystemExit:\n    pass\n"
+        "bad = [m for m in ('matplotlib', 'pandas', 'scipy', 'dask') if m in sys.modules]\n"
+        "sys.stderr.write(','.join(bad))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.stderr == "", f"check --samples imported: {done.stderr}"
+
+
+def test_envelope_bounds_and_battery_keys_are_refused_with_the_reason(tmp_path) -> None:
+    for key, reason in (("requirements.envelope.min_airspeed_m_s", "grid"),
+                        ("battery.capacity_ah", "battery")):
+        path = shipped_with(tmp_path, {"parameters": {key: {"normal": [1, 0.1]}}})
+        result = runner.invoke(app, ["check", str(path)])
+        assert result.exit_code == 2 and key in result.stderr and reason in result.stderr

@@ -49,10 +49,16 @@ def check_key(case: Case, key: str, where: str) -> None:
     known = numeric_keys(case)
     if key in known:
         return
+    if key in _FIXED:
+        raise InputError(
+            f"{where}: {key}: the envelope's bounds cannot be varied (they fix the airspeed "
+            "grid every trim/OEI point is solved on)"
+        )
     if key.startswith("battery.") or key.startswith("propulsion."):
         raise InputError(
-            f"{where}: {key}: battery and propulsion keys cannot be varied here "
-            "(the thrust model's uncertainty is `uncertainty.propulsion`)"
+            f"{where}: {key}: battery and propulsion keys cannot be varied yet (the battery "
+            "is characterised from its runs at check time; the thrust model's uncertainty is "
+            "`uncertainty.propulsion`)"
         )
     close = difflib.get_close_matches(key, list(known), n=1)
     hint = f" (did you mean {close[0]}?)" if close else ""
