@@ -163,7 +163,11 @@ def _trim(case: Case) -> Verdict:
         "fraction",
         "max",
         reason,
-        {"min_throttle": result.min_throttle, "warnings": list(result.warnings)},
+        {
+            "min_throttle": result.min_throttle,
+            "least_attainable_airspeed_m_s": result.attainable.low,
+            "warnings": list(result.warnings),
+        },
     )
 
 
