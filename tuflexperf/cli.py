@@ -733,12 +733,14 @@ def report_command(
 def export_command(
     case_file: Path | None = CaseOption,
     formats: str = typer.Option(
-        "c,casadi,json", "--format", help="Comma list of c, casadi, json (default: all three)."
+        "c,casadi,json",
+        "--format",
+        help="Comma list of c, casadi, json, jsbsim, fmu (default: c,casadi,json).",
     ),
     out: Path = typer.Option(..., "--out", help="Directory to write the model files into."),
     as_json: bool = JsonOption,
 ) -> None:
-    """The thrust model for simulation and flight software: CasADi functions, C99, JSON."""
+    """The thrust model for simulation and flight software: C99, CasADi, JSON, JSBSim, FMU."""
     from tuflexperf.export import export_model, parse_formats
 
     result = export_model(case_file, parse_formats(formats), out)
@@ -746,7 +748,10 @@ def export_command(
         emit_json(result.as_dict())
         return
     prop = result.model.propulsion
-    typer.echo(f"{prop.name}: {result.model.n_engines} engines, delay {prop.delay_s:g} s")
+    typer.echo(
+        f"{prop.name}: {result.model.n_engines} engines, delay {prop.delay_s:g} s, "
+        f"spool lag {prop.lag_s:g} s"
+    )
     for path in result.files:
         typer.echo(f"  wrote {path}")
 

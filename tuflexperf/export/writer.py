@@ -25,13 +25,15 @@ from tuflexperf.export.model import (
     thrust_step_function,
 )
 
-FORMATS: tuple[str, ...] = ("c", "casadi", "json")
+FORMATS: tuple[str, ...] = ("c", "casadi", "json", "jsbsim", "fmu")
 
 #: The files each format writes (fixed names, so flight-software builds can rely on them).
 FILES: dict[str, tuple[str, ...]] = {
     "c": ("tfp_thrust.c", "tfp_thrust.h"),
     "casadi": ("tfp_thrust.casadi", "tfp_throttle_for_thrust.casadi", "tfp_thrust_step.casadi"),
     "json": ("tfp_thrust.json",),
+    "jsbsim": ("tfp_thrust_system.xml", "tfp_thrust_reactions.xml"),
+    "fmu": ("tfp_thrust.fmu",),
 }
 
 
@@ -90,6 +92,16 @@ def _write_format(model: ExportModel, fmt: str, directory: Path) -> None:
     elif fmt == "json":
         text = json.dumps(model_description(model), indent=2, allow_nan=False) + "\n"
         (directory / FILES["json"][0]).write_text(text, encoding="utf-8")
+    elif fmt == "jsbsim":
+        from tuflexperf.export.jsbsim import reactions_text, system_text
+
+        system_file, reactions_file = FILES["jsbsim"]
+        (directory / system_file).write_text(system_text(model), encoding="ascii")
+        (directory / reactions_file).write_text(reactions_text(model), encoding="ascii")
+    elif fmt == "fmu":
+        from tuflexperf.export.fmu import build_fmu
+
+        build_fmu(model, directory / FILES["fmu"][0])
     else:  # parse_formats guards this
         raise InputError(f"--format: unknown format {fmt!r}")
 

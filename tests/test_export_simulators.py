@@ -1,0 +1,223 @@
+"""The JSBSim and FMU exports in the real simulators: the ``jsbsim`` and ``fmpy`` packages.
+
+JSBSim loads a minimal aircraft written here that includes the two exported files the way the
+README tells users to; the aircraft is held at fixed true airspeed and altitude (JSBSim's
+integrators switched off, so the airspeed stays exactly what the initial conditions say) while
+the throttles are held, and the external force JSBSim computes must equal the model evaluated
+independently from the propulsion file (poly22 typed here from SPEC 4) to 1e-6 relative.
+FMPy validates the FMU and simulates a throttle step with ``simulate_fmu``; the outputs must
+equal the model before the step, after the dead time, and follow the spool lag in between.
+Skipped only when the package cannot be imported (install ``tuflexperf[sim]``).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from tests.conftest import MADE_UP_PROPULSION, write_case
+from tuflexperf.export import export_model
+from tuflexperf.export.cbuild import find_compiler
+
+ROOT = Path(__file__).resolve().parents[1]
+SHIPPED = ROOT / "data" / "tuflex" / "propulsion.yaml"
+LBF_N = 0.45359237 * 9.80665
+SLUG_FT3 = LBF_N / 0.3048**4
+FT = 0.3048
+
+
+def _thrust(engine: dict, x: float, v: float, rho: float, rho_ref: float | None) -> float:
+    """poly22 typed from SPEC 4, independent of tuflexperf.models."""
+    c = engine["coefficients"]
+    scale = rho / rho_ref if rho_ref else 1.0
+    return scale * (c["p00"] + c["p10"] * x + c["p01"] * v + c["p20"] * x * x
+                    + c["p11"] * x * v + c["p02"] * v * v)
+
+
+AIRCRAFT_XML = """<?xml version="1.0"?>
+<fdm_config name="tfptest" version="2.0" release="ALPHA">
+  <metrics>
+    <wingarea unit="M2"> 1.0 </wingarea> <wingspan unit="M"> 2.0 </wingspan>
+    <chord unit="M"> 0.5 </chord>
+    <location name="AERORP" unit="M"> <x>0</x> <y>0</y> <z>0</z> </location>
+    <location name="EYEPOINT" unit="M"> <x>0</x> <y>0</y> <z>0</z> </location>
+    <location name="VRP" unit="M"> <x>0</x> <y>0</y> <z>0</z> </location>
+  </metrics>
+  <mass_balance>
+    <ixx unit="KG*M2"> 5 </ixx> <iyy unit="KG*M2"> 5 </iyy> <izz unit="KG*M2"> 8 </izz>
+    <emptywt unit="KG"> 22 </emptywt>
+    <location name="CG" unit="M"> <x>0</x> <y>0</y> <z>0</z> </location>
+  </mass_balance>
+  <ground_reactions>
+    <contact type="STRUCTURE" name="NOSE">
+      <location unit="M"> <x>-0.5</x> <y>0</y> <z>-0.3</z> </location>
+      <static_friction>0.8</static_friction> <dynamic_friction>0.5</dynamic_friction>
+      <spring_coeff unit="N/M">20000</spring_coeff>
+      <damping_coeff unit="N/M/SEC">2000</damping_coeff>
+    </contact>
+  </ground_reactions>
+  <!-- the README's two lines -->
+  <external_reactions file="tfp_thrust_reactions"/>
+  <system file="tfp_thrust_system"/>
+  <aerodynamics/>
+</fdm_config>
+"""
+
+
+def _variants(tmp_path: Path) -> dict[str, tuple[Path, dict]]:
+    lagged = copy.deepcopy(MADE_UP_PROPULSION)
+    lagged.update(delay_s=0.05, lag_s=0.08, reference_density_kg_m3=1.19)
+    path = tmp_path / "lagged.yaml"
+    path.write_text(yaml.safe_dump(lagged))
+    return {"shipped": (SHIPPED, yaml.safe_load(SHIPPED.read_text())), "lagged": (path, lagged)}
+
+
+def _export(tmp_path: Path, propulsion: Path, formats: tuple[str, ...]) -> Path:
+    case = write_case(tmp_path / "case", propulsion=yaml.safe_load(propulsion.read_text()))
+    out = tmp_path / "export"
+    export_model(case, formats, out)
+    return out
+
+
+def _jsbsim_fdm(root: Path, out: Path):  # noqa: ANN202 - jsbsim type
+    jsbsim = pytest.importorskip("jsbsim", reason="jsbsim not installed (pip install jsbsim)")
+    folder = root / "aircraft" / "tfptest"
+    folder.mkdir(parents=True)
+    (folder / "tfptest.xml").write_text(AIRCRAFT_XML)
+    for name in ("tfp_thrust_system.xml", "tfp_thrust_reactions.xml"):
+        (folder / name).write_text((out / name).read_text())
+    fdm = jsbsim.FGFDMExec(str(root))
+    fdm.set_debug_level(0)
+    assert fdm.load_model("tfptest")
+    return fdm
+
+
+@pytest.mark.parametrize("key", ["shipped", "lagged"])
+def test_jsbsim_force_equals_the_model(tmp_path: Path, key: str) -> None:
+    pytest.importorskip("jsbsim", reason="jsbsim not installed (pip install jsbsim)")
+    propulsion, data = _variants(tmp_path)[key]
+    out = _export(tmp_path, propulsion, ("jsbsim",))
+    rho_ref = data.get("reference_density_kg_m3")
+    compared = 0
+    for altitude_ft, airspeed in ((0.0, 0.0), (3000.0, 12.0), (8000.0, 27.5), (1000.0, 40.0)):
+        fdm = _jsbsim_fdm(tmp_path / f"jsb_{altitude_ft:.0f}_{airspeed:g}", out)
+        fdm["ic/h-sl-ft"] = altitude_ft
+        fdm["ic/vt-fps"] = airspeed / FT
+        fdm.run_ic()
+        for axis in ("rate/translational", "rate/rotational", "position/translational",
+                     "position/rotational"):
+            fdm["simulation/integrator/" + axis] = 0  # hold airspeed and altitude exactly
+        dt = fdm.get_delta_t()
+        for throttles in ((0.0, 0.0), (0.35, 0.8), (1.0, 1.0), (0.6, 0.1)):
+            for i, x in enumerate(throttles):
+                fdm[f"tfp/engine-{i + 1}/throttle-cmd-norm"] = x
+            hold_s = data.get("delay_s", 0.0) + 20 * data.get("lag_s", 0.0) + 0.1
+            for _ in range(int(hold_s / dt) + 2):
+                fdm.run()
+            v = fdm["velocities/vtrue-fps"] * FT
+            rho = fdm["atmosphere/rho-slugs_ft3"] * SLUG_FT3
+            assert v == pytest.approx(airspeed, abs=1e-9)
+            expected = [_thrust(e, x, v, rho, rho_ref) for e, x in zip(data["engines"], throttles,
+                                                                         strict=True)]
+            for i, value in enumerate(expected):
+                got = fdm[f"tfp/engine-{i + 1}/thrust-lbs"] * LBF_N
+                assert got == pytest.approx(value, rel=1e-6, abs=1e-9), (i, throttles, v)
+            total = fdm["forces/fbx-external-lbs"] * LBF_N  # body x: forward
+            assert total == pytest.approx(sum(expected), rel=1e-6, abs=1e-9)
+            compared += 1
+    assert compared == 16
+
+
+def test_jsbsim_applies_the_dead_time(tmp_path: Path) -> None:
+    """A throttle step: the force holds its old value for the dead time (JSBSim: whole frames)."""
+    pytest.importorskip("jsbsim", reason="jsbsim not installed (pip install jsbsim)")
+    propulsion, data = _variants(tmp_path)["shipped"]
+    out = _export(tmp_path, propulsion, ("jsbsim",))
+    fdm = _jsbsim_fdm(tmp_path / "jsb", out)
+    fdm["ic/h-sl-ft"] = 500.0
+    fdm["ic/vt-fps"] = 15.0 / FT
+    fdm.run_ic()
+    for axis in ("rate/translational", "rate/rotational", "position/translational",
+                 "position/rotational"):
+        fdm["simulation/integrator/" + axis] = 0
+    dt = fdm.get_delta_t()
+    for _ in range(30):
+        fdm.run()
+    before = fdm["tfp/engine-1/thrust-lbs"]
+    fdm["tfp/engine-1/throttle-cmd-norm"] = 1.0
+    fdm["tfp/engine-2/throttle-cmd-norm"] = 1.0
+    trace = []
+    for _ in range(int(3 * data["delay_s"] / dt)):
+        fdm.run()
+        trace.append(fdm["tfp/engine-1/thrust-lbs"])
+    changed = next(k for k, f in enumerate(trace) if f != before)
+    # JSBSim's delay buffer holds floor(d / dt) frames and passes a command on that many
+    # frames minus one after the frame it was set in (documented in export/jsbsim.py)
+    frames = math.floor((data["delay_s"] + 1e-9) / dt) - 1
+    assert frames >= 4 and changed == frames
+    rho = fdm["atmosphere/rho-slugs_ft3"] * SLUG_FT3
+    full = _thrust(data["engines"][0], 1.0, 15.0, rho, data.get("reference_density_kg_m3"))
+    assert trace[-1] * LBF_N == pytest.approx(full, rel=1e-6)
+
+
+@pytest.mark.skipif(find_compiler() is None, reason="no C compiler (gcc) to build the FMU")
+@pytest.mark.parametrize("key", ["shipped", "lagged"])
+def test_fmpy_validates_and_simulates_a_throttle_step(tmp_path: Path, key: str) -> None:
+    fmpy = pytest.importorskip("fmpy", reason="fmpy not installed (pip install fmpy)")
+    from fmpy.validation import validate_fmu
+
+    propulsion, data = _variants(tmp_path)[key]
+    out = _export(tmp_path, propulsion, ("fmu",))
+    fmu = str(out / "tfp_thrust.fmu")
+    assert validate_fmu(fmu) == []
+    dt, v, rho, t_step = 0.001, 18.0, 1.1, 0.3
+    names = ["time", "throttle_1", "throttle_2", "airspeed_m_s", "density_kg_m3"]
+    # two rows at t_step: a step, not a ramp
+    signal = np.array([(0.0, 0.2, 0.3, v, rho), (t_step, 0.2, 0.3, v, rho),
+                       (t_step, 0.9, 0.7, v, rho), (2.0, 0.9, 0.7, v, rho)],
+                      dtype=[(n, float) for n in names])
+    result = fmpy.simulate_fmu(fmu, stop_time=2.0, step_size=dt, output_interval=dt,
+                               input=signal)
+    t = result["time"]
+    rho_ref = data.get("reference_density_kg_m3")
+    delay, lag = data.get("delay_s", 0.0), data.get("lag_s", 0.0)
+    for i, (x0, x1) in enumerate(((0.2, 0.9), (0.3, 0.7))):
+        y = result[f"thrust_{i + 1}_n"]
+        t0 = _thrust(data["engines"][i], x0, v, rho, rho_ref)
+        t1 = _thrust(data["engines"][i], x1, v, rho, rho_ref)
+        # independent discrete simulation: command held over each step, the output after it
+        steps = math.floor(delay / dt + 0.5)
+        a = math.exp(-dt / lag) if lag > 0 else 0.0
+        expected = np.empty(t.size)
+        state = t0
+        for k in range(t.size):
+            if k == 0:
+                expected[k] = t0
+                continue
+            sent_at = t[k] - dt * (steps + 1)  # the command set before the step ending at t[k]
+            command = x1 if sent_at >= t_step - 1e-9 else x0
+            target = _thrust(data["engines"][i], command, v, rho, rho_ref)
+            state = a * state + (1 - a) * target
+            expected[k] = state
+        np.testing.assert_allclose(y, expected, rtol=1e-9, atol=1e-9)
+        assert y[t < t_step + delay].max() == pytest.approx(t0, rel=1e-12)  # dead time
+        assert y[-1] == pytest.approx(t1, rel=1e-6)  # settled (20+ lag time constants)
+    np.testing.assert_allclose(result["total_thrust_n"],
+                               result["thrust_1_n"] + result["thrust_2_n"], rtol=1e-12)
+
+
+@pytest.mark.skipif(find_compiler() is None, reason="no C compiler (gcc) to build the FMU")
+def test_fmu_refuses_meaningless_inputs(tmp_path: Path) -> None:
+    fmpy = pytest.importorskip("fmpy", reason="fmpy not installed (pip install fmpy)")
+    out = _export(tmp_path, SHIPPED, ("fmu",))
+    signal = np.array([(0.0, 0.5, 0.5, -5.0)],
+                      dtype=[("time", float), ("throttle_1", float), ("throttle_2", float),
+                             ("airspeed_m_s", float)])
+    with pytest.raises(Exception, match="failed with status"):  # the log says: negative
+        fmpy.simulate_fmu(str(out / "tfp_thrust.fmu"), stop_time=0.01, step_size=0.001,
+                          input=signal)
