@@ -751,8 +751,15 @@ def _table_row(p: Point) -> dict[str, Any]:
 
 # --- table ----------------------------------------------------------------------------------
 def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
-    """Fit the poly22 per engine to a thrust table alone (no reduction)."""
-    table: ThrustTable = read_thrust_table(path)
+    """Fit the poly22 per engine to a thrust table alone (no reduction).
+
+    ``path`` is a thrust table (SPEC 4) or a propeller-table manifest (UIUC / APC PER3 files,
+    :mod:`tuflexperf.io.proptables`), converted to the same points.
+    """
+    from tuflexperf.io.proptables import is_propeller_manifest, read_propeller_tables
+
+    manifest = is_propeller_manifest(Path(path))
+    table: ThrustTable = read_propeller_tables(path) if manifest else read_thrust_table(path)
     fits = {
         engine: fit_poly22(*table.select(engine), label=f"{table.path}: engine {engine}")
         for engine in table.engines()
@@ -992,7 +999,9 @@ def run_fit(
         raise InputError(f"--delay-s: must be a finite number >= 0, got {delay_s}")
     out = Path(out)
     _check_output(out, "--out")
-    if is_thrust_table(input_path):
+    from tuflexperf.io.proptables import is_propeller_manifest
+
+    if is_thrust_table(input_path) or is_propeller_manifest(input_path):
         if glauert:
             raise InputError("--glauert: needs a campaign (fan and tunnel areas), not a table")
         result = fit_table(input_path, delay_s)

@@ -1,0 +1,182 @@
+"""Published propeller tables as thrust tables: UIUC Propeller Data Site and APC PER3 files.
+
+A propeller-table manifest (YAML with a ``tables:`` list) is an input of ``tuflexperf fit``
+like a thrust table (SPEC 4); each file is converted to ``engine, throttle, airspeed_m_s,
+thrust_n`` points with ``throttle = rpm / max_rpm`` (the engine's largest tabulated rpm unless
+the manifest gives ``max_rpm``), which a poly22 then fits as it fits measured data:
+
+```yaml
+name: APC 10x7E and a UIUC run
+air_density_kg_m3: 1.225          # for the UIUC coefficients (default: ISA sea level)
+tables:
+  - {file: PER3_10x7E.dat, format: apc_per3, engine: P1}          # every "PROP RPM =" block
+  - {file: apcsf_9x4.7_kt1033_4008.txt, format: uiuc, engine: P2,
+     diameter_m: 0.2286, rpm: 4008}                                # one rpm per file
+  - {file: apcsf_9x4.7_kt1033_5010.txt, format: uiuc, engine: P2, diameter_m: 0.2286, rpm: 5010}
+max_rpm: {P2: 6000}               # optional, per engine
+```
+
+``uiuc``: columns ``J CT CP eta`` (advance ratio ``J = V / (n D)``, ``CT = T / (rho n^2 D^4)``),
+``n = rpm / 60``; so ``V = J n D`` and ``T = CT rho n^2 D^4``. ``apc_per3``: blocks headed
+``PROP RPM = <rpm>``, rows ``V (mph) J Pe Ct Cp PWR(Hp) Torque(In-Lbf) Thrust(Lbf) ...``; the
+newer 15-column files add ``Thrust (N)`` (column 11), used when present, else column 8 in lbf.
+A propeller's thrust is not an EDF's: this is for models of propeller-driven aircraft through
+the same poly22 (rpm fraction as "throttle").
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from tuflexperf.errors import InputError
+from tuflexperf.io.runs import ThrustTable
+from tuflexperf.io.yamlio import StrictModel, load_model
+
+MPH_M_S = 0.44704  # exact (1609.344 m / 3600 s)
+LBF_N = 0.45359237 * 9.80665  # exact
+ISA_SEA_LEVEL_DENSITY_KG_M3 = 1.225
+Positive = Annotated[float, Field(gt=0)]
+_RPM = re.compile(r"PROP\s+RPM\s*=\s*([0-9.]+)", re.IGNORECASE)
+
+
+class TableEntry(StrictModel):
+    file: Annotated[str, Field(min_length=1)]
+    format: Literal["uiuc", "apc_per3"]
+    engine: Annotated[str, Field(min_length=1)]
+    diameter_m: Positive | None = None
+    rpm: Positive | None = None
+
+    @model_validator(mode="after")
+    def _uiuc_needs(self) -> TableEntry:
+        if self.format == "uiuc" and (self.diameter_m is None or self.rpm is None):
+            raise ValueError("a uiuc table needs diameter_m and rpm (the file gives neither)")
+        return self
+
+
+class PropellerTablesSchema(StrictModel):
+    name: Annotated[str, Field(min_length=1)]
+    air_density_kg_m3: Positive = ISA_SEA_LEVEL_DENSITY_KG_M3
+    max_rpm: dict[str, Positive] = {}
+    tables: Annotated[list[TableEntry], Field(min_length=1)]
+
+
+def is_propeller_manifest(path: Path) -> bool:
+    """True for a YAML file whose top level has a ``tables:`` key (cheap check, no validation)."""
+    if path.suffix.lower() not in (".yaml", ".yml") or not path.is_file():
+        return False
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return False
+    return re.search(r"^tables\s*:", text, re.MULTILINE) is not None
+
+
+def _numbers(line: str) -> list[float] | None:
+    try:
+        return [float(token) for token in line.split()]
+    except ValueError:
+        return None
+
+
+def read_uiuc(path: Path, diameter_m: float, rpm: float, density_kg_m3: float) -> np.ndarray:
+    """UIUC ``J CT CP eta`` rows -> array of (airspeed [m/s], thrust [N]).
+
+    References
+    ----------
+    Brandt, Deters, Ananda & Selig, *UIUC Propeller Data Site*, vol. 1-4 (data file layout);
+    McCormick, *Aerodynamics, Aeronautics and Flight Mechanics*, 2nd ed., ch. 6 (J, CT).
+    """
+    lines = _lines(path)
+    header = lines[0].split() if lines else []
+    if [h.lower() for h in header[:2]] != ["j", "ct"]:
+        raise InputError(f"{path}: expected the UIUC header 'J CT CP eta', found {lines[:1]}")
+    n = rpm / 60.0
+    rows = []
+    for number, line in enumerate(lines[1:], start=2):
+        values = _numbers(line)
+        if values is None or len(values) < 2:
+            raise InputError(f"{path}: line {number}: expected numbers J CT ..., got {line!r}")
+        j, ct = values[0], values[1]
+        rows.append((j * n * diameter_m, ct * density_kg_m3 * n * n * diameter_m**4))
+    if not rows:
+        raise InputError(f"{path}: no data rows")
+    return np.array(rows)
+
+
+def read_apc_per3(path: Path) -> list[tuple[float, np.ndarray]]:
+    """APC PER3 blocks -> list of (rpm, array of (airspeed [m/s], thrust [N])).
+
+    References
+    ----------
+    APC Propellers, *Performance data* (PER3_*.dat files, one block per ``PROP RPM``).
+    """
+    blocks: list[tuple[float, list[tuple[float, float]]]] = []
+    for line in _lines(path):
+        found = _RPM.search(line)
+        if found:
+            blocks.append((float(found.group(1)), []))
+            continue
+        values = _numbers(line)
+        if not blocks or values is None or len(values) < 8:
+            continue  # titles, definitions, column headers and units
+        thrust = values[10] if len(values) >= 15 else values[7] * LBF_N
+        blocks[-1][1].append((values[0] * MPH_M_S, thrust))
+    blocks = [(rpm, rows) for rpm, rows in blocks if rows]
+    if not blocks:
+        raise InputError(f"{path}: no 'PROP RPM =' block with data rows (not an APC PER3 file?)")
+    return [(rpm, np.array(rows)) for rpm, rows in blocks]
+
+
+def _lines(path: Path) -> list[str]:
+    if not path.is_file():
+        raise InputError(f"{path}: file not found")
+    try:
+        text = path.read_text(encoding="latin-1")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read: {exc.strerror}") from None
+    return [line.strip() for line in text.splitlines() if line.strip()]
+
+
+def read_propeller_tables(path: Path | str) -> ThrustTable:
+    """A propeller-table manifest -> one :class:`ThrustTable` (module docstring)."""
+    path = Path(path)
+    schema = load_model(path, PropellerTablesSchema)
+    points: list[tuple[str, float, float, float]] = []  # engine, rpm, airspeed, thrust
+    for index, entry in enumerate(schema.tables):
+        file = (path.parent / entry.file).resolve()
+        if not file.is_file():
+            raise InputError(f"{path}: tables[{index}].file: file not found: {entry.file}")
+        if entry.format == "uiuc":
+            assert entry.diameter_m is not None and entry.rpm is not None  # validated
+            rows = read_uiuc(file, entry.diameter_m, entry.rpm, schema.air_density_kg_m3)
+            points += [(entry.engine, entry.rpm, v, t) for v, t in rows]
+        else:
+            for rpm, rows in read_apc_per3(file):
+                points += [(entry.engine, rpm, v, t) for v, t in rows]
+    engines = list(dict.fromkeys(p[0] for p in points))
+    unknown = sorted(set(schema.max_rpm) - set(engines))
+    if unknown:
+        raise InputError(f"{path}: max_rpm: no table for engine {unknown[0]!r}")
+    top = {e: schema.max_rpm.get(e, max(p[1] for p in points if p[0] == e)) for e in engines}
+    for engine, rpm, _, _ in points:
+        if rpm > top[engine] * (1 + 1e-9):
+            raise InputError(
+                f"{path}: max_rpm: {engine} is tabulated at {rpm:g} rpm, above max_rpm "
+                f"{top[engine]:g}"
+            )
+    bad = [p for p in points if not all(math.isfinite(x) for x in p[1:])]
+    if bad:
+        raise InputError(f"{path}: non-finite value in the table of {bad[0][0]}")
+    return ThrustTable(
+        path=path,
+        engine=tuple(p[0] for p in points),
+        throttle=np.array([p[1] / top[p[0]] for p in points]),
+        airspeed_m_s=np.array([p[2] for p in points]),
+        thrust_n=np.array([p[3] for p in points]),
+    )
