@@ -130,3 +130,30 @@ def test_extrapolation_error_moves_thrust_only_beyond_the_tested_range() -> None
     # take-off ends at 17 m/s, inside 0-30 m/s: unchanged; trim's worst point is at 45 m/s
     assert result.values["takeoff_ground_roll"][1] == result.values["takeoff_ground_roll"][0]
     assert result.values["trim_throttle_max"][1] > result.values["trim_throttle_max"][0] + 0.02
+
+
+def test_battery_keys_in_a_batch_equal_a_case_with_that_battery_file(tmp_path) -> None:
+    import yaml
+
+    case = load_case(SHIPPED_CASE)
+    battery = yaml.safe_load(case.battery_path.read_text())
+    for run in battery["runs"]:
+        run["file"] = str((case.battery_path.parent / run["file"]).resolve())
+    changed = {"battery.cutoff_voltage_per_cell_v": 3.55,
+               "battery.mission.pattern_altitude_m": 160.0,
+               "battery.mission.landing_reserve_fraction": 0.3}
+    battery["cutoff_voltage_per_cell_v"] = 3.55
+    battery["mission"] = {"pattern_altitude_m": 160.0, "landing_reserve_fraction": 0.3}
+    (tmp_path / "battery.yaml").write_text(yaml.safe_dump(battery))
+    data = yaml.safe_load(SHIPPED_CASE.read_text())
+    for key in ("aircraft", "propulsion"):
+        data[key] = str((SHIPPED_CASE.parent / data[key]).resolve())
+    data["battery"] = str(tmp_path / "battery.yaml")
+    (tmp_path / "case.yaml").write_text(yaml.safe_dump(data))
+    single = load_case(tmp_path / "case.yaml")
+    nominal = numeric_keys(case)
+    values = {k: np.array([nominal[k], v]) for k, v in changed.items()}
+    result = BatchEvaluator(case).evaluate(values)
+    assert_equal_to_deterministic(case, result.values, 0)
+    assert_equal_to_deterministic(single, result.values, 1)
+    assert result.values["flight_endurance"][1] < result.values["flight_endurance"][0] - 1.0

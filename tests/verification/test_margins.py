@@ -20,7 +20,30 @@ from tuflexperf.io.dotted import with_values
 
 
 def deterministic(case, key: str, value: float, name: str) -> float | None:
+    """The single-case analysis with ``key`` set (a battery key through a battery file)."""
+    if key.startswith("battery."):
+        return {v.name: v.value for v in check_case(with_battery(case, key, value))}[name]
     return {v.name: v.value for v in check_case(with_values(case, {key: value}))}[name]
+
+
+def with_battery(case, key: str, value: float):
+    import dataclasses
+    import tempfile
+    from pathlib import Path
+
+    import yaml
+
+    battery = yaml.safe_load(case.battery_path.read_text())
+    for run in battery["runs"]:
+        run["file"] = str((case.battery_path.parent / run["file"]).resolve())
+    node = battery
+    parts = key.split(".")[1:]
+    for part in parts[:-1]:
+        node = node.setdefault(part, {})
+    node[parts[-1]] = float(value)
+    path = Path(tempfile.mkdtemp()) / "battery.yaml"
+    path.write_text(yaml.safe_dump(battery))
+    return dataclasses.replace(case, battery_path=path)
 
 
 @pytest.fixture(scope="module")
@@ -52,6 +75,7 @@ def bracket_by_scan(case, key: str, name: str, limit: float) -> tuple[float, flo
     ("takeoff_ground_roll", "atmosphere.temperature_offset_k"),
     ("takeoff_ground_roll", "aircraft.takeoff.rolling_friction"),
     ("flight_endurance", "requirements.endurance.throttle"),
+    ("flight_endurance", "battery.mission.landing_reserve_fraction"),
 ])
 def test_limit_value_equals_an_independent_root_find(case, limits, name, key) -> None:
     limit = {v.name: v.limit for v in check_case(case)}[name]
@@ -107,7 +131,8 @@ def test_binding_by_not_attainable_is_where_the_analysis_stops(case, limits) -> 
 
 KEYS = ["aircraft.mass_kg", "aircraft.cd0", "aircraft.k", "aircraft.takeoff.rolling_friction",
         "atmosphere.temperature_offset_k", "atmosphere.altitude_m",
-        "requirements.endurance.throttle"]
+        "requirements.endurance.throttle", "battery.cutoff_voltage_per_cell_v",
+        "battery.mission.pattern_altitude_m", "battery.mission.landing_reserve_fraction"]
 
 
 def test_symbolic_values_equal_the_deterministic_analyses(case) -> None:

@@ -250,8 +250,10 @@ class BatchEvaluator:
                 key = "requirements.endurance.throttle"
                 throttle = _column(values, key, self.case.requirements.endurance.throttle, size)
                 throttle = np.asarray(throttle, dtype=float).reshape(-1) * np.ones(size)
+                battery = {k: np.asarray(_column(values, k, v, size), dtype=float).reshape(-1)
+                           * np.ones(size) for k, v in self._battery_nominal().items()}
                 out[requirement.name] = model.flight_endurance_min(
-                    self._endurance, throttle, roll
+                    self._endurance, throttle, roll, battery
                 )
         return BatchResult(
             values=out,
@@ -259,6 +261,14 @@ class BatchEvaluator:
             kinds={r.name: r.kind for r in self.requirements},
             units={r.name: r.unit for r in self.requirements},
         )
+
+    def _battery_nominal(self) -> dict[str, float]:
+        battery = self._endurance.battery
+        return {
+            "battery.cutoff_voltage_per_cell_v": float(battery.cutoff_voltage_per_cell_v),
+            "battery.mission.pattern_altitude_m": float(battery.pattern_altitude_m),
+            "battery.mission.landing_reserve_fraction": float(battery.landing_reserve_fraction),
+        }
 
     def _grid(self) -> Array:
         if getattr(self, "_grid_cache", None) is not None:
@@ -472,11 +482,12 @@ class _Model:
 
     # -- endurance ----------------------------------------------------------------------------
     def flight_endurance_min(self, model: Any, throttle: Array,
-                             roll: tuple[Array, Array, Array, Array]) -> Array:
+                             roll: tuple[Array, Array, Array, Array],
+                             battery: dict[str, Array]) -> Array:
         """Flight endurance [min] at ``throttle`` per row (see :class:`EnduranceModel`)."""
         from tuflexperf.analysis import batch_endurance
 
-        return batch_endurance.flight_endurance_min(self, model, throttle, roll)
+        return batch_endurance.flight_endurance_min(self, model, throttle, roll, battery)
 
 
 def stall_speed(model: _Model) -> Array:

@@ -105,16 +105,15 @@ def _interp_rows(t: Array, t_hist: Array, v_hist: Array) -> Array:
 
 
 def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
-                   stall: Array) -> tuple[Array, Array]:
-    """Charge [Ah] per fan drawn by roll + climb, and the climb time [s]; NaN if impossible."""
+                   stall: Array, height: Array) -> tuple[Array, Array]:
+    """Charge [Ah] per fan drawn by roll + climb to ``height`` [m], and the climb time [s];
+    NaN if impossible."""
     _, roll_time, v_lo, ok = roll
-    battery = model.battery
-    packs = battery.packs_in_parallel_per_engine
-    height = battery.pattern_altitude_m
+    packs = model.battery.packs_in_parallel_per_engine
     climb_speed, climb_rate = _best_climb(m, v_lo, stall)
     ok = (ok > 0.5) & ~((height > 0) & (climb_rate <= 0))
     with np.errstate(divide="ignore", invalid="ignore"):
-        climb_time = np.where(ok, height / climb_rate if height > 0 else 0.0, np.nan)
+        climb_time = np.where(ok, np.where(height > 0, height / climb_rate, 0.0), np.nan)
     roll_time = np.where(ok, roll_time, 0.0)
     climb_time_safe = np.where(ok, climb_time, 0.0)
     t_hist = m.roll_history()
@@ -222,12 +221,18 @@ def _excess(m: Any, throttle: Array, speed: Array) -> Array:
 
 
 def flight_endurance_min(m: Any, model: Any, throttle: Array,
-                         roll: tuple[Array, Array, Array, Array]) -> Array:
+                         roll: tuple[Array, Array, Array, Array],
+                         battery: dict[str, Array]) -> Array:
     """Flight endurance [min] per row; NaN where the single-case analysis says not attainable."""
     from tuflexperf.analysis.batch import stall_speed
 
     stall = stall_speed(m)
-    q_launch, climb_time = _launch_charge(m, model, roll, stall)
+    q_launch, climb_time = _launch_charge(m, model, roll, stall,
+                                          battery["battery.mission.pattern_altitude_m"])
+    # the battery keys that vary without refitting the pack (dotted.BATTERY_KEYS)
+    cutoff = model.battery.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"]
+    reserve_ah = (model.packs * model.battery.capacity_ah
+                  * (1.0 - battery["battery.mission.landing_reserve_fraction"]))
     # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
     most, least_speed = _most_excess(m, throttle, m.least_airspeed())
     ok = np.isfinite(q_launch) & (most >= 0.0)
@@ -244,7 +249,7 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
         lambda v: _excess(m, throttle, v), np.where(ok, least_speed, 1.0), np.where(ok, guess, 2.0)
     )
     power_w = _power_w(model, m, throttle, speed)
-    params, cutoff, packs = model.params, model.cutoff_v, model.packs
+    params, packs = model.params, model.packs
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, 1) > 0.0)
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs) > 0.0)
     q_cut = _bracketed_root(
@@ -253,7 +258,7 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
         np.full(m.size, packs * params.max_capacity_ah * (1.0 - 1e-12)),
     )
     start = np.where(ok, q_launch, 0.0)
-    span = np.maximum(np.minimum(q_cut, model.reserve_ah) - start, 0.0)
+    span = np.maximum(np.minimum(q_cut, reserve_ah) - start, 0.0)
     cruise_s = np.asarray(discharge_time_s(params, np.where(ok, power_w, 1.0), start,
                                            start + span, packs), dtype=float)
     minutes = cruise_s / 60.0 + np.where(ok, climb_time, 0.0) / 60.0

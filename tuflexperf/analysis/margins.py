@@ -48,10 +48,14 @@ _RANGES: dict[str, tuple[float, float]] = {
 _UPPER: dict[str, float] = {
     "aircraft.takeoff.rolling_friction": 1.0,
     "requirements.endurance.throttle": 1.0,
+    "battery.cutoff_voltage_per_cell_v": 4.2,
+    "battery.mission.landing_reserve_fraction": 0.95,
+    "battery.mission.pattern_altitude_m": 5000.0,
 }
 _LOWER: dict[str, float] = {
     "aircraft.takeoff.liftoff_speed_factor": 1.0,
     "aircraft.takeoff.transition_load_factor": 1.01,
+    "battery.cutoff_voltage_per_cell_v": 2.5,
 }
 _EXTRA_KEYS = ("requirements.endurance.throttle", "requirements.takeoff.obstacle_height_m")
 
@@ -60,7 +64,7 @@ def margin_parameters(case: Case) -> dict[str, float]:
     """The parameters ``margins`` varies, with their nominal values (SI units of their keys)."""
     keys = numeric_keys(case)
     return {k: v for k, v in keys.items()
-            if k.startswith(("aircraft.", "atmosphere.")) or k in _EXTRA_KEYS}
+            if k.startswith(("aircraft.", "atmosphere.", "battery.")) or k in _EXTRA_KEYS}
 
 
 def parameter_range(key: str, nominal: float) -> tuple[float, float]:

@@ -180,8 +180,8 @@ def _endurance_value(s: _Symbolic) -> Any:
     v_climb = v_lo + (single._MAX_SPEED_OVER_STALL * stall - v_lo) * k / (n - 1)
     rate = (s.thrust(1.0, v_climb) - level_flight_drag_n(ac, v_climb, rho)) * v_climb \
         / ac.weight_n
-    height = battery.pattern_altitude_m
-    climb_time = height / rate if height > 0 else 0.0
+    height = s.symbols.get("battery.mission.pattern_altitude_m", battery.pattern_altitude_m)
+    climb_time = height / rate if battery.pattern_altitude_m > 0 else 0.0
     # the launch's RK4 with the nominal step count; power looked up as the nominal does
     total0 = launch.ground_roll_time_s + launch.climb_time_s
     steps = max(1, math.ceil(total0 / single._LAUNCH_STEP_S))
@@ -222,10 +222,15 @@ def _endurance_value(s: _Symbolic) -> Any:
     speed = s.newton_step(
         lambda v: s.thrust(x, v) - level_flight_drag_n(ac, v, rho), result.airspeed_m_s)
     power_w = _power_w(s, model, x, speed)
+    cutoff = battery.cells_in_series * s.symbols.get("battery.cutoff_voltage_per_cell_v",
+                                                     battery.cutoff_voltage_per_cell_v)
+    reserve = s.symbols.get("battery.mission.landing_reserve_fraction",
+                            battery.landing_reserve_fraction)
     q_cut = s.newton_step(
-        lambda c: cutoff_residual_v(model.params, c, power_w, model.cutoff_v, packs),
+        lambda c: cutoff_residual_v(model.params, c, power_w, cutoff, packs),
         _nominal_cutoff(model, result))
-    end = model.reserve_ah if result.cruise_ends_at == "landing reserve" else q_cut
+    reserve_ah = packs * battery.capacity_ah * (1.0 - reserve)
+    end = reserve_ah if result.cruise_ends_at == "landing reserve" else q_cut
     cruise = discharge_time_s(model.params, power_w, q, end, packs)
     return cruise / 60.0 + climb_time / 60.0
 

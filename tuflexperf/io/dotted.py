@@ -33,14 +33,38 @@ def _flatten(prefix: str, value: Any, out: dict[str, float]) -> None:
         out[prefix] = float(value)
 
 
-def numeric_keys(case: Case) -> dict[str, float]:
-    """Every numeric key of the case, aircraft and atmosphere that may vary, with its value."""
+# Battery keys a batch may vary without refitting the pack model (used after the fit).
+BATTERY_KEYS = (
+    "battery.cutoff_voltage_per_cell_v",
+    "battery.mission.pattern_altitude_m",
+    "battery.mission.landing_reserve_fraction",
+)
+
+
+def battery_values(case: Case) -> dict[str, float]:
+    """The case's battery keys of :data:`BATTERY_KEYS` with their values (none: no battery)."""
+    if case.battery_path is None:
+        return {}
+    from tuflexperf.io.battery import load_battery
+
+    battery = load_battery(case.battery_path)
+    return {
+        "battery.cutoff_voltage_per_cell_v": float(battery.cutoff_voltage_per_cell_v),
+        "battery.mission.pattern_altitude_m": float(battery.pattern_altitude_m),
+        "battery.mission.landing_reserve_fraction": float(battery.landing_reserve_fraction),
+    }
+
+
+def numeric_keys(case: Case, battery: bool = True) -> dict[str, float]:
+    """Every numeric key of the case, aircraft, atmosphere (and battery) that may vary."""
     out: dict[str, float] = {}
     _flatten("aircraft", dataclasses.asdict(case.aircraft), out)
     _flatten("atmosphere", case.atmosphere.model_dump(), out)
     _flatten("requirements", case.requirements.model_dump(exclude_none=True), out)
     for key in _FIXED:
         out.pop(key, None)
+    if battery:
+        out.update(battery_values(case))
     return out
 
 
@@ -56,9 +80,9 @@ def check_key(case: Case, key: str, where: str) -> None:
         )
     if key.startswith("battery.") or key.startswith("propulsion."):
         raise InputError(
-            f"{where}: {key}: battery and propulsion keys cannot be varied yet (the battery "
-            "is characterised from its runs at check time; the thrust model's uncertainty is "
-            "`uncertainty.propulsion`)"
+            f"{where}: {key}: cannot be varied (of the battery only "
+            f"{', '.join(BATTERY_KEYS)}: the pack model is fitted to its runs at check time; "
+            "the thrust model's uncertainty is `uncertainty.propulsion`)"
         )
     close = difflib.get_close_matches(key, list(known), n=1)
     hint = f" (did you mean {close[0]}?)" if close else ""
@@ -79,8 +103,12 @@ def check_value(case: Case, key: str, value: float, where: str) -> None:
 
     check_key(case, key, where)
     head, *rest = key.split(".")
-    if head == "aircraft":
-        schema: Any = TakeoffSchema if rest[0] == "takeoff" and len(rest) > 1 else AircraftSchema
+    if head == "battery":
+        from tuflexperf.io.battery import BatterySchema, MissionSchema
+
+        schema: Any = MissionSchema if rest[0] == "mission" else BatterySchema
+    elif head == "aircraft":
+        schema = TakeoffSchema if rest[0] == "takeoff" and len(rest) > 1 else AircraftSchema
     elif head == "atmosphere":
         schema = AtmosphereSchema
     else:
@@ -117,6 +145,11 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
     for key, value in values.items():
         check_key(case, key, where)
         head, *rest = key.split(".")
+        if head == "battery":
+            raise InputError(
+                f"{where}: {key}: battery keys vary in batches only (samples, sweeps); for one "
+                "case edit the battery file"
+            )
         try:
             if head == "aircraft":
                 node = aircraft
