@@ -221,3 +221,36 @@ def test_fmu_refuses_meaningless_inputs(tmp_path: Path) -> None:
     with pytest.raises(Exception, match="failed with status"):  # the log says: negative
         fmpy.simulate_fmu(str(out / "tfp_thrust.fmu"), stop_time=0.01, step_size=0.001,
                           input=signal)
+
+
+def test_jsbsim_lag_filter_follows_the_spool_lag(tmp_path: Path) -> None:
+    """Lagged model: one time constant after the dead time JSBSim's force has made 63 % of the
+    step (its lag_filter is Tustin's discretisation; 1 % is its error at 120 Hz and more)."""
+    pytest.importorskip("jsbsim", reason="jsbsim not installed (pip install jsbsim)")
+    propulsion, data = _variants(tmp_path)["lagged"]
+    out = _export(tmp_path, propulsion, ("jsbsim",))
+    fdm = _jsbsim_fdm(tmp_path / "jsb", out)
+    fdm["ic/h-sl-ft"] = 500.0
+    fdm["ic/vt-fps"] = 10.0 / FT
+    fdm.run_ic()
+    for axis in ("rate/translational", "rate/rotational", "position/translational",
+                 "position/rotational"):
+        fdm["simulation/integrator/" + axis] = 0
+    dt = fdm.get_delta_t()
+    for _ in range(int(4.0 / dt)):
+        fdm.run()  # settle at throttle 0 (50 time constants)
+    before = fdm["tfp/engine-1/thrust-lbs"]
+    fdm["tfp/engine-1/throttle-cmd-norm"] = 1.0
+    trace = []
+    for _ in range(int(2.5 / dt)):
+        fdm.run()
+        trace.append(fdm["tfp/engine-1/thrust-lbs"])
+    after = trace[-1]
+    start = math.floor((data["delay_s"] + 1e-9) / dt) - 1  # first frame that sees the step
+    assert trace[start - 1] == pytest.approx(before, rel=1e-12)
+    at = start - 1 + round(data["lag_s"] / dt)
+    share = (trace[at] - before) / (after - before)
+    assert share == pytest.approx(1 - math.exp(-1), abs=0.01)
+    rho = fdm["atmosphere/rho-slugs_ft3"] * SLUG_FT3
+    full = _thrust(data["engines"][0], 1.0, 10.0, rho, data["reference_density_kg_m3"])
+    assert after * LBF_N == pytest.approx(full, rel=1e-6)

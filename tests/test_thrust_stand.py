@@ -126,6 +126,18 @@ def test_thrust_units_sign_pulse_and_manifest_airspeed(tmp_path: Path, unit: str
     np.testing.assert_allclose(data["voltage_v"], 16.0)
 
 
+def test_wrong_thrust_sign_is_refused_not_fitted(tmp_path: Path) -> None:
+    """The shipped sample logs pull as negative; with thrust_sign: 1 the fit would be upside
+    down, so reading refuses and names the key to change."""
+    manifest = _manifest(tmp_path, [{"file": str(SAMPLE.parent / "stand_v10.csv"), "engine": "E",
+                                     "kind": "throttle_steps"}], format="rcbenchmark",
+                         thrust_sign=1)
+    result = runner.invoke(app, ["fit", str(manifest), "--out", str(tmp_path / "o.yaml")])
+    assert result.exit_code == 2
+    assert "set thrust_sign: -1" in result.stderr and "stand_v10.csv" in result.stderr
+    assert not (tmp_path / "o.yaml").exists()
+
+
 def test_airspeed_column_units(tmp_path: Path) -> None:
     rows = ["Time (s),ESC signal (µs),Thrust (N),Airspeed (km/h)"]
     rows += [f"{0.1 * k},1500,1.0,36" for k in range(12)]

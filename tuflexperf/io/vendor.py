@@ -230,7 +230,32 @@ def read_rcbenchmark(
                 columns[target] = values
             else:
                 bad_cells.pop(target)  # an unreadable optional column is left out, not fatal
+    _check_sign(path, columns, settings, where)
     return columns, bad_cells
+
+
+def _check_sign(
+    path: Path, columns: dict[str, np.ndarray], settings: VendorSettings, where: str
+) -> None:
+    """A stand mounted the other way round logs pull as negative: refuse rather than fit it.
+
+    At the run's upper throttles (at least 30 %, within the top half of what it reached) a fan
+    pulls; a force whose median there is negative means ``thrust_sign`` is the wrong way round.
+    """
+    force, throttle = columns.get("force_n"), columns.get("throttle")
+    if force is None or throttle is None:
+        return
+    finite = np.isfinite(force) & np.isfinite(throttle)
+    if not finite.any() or float(throttle[finite].max()) < 0.3:
+        return
+    high = finite & (throttle >= 0.5 * float(throttle[finite].max()))
+    median = float(np.median(force[high]))
+    if median < 0:
+        raise InputError(
+            f"{path}: thrust is negative ({median:.3g} N median) at throttle >= "
+            f"{0.5 * float(throttle[finite].max()):.2f}: the stand logs pull the other way; "
+            f"set thrust_sign: {-int(settings.thrust_sign)} in the manifest{where}"
+        )
 
 
 READERS = {"rcbenchmark": read_rcbenchmark}
