@@ -174,7 +174,13 @@ def _rows_pairs(nominal: dict[str, float], brackets: list, column: np.ndarray) -
 
 
 def solve_margins(case: Case) -> list[Margin]:
-    """Every requirement against every parameter: limit value and AD sensitivity."""
+    """Every requirement against every parameter: limit value and AD sensitivity.
+
+    References
+    ----------
+    Andersson et al. (2019), "CasADi", Math. Prog. Comp. 11 (algorithmic differentiation);
+    Press et al., *Numerical Recipes*, 3rd ed., 9.1 (bracketing and bisection).
+    """
     from tuflexperf.analysis.sensitivity import sensitivities
 
     requirements = present_requirements(case)

@@ -107,7 +107,12 @@ def evaluate_rows(case: Case, keys: tuple[str, ...], points: Array) -> dict[str,
 
 def run_sweep(case: Case, axes: list[tuple[str, Array]], workers: int | None = None,
               dask_address: str | None = None) -> SweepResult:
-    """Every requirement at every grid point (first axis slowest)."""
+    """Every requirement at every grid point (first axis slowest), as batches.
+
+    References
+    ----------
+    Raymer, *Aircraft Design*, 19.5 (carpet plots for design trades).
+    """
     from tuflexperf.analysis.batch import present_requirements
     from tuflexperf.analysis.uncertainty import run_chunks
 

@@ -69,7 +69,12 @@ class SamplingPlan:
 
 
 def plan_for(case: Case, samples: int | None = None, seed: int | None = None) -> SamplingPlan:
-    """The case's ``uncertainty:`` block, with ``--samples`` / ``--seed`` taking precedence."""
+    """The case's ``uncertainty:`` block, with ``--samples`` / ``--seed`` taking precedence.
+
+    References
+    ----------
+    SPEC 4 (uncertainty block), SPEC 5 (``check --samples``).
+    """
     block = case.uncertainty or UncertaintySchema()
     n = block.samples if samples is None else samples
     if n < 1:
@@ -113,7 +118,16 @@ class ChunkDraw:
 
 
 def draw_chunk(case: Case, plan: SamplingPlan, index: int) -> ChunkDraw:
-    """The samples of chunk ``index`` (its own spawned seed; see the module docstring)."""
+    """The samples of chunk ``index`` (its own spawned seed; see the module docstring).
+
+    Parameter values in their keys' units; thrust coefficients ``(E, size, 6)`` from
+    ``N(p, C)`` by ``p + L z`` with ``L L^T = C``; extrapolation errors ``(E, size)`` [N].
+
+    References
+    ----------
+    Rubinstein & Kroese, *Simulation and the Monte Carlo Method*, 3rd ed., 2.5 (multivariate
+    normal by a matrix square root, inverse-CDF sampling of truncated distributions).
+    """
     size = plan.chunks[index]
     child = np.random.SeedSequence(plan.seed).spawn(len(plan.chunks))[index]
     rng = np.random.default_rng(child)
@@ -208,7 +222,12 @@ def run_samples(
     workers: int | None = None,
     dask_address: str | None = None,
 ) -> SampleSet:
-    """All chunks of ``plan`` for ``case``; the same numbers wherever the chunks run."""
+    """All chunks of ``plan`` for ``case``; the same numbers wherever the chunks run.
+
+    References
+    ----------
+    Hanson & Beard (2010), NASA/TP-2010-216447 (Monte Carlo requirement verification).
+    """
     parts = run_chunks(
         evaluate_chunk,
         [(case, plan, i) for i in range(len(plan.chunks))],
@@ -228,7 +247,14 @@ def as_batch(samples: SampleSet) -> BatchResult:
 
 
 def quantiles(values: Array, kind: str) -> list[float | None]:
-    """5/50/95 % values; a not-attainable sample counts as the worst value (None if reached)."""
+    """5/50/95 % values [the requirement's unit]; a not-attainable sample counts as the worst
+    value (None where a percentile falls on one).
+
+    References
+    ----------
+    Hyndman & Fan (1996), "Sample quantiles in statistical packages", Am. Stat. 50 (type 1,
+    inverted empirical CDF: every reported value is a sample's).
+    """
     worst = math.inf if kind == "max" else -math.inf
     filled = np.where(np.isfinite(values), values, worst)
     q = np.quantile(filled, [0.05, 0.5, 0.95], method="inverted_cdf")
