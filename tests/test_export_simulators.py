@@ -115,7 +115,7 @@ def test_jsbsim_force_equals_the_model(tmp_path: Path, key: str) -> None:
         dt = fdm.get_delta_t()
         for throttles in ((0.0, 0.0), (0.35, 0.8), (1.0, 1.0), (0.6, 0.1)):
             for i, x in enumerate(throttles):
-                fdm[f"tfp/engine-{i + 1}/throttle-cmd-norm"] = x
+                fdm[f"fcs/throttle-cmd-norm[{i}]"] = x
             hold_s = data.get("delay_s", 0.0) + 20 * data.get("lag_s", 0.0) + 0.1
             for _ in range(int(hold_s / dt) + 2):
                 fdm.run()
@@ -149,8 +149,8 @@ def test_jsbsim_applies_the_dead_time(tmp_path: Path) -> None:
     for _ in range(30):
         fdm.run()
     before = fdm["tfp/engine-1/thrust-lbs"]
-    fdm["tfp/engine-1/throttle-cmd-norm"] = 1.0
-    fdm["tfp/engine-2/throttle-cmd-norm"] = 1.0
+    fdm["fcs/throttle-cmd-norm[0]"] = 1.0
+    fdm["fcs/throttle-cmd-norm[1]"] = 1.0
     trace = []
     for _ in range(int(3 * data["delay_s"] / dt)):
         fdm.run()
@@ -240,7 +240,7 @@ def test_jsbsim_lag_filter_follows_the_spool_lag(tmp_path: Path) -> None:
     for _ in range(int(4.0 / dt)):
         fdm.run()  # settle at throttle 0 (50 time constants)
     before = fdm["tfp/engine-1/thrust-lbs"]
-    fdm["tfp/engine-1/throttle-cmd-norm"] = 1.0
+    fdm["fcs/throttle-cmd-norm[0]"] = 1.0
     trace = []
     for _ in range(int(2.5 / dt)):
         fdm.run()

@@ -4,10 +4,10 @@ Two XML files, both generated from the one physics code path's numbers
 (:class:`~tuflexperf.models.thrust.Propulsion`, poly22 per engine, paper section 4):
 
 ``tfp_thrust_system.xml`` (in the aircraft folder or its ``Systems/``)
-    A ``<system>`` with one channel per engine: the throttle command property
-    ``tfp/engine-<i>/throttle-cmd-norm`` passes an ``actuator`` with a
-    ``<delay type="time">`` (the dead time ``delay_s``, JSBSim's transport latency), an
-    ``fcs_function`` evaluates the poly22 at the delayed throttle,
+    A ``<system>`` with one channel per engine: JSBSim's throttle command
+    ``fcs/throttle-cmd-norm[i]`` (declared here: the aircraft needs no ``<engine>``) passes an
+    ``actuator`` with a ``<delay type="time">`` (the dead time ``delay_s``, JSBSim's transport
+    latency), an ``fcs_function`` evaluates the poly22 at the delayed throttle,
     the true airspeed ``velocities/vtrue-fps`` (in m/s) and the density ratio
     ``atmosphere/rho-slugs_ft3 / reference_density`` (1 without a reference density), in lbf,
     and a ``lag_filter`` (``lag_s``, when it is not 0) gives ``tfp/engine-<i>/thrust-lbs``.
@@ -51,6 +51,12 @@ DELAY_NUDGE_S = 1e-9
 def property_base(index: int) -> str:
     """``tfp/engine-<i>`` (1-based): the property folder of engine ``index`` (0-based)."""
     return f"tfp/engine-{index + 1}"
+
+
+def throttle_property(index: int) -> str:
+    """JSBSim's own throttle command of engine ``index`` (0-based): what scripts, joysticks and
+    autopilots already drive; the system declares it for an aircraft without ``<engine>``."""
+    return f"fcs/throttle-cmd-norm[{index}]"
 
 
 def _number(value: float) -> str:
@@ -127,20 +133,20 @@ def system_text(model: ExportModel) -> str:
     declarations = []
     for i, engine in enumerate(prop.engines):
         base = property_base(i)
-        declarations.append(f'  <property value="0">{base}/throttle-cmd-norm</property>')
+        declarations.append(f'  <property value="0">{throttle_property(i)}</property>')
         if prop.delay_s > 0:
             # an actuator models transport latency (pure_gain ignores <delay>); JSBSim keeps
             # floor(delay / dt) frames, the nudge stops 0.05 s at 120 Hz rounding down to 5
             dead_time = (
                 f'    <actuator name="{base}/throttle-delayed">\n'
-                f"      <input>{base}/throttle-cmd-norm</input>\n"
+                f"      <input>{throttle_property(i)}</input>\n"
                 f'      <delay type="time">{_number(prop.delay_s + DELAY_NUDGE_S)}</delay>\n'
                 "    </actuator>"
             )
         else:
             dead_time = (
                 f'    <pure_gain name="{base}/throttle-delayed">\n'
-                f"      <input>{base}/throttle-cmd-norm</input>\n"
+                f"      <input>{throttle_property(i)}</input>\n"
                 "      <gain>1</gain>\n"
                 "    </pure_gain>"
             )
@@ -175,8 +181,8 @@ def system_text(model: ExportModel) -> str:
     return (
         '<?xml version="1.0"?>\n<!--\n'
         + _header(model, "JSBSim system")
-        + "\n  Set tfp/engine-<i>/throttle-cmd-norm (0 .. 1) from your FCS; read "
-        "tfp/engine-<i>/thrust-lbs.\n-->\n"
+        + "\n  Input: fcs/throttle-cmd-norm[i] (0 .. 1, i from 0); output: "
+        "tfp/engine-<i+1>/thrust-lbs.\n-->\n"
         + '<system name="tfp-thrust">\n'
         + "\n".join(declarations)
         + "\n\n"
