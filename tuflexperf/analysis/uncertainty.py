@@ -189,7 +189,7 @@ def run_chunks(
                 "--dask: dask.distributed is not installed (pip install 'tuflexperf[dask]')"
             ) from None
         try:
-            client = Client(dask_address, timeout="10s")
+            client = Client(dask_address, timeout="5s")
         except (OSError, TimeoutError) as exc:
             raise InputError(f"--dask: cannot reach the scheduler at {dask_address}: {exc}") \
                 from None
