@@ -158,6 +158,8 @@ def test_high_cl_ground_roll_matches_clamped_integration(tmp_path):
     result = solve_takeoff(case)
     distance, _, _ = _independent_roll(aircraft, MADE_UP_PROPULSION, case.density_kg_m3)
     assert result.ground_roll_m == pytest.approx(distance, rel=1e-6)
+    assert any("no runway friction from there" in w for w in result.warnings)
+    assert not any("cl_ground" in w for w in solve_takeoff(_case(tmp_path / "n")).warnings)
 
 
 @pytest.mark.parametrize(

@@ -254,6 +254,15 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
     density_note = unlapsed_density_warning(propulsion, rho)
     if density_note:
         warnings.append(density_note)
+    if to.cl_ground > 0.0:
+        # ground lift equal to the weight before lift-off: the wheels carry nothing from there
+        unloaded = math.sqrt(2.0 * aircraft.weight_n / (rho * aircraft.wing_area_m2 * to.cl_ground))
+        if unloaded < v_lo:
+            warnings.append(
+                f"cl_ground {to.cl_ground:g} lifts the weight at {unloaded:.1f} m/s, below the "
+                f"lift-off speed {v_lo:.1f} m/s: no runway friction from there (clamped at "
+                "zero); check cl_ground against the lift-off lift coefficient"
+            )
     return TakeoffResult(
         ground_roll_m=ground_roll,
         liftoff_speed_m_s=v_lo,
