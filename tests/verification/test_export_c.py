@@ -25,13 +25,13 @@ from tuflexperf.export.c_code import (
     source_text,
 )
 from tuflexperf.export.cbuild import CThrustModel, compile_shared, find_compiler
-from tuflexperf.export.model import (
-    ExportModel,
+from tuflexperf.export.model import ExportModel, model_from_propulsion_file, throttle_for_thrust
+from tuflexperf.models.thrust import (
+    density_ratio,
+    engine_thrust_n,
     max_model_airspeed_m_s,
-    model_from_propulsion_file,
-    throttle_for_thrust,
+    total_thrust_n,
 )
-from tuflexperf.models.thrust import density_ratio, engine_thrust_n, total_thrust_n
 
 ROOT = Path(__file__).resolve().parents[2]
 SHIPPED_PROPULSION = ROOT / "data" / "tuflex" / "propulsion.yaml"

@@ -30,7 +30,8 @@ from tuflexperf.export.c_code import (
     source_text,
 )
 from tuflexperf.export.cbuild import CThrustModel, compile_shared, find_compiler
-from tuflexperf.export.model import max_model_airspeed_m_s, model_from_propulsion_file
+from tuflexperf.export.model import model_from_propulsion_file
+from tuflexperf.models.thrust import max_model_airspeed_m_s
 
 pytestmark = pytest.mark.skipif(find_compiler() is None, reason="no C compiler (gcc) installed")
 

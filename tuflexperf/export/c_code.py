@@ -15,14 +15,8 @@ from __future__ import annotations
 
 import textwrap
 
-from tuflexperf.export.model import (
-    AIRSPEED_CAP_FACTOR,
-    EXTRAPOLATION_WARNING,
-    ExportModel,
-    max_model_airspeed_m_s,
-    quadratic_coefficients,
-)
-from tuflexperf.models.thrust import POLY22_TERMS
+from tuflexperf.export.model import EXTRAPOLATION_WARNING, ExportModel, quadratic_coefficients
+from tuflexperf.models.thrust import AIRSPEED_CAP_FACTOR, POLY22_TERMS, max_model_airspeed_m_s
 
 HEADER_NAME = "tfp_thrust.h"
 SOURCE_NAME = "tfp_thrust.c"

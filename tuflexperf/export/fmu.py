@@ -43,7 +43,12 @@ FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 
 
 def platform_folder() -> str:
-    """FMI 2.0 binaries folder name of this machine (``linux64``, ``darwin64``, ``win64``)."""
+    """FMI 2.0 binaries folder name of this machine (``linux64``, ``darwin64``, ``win64``).
+
+    References
+    ----------
+    FMI 2.0.1 standard, section 2.3 (FMU distribution, ``binaries/<platform>``).
+    """
     system = {"Linux": "linux", "Darwin": "darwin", "Windows": "win"}.get(platform.system())
     if system is None:
         raise InputError(f"--format fmu: unsupported platform {platform.system()!r}")
@@ -60,7 +65,22 @@ def _guid(model: ExportModel) -> str:
 
 
 def value_references(n_engines: int) -> dict[str, int]:
-    """Name -> value reference of every FMU variable, in the order the wrapper stores them."""
+    """Name -> value reference of every FMU variable, in the order the wrapper stores them.
+
+    Parameters
+    ----------
+    n_engines : int
+        Number of engines (one throttle input and one thrust output each).
+
+    Returns
+    -------
+    dict
+        Variable name (units in the name: ``_m_s``, ``_kg_m3``, ``_n``, ``_s``) -> reference.
+
+    References
+    ----------
+    FMI 2.0.1 standard, section 2.2.7 (ScalarVariable, valueReference).
+    """
     names = [f"throttle_{i + 1}" for i in range(n_engines)]
     names += ["airspeed_m_s", "density_kg_m3"]
     names += [f"thrust_{i + 1}_n" for i in range(n_engines)]
@@ -69,7 +89,12 @@ def value_references(n_engines: int) -> dict[str, int]:
 
 
 def model_description(model: ExportModel) -> str:
-    """``modelDescription.xml`` (FMI 2.0, co-simulation)."""
+    """``modelDescription.xml`` (FMI 2.0, co-simulation).
+
+    References
+    ----------
+    FMI 2.0.1 standard, sections 2.2 (model description) and 4.3 (co-simulation capabilities).
+    """
     from tuflexperf import __version__ as version
 
     prop = model.propulsion
@@ -134,7 +159,12 @@ def model_description(model: ExportModel) -> str:
 
 
 def wrapper_source(model: ExportModel) -> str:
-    """``fmu.c``: the FMI 2.0 co-simulation functions around ``tfp_step``."""
+    """``fmu.c``: the FMI 2.0 co-simulation functions around ``tfp_step``.
+
+    References
+    ----------
+    FMI 2.0.1 standard, sections 2.1 (common functions) and 4.2 (co-simulation API).
+    """
     n = model.n_engines
     refs = value_references(n)
     listing = ", ".join(f"{name} = {ref}" for name, ref in refs.items())
@@ -399,7 +429,13 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
 
 
 def c_density(model: ExportModel) -> str:
-    """Start value of ``density_kg_m3`` as a C literal: the test day's, else ISA sea level."""
+    """Start value of ``density_kg_m3`` [kg/m^3] as a C literal: the test day's, else ISA
+    sea level.
+
+    References
+    ----------
+    ISO 2533:1975 (ISA sea-level density 1.225 kg/m^3).
+    """
     return repr(float(model.propulsion.reference_density_kg_m3 or 1.225))
 
 
@@ -408,6 +444,10 @@ def build_fmu(model: ExportModel, target: Path) -> Path:
 
     Raises :class:`InputError` when no C compiler exists (``--format fmu`` needs one) and
     RuntimeError with the compiler's output if the generated C does not compile.
+
+    References
+    ----------
+    FMI 2.0.1 standard, section 2.3 (the zip layout: modelDescription.xml, sources/, binaries/).
     """
     compiler = find_compiler()
     if compiler is None:

@@ -49,13 +49,23 @@ DELAY_NUDGE_S = 1e-9
 
 
 def property_base(index: int) -> str:
-    """``tfp/engine-<i>`` (1-based): the property folder of engine ``index`` (0-based)."""
+    """``tfp/engine-<i>`` (1-based): the property folder of engine ``index`` (0-based).
+
+    References
+    ----------
+    JSBSim Reference Manual, property naming (``/``-separated, lower case).
+    """
     return f"tfp/engine-{index + 1}"
 
 
 def throttle_property(index: int) -> str:
     """JSBSim's own throttle command of engine ``index`` (0-based): what scripts, joysticks and
-    autopilots already drive; the system declares it for an aircraft without ``<engine>``."""
+    autopilots already drive; the system declares it for an aircraft without ``<engine>``.
+
+    References
+    ----------
+    JSBSim-Team/jsbsim, src/models/FGFCS.cpp (``fcs/throttle-cmd-norm[i]``, 0..1).
+    """
     return f"fcs/throttle-cmd-norm[{index}]"
 
 
@@ -127,7 +137,23 @@ def _poly22_function(model: ExportModel, index: int, indent: str) -> str:
 
 
 def system_text(model: ExportModel) -> str:
-    """``tfp_thrust_system.xml``: inputs, dead time, poly22 and lag per engine."""
+    """``tfp_thrust_system.xml``: inputs, dead time, poly22 and lag per engine.
+
+    Parameters
+    ----------
+    model : ExportModel
+        The case's propulsion model (coefficients [N], ``delay_s`` [s], ``lag_s`` [s]).
+
+    Returns
+    -------
+    str
+        The XML text; thrust properties in lbf, airspeed read in ft/s and converted to m/s.
+
+    References
+    ----------
+    Paper section 4 (poly22, delay); JSBSim Reference Manual (``system``, ``actuator``,
+    ``fcs_function``, ``lag_filter``).
+    """
     prop = model.propulsion
     channels = []
     declarations = []
@@ -192,7 +218,22 @@ def system_text(model: ExportModel) -> str:
 
 
 def reactions_text(model: ExportModel) -> str:
-    """``tfp_thrust_reactions.xml``: one body-axis force per engine, magnitude the thrust."""
+    """``tfp_thrust_reactions.xml``: one body-axis force per engine, magnitude the thrust.
+
+    Parameters
+    ----------
+    model : ExportModel
+        The case's propulsion model (one force per engine).
+
+    Returns
+    -------
+    str
+        The ``<external_reactions>`` XML; magnitudes in lbf, locations for the user to set [m].
+
+    References
+    ----------
+    JSBSim-Team/jsbsim, src/models/FGExternalReactions.h (``force``, ``frame="BODY"``).
+    """
     forces = []
     for i, engine in enumerate(model.propulsion.engines):
         base = property_base(i)

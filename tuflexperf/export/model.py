@@ -25,6 +25,7 @@ from tuflexperf.models.thrust import (
     lag_factor,
     lag_step,
     least_throttle_reaching,
+    max_model_airspeed_m_s,
     total_thrust_n,
 )
 
@@ -203,44 +204,6 @@ def quadratic_coefficients(propulsion: Propulsion, engine: int | None = None) ->
     }
 
 
-#: The exported inverse refuses airspeeds above this many times the top tested airspeed, even
-#: where the polynomial still looks physical (an extrapolation that far is no model).
-AIRSPEED_CAP_FACTOR = 4.0
-
-
-def max_model_airspeed_m_s(propulsion: Propulsion) -> float:
-    """Airspeed above which the exported model refuses to answer [m/s].
-
-    A fan's thrust falls with airspeed (momentum theory, ``T = mdot (v_e - V)``); a poly22 with
-    ``p02 > 0`` turns back up beyond the vertex of its ``v^2`` term, where it reports absurd
-    thrust (e.g. ~100 N "idle thrust" at 300 m/s). The limit is the least airspeed at which any
-    engine's ``dT/dV`` (from :func:`engine_thrust_n` on CasADi symbols) reaches 0 at throttle 0
-    or 1 (``dT/dV`` is linear in throttle, so the ends bound it), but never below the top tested
-    airspeed (the data are what they are) and never above :data:`AIRSPEED_CAP_FACTOR` times it.
-
-    References
-    ----------
-    Paper section 4 (poly22, tested 0-30 m/s); momentum theory, e.g. Anderson, *Aircraft
-    Performance and Design*, section 3.3.
-    """
-    import casadi as ca
-
-    high = float(propulsion.tested_airspeed_m_s[1])
-    limit = AIRSPEED_CAP_FACTOR * high
-    x = ca.SX.sym("x")
-    v = ca.SX.sym("v")
-    for engine in propulsion.engines:
-        slope = ca.jacobian(engine_thrust_n(engine, x, v, 1.0), v)
-        curvature = ca.jacobian(slope, v)
-        for throttle in (0.0, 1.0):
-            at = {"x": throttle, "v": 0.0}
-            f = ca.Function("f", [x, v], [slope, curvature])
-            g0, g1 = (float(value) for value in f(at["x"], at["v"]))
-            if g1 > 0:
-                limit = min(limit, max(-g0 / g1, high))
-    return limit
-
-
 def thrust_step_function(propulsion: Propulsion, sample_time_s: float) -> Any:
     """CasADi ``tfp_thrust_step``: one sample of the dynamic model (dead time, then spool lag).
 
@@ -250,7 +213,12 @@ def thrust_step_function(propulsion: Propulsion, sample_time_s: float) -> Any:
     ``total_thrust_n`` and the next ``delay_state`` and ``lag_state``. Per engine:
     ``u = command N samples ago``, ``T_k = a T_(k-1) + (1 - a) T_static(u, V, rho)`` with
     ``a = exp(-dt / lag_s)`` (:func:`lag_step`); ``lag_s = 0`` is the paper's pure delay.
-    The same recursion as the exported C's ``tfp_step``.
+    The same recursion as the exported C's ``tfp_step``. ``sample_time_s`` is dt [s].
+
+    References
+    ----------
+    Paper section 4 (dead time); Franklin, Powell & Workman, *Digital Control of Dynamic
+    Systems*, 3rd ed., section 4.3.3 (exact discrete first-order lag).
     """
     import casadi as ca
 

@@ -67,7 +67,12 @@ class PropellerTablesSchema(StrictModel):
 
 
 def is_propeller_manifest(path: Path) -> bool:
-    """True for a YAML file whose top level has a ``tables:`` key (cheap check, no validation)."""
+    """True for a YAML file whose top level has a ``tables:`` key (cheap check, no validation).
+
+    References
+    ----------
+    SPEC 4 (inputs of ``fit``); this module's docstring (the manifest).
+    """
     if path.suffix.lower() not in (".yaml", ".yml") or not path.is_file():
         return False
     try:
@@ -144,7 +149,22 @@ def _lines(path: Path) -> list[str]:
 
 
 def read_propeller_tables(path: Path | str) -> ThrustTable:
-    """A propeller-table manifest -> one :class:`ThrustTable` (module docstring)."""
+    """A propeller-table manifest -> one :class:`ThrustTable` (module docstring).
+
+    Parameters
+    ----------
+    path : Path
+        The manifest (YAML with ``tables:``); file paths in it are relative to it.
+
+    Returns
+    -------
+    ThrustTable
+        Points per engine: throttle = rpm / max rpm [-], airspeed [m/s], thrust [N].
+
+    References
+    ----------
+    UIUC Propeller Data Site (Brandt, Deters, Ananda & Selig); APC Propellers performance data.
+    """
     path = Path(path)
     schema = load_model(path, PropellerTablesSchema)
     points: list[tuple[str, float, float, float]] = []  # engine, rpm, airspeed, thrust

@@ -264,7 +264,17 @@ READERS = {"rcbenchmark": read_rcbenchmark}
 def read_vendor_columns(
     path: Path, settings: VendorSettings
 ) -> tuple[dict[str, np.ndarray], dict[str, tuple[int, str]]]:
-    """Dispatch on ``settings.format`` (one of :data:`VENDOR_FORMATS`)."""
+    """Dispatch on ``settings.format`` (one of :data:`VENDOR_FORMATS`).
+
+    Returns
+    -------
+    tuple
+        As :func:`read_rcbenchmark`: columns in SI units and the first non-numeric cells.
+
+    References
+    ----------
+    SPEC 4 (run formats, ``format:``).
+    """
     reader = READERS.get(settings.format)
     if reader is None:
         raise InputError(

@@ -285,3 +285,46 @@ def lag_step(previous: Any, target: Any, factor: Any) -> Any:
     See :func:`lag_factor`.
     """
     return factor * previous + (1.0 - factor) * target
+
+
+#: The model is refused above this many times its top tested airspeed, even where the polynomial
+#: still looks physical (an extrapolation that far is no model).
+AIRSPEED_CAP_FACTOR = 4.0
+
+
+def max_model_airspeed_m_s(propulsion: Propulsion) -> float:
+    """Airspeed above which the poly22 is no longer a fan's thrust law [m/s].
+
+    A fan's thrust falls with airspeed (momentum theory, ``T = mdot (v_e - V)``); a poly22 with
+    ``p02 > 0`` turns back up beyond the vertex of its ``v^2`` term and reports absurd thrust
+    there (e.g. ~100 N "idle thrust" at 300 m/s). The limit is the least airspeed at which any
+    engine's ``dT/dV = p01 + p11 x + 2 p02 V`` reaches 0 at throttle 0 or 1 (linear in ``x``,
+    so the ends bound it), never below the top tested airspeed and never above
+    :data:`AIRSPEED_CAP_FACTOR` times it.
+
+    Parameters
+    ----------
+    propulsion : Propulsion
+        The engines' poly22 models and their tested airspeed range.
+
+    Returns
+    -------
+    float
+        The limit [m/s].
+
+    References
+    ----------
+    Paper section 4 (poly22, tested 0-30 m/s); Anderson, *Aircraft Performance and Design*,
+    section 3.3 (momentum theory: thrust falls with flight speed).
+    """
+    high = float(propulsion.tested_airspeed_m_s[1])
+    limit = AIRSPEED_CAP_FACTOR * high
+    for engine in propulsion.engines:
+        c = engine.coefficients
+        curvature = 2.0 * float(c["p02"])
+        if curvature <= 0.0:
+            continue
+        for x in (0.0, engine.throttle_scale):  # throttle 0 and 1 in the coefficients' unit
+            slope_at_zero = float(c["p01"]) + float(c["p11"]) * x
+            limit = min(limit, max(-slope_at_zero / curvature, high))
+    return limit
