@@ -167,3 +167,18 @@ def test_envelope_bounds_and_battery_keys_are_refused_with_the_reason(tmp_path) 
         path = shipped_with(tmp_path, {"parameters": {key: {"normal": [1, 0.1]}}})
         result = runner.invoke(app, ["check", str(path)])
         assert result.exit_code == 2 and key in result.stderr and reason in result.stderr
+
+
+def test_samples_outside_a_keys_bounds_count_as_not_met(tmp_path) -> None:
+    """A wide normal on cd0 draws some negative drag: never a pass from a non-aircraft."""
+    path = shipped_with(tmp_path, {
+        "samples": 4000, "seed": 9, "required_probability": 0.5,
+        "propulsion": {"covariance": False, "extrapolation": False},
+        "parameters": {"aircraft.cd0": {"normal": [0.02, 0.02]}},
+    }, {"envelope": {"min_airspeed_m_s": 15, "max_airspeed_m_s": 45}})
+    data = json.loads(runner.invoke(app, ["check", str(path), "--json"]).stdout)
+    outside = data["uncertainty"]["samples_outside_bounds"]["aircraft.cd0"]
+    assert 400 < outside < 900  # P(cd0 <= 0) = Phi(-1) = 0.16
+    result = data["results"][0]
+    assert result["samples_met"] <= 4000 - outside
+    assert result["samples_not_attainable"] >= outside

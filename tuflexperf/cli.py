@@ -133,13 +133,16 @@ def check(
     verdicts = check_case(case)
     passed = all(v.passed for v in verdicts)
     probabilistic: dict[str, Any] = {}
+    outside: dict[str, int] = {}
     plan = None
     if samples is not None or case.uncertainty is not None:
         from tuflexperf.analysis.requirements import probabilistic_verdicts
         from tuflexperf.analysis.uncertainty import plan_for, run_samples
 
         plan = plan_for(case, samples, seed)
-        probabilistic = probabilistic_verdicts(run_samples(case, plan, workers, dask))
+        sample_set = run_samples(case, plan, workers, dask)
+        probabilistic = probabilistic_verdicts(sample_set)
+        outside = {k: n for k, n in sample_set.outside_bounds.items() if n}
         passed = passed and all(p.passed for p in probabilistic.values())
     if as_json:
         results = [
@@ -153,7 +156,7 @@ def check(
             "results": results,
         }
         if plan is not None:
-            payload["uncertainty"] = plan.to_dict()
+            payload["uncertainty"] = {**plan.to_dict(), "samples_outside_bounds": outside}
         emit_json(payload)
     else:
         typer.echo(f"{case.name}  ({case.path})")
@@ -171,6 +174,9 @@ def check(
             typer.echo("(the case states no requirements)")
         if plan is not None:
             _print_probabilities(plan, probabilistic)
+            for key, count in outside.items():
+                typer.echo(f"  note: {count} samples of {key} fall outside its valid range; "
+                           "they count as not met")
         typer.echo(f"overall: {'PASS' if passed else 'FAIL'}")
     raise typer.Exit(0 if passed else 1)
 

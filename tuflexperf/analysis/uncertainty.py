@@ -33,6 +33,7 @@ from tuflexperf.analysis.batch import BatchEvaluator, BatchResult, nominal_engin
 from tuflexperf.analysis.probability import normal_cdf, normal_ppf
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case, UncertaintySchema
+from tuflexperf.io.dotted import value_bounds
 
 Array = NDArray[np.float64]
 CHUNK_SIZE = 2500
@@ -169,7 +170,17 @@ def evaluate_chunk(case: Case, plan: SamplingPlan, index: int) -> dict[str, Arra
     result = evaluator_for(case).evaluate(
         draw.values, draw.size, draw.coefficients, draw.extrapolation_n
     )
-    out = {f"value:{k}": v for k, v in result.values.items()}
+    # a sample outside a key's schema bounds (a negative cd0 from a wide normal) is no
+    # aircraft: every requirement counts it as not met, and it is reported
+    outside = np.zeros(draw.size, dtype=bool)
+    out: dict[str, Array] = {}
+    for key, values in draw.values.items():
+        low, low_in, high, high_in = value_bounds(case, key)
+        bad = ~(((values >= low) if low_in else (values > low))
+                & ((values <= high) if high_in else (values < high)))
+        out[f"outside:{key}"] = np.array([np.count_nonzero(bad)])
+        outside |= bad
+    out.update({f"value:{k}": np.where(outside, np.nan, v) for k, v in result.values.items()})
     out.update({f"limit:{k}": v for k, v in result.limits.items()})
     return out
 
@@ -214,6 +225,8 @@ class SampleSet:
     values: dict[str, Array]
     limits: dict[str, Array]
     kinds: dict[str, str] = field(default_factory=dict)
+    # per parameter: samples outside its schema bounds (counted as not met everywhere)
+    outside_bounds: dict[str, int] = field(default_factory=dict)
 
 
 def run_samples(
@@ -238,7 +251,9 @@ def run_samples(
     values = {n: np.concatenate([p[f"value:{n}"] for p in parts]) for n in names}
     limits = {n: np.concatenate([p[f"limit:{n}"] for p in parts]) for n in names}
     kinds = {r.name: r.kind for r in evaluator_for(case).requirements}
-    return SampleSet(plan, values, limits, kinds)
+    outside = {k.split(":", 1)[1]: int(sum(int(p[k][0]) for p in parts))
+               for k in parts[0] if k.startswith("outside:")}
+    return SampleSet(plan, values, limits, kinds, outside)
 
 
 def as_batch(samples: SampleSet) -> BatchResult:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -89,19 +90,9 @@ def check_key(case: Case, key: str, where: str) -> None:
     raise InputError(f"{where}: unknown or non-numeric key {key!r}{hint}")
 
 
-def check_value(case: Case, key: str, value: float, where: str) -> None:
-    """Raise :class:`InputError` if ``value`` breaks the key's own bounds in its schema.
-
-    Only the field itself is checked (e.g. a positive mass); cross-field rules (a lift-off
-    speed below a heavier aircraft's stall) are the analyses' to report per point.
-    """
-    from typing import Annotated
-
-    from pydantic import TypeAdapter
-
+def _schema_field(case: Case, key: str) -> Any:
     from tuflexperf.io.case import AtmosphereSchema, TakeoffSchema
 
-    check_key(case, key, where)
     head, *rest = key.split(".")
     if head == "battery":
         from tuflexperf.io.battery import BatterySchema, MissionSchema
@@ -112,9 +103,47 @@ def check_value(case: Case, key: str, value: float, where: str) -> None:
     elif head == "atmosphere":
         schema = AtmosphereSchema
     else:
-        block = getattr(case.requirements, rest[0])
-        schema = type(block)
-    field = schema.model_fields[rest[-1]]
+        schema = type(getattr(case.requirements, rest[0]))
+    return schema.model_fields[rest[-1]]
+
+
+def value_bounds(case: Case, key: str) -> tuple[float, bool, float, bool]:
+    """The key's schema bounds: (low, low inclusive, high, high inclusive) in its unit."""
+    import typing
+
+    field = _schema_field(case, key)
+    constraints = list(field.metadata)
+    stack = [field.annotation]
+    while stack:  # constraints of an Optional[Annotated[float, ...]] sit inside the union
+        kind = stack.pop()
+        if typing.get_origin(kind) is typing.Annotated:
+            constraints += list(typing.get_args(kind)[1:])
+        stack += [a for a in typing.get_args(kind) if a is not type(None)]
+    low, low_in, high, high_in = -math.inf, False, math.inf, False
+    for item in list(constraints):  # a Field(...) inside Annotated carries its own metadata
+        constraints += list(getattr(item, "metadata", None) or [])
+    for c in constraints:
+        for name, value in (("gt", False), ("ge", True)):
+            if getattr(c, name, None) is not None and float(getattr(c, name)) >= low:
+                low, low_in = float(getattr(c, name)), value
+        for name, value in (("lt", False), ("le", True)):
+            if getattr(c, name, None) is not None and float(getattr(c, name)) <= high:
+                high, high_in = float(getattr(c, name)), value
+    return low, low_in, high, high_in
+
+
+def check_value(case: Case, key: str, value: float, where: str) -> None:
+    """Raise :class:`InputError` if ``value`` breaks the key's own bounds in its schema.
+
+    Only the field itself is checked (e.g. a positive mass); cross-field rules (a lift-off
+    speed below a heavier aircraft's stall) are the analyses' to report per point.
+    """
+    from typing import Annotated
+
+    from pydantic import TypeAdapter
+
+    check_key(case, key, where)
+    field = _schema_field(case, key)
     try:
         kind = Annotated[(field.annotation, *field.metadata)] if field.metadata \
             else field.annotation
