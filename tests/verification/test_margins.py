@@ -22,14 +22,18 @@ from tuflexperf.io.dotted import with_values
 def deterministic(case, key: str, value: float, name: str) -> float | None:
     """The single-case analysis with ``key`` set (a battery key through a battery file)."""
     if key.startswith("battery."):
-        return {v.name: v.value for v in check_case(with_battery(case, key, value))}[name]
+        import tempfile
+        from pathlib import Path
+
+        with tempfile.TemporaryDirectory() as folder:
+            single = with_battery(case, key, value, Path(folder))
+            return {v.name: v.value for v in check_case(single)}[name]
     return {v.name: v.value for v in check_case(with_values(case, {key: value}))}[name]
 
 
-def with_battery(case, key: str, value: float):
+def with_battery(case, key: str, value: float, folder):
+    """The case with a copy of its battery file in ``folder`` where ``key`` is ``value``."""
     import dataclasses
-    import tempfile
-    from pathlib import Path
 
     import yaml
 
@@ -41,7 +45,7 @@ def with_battery(case, key: str, value: float):
     for part in parts[:-1]:
         node = node.setdefault(part, {})
     node[parts[-1]] = float(value)
-    path = Path(tempfile.mkdtemp()) / "battery.yaml"
+    path = folder / "battery.yaml"
     path.write_text(yaml.safe_dump(battery))
     return dataclasses.replace(case, battery_path=path)
 
