@@ -129,6 +129,14 @@ def test_c_step_response_is_dead_time_then_exponential(lagged: tuple) -> None:
         assert (trace[at] - t0) / (t1 - t0) == pytest.approx(1 - math.exp(-1), abs=2e-3)
 
 
+def test_step_refuses_a_nan_command_and_bad_initial_conditions(lagged: tuple) -> None:
+    _, c = lagged
+    code, _ = c.simulate(0.01, [[0.5, 0.5], [math.nan, 0.5]], 10.0, 1.2)
+    assert code == RETURN_BAD_ARGUMENT
+    code, _ = c.simulate(0.01, [[0.5, 0.5]], -1.0, 1.2, [0.5, 0.5])
+    assert code == RETURN_NEGATIVE_AIRSPEED  # tfp_state_init refuses it already
+
+
 def test_zero_lag_is_the_papers_pure_delay(tmp_path: Path) -> None:
     data, c = _build(tmp_path, _write(tmp_path, lag_s=0.0, delay_s=0.03))
     dt = 0.01

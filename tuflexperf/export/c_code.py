@@ -280,8 +280,8 @@ int tfp_state_init(tfp_state_t *state, double sample_time_s, const double *initi
 
 /*
  * One sample: push each engine's throttle command, and write its thrust in N after the dead
- * time and the lag. Returns TFP_OK or the code of the argument checks of tfp_thrust (then
- * thrust_n is NaN and the state is not advanced).
+ * time and the lag. Returns TFP_OK, TFP_BAD_ARGUMENT for a non-finite command, or the code of
+ * the argument checks of tfp_thrust (then thrust_n is NaN and the state is not advanced).
  */
 int tfp_step(tfp_state_t *state, const double *throttle_command, double airspeed_m_s,
              double density_kg_m3, double *thrust_n);
@@ -615,6 +615,11 @@ int tfp_step(tfp_state_t *state, const double *throttle_command, double airspeed
         return TFP_BAD_ARGUMENT;
     }}
     code = tfp_check_point(airspeed_m_s, density_kg_m3);
+    for (i = 0; i < TFP_N_ENGINES; ++i) {{
+        if (!isfinite(throttle_command[i])) {{
+            code = TFP_BAD_ARGUMENT; /* a NaN would stay in the lag state for good */
+        }}
+    }}
     if (code != TFP_OK) {{
         for (i = 0; i < TFP_N_ENGINES; ++i) {{
             thrust_n[i] = NAN;
