@@ -501,6 +501,69 @@ def performance(case_file: Path | None = CaseOption, as_json: bool = JsonOption)
     raise typer.Exit(0 if attainable else 1)
 
 
+# ---- mission (issue 13) --------------------------------------------------------------------
+@app.command()
+def mission(
+    mission_file: Path | None = typer.Argument(
+        None, help="Mission file (default: the case's mission requirement)."
+    ),
+    case_file: Path | None = CaseOption,
+    csv: Path | None = typer.Option(None, "--csv", help="Write the time history to this CSV."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Fly a mission with the battery model; charge at landing against the reserve."""
+    from tuflexperf.analysis.mission import solve_mission
+    from tuflexperf.analysis.requirements import mission_path
+    from tuflexperf.io.case import load_case
+    from tuflexperf.io.mission import load_mission
+
+    case = load_case(case_file)
+    requirement = case.requirements.mission
+    if mission_file is None:
+        if requirement is None:
+            fail_input("MISSION: give a mission file (the case has no mission requirement)")
+        mission_file = mission_path(case)
+    plan = load_mission(mission_file)
+    inputs = {Path(mission_file).resolve(), Path(case.path).resolve()}
+    if csv is not None and csv.resolve() in inputs:
+        fail_input(f"--csv: {csv} is an input of this command; choose another file")
+    limit = requirement.min_landing_charge_fraction if requirement is not None else None
+    result = solve_mission(case, plan, limit)
+    if csv is not None:
+        from tuflexperf.io.yamlio import atomic_write_text
+
+        names = list(result.history)
+        rows = zip(*(result.history[k] for k in names), strict=True)
+        text = ",".join(names) + "\n" + "".join(
+            ",".join(f"{value:.10g}" for value in row) + "\n" for row in rows
+        )
+        atomic_write_text(csv, text)
+    if as_json:
+        emit_json(result.to_dict())
+    else:
+        typer.echo(f"{case.name}: mission {result.name}")
+        header = (f"  {'segment':<16}{'time min':>9}{'dist km':>9}{'alt m':>8}{'EAS m/s':>8}"
+                  f"{'charge Ah':>10}{'energy Wh':>10}{'min V':>8}{'max thr':>8}")
+        typer.echo(header)
+        for s in result.segments:
+            eas = "" if s.airspeed_eas_m_s is None else f"{s.airspeed_eas_m_s:.1f}"
+            thr = "" if s.max_throttle is None else f"{s.max_throttle:.3f}"
+            label = f"{s.dead_engine} fails" if s.type == "engine_failure" else s.type
+            typer.echo(
+                f"  {label:<16}{s.time_s / 60:9.2f}{s.distance_m / 1000:9.2f}"
+                f"{s.end_altitude_m:8.0f}{eas:>8}{sum(s.charge_ah):10.3f}"
+                f"{sum(s.energy_wh):10.1f}{s.min_voltage_v:8.2f}{thr:>8}"
+            )
+        if result.solved is not None:
+            typer.echo(f"  solved: longest {result.solved['segment']} "
+                       f"{result.solved['time_min']:.2f} min that lands on the reserve")
+        verdict = "PASS" if result.passed else "FAIL"
+        typer.echo(f"  {result.reason}  {verdict}")
+        if csv is not None:
+            typer.echo(f"  wrote {csv}")
+    raise typer.Exit(0 if result.passed else 1)
+
+
 # ---- endurance (issue 3) -------------------------------------------------------------------
 @app.command()
 def endurance(

@@ -223,7 +223,39 @@ def _endurance(case: Case) -> Verdict:
     )
 
 
-CHECKS = {"takeoff": _takeoff, "envelope": _trim, "oei": _oei, "endurance": _endurance}
+def _mission(case: Case) -> Verdict:
+    from tuflexperf.analysis.mission import solve_mission
+    from tuflexperf.io.mission import load_mission
+
+    requirement = case.requirements.mission
+    mission = load_mission(mission_path(case))
+    limit = requirement.min_landing_charge_fraction
+    try:
+        result = solve_mission(case, mission, limit)
+    except NotAttainable as exc:
+        return Verdict("mission_landing_charge", None, limit, "fraction", "min", str(exc))
+    value = result.landing_charge_fraction if result.attainable else None
+    return Verdict(
+        "mission_landing_charge", value, limit, "fraction", "min",
+        f"{mission.name}: {result.reason}", {"warnings": list(result.warnings)},
+    )
+
+
+def mission_path(case: Case) -> Any:
+    """The case's mission file, resolved relative to the case file (SPEC 4)."""
+    from pathlib import Path
+
+    from tuflexperf.errors import InputError
+
+    target = (Path(case.path).parent / case.requirements.mission.file).resolve()
+    if not target.is_file():
+        raise InputError(f"{case.path}: requirements.mission.file: file not found: "
+                         f"{case.requirements.mission.file}")
+    return target
+
+
+CHECKS = {"takeoff": _takeoff, "envelope": _trim, "oei": _oei, "endurance": _endurance,
+          "mission": _mission}
 
 
 def check_case(case: Case) -> list[Verdict]:

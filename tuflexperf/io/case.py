@@ -194,11 +194,19 @@ class EnduranceRequirement(StrictModel):
     min_flight_time_min: Positive
 
 
+class MissionRequirement(StrictModel):
+    """A mission file (path relative to the case) and the charge to land with (SPEC 4)."""
+
+    file: Annotated[str, Field(min_length=1)]
+    min_landing_charge_fraction: Annotated[float, Field(ge=0, lt=1)] = 0.2
+
+
 class Requirements(StrictModel):
     takeoff: TakeoffRequirement | None = None
     envelope: EnvelopeRequirement | None = None
     oei: OeiRequirement | None = None
     endurance: EnduranceRequirement | None = None
+    mission: MissionRequirement | None = None
 
 
 class DistributionSchema(StrictModel):
