@@ -18,6 +18,7 @@ from tuflexperf.cli import app
 from tuflexperf.export import FILES
 from tuflexperf.export.cbuild import CThrustModel, compile_shared, find_compiler
 from tuflexperf.io.case import load_propulsion
+from tuflexperf.io.files import MARKER
 from tuflexperf.models.thrust import total_thrust_n
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -34,7 +35,7 @@ def test_export_all_formats(made_up_case: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
     result = _export("--case", str(made_up_case), "--out", str(out))
     assert result.exit_code == 0, result.output
-    assert sorted(p.name for p in out.iterdir()) == ALL_FILES
+    assert sorted(p.name for p in out.iterdir() if p.name != MARKER) == ALL_FILES
     for name in ALL_FILES:
         assert str(out / name) in result.output
 
@@ -46,7 +47,7 @@ def test_export_json_listing_and_model_file(made_up_case: Path, tmp_path: Path) 
     listing = json.loads(result.stdout)
     assert listing["files"] == [str(out / "tfp_thrust.json")]
     assert listing["formats"] == ["json"]
-    assert [p.name for p in out.iterdir()] == ["tfp_thrust.json"]
+    assert [p.name for p in out.iterdir() if p.name != MARKER] == ["tfp_thrust.json"]
     doc = json.loads((out / "tfp_thrust.json").read_text())
     propulsion_file = made_up_case.parent / "propulsion.yaml"
     prop = load_propulsion(propulsion_file)
@@ -131,18 +132,25 @@ def test_out_is_a_file_exit_2(made_up_case: Path, tmp_path: Path) -> None:
     assert target.read_text() == "keep"
 
 
-def test_existing_out_dir_keeps_other_files(made_up_case: Path, tmp_path: Path) -> None:
+def test_foreign_folder_is_refused_and_an_earlier_export_is_replaced(
+    made_up_case: Path, tmp_path: Path
+) -> None:
+    """SPEC 5, "Nothing is lost": only a folder an earlier export wrote may be replaced."""
     out = tmp_path / "existing"
     out.mkdir()
     (out / "notes.txt").write_text("mine")
     (out / "tfp_thrust.json").write_text("old")
     result = _export("--case", str(made_up_case), "--format", "json,c", "--out", str(out))
-    assert result.exit_code == 0, result.output
+    assert result.exit_code == 2
+    assert "--out" in result.stderr and "did not write" in result.stderr
     assert (out / "notes.txt").read_text() == "mine"
-    assert json.loads((out / "tfp_thrust.json").read_text())["model"] == "poly22"
-    assert sorted(p.name for p in out.iterdir()) == [
-        "notes.txt", "tfp_thrust.c", "tfp_thrust.h", "tfp_thrust.json"
-    ]
+    assert (out / "tfp_thrust.json").read_text() == "old"
+    fresh = tmp_path / "fresh"
+    assert _export("--case", str(made_up_case), "--format", "json,c", "--out",
+                   str(fresh)).exit_code == 0
+    again = _export("--case", str(made_up_case), "--format", "json", "--out", str(fresh))
+    assert again.exit_code == 0, again.output
+    assert sorted(p.name for p in fresh.iterdir() if p.name != MARKER) == ["tfp_thrust.json"]
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
 
 

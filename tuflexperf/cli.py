@@ -19,10 +19,28 @@ from tuflexperf.errors import InputError, NotAttainable
 
 app = typer.Typer(
     add_completion=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     help="Wind-tunnel EDF runs -> thrust model -> aircraft-performance verdicts.",
 )
+
+def _version(value: bool) -> None:
+    if value:
+        from tuflexperf import __version__
+
+        typer.echo(f"tuflexperf {__version__}")
+        raise typer.Exit(0)
+
+
+@app.callback()
+def _root(
+    version: bool = typer.Option(
+        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
+    ),
+) -> None:
+    """Wind-tunnel EDF runs -> thrust model -> aircraft-performance verdicts."""
+
 
 CaseOption = typer.Option(None, "--case", help="Requirement file (default: shipped TU-Flex case).")
 JsonOption = typer.Option(False, "--json", help="Print one JSON object on stdout.")
@@ -115,6 +133,9 @@ DaskOption = typer.Option(
 @app.command()
 def check(
     case_file: Path | None = typer.Argument(None, help="Requirement file (default: TU-Flex)."),
+    case_option: Path | None = typer.Option(
+        None, "--case", help="Requirement file (the same as the argument)."
+    ),
     as_json: bool = JsonOption,
     samples: int | None = SamplesOption,
     seed: int | None = SeedOption,
@@ -124,6 +145,10 @@ def check(
     """Verify every requirement in the case: value, limit, margin, PASS/FAIL."""
     from tuflexperf.analysis.requirements import check_case
     from tuflexperf.io.case import load_case
+
+    if case_file is not None and case_option is not None and case_file != case_option:
+        fail_input("--case: give the case once, as the argument or as --case, not both")
+    case_file = case_file if case_file is not None else case_option
 
     case = load_case(case_file)
     if workers is not None and workers < 1:
@@ -419,6 +444,7 @@ def oei(
     from tuflexperf.analysis.oei import solve_oei
     from tuflexperf.io.case import load_case
 
+    dead_engine = dead_engine.lower() if dead_engine is not None else None
     if dead_engine is not None and dead_engine not in ("windmilling", "zero"):
         fail_input(f"--dead-engine: must be windmilling or zero, got {dead_engine!r}")
     case = load_case(case_file)
@@ -583,7 +609,9 @@ def endurance(
     if throttle is None and not best:
         fail_input("--throttle: required (a fraction in [0, 1]), or use --best")
     if throttle is not None and not (math.isfinite(throttle) and 0.0 <= throttle <= 1.0):
-        fail_input(f"--throttle: must be a fraction in [0, 1], got {throttle!r}")
+        hint = (f" (did you mean {throttle / 100:g}? throttle is a fraction, not percent)"
+                if math.isfinite(throttle) and 1.0 < throttle <= 100.0 else "")
+        fail_input(f"--throttle: must be a fraction in [0, 1], got {throttle:g}{hint}")
     case = load_case(case_file)
     best_result = solve_best(case) if best else None
     result = (
@@ -836,6 +864,9 @@ def _guarded(callback: Any) -> Any:
             sys.stderr.write(f"tuflexperf: error: {exc}\n")
             raise typer.Exit(2) from None
         except NotAttainable as exc:
+            if kwargs.get("as_json"):  # SPEC 5: one JSON object on exit 1 as well
+                emit_json({"command": callback.__name__.removesuffix("_command"),
+                           "passed": False, "attainable": False, "reason": str(exc)})
             sys.stderr.write(f"tuflexperf: not attainable: {exc}\n")
             raise typer.Exit(1) from None
 
@@ -850,6 +881,9 @@ def main(argv: list[str] | None = None) -> None:
     """Console entry point: usage errors become one line on stderr and exit 2."""
     from typer.exceptions import Abort, TyperException
 
+    from tuflexperf.io.files import install_sigterm_handler
+
+    install_sigterm_handler()  # SIGTERM unwinds like Ctrl-C: no staging left behind
     try:
         code = app(args=argv, standalone_mode=False, prog_name="tuflexperf")
     except Abort:

@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import json
 import os
-import secrets
-import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,6 +22,7 @@ from tuflexperf.export.model import (
     thrust_function,
     thrust_step_function,
 )
+from tuflexperf.io.files import check_output_dir, staged_directory
 
 FORMATS: tuple[str, ...] = ("c", "casadi", "json", "jsbsim", "fmu")
 
@@ -123,8 +122,8 @@ def export_model(
     """Export the case's propulsion model in ``formats`` into ``out_dir``.
 
     Validates every input first (case, formats, ``--out``), builds all files in a temporary
-    sibling directory, then renames it into place (or, if ``out_dir`` exists, replaces the
-    exported files in it one by one; other files there are left alone). Raises
+    sibling directory, then moves it into place whole (SPEC 5, "Nothing is lost": an existing
+    ``out_dir`` is replaced only if an earlier ``export`` wrote it). Raises
     :class:`InputError` on bad input, leaving nothing behind.
     """
     out_dir = Path(out_dir)
@@ -132,30 +131,13 @@ def export_model(
     if unknown or not formats:
         raise InputError(f"--format: unknown format {(unknown or [''])[0]!r}")
     _check_out(out_dir)
+    check_output_dir(out_dir, "export")
     names = [name for fmt in formats for name in FILES[fmt]]
-    for name in names:
-        if (out_dir / name).is_dir():
-            raise InputError(f"--out: {out_dir / name} is a directory; cannot write the file")
     model = load_export_model(case_path)
 
-    staging = out_dir.parent / f".{out_dir.name}.tmp-{secrets.token_hex(6)}"
-    try:
-        out_dir.parent.mkdir(parents=True, exist_ok=True)
-        staging.mkdir()
-    except OSError as exc:
-        raise InputError(f"--out: cannot create {out_dir}: {exc.strerror}") from None
-    try:
+    with staged_directory(out_dir, "export") as staging:
         for fmt in formats:
             _write_format(model, fmt, staging)
-        if out_dir.is_dir():
-            for name in names:
-                os.replace(staging / name, out_dir / name)
-            staging.rmdir()
-        else:
-            os.replace(staging, out_dir)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
     return ExportResult(
         out_dir=out_dir,
         formats=formats,

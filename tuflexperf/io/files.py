@@ -1,9 +1,29 @@
-"""File fingerprints for provenance (fit, report and export name their inputs by them)."""
+"""Every file the tool writes goes through here: one atomic writer, one output guard.
+
+SPEC 5, "Nothing is lost": no command deletes, replaces or truncates a file it did not write
+itself. An output that is, or would overwrite, one of the command's inputs is bad input; a
+non-empty folder may be replaced only if it carries the marker that the same command wrote
+there; output is staged beside the target and moved into place whole; files get the user's
+umask; an interrupt (SIGINT, SIGTERM) leaves no staging behind and the earlier output intact.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import hashlib
+import json
+import os
+import secrets
+import shutil
+import signal
+import tempfile
+from collections.abc import Iterable, Iterator
 from pathlib import Path
+
+from tuflexperf.errors import InputError
+
+MARKER = ".tuflexperf-output.json"  # written into every folder a command writes whole
 
 
 def sha256_of(path: Path | str) -> str:
@@ -13,3 +33,186 @@ def sha256_of(path: Path | str) -> str:
         for chunk in iter(lambda: handle.read(1 << 20), b""):
             digest.update(chunk)
     return digest.hexdigest()
+
+
+def user_umask() -> int:
+    """The process's umask (read without changing it for longer than a call)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _os_error(path: Path, exc: OSError) -> InputError:
+    """A write failure as one line naming the file (disk full included)."""
+    why = "disk full" if exc.errno in (errno.ENOSPC, errno.EDQUOT) else exc.strerror or str(exc)
+    return InputError(f"{path}: cannot write: {why}")
+
+
+def write_files_atomically(files: dict[Path, bytes | str]) -> None:
+    """Write several files all-or-nothing: every temporary file first, then the renames.
+
+    Temporary files sit beside their targets (same filesystem, so ``os.replace`` is atomic)
+    and get the user's umask (``mkstemp`` alone makes them 0600). On any failure, including
+    an interrupt, no temporary file is left and no target is touched.
+    """
+    staged: list[tuple[str, Path]] = []
+    mode = 0o666 & ~user_umask()
+    current: Path | None = None
+    try:
+        for path, data in files.items():
+            current = Path(path)
+            current.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(prefix=f".{current.name}.", suffix=".tmp",
+                                       dir=current.parent)
+            staged.append((tmp, current))
+            with os.fdopen(fd, "wb") as handle:
+                handle.write(data.encode("utf-8") if isinstance(data, str) else data)
+                handle.flush()
+                os.fsync(handle.fileno())
+            os.chmod(tmp, mode)
+        for tmp, target in staged:
+            current = target
+            os.replace(tmp, target)
+    except OSError as exc:
+        for tmp, _ in staged:
+            Path(tmp).unlink(missing_ok=True)
+        raise _os_error(current or Path("output"), exc) from None
+    except BaseException:
+        for tmp, _ in staged:
+            Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def atomic_write_bytes(path: Path | str, data: bytes) -> None:
+    """Write ``data`` to ``path`` via a temporary file and a rename: never half-written."""
+    write_files_atomically({Path(path): data})
+
+
+def atomic_write_text(path: Path | str, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` via a temporary file and a rename."""
+    write_files_atomically({Path(path): text})
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path]) -> None:
+    """Refuse an output that is, or would overwrite, one of the command's inputs (exit 2).
+
+    ``outputs`` maps the flag (``--out``) to its path. Also refuses an output that is an
+    existing directory where a file is expected. Two outputs may not be the same path.
+    """
+    inputs = [Path(p) for p in inputs]
+    seen: dict[Path, str] = {}
+    for flag, out in outputs.items():
+        out = Path(out)
+        resolved = out.resolve()
+        if resolved in seen:
+            raise InputError(f"{flag}: {out} is also {seen[resolved]}; give different files")
+        seen[resolved] = flag
+        for source in inputs:
+            if resolved == source.resolve() or _same_file(out, source):
+                raise InputError(
+                    f"{flag}: {out} is an input of this command ({source}); refusing to "
+                    "overwrite it, choose another path"
+                )
+
+
+def check_output_dir(out: Path, command: str) -> None:
+    """``out`` may be new, empty, or an earlier output of ``command`` (it carries the marker).
+
+    Anything else — a file, a folder of the user's — is bad input: the command would
+    replace what it did not write.
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out: {out} exists and is not a directory")
+    if out.is_dir():
+        try:
+            entries = [p.name for p in out.iterdir()]
+        except OSError as exc:
+            raise InputError(f"--out: cannot read {out}: {exc.strerror}") from None
+        if entries and read_marker(out) != command:
+            raise InputError(
+                f"--out: {out} is a non-empty folder that an earlier `tuflexperf {command}` did "
+                "not write; refusing to replace it, choose a new or empty folder"
+            )
+
+
+def read_marker(folder: Path) -> str | None:
+    """The command that wrote ``folder`` (its marker), or ``None``."""
+    try:
+        data = json.loads((Path(folder) / MARKER).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data.get("command") if isinstance(data, dict) else None
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM, delivered as an interrupt so every cleanup path runs (and exit is 130)."""
+
+
+def _raise_terminated(signum: int, frame: object) -> None:
+    raise _Terminated()
+
+
+def install_sigterm_handler() -> None:
+    """Make SIGTERM unwind like Ctrl-C (staging removed, earlier output intact)."""
+    with contextlib.suppress(ValueError):  # not the main thread: leave the default
+        signal.signal(signal.SIGTERM, _raise_terminated)
+
+
+@contextlib.contextmanager
+def staged_directory(out: Path, command: str) -> Iterator[Path]:
+    """Stage a folder beside ``out``, yield it, then move it into place whole.
+
+    The staging folder gets the user's umask and, on success, the marker naming
+    ``command`` and the files written. An earlier output at ``out`` (checked by
+    :func:`check_output_dir`) is swapped out and removed only after the new one is in
+    place. On any failure or interrupt the staging folder is removed and ``out`` is
+    untouched.
+    """
+    out = Path(out).absolute()
+    check_output_dir(out, command)
+    created: list[Path] = []
+    for folder in [out.parent, *out.parent.parents][::-1]:
+        if not folder.exists():
+            try:
+                folder.mkdir()
+            except OSError as exc:
+                raise InputError(f"--out: cannot create {folder}: {exc.strerror}") from None
+            created.append(folder)
+    staging = out.parent / f".{out.name}.tmp-{secrets.token_hex(6)}"
+    try:
+        staging.mkdir(mode=0o777 & ~user_umask())
+    except OSError as exc:
+        for folder in reversed(created):
+            folder.rmdir()
+        raise InputError(f"--out: cannot write in {out.parent}: {exc.strerror}") from None
+    try:
+        yield staging
+        names = sorted(p.name for p in staging.iterdir())
+        marker = json.dumps({"command": command, "files": names}, indent=1)
+        try:
+            (staging / MARKER).write_text(marker + "\n", encoding="utf-8")
+        except OSError as exc:
+            raise _os_error(staging / MARKER, exc) from None
+        if out.exists():
+            old = out.parent / f".{out.name}.old-{secrets.token_hex(6)}"
+            os.replace(out, old)
+            os.replace(staging, out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(staging, out)
+    except BaseException as exc:
+        shutil.rmtree(staging, ignore_errors=True)
+        for folder in reversed(created):
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+        if isinstance(exc, OSError):
+            raise _os_error(out, exc) from None
+        raise

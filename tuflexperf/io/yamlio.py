@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
+import difflib
+import re
+import typing
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -37,6 +38,13 @@ def _construct_unique_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode) -
     return mapping
 
 
+# YAML 1.1 reads "2.21732e1" (no sign in the exponent) and "1e3" as strings; every number
+# the user writes in exponent notation is meant as a float
+_UniqueKeyLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
 _UniqueKeyLoader.add_constructor(
     yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_unique_mapping
 )
@@ -72,20 +80,56 @@ def format_location(loc: tuple[Any, ...]) -> str:
     return text or "(top level)"
 
 
-def validation_message(path: Path | str, error: ValidationError) -> str:
-    """One line naming the file, the first offending key and what is wrong with it."""
-    first = error.errors()[0]
+def _submodel(annotation: Any) -> type[BaseModel] | None:
+    """The pydantic model inside an annotation (``X | None``, ``list[X]``, ``Annotated``)."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in typing.get_args(annotation):
+        found = _submodel(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _valid_keys(model: type[BaseModel] | None, loc: tuple[Any, ...]) -> list[str]:
+    """The keys the schema accepts at ``loc`` (the location of the offending key)."""
+    for part in loc[:-1]:
+        if model is None:
+            return []
+        if isinstance(part, int):
+            continue
+        field = model.model_fields.get(str(part))
+        model = _submodel(field.annotation) if field is not None else None
+    return list(model.model_fields) if model is not None else []
+
+
+def validation_message(
+    path: Path | str, error: ValidationError, model: type[BaseModel] | None = None
+) -> str:
+    """One line naming the file, the first offending key and what is wrong with it.
+
+    An unknown key (a misspelt one) is reported before anything else, with the closest
+    valid key at that place: a misspelt requirement must never pass silently.
+    """
+    errors = sorted(error.errors(), key=lambda e: e["type"] != "extra_forbidden")
+    first = errors[0]
     loc = format_location(tuple(first["loc"]))
     kind = first["type"]
     if kind == "extra_forbidden":
-        problem = "unknown key (misspelt?)"
+        key = str(first["loc"][-1])
+        close = difflib.get_close_matches(key, _valid_keys(model, tuple(first["loc"])), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        problem = f"unknown key {key!r}{hint}"
     elif kind == "missing":
         problem = "required key is missing"
     else:
-        problem = first["msg"]
-        if "input" in first and not isinstance(first["input"], (dict, list)):
-            problem += f" (got {first['input']!r})"
-    more = len(error.errors()) - 1
+        problem = str(first["msg"]).splitlines()[0]
+        value = first.get("input")
+        if not isinstance(value, (dict, list)):
+            shown = value.item() if hasattr(value, "item") else value
+            text = repr(shown)
+            problem += f" (got {text[:60] + '...' if len(text) > 60 else text})"
+    more = len(errors) - 1
     tail = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
     return f"{path}: {loc}: {problem}{tail}"
 
@@ -98,26 +142,8 @@ def load_model(path: Path, model: type[M]) -> M:
     try:
         return model.model_validate(data)
     except ValidationError as exc:
-        raise InputError(validation_message(path, exc)) from None
+        raise InputError(validation_message(path, exc, model)) from None
 
 
-def atomic_write_text(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file and a rename: never half-written."""
-    atomic_write_bytes(path, text.encode("utf-8"))
-
-
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` via a temporary file and a rename: never half-written."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            handle.write(data)
-        umask = os.umask(0)  # mkstemp makes 0600; the result gets the user's umask
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+# one writer for the whole tool (io/files.py); these names stay importable from here
+from tuflexperf.io.files import atomic_write_bytes, atomic_write_text  # noqa: E402, F401

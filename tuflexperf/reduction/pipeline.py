@@ -26,8 +26,6 @@ schema ``check`` uses, and only then are files written, atomically.
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -942,25 +940,30 @@ def _plain(value: Any) -> Any:
 
 # --- writing --------------------------------------------------------------------------------
 def write_files(files: dict[Path, str]) -> None:
-    """Write several files all-or-nothing: every temp file first, then the renames.
+    """Write several files all-or-nothing with the user's umask (the tool's one writer)."""
+    from tuflexperf.io.files import write_files_atomically
 
-    A failure before the renames leaves nothing behind; the renames themselves are
-    atomic per file.
-    """
-    staged: list[tuple[str, Path]] = []
-    try:
-        for path, text in files.items():
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-            staged.append((tmp, path))
-            with os.fdopen(fd, "w", encoding="utf-8") as handle:
-                handle.write(text)
-        for tmp, path in staged:
-            os.replace(tmp, path)
-    except OSError as exc:
-        for tmp, _ in staged:
-            Path(tmp).unlink(missing_ok=True)
-        raise InputError(f"{exc.filename or 'output'}: cannot write: {exc.strerror}") from None
+    write_files_atomically(dict(files))
+
+
+def _fit_inputs(input_path: Path) -> list[Path]:
+    """Every file ``fit`` reads: the input and, for a campaign, each run file it names."""
+    inputs = [input_path]
+    if is_thrust_table(input_path):
+        return inputs
+    from tuflexperf.io.yamlio import read_yaml
+
+    data = read_yaml(input_path)
+    if isinstance(data, dict) and {"aircraft", "propulsion"} <= set(data):
+        raise InputError(
+            f"{input_path}: this is a case (requirement) file, not a campaign manifest or "
+            "thrust table; give fit a campaign.yaml or a thrust-table .csv"
+        )
+    if isinstance(data, dict) and isinstance(data.get("runs"), list):
+        for entry in data["runs"]:
+            if isinstance(entry, dict) and isinstance(entry.get("file"), str):
+                inputs.append(input_path.parent / entry["file"])
+    return inputs
 
 
 def _check_output(path: Path, flag: str) -> None:
@@ -999,7 +1002,11 @@ def run_fit(
         raise InputError(f"--delay-s: must be a finite number >= 0, got {delay_s}")
     out = Path(out)
     _check_output(out, "--out")
+    from tuflexperf.io.files import guard_outputs
     from tuflexperf.io.proptables import is_propeller_manifest
+
+    inputs = _fit_inputs(input_path)
+    guard_outputs({"--out": out}, inputs)
 
     if is_thrust_table(input_path) or is_propeller_manifest(input_path):
         if glauert:
@@ -1015,6 +1022,7 @@ def run_fit(
         _check_output(table, "--table")
         if table.resolve() == out.resolve():
             raise InputError("--table: must differ from --out")
+        guard_outputs({"--out": out, "--table": table}, inputs)
         if result.table_text is not None:
             files[table] = result.table_text
     write_files(files)

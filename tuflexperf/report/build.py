@@ -13,9 +13,7 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -85,45 +83,6 @@ def _safe_name(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_") or "engine"
 
 
-def _check_out(out: Path) -> None:
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out: {out} exists and is not a directory")
-    if out.is_dir() and any(out.iterdir()) and not (out / PDF_NAME).is_file():
-        raise InputError(
-            f"--out: {out} is a non-empty directory without a previous report ({PDF_NAME}); "
-            "refusing to replace it, choose a new directory"
-        )
-
-
-def _make_parents(parent: Path) -> list[Path]:
-    """Create missing parent directories; return those created (removed again on failure)."""
-    created = []
-    for folder in [parent, *parent.parents][::-1]:
-        if not folder.exists():
-            try:
-                folder.mkdir()
-            except OSError as exc:
-                raise InputError(f"--out: cannot create {folder}: {exc.strerror}") from None
-            created.append(folder)
-    return created
-
-
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-def _move_into_place(staging: Path, out: Path) -> None:
-    if out.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
-        os.replace(out, old / "report")
-        os.replace(staging, out)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.replace(staging, out)
-
-
 def build_report(
     case_file: Path | str | None,
     out: Path | str,
@@ -150,6 +109,7 @@ def build_report(
     ReportResult
     """
     from tuflexperf.io.case import load_case
+    from tuflexperf.io.files import staged_directory
 
     started = time.perf_counter()
     out = Path(out).absolute()
@@ -157,26 +117,8 @@ def build_report(
     campaign_path = Path(campaign) if campaign is not None else None
     if campaign_path is not None and not campaign_path.is_file():
         raise InputError(f"--campaign: file not found: {campaign_path}")
-    _check_out(out)
-    created = _make_parents(out.parent)
-    try:
-        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
-        staging.chmod(0o777 & ~_umask())  # mkdtemp makes it private; the report is not
-    except OSError as exc:
-        for folder in reversed(created):
-            folder.rmdir()
-        raise InputError(f"--out: cannot write in {out.parent}: {exc.strerror}") from None
-    try:
+    with staged_directory(out, "report") as staging:
         result = _render(case, staging, campaign_path, StepCounter(14, stream, progress))
-        _move_into_place(staging, out)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        for folder in reversed(created):
-            try:
-                folder.rmdir()
-            except OSError:
-                pass
-        raise
     files = [out / p.name for p in result.files]
     return ReportResult(
         out_dir=out,
