@@ -156,3 +156,65 @@ def test_fit_writes_with_the_users_umask(workdir: Path) -> None:
     mask = os.umask(0o022)
     os.umask(mask)
     assert (workdir / "p.yaml").stat().st_mode & 0o777 == 0o666 & ~mask
+
+
+def test_yaml_anchor_bomb_in_provenance_costs_nothing(workdir: Path) -> None:
+    """A billion-laughs `source:` block must not expand into memory through cache keys."""
+    bomb = ["source:", '  a0: &a0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    for level in range(1, 9):
+        refs = ", ".join([f"*a{level - 1}"] * 8)
+        bomb.append(f"  a{level}: &a{level} [{refs}]")
+    path = workdir / "data/tuflex/propulsion.yaml"
+    path.write_text(path.read_text() + "\n".join(bomb) + "\n")
+    import resource
+
+    def limit() -> None:  # 1.5 GiB: the expanded tree (8^9 strings) would need far more
+        resource.setrlimit(resource.RLIMIT_AS, (1536 << 20, 1536 << 20))
+
+    result = subprocess.run(
+        [sys.executable, "-m", "tuflexperf", "check", "--case", "requirements/tuflex.yaml"],
+        cwd=workdir, capture_output=True, text=True, timeout=120, preexec_fn=limit,
+    )
+    assert "Traceback" not in result.stderr
+    assert result.returncode in (0, 1), result.stderr
+
+
+MORE = [
+    Case("fifo as case", ("check", "fifo.yaml"), 2, "not a regular file",
+         lambda w: os.mkfifo(w / "fifo.yaml")),
+    Case("/dev/zero as case", ("check", "/dev/zero"), 2, "/dev/zero"),
+    Case("symlink loop", ("check", "loop1"), 2, "symbolic link loop",
+         lambda w: ((w / "loop1").symlink_to("loop2"), (w / "loop2").symlink_to("loop1"))),
+    Case("300-character name", ("check", "a" * 300 + ".yaml"), 2, "aaaa"),
+    Case("list as mapping key", ("check", "lk.yaml"), 2, "lk.yaml",
+         lambda w: (w / "lk.yaml").write_text("name: x\n? [a, b]\n: 1\n")),
+    Case("percent on a fraction file", ("check", "--case", "requirements/tuflex.yaml"), 2,
+         "physically absurd",
+         lambda w: _edit(w / "data/tuflex/propulsion.yaml", "\nmodel: poly22",
+                         "\nthrottle_unit: percent\nmodel: poly22")),
+    Case("capacity the runs contradict", ("check", "--case", "requirements/tuflex.yaml"), 2,
+         "capacity_ah", lambda w: _edit(w / "data/tuflex/battery.yaml", "capacity_ah: 5.0",
+                                        "capacity_ah: 0.001")),
+    Case("absurd envelope", ("trim", "--case", "requirements/tuflex.yaml"), 2,
+         "max_airspeed_m_s", lambda w: _edit(w / "requirements/tuflex.yaml",
+                                             "max_airspeed_m_s: 45", "max_airspeed_m_s: 1e7")),
+    Case("--set a misspelt key", ("check", "--set", "aircraft.mas_kg=30"), 2,
+         "did you mean aircraft.mass_kg"),
+    Case("--set out of range", ("trim", "--set", "aircraft.mass_kg=-3"), 2, "aircraft.mass_kg"),
+    Case("--set tightens a limit", ("check", "--case", "requirements/tuflex.yaml", "--set",
+                                    "requirements.takeoff.max_ground_roll_m=50"), 1, "FAIL"),
+    Case("table to a full disk", ("trim", "--table"), 2, "disk full", None),
+]
+
+
+@pytest.mark.parametrize("case", MORE, ids=[c.name for c in MORE])
+def test_more_hostile_cases(workdir: Path, case: Case) -> None:
+    if case.name == "table to a full disk":
+        with open("/dev/full", "w") as full:
+            result = subprocess.run([sys.executable, "-m", "tuflexperf", *case.args],
+                                    cwd=workdir, stdout=full, stderr=subprocess.PIPE, text=True,
+                                    timeout=120)
+        assert result.returncode == 2 and case.names in result.stderr
+        assert len(result.stderr.strip().splitlines()) == 1
+        return
+    test_hostile_case(workdir, case)

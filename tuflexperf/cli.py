@@ -44,6 +44,39 @@ def _root(
 
 CaseOption = typer.Option(None, "--case", help="Requirement file (default: shipped TU-Flex case).")
 JsonOption = typer.Option(False, "--json", help="Print one JSON object on stdout.")
+SetOption = typer.Option(
+    None, "--set", metavar="KEY=VALUE",
+    help="Change one numeric key of the case for this run (repeatable), e.g. "
+    "aircraft.mass_kg=25 or atmosphere.altitude_m=1500; validated like the files.",
+)
+
+
+def load_case_with(case_file: Path | None, sets: list[str] | None) -> Any:
+    """The case, with every ``--set KEY=VALUE`` applied and validated by the schemas."""
+    from tuflexperf.io.case import load_case
+
+    case = load_case(case_file)
+    if not sets:
+        return case
+    import yaml
+
+    from tuflexperf.io.dotted import with_values
+
+    values: dict[str, float] = {}
+    for item in sets:
+        key, sep, text = item.partition("=")
+        if not sep or not key.strip():
+            fail_input(f"--set: expected KEY=VALUE, got {item!r}")
+        try:
+            value = yaml.safe_load(text)
+            value = float(text) if isinstance(value, str) else value
+        except (yaml.YAMLError, ValueError):
+            fail_input(f"--set: {key}: not a number: {text!r}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value):
+            fail_input(f"--set: {key}: not a finite number: {text!r}")
+        values[key.strip()] = float(value)
+    return with_values(case, values, "--set")
 
 
 def _json_default(value: Any) -> Any:
@@ -137,6 +170,7 @@ def check(
         None, "--case", help="Requirement file (the same as the argument)."
     ),
     as_json: bool = JsonOption,
+    sets: list[str] | None = SetOption,
     samples: int | None = SamplesOption,
     seed: int | None = SeedOption,
     workers: int | None = WorkersOption,
@@ -144,13 +178,12 @@ def check(
 ) -> None:
     """Verify every requirement in the case: value, limit, margin, PASS/FAIL."""
     from tuflexperf.analysis.requirements import check_case
-    from tuflexperf.io.case import load_case
 
     if case_file is not None and case_option is not None and case_file != case_option:
         fail_input("--case: give the case once, as the argument or as --case, not both")
     case_file = case_file if case_file is not None else case_option
 
-    case = load_case(case_file)
+    case = load_case_with(case_file, sets)
     if workers is not None and workers < 1:
         fail_input(f"--workers: must be at least 1, got {workers}")
     if seed is not None and seed < 0:
@@ -232,12 +265,12 @@ def _print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
 def margins(
     case_file: Path | None = CaseOption,
     as_json: bool = JsonOption,
+    sets: list[str] | None = SetOption,
 ) -> None:
     """Per requirement and parameter: the value where it just holds, and d(value)/d(parameter)."""
     from tuflexperf.analysis.margins import solve_margins
-    from tuflexperf.io.case import load_case
 
-    case = load_case(case_file)
+    case = load_case_with(case_file, sets)
     rows = solve_margins(case)
     if as_json:
         emit_json({"case": case.name, "case_file": str(case.path),
@@ -272,6 +305,7 @@ def sweep(
     vary: list[str] = typer.Option(..., "--vary", help="KEY=START:STOP:N (repeatable)."),
     case_file: Path | None = CaseOption,
     as_json: bool = JsonOption,
+    sets: list[str] | None = SetOption,
     csv_out: Path | None = typer.Option(None, "--csv", help="Write the grid as CSV here."),
     plot: Path | None = typer.Option(None, "--plot", help="Write a carpet plot (PNG) here."),
     workers: int | None = WorkersOption,
@@ -279,10 +313,9 @@ def sweep(
 ) -> None:
     """Every requirement over a grid of parameter values."""
     from tuflexperf.analysis.sweep import parse_vary, run_sweep
-    from tuflexperf.io.case import load_case
     from tuflexperf.io.yamlio import atomic_write_bytes, atomic_write_text
 
-    case = load_case(case_file)
+    case = load_case_with(case_file, sets)
     if workers is not None and workers < 1:
         fail_input(f"--workers: must be at least 1, got {workers}")
     inputs = {p.resolve() for p in (case.path, case.aircraft_path, case.propulsion_path,
@@ -328,13 +361,16 @@ def sweep(
 
 
 @app.command()
-def takeoff(case_file: Path | None = CaseOption, as_json: bool = JsonOption) -> None:
+def takeoff(
+    case_file: Path | None = CaseOption,
+    as_json: bool = JsonOption,
+    sets: list[str] | None = SetOption,
+) -> None:
     """Take-off at full throttle: ground roll, rotation, transition arc, climb to the obstacle."""
     from tuflexperf.analysis.requirements import takeoff_verdicts
     from tuflexperf.analysis.takeoff import solve_takeoff
-    from tuflexperf.io.case import load_case
 
-    case = load_case(case_file)
+    case = load_case_with(case_file, sets)
     result = solve_takeoff(case)
     requirement = case.requirements.takeoff
     verdicts = takeoff_verdicts(requirement, result) if requirement is not None else []
@@ -395,13 +431,13 @@ def _throttle_table(
 def trim(
     case_file: Path | None = CaseOption,
     as_json: bool = JsonOption,
+    sets: list[str] | None = SetOption,
     table: bool = typer.Option(False, "--table", help="Print the throttle at every airspeed."),
 ) -> None:
     """Least throttle for level flight at each airspeed of the envelope (0.5 m/s grid)."""
     from tuflexperf.analysis.trim import solve_trim
-    from tuflexperf.io.case import load_case
 
-    case = load_case(case_file)
+    case = load_case_with(case_file, sets)
     result = solve_trim(case)
     data = result.to_dict()
     limit = case.requirements.envelope.max_trim_throttle
@@ -436,18 +472,18 @@ def trim(
 def oei(
     case_file: Path | None = CaseOption,
     as_json: bool = JsonOption,
+    sets: list[str] | None = SetOption,
     dead_engine: str | None = typer.Option(
         None, "--dead-engine", help="windmilling or zero (default: the case's oei block)."
     ),
 ) -> None:
     """Level flight with one engine inoperative; each engine dead in turn, worse case."""
     from tuflexperf.analysis.oei import solve_oei
-    from tuflexperf.io.case import load_case
 
     dead_engine = dead_engine.lower() if dead_engine is not None else None
     if dead_engine is not None and dead_engine not in ("windmilling", "zero"):
         fail_input(f"--dead-engine: must be windmilling or zero, got {dead_engine!r}")
-    case = load_case(case_file)
+    case = load_case_with(case_file, sets)
     result = solve_oei(case, dead_engine)  # type: ignore[arg-type]
     data = result.to_dict()
     requirement = case.requirements.oei
@@ -480,12 +516,15 @@ def oei(
 
 
 @app.command()
-def performance(case_file: Path | None = CaseOption, as_json: bool = JsonOption) -> None:
+def performance(
+    case_file: Path | None = CaseOption,
+    as_json: bool = JsonOption,
+    sets: list[str] | None = SetOption,
+) -> None:
     """Point performance: stall, V_md, level speeds, climb (Vx, Vy), ceilings, OEI, obstacle."""
     from tuflexperf.analysis.performance import solve_performance
-    from tuflexperf.io.case import load_case
 
-    case = load_case(case_file)
+    case = load_case_with(case_file, sets)
     result = solve_performance(case)
     data = result.to_dict()
     attainable = result.min_level_speed_m_s is not None
@@ -536,14 +575,14 @@ def mission(
     case_file: Path | None = CaseOption,
     csv: Path | None = typer.Option(None, "--csv", help="Write the time history to this CSV."),
     as_json: bool = JsonOption,
+    sets: list[str] | None = SetOption,
 ) -> None:
     """Fly a mission with the battery model; charge at landing against the reserve."""
     from tuflexperf.analysis.mission import solve_mission
     from tuflexperf.analysis.requirements import mission_path
-    from tuflexperf.io.case import load_case
     from tuflexperf.io.mission import load_mission
 
-    case = load_case(case_file)
+    case = load_case_with(case_file, sets)
     requirement = case.requirements.mission
     if mission_file is None:
         if requirement is None:
@@ -598,13 +637,13 @@ def endurance(
     ),
     case_file: Path | None = CaseOption,
     as_json: bool = JsonOption,
+    sets: list[str] | None = SetOption,
     best: bool = typer.Option(
         False, "--best", help="Also the throttle/airspeed of longest flight and of best range."
     ),
 ) -> None:
     """Level-flight airspeed, electrical power, pack and flight endurance at a throttle."""
     from tuflexperf.analysis.endurance import solve_best, solve_endurance
-    from tuflexperf.io.case import load_case
 
     if throttle is None and not best:
         fail_input("--throttle: required (a fraction in [0, 1]), or use --best")
@@ -612,7 +651,7 @@ def endurance(
         hint = (f" (did you mean {throttle / 100:g}? throttle is a fraction, not percent)"
                 if math.isfinite(throttle) and 1.0 < throttle <= 100.0 else "")
         fail_input(f"--throttle: must be a fraction in [0, 1], got {throttle:g}{hint}")
-    case = load_case(case_file)
+    case = load_case_with(case_file, sets)
     best_result = solve_best(case) if best else None
     result = (
         solve_endurance(case, throttle) if throttle is not None else best_result.endurance
@@ -862,6 +901,13 @@ def _guarded(callback: Any) -> Any:
             return callback(*args, **kwargs)
         except InputError as exc:
             sys.stderr.write(f"tuflexperf: error: {exc}\n")
+            raise typer.Exit(2) from None
+        except OSError as exc:  # a file the OS refuses (name too long, disk full, ...)
+            import errno
+
+            where = exc.filename or "stdout"
+            why = "disk full" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+            sys.stderr.write(f"tuflexperf: error: {where}: {why}\n")
             raise typer.Exit(2) from None
         except NotAttainable as exc:
             if kwargs.get("as_json"):  # SPEC 5: one JSON object on exit 1 as well

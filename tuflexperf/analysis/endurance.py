@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.analysis.attainable import least_airspeed_m_s
+from tuflexperf.analysis.cache import BoundedCache, fingerprint
 from tuflexperf.analysis.powertrain import PowerAgreement, agreement_at
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.battery import Battery, load_battery
@@ -73,9 +74,9 @@ BEST_MIN_AIRSPEED_OVER_STALL = 1.2
 _LAUNCH_STEP_S = 0.25
 # A discharge run's measured power further than this from the power model is a warning.
 RUN_POWER_TOLERANCE = 0.10
-_characterisation_cache: dict[Any, BatteryCharacterisation] = {}
-_model_cache: dict[Any, EnduranceModel] = {}
-_battery_cache: dict[Any, Battery] = {}
+_characterisation_cache: BoundedCache[BatteryCharacterisation] = BoundedCache()
+_model_cache: BoundedCache[EnduranceModel] = BoundedCache()
+_battery_cache: BoundedCache[Battery] = BoundedCache()
 
 
 # --- battery characterisation (fit + cross-validation + power), cached per file contents ---
@@ -155,14 +156,24 @@ def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisatio
     thrust of the runs' engine (the first engine when the runs name none).
     Cached on the battery file, the run files and the propulsion model.
     """
-    key = (
+    key = fingerprint(
         _file_key(battery.path),
-        tuple(_file_key(r.path) for r in battery.runs),
-        repr(case.propulsion),
+        [_file_key(r.path) for r in battery.runs],
+        battery,
+        case.propulsion,
     )
-    if key in _characterisation_cache:
-        return _characterisation_cache[key]
+    return _characterisation_cache.get(key, lambda: _characterise(battery, case))
+
+
+def _characterise(battery: Battery, case: Case) -> BatteryCharacterisation:
     runs = tuple(read_discharge_run(r.path) for r in battery.runs)
+    for run in runs:  # one pack per run: it cannot give more than it holds (issue 10)
+        drawn = float(run.charge_ah[-1])
+        if drawn > 1.05 * battery.capacity_ah:
+            raise InputError(
+                f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah, but the discharge "
+                f"run {run.path.name} drew {drawn:.2f} Ah from one pack; the runs contradict it"
+            )
     fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
     engine_name = next((r.engine for r in battery.runs if r.engine), None)
     engines = {e.name: e for e in case.propulsion.engines}
@@ -181,9 +192,7 @@ def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisatio
         static_n, battery.published_power_range_w, battery.published_static_thrust_range_n
     )
     power = fit_fan_power(runs, static_w, battery.jet_velocity_m_s)
-    result = BatteryCharacterisation(battery, runs, fit, power)
-    _characterisation_cache[key] = result
-    return result
+    return BatteryCharacterisation(battery, runs, fit, power)
 
 
 # --- launch: ground roll + climb at full throttle -------------------------------------------
@@ -727,21 +736,18 @@ def endurance_model(case: Case) -> EnduranceModel:
         raise InputError(
             f"{case.path}: battery: the case names no battery file; endurance needs one"
         )
-    battery_key = _file_key(case.battery_path)
-    battery = _battery_cache.get(battery_key)
-    if battery is None:  # parse the YAML once per file version, not per call
-        battery = _battery_cache[battery_key] = load_battery(case.battery_path)
-    key = (
-        repr(case.aircraft),
-        repr(case.propulsion),
+    path = case.battery_path
+    # parse the YAML once per file version, not per call
+    battery = _battery_cache.get(fingerprint(_file_key(path)), lambda: load_battery(path))
+    key = fingerprint(
+        case.aircraft,
+        case.propulsion,
         case.density_kg_m3,
         least_airspeed_m_s(case),  # the stall margin bounds level flight
-        repr(battery),
-        tuple(_file_key(r.path) for r in battery.runs),
+        battery,
+        [_file_key(r.path) for r in battery.runs],
     )
-    if key not in _model_cache:
-        _model_cache[key] = EnduranceModel(case, battery)
-    return _model_cache[key]
+    return _model_cache.get(key, lambda: EnduranceModel(case, battery))
 
 
 def solve_endurance(case: Case, throttle: float) -> EnduranceResult:

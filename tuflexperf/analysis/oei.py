@@ -20,6 +20,7 @@ from tuflexperf.analysis.attainable import (
     stall_bounded,
     stall_margin_of,
 )
+from tuflexperf.analysis.cache import BoundedCache, fingerprint
 from tuflexperf.analysis.level_flight import (
     LeastThrottleSolver,
     ThrottleSweep,
@@ -32,21 +33,21 @@ from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.thrust import DeadEngineMode, total_thrust_n, unlapsed_density_warning
 
-_cache: dict[Any, LeastThrottleSolver] = {}
+_cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
 
 
 def oei_solver(case: Case, dead_engine: int, mode: DeadEngineMode) -> LeastThrottleSolver:
     """Least-throttle solver with engine ``dead_engine`` out, built once per case."""
-    key = (repr(case.aircraft), repr(case.propulsion), case.density_kg_m3, dead_engine, mode)
-    if key not in _cache:
-        aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
+    aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
 
+    def build() -> LeastThrottleSolver:
         def excess(throttle: Any, airspeed: Any) -> Any:
             thrust = total_thrust_n(propulsion, throttle, airspeed, rho, dead_engine, mode)
             return thrust - level_flight_drag_n(aircraft, airspeed, rho)
 
-        _cache[key] = least_throttle_solver(excess)
-    return _cache[key]
+        return least_throttle_solver(excess)
+
+    return _cache.get(fingerprint(aircraft, propulsion, rho, dead_engine, mode), build)
 
 
 @dataclass(frozen=True)

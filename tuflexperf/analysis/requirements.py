@@ -6,6 +6,7 @@ limits (ground roll, throttle), ``value - limit`` for lower limits (endurance).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,7 +51,10 @@ class Verdict:
 
     @property
     def passed(self) -> bool:
-        return self.margin is not None and self.margin >= -MARGIN_TOLERANCE
+        # a non-finite value (an endless endurance from a pack the runs contradict, a
+        # diverged solve) never passes (SPEC: never a false PASS)
+        return (self.margin is not None and math.isfinite(self.margin)
+                and self.margin >= -MARGIN_TOLERANCE)
 
     def to_dict(self) -> dict[str, Any]:
         return {

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.cache import BoundedCache, fingerprint
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
@@ -41,7 +42,7 @@ from tuflexperf.models.thrust import (
 
 HISTORY_POINTS = 101
 _CHECK_POINTS = 2001
-_cache: dict[Any, Any] = {}
+_cache: BoundedCache[Any] = BoundedCache()
 
 
 def net_force_n(
@@ -158,12 +159,10 @@ def build_ground_roll_integrator(
 
 
 def _integrator_for(case: Case) -> Any:
-    key = (repr(case.aircraft), repr(case.propulsion), case.density_kg_m3)
-    if key not in _cache:
-        _cache[key] = build_ground_roll_integrator(
-            case.aircraft, case.propulsion, case.density_kg_m3
-        )
-    return _cache[key]
+    return _cache.get(
+        fingerprint(case.aircraft, case.propulsion, case.density_kg_m3),
+        lambda: build_ground_roll_integrator(case.aircraft, case.propulsion, case.density_kg_m3),
+    )
 
 
 def obstacle_height_of(case: Case) -> float:

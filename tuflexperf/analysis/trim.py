@@ -19,6 +19,7 @@ from tuflexperf.analysis.attainable import (
     stall_bounded,
     stall_margin_of,
 )
+from tuflexperf.analysis.cache import BoundedCache, fingerprint
 from tuflexperf.analysis.level_flight import (
     LeastThrottleSolver,
     ThrottleSweep,
@@ -30,7 +31,7 @@ from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.thrust import total_thrust_n, unlapsed_density_warning
 
-_cache: dict[Any, LeastThrottleSolver] = {}
+_cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
 
 
 def envelope_of(case: Case) -> tuple[float, float]:
@@ -59,17 +60,17 @@ def extrapolation_note(case: Case, airspeeds_m_s: np.ndarray) -> tuple[bool, lis
 
 def trim_solver(case: Case) -> LeastThrottleSolver:
     """Least-throttle solver for level flight on all engines, built once per case."""
-    key = (repr(case.aircraft), repr(case.propulsion), case.density_kg_m3)
-    if key not in _cache:
-        aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
+    aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
 
+    def build() -> LeastThrottleSolver:
         def excess(throttle: Any, airspeed: Any) -> Any:
             return total_thrust_n(propulsion, throttle, airspeed, rho) - level_flight_drag_n(
                 aircraft, airspeed, rho
             )
 
-        _cache[key] = least_throttle_solver(excess)
-    return _cache[key]
+        return least_throttle_solver(excess)
+
+    return _cache.get(fingerprint(aircraft, propulsion, rho), build)
 
 
 @dataclass(frozen=True)

@@ -170,7 +170,7 @@ class TakeoffRequirement(StrictModel):
 
 class EnvelopeRequirement(StrictModel):
     min_airspeed_m_s: Positive
-    max_airspeed_m_s: Positive
+    max_airspeed_m_s: Annotated[float, Field(gt=0, le=340)]  # below Mach 1: poly22 at low speed
     max_trim_throttle: Fraction = 1.0
     stall_margin: Annotated[float, Field(ge=1, le=3)] = 1.0  # level flight needs V >= this x stall
 
@@ -380,6 +380,30 @@ def shipped_case_path() -> Path:
     raise InputError("the shipped TU-Flex case is missing from this installation; pass a CASE")
 
 
+# Static thrust beyond this many times the aircraft's weight per engine is no fan for this
+# aircraft: most likely coefficients read in the wrong throttle unit (fraction vs percent).
+ABSURD_THRUST_TO_WEIGHT = 10.0
+
+
+def _refuse_absurd_propulsion(case: Case) -> None:
+    """Bad input: a model whose full-throttle static thrust is not positive or absurd."""
+    from tuflexperf.models.thrust import engine_thrust_n
+
+    weight = case.aircraft.weight_n
+    for index, engine in enumerate(case.propulsion.engines):
+        static = float(engine_thrust_n(engine, 1.0, 0.0))
+        where = f"{case.propulsion_path}: engines[{index}] ({engine.name})"
+        if not static > 0:
+            raise InputError(f"{where}: full-throttle static thrust {static:.3g} N is not "
+                             "positive; check the coefficients and throttle_unit")
+        if static > ABSURD_THRUST_TO_WEIGHT * weight:
+            raise InputError(
+                f"{where}: full-throttle static thrust {static:.4g} N is {static / weight:.0f} "
+                f"x the aircraft's weight ({weight:.0f} N): physically absurd; is throttle_unit "
+                "right (fraction vs percent)?"
+            )
+
+
 def load_case(path: Path | str | None = None) -> Case:
     """Load a requirement file and the aircraft/propulsion files it names (paths relative to it)."""
     case_path = Path(path) if path is not None else shipped_case_path()
@@ -411,6 +435,7 @@ def load_case(path: Path | str | None = None) -> Case:
     )
     if not math.isfinite(case.density_kg_m3) or case.density_kg_m3 <= 0:
         raise InputError(f"{case_path}: atmosphere: gives no valid density")
+    _refuse_absurd_propulsion(case)
     if schema.uncertainty is not None:
         from tuflexperf.io.dotted import check_key  # dotted keys need the loaded case
 

@@ -35,6 +35,38 @@ def sha256_of(path: Path | str) -> str:
     return digest.hexdigest()
 
 
+MAX_YAML_BYTES = 16 << 20  # a case, aircraft, propulsion, battery or mission file
+MAX_RUN_BYTES = 2 << 30  # one run file (the paper's rig: 1 kHz for minutes, a few MB)
+
+
+def check_input_file(path: Path | str, what: str = "file", max_bytes: int = MAX_YAML_BYTES) -> Path:
+    """``path`` if it is a regular, readable file of at most ``max_bytes``; else bad input.
+
+    Refuses what would hang or exhaust memory before a byte is read: a FIFO (blocks
+    forever), a device such as /dev/zero (endless), a symlink loop, a name too long.
+    """
+    import stat
+
+    path = Path(path)
+    try:
+        info = path.stat()
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except OSError as exc:
+        why = {errno.ELOOP: "symbolic link loop", errno.ENAMETOOLONG: "file name too long"}
+        raise InputError(f"{path}: cannot read: {why.get(exc.errno, exc.strerror)}") from None
+    if stat.S_ISDIR(info.st_mode):
+        raise InputError(f"{path}: is a directory, expected a {what}")
+    if not stat.S_ISREG(info.st_mode):
+        raise InputError(f"{path}: not a regular file (a pipe or device?), expected a {what}")
+    if info.st_size > max_bytes:
+        raise InputError(
+            f"{path}: {info.st_size / 2**20:.0f} MiB is larger than a {what} can be "
+            f"({max_bytes / 2**20:.0f} MiB)"
+        )
+    return path
+
+
 def user_umask() -> int:
     """The process's umask (read without changing it for longer than a call)."""
     mask = os.umask(0o022)

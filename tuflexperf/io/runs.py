@@ -188,11 +188,9 @@ def read_run(
         Columns as float64 arrays; the sample rate in Hz is ``1 / median(diff(time_s))``
         (never assumed: the paper's rig logged 1 kHz, others do not).
     """
-    path = Path(path)
-    if not path.exists():
-        raise InputError(f"{path}: file not found")
-    if path.is_dir():
-        raise InputError(f"{path}: is a directory, expected a run file")
+    from tuflexperf.io.files import MAX_RUN_BYTES, check_input_file
+
+    path = check_input_file(path, "run file", MAX_RUN_BYTES)
     suffix = _suffix(path)
     if vendor is not None:
         raw, bad_cells = read_vendor_columns(path, vendor)

@@ -30,6 +30,11 @@ def _construct_unique_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode) -
     mapping: dict[Any, Any] = {}
     for key_node, value_node in node.value:
         key = loader.construct_object(key_node, deep=True)
+        if not isinstance(key, (str, int, float, bool)) and key is not None:
+            raise yaml.constructor.ConstructorError(
+                None, None, "a key must be a plain name, not a list or mapping",
+                key_node.start_mark,
+            )
         if key in mapping:
             raise yaml.constructor.ConstructorError(
                 None, None, f"duplicate key {key!r}", key_node.start_mark
@@ -52,6 +57,9 @@ _UniqueKeyLoader.add_constructor(
 
 def read_yaml(path: Path) -> Any:
     """Parse a YAML file; any problem becomes an :class:`InputError` naming the file."""
+    from tuflexperf.io.files import check_input_file
+
+    check_input_file(path, "YAML file")
     try:
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError:

@@ -288,7 +288,9 @@ def read_discharge_run(path: Path | str) -> DischargeRun:
     Raises :class:`InputError` naming the file and column on missing columns, non-finite
     values, a time that does not increase, or a run with no loaded segment.
     """
-    path = Path(path)
+    from tuflexperf.io.files import MAX_RUN_BYTES, check_input_file
+
+    path = check_input_file(path, "run file", MAX_RUN_BYTES)
     columns = _read_columns(path)
     missing = [c for c in RUN_COLUMNS if c not in columns]
     if missing:

@@ -1,0 +1,61 @@
+"""Bounded memo of built CasADi problems, keyed on content hashes (never ``repr`` of user data).
+
+A case's free-form provenance (``source:`` in a propulsion file) may hold anything the user
+wrote, a YAML anchor bomb included: keys here hash only the numbers the physics reads, so
+neither memory nor time depends on it. At most :data:`MAX_ENTRIES` problems per kind stay
+built (least recently used dropped first), so a long batch cannot grow without bound.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from collections import OrderedDict
+from collections.abc import Callable
+from typing import Any, Generic, TypeVar
+
+T = TypeVar("T")
+MAX_ENTRIES = 16
+
+
+def _physics(obj: Any) -> Any:
+    """The numbers of a model object (dataclass / mapping / sequence), provenance left out."""
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return {f.name: _physics(getattr(obj, f.name)) for f in dataclasses.fields(obj)
+                if f.name != "metadata"}
+    if isinstance(obj, dict):
+        return {str(k): _physics(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_physics(v) for v in obj]
+    if isinstance(obj, (str, int, float, bool)) or obj is None:
+        return obj
+    return str(type(obj).__name__)  # paths and other handles: not physics
+
+
+def fingerprint(*parts: Any) -> str:
+    """sha256 of the physics content of ``parts`` (aircraft, propulsion, numbers)."""
+    text = json.dumps([_physics(p) for p in parts], sort_keys=True, default=str)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+class BoundedCache(Generic[T]):
+    """A least-recently-used memo with at most ``size`` entries."""
+
+    def __init__(self, size: int = MAX_ENTRIES) -> None:
+        self.size = size
+        self._items: OrderedDict[str, T] = OrderedDict()
+
+    def get(self, key: str, build: Callable[[], T]) -> T:
+        """The entry for ``key``, built by ``build()`` on first use."""
+        if key in self._items:
+            self._items.move_to_end(key)
+            return self._items[key]
+        value = build()
+        self._items[key] = value
+        while len(self._items) > self.size:
+            self._items.popitem(last=False)
+        return value
+
+    def __len__(self) -> int:
+        return len(self._items)
