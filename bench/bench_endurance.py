@@ -26,7 +26,10 @@ from scipy.optimize import brentq
 from tuflexperf.analysis.endurance import endurance_model, solve_endurance
 from tuflexperf.io.case import load_case, shipped_case_path
 from tuflexperf.models.aircraft import level_flight_drag_n
-from tuflexperf.models.battery import current_at_power_a, terminal_voltage_v
+from tuflexperf.models.battery import (
+    current_at_power_a,
+    terminal_voltage_v,
+)
 from tuflexperf.models.thrust import total_thrust_n
 
 ROOT = Path(__file__).resolve().parent.parent

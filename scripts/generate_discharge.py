@@ -42,7 +42,10 @@ from scipy.optimize import brentq
 from tuflexperf.io.battery import BatterySchema
 from tuflexperf.io.case import load_propulsion
 from tuflexperf.io.yamlio import atomic_write_text, load_model
-from tuflexperf.models.battery import FanPowerModel, published_static_power_w
+from tuflexperf.models.battery import (
+    FanPowerModel,
+    published_static_power_w,
+)
 from tuflexperf.models.thrust import engine_thrust_n
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad, solve_ivp
 
+from tuflexperf.io.discharge import read_discharge_run
 from tuflexperf.models.battery import (
     DischargeParameters,
     FanPowerModel,
@@ -17,14 +18,15 @@ from tuflexperf.models.battery import (
     cutoff_charge_ah,
     cutoff_residual_v,
     discharge_time_s,
+    open_circuit_voltage_v,
+    published_static_power_w,
+    terminal_voltage_v,
+    time_to_cutoff_s,
+)
+from tuflexperf.reduction.battery import (
     fit_discharge,
     fit_discharge_ipopt,
     fit_fan_power,
-    open_circuit_voltage_v,
-    published_static_power_w,
-    read_discharge_run,
-    terminal_voltage_v,
-    time_to_cutoff_s,
 )
 
 # A plausible 12S 5 Ah pack (the values only need to be physical, not the shipped ones).

@@ -25,7 +25,11 @@ from numpy.typing import NDArray
 
 from tuflexperf.analysis import endurance as single
 from tuflexperf.models.aircraft import level_flight_drag_n
-from tuflexperf.models.battery import current_at_power_a, cutoff_residual_v, discharge_time_s
+from tuflexperf.models.battery import (
+    current_at_power_a,
+    cutoff_residual_v,
+    discharge_time_s,
+)
 from tuflexperf.models.powertrain import PowerSurfaces
 from tuflexperf.models.thrust import density_ratio
 

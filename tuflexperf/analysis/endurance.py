@@ -42,19 +42,17 @@ from tuflexperf.analysis.powertrain import PowerAgreement, agreement_at
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.battery import Battery, load_battery
 from tuflexperf.io.case import Case
+from tuflexperf.io.discharge import (
+    DischargeRun,
+    read_discharge_run,
+)
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.battery import (
-    DischargeFit,
     DischargeParameters,
-    DischargeRun,
-    PowerFit,
     current_at_power_a,
     cutoff_residual_v,
     discharge_time_s,
-    fit_discharge,
-    fit_fan_power,
     published_static_power_w,
-    read_discharge_run,
     time_to_cutoff_s,
 )
 from tuflexperf.models.powertrain import PowerSurfaces, engine_power_w, power_surfaces
@@ -64,6 +62,12 @@ from tuflexperf.models.thrust import (
     least_throttle_reaching,
     total_thrust_n,
     unlapsed_density_warning,
+)
+from tuflexperf.reduction.battery import (
+    DischargeFit,
+    PowerFit,
+    fit_discharge,
+    fit_fan_power,
 )
 
 # Level flight is searched between the stall speed and this multiple of it.

@@ -36,7 +36,11 @@ from tuflexperf.models.aircraft import (
     transition_speed_m_s,
 )
 from tuflexperf.models.atmosphere import isa_density_kg_m3
-from tuflexperf.models.battery import current_at_power_a, cutoff_residual_v, discharge_time_s
+from tuflexperf.models.battery import (
+    current_at_power_a,
+    cutoff_residual_v,
+    discharge_time_s,
+)
 from tuflexperf.models.thrust import least_throttle_reaching, total_thrust_n
 
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(64)
