@@ -189,7 +189,9 @@ def test_duplicate_key_in_battery_file(tmp_path):
     ],
 )
 def test_bad_run_file_is_exit_2_naming_the_run(tmp_path, content, problem):
-    path = _battery_copy(tmp_path, lambda d: None)
+    # without its fit block the battery file's runs are read (and refused) at check time;
+    # with it, a changed run is refused by its sha256 (test below)
+    path = _battery_copy(tmp_path, lambda d: d.pop("fit", None))
     run_file = path.parent / "endurance" / "edf1_endurance_75.csv"
     run_file.write_text(content)
     data = yaml.safe_load((ROOT / "requirements" / "tuflex.yaml").read_text())
@@ -216,3 +218,18 @@ def test_real_subprocess(case_path):
     bad = subprocess.run([str(exe), "endurance", "--throttle", "2"], capture_output=True,
                          text=True, timeout=120, check=False)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--throttle" in bad.stderr
+
+
+def test_run_changed_since_the_fit_is_exit_2(tmp_path):
+    path = _battery_copy(tmp_path, lambda d: None)
+    run_file = path.parent / "endurance" / "edf1_endurance_75.csv"
+    run_file.write_text(run_file.read_text().replace("\n1", "\n2", 1))
+    data = yaml.safe_load((ROOT / "requirements" / "tuflex.yaml").read_text())
+    for key in ("aircraft", "propulsion"):
+        data[key] = str((ROOT / "requirements" / data[key]).resolve())
+    data["battery"] = str(path)
+    case = tmp_path / "case.yaml"
+    case.write_text(yaml.safe_dump(data))
+    result = run("endurance", "--throttle", "0.5", "--case", str(case))
+    assert result.exit_code == 2, result.output
+    assert run_file.name in result.stderr and "changed since" in result.stderr

@@ -806,8 +806,10 @@ def fit_command(
     input_file: Path = typer.Argument(
         ..., help="Campaign manifest (campaign.yaml) or thrust table (.csv)."
     ),
-    out: Path = typer.Option(
-        Path("propulsion_fit.yaml"), "--out", help="Propulsion file to write."
+    out: Path | None = typer.Option(
+        None, "--out",
+        help="File to write (default: propulsion_fit.yaml, or battery_fit.yaml for a battery "
+        "file).",
     ),
     table: Path | None = typer.Option(
         None,
@@ -823,12 +825,24 @@ def fit_command(
     as_json: bool = JsonOption,
 ) -> None:
     """Reduce raw runs (or a thrust table) to the poly22 propulsion file."""
-    from tuflexperf.reduction.pipeline import run_fit
+    from tuflexperf.reduction.pipeline import is_battery_file, run_fit
 
+    if out is None:
+        battery = input_file.is_file() and is_battery_file(input_file)
+        out = Path("battery_fit.yaml" if battery else "propulsion_fit.yaml")
     with _FitProgress() as progress:
         summary = run_fit(input_file, out, table, glauert, delay_s, progress)
     if as_json:
         emit_json(summary)
+    elif summary.get("kind") == "battery":
+        fit = summary["battery_fit"]
+        typer.echo(f"pack model of {summary['input']}: rms {fit['rms_v']:.3f} V (max "
+                   f"{fit['max_abs_v']:.3f} V) over {fit['n_points']} points of "
+                   f"{len(fit['runs'])} runs")
+        for c in fit["cross_validation"]:
+            typer.echo(f"  fitted on {c['fitted_on']}: {c['predicted_run']} cut-off "
+                       f"{c['predicted_min']:.2f} min vs {c['observed_min']:.2f} measured")
+        typer.echo(f"wrote {summary['out']}")
     else:
         _print_fit(summary)
 

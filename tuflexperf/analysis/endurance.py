@@ -112,16 +112,26 @@ class BatteryCharacterisation:
     """Everything the discharge runs give: pack model, its validation, fan power model."""
 
     battery: Battery
-    runs: tuple[DischargeRun, ...]
+    runs: tuple[Any, ...]  # DischargeRun, or the RunSummary a fitted battery file stores
     fit: DischargeFit
     power: PowerFit
+    stored_cross_validation: tuple[CrossValidation, ...] | None = None
+    notes: tuple[str, ...] = ()
+
+    def discharge_runs(self) -> tuple[DischargeRun, ...]:
+        """The runs themselves (read on demand: the report draws them, check does not)."""
+        return tuple(r if isinstance(r, DischargeRun) else read_discharge_run(r.path)
+                     for r in self.runs)
 
     @functools.cached_property
     def cross_validation(self) -> tuple[CrossValidation, ...]:
         """Each run's model predicting every other run's time to cut-off.
 
-        Computed on first use only: ``check`` needs the fit, not its validation.
+        Stored by ``fit`` in a fitted battery file; otherwise computed on first use
+        (``check`` needs the fit, not its validation).
         """
+        if self.stored_cross_validation is not None:
+            return self.stored_cross_validation
         cells, capacity = self.battery.cells_in_series, self.battery.capacity_ah
         checks = []
         if len(self.runs) > 1:
@@ -169,16 +179,54 @@ def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisatio
     return _characterisation_cache.get(key, lambda: _characterise(battery, case))
 
 
+def _stored_fit(battery: Battery) -> tuple[tuple[Any, ...], DischargeFit, tuple[Any, ...]]:
+    """The pack model a fitted battery file carries (written by ``fit``; nothing is read)."""
+    from tuflexperf.io.discharge import RunSummary
+    from tuflexperf.io.files import sha256_of
+
+    stored = battery.fitted
+    assert stored is not None
+    for ref, r in zip(battery.runs, stored.runs, strict=True):
+        if sha256_of(ref.path) != r.sha256:  # the fit no longer describes this run
+            raise InputError(
+                f"{battery.path}: fit.runs: {ref.path.name} changed since the pack model was "
+                f"fitted (sha256 differs); fit it again (tuflexperf fit {battery.path.name} "
+                "--out ...)"
+            )
+    summaries = tuple(
+        RunSummary(ref.path, r.sha256, r.throttle, r.airspeed_m_s, r.mean_power_w,
+                   r.mean_force_n, r.start_charge_ah, r.time_to_cutoff_s, r.charge_drawn_ah)
+        for ref, r in zip(battery.runs, stored.runs, strict=True)
+    )
+    fit = DischargeFit(
+        DischargeParameters(**stored.parameters.model_dump()), stored.rms_v, stored.max_abs_v,
+        stored.n_points, tuple(s.path.name for s in summaries),
+    )
+    checks = tuple(CrossValidation(c.fitted_on, c.predicted_run, c.observed_min,
+                                   c.predicted_min) for c in stored.cross_validation)
+    return summaries, fit, checks
+
+
 def _characterise(battery: Battery, case: Case) -> BatteryCharacterisation:
-    runs = tuple(read_discharge_run(r.path) for r in battery.runs)
-    for run in runs:  # one pack per run: it cannot give more than it holds (issue 10)
-        drawn = float(run.charge_ah[-1])
+    notes: tuple[str, ...] = ()
+    stored_checks = None
+    if battery.fitted is not None:
+        runs, fit, stored_checks = _stored_fit(battery)
+        drawn_of = [r.charge_drawn_ah for r in runs]
+    else:
+        runs = tuple(read_discharge_run(r.path) for r in battery.runs)
+        drawn_of = [float(r.charge_ah[-1]) for r in runs]
+        notes = (f"{battery.path.name} carries no fitted pack model: fitted now from its runs; "
+                 f"`tuflexperf fit {battery.path.name} --out ...` stores it",)
+    for run, drawn in zip(runs, drawn_of, strict=True):
+        # one pack per run: it cannot give more than it holds (issue 10)
         if drawn > 1.05 * battery.capacity_ah:
             raise InputError(
                 f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah, but the discharge "
                 f"run {run.path.name} drew {drawn:.2f} Ah from one pack; the runs contradict it"
             )
-    fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
+    if battery.fitted is None:
+        fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
     engine_name = next((r.engine for r in battery.runs if r.engine), None)
     engines = {e.name: e for e in case.propulsion.engines}
     if engine_name is not None and engine_name not in engines:
@@ -196,7 +244,7 @@ def _characterise(battery: Battery, case: Case) -> BatteryCharacterisation:
         static_n, battery.published_power_range_w, battery.published_static_thrust_range_n
     )
     power = fit_fan_power(runs, static_w, battery.jet_velocity_m_s)
-    return BatteryCharacterisation(battery, runs, fit, power)
+    return BatteryCharacterisation(battery, runs, fit, power, stored_checks, notes)
 
 
 # --- launch: ground roll + climb at full throttle -------------------------------------------
@@ -403,7 +451,7 @@ class EnduranceModel:
         # else the battery file's fan-power law fitted to the discharge runs
         surfaces = power_surfaces(case.propulsion, case.density_kg_m3)
         self.power: Any = surfaces if surfaces is not None else self.ch.power.model
-        self.run_checks = self._check_runs(battery)
+        self.run_checks = self.ch.notes + self._check_runs(battery)
         aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
         self.packs = battery.packs_in_parallel_per_engine
         self.cutoff_v = battery.cutoff_voltage_v
@@ -492,7 +540,7 @@ class EnduranceModel:
                     f"{v:.1f} m/s; the power model used here gives {modelled:.0f} W "
                     f"({100 * (modelled / measured - 1):+.0f} %): thrust and power data disagree"
                 )
-            force = float(np.mean(run.force_n[run.loaded]))
+            force = run.mean_force_n
             check = power_agreement(
                 run.path.name, engine.name, x, v, force, measured,
                 rho_ref if rho_ref is not None else self.case.density_kg_m3,

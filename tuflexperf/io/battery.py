@@ -62,6 +62,48 @@ class MissionSchema(StrictModel):
     landing_reserve_fraction: Annotated[float, Field(ge=0, lt=1)] = 0.2
 
 
+class PackParametersSchema(StrictModel):
+    """The fitted equivalent circuit of one pack (models.battery.DischargeParameters)."""
+
+    e0_v: float
+    slope_v_per_ah: float
+    exp_amplitude_v: float
+    exp_rate_per_ah: float
+    knee_v: float
+    max_capacity_ah: Positive
+    resistance_ohm: Annotated[float, Field(ge=0)]
+
+
+class FittedRunSchema(StrictModel):
+    file: Annotated[str, Field(min_length=1)]
+    sha256: Annotated[str, Field(min_length=64, max_length=64)]
+    throttle: Annotated[float, Field(gt=0, le=1)]
+    airspeed_m_s: Annotated[float, Field(ge=0)]
+    mean_power_w: Positive
+    mean_force_n: float
+    start_charge_ah: Annotated[float, Field(ge=0)]
+    time_to_cutoff_s: Positive
+    charge_drawn_ah: Annotated[float, Field(ge=0)]
+
+
+class CrossValidationSchema(StrictModel):
+    fitted_on: str
+    predicted_run: str
+    observed_min: float
+    predicted_min: float
+
+
+class BatteryFitSchema(StrictModel):
+    """Written by ``tuflexperf fit``: the pack model fitted to the runs (check never fits)."""
+
+    parameters: PackParametersSchema
+    rms_v: Annotated[float, Field(ge=0)]
+    max_abs_v: Annotated[float, Field(ge=0)]
+    n_points: Annotated[int, Field(ge=1)]
+    runs: Annotated[list[FittedRunSchema], Field(min_length=1)]
+    cross_validation: list[CrossValidationSchema] = []
+
+
 class BatterySchema(StrictModel):
     name: str
     cells_in_series: Annotated[int, Field(ge=1, le=100)]
@@ -73,6 +115,7 @@ class BatterySchema(StrictModel):
     runs: Annotated[list[RunSchema], Field(min_length=1)]
     fan_power: FanPowerSchema
     mission: MissionSchema = MissionSchema()
+    fit: BatteryFitSchema | None = None
 
     @model_validator(mode="after")
     def _check(self) -> BatterySchema:
@@ -113,6 +156,7 @@ class Battery:
     landing_reserve_fraction: float
     nominal_voltage_v: float | None = None
     max_discharge_c: float | None = None
+    fitted: BatteryFitSchema | None = None
 
     @property
     def cutoff_voltage_v(self) -> float:
@@ -137,6 +181,15 @@ def load_battery(path: Path | str) -> Battery:
                 f"{path}: runs[{index}].file: expected a .csv or .mat run file, got {run.file}"
             )
         runs.append(DischargeRunRef(path=target, engine=run.engine))
+    if schema.fit is not None:
+        # matched by position and name (a copied file may point at its runs another way);
+        # the content is then checked by sha256 where the fit is used
+        stored = [Path(r.file).name for r in schema.fit.runs]
+        if stored != [r.path.name for r in runs]:
+            raise InputError(
+                f"{path}: fit.runs: the fitted runs are not the file's runs; fit it again "
+                f"(tuflexperf fit {path.name} --out ...)"
+            )
     fan, mission = schema.fan_power, schema.mission
     return Battery(
         name=schema.name,
@@ -156,4 +209,5 @@ def load_battery(path: Path | str) -> Battery:
         landing_reserve_fraction=mission.landing_reserve_fraction,
         nominal_voltage_v=schema.nominal_voltage_v,
         max_discharge_c=schema.max_discharge_c,
+        fitted=schema.fit,
     )

@@ -72,6 +72,11 @@ class DischargeRun:
         return float(np.mean(self.voltage_v[mask] * self.current_a[mask]))
 
     @property
+    def mean_force_n(self) -> float:
+        """Mean measured force in N under load (thrust less the rig's drag)."""
+        return float(np.mean(self.force_n[self.loaded]))
+
+    @property
     def start_charge_ah(self) -> float:
         """Charge in Ah drawn before the throttle step (idle current of the ESC)."""
         start, _ = self.load_window_s
@@ -152,3 +157,49 @@ def read_discharge_run(path: Path | str) -> DischargeRun:
     )
 
 
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """What the analyses need of a discharge run, as ``fit`` stores it in the battery file.
+
+    The same attribute names as :class:`DischargeRun`, so a fitted battery file serves
+    ``check`` without reading (or fitting) its runs.
+    """
+
+    path: Path
+    sha256: str
+    throttle_setting: float
+    airspeed_setting_m_s: float
+    mean_power_w: float
+    mean_force_n: float
+    start_charge_ah: float
+    time_to_cutoff_s: float
+    charge_drawn_ah: float
+
+    def to_dict(self, relative_to: Path) -> dict[str, object]:
+        import os
+
+        return {
+            "file": os.path.relpath(self.path, relative_to),
+            "sha256": self.sha256,
+            "throttle": self.throttle_setting,
+            "airspeed_m_s": self.airspeed_setting_m_s,
+            "mean_power_w": self.mean_power_w,
+            "mean_force_n": self.mean_force_n,
+            "start_charge_ah": self.start_charge_ah,
+            "time_to_cutoff_s": self.time_to_cutoff_s,
+            "charge_drawn_ah": self.charge_drawn_ah,
+        }
+
+
+def summarise_run(run: DischargeRun) -> RunSummary:
+    """The stored summary of a discharge run (with its file's sha256)."""
+    from tuflexperf.io.files import sha256_of
+
+    return RunSummary(
+        path=run.path, sha256=sha256_of(run.path), throttle_setting=run.throttle_setting,
+        airspeed_setting_m_s=run.airspeed_setting_m_s, mean_power_w=run.mean_power_w,
+        mean_force_n=run.mean_force_n, start_charge_ah=run.start_charge_ah,
+        time_to_cutoff_s=run.time_to_cutoff_s, charge_drawn_ah=float(run.charge_ah[-1]),
+    )

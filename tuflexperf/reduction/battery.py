@@ -230,3 +230,97 @@ def fit_fan_power(
         for label, xi, vi, pi, mi in zip(labels, x, v, p, predicted, strict=True)
     )
     return PowerFit(model, points, float(np.sqrt(np.mean(np.log(predicted / p) ** 2))))
+
+
+# --- the battery file as a fitted artefact (issue 9) -------------------------------------------
+def _cross_validation(runs: Sequence[DischargeRun], cells: int, capacity_ah: float,
+                      cutoff_v: float) -> list[dict[str, Any]]:
+    """Each run's model (fitted on it alone) predicting every other run's time to cut-off."""
+    from tuflexperf.models.battery import time_to_cutoff_s
+
+    checks: list[dict[str, Any]] = []
+    for k, source in enumerate(runs):
+        alone = fit_discharge([source], cells, capacity_ah).parameters
+        for j, target in enumerate(runs):
+            if j != k:
+                predicted = time_to_cutoff_s(alone, target.mean_power_w, cutoff_v, 1,
+                                             target.start_charge_ah)
+                checks.append({"fitted_on": source.path.name, "predicted_run": target.path.name,
+                               "observed_min": target.time_to_cutoff_s / 60.0,
+                               "predicted_min": predicted / 60.0})
+    return checks
+
+
+def fit_battery_block(battery: Any, relative_to: Any) -> dict[str, Any]:
+    """The ``fit:`` block of a battery file: pack model, residual, runs (sha256), validation.
+
+    ``battery`` is a loaded :class:`tuflexperf.io.battery.Battery`; run paths are written
+    relative to ``relative_to`` (the folder of the file written). A capacity the runs
+    contradict (a run drew more than the pack holds) is bad input.
+    """
+    from tuflexperf.io.discharge import read_discharge_run, summarise_run
+
+    runs = [read_discharge_run(r.path) for r in battery.runs]
+    for run in runs:
+        drawn = float(run.charge_ah[-1])
+        if drawn > 1.05 * battery.capacity_ah:
+            raise InputError(
+                f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah, but the discharge "
+                f"run {run.path.name} drew {drawn:.2f} Ah from one pack; the runs contradict it"
+            )
+    fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
+    return {
+        "parameters": {k: float(v) for k, v in fit.parameters.to_dict().items()},
+        "rms_v": float(fit.rms_v),
+        "max_abs_v": float(fit.max_abs_v),
+        "n_points": int(fit.n_points),
+        "runs": [summarise_run(run).to_dict(relative_to) for run in runs],
+        "cross_validation": _cross_validation(runs, battery.cells_in_series,
+                                              battery.capacity_ah, battery.cutoff_voltage_v)
+        if len(runs) > 1 else [],
+    }
+
+
+def fitted_battery_text(battery_path: Any, out_path: Any) -> tuple[str, dict[str, Any]]:
+    """The battery file with its ``fit:`` block (re)written, and the block.
+
+    Written beside the input, the file's own text (and its provenance comments) is kept and
+    only the ``fit:`` block replaced; elsewhere the whole file is written anew with the run
+    paths made relative to the new place.
+    """
+    import os
+    from pathlib import Path
+
+    import yaml
+
+    from tuflexperf.io.battery import load_battery
+    from tuflexperf.io.yamlio import read_yaml
+
+    battery_path, out_path = Path(battery_path), Path(out_path)
+    battery = load_battery(battery_path)
+    folder = out_path.absolute().parent
+    block = fit_battery_block(battery, folder)
+    header = ("# fit: written by `tuflexperf fit` (equivalent circuit fitted to the runs, "
+              "their sha256);\n# check, endurance and report read it and never fit.\n")
+    dumped = yaml.safe_dump({"fit": block}, sort_keys=False, width=100)
+    if folder == battery_path.absolute().parent:
+        lines = battery_path.read_text(encoding="utf-8").splitlines(keepends=True)
+        kept: list[str] = []
+        skipping = False
+        for line in lines:
+            if line.startswith("fit:") or line.startswith("# fit: written by"):
+                skipping = True
+                continue
+            if skipping and (line.startswith((" ", "\t", "#")) or not line.strip()):
+                continue
+            skipping = False
+            kept.append(line)
+        text = "".join(kept).rstrip("\n") + "\n" + header + dumped
+    else:
+        data = read_yaml(battery_path)
+        for entry in data.get("runs", []):
+            entry["file"] = os.path.relpath(battery_path.parent / entry["file"], folder)
+        data["fit"] = block
+        text = (f"# {battery.name}: written by `tuflexperf fit` from {battery_path.name}\n"
+                + yaml.safe_dump(data, sort_keys=False, width=100))
+    return text, block

@@ -966,6 +966,29 @@ def _fit_inputs(input_path: Path) -> list[Path]:
     return inputs
 
 
+def is_battery_file(path: Path) -> bool:
+    """A battery file (SPEC 4): a YAML mapping with the pack's ``cells_in_series``."""
+    if is_thrust_table(path):
+        return False
+    from tuflexperf.io.yamlio import read_yaml
+
+    data = read_yaml(path)
+    return isinstance(data, dict) and "cells_in_series" in data
+
+
+def _fit_battery(path: Path, out: Path, table: Path | None, glauert: bool) -> dict[str, Any]:
+    """``fit BATTERY.yaml``: the pack model fitted to the file's discharge runs, written back."""
+    from tuflexperf.reduction.battery import fitted_battery_text
+
+    if table is not None or glauert:
+        raise InputError(f"{'--table' if table is not None else '--glauert'}: not for a "
+                         "battery file (it fits the pack model alone)")
+    text, block = fitted_battery_text(path, out)
+    write_files({out: text})
+    return {"kind": "battery", "input": str(path), "out": str(out), "table": None,
+            "battery_fit": block}
+
+
 def _check_output(path: Path, flag: str) -> None:
     if path.is_dir():
         raise InputError(f"{flag}: {path} is a directory, expected a file name")
@@ -1007,6 +1030,8 @@ def run_fit(
 
     inputs = _fit_inputs(input_path)
     guard_outputs({"--out": out}, inputs)
+    if is_battery_file(input_path):
+        return _fit_battery(input_path, out, table, glauert)
 
     if is_thrust_table(input_path) or is_propeller_manifest(input_path):
         if glauert:

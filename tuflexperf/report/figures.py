@@ -738,7 +738,7 @@ def endurance(case: Case, analyses: Analyses) -> Any:
     av = fig.add_subplot(1, 2, 1)
     af = fig.add_subplot(1, 2, 2)
     colours = ["tab:blue", "tab:orange", "tab:green", "tab:purple"]
-    for k, run in enumerate(ch.runs):
+    for k, run in enumerate(ch.discharge_runs()):
         colour = colours[k % len(colours)]
         minutes = (run.time_s - run.time_s[0]) / 60.0
         model = np.asarray(
