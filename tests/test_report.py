@@ -113,21 +113,23 @@ def test_json_lists_the_files_written_and_nothing_else_is_left(shipped):
     assert data["passed"] is True  # the shipped case meets its requirements
 
 
-def test_title_page_names_every_input_by_sha256_with_version_and_date(shipped):
+def test_last_page_names_every_input_by_sha256_first_page_version_and_date(shipped):
     import hashlib
 
     import tuflexperf
     from tuflexperf.io.case import load_case
-    from tuflexperf.report.build import title_lines
+    from tuflexperf.report.build import hash_lines, title_lines
     from tuflexperf.report.data import Measured
 
     case = load_case(None)
-    lines = title_lines(case, Measured(), SimpleNamespace(verdicts=[]))
-    text = "\n".join(lines)
+    text = "\n".join(hash_lines(case, Measured()))
     for path in (case.path, case.aircraft_path, case.propulsion_path, case.battery_path):
         assert hashlib.sha256(path.read_bytes()).hexdigest() in text
-    assert f"tuflexperf {tuflexperf.__version__}" in text
-    assert re.search(r"date\s+\d{4}-\d{2}-\d{2}", text)
+    first = "\n".join(title_lines(case, Measured(), SimpleNamespace(
+        verdicts=[], takeoff=None, takeoff_note="n/a", trim=None, oei=None,
+        endurance_at_requirement=None)))
+    assert f"tuflexperf {tuflexperf.__version__}" in first
+    assert re.search(r"\d{4}-\d{2}-\d{2} \d{2}:\d{2} UTC", first)
 
 
 # --- every figure: units on the axes, a title, limits ----------------------------------------
@@ -223,7 +225,7 @@ def test_made_up_case_draws_the_model_alone_and_says_so(made_up):
     assert not {"04_run_processing", "05_sine_sweep", "09_endurance"} & names
     assert any("no measured data" in n for n in data["notes"])
     assert any("battery" in n for n in data["notes"])
-    assert pdf_page_count(out / "review.pdf") == data["pages"] == len(data["figures"]) + 2
+    assert pdf_page_count(out / "review.pdf") == data["pages"] == len(data["figures"]) + 3  # title, hashes, notes
 
 
 def test_rerun_replaces_an_earlier_report_without_leftovers(made_up):

@@ -11,6 +11,7 @@ Progress goes to stderr as a step counter; stdout stays for the result.
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import sys
@@ -188,7 +189,8 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
                 files.append(png)
             pdf.savefig(fig)
             step(name or "title page")
-        page_count = len(pages)
+        pdf.savefig(_hash_page(case, measured))
+        page_count = len(pages) + 1
         if notes:
             pdf.savefig(
                 fg.text_page("What this report leaves out, and why", [f"- {n}" for n in notes])
@@ -210,45 +212,91 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
 def _title_page(case: Any, measured: Any, analyses: Any) -> Any:
     from tuflexperf.report import figures as fg
 
-    lines = title_lines(case, measured, analyses)
-    return fg.text_page(f"Design review: {case.name}", lines, size=(11.0, 8.5))
+    return fg.text_page(f"Design review: {case.name}", title_lines(case, measured, analyses),
+                        font_size=12.5)
+
+
+def _hash_page(case: Any, measured: Any) -> Any:
+    from tuflexperf.report import figures as fg
+
+    return fg.text_page("Inputs of this report (sha256)", hash_lines(case, measured))
+
+
+def _fmt(value: Any, unit: str = "", digits: int = 3) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "not attainable"
+    return f"{value:.{digits}f}{(' ' + unit) if unit else ''}"
+
+
+def key_figures(analyses: Any) -> list[str]:
+    """The numbers a reviewer asks for first, from the analyses already run (no physics)."""
+    lines = []
+    t = analyses.takeoff
+    if t is not None:
+        lines.append(f"  stall speed          {_fmt(t.stall_speed_m_s, 'm/s', 2)} (TAS)")
+        lines.append(f"  lift-off speed       {_fmt(t.liftoff_speed_m_s, 'm/s', 2)} "
+                     f"({_fmt(t.liftoff_speed_eas_m_s, 'm/s', 2)} EAS)")
+        lines.append(f"  ground roll          {_fmt(t.ground_roll_m, 'm', 1)}; to the "
+                     f"{t.obstacle_height_m:g} m obstacle {_fmt(t.distance_to_obstacle_m, 'm', 1)}")
+    else:
+        import textwrap
+
+        note = textwrap.shorten(str(analyses.takeoff_note), 70, placeholder=" ...")
+        lines.append(f"  take-off             not attainable: {note}")
+    if analyses.trim is not None:
+        lines.append(f"  least trim throttle  {_fmt(analyses.trim.min_throttle)}")
+    if analyses.oei is not None:
+        worst = analyses.oei.critical
+        lines.append(f"  OEI least throttle   {_fmt(worst.min_throttle)} "
+                     f"({worst.dead_engine} dead)")
+    e = analyses.endurance_at_requirement
+    if e is not None:
+        lines.append(f"  flight endurance     {_fmt(e.flight_endurance_min, 'min', 1)} at "
+                     f"throttle {e.throttle:g}, {_fmt(e.airspeed_m_s, 'm/s', 1)}")
+    return lines
 
 
 def title_lines(case: Any, measured: Any, analyses: Any) -> list[str]:
-    """The title page: case, model, verdict, tool version, date, every input by sha256."""
+    """The first page: verdicts with value, limit and margin, key figures, provenance, tool."""
     from tuflexperf import __version__
+    from tuflexperf.report.data import provenance_class
+
+    verdicts = analyses.verdicts
+    failed = sum(not v.passed for v in verdicts)
+    now = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    verdict = ("no requirements stated" if not verdicts else "ALL REQUIREMENTS MET"
+               if not failed else f"{failed} OF {len(verdicts)} REQUIREMENTS NOT MET")
+    lines = [f"VERDICT: {verdict}", "",
+             f"  {'requirement':<26}{'value':>16}{'limit':>10}{'unit':>10}{'margin':>16}  verdict"]
+    for v in verdicts:
+        lines.append(f"  {v.name:<26}{_fmt(v.value):>16}{v.limit:>10g}{v.unit:>10}"
+                     f"{_fmt(v.margin):>16}  {'PASS' if v.passed else 'FAIL'}")
+    lines += ["", "KEY FIGURES", *key_figures(analyses), "", "INPUTS AND THEIR PROVENANCE"]
+    lines.append(f"  aircraft     {case.aircraft.name}, {case.aircraft.mass_kg:g} kg: "
+                 f"{provenance_class(case.aircraft_path)}")
+    lines.append(f"  propulsion   {case.propulsion.name}: "
+                 f"{provenance_class(case.propulsion_path)}")
+    if case.battery_path is not None:
+        lines.append(f"  battery      {provenance_class(case.battery_path)}")
+    if measured.source is not None:
+        lines.append(f"  test data    {measured.kind} {measured.source.name}: "
+                     f"{provenance_class(measured.source)}")
+    else:
+        lines.append("  test data    none (the thrust model is drawn alone)")
+    lines.append(f"  atmosphere   ISA {case.atmosphere.altitude_m:g} m, "
+                 f"dT {case.atmosphere.temperature_offset_k:+g} K, "
+                 f"rho = {case.density_kg_m3:.4f} kg/m\u00b3")
+    lines += ["", f"case {case.path}", f"tuflexperf {__version__}, {now}; "
+              "every input file with its sha256 on the last page"]
+    return lines
+
+
+def hash_lines(case: Any, measured: Any) -> list[str]:
+    """Every input of the report with its sha256 (the last page)."""
     from tuflexperf.io.files import sha256_of
     from tuflexperf.report.data import input_files
 
-    verdicts = analyses.verdicts
-    passed = all(v.passed for v in verdicts)
-    now = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    lines = [
-        f"case        {case.name}",
-        f"file        {case.path}",
-        f"aircraft    {case.aircraft.name}, {case.aircraft.mass_kg:g} kg, "
-        f"S = {case.aircraft.wing_area_m2:g} m^2, CD = {case.aircraft.cd0:g} + "
-        f"{case.aircraft.k:g} CL^2",
-        f"propulsion  {case.propulsion.name}: {len(case.propulsion.engines)} engines "
-        f"({', '.join(e.name for e in case.propulsion.engines)}), poly22, tested "
-        f"{case.propulsion.tested_airspeed_m_s[0]:g}-{case.propulsion.tested_airspeed_m_s[1]:g}"
-        f" m/s, delay {case.propulsion.delay_s:g} s",
-        f"atmosphere  ISA {case.atmosphere.altitude_m:g} m, "
-        f"dT {case.atmosphere.temperature_offset_k:+g} K, rho = {case.density_kg_m3:.4f} kg/m^3",
-        f"verdict     {len(verdicts)} requirements, "
-        + ("all met" if passed else f"{sum(not v.passed for v in verdicts)} NOT met"),
-        "measured    "
-        + (
-            f"{measured.kind} {measured.source}"
-            if measured.source is not None
-            else "none (the thrust model is drawn alone)"
-        ),
-        "",
-        f"tool        tuflexperf {__version__}",
-        f"date        {now}",
-        "",
-        "data (sha256):",
-    ]
+    lines = []
     root = case.path.parent
     for role, path in input_files(case, measured):
         try:

@@ -304,7 +304,10 @@ def run_analyses(case: Case) -> Analyses:
     if case.battery_path is None:
         notes.append("the case names no battery file: the endurance figure is left out")
         return analyses
-    _endurance(case, analyses)
+    try:
+        _endurance(case, analyses)
+    except NotAttainable as exc:  # a failing aircraft still gets its review (issue 10)
+        notes.append(f"endurance: not attainable: {exc}")
     return analyses
 
 
@@ -357,3 +360,20 @@ def input_files(case: Case, measured: Measured) -> list[tuple[str, Path]]:
             )
         )
     return files
+
+
+def provenance_class(path: Path) -> str:
+    """What a file's own header says it is: measured, synthetic or reconstructed.
+
+    Read from the comment lines at the top of the file (the shipped data state it there;
+    ``fit`` writes its source). A file that says nothing is "as given".
+    """
+    try:
+        with open(path, encoding="utf-8", errors="replace") as handle:
+            head = "".join(handle.readline() for _ in range(8)).lower()
+    except OSError:
+        return "unreadable"
+    for word in ("synthetic", "reconstructed", "estimated", "measured"):
+        if word in head:
+            return word
+    return "as given (no provenance stated)"

@@ -19,7 +19,7 @@ from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.thrust import density_ratio, engine_thrust_n, total_thrust_n
 from tuflexperf.report.data import Analyses, Measured, ProcessedRun
 
-LANDSCAPE_IN = (11.0, 6.5)
+LANDSCAPE_IN = (11.69, 8.27)  # A4 landscape (297 x 210 mm)
 PASS_COLOUR = "#c8e6c9"
 FAIL_COLOUR = "#ffcdd2"
 LIMIT_COLOUR = "#c62828"
@@ -256,7 +256,7 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
     ax.set_ylabel("thrust, drag (N)")
     fig.suptitle(
         "Required and available thrust in level flight (paper Fig. 18)\n"
-        f"{case.name}, rho = {rho:.3f} kg/m^3"
+        f"{case.name}, rho = {rho:.3f} kg/m³"
     )
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper right", ncols=2, framealpha=0.95)
@@ -840,7 +840,10 @@ def endurance(case: Case, analyses: Analyses) -> Any:
 
 
 # --- pages without a figure -----------------------------------------------------------------
-def text_page(title: str, lines: list[str], size: tuple[float, float] = LANDSCAPE_IN) -> Any:
+def text_page(
+    title: str, lines: list[str], size: tuple[float, float] = LANDSCAPE_IN,
+    font_size: float = 7.5,
+) -> Any:
     """A page of text (title page, notes)."""
     fig = new_figure(size)
     ax = fig.add_subplot()
@@ -853,7 +856,7 @@ def text_page(title: str, lines: list[str], size: tuple[float, float] = LANDSCAP
         transform=ax.transAxes,
         va="top",
         ha="left",
-        fontsize=7.5,
+        fontsize=font_size,
         family="monospace",
     )
     return fig
