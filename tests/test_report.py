@@ -225,7 +225,8 @@ def test_made_up_case_draws_the_model_alone_and_says_so(made_up):
     assert not {"04_run_processing", "05_sine_sweep", "09_endurance"} & names
     assert any("no measured data" in n for n in data["notes"])
     assert any("battery" in n for n in data["notes"])
-    assert pdf_page_count(out / "review.pdf") == data["pages"] == len(data["figures"]) + 3  # title, hashes, notes
+    # the figures plus the title, hashes and notes pages
+    assert pdf_page_count(out / "review.pdf") == data["pages"] == len(data["figures"]) + 3
 
 
 def test_rerun_replaces_an_earlier_report_without_leftovers(made_up):
