@@ -15,40 +15,18 @@ lapsed with density, so both ceilings exist).
 
 from __future__ import annotations
 
-import statistics
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 import yaml
+from timing import per_call as median_time  # noqa: E402
+from timing import wall
 
 from tuflexperf.analysis.performance import PerformanceProblems, solve_performance
 from tuflexperf.io.case import load_case
 from tuflexperf.models.atmosphere import isa_density_kg_m3
-
-
-def wall(argv: list[str], repeats: int = 5) -> float:
-    """Median wall time [s] of a whole process."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        subprocess.run(argv, capture_output=True, check=False)
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
-def median_time(fn, repeats: int = 7) -> float:
-    """Median time [s] of one call after a warm-up call."""
-    fn()
-    samples = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        samples.append(time.perf_counter() - start)
-    return statistics.median(samples)
 
 
 def naive(case, p: PerformanceProblems) -> dict[str, float]:

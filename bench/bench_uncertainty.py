@@ -15,10 +15,11 @@ from __future__ import annotations
 
 import dataclasses
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
+
+from timing import wall  # noqa: E402
 
 from tuflexperf.analysis.requirements import check_case
 from tuflexperf.analysis.uncertainty import (
@@ -39,14 +40,6 @@ PARAMETERS = (
 TUFLEXPERF = str(Path(sys.executable).with_name("tuflexperf"))
 
 
-def wall(argv: list[str], repeats: int = 5) -> float:
-    """Median wall time [s] of a whole process."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        subprocess.run(argv, capture_output=True, check=False)
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def main() -> None:

@@ -114,6 +114,17 @@ def _battery_copy(folder: Path, edit) -> Path:
     return path
 
 
+def _case_with(folder: Path, battery: Path) -> Path:
+    """The shipped case with ``battery`` as its battery file (written into ``folder``)."""
+    data = yaml.safe_load((ROOT / "requirements" / "tuflex.yaml").read_text())
+    for key in ("aircraft", "propulsion"):
+        data[key] = str((ROOT / "requirements" / data[key]).resolve())
+    data["battery"] = str(battery)
+    case = folder / "case.yaml"
+    case.write_text(yaml.safe_dump(data))
+    return case
+
+
 def _set(path: tuple, value):
     def edit(data):
         target = data
@@ -194,13 +205,7 @@ def test_bad_run_file_is_exit_2_naming_the_run(tmp_path, content, problem):
     path = _battery_copy(tmp_path, lambda d: d.pop("fit", None))
     run_file = path.parent / "endurance" / "edf1_endurance_75.csv"
     run_file.write_text(content)
-    data = yaml.safe_load((ROOT / "requirements" / "tuflex.yaml").read_text())
-    for key in ("aircraft", "propulsion"):
-        data[key] = str((ROOT / "requirements" / data[key]).resolve())
-    data["battery"] = str(path)
-    case = tmp_path / "case.yaml"
-    case.write_text(yaml.safe_dump(data))
-    result = run("endurance", "--throttle", "0.5", "--case", str(case))
+    result = run("endurance", "--throttle", "0.5", "--case", str(_case_with(tmp_path, path)))
     assert result.exit_code == 2, result.output
     assert run_file.name in result.stderr and problem in result.stderr
     assert result.stderr.count("\n") == 1
@@ -224,12 +229,6 @@ def test_run_changed_since_the_fit_is_exit_2(tmp_path):
     path = _battery_copy(tmp_path, lambda d: None)
     run_file = path.parent / "endurance" / "edf1_endurance_75.csv"
     run_file.write_text(run_file.read_text().replace("\n1", "\n2", 1))
-    data = yaml.safe_load((ROOT / "requirements" / "tuflex.yaml").read_text())
-    for key in ("aircraft", "propulsion"):
-        data[key] = str((ROOT / "requirements" / data[key]).resolve())
-    data["battery"] = str(path)
-    case = tmp_path / "case.yaml"
-    case.write_text(yaml.safe_dump(data))
-    result = run("endurance", "--throttle", "0.5", "--case", str(case))
+    result = run("endurance", "--throttle", "0.5", "--case", str(_case_with(tmp_path, path)))
     assert result.exit_code == 2, result.output
     assert run_file.name in result.stderr and "changed since" in result.stderr
