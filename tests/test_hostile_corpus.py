@@ -218,3 +218,42 @@ def test_more_hostile_cases(workdir: Path, case: Case) -> None:
         assert len(result.stderr.strip().splitlines()) == 1
         return
     test_hostile_case(workdir, case)
+
+
+def _rewrite_csv(path: Path, column: str, value: float) -> None:
+    import gzip
+
+    opener = gzip.open if path.name.endswith(".gz") else open
+    with opener(path, "rt") as handle:
+        lines = handle.read().splitlines()
+    header = lines[0].split(",")
+    k = header.index(column)
+    rows = [line.split(",") for line in lines[1:]]
+    for row in rows:
+        row[k] = f"{value:g}"
+    with opener(path, "wt") as handle:
+        handle.write("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+
+
+def test_degenerate_campaign_runs_are_named(workdir: Path) -> None:
+    """Two set points refuse the fit; a sweep without excitation and a drag sweep without
+    wind are left out with a warning naming the run (issue 10)."""
+    import json
+    import re
+
+    campaign = workdir / "data/tuflex/campaign"
+    manifest = (campaign / "campaign.yaml").read_text()
+    two = "\n".join(line for line in manifest.splitlines()
+                    if not re.search(r"_v(15|20|22|25|27)p", line))
+    (campaign / "two.yaml").write_text(two + "\n")
+    result = _run(workdir, "fit", "data/tuflex/campaign/two.yaml", "--out", "p.yaml")
+    assert result.returncode == 2 and "2 airspeed set point" in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+    _rewrite_csv(campaign / "runs/edf2_sweep_v30.csv.gz", "throttle", 0.5)
+    _rewrite_csv(campaign / "runs/structure_drag.csv", "airspeed_m_s", 0.0)
+    result = _run(workdir, "fit", "data/tuflex/campaign/campaign.yaml", "--out", "p.yaml",
+                  "--json")
+    assert result.returncode == 0, result.stderr
+    warnings = "\n".join(json.loads(result.stdout)["warnings"])
+    assert "edf2_sweep_v30.csv.gz: sine sweep without excitation" in warnings
+    assert "structure_drag.csv: drag sweep without wind" in warnings

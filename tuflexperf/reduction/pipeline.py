@@ -302,6 +302,35 @@ def _validation(
 
 
 # --- campaign ---------------------------------------------------------------------------------
+MIN_SWEEP_THROTTLE_SWING = 0.05  # a sweep whose throttle barely moves measures no delay
+MIN_DRAG_SWEEP_AIRSPEED_M_S = 1.0  # a drag sweep that never blows measures no drag
+SET_POINT_RESOLUTION_M_S = 0.5  # tunnel set points closer than this are one set point
+
+
+def _check_set_points(campaign: Any, step_results: list[Any]) -> None:
+    """Bad input: an engine whose step runs cover fewer than 3 airspeed set points.
+
+    Counted from each run's median airspeed rounded to the set-point resolution, not from
+    the measured values (their noise makes any two runs look like many airspeeds and
+    defeats the rank test of the fit).
+    """
+    by_engine: dict[str, dict[float, list[str]]] = {}
+    for result in step_results:
+        runs = by_engine.setdefault(str(result.run.engine), {})
+        speeds = [seg.airspeed_m_s for seg in result.segments] or [0.0]
+        step = SET_POINT_RESOLUTION_M_S
+        point = round(float(np.median(speeds)) / step) * step
+        runs.setdefault(point, []).append(result.run.file)
+    for engine, points in by_engine.items():
+        if len(points) < 3:
+            listed = "; ".join(f"{v:g} m/s ({', '.join(files)})" for v, files in
+                               sorted(points.items()))
+            raise InputError(
+                f"{campaign.path}: {engine}: the throttle-step runs cover only {len(points)} "
+                f"airspeed set point(s), {listed}; a poly22 surface needs at least 3"
+            )
+
+
 def fit_campaign(
     manifest: Path | str,
     glauert: bool = False,
@@ -321,9 +350,18 @@ def fit_campaign(
 
     run_reports: list[dict[str, Any]] = []
     delay_runs: list[dict[str, Any]] = []
+    degenerate: list[str] = []  # runs that carry no information, named (issue 10)
     for run in campaign.of_kind("sine_sweep"):
         tick(run.file)
         data = read_run(run.path, vendor=run.vendor)
+        swing = float(np.ptp(data["throttle"]))
+        if swing < MIN_SWEEP_THROTTLE_SWING:
+            degenerate.append(
+                f"{run.file}: sine sweep without excitation (throttle swings {swing:.3f}, "
+                f"needs >= {MIN_SWEEP_THROTTLE_SWING}): left out of the delay"
+            )
+            run_reports.append({**_run_header(run, data), "excitation": "none"})
+            continue
         estimate = estimate_delay(
             data.time_s, data["throttle"], data["force_n"], data.sample_rate_hz
         )
@@ -362,6 +400,14 @@ def fit_campaign(
     for run in campaign.of_kind("drag_sweep"):
         tick(run.file)
         data = read_run(run.path, vendor=run.vendor)
+        top = float(np.max(data["airspeed_m_s"]))
+        if top < MIN_DRAG_SWEEP_AIRSPEED_M_S:
+            degenerate.append(
+                f"{run.file}: drag sweep without wind (airspeed at most {top:.2f} m/s): no "
+                "structure drag measured, none added"
+            )
+            run_reports.append({**_run_header(run, data), "wind": "none"})
+            continue
         force, replaced = clean_run(campaign, data)
         _, _, k_med = _windows(campaign, data.sample_rate_hz)
         sweeps.append((movmedian(data["airspeed_m_s"], k_med), force))
@@ -377,6 +423,7 @@ def fit_campaign(
         step_results.append(reduce_step_run(campaign, run, data, max(onset, 0.0)))
     if progress is not None:
         progress(total, total, "fit")
+    _check_set_points(campaign, step_results)
 
     points: list[Point] = []
     point_ratios: dict[int, list[float]] = {}
@@ -498,6 +545,7 @@ def fit_campaign(
         }
     )
     summary["warnings"].extend(electrical.warnings)
+    summary["warnings"].extend(degenerate)
     for entry in summary["engines"]:
         name = entry["name"]
         if name in electrical.power:
