@@ -916,6 +916,8 @@ def _guarded(callback: Any) -> Any:
         except InputError as exc:
             sys.stderr.write(f"tuflexperf: error: {exc}\n")
             raise typer.Exit(2) from None
+        except BrokenPipeError:  # the reader went away (`| head`): nothing more to say
+            raise typer.Exit(0) from None
         except OSError as exc:  # a file the OS refuses (name too long, disk full, ...)
             import errno
 

@@ -192,3 +192,30 @@ def test_cli_mission_bad_key_is_exit_2(tmp_path: Path) -> None:
     code, _, err = _run("mission", str(path))
     assert code == 2
     assert str(path) in err and "time_mins" in err
+
+
+def test_catapult_launch_starts_airborne_and_skips_the_runway(tmp_path: Path) -> None:
+    """launch: catapult (SPEC 4): endurance and missions start airborne at the release speed;
+    an aircraft that could never roll on a runway still flies its endurance and mission."""
+    import shutil
+
+    from tuflexperf.analysis.endurance import solve_endurance
+
+    for folder in ("requirements", "data"):
+        shutil.copytree(ROOT / folder, tmp_path / folder)
+    aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
+    text = aircraft.read_text().replace(
+        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 2000\ntakeoff:", 1)
+    text = "\n".join("  rolling_friction: 0.9" if line.strip().startswith("rolling_friction")
+                     else line for line in text.splitlines()) + "\n"
+    aircraft.write_text(text)
+    case_file = tmp_path / "requirements" / "tuflex.yaml"
+    case_file.write_text(case_file.read_text().replace("  takeoff: {max_ground_roll_m: 60}\n", ""))
+    case = load_case(case_file)
+    runway = solve_endurance(load_case(None), 0.5)
+    catapult = solve_endurance(case, 0.5)
+    assert catapult.launch.ground_roll_time_s == 0.0
+    assert 0 < catapult.launch.charge_ah < runway.launch.charge_ah  # only the climb draws
+    result = MissionModel(case, load_mission(SHIPPED_MISSION), None).fly()
+    assert result.attainable and result.segments[0].charge_ah == (0.0, 0.0)
+    assert result.segments[1].start_altitude_m == 0.0

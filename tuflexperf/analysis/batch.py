@@ -136,6 +136,13 @@ class BatchEvaluator:
         self.case = case
         self.requirements = present_requirements(case)
         self._endurance: Any = None
+        if case.aircraft.launch != "runway" and case.requirements.endurance is not None:
+            from tuflexperf.errors import InputError
+
+            raise InputError(
+                f"{case.aircraft_path}: launch: {case.aircraft.launch}: samples, margins and "
+                "sweeps evaluate a runway launch only; run the deterministic check"
+            )
         if case.requirements.endurance is not None:
             from tuflexperf.analysis.endurance import endurance_model
 
@@ -145,7 +152,9 @@ class BatchEvaluator:
     def _aircraft(self, values: Mapping[str, Array], size: int) -> Aircraft:
         base = self.case.aircraft
         top = {f.name: _column(values, f"aircraft.{f.name}", getattr(base, f.name), size)
-               for f in dataclasses.fields(base) if f.name not in ("name", "takeoff")}
+               for f in dataclasses.fields(base)
+               if f.name not in ("name", "takeoff", "launch", "launch_speed_m_s",
+                                 "launch_energy_j")}
         takeoff = dataclasses.replace(
             base.takeoff,
             **{f.name: _column(values, f"aircraft.takeoff.{f.name}",

@@ -32,6 +32,7 @@ import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -275,6 +276,10 @@ def _best_climb(case: Case) -> tuple[float, float]:
 
     aircraft, rho = case.aircraft, case.density_kg_m3
     low = float(liftoff_speed_m_s(aircraft, rho))
+    if aircraft.launch == "catapult":  # the climb starts from the release speed
+        from tuflexperf.models.aircraft import true_airspeed_m_s
+
+        low = float(true_airspeed_m_s(aircraft.launch_speed_m_s, rho))
     speeds = np.linspace(low, _MAX_SPEED_OVER_STALL * float(stall_speed_m_s(aircraft, rho)), 4001)
     thrust = total_thrust_n(case.propulsion, 1.0, speeds, rho)
     excess = np.asarray(thrust - level_flight_drag_n(aircraft, speeds, rho), dtype=float)
@@ -295,7 +300,16 @@ def launch_budget(
     """
     from tuflexperf.analysis.takeoff import solve_takeoff
 
-    takeoff = solve_takeoff(case)
+    if case.aircraft.launch == "catapult":
+        # the catapult's energy comes from ground equipment: the flight starts airborne at
+        # the release speed, and the battery pays only for the climb (SPEC 4, aircraft file)
+        from tuflexperf.models.aircraft import true_airspeed_m_s
+
+        release = float(true_airspeed_m_s(case.aircraft.launch_speed_m_s, case.density_kg_m3))
+        takeoff = SimpleNamespace(time_s=0.0, liftoff_speed_m_s=release,
+                                  history_time_s=[0.0], history_airspeed_m_s=[release])
+    else:
+        takeoff = solve_takeoff(case)
     packs = battery.packs_in_parallel_per_engine
     height = battery.pattern_altitude_m
     climb_speed, climb_rate = _best_climb(case)

@@ -228,6 +228,10 @@ class MissionModel:
                     raise InputError(f"{where}[{i}]: takeoff must be the first segment")
                 from tuflexperf.analysis.takeoff import obstacle_height_of
 
+                if self.case.aircraft.launch == "catapult":  # airborne at release, 0 m
+                    plans.append(_Plan(i, s.type, "event", 0.0, 0.0, None, False, 0.0, 0.0,
+                                       False, 0.0, dead))
+                    continue
                 h = obstacle_height_of(self.case)  # the take-off ends over the obstacle
                 plans.append(_Plan(i, s.type, "takeoff", 0.0, h, None, False, 1.0, 0.0,
                                    False, 0.0, dead))
@@ -524,7 +528,8 @@ class MissionModel:
                                               float(h[k]), None, (0.0,) * n, (0.0,) * n,
                                               float(np.nanmin(voltage[:, k])) if states.size
                                               else math.nan, None,
-                                              self.engines[plan.dead]))
+                                              None if plan.dead is None
+                                              else self.engines[plan.dead]))
                 continue
             sl = slice(a, b)
             live = [i for i in range(n) if i != plan.dead]

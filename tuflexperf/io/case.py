@@ -48,9 +48,26 @@ class AircraftSchema(StrictModel):
     k: Positive
     cl_max: Positive
     takeoff: TakeoffSchema
+    launch: Literal["runway", "catapult"] = "runway"
+    launch_speed_m_s: Positive | None = None  # EAS at the end of the catapult stroke
+    launch_energy_j: Annotated[float, Field(ge=0)] | None = None  # from ground equipment
 
     @model_validator(mode="after")
     def _check(self) -> AircraftSchema:
+        stall_eas = math.sqrt(
+            2.0 * self.mass_kg * G0_M_S2
+            / (EAS_REFERENCE_DENSITY_KG_M3 * self.wing_area_m2 * self.cl_max)
+        )
+        if self.launch == "catapult":
+            if self.launch_speed_m_s is None:
+                raise ValueError("launch_speed_m_s: required with launch: catapult (EAS)")
+            if self.launch_speed_m_s < stall_eas:
+                raise ValueError(
+                    f"launch_speed_m_s: {self.launch_speed_m_s:g} m/s (EAS) is below the stall "
+                    f"speed {stall_eas:.2f} m/s EAS; a catapult must launch at or above stall"
+                )
+        elif self.launch_speed_m_s is not None or self.launch_energy_j is not None:
+            raise ValueError("launch_speed_m_s/launch_energy_j: only with launch: catapult")
         # the stall EAS is the same at every density, so the check belongs to the file
         liftoff = self.takeoff.liftoff_speed_m_s
         if liftoff is not None:
@@ -310,6 +327,9 @@ def aircraft_from_schema(schema: AircraftSchema) -> Aircraft:
             rotation_time_s=to.rotation_time_s,
             transition_load_factor=to.transition_load_factor,
         ),
+        launch=schema.launch,
+        launch_speed_m_s=schema.launch_speed_m_s,
+        launch_energy_j=schema.launch_energy_j,
     )
 
 

@@ -68,6 +68,9 @@ class Aircraft:
     k: float
     cl_max: float
     takeoff: TakeoffConfig
+    launch: str = "runway"  # or "catapult": endurance and missions start airborne
+    launch_speed_m_s: float | None = None  # catapult: EAS at release
+    launch_energy_j: float | None = None  # catapult: from ground equipment, not the battery
 
     @property
     def weight_n(self) -> float:
