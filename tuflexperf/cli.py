@@ -440,8 +440,12 @@ def trim(
     case = load_case_with(case_file, sets)
     result = solve_trim(case)
     data = result.to_dict()
+    from tuflexperf.analysis.requirements import trim_verdict
+
+    if case.requirements.envelope is None:
+        fail_input(f"{case.path}: requirements.envelope: trim needs the envelope requirement")
     limit = case.requirements.envelope.max_trim_throttle
-    met = result.all_feasible and result.max_throttle <= limit + 1e-12
+    met = trim_verdict(case.requirements.envelope, result).passed  # the one verdict rule
     if as_json:
         emit_json({**data, "max_trim_throttle": limit, "passed": met})
     else:
@@ -489,7 +493,9 @@ def oei(
     requirement = case.requirements.oei
     limit = requirement.max_throttle if requirement is not None else 1.0
     worst = result.critical
-    met = worst.min_throttle is not None and worst.min_throttle <= limit + 1e-12
+    from tuflexperf.analysis.requirements import oei_verdict
+
+    met = oei_verdict(requirement, result).passed  # the one verdict rule
     if as_json:
         emit_json({**data, "max_throttle": limit, "passed": met})
     else:
@@ -659,7 +665,9 @@ def endurance(
     data = result.to_dict()
     requirement = case.requirements.endurance
     judged = requirement is not None and abs(requirement.throttle - result.throttle) < 1e-12
-    met = not judged or result.flight_endurance_min >= requirement.min_flight_time_min
+    from tuflexperf.analysis.requirements import endurance_verdict
+
+    met = not judged or endurance_verdict(requirement, result).passed  # the one verdict rule
     if as_json:
         payload = dict(data)
         if best_result is not None:

@@ -144,8 +144,11 @@ def takeoff_verdicts(requirement: Any, result: Any) -> list[Verdict]:
 def _trim(case: Case) -> Verdict:
     from tuflexperf.analysis.trim import solve_trim
 
-    envelope = case.requirements.envelope
-    result = solve_trim(case)
+    return trim_verdict(case.requirements.envelope, solve_trim(case))
+
+
+def trim_verdict(envelope: Any, result: Any) -> Verdict:
+    """The trim requirement's verdict from a solved trim sweep (the CLI's ``trim`` too)."""
     span = f"{envelope.min_airspeed_m_s:g}-{envelope.max_airspeed_m_s:g} m/s"
     if not result.all_feasible:
         from tuflexperf.analysis.attainable import describe_unattainable
@@ -179,7 +182,15 @@ def _oei(case: Case) -> Verdict:
     from tuflexperf.analysis.oei import solve_oei
 
     requirement = case.requirements.oei
-    result = solve_oei(case, requirement.dead_engine)
+    return oei_verdict(requirement, solve_oei(case, requirement.dead_engine))
+
+
+def oei_verdict(requirement: Any, result: Any) -> Verdict:
+    """The OEI verdict of a solved OEI case (``requirement`` None: full throttle the limit)."""
+    if requirement is None:
+        from tuflexperf.io.case import OeiRequirement
+
+        requirement = OeiRequirement(dead_engine=result.dead_engine_mode)
     worst = result.critical
     if worst.min_throttle is None:
         from tuflexperf.analysis.attainable import describe_unattainable
@@ -215,6 +226,11 @@ def _endurance(case: Case) -> Verdict:
         return Verdict(
             "flight_endurance", None, requirement.min_flight_time_min, "min", "min", str(exc)
         )
+    return endurance_verdict(requirement, result)
+
+
+def endurance_verdict(requirement: Any, result: Any) -> Verdict:
+    """The endurance verdict of a solved endurance at the requirement's throttle."""
     return Verdict(
         "flight_endurance",
         result.flight_endurance_min,

@@ -546,6 +546,11 @@ def model_vs_measured(case: Case, measured: Measured) -> Any:
 
 
 # --- 8. take-off ----------------------------------------------------------------------------
+def _verdict_passed(analyses: Analyses, name: str) -> bool:
+    """PASS/FAIL as ``check`` decided it (analysis/requirements.py), never re-judged here."""
+    return any(v.name == name and v.passed for v in analyses.verdicts)
+
+
 def takeoff_history(case: Case, analyses: Analyses) -> Any:
     """Ground roll at full throttle: airspeed and distance against time, runway limit."""
     fig = new_figure()
@@ -604,7 +609,7 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     requirement = case.requirements.takeoff
     if requirement is not None:
         limit = requirement.max_ground_roll_m
-        met = result.ground_roll_m <= limit
+        met = _verdict_passed(analyses, "takeoff_ground_roll")
         ad.axhline(
             limit,
             color=LIMIT_COLOUR,
@@ -819,7 +824,7 @@ def endurance(case: Case, analyses: Analyses) -> Any:
             label=f"at throttle {requirement.throttle:g}",
         )
         if result is not None:
-            met = result.flight_endurance_min >= requirement.min_flight_time_min
+            met = _verdict_passed(analyses, "flight_endurance")
             af.plot(
                 [requirement.throttle],
                 [result.flight_endurance_min],
