@@ -427,7 +427,7 @@ def sine_sweep(measured: Measured) -> Any:
     ax.set_ylabel("normalised (-)")
     ax.set_title(f"whole sweep ({sweep.file})")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="lower left")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))  # off the traces
     # the sweep ends where the throttle last leaves the value it holds at the end of the log
     moving = np.flatnonzero(np.abs(sweep.throttle - sweep.throttle[-1]) > 0.01)
     t_end = t[moving[-1]] if moving.size else t[-1]
@@ -435,14 +435,24 @@ def sine_sweep(measured: Measured) -> Any:
     az.plot(t[end], f[end], color="tab:orange", linewidth=0.8, label="force / max force")
     az.plot(t[end], x[end], color="black", linewidth=1.0, label="throttle / max throttle")
     if math.isfinite(sweep.delay_s):
-        delayed = np.interp(t[end] - sweep.delay_s, t, x)
+        from scipy.signal import lfilter
+
+        from tuflexperf.models.thrust import lag_factor
+
+        # the dynamic model as fitted: dead time, then the first-order spool lag (exact
+        # discretisation, the exports' recursion), driven by the logged throttle
+        delayed = np.interp(t - sweep.delay_s, t, x)
+        lag = sweep.lag_s if math.isfinite(sweep.lag_s) else 0.0
+        a = lag_factor(lag, 1.0 / rate)
+        modelled = lfilter([1.0 - a], [1.0, -a], delayed, zi=[a * delayed[0]])[0]
         az.plot(
             t[end],
-            delayed,
+            modelled[end],
             color="tab:blue",
             linestyle="--",
-            linewidth=1.0,
-            label=f"throttle delayed by the measured {1000 * sweep.delay_s:.0f} ms",
+            linewidth=1.2,
+            label=f"model: throttle after {1000 * sweep.delay_s:.0f} ms dead time and "
+            f"{1000 * lag:.0f} ms spool lag",
         )
     az.set_xlabel("time t (s)")
     az.set_ylabel("normalised (-)")
@@ -451,7 +461,8 @@ def sine_sweep(measured: Measured) -> Any:
         "the fan's spool lag"
     )
     az.grid(alpha=0.3)
-    az.legend(fontsize=8, loc="lower left")
+    # below the axes: inside, it would cover the traces it explains
+    az.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncols=3)
     delay = (
         f"dead time {1000 * sweep.delay_s:.0f} ms, spool lag {1000 * sweep.lag_s:.0f} ms"
         if math.isfinite(sweep.delay_s)
