@@ -257,3 +257,11 @@ def test_degenerate_campaign_runs_are_named(workdir: Path) -> None:
     warnings = "\n".join(json.loads(result.stdout)["warnings"])
     assert "edf2_sweep_v30.csv.gz: sine sweep without excitation" in warnings
     assert "structure_drag.csv: drag sweep without wind" in warnings
+
+
+def test_flags_show_no_value_and_empty_answers_read_well(workdir: Path) -> None:
+    help_text = _run(workdir, "check", "--help").stdout
+    json_line = next(line for line in help_text.splitlines() if "--json" in line)
+    assert "<bool>" not in json_line
+    out = _run(workdir, "trim", "--set", "aircraft.mass_kg=200").stdout
+    assert "n/a at n/a" not in out and "attainable nowhere" in out

@@ -36,14 +36,15 @@ def _version(value: bool) -> None:
 @app.callback()
 def _root(
     version: bool = typer.Option(
-        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
+        False, "--version", metavar="", callback=_version, is_eager=True,
+        help="Print the version and exit.",
     ),
 ) -> None:
     """Wind-tunnel EDF runs -> thrust model -> aircraft-performance verdicts."""
 
 
 CaseOption = typer.Option(None, "--case", help="Requirement file (default: shipped TU-Flex case).")
-JsonOption = typer.Option(False, "--json", help="Print one JSON object on stdout.")
+JsonOption = typer.Option(False, "--json", metavar="", help="Print one JSON object on stdout.")
 SetOption = typer.Option(
     None, "--set", metavar="KEY=VALUE",
     help="Change one numeric key of the case for this run (repeatable), e.g. "
@@ -432,7 +433,9 @@ def trim(
     case_file: Path | None = CaseOption,
     as_json: bool = JsonOption,
     sets: list[str] | None = SetOption,
-    table: bool = typer.Option(False, "--table", help="Print the throttle at every airspeed."),
+    table: bool = typer.Option(
+        False, "--table", metavar="", help="Print the throttle at every airspeed."
+    ),
 ) -> None:
     """Least throttle for level flight at each airspeed of the envelope (0.5 m/s grid)."""
     from tuflexperf.analysis.trim import solve_trim
@@ -451,10 +454,13 @@ def trim(
     else:
         v = data["airspeed_m_s"]
         typer.echo(f"{case.name}: trim over {v[0]:g}-{v[-1]:g} m/s ({len(v)} airspeeds)")
-        typer.echo(
-            f"  least throttle   {_fmt(result.min_throttle)} at "
-            f"{_fmt(result.airspeed_at_min_throttle_m_s, 1)} m/s"
-        )
+        if result.min_throttle is None:
+            typer.echo("  least throttle   none: level flight attainable nowhere in the envelope")
+        else:
+            typer.echo(
+                f"  least throttle   {result.min_throttle:.3f} at "
+                f"{result.airspeed_at_min_throttle_m_s:.1f} m/s"
+            )
         typer.echo(f"  highest throttle {_fmt(result.max_throttle)} (limit {limit:g})")
         typer.echo(
             f"  stall {result.stall_speed_m_s:.2f} m/s x {result.stall_margin:g}; level flight "
@@ -645,7 +651,8 @@ def endurance(
     as_json: bool = JsonOption,
     sets: list[str] | None = SetOption,
     best: bool = typer.Option(
-        False, "--best", help="Also the throttle/airspeed of longest flight and of best range."
+        False, "--best", metavar="",
+        help="Also the throttle/airspeed of longest flight and of best range.",
     ),
 ) -> None:
     """Level-flight airspeed, electrical power, pack and flight endurance at a throttle."""
@@ -825,7 +832,8 @@ def fit_command(
         help="Thrust table to write (campaign default: <out>_thrust_table.csv beside --out).",
     ),
     glauert: bool = typer.Option(
-        False, "--glauert", help="Fit against Glauert-corrected airspeeds (paper eq. 5)."
+        False, "--glauert", metavar="",
+        help="Fit against Glauert-corrected airspeeds (paper eq. 5).",
     ),
     delay_s: float | None = typer.Option(
         None, "--delay-s", help="Delay in s to write instead of the measured one."
