@@ -265,3 +265,22 @@ def test_flags_show_no_value_and_empty_answers_read_well(workdir: Path) -> None:
     assert "<bool>" not in json_line
     out = _run(workdir, "trim", "--set", "aircraft.mass_kg=200").stdout
     assert "n/a at n/a" not in out and "attainable nowhere" in out
+
+
+def test_mat_discharge_run_with_a_text_column(workdir: Path) -> None:
+    import numpy as np
+    import scipy.io
+    import yaml
+
+    t = np.arange(100.0)
+    scipy.io.savemat(workdir / "data/tuflex/endurance/bad.mat", {
+        "time_s": t, "force_n": 0 * t, "airspeed_m_s": 0 * t + 30, "throttle": 0 * t + 0.5,
+        "voltage_v": np.array(["abc"] * 100), "current_a": 0 * t + 20})
+    path = workdir / "data/tuflex/battery.yaml"
+    battery = yaml.safe_load(path.read_text())
+    battery.pop("fit", None)
+    battery["runs"] = [{"file": "endurance/bad.mat", "engine": "EDF1"}]
+    path.write_text(yaml.safe_dump(battery))
+    result = _run(workdir, "endurance", "--throttle", "0.5", "--case", "requirements/tuflex.yaml")
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    assert "bad.mat: voltage_v" in result.stderr

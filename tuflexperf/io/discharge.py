@@ -91,8 +91,15 @@ def _read_columns(path: Path) -> dict[str, np.ndarray]:
             raw = loadmat(path, squeeze_me=True)
         except Exception as exc:  # noqa: BLE001 - any reader failure is bad input
             raise InputError(f"{path}: cannot read MATLAB file: {exc}") from None
-        return {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in raw.items()
-                if not k.startswith("__") and k in RUN_COLUMNS}
+        columns: dict[str, np.ndarray] = {}
+        for key, value in raw.items():
+            if key.startswith("__") or key not in RUN_COLUMNS:
+                continue
+            try:
+                columns[key] = np.atleast_1d(np.asarray(value, dtype=float))
+            except (TypeError, ValueError):
+                raise InputError(f"{path}: {key}: not numbers (a text column?)") from None
+        return columns
     try:
         with path.open(newline="", encoding="utf-8") as handle:
             header = next(csv.reader(handle), None)
