@@ -216,8 +216,13 @@ def fit_fan_power(
     ps = [static_full_throttle_w] + [r.mean_power_w for r in runs]
     labels = ["published full-throttle static"] + [r.path.name for r in runs]
     x, v, p = np.array(xs), np.array(vs), np.array(ps)
-    if np.any(x <= 0) or np.any(v >= jet_velocity_m_s) or np.any(p <= 0):
-        raise InputError("fan power fit: runs need throttle > 0, power > 0, airspeed below jet")
+    bad = [label for label, xi, vi, pi in zip(labels, x, v, p, strict=True)
+           if not (xi > 0 and vi < jet_velocity_m_s and pi > 0)]
+    if bad:
+        raise InputError(
+            f"fan power fit: {', '.join(bad)}: needs throttle > 0, power > 0 and an airspeed "
+            f"below the jet velocity {jet_velocity_m_s:g} m/s"
+        )
     factor = 1.0 - (v / jet_velocity_m_s) ** 2
     design = np.column_stack([np.ones_like(x), np.log(x)])
     target = np.log(p) - np.log(factor)
