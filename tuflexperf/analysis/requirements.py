@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from tuflexperf.errors import NotAttainable
 from tuflexperf.io.case import Case
+
+if TYPE_CHECKING:
+    from tuflexperf.analysis.study import Study
 
 MARGIN_TOLERANCE = 1e-12
 
@@ -69,13 +72,11 @@ class Verdict:
         }
 
 
-def _takeoff(case: Case) -> list[Verdict]:
-    from tuflexperf.analysis.takeoff import solve_takeoff
-
-    requirement = case.requirements.takeoff
+def _takeoff(study: Study) -> list[Verdict]:
+    requirement = study.case.requirements.takeoff
     verdicts: list[Verdict] = []
     try:
-        result = solve_takeoff(case)
+        result = study.takeoff()
     except NotAttainable as exc:
         if requirement.max_ground_roll_m is not None:
             verdicts.append(
@@ -141,10 +142,8 @@ def takeoff_verdicts(requirement: Any, result: Any) -> list[Verdict]:
     return verdicts
 
 
-def _trim(case: Case) -> Verdict:
-    from tuflexperf.analysis.trim import solve_trim
-
-    return trim_verdict(case.requirements.envelope, solve_trim(case))
+def _trim(study: Study) -> Verdict:
+    return trim_verdict(study.case.requirements.envelope, study.trim())
 
 
 def trim_verdict(envelope: Any, result: Any) -> Verdict:
@@ -178,11 +177,9 @@ def trim_verdict(envelope: Any, result: Any) -> Verdict:
     )
 
 
-def _oei(case: Case) -> Verdict:
-    from tuflexperf.analysis.oei import solve_oei
-
-    requirement = case.requirements.oei
-    return oei_verdict(requirement, solve_oei(case, requirement.dead_engine))
+def _oei(study: Study) -> Verdict:
+    requirement = study.case.requirements.oei
+    return oei_verdict(requirement, study.oei(requirement.dead_engine))
 
 
 def oei_verdict(requirement: Any, result: Any) -> Verdict:
@@ -216,12 +213,10 @@ def oei_verdict(requirement: Any, result: Any) -> Verdict:
     )
 
 
-def _endurance(case: Case) -> Verdict:
-    from tuflexperf.analysis.endurance import solve_endurance
-
-    requirement = case.requirements.endurance
+def _endurance(study: Study) -> Verdict:
+    requirement = study.case.requirements.endurance
     try:
-        result = solve_endurance(case, requirement.throttle)
+        result = study.endurance(requirement.throttle)
     except NotAttainable as exc:
         return Verdict(
             "flight_endurance", None, requirement.min_flight_time_min, "min", "min", str(exc)
@@ -243,21 +238,16 @@ def endurance_verdict(requirement: Any, result: Any) -> Verdict:
     )
 
 
-def _mission(case: Case) -> Verdict:
-    from tuflexperf.analysis.mission import solve_mission
-    from tuflexperf.io.mission import load_mission
-
-    requirement = case.requirements.mission
-    mission = load_mission(mission_path(case))
-    limit = requirement.min_landing_charge_fraction
+def _mission(study: Study) -> Verdict:
+    limit = study.case.requirements.mission.min_landing_charge_fraction
     try:
-        result = solve_mission(case, mission, limit)
+        result = study.mission()
     except NotAttainable as exc:
         return Verdict("mission_landing_charge", None, limit, "fraction", "min", str(exc))
     value = result.landing_charge_fraction if result.attainable else None
     return Verdict(
         "mission_landing_charge", value, limit, "fraction", "min",
-        f"{mission.name}: {result.reason}", {"warnings": list(result.warnings)},
+        f"{result.name}: {result.reason}", {"warnings": list(result.warnings)},
     )
 
 
@@ -278,14 +268,26 @@ CHECKS = {"takeoff": _takeoff, "envelope": _trim, "oei": _oei, "endurance": _end
           "mission": _mission}
 
 
-def check_case(case: Case) -> list[Verdict]:
-    """Verdicts for every requirement block present in ``case``, in the file's order."""
-    present = [name for name in CHECKS if getattr(case.requirements, name) is not None]
+def study_verdicts(study: Study) -> list[Verdict]:
+    """Verdicts for every requirement block present in the study's case, in SPEC order.
+
+    Each verdict reads the study's memoised result, so a command or figure that asks the
+    same study again gets the very result the verdict was made from.
+    """
+    requirements = study.case.requirements
     verdicts: list[Verdict] = []
-    for name in present:
-        result = CHECKS[name](case)
-        verdicts.extend(result if isinstance(result, list) else [result])
+    for name, check in CHECKS.items():
+        if getattr(requirements, name) is not None:
+            result = check(study)
+            verdicts.extend(result if isinstance(result, list) else [result])
     return verdicts
+
+
+def check_case(case: Case) -> list[Verdict]:
+    """Verdicts for every requirement block present in ``case`` (a fresh :class:`Study`)."""
+    from tuflexperf.analysis.study import Study
+
+    return Study(case).verdicts()
 
 
 # --- probabilistic verdicts (check --samples, SPEC 4 uncertainty block) --------------------

@@ -96,12 +96,33 @@ def movmedian(x: ArrayLike, k: int) -> Array:
         else:
             lower = rank_filter(values, rank=k // 2 - 1, size=k, mode="nearest")
             out[:] = 0.5 * (lower + upper)
+        if np.isfinite(values).all():
+            # the cut-short end windows, all at once (one sorted row per end sample)
+            out[:before] = _growing_window_medians(values[: before + after], after + 1)
+            if after:
+                tail = _growing_window_medians(values[::-1][: after + before], before + 1)
+                out[n - after :] = tail[::-1]
+            return out
         edges = np.r_[0 : min(before, n), max(n - after, 0) : n]
     else:
         edges = np.arange(n)
     for i in edges:
         out[i] = np.median(values[max(i - before, 0) : min(i + after + 1, n)])
     return out
+
+
+def _growing_window_medians(head: Array, first: int) -> Array:
+    """Medians of ``head[:first]``, ``head[:first + 1]``, ... up to the whole of ``head``.
+
+    Each row holds one window, padded with +inf past its end; after sorting, the
+    median is the mean of the row's two middle values (equal for an odd count).
+    """
+    width = head.size
+    counts = np.arange(first, width + 1)
+    rows = np.where(np.arange(width) < counts[:, None], head, np.inf)
+    rows.sort(axis=1)
+    at = np.arange(counts.size)
+    return 0.5 * (rows[at, (counts - 1) // 2] + rows[at, counts // 2])
 
 
 def isoutlier_movmean(x: ArrayLike, k: int, threshold: float = 3.0) -> NDArray[np.bool_]:
@@ -157,3 +178,31 @@ def robust_std(x: ArrayLike) -> float:
     if values.size == 0:
         return 0.0
     return float(1.4826 * np.median(np.abs(values - np.median(values))))
+
+
+def first_order_lag(u: ArrayLike, pole: float) -> Array:
+    """Discrete first-order lag ``y[n] = pole y[n-1] + (1 - pole) u[n]`` along the last axis.
+
+    Each row starts at rest at its first value (``y[-1] = u[0]``). With
+    ``pole = exp(-dt / tau)`` it is the exact response of ``tau dy/dt = u - y`` to a
+    sample-and-hold input (the exports' recursion). SciPy's ``lfilter`` runs the
+    recursion in C (its module is imported by the change-point search anyway).
+
+    Parameters
+    ----------
+    u : array_like
+        Input [any unit], one signal per row.
+    pole : float
+        ``exp(-dt / tau)`` in [0, 1) [-].
+
+    Returns
+    -------
+    ndarray
+        The lagged signal, same shape and unit as ``u``.
+    """
+    from scipy.signal import lfilter
+
+    values = np.asarray(u, dtype=float)
+    if pole <= 0.0:
+        return values.copy()
+    return lfilter([1.0 - pole], [1.0, -pole], values, axis=-1, zi=pole * values[..., :1])[0]

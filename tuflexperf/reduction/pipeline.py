@@ -47,7 +47,7 @@ from tuflexperf.io.runs import (
 )
 from tuflexperf.models.thrust import POLY22_TERMS
 from tuflexperf.reduction.changepoints import cross_check, force_changepoints, throttle_plateaus
-from tuflexperf.reduction.delay import estimate_delay
+from tuflexperf.reduction.delay import DelayEstimate, estimate_delay
 from tuflexperf.reduction.drag import DragModel, fit_structure_drag
 from tuflexperf.reduction.filters import filloutliers_movmean, movmedian, window_samples
 from tuflexperf.reduction.glauert import glauert_ratio
@@ -116,10 +116,28 @@ class Point:
 
 @dataclass
 class StepRunResult:
+    """One throttle-step run reduced: its steady segments and the whole-run cleaning.
+
+    ``cleaned_force_n`` (outliers filled, moving median) and ``changepoints`` are kept
+    so that the report draws the run as reduced, without reducing it again.
+    """
+
     run: CampaignRun
     data: Run
     segments: list[SteadyMean]
     report: dict[str, Any]
+    cleaned_force_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    changepoints: tuple[int, ...] = ()
+    outliers_replaced: int = 0
+
+
+@dataclass(frozen=True)
+class SweepRunResult:
+    """One sine-sweep run with its fitted dead time and spool lag."""
+
+    run: CampaignRun
+    data: Run
+    estimate: DelayEstimate
 
 
 @dataclass
@@ -131,6 +149,8 @@ class FitResult:
     table_text: str | None
     engines: dict[str, Poly22Fit] = field(default_factory=dict)
     power: dict[str, Poly22Fit] = field(default_factory=dict)
+    step_runs: list[StepRunResult] = field(default_factory=list)
+    sweep_runs: list[SweepRunResult] = field(default_factory=list)
 
 
 # --- run reduction --------------------------------------------------------------------------
@@ -190,8 +210,9 @@ def reduce_step_run(
         for p in plateaus
     ]
     onsets = [max(o, p.start) for o, p in zip(onsets, plateaus, strict=True)]
-    despiked = movmedian(data["force_n"], k_med)
-    transients = fit_transients(t, despiked, onsets, [p.stop for p in plateaus], fs)
+    # one whole-run cleaning serves the spool-lag fit and the change-point cross-check
+    cleaned, replaced = clean_run(campaign, data)
+    transients = fit_transients(t, cleaned, onsets, [p.stop for p in plateaus], fs)
 
     segments: list[SteadyMean] = []
     settle_samples: list[int] = []
@@ -221,7 +242,6 @@ def reduce_step_run(
             )
         )
 
-    cleaned, replaced = clean_run(campaign, data)
     changes = force_changepoints(cleaned, fs, min_segment_s=MIN_SEGMENT_S)
     steps = [
         (p.step_index, s)
@@ -258,7 +278,15 @@ def reduce_step_run(
             },
         }
     )
-    return StepRunResult(run=run, data=data, segments=segments, report=report)
+    return StepRunResult(
+        run=run,
+        data=data,
+        segments=segments,
+        report=report,
+        cleaned_force_n=cleaned,
+        changepoints=tuple(int(c) for c in changes),
+        outliers_replaced=replaced,
+    )
 
 
 def _mean_or_none(values: list[float]) -> float | None:
@@ -351,6 +379,7 @@ def fit_campaign(
     run_reports: list[dict[str, Any]] = []
     delay_runs: list[dict[str, Any]] = []
     degenerate: list[str] = []  # runs that carry no information, named (issue 10)
+    sweep_results: list[SweepRunResult] = []
     for run in campaign.of_kind("sine_sweep"):
         tick(run.file)
         data = read_run(run.path, vendor=run.vendor)
@@ -365,6 +394,7 @@ def fit_campaign(
         estimate = estimate_delay(
             data.time_s, data["throttle"], data["force_n"], data.sample_rate_hz
         )
+        sweep_results.append(SweepRunResult(run, data, estimate))
         delay_runs.append(
             {
                 "file": run.file,
@@ -585,6 +615,8 @@ def fit_campaign(
         table_text=table,
         engines=fits,
         power=electrical.power,
+        step_runs=step_results,
+        sweep_runs=sweep_results,
     )
 
 

@@ -50,17 +50,19 @@ def _segment_sse(
 ) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
     """Least squares of ``y ~ L + A e`` separately in each segment (closed-form 2x2).
 
-    Returns total SSE, and the per-segment ``L`` and ``A``.
+    Returns total SSE, and the per-segment ``L`` and ``A``. ``e`` may carry leading
+    axes (one regressor per row, e.g. a grid of time constants); the SSE then is one
+    total per row.
     """
-    sums = [np.add.reduceat(v, starts) for v in (np.ones_like(y), e, e * e, y, y * e, y * y)]
-    n, se, see, sy, sye, syy = sums
+    n, sy, syy = (np.add.reduceat(v, starts) for v in (np.ones_like(y), y, y * y))
+    se, see, sye = (np.add.reduceat(v, starts, axis=-1) for v in (e, e * e, y * e))
     det = n * see - se * se
     ok = det > 1e-12 * np.maximum(n * see, 1e-300)
     with np.errstate(invalid="ignore", divide="ignore"):
         level = np.where(ok, (see * sy - se * sye) / det, sy / n)
         amplitude = np.where(ok, (n * sye - se * sy) / det, 0.0)
-    sse = syy - level * sy - amplitude * sye
-    return float(np.sum(np.maximum(sse, 0.0))), level, amplitude
+    sse = np.sum(np.maximum(syy - level * sy - amplitude * sye, 0.0), axis=-1)
+    return sse, level, amplitude  # type: ignore[return-value]
 
 
 def fit_transients(
@@ -111,10 +113,10 @@ def fit_transients(
     tau_max = max(0.25 * float(np.median(durations)), 2 * tau_min)
 
     def objective(log_tau: float) -> float:
-        return _segment_sse(y, np.exp(-t / np.exp(log_tau)), index)[0]
+        return float(_segment_sse(y, np.exp(-t / np.exp(log_tau)), index)[0])
 
     grid = np.linspace(np.log(tau_min), np.log(tau_max), 40)
-    values = [objective(g) for g in grid]
+    values = _segment_sse(y, np.exp(-t / np.exp(grid)[:, None]), index)[0]  # all 40 at once
     best = int(np.argmin(values))
     lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
     result = minimize_scalar(objective, bounds=(lo, hi), method="bounded", options={"xatol": 1e-3})

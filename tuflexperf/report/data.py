@@ -2,13 +2,12 @@
 
 Everything here is computed by the project's own modules; nothing is re-derived:
 
-- verdicts: :func:`tuflexperf.analysis.requirements.check_case`;
-- take-off, trim, OEI: :func:`solve_takeoff`, :func:`solve_trim`, :func:`solve_oei`;
+- verdicts, take-off, trim, OEI, endurance: one :class:`tuflexperf.analysis.study.Study`
+  of the case, so each is solved once and the figure draws the result the verdict read;
 - measured thrust points, delay, structure drag: :func:`tuflexperf.reduction.pipeline.fit_campaign`
   on the campaign (or :func:`tuflexperf.io.runs.read_thrust_table` on a table);
-- one reduced run: :func:`tuflexperf.reduction.pipeline.reduce_step_run` plus the campaign's
-  filters (:mod:`tuflexperf.reduction.filters`) and change points
-  (:func:`tuflexperf.reduction.changepoints.force_changepoints`);
+- one reduced run, its cleaned force and change points, and the sine sweeps: kept by that
+  same ``fit_campaign`` (``FitResult.step_runs``, ``sweep_runs``), never reduced again;
 - endurance: :func:`tuflexperf.analysis.endurance.solve_endurance` and its battery
   characterisation (fitted pack model and discharge runs).
 
@@ -26,12 +25,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
+
+if TYPE_CHECKING:
+    from tuflexperf.analysis.study import Study
 
 CAMPAIGN_BESIDE_PROPULSION = Path("campaign") / "campaign.yaml"
 
@@ -129,33 +131,20 @@ def _points_from_rows(rows: list[dict[str, Any]]) -> MeasuredPoints:
     )
 
 
-def _processed_run(campaign: Any, run: Any, delay_s: float) -> ProcessedRun:
-    """Reduce one throttle-step run with the campaign's own settings (paper Fig. 10).
-
-    Adapter: ``fit_campaign`` keeps only summaries, so the run is reduced again with
-    the pipeline's public ``reduce_step_run``; the whole-run cleaned force is the
-    pipeline's own ``clean_run``.
-    """
-    from tuflexperf.io.runs import read_run
-    from tuflexperf.reduction.changepoints import force_changepoints
-    from tuflexperf.reduction.pipeline import MIN_SEGMENT_S, clean_run, reduce_step_run
-
-    data = read_run(run.path, vendor=run.vendor)
-    result = reduce_step_run(campaign, run, data, delay_s)
-    fs = data.sample_rate_hz
-    clean, replaced = clean_run(campaign, data)
-    changes = force_changepoints(clean, fs, min_segment_s=MIN_SEGMENT_S)
+def _processed_run(result: Any) -> ProcessedRun:
+    """One throttle-step run as ``fit_campaign`` reduced it (paper Fig. 10); no re-reduction."""
+    data = result.data
     return ProcessedRun(
-        file=run.file,
-        engine=str(run.engine),
+        file=result.run.file,
+        engine=str(result.run.engine),
         time_s=data.time_s,
         throttle=data["throttle"],
         airspeed_m_s=data["airspeed_m_s"],
         force_raw_n=data["force_n"],
-        force_clean_n=clean,
-        changepoints=tuple(int(c) for c in changes),
+        force_clean_n=result.cleaned_force_n,
+        changepoints=result.changepoints,
         segments=tuple((s.start, s.stop, s.force_n) for s in result.segments),
-        outliers_replaced=replaced,
+        outliers_replaced=result.outliers_replaced,
     )
 
 
@@ -191,7 +180,6 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
         return measured
 
     from tuflexperf.io.campaign import load_campaign
-    from tuflexperf.io.runs import read_run
     from tuflexperf.reduction.pipeline import fit_campaign
 
     campaign = load_campaign(source)
@@ -205,7 +193,6 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
     drag = summary.get("structure_drag")
     if drag:
         measured.drag_c1_c2 = (drag["c1_n_per_m_s"], drag["c2_n_per_m2_s2"])
-    delay = float(summary.get("delay_s") or case.propulsion.delay_s or 0.0)
 
     airspeeds: dict[str, dict[str, Any]] = {}
     for row in summary["points"]:
@@ -214,43 +201,34 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
     for entry in airspeeds.values():
         entry["airspeed"] = float(np.mean(entry["values"]))
 
-    steps = campaign.of_kind("throttle_steps")
-    engines = list(dict.fromkeys(str(r.engine) for r in steps))
+    steps = result.step_runs
+    engines = list(dict.fromkeys(str(r.run.engine) for r in steps))
     if steps:
         # Paper Fig. 10: the run at the highest airspeed (30 m/s) of the first engine.
-        first = [r for r in steps if str(r.engine) == engines[0]]
-        fastest = max(first, key=lambda r: _mean_airspeed(airspeeds, r.file))
-        measured.processed = _processed_run(campaign, fastest, delay)
+        first = [r for r in steps if str(r.run.engine) == engines[0]]
+        fastest = max(first, key=lambda r: _mean_airspeed(airspeeds, r.run.file))
+        measured.processed = _processed_run(fastest)
         # Paper Figs. 16-17: first engine at its lowest airspeed, last at its highest.
-        slowest = min(first, key=lambda r: _mean_airspeed(airspeeds, r.file))
-        last = [r for r in steps if str(r.engine) == engines[-1]]
-        top = max(last, key=lambda r: _mean_airspeed(airspeeds, r.file))
-        measured.comparisons = [
-            _processed_run(campaign, slowest, delay)
-            if slowest is not fastest
-            else measured.processed,
-            _processed_run(campaign, top, delay) if top is not fastest else measured.processed,
-        ]
+        slowest = min(first, key=lambda r: _mean_airspeed(airspeeds, r.run.file))
+        last = [r for r in steps if str(r.run.engine) == engines[-1]]
+        top = max(last, key=lambda r: _mean_airspeed(airspeeds, r.run.file))
+        measured.comparisons = [_processed_run(slowest), _processed_run(top)]
 
-    sweeps = campaign.of_kind("sine_sweep")
-    if sweeps:
-        by_file = {d["file"]: d for d in summary.get("delay_runs", [])}
-        loaded = [(run, read_run(run.path, vendor=run.vendor)) for run in sweeps]
+    if result.sweep_runs:
         # Paper Figs. 13-14: the sweep at the highest airspeed, of the last engine on a tie.
-        run, data = max(
-            enumerate(loaded),
-            key=lambda item: (round(float(np.mean(item[1][1]["airspeed_m_s"])), 0), item[0]),
+        sweep = max(
+            enumerate(result.sweep_runs),
+            key=lambda item: (round(float(np.mean(item[1].data["airspeed_m_s"])), 0), item[0]),
         )[1]
-        estimate = by_file.get(run.file, {})
         measured.sweep = SweepRun(
-            file=run.file,
-            engine=str(run.engine),
-            time_s=data.time_s,
-            throttle=data["throttle"],
-            force_n=data["force_n"],
-            airspeed_m_s=float(np.mean(data["airspeed_m_s"])),
-            delay_s=float(estimate.get("delay_s", math.nan)),
-            lag_s=float(estimate.get("lag_s", math.nan)),
+            file=sweep.run.file,
+            engine=str(sweep.run.engine),
+            time_s=sweep.data.time_s,
+            throttle=sweep.data["throttle"],
+            force_n=sweep.data["force_n"],
+            airspeed_m_s=float(np.mean(sweep.data["airspeed_m_s"])),
+            delay_s=sweep.estimate.delay_s,
+            lag_s=sweep.estimate.lag_s,
         )
     else:
         measured.notes.append(f"{source.name}: no sine_sweep run, delay figure left out")
@@ -271,50 +249,49 @@ class Analyses:
     endurance_at_requirement: Any | None = None
     characterisation: Any | None = None
     notes: list[str] = field(default_factory=list)
+    study: Any | None = None  # the Study these came from: later pages ask it, never re-solve
 
 
 ENDURANCE_CURVE_POINTS = 15
 
 
-def run_analyses(case: Case) -> Analyses:
-    """Every analysis the case allows; "not attainable" becomes a note, never a crash."""
-    from tuflexperf.analysis.requirements import check_case
-    from tuflexperf.analysis.takeoff import solve_takeoff
+def run_analyses(study: Study | Case) -> Analyses:
+    """Every analysis the case allows, read from its :class:`Study` (solved once, shared
+    with the verdicts); "not attainable" becomes a note, never a crash."""
+    from tuflexperf.analysis.study import Study
 
-    verdicts = check_case(case)
+    if not isinstance(study, Study):
+        study = Study(study)
+    case = study.case
+    verdicts = study.verdicts()
     notes: list[str] = []
     takeoff, takeoff_note = None, None
     try:
-        takeoff = solve_takeoff(case)
+        takeoff = study.takeoff()
     except NotAttainable as exc:
         takeoff_note = str(exc)
     trim = oei = None
     if case.requirements.envelope is not None:
-        from tuflexperf.analysis.oei import solve_oei
-        from tuflexperf.analysis.trim import solve_trim
-
-        trim = solve_trim(case)
+        trim = study.trim()
         if len(case.propulsion.engines) >= 2:
-            oei = solve_oei(case)
+            oei = study.oei()
         else:
             notes.append("one engine only: no one-engine-inoperative case")
     else:
         notes.append("the case has no envelope requirement: trim and OEI are not drawn")
-    analyses = Analyses(verdicts, takeoff, takeoff_note, trim, oei, notes=notes)
+    analyses = Analyses(verdicts, takeoff, takeoff_note, trim, oei, notes=notes, study=study)
     if case.battery_path is None:
         notes.append("the case names no battery file: the endurance figure is left out")
         return analyses
     try:
-        _endurance(case, analyses)
+        _endurance(study, analyses)
     except NotAttainable as exc:  # a failing aircraft still gets its review (issue 10)
         notes.append(f"endurance: not attainable: {exc}")
     return analyses
 
 
-def _endurance(case: Case, analyses: Analyses) -> None:
-    from tuflexperf.analysis.endurance import endurance_model, solve_endurance
-
-    model = endurance_model(case)
+def _endurance(study: Study, analyses: Analyses) -> None:
+    model = study.endurance_model()
     analyses.characterisation = model.ch
     least = model.min_throttle
     if not math.isfinite(least):
@@ -322,13 +299,13 @@ def _endurance(case: Case, analyses: Analyses) -> None:
         return
     for x in np.linspace(min(max(least, 0.0), 1.0), 1.0, ENDURANCE_CURVE_POINTS):
         try:
-            analyses.endurance_curve.append((float(x), solve_endurance(case, float(x))))
+            analyses.endurance_curve.append((float(x), study.endurance(float(x))))
         except NotAttainable:
             continue
-    requirement = case.requirements.endurance
+    requirement = study.case.requirements.endurance
     if requirement is not None:
         try:
-            analyses.endurance_at_requirement = solve_endurance(case, requirement.throttle)
+            analyses.endurance_at_requirement = study.endurance(requirement.throttle)
         except NotAttainable as exc:
             analyses.notes.append(f"endurance at throttle {requirement.throttle:g}: {exc}")
 
