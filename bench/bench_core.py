@@ -66,6 +66,16 @@ def naive_trim(case, speeds: np.ndarray) -> list[float]:
     return out
 
 
+USED_STACK = """
+import casadi, numpy, typer, yaml, pydantic
+from pydantic import BaseModel, Field
+class Probe(BaseModel):
+    x: float = Field(gt=0)
+Probe(x=1.0)
+import typer._adapters
+"""
+
+
 def main() -> None:
     exe = shutil.which("tuflexperf", path=str(Path(sys.executable).parent)) or "tuflexperf"
     check_s = wall([exe, "check"])
@@ -79,6 +89,16 @@ def main() -> None:
     print(
         f"  tuflexperf check              {check_s * 1e3:8.1f} ms   "
         f"ratio to the floor {check_s / stack_s:5.2f} (issue 9 target <= 1.3)"
+    )
+    # What any typer + pydantic CLI pays beyond that floor: `import pydantic` is lazy, so the
+    # floor holds none of pydantic's model machinery, nor typer's parser (imported on parse).
+    used_s = wall([sys.executable, "-c", USED_STACK])
+    print(
+        f"  + one pydantic model validated, typer's parser {used_s * 1e3:6.1f} ms   "
+        f"ratio to the floor {used_s / stack_s:5.2f} (no tuflexperf code at all)"
+    )
+    print(
+        f"  tuflexperf's own share (check - that)  {(check_s - used_s) * 1e3:6.1f} ms"
     )
     # AeroSandbox is not a dependency: pass a Python that has it (e.g. a scratch venv).
     asb_python = sys.argv[sys.argv.index("--aerosandbox-python") + 1] if (

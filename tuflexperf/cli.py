@@ -8,6 +8,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -962,6 +963,9 @@ def main(argv: list[str] | None = None) -> None:
     from tuflexperf.io.files import install_sigterm_handler
 
     install_sigterm_handler()  # SIGTERM unwinds like Ctrl-C: no staging left behind
+    # pydantic otherwise scans every installed package's entry points for plugins on the
+    # first model (importlib.metadata, ~10 ms of each `check`); a user may still enable them
+    os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
     try:
         code = app(args=argv, standalone_mode=False, prog_name="tuflexperf")
     except Abort:

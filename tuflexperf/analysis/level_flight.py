@@ -1,10 +1,9 @@
 """Least throttle for steady level flight, ``T(x, V) >= D(V)``, over an airspeed grid.
 
-Shared by trim (all engines) and one-engine-inoperative. The throttle is found
-by a CasADi Newton rootfinder on the thrust excess ``E(x, V) = T(x, V) - D(V)``,
-mapped over the grid and built once per case. A coarse throttle scan brackets
-the least root first, so Newton starts beside the right root; a root that leaves
-its bracket falls back to bisection.
+Shared by trim (all engines) and one-engine-inoperative. The thrust excess
+``E(x, V) = T(x, V) - D(V)`` is quadratic in the throttle ``x`` (poly22 thrust), so
+the least throttle is the least root in [0, 1] of a quadratic, in closed form over
+the whole grid at once (:func:`tuflexperf.models.thrust.least_throttle_of`).
 """
 
 from __future__ import annotations
@@ -16,8 +15,9 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.models.thrust import least_throttle_of
+
 MAX_GRID_STEP_M_S = 0.5
-_SCAN = np.linspace(0.0, 1.0, 41)  # bracket width 0.025 in throttle
 
 ExcessFunction = Callable[[Any, Any], Any]
 
@@ -28,57 +28,23 @@ def airspeed_grid(min_airspeed_m_s: float, max_airspeed_m_s: float) -> np.ndarra
     return np.linspace(min_airspeed_m_s, max_airspeed_m_s, steps + 1)
 
 
-@dataclass
+@dataclass(frozen=True)
 class LeastThrottleSolver:
-    """Least throttle in [0, 1] with ``excess(x, V) >= 0`` at each airspeed; NaN where none."""
+    """Least throttle in [0, 1] with ``excess(x, V) >= 0`` at each airspeed; NaN where none.
+
+    The excess (poly22 thrust minus drag) is quadratic in the throttle, so the least
+    throttle is the least root of a quadratic, exact and vectorised over the grid
+    (:func:`tuflexperf.models.thrust.least_throttle_of`); nothing iterates.
+    """
 
     excess: ExcessFunction
-    _rootfinders: dict[int, Any]
 
     def __call__(self, airspeeds_m_s: np.ndarray) -> np.ndarray:
         v = np.asarray(airspeeds_m_s, dtype=float)
-        scan = np.asarray(self.excess(_SCAN[:, None], v[None, :]), dtype=float)
-        feasible = scan >= 0.0
-        reachable = feasible.any(axis=0)
-        first = np.argmax(feasible, axis=0)
-        result = np.full(v.shape, np.nan)
-        result[reachable & (first == 0)] = 0.0
-        todo = reachable & (first > 0)
-        if not todo.any():
-            return result
-        low = _SCAN[first[todo] - 1]
-        high = _SCAN[first[todo]]
-        roots = self._newton(v[todo], high)
-        bad = ~((roots >= low - 1e-12) & (roots <= high + 1e-12) & np.isfinite(roots))
-        if bad.any():
-            roots[bad] = self._bisect(v[todo][bad], low[bad], high[bad])
-        result[todo] = np.clip(roots, low, high)
-        return result
-
-    def _newton(self, v: np.ndarray, guess: np.ndarray) -> np.ndarray:
-        n = v.size
-        if n not in self._rootfinders:
-            import casadi as ca
-
-            x = ca.MX.sym("throttle")
-            speed = ca.MX.sym("airspeed_m_s")
-            rf = ca.rootfinder(
-                "least_throttle",
-                "newton",
-                {"x": x, "p": speed, "g": self.excess(x, speed)},
-                {"abstol": 1e-13, "max_iter": 60, "error_on_fail": False},
-            )
-            self._rootfinders[n] = rf.map(n)
-        return np.asarray(self._rootfinders[n](guess[None, :], v[None, :]), dtype=float).ravel()
-
-    def _bisect(self, v: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
-        low, high = low.copy(), high.copy()
-        for _ in range(60):
-            mid = 0.5 * (low + high)
-            ok = np.asarray(self.excess(mid, v), dtype=float) >= 0.0
-            high = np.where(ok, mid, high)
-            low = np.where(ok, low, mid)
-        return high
+        throttle, reached = least_throttle_of(lambda x: self.excess(x, v))
+        throttle = np.broadcast_to(np.asarray(throttle, dtype=float), v.shape)
+        reached = np.broadcast_to(np.asarray(reached, dtype=float), v.shape)
+        return np.where(reached > 0.5, throttle, np.nan)
 
 
 @dataclass(frozen=True)
@@ -118,5 +84,5 @@ class ThrottleSweep:
 
 
 def least_throttle_solver(excess: ExcessFunction) -> LeastThrottleSolver:
-    """Build a solver for ``excess(throttle, airspeed)`` (one code path: numpy and CasADi)."""
-    return LeastThrottleSolver(excess=excess, _rootfinders={})
+    """A solver for ``excess(throttle, airspeed)`` (one code path: numpy and CasADi)."""
+    return LeastThrottleSolver(excess=excess)

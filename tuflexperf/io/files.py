@@ -14,10 +14,7 @@ import errno
 import hashlib
 import json
 import os
-import secrets
-import shutil
 import signal
-import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
@@ -94,6 +91,8 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
         for path, data in files.items():
             current = Path(path)
             current.parent.mkdir(parents=True, exist_ok=True)
+            import tempfile  # lazy: `check` writes nothing
+
             fd, tmp = tempfile.mkstemp(prefix=f".{current.name}.", suffix=".tmp",
                                        dir=current.parent)
             staged.append((tmp, current))
@@ -208,6 +207,9 @@ def staged_directory(out: Path, command: str) -> Iterator[Path]:
     place. On any failure or interrupt the staging folder is removed and ``out`` is
     untouched.
     """
+    import secrets  # lazy, with shutil: only the commands that write a folder need them
+    import shutil
+
     out = Path(out).absolute()
     check_output_dir(out, command)
     created: list[Path] = []

@@ -213,6 +213,29 @@ def least_throttle_reaching(a: Any, b: Any, c: Any) -> tuple[Any, Any]:
     return throttle, reached
 
 
+def least_throttle_of(excess: Any) -> tuple[Any, Any]:
+    """Least throttle with ``excess(x) >= 0`` (``excess`` quadratic in ``x``), and if one exists.
+
+    Poly22 thrust is quadratic in the throttle, and so is any sum of engines minus a drag
+    that does not depend on it; three evaluations (``x = 0, 1/2, 1``) give its
+    coefficients exactly, and :func:`least_throttle_reaching` the root. The one solver
+    of the least level-flight throttle: trim, OEI, endurance, missions, batches and the
+    export's inverse all come here (issue 9). Backend-neutral.
+
+    Parameters
+    ----------
+    excess : callable
+        ``excess(x)`` [N] at throttle ``x`` [fraction]: thrust minus the force to balance.
+
+    Returns
+    -------
+    throttle, reached
+        As :func:`least_throttle_reaching`.
+    """
+    e0, e_half, e1 = excess(0.0), excess(0.5), excess(1.0)
+    return least_throttle_reaching(2.0 * (e1 + e0) - 4.0 * e_half, 4.0 * e_half - e1 - 3.0 * e0, e0)
+
+
 def delay_samples(delay_s: float, sample_time_s: float) -> int:
     """Dead time in whole samples: ``round(delay_s / sample_time_s)``, half away from zero.
 
