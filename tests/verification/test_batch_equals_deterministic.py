@@ -157,3 +157,80 @@ def test_battery_keys_in_a_batch_equal_a_case_with_that_battery_file(tmp_path) -
     assert_equal_to_deterministic(case, result.values, 0)
     assert_equal_to_deterministic(single, result.values, 1)
     assert result.values["flight_endurance"][1] < result.values["flight_endurance"][0] - 1.0
+
+
+def _catapult_case(tmp_path, rolling_friction: float = 0.9):
+    """The shipped case launched by a catapult at 18 m/s EAS, on a runway it could never
+    roll on (friction 0.9): the endurance starts airborne (SPEC 4, aircraft file)."""
+    import shutil
+
+    root = SHIPPED_CASE.parent.parent
+    for folder in ("requirements", "data"):
+        shutil.copytree(root / folder, tmp_path / folder)
+    aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
+    text = aircraft.read_text().replace(
+        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 2000\ntakeoff:", 1)
+    text = "\n".join(f"  rolling_friction: {rolling_friction}"
+                     if line.strip().startswith("rolling_friction") else line
+                     for line in text.splitlines()) + "\n"
+    aircraft.write_text(text)
+    case_file = tmp_path / "requirements" / "tuflex.yaml"
+    case_file.write_text(case_file.read_text().replace("  takeoff: {max_ground_roll_m: 60}\n", ""))
+    return load_case(case_file)
+
+
+def test_catapult_launch_in_a_batch_equals_the_deterministic_check(tmp_path) -> None:
+    case = _catapult_case(tmp_path)
+    assert case.aircraft.launch == "catapult"
+    sets = [
+        {},
+        {"aircraft.mass_kg": 24.0, "aircraft.cd0": 0.038},
+        {"aircraft.launch_speed_m_s": 22.0, "atmosphere.temperature_offset_k": 20.0},
+        {"aircraft.launch_speed_m_s": 16.0, "aircraft.k": 0.045},
+        {"requirements.endurance.throttle": 0.7, "atmosphere.altitude_m": 800.0},
+        {"aircraft.mass_kg": 40.0},  # stall 17.8 m/s EAS: 18 m/s still launches
+        {"aircraft.mass_kg": 45.0},  # stall 18.8 m/s EAS: below stall, bad input alone
+    ]
+    nominal = numeric_keys(case)
+    keys = sorted({k for s in sets for k in s})
+    values = {k: np.array([s.get(k, nominal[k]) for s in sets]) for k in keys}
+    result = BatchEvaluator(case).evaluate(values)
+    assert "flight_endurance" in result.values
+    for row, s in enumerate(sets):
+        try:
+            single = with_values(case, s)
+        except InputError:  # release below the sampled stall: bad input for one case
+            assert row == len(sets) - 1
+            assert math.isnan(result.values["flight_endurance"][row])
+            continue
+        assert_equal_to_deterministic(single, result.values, row)
+    endurance = result.values["flight_endurance"]
+    # a faster release leaves less to climb... and a runway launch would not be attainable
+    assert np.isfinite(endurance[:-1]).all()
+    assert endurance[2] != endurance[0] and endurance[3] != endurance[0]
+
+
+def test_catapult_samples_run_where_the_runway_case_is_not_attainable(tmp_path) -> None:
+    from tuflexperf.analysis.uncertainty import plan_for, run_samples
+
+    case = _catapult_case(tmp_path)
+    plan = plan_for(case, 300, seed=3)
+    samples = run_samples(case, plan)
+    endurance = samples.values["flight_endurance"]
+    assert np.isfinite(endurance).all()
+    runway = dataclasses.replace(case, aircraft=dataclasses.replace(case.aircraft,
+                                                                    launch="runway"))
+    runway_values = BatchEvaluator(runway).evaluate().values["flight_endurance"]
+    assert math.isnan(runway_values[0])  # friction 0.9: it never rolls to lift-off
+
+
+def test_a_nominal_case_that_never_rolls_still_evaluates_other_rows() -> None:
+    """The batch takes only the battery side of the endurance model: a sweep or sample set
+    whose nominal case never reaches lift-off still answers for the rows that do."""
+    case = with_values(load_case(SHIPPED_CASE), {"aircraft.takeoff.rolling_friction": 0.9})
+    assert all(v.value is None for v in check_case(case)
+               if v.name in ("takeoff_ground_roll", "flight_endurance"))
+    result = BatchEvaluator(case).evaluate(
+        {"aircraft.takeoff.rolling_friction": np.array([0.9, 0.07])})
+    assert math.isnan(result.values["flight_endurance"][0])
+    assert_equal_to_deterministic(load_case(SHIPPED_CASE), result.values, 1)

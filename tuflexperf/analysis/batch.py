@@ -13,7 +13,15 @@ iteration is replaced by its closed form or a fixed-node rule:
   :func:`tuflexperf.models.thrust.least_throttle_reaching`;
 - **endurance**: the same steps as :class:`tuflexperf.analysis.endurance.EnduranceModel`
   (launch charge by the same RK4, level-flight speed, cut-off charge, Gauss-Legendre
-  discharge time) with bisection vectorised over the batch instead of Newton per case.
+  discharge time) with bisection vectorised over the batch instead of Newton per case; a
+  ``launch: catapult`` aircraft starts airborne at its release speed (no roll).
+
+Speed without a smaller problem: the roll's net force is a quadratic in airspeed between its
+kinks, so three evaluations per piece replace one per node (checked by a fourth); trim and
+OEI look first at the airspeeds beside the nominal case's extremes and verify every row
+against the whole grid (rows the check rejects are solved at every airspeed); sampled thrust
+coefficients meet the grid's airspeeds in one matrix product. Each shortcut is held to the
+plain way in ``tests/verification/test_batch_shortcuts.py``.
 
 A not-attainable parameter set gives NaN, never a dropped row. The thrust model may be
 perturbed per sample: coefficients ``(E, B, 6)`` and an extrapolation error ``(E, B)``
@@ -51,6 +59,7 @@ from tuflexperf.models.aircraft import (
     stall_speed_m_s,
     transition_radius_m,
     transition_speed_m_s,
+    true_airspeed_m_s,
 )
 from tuflexperf.models.atmosphere import isa_density_kg_m3
 from tuflexperf.models.thrust import (
@@ -59,6 +68,7 @@ from tuflexperf.models.thrust import (
     density_ratio,
     engine_thrust_n,
     least_throttle_reaching,
+    poly22,
     total_thrust_n,
     windmilling_thrust_n,
 )
@@ -66,6 +76,12 @@ from tuflexperf.models.thrust import (
 Array = NDArray[np.float64]
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(16)
 _PANELS = 4  # composite rule: 4 panels x 16 nodes per smooth piece
+_CANDIDATE_HALF_WIDTH = 3  # grid points each side of the nominal's extreme tried first
+# the roll's quadrature nodes and weights on [0, 1] (composite, as _integrate places them)
+_ROLL_U_NODES = ((np.arange(_PANELS)[:, None] + 0.5 * (_GL_NODES + 1.0)) / _PANELS).reshape(1, -1)
+_ROLL_U_WEIGHTS = np.tile(_GL_WEIGHTS, _PANELS)[None, :] * 0.5 / _PANELS
+_ROLL_PROBES = np.array([0.25, 0.5, 0.75, 0.9])  # three fix a piece's quadratic, one checks it
+_UNIT = {t: {u: float(u == t) for u in POLY22_TERMS} for t in POLY22_TERMS}  # basis picks
 _HISTORY_POINTS = 101  # as analysis.takeoff.HISTORY_POINTS: check grid and time history
 
 
@@ -136,25 +152,17 @@ class BatchEvaluator:
         self.case = case
         self.requirements = present_requirements(case)
         self._endurance: Any = None
-        if case.aircraft.launch != "runway" and case.requirements.endurance is not None:
-            from tuflexperf.errors import InputError
-
-            raise InputError(
-                f"{case.aircraft_path}: launch: {case.aircraft.launch}: samples, margins and "
-                "sweeps evaluate a runway launch only; run the deterministic check"
-            )
         if case.requirements.endurance is not None:
-            from tuflexperf.analysis.endurance import endurance_model
+            from tuflexperf.analysis.batch_endurance import battery_side
 
-            self._endurance = endurance_model(case)
+            self._endurance = battery_side(case)
 
     # -- the batch's model objects -----------------------------------------------------------
     def _aircraft(self, values: Mapping[str, Array], size: int) -> Aircraft:
         base = self.case.aircraft
         top = {f.name: _column(values, f"aircraft.{f.name}", getattr(base, f.name), size)
                for f in dataclasses.fields(base)
-               if f.name not in ("name", "takeoff", "launch", "launch_speed_m_s",
-                                 "launch_energy_j")}
+               if f.name not in ("name", "takeoff", "launch")}
         takeoff = dataclasses.replace(
             base.takeoff,
             **{f.name: _column(values, f"aircraft.takeoff.{f.name}",
@@ -250,19 +258,25 @@ class BatchEvaluator:
                                  obstacle_height_of(self.case), size)
                 out[requirement.name] = model.distance_to_obstacle(roll, height)
             elif requirement.block == "envelope":
-                out[requirement.name] = model.trim_max_throttle(self._grid())
+                out[requirement.name] = model.trim_max_throttle(
+                    self._grid(), self._candidates()[0])
             elif requirement.block == "oei":
                 mode = self.case.requirements.oei.dead_engine
-                out[requirement.name] = model.oei_min_throttle(self._grid(), mode)
+                out[requirement.name] = model.oei_min_throttle(
+                    self._grid(), mode, self._candidates()[1])
             else:
-                roll = roll or model.ground_roll()
+                # a catapult launch starts airborne at its release speed (no runway)
+                launch = (model.catapult_release() if self.case.aircraft.launch == "catapult"
+                          else roll or model.ground_roll())
+                if self.case.aircraft.launch != "catapult":
+                    roll = launch
                 key = "requirements.endurance.throttle"
                 throttle = _column(values, key, self.case.requirements.endurance.throttle, size)
                 throttle = np.asarray(throttle, dtype=float).reshape(-1) * np.ones(size)
                 battery = {k: np.asarray(_column(values, k, v, size), dtype=float).reshape(-1)
                            * np.ones(size) for k, v in self._battery_nominal().items()}
                 out[requirement.name] = model.flight_endurance_min(
-                    self._endurance, throttle, roll, battery
+                    self._endurance, throttle, launch, battery
                 )
         return BatchResult(
             values=out,
@@ -278,6 +292,40 @@ class BatchEvaluator:
             "battery.mission.pattern_altitude_m": float(battery.pattern_altitude_m),
             "battery.mission.landing_reserve_fraction": float(battery.landing_reserve_fraction),
         }
+
+    def _candidates(self) -> tuple[Array | None, dict[int, Array]]:
+        """Grid indices beside the nominal case's highest trim throttle (and the envelope's
+        ends) and, per dead engine, beside its least OEI throttle (memoised).
+
+        Only where to look first: the batch verifies every row against all airspeeds and
+        solves the rows the candidates do not settle at every airspeed.
+        """
+        if getattr(self, "_candidate_cache", None) is not None:
+            return self._candidate_cache
+        grid = self._grid()
+        last = grid.size - 1
+        model = _Model(aircraft=self._aircraft({}, 1), propulsion=self._propulsion(None),
+                       density=self._density({}, 1), extrapolation_n=None, size=1,
+                       stall_margin=stall_margin_of(self.case))
+
+        def beside(index: int) -> Array:
+            near = np.arange(index - _CANDIDATE_HALF_WIDTH, index + _CANDIDATE_HALF_WIDTH + 1)
+            return np.unique(np.clip(np.concatenate([near, [0, last]]), 0, last))
+
+        terms = model._grid_terms(grid)
+        above = model._above_stall(grid)[0]
+        throttle = np.where(above, model.least_throttle(grid[None, :], terms=terms)[0], np.nan)
+        trim = beside(int(np.nanargmax(throttle))) if np.any(np.isfinite(throttle)) else None
+        oei: dict[int, Array] = {}
+        mode = self.case.requirements.oei.dead_engine if self.case.requirements.oei else \
+            "windmilling"
+        for dead in range(len(self.case.propulsion.engines)):
+            throttle = np.where(
+                above, model.least_throttle(grid[None, :], dead, mode, terms)[0], np.nan)
+            if np.any(np.isfinite(throttle)):
+                oei[dead] = beside(int(np.nanargmin(throttle)))
+        self._candidate_cache = (trim, oei)
+        return self._candidate_cache
 
     def _grid(self) -> Array:
         if getattr(self, "_grid_cache", None) is not None:
@@ -302,6 +350,8 @@ class _Model:
     size: int
     stall_margin: Any = 1.0  # envelope's stall_margin (scalar or per row)
     _uniform: Array | None = None
+    _drag: Any = None  # (airspeeds, level-flight drag there) of the last grid
+    _pieces: Any = None  # memo of _roll_pieces (False: evaluate node by node)
     _terms: Any = None
 
     def least_airspeed(self) -> Array:
@@ -349,7 +399,8 @@ class _Model:
         return [np.zeros_like(v_lo), first, second, v_lo]
 
     def _integrate(self, low: Array, high: Array, panels: int) -> tuple[Array, Array]:
-        """Composite Gauss-Legendre of ``m V / F`` and ``m / F`` over [low, high] per row."""
+        """Composite Gauss-Legendre of ``m V / F`` and ``m / F`` over [low, high] per row
+        (the force evaluated node by node: the fallback of :meth:`_roll_pieces`)."""
         width = (high - low) / panels
         starts = low + width * np.arange(panels)[None, :]
         nodes = (starts[:, :, None] + 0.5 * width[:, :, None] * (_GL_NODES + 1.0)).reshape(
@@ -362,12 +413,81 @@ class _Model:
             time = np.sum(weights * mass / force, axis=1)
         return distance, time
 
+    def _roll_pieces(self) -> tuple[list[Array], list[tuple[Array, ...]]] | None:
+        """The net force on each smooth piece of [0, V_LO] as a quadratic (memoised).
+
+        Between the kinks of :meth:`_breaks` the full-throttle net force is quadratic in
+        airspeed (poly22 thrust at a fixed throttle, drag, lift and wheel load all ~V^2, the
+        extrapolation error constant), so three values of :meth:`net_force` per piece give
+        it exactly, as ``c0 + c1 s + c2 s^2`` with ``s = u - 1/2`` and ``u`` the piece's own
+        coordinate in [0, 1] (Lagrange through u = 1/4, 1/2, 3/4). A fourth value checks it;
+        where it does not hold (a model that is not quadratic, a jump inside a piece) the
+        force is evaluated node by node instead (None).
+        """
+        if self._pieces is not None:
+            return self._pieces or None
+        low_edge = self.propulsion.tested_airspeed_m_s[0]
+        if self.extrapolation_n is not None and low_edge > 0.0:
+            self._pieces = False  # a jump at the low edge lies inside the first piece
+            return None
+        breaks = self._breaks(self.liftoff_speed())
+        fits = []
+        ok = True
+        for low, high in zip(breaks[:-1], breaks[1:], strict=True):
+            width = high - low
+            f = self.net_force(low + width * _ROLL_PROBES[None, :])
+            c0 = f[:, 1:2]
+            c1 = 2.0 * (f[:, 2:3] - f[:, 0:1])
+            c2 = 8.0 * (f[:, 0:1] - 2.0 * f[:, 1:2] + f[:, 2:3])
+            s = _ROLL_PROBES[3] - 0.5
+            predicted = c0 + s * (c1 + s * c2)
+            scale = np.max(np.abs(f), axis=1, keepdims=True) + 1.0
+            with np.errstate(invalid="ignore"):
+                ok = ok and bool(np.all((np.abs(predicted - f[:, 3:4]) <= 1e-9 * scale)
+                                        | ~np.isfinite(f[:, 3:4])))
+            fits.append((low, width, c0, c1, c2))
+        self._pieces = (breaks, fits) if ok else False
+        return self._pieces or None
+
+    def _integrate_piece(self, piece: tuple[Array, ...]) -> tuple[Array, Array]:
+        """:meth:`_integrate` on one piece of :meth:`_roll_pieces`: the same nodes, the force
+        from the piece's quadratic."""
+        low, width, c0, c1, c2 = piece
+        s = _ROLL_U_NODES - 0.5
+        force = c0 + s * (c1 + s * c2)
+        speed = low + width * _ROLL_U_NODES
+        weights = _ROLL_U_WEIGHTS * width
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            over = weights * mass / force
+            return np.sum(over * speed, axis=1), np.sum(over, axis=1)
+
     def uniform_force(self) -> Array:
         """Net force [N] at 101 equally spaced airspeeds from rest to V_LO (memoised)."""
         if self._uniform is None:
             v_lo = self.liftoff_speed()
             speeds = v_lo * np.linspace(0.0, 1.0, _HISTORY_POINTS)[None, :]
-            self._uniform = self.net_force(speeds)
+            pieces = self._roll_pieces()
+            if pieces is None:
+                self._uniform = self.net_force(speeds)
+                return self._uniform
+            breaks, fits = pieces
+            # each airspeed on its piece; an airspeed within 1e-9 above the tested range's
+            # end still counts as tested, as the thrust model decides (Model.thrust)
+            edge = self.propulsion.tested_airspeed_m_s[1]
+            index = sum((speeds > np.where(b == edge, b + 1e-9, b)).astype(np.intp)
+                        for b in breaks[1:3])
+            low, width, c0, c1, c2 = (
+                np.concatenate([f[i] for f in fits], axis=1) for i in range(5))
+            if index.any():  # some airspeeds beyond the first kink: each on its piece
+                low, width, c0, c1, c2 = (np.take_along_axis(a, index, axis=1)
+                                          for a in (low, width, c0, c1, c2))
+            else:
+                low, width, c0, c1, c2 = (a[:, :1] for a in (low, width, c0, c1, c2))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                s = (speeds - low) / width - 0.5
+            force = c0 + s * (c1 + s * c2)
+            self._uniform = force
         return self._uniform
 
     def ground_roll(self) -> tuple[Array, Array, Array, Array]:
@@ -381,13 +501,15 @@ class _Model:
         stall = stall_speed(self)[:, None]
         attainable = np.all(self.uniform_force() > 0.0, axis=1) & (
             v_lo >= stall * (1.0 - 1e-12))[:, 0]
-        breaks = self._breaks(v_lo)
+        pieces = self._roll_pieces()
+        breaks = self._breaks(v_lo) if pieces is None else pieces[0]
         distance = np.zeros(self.size)
         time = np.zeros(self.size)
-        for low, high in zip(breaks[:-1], breaks[1:], strict=True):
+        for k, (low, high) in enumerate(zip(breaks[:-1], breaks[1:], strict=True)):
             if np.all(high <= low):
                 continue  # this kink lies beyond lift-off for every row
-            d, t = self._integrate(low, high, _PANELS)
+            d, t = (self._integrate(low, high, _PANELS) if pieces is None
+                    else self._integrate_piece(pieces[1][k]))
             distance, time = distance + d, time + t
         ok = attainable & np.isfinite(distance) & np.isfinite(time)
         # rotation on the ground at the lift-off speed (Raymer 17.8.2: S_R = V_LO t_R)
@@ -397,6 +519,20 @@ class _Model:
         time = time + rotation
         return (np.where(ok, distance, np.nan), np.where(ok, time, np.nan), v_lo[:, 0],
                 ok.astype(float))
+
+    def catapult_release(self) -> tuple[Array, Array, Array, Array]:
+        """A catapult launch as :meth:`ground_roll` reports a roll: no distance, no time, the
+        release true airspeed [m/s] (``launch_speed_m_s`` is an EAS) and attainable (1/0).
+
+        The catapult's energy is the ground equipment's, not the battery's (SPEC 4): the
+        flight starts airborne at the release speed, which must not be below stall (bad input
+        for one case; not attainable for a sampled mass or ``cl_max`` that raises the stall).
+        """
+        release = np.asarray(true_airspeed_m_s(self.aircraft.launch_speed_m_s, self.density),
+                             dtype=float).reshape(-1) * np.ones(self.size)
+        ok = release >= stall_speed(self) * (1.0 - 1e-12)
+        zero = np.zeros(self.size)
+        return zero, zero, release, ok.astype(float)
 
     def distance_to_obstacle(self, roll: tuple[Array, Array, Array, Array],
                              height: Any) -> Array:
@@ -438,22 +574,35 @@ class _Model:
         live, dead = [], []
         for j, engine in enumerate(self.propulsion.engines):
             error = 0.0 if outside is None else scale * outside * self.extrapolation_n[j][:, None]
-            live.append([engine_thrust_n(engine, x, speed, scale) + error for x in (0.0, 0.5, 1.0)])
+            coefficients = engine.coefficients
+            if np.shape(speed)[0] == 1 and all(np.ndim(coefficients[t]) == 2
+                                               for t in POLY22_TERMS):
+                # sampled coefficients against airspeeds common to all rows: poly22 is
+                # linear in its coefficients, so each row's thrust is its coefficients
+                # times poly22's basis functions (one matrix product)
+                rows = np.concatenate([coefficients[t] for t in POLY22_TERMS], axis=1)
+                live.append([
+                    scale * (rows @ np.stack([
+                        np.broadcast_to(poly22(x * engine.throttle_scale, speed[0], _UNIT[t]),
+                                        speed[0].shape) for t in POLY22_TERMS]))
+                    + error
+                    for x in (0.0, 0.5, 1.0)])
+            else:
+                live.append([engine_thrust_n(engine, x, speed, scale) + error
+                             for x in (0.0, 0.5, 1.0)])
             dead.append(windmilling_thrust_n(engine, speed, scale, self.density,
                                              self.propulsion.fan_area_m2))
         return live, dead
 
-    def least_throttle(self, speed: Array, dead: int | None = None,
-                       mode: str = "windmilling",
-                       terms: tuple[list[list[Array]], list[Array]] | None = None) -> Array:
-        """Least throttle [fraction] for level flight at each airspeed; NaN where none.
+    def _excess_quadratic(self, speed: Array, dead: int | None, mode: str,
+                          terms: tuple[list[list[Array]], list[Array]]
+                          ) -> tuple[Array, Array, Array]:
+        """Level-flight thrust excess ``a x^2 + b x + c`` [N] in throttle at each airspeed.
 
         The total thrust is quadratic in throttle (poly22): its coefficients from its values
-        at throttle 0, 1/2 and 1, the least root by :func:`least_throttle_reaching` (one
-        closed form for trim, OEI, endurance and the export). ``terms`` reuses the engines'
-        thrusts at these airspeeds across dead-engine cases.
+        at throttle 0, 1/2 and 1; ``c`` is the idle thrust less the drag.
         """
-        live, windmill = terms if terms is not None else self._engine_thrusts(speed)
+        live, windmill = terms
         t0, th, t1 = (
             sum(live[j][i] for j in range(len(live)) if j != dead) for i in range(3)
         )
@@ -461,32 +610,112 @@ class _Model:
             t0, th, t1 = t0 + windmill[dead], th + windmill[dead], t1 + windmill[dead]
         quadratic = 2.0 * (t1 - 2.0 * th + t0)
         linear = t1 - t0 - quadratic
-        drag = np.asarray(level_flight_drag_n(self.aircraft, speed, self.density), dtype=float)
+        if self._drag is None or self._drag[0] is not speed:  # shared by trim and OEI
+            self._drag = (speed, np.asarray(
+                level_flight_drag_n(self.aircraft, speed, self.density), dtype=float))
+        drag = self._drag[1]
+        shape = np.broadcast_shapes(np.shape(quadratic), np.shape(drag), (self.size, 1))
+        return (np.broadcast_to(quadratic, shape), np.broadcast_to(linear, shape),
+                np.broadcast_to(t0 - drag, shape))
+
+    @staticmethod
+    def _roots(a: Array, b: Array, c: Array) -> Array:
+        """:func:`least_throttle_reaching` (one closed form for trim, OEI, endurance and the
+        export), NaN where no throttle in [0, 1] reaches."""
         with np.errstate(invalid="ignore", divide="ignore"):
-            throttle, reached = least_throttle_reaching(quadratic, linear, t0 - drag)
-        throttle = np.where(np.asarray(reached) > 0.5, np.asarray(throttle, dtype=float), np.nan)
-        return np.broadcast_to(throttle, np.broadcast_shapes(throttle.shape, (self.size, 1)))
+            throttle, reached = least_throttle_reaching(a, b, c)
+        return np.where(np.asarray(reached) > 0.5, np.asarray(throttle, dtype=float), np.nan)
 
-    def trim_max_throttle(self, grid: Array) -> Array:
-        """Highest least throttle over the envelope grid; NaN if any airspeed is not attainable."""
-        throttle = self.least_throttle(grid[None, :], terms=self._grid_terms(grid))
-        throttle = np.where(self._above_stall(grid), throttle, np.nan)  # below stall: none
-        return np.where(np.all(np.isfinite(throttle), axis=1), np.max(throttle, axis=1), np.nan)
+    def least_throttle(self, speed: Array, dead: int | None = None,
+                       mode: str = "windmilling",
+                       terms: tuple[list[list[Array]], list[Array]] | None = None) -> Array:
+        """Least throttle [fraction] for level flight at each airspeed; NaN where none.
 
-    def oei_min_throttle(self, grid: Array, mode: str) -> Array:
-        """Worse dead engine's least throttle over the grid; NaN if one has no level flight."""
+        ``terms`` reuses the engines' thrusts at these airspeeds across dead-engine cases.
+        """
+        terms = terms if terms is not None else self._engine_thrusts(speed)
+        return self._roots(*self._excess_quadratic(speed, dead, mode, terms))
+
+    def trim_max_throttle(self, grid: Array, candidates: Array | None = None) -> Array:
+        """Highest least throttle over the envelope grid; NaN if any airspeed is not attainable.
+
+        ``candidates`` (grid indices where the highest least throttle is expected, from the
+        nominal case) make it cheap and leave it exact: the largest least throttle ``m`` over
+        the candidates is the answer of every row whose excess at throttle ``m`` is >= 0 at
+        all other airspeeds (there the least throttle is <= m); the other rows are solved at
+        every airspeed. Each row's answer depends on that row alone.
+        """
+        above = self._above_stall(grid)
+        a, b, c = self._excess_quadratic(self._grid_row(grid), None, "windmilling",
+                                         self._grid_terms(grid))
+        everywhere = np.all(above, axis=1)  # below stall somewhere: not attainable there
+        if candidates is None:
+            rows = np.arange(self.size)
+            result = np.full(self.size, np.nan)
+        else:
+            m = np.max(self._roots(a[:, candidates], b[:, candidates], c[:, candidates]), axis=1)
+            with np.errstate(invalid="ignore"):
+                excess = (a * m[:, None] + b) * m[:, None] + c
+            excess[:, candidates] = 0.0  # the candidates' roots are m or below, computed
+            holds = np.all(excess >= 0.0, axis=1)
+            # NaN at a candidate: that airspeed is not attainable, so neither is the envelope
+            result = np.where(np.isnan(m) | holds, m, np.nan)
+            rows = np.flatnonzero(everywhere & ~np.isnan(m) & ~holds)
+        if rows.size:
+            throttle = self._roots(a[rows], b[rows], c[rows])
+            result[rows] = np.where(np.all(np.isfinite(throttle), axis=1),
+                                    np.max(throttle, axis=1), np.nan)
+        return np.where(everywhere, result, np.nan)
+
+    def oei_min_throttle(self, grid: Array, mode: str,
+                         candidates: dict[int, Array] | None = None) -> Array:
+        """Worse dead engine's least throttle over the grid; NaN if one has no level flight.
+
+        ``candidates`` per dead engine (grid indices where the least throttle is expected to
+        be lowest, from the nominal case): with ``m`` the least over the attainable
+        candidates, a row's answer is ``m`` when at every other airspeed above stall the
+        excess is < 0 at throttle ``m`` and rising in throttle on [0, m] (so its least
+        throttle is above ``m``); the other rows are solved at every airspeed.
+        """
         worst = np.full(self.size, -np.inf)
         terms = self._grid_terms(grid)
+        above = self._above_stall(grid)
         for dead in range(len(self.propulsion.engines)):
-            throttle = self.least_throttle(grid[None, :], dead, mode, terms)
-            throttle = np.where(self._above_stall(grid), throttle, np.nan)
-            best = np.min(np.where(np.isfinite(throttle), throttle, np.inf), axis=1)
+            a, b, c = self._excess_quadratic(self._grid_row(grid), dead, mode, terms)
+            picked = None if candidates is None else candidates.get(dead)
+            if picked is None:
+                rows = np.arange(self.size)
+                best = np.full(self.size, np.inf)
+            else:
+                roots = self._roots(a[:, picked], b[:, picked], c[:, picked])
+                roots = np.where(above[:, picked] & np.isfinite(roots), roots, np.inf)
+                m = np.min(roots, axis=1)
+                mc = np.where(np.isfinite(m), m, 0.0)[:, None]
+                with np.errstate(invalid="ignore"):
+                    higher = ((((a * mc + b) * mc + c) < 0.0) & (b >= 0.0)
+                              & (2.0 * a * mc + b >= 0.0))
+                higher |= ~above  # below stall: no level flight to compare with
+                higher[:, picked] = True
+                holds = np.isfinite(m) & np.all(higher, axis=1)
+                best = np.where(holds, m, np.inf)
+                rows = np.flatnonzero(~holds)
+            if rows.size:
+                throttle = self._roots(a[rows], b[rows], c[rows])
+                throttle = np.where(above[rows] & np.isfinite(throttle), throttle, np.inf)
+                best[rows] = np.min(throttle, axis=1)
             worst = np.maximum(worst, best)
         return np.where(np.isfinite(worst), worst, np.nan)
 
+    def _grid_row(self, grid: Array) -> Array:
+        """The grid as one row ``(1, K)``, the same object each time (memo keys on it)."""
+        if self._terms is None or self._terms[0] is not grid:
+            self._grid_terms(grid)
+        return self._terms[2]
+
     def _grid_terms(self, grid: Array) -> tuple[list[list[Array]], list[Array]]:
         if self._terms is None or self._terms[0] is not grid:
-            self._terms = (grid, self._engine_thrusts(grid[None, :]))
+            row = grid[None, :]
+            self._terms = (grid, self._engine_thrusts(row), row)
         return self._terms[1]
 
     # -- endurance ----------------------------------------------------------------------------
