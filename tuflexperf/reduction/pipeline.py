@@ -982,9 +982,13 @@ def _propulsion_text(
         "# Written by `tuflexperf fit` (poly22 by ordinary least squares, paper section 4).\n"
         "# T = p00 + p10 x + p01 v + p20 x^2 + p11 x v + p02 v^2, x throttle fraction, v m/s.\n"
     )
-    text = header + yaml.safe_dump(_plain(document), sort_keys=False, allow_unicode=True)
+    # libyaml's emitter and parser where PyYAML has them (same text, ~10x faster)
+    dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    text = header + yaml.dump(_plain(document), Dumper=dumper, sort_keys=False,
+                              allow_unicode=True)
     try:
-        PropulsionSchema.model_validate(yaml.safe_load(text))
+        PropulsionSchema.model_validate(yaml.load(text, Loader=loader))  # noqa: S506 - safe
     except Exception as exc:  # noqa: BLE001 - the fit must never write a file check refuses
         raise InputError(f"the fitted propulsion file would not be valid: {exc}") from None
     return text
