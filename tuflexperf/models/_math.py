@@ -1,18 +1,47 @@
-"""Backend-neutral helpers: one physics code path for floats, numpy arrays and CasADi symbols."""
+"""Backend-neutral helpers: one physics code path for floats, numpy arrays and CasADi symbols.
+
+The physics in :mod:`tuflexperf.models` is written once against these functions and runs
+on Python floats, numpy arrays (vectorised batches) and CasADi ``SX``/``MX`` (the problems
+the analyses build), as AeroSandbox's ``aerosandbox.numpy`` does. CasADi is never imported
+here unless a symbol is actually passed in.
+
+Type aliases
+------------
+``Vectorizable``
+    What the physics accepts and returns: a float, a numpy array or a CasADi symbol.
+``Array``
+    A concrete numpy array of floats (results, grids): never symbolic.
+"""
 
 from __future__ import annotations
 
-from typing import Any
+import sys
+from typing import TYPE_CHECKING, TypeAlias, Union
 
 import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    import casadi
+
+    Symbolic: TypeAlias = casadi.SX | casadi.MX | casadi.DM
+else:
+    Symbolic = object  # casadi stays optional at run time
+
+Array: TypeAlias = NDArray[np.float64]
+Vectorizable: TypeAlias = Union[float, Array, "Symbolic"]
 
 
-def is_symbolic(*values: Any) -> bool:
-    """True if any value is a CasADi SX/MX/DM (checked by type name, so casadi stays optional)."""
-    return any(type(v).__name__ in ("SX", "MX", "DM") for v in values)
+def is_symbolic(*values: object) -> bool:
+    """True if any value is a CasADi SX/MX/DM (no CasADi loaded: nothing can be symbolic)."""
+    ca = sys.modules.get("casadi")
+    if ca is None:
+        return False
+    kinds = (ca.SX, ca.MX, ca.DM)
+    return any(isinstance(v, kinds) for v in values)
 
 
-def where(condition: Any, if_true: Any, if_false: Any) -> Any:
+def where(condition: Vectorizable, if_true: Vectorizable, if_false: Vectorizable) -> Vectorizable:
     """Element-wise ``condition ? if_true : if_false`` for numpy or CasADi operands."""
     if is_symbolic(condition, if_true, if_false):
         import casadi as ca
@@ -21,7 +50,7 @@ def where(condition: Any, if_true: Any, if_false: Any) -> Any:
     return np.where(condition, if_true, if_false)
 
 
-def fmin(a: Any, b: Any) -> Any:
+def fmin(a: Vectorizable, b: Vectorizable) -> Vectorizable:
     """Element-wise minimum for numpy or CasADi operands."""
     if is_symbolic(a, b):
         import casadi as ca
@@ -30,7 +59,7 @@ def fmin(a: Any, b: Any) -> Any:
     return np.minimum(a, b)
 
 
-def fmax(a: Any, b: Any) -> Any:
+def fmax(a: Vectorizable, b: Vectorizable) -> Vectorizable:
     """Element-wise maximum for numpy or CasADi operands."""
     if is_symbolic(a, b):
         import casadi as ca
@@ -39,7 +68,7 @@ def fmax(a: Any, b: Any) -> Any:
     return np.maximum(a, b)
 
 
-def sqrt(a: Any) -> Any:
+def sqrt(a: Vectorizable) -> Vectorizable:
     """Square root for numpy or CasADi operands."""
     if is_symbolic(a):
         import casadi as ca
@@ -48,7 +77,7 @@ def sqrt(a: Any) -> Any:
     return np.sqrt(a)
 
 
-def exp(a: Any) -> Any:
+def exp(a: Vectorizable) -> Vectorizable:
     """Exponential for numpy or CasADi operands."""
     if is_symbolic(a):
         import casadi as ca

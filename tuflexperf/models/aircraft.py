@@ -17,9 +17,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
-from tuflexperf.models._math import fmax, sqrt, where
+from tuflexperf.models._math import Vectorizable, fmax, sqrt, where
 from tuflexperf.models.atmosphere import (
     G0_M_S2,
     GAS_CONSTANT_J_KG_K,
@@ -78,17 +77,19 @@ class Aircraft:
         return self.mass_kg * G0_M_S2
 
 
-def dynamic_pressure_pa(density_kg_m3: Any, airspeed_m_s: Any) -> Any:
+def dynamic_pressure_pa(density_kg_m3: Vectorizable, airspeed_m_s: Vectorizable) -> Vectorizable:
     """``q = rho V^2 / 2`` [Pa] from density [kg/m^3] and true airspeed [m/s]."""
     return 0.5 * density_kg_m3 * airspeed_m_s * airspeed_m_s
 
 
-def polar_drag_coefficient(cl: Any, cd0: float, k: float) -> Any:
+def polar_drag_coefficient(cl: Vectorizable, cd0: float, k: float) -> Vectorizable:
     """Parabolic polar ``CD = cd0 + k CL^2`` [-] (Anderson eq. 2.47)."""
     return cd0 + k * cl * cl
 
 
-def true_airspeed_m_s(equivalent_airspeed_m_s: Any, density_kg_m3: Any) -> Any:
+def true_airspeed_m_s(
+    equivalent_airspeed_m_s: Vectorizable, density_kg_m3: Vectorizable
+) -> Vectorizable:
     """True airspeed [m/s] from an equivalent airspeed [m/s]: ``EAS sqrt(rho0 / rho)``.
 
     References
@@ -99,7 +100,9 @@ def true_airspeed_m_s(equivalent_airspeed_m_s: Any, density_kg_m3: Any) -> Any:
     return equivalent_airspeed_m_s * sqrt(EAS_REFERENCE_DENSITY_KG_M3 / density_kg_m3)
 
 
-def equivalent_airspeed_m_s(true_airspeed: Any, density_kg_m3: Any) -> Any:
+def equivalent_airspeed_m_s(
+    true_airspeed: Vectorizable, density_kg_m3: Vectorizable
+) -> Vectorizable:
     """Equivalent airspeed [m/s] from a true airspeed [m/s]: ``V sqrt(rho / rho0)``.
 
     References
@@ -109,20 +112,24 @@ def equivalent_airspeed_m_s(true_airspeed: Any, density_kg_m3: Any) -> Any:
     return true_airspeed * sqrt(density_kg_m3 / EAS_REFERENCE_DENSITY_KG_M3)
 
 
-def level_flight_cl(aircraft: Aircraft, airspeed_m_s: Any, density_kg_m3: Any) -> Any:
+def level_flight_cl(
+    aircraft: Aircraft, airspeed_m_s: Vectorizable, density_kg_m3: Vectorizable
+) -> Vectorizable:
     """Lift coefficient [-] for ``L = W`` at true airspeed [m/s] and density [kg/m^3]."""
     return aircraft.weight_n / (
         dynamic_pressure_pa(density_kg_m3, airspeed_m_s) * aircraft.wing_area_m2
     )
 
 
-def level_flight_drag_n(aircraft: Aircraft, airspeed_m_s: Any, density_kg_m3: Any) -> Any:
+def level_flight_drag_n(
+    aircraft: Aircraft, airspeed_m_s: Vectorizable, density_kg_m3: Vectorizable
+) -> Vectorizable:
     """Drag [N] in steady level flight: ``q S cd0 + k W^2 / (q S)`` (Anderson eq. 5.18)."""
     q_s = dynamic_pressure_pa(density_kg_m3, airspeed_m_s) * aircraft.wing_area_m2
     return q_s * aircraft.cd0 + aircraft.k * aircraft.weight_n**2 / q_s
 
 
-def stall_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
+def stall_speed_m_s(aircraft: Aircraft, density_kg_m3: Vectorizable) -> Vectorizable:
     """1-g stall speed, true airspeed [m/s]: ``sqrt(2 W / (rho S CL_max))``.
 
     References
@@ -132,7 +139,7 @@ def stall_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
     return sqrt(2.0 * aircraft.weight_n / (density_kg_m3 * aircraft.wing_area_m2 * aircraft.cl_max))
 
 
-def stall_speed_eas_m_s(aircraft: Aircraft) -> Any:
+def stall_speed_eas_m_s(aircraft: Aircraft) -> Vectorizable:
     """1-g stall speed as an equivalent airspeed [m/s]; the same at every density.
 
     References
@@ -146,7 +153,7 @@ def stall_speed_eas_m_s(aircraft: Aircraft) -> Any:
     )
 
 
-def liftoff_speed_eas_m_s(aircraft: Aircraft) -> Any:
+def liftoff_speed_eas_m_s(aircraft: Aircraft) -> Vectorizable:
     """Lift-off speed as an equivalent airspeed [m/s] (SPEC 3).
 
     The file's ``liftoff_speed_m_s`` (an EAS) where given, else
@@ -162,7 +169,7 @@ def liftoff_speed_eas_m_s(aircraft: Aircraft) -> Any:
     return to.liftoff_speed_factor * stall_speed_eas_m_s(aircraft)
 
 
-def liftoff_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
+def liftoff_speed_m_s(aircraft: Aircraft, density_kg_m3: Vectorizable) -> Vectorizable:
     """Lift-off true airspeed [m/s] at density [kg/m^3]: the lift-off EAS times ``sqrt(rho0/rho)``.
 
     References
@@ -172,7 +179,7 @@ def liftoff_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
     return true_airspeed_m_s(liftoff_speed_eas_m_s(aircraft), density_kg_m3)
 
 
-def minimum_drag_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
+def minimum_drag_speed_m_s(aircraft: Aircraft, density_kg_m3: Vectorizable) -> Vectorizable:
     """True airspeed [m/s] of least level-flight drag, ``sqrt(2W/(rho S) sqrt(k/cd0))``.
 
     References
@@ -197,7 +204,12 @@ def minimum_drag_n(aircraft: Aircraft) -> float:
     return 2.0 * aircraft.weight_n * (aircraft.cd0 * aircraft.k) ** 0.5
 
 
-def climb_gradient(aircraft: Aircraft, thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any) -> Any:
+def climb_gradient(
+    aircraft: Aircraft,
+    thrust_n: Vectorizable,
+    airspeed_m_s: Vectorizable,
+    density_kg_m3: Vectorizable,
+) -> Vectorizable:
     """Steady climb gradient ``sin(gamma) = (T - D) / W`` [-], drag at ``L = W``.
 
     Thrust [N], true airspeed [m/s], density [kg/m^3]. The small-angle assumption
@@ -213,7 +225,12 @@ def climb_gradient(aircraft: Aircraft, thrust_n: Any, airspeed_m_s: Any, density
     )
 
 
-def climb_rate_m_s(aircraft: Aircraft, thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any) -> Any:
+def climb_rate_m_s(
+    aircraft: Aircraft,
+    thrust_n: Vectorizable,
+    airspeed_m_s: Vectorizable,
+    density_kg_m3: Vectorizable,
+) -> Vectorizable:
     """Steady rate of climb ``R/C = V (T - D) / W`` [m/s] (Anderson eq. 5.80), drag at ``L = W``.
 
     References
@@ -224,8 +241,11 @@ def climb_rate_m_s(aircraft: Aircraft, thrust_n: Any, airspeed_m_s: Any, density
 
 
 def ground_roll_net_force_n(
-    aircraft: Aircraft, thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any
-) -> Any:
+    aircraft: Aircraft,
+    thrust_n: Vectorizable,
+    airspeed_m_s: Vectorizable,
+    density_kg_m3: Vectorizable,
+) -> Vectorizable:
     """Accelerating force on the ground roll, ``T - D - mu max(W - L, 0)`` [N].
 
     Thrust [N], true airspeed [m/s], density [kg/m^3]. Uses the ground
@@ -246,7 +266,7 @@ def ground_roll_net_force_n(
     return thrust_n - drag - to.rolling_friction * fmax(aircraft.weight_n - lift, 0.0)
 
 
-def transition_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
+def transition_speed_m_s(aircraft: Aircraft, density_kg_m3: Vectorizable) -> Vectorizable:
     """Mean true airspeed [m/s] of the transition arc after lift-off, ``1.15 V_stall``.
 
     References
@@ -257,7 +277,7 @@ def transition_speed_m_s(aircraft: Aircraft, density_kg_m3: Any) -> Any:
     return TRANSITION_SPEED_OVER_STALL * stall_speed_m_s(aircraft, density_kg_m3)
 
 
-def transition_radius_m(airspeed_m_s: Any, load_factor: Any) -> Any:
+def transition_radius_m(airspeed_m_s: Vectorizable, load_factor: Vectorizable) -> Vectorizable:
     """Radius [m] of the pull-up arc at true airspeed [m/s] and load factor [-]: ``V^2/(g (n-1))``.
 
     References
@@ -268,8 +288,8 @@ def transition_radius_m(airspeed_m_s: Any, load_factor: Any) -> Any:
 
 
 def obstacle_distances_m(
-    radius_m: Any, climb_gradient_: Any, obstacle_height_m: Any
-) -> tuple[Any, Any, Any]:
+    radius_m: Vectorizable, climb_gradient_: Vectorizable, obstacle_height_m: Vectorizable
+) -> tuple[Vectorizable, Vectorizable, Vectorizable]:
     """Horizontal distances [m] from lift-off to an obstacle: (arc, straight climb, arc top [m]).
 
     The arc of ``radius_m`` [m] turns the path up to the climb angle ``gamma`` with
@@ -293,15 +313,13 @@ def obstacle_distances_m(
     cleared_in_arc = arc_height >= obstacle_height_m
     within = sqrt(fmax(obstacle_height_m * (2.0 * radius_m - obstacle_height_m), 0.0))
     safe_sin = where(positive, sin_g, 1.0)
-    climb = where(
-        positive, (obstacle_height_m - arc_height) * cos_g / safe_sin, math.inf
-    )
+    climb = where(positive, (obstacle_height_m - arc_height) * cos_g / safe_sin, math.inf)
     arc = where(cleared_in_arc, within, radius_m * sin_g)
     climb = where(cleared_in_arc, 0.0, climb)
     # where the obstacle is cleared in the arc, the arc is flown only up to its height
     return arc, climb, where(cleared_in_arc, obstacle_height_m, arc_height)
 
 
-def _at_most_one(value: Any) -> Any:
+def _at_most_one(value: Vectorizable) -> Vectorizable:
     """``min(value, 1)`` element-wise: keeps ``sqrt(1 - s^2)`` real when rounding exceeds 1."""
     return where(value < 1.0, value, 1.0)

@@ -7,9 +7,7 @@ standard day, as in the usual "ISA + dT" convention.
 
 from __future__ import annotations
 
-from typing import Any
-
-from tuflexperf.models._math import exp, fmin, where
+from tuflexperf.models._math import Vectorizable, exp, fmin, where
 
 SEA_LEVEL_TEMPERATURE_K = 288.15
 SEA_LEVEL_PRESSURE_PA = 101_325.0
@@ -25,7 +23,9 @@ _TROPOPAUSE_PRESSURE_PA = (
 )
 
 
-def isa_temperature_k(altitude_m: Any, temperature_offset_k: Any = 0.0) -> Any:
+def isa_temperature_k(
+    altitude_m: Vectorizable, temperature_offset_k: Vectorizable = 0.0
+) -> Vectorizable:
     """Static air temperature in K at ``altitude_m`` (m), offset by ``temperature_offset_k``."""
     return (
         SEA_LEVEL_TEMPERATURE_K
@@ -34,7 +34,7 @@ def isa_temperature_k(altitude_m: Any, temperature_offset_k: Any = 0.0) -> Any:
     )
 
 
-def isa_pressure_pa(altitude_m: Any) -> Any:
+def isa_pressure_pa(altitude_m: Vectorizable) -> Vectorizable:
     """Static pressure in Pa at ``altitude_m`` (m); the temperature offset does not change it."""
     troposphere = (
         SEA_LEVEL_PRESSURE_PA
@@ -47,7 +47,9 @@ def isa_pressure_pa(altitude_m: Any) -> Any:
     return where(altitude_m <= TROPOPAUSE_M, troposphere, stratosphere)
 
 
-def isa_density_kg_m3(altitude_m: Any, temperature_offset_k: Any = 0.0) -> Any:
+def isa_density_kg_m3(
+    altitude_m: Vectorizable, temperature_offset_k: Vectorizable = 0.0
+) -> Vectorizable:
     """Air density in kg/m^3 from the ideal-gas law, ``rho = p / (R T)``."""
     return isa_pressure_pa(altitude_m) / (
         GAS_CONSTANT_J_KG_K * isa_temperature_k(altitude_m, temperature_offset_k)

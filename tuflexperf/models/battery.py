@@ -35,11 +35,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
-from typing import Any
 
 import numpy as np
 
-from tuflexperf.models._math import exp, fmin, is_symbolic, sqrt
+from tuflexperf.models._math import Vectorizable, exp, fmin, is_symbolic, sqrt
 
 SECONDS_PER_HOUR = 3600.0
 RUN_COLUMNS: tuple[str, ...] = (
@@ -90,7 +89,9 @@ class DischargeParameters:
         return asdict(self)
 
 
-def open_circuit_voltage_v(p: Any, charge_ah: Any, packs: int = 1) -> Any:
+def open_circuit_voltage_v(
+    p: Vectorizable, charge_ah: Vectorizable, packs: int = 1
+) -> Vectorizable:
     """Open-circuit voltage in V of ``packs`` parallel packs after drawing ``charge_ah`` (Ah).
 
     ``p`` is a :class:`DischargeParameters` (or anything with the same attributes,
@@ -105,12 +106,16 @@ def open_circuit_voltage_v(p: Any, charge_ah: Any, packs: int = 1) -> Any:
     )
 
 
-def terminal_voltage_v(p: Any, charge_ah: Any, current_a: Any, packs: int = 1) -> Any:
+def terminal_voltage_v(
+    p: Vectorizable, charge_ah: Vectorizable, current_a: Vectorizable, packs: int = 1
+) -> Vectorizable:
     """Terminal voltage in V under ``current_a`` (A, total of the parallel packs)."""
     return open_circuit_voltage_v(p, charge_ah, packs) - p.resistance_ohm / packs * current_a
 
 
-def current_at_power_a(p: Any, charge_ah: Any, power_w: Any, packs: int = 1) -> Any:
+def current_at_power_a(
+    p: Vectorizable, charge_ah: Vectorizable, power_w: Vectorizable, packs: int = 1
+) -> Vectorizable:
     """Current in A that delivers ``power_w`` (W) at the terminals: ``V(q, i) i = P``.
 
     The smaller root of ``(R/n) i^2 - OCV i + P = 0`` in the cancellation-free form
@@ -124,7 +129,9 @@ def current_at_power_a(p: Any, charge_ah: Any, power_w: Any, packs: int = 1) -> 
     return 2.0 * power_w / (ocv + sqrt(disc))
 
 
-def cutoff_residual_v(p: Any, charge_ah: Any, power_w: Any, cutoff_v: float, packs: int = 1) -> Any:
+def cutoff_residual_v(
+    p: Vectorizable, charge_ah: Vectorizable, power_w: Vectorizable, cutoff_v: float, packs: int = 1
+) -> Vectorizable:
     """``OCV(q/n) - (R/n) P/Vc - Vc`` in V: positive before, zero at the cut-off under ``P``.
 
     At cut-off the terminal voltage is ``Vc`` and so the current is ``P / Vc``.
@@ -160,8 +167,12 @@ def cutoff_charge_ah(
 
 
 def discharge_time_s(
-    p: Any, power_w: Any, start_ah: Any, end_ah: Any, packs: int = 1
-) -> Any:
+    p: Vectorizable,
+    power_w: Vectorizable,
+    start_ah: Vectorizable,
+    end_ah: Vectorizable,
+    packs: int = 1,
+) -> Vectorizable:
     """Time in s to draw the charge from ``start_ah`` to ``end_ah`` at constant power.
 
     ``t = 3600 * integral dq / i(q, P)`` by 48-point Gauss-Legendre quadrature (the
@@ -178,7 +189,7 @@ def discharge_time_s(
         charge = mid + half * ca.DM(_GAUSS_NODES)
         inverse = 1.0 / current_at_power_a(p, charge, power_w, packs)
         return SECONDS_PER_HOUR * half * ca.dot(ca.DM(_GAUSS_WEIGHTS), inverse)
-    total: Any = 0.0
+    total: Vectorizable = 0.0
     for node, weight in zip(_GAUSS_NODES, _GAUSS_WEIGHTS, strict=True):
         charge = mid + half * float(node)
         total = total + float(weight) / current_at_power_a(p, charge, power_w, packs)
@@ -211,15 +222,19 @@ class FanPowerModel:
     exponent: float
     jet_velocity_m_s: float
 
-    def airspeed_factor(self, airspeed_m_s: Any) -> Any:
+    def airspeed_factor(self, airspeed_m_s: Vectorizable) -> Vectorizable:
         """``1 - (V / V_j)^2`` (dimensionless)."""
         ratio = airspeed_m_s / self.jet_velocity_m_s
         return 1.0 - ratio * ratio
 
-    def electrical_power_w(self, throttle: Any, airspeed_m_s: Any) -> Any:
+    def electrical_power_w(
+        self, throttle: Vectorizable, airspeed_m_s: Vectorizable
+    ) -> Vectorizable:
         """Electrical input power of one fan in W at ``throttle`` (fraction) and airspeed (m/s)."""
-        return self.static_full_throttle_w * throttle**self.exponent * self.airspeed_factor(
-            airspeed_m_s
+        return (
+            self.static_full_throttle_w
+            * throttle**self.exponent
+            * self.airspeed_factor(airspeed_m_s)
         )
 
     def to_dict(self) -> dict[str, float]:
@@ -240,5 +255,3 @@ def published_static_power_w(
     (p_low, p_high), (t_low, t_high) = power_range_w, thrust_range_n
     slope = math.log(p_high / p_low) / math.log(t_high / t_low)
     return p_low * (static_thrust_n / t_low) ** slope
-
-

@@ -29,7 +29,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from tuflexperf.models._math import fmax, sqrt, where
+from tuflexperf.models._math import Vectorizable, fmax, sqrt, where
 from tuflexperf.models.thrust import Engine, Propulsion, density_ratio, poly22
 
 # In-flight overall efficiency below this is implausible for a working fan (SPEC 3).
@@ -38,7 +38,9 @@ MIN_OVERALL_EFFICIENCY = 0.2
 MAX_FIGURE_OF_MERIT = 1.0
 
 
-def electrical_power_w(throttle: Any, airspeed_m_s: Any, coefficients: Mapping[str, float]) -> Any:
+def electrical_power_w(
+    throttle: Vectorizable, airspeed_m_s: Vectorizable, coefficients: Mapping[str, float]
+) -> Vectorizable:
     """Electrical power of one fan from its fitted poly22 power surface.
 
     Parameters
@@ -61,7 +63,9 @@ def electrical_power_w(throttle: Any, airspeed_m_s: Any, coefficients: Mapping[s
     return poly22(throttle, airspeed_m_s, coefficients)
 
 
-def engine_power_w(engine: Engine, throttle: Any, airspeed_m_s: Any) -> Any:
+def engine_power_w(
+    engine: Engine, throttle: Vectorizable, airspeed_m_s: Vectorizable
+) -> Vectorizable:
     """Electrical power [W] of ``engine`` from its fitted power surface (``None`` if none).
 
     Parameters
@@ -84,7 +88,12 @@ def engine_power_w(engine: Engine, throttle: Any, airspeed_m_s: Any) -> Any:
     )
 
 
-def exit_velocity_m_s(thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any, area_m2: Any) -> Any:
+def exit_velocity_m_s(
+    thrust_n: Vectorizable,
+    airspeed_m_s: Vectorizable,
+    density_kg_m3: Vectorizable,
+    area_m2: Vectorizable,
+) -> Vectorizable:
     """Jet exit velocity of a fan making ``thrust_n``: the root of ``T = rho A v_e (v_e - V)``.
 
     Parameters
@@ -108,11 +117,17 @@ def exit_velocity_m_s(thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any, area
     axial flight).
     """
     t = fmax(thrust_n, 0.0)
-    return 0.5 * (airspeed_m_s + sqrt(airspeed_m_s * airspeed_m_s
-                                      + 4.0 * t / (density_kg_m3 * area_m2)))
+    return 0.5 * (
+        airspeed_m_s + sqrt(airspeed_m_s * airspeed_m_s + 4.0 * t / (density_kg_m3 * area_m2))
+    )
 
 
-def ideal_power_w(thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any, area_m2: Any) -> Any:
+def ideal_power_w(
+    thrust_n: Vectorizable,
+    airspeed_m_s: Vectorizable,
+    density_kg_m3: Vectorizable,
+    area_m2: Vectorizable,
+) -> Vectorizable:
     """Momentum-theory (ideal) power of a fan: ``P_i = T (V + v_e) / 2``.
 
     Parameters
@@ -140,8 +155,12 @@ def ideal_power_w(thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any, area_m2:
 
 
 def figure_of_merit(
-    thrust_n: Any, airspeed_m_s: Any, density_kg_m3: Any, area_m2: Any, power_w: Any
-) -> Any:
+    thrust_n: Vectorizable,
+    airspeed_m_s: Vectorizable,
+    density_kg_m3: Vectorizable,
+    area_m2: Vectorizable,
+    power_w: Vectorizable,
+) -> Vectorizable:
     """Ideal over electrical power, ``P_i / P_el`` [-]; above 1 the power cannot make the thrust.
 
     ``nan`` where the electrical power is not positive.
@@ -155,7 +174,9 @@ def figure_of_merit(
     return where(power_w > 0.0, ideal / where(power_w > 0.0, power_w, 1.0), float("nan"))
 
 
-def overall_efficiency(thrust_n: Any, airspeed_m_s: Any, power_w: Any) -> Any:
+def overall_efficiency(
+    thrust_n: Vectorizable, airspeed_m_s: Vectorizable, power_w: Vectorizable
+) -> Vectorizable:
     """Useful over electrical power in flight, ``T V / P_el`` [-] (``nan`` if ``P_el <= 0``).
 
     References
@@ -163,13 +184,14 @@ def overall_efficiency(thrust_n: Any, airspeed_m_s: Any, power_w: Any) -> Any:
     McCormick, *Aerodynamics, Aeronautics and Flight Mechanics*, 2nd ed., 6.2 (propulsive
     efficiency ``T V / P``).
     """
-    return where(power_w > 0.0, thrust_n * airspeed_m_s / where(power_w > 0.0, power_w, 1.0),
-                 float("nan"))
+    return where(
+        power_w > 0.0, thrust_n * airspeed_m_s / where(power_w > 0.0, power_w, 1.0), float("nan")
+    )
 
 
 def windmilling_drag_n(
-    drag_coefficient: float, airspeed_m_s: Any, density_kg_m3: Any, area_m2: float
-) -> Any:
+    drag_coefficient: float, airspeed_m_s: Vectorizable, density_kg_m3: Vectorizable, area_m2: float
+) -> Vectorizable:
     """A dead fan's contribution to thrust: ``-C_d,wm q A_fan`` [N], always a drag.
 
     Parameters
@@ -203,14 +225,16 @@ class PowerSurfaces:
     engines: tuple[Engine, ...]
     density_scale: float = 1.0
 
-    def electrical_power_w(self, throttle: Any, airspeed_m_s: Any) -> Any:
+    def electrical_power_w(
+        self, throttle: Vectorizable, airspeed_m_s: Vectorizable
+    ) -> Vectorizable:
         """Per-fan electrical power [W] at ``throttle`` [-] and true airspeed [m/s].
 
         References
         ----------
         SPEC 4 (``power: {model: poly22}``); SPEC 3 (thrust and density).
         """
-        power: Any = None
+        power: Vectorizable = None
         for engine in self.engines:
             p = engine_power_w(engine, throttle, airspeed_m_s)
             power = p if power is None else fmax(power, p)

@@ -8,18 +8,18 @@ Every function takes floats, numpy arrays or CasADi symbols.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from tuflexperf.models._math import fmin, sqrt, where
+from tuflexperf.models._math import Vectorizable, fmin, sqrt, where
 from tuflexperf.models.atmosphere import SEA_LEVEL_DENSITY_KG_M3
 
 POLY22_TERMS: tuple[str, ...] = ("p00", "p10", "p01", "p20", "p11", "p02")
 DeadEngineMode = Literal["windmilling", "zero"]
 
 
-def poly22(x: Any, v: Any, coefficients: Mapping[str, float]) -> Any:
+def poly22(x: Vectorizable, v: Vectorizable, coefficients: Mapping[str, float]) -> Vectorizable:
     """Evaluate ``p00 + p10 x + p01 v + p20 x^2 + p11 x v + p02 v^2`` (paper section 4)."""
     c = coefficients
     return (
@@ -76,7 +76,7 @@ class Propulsion:
     lag_s: float = 0.0
 
 
-def density_ratio(propulsion: Propulsion, density_kg_m3: Any) -> Any:
+def density_ratio(propulsion: Propulsion, density_kg_m3: Vectorizable) -> Vectorizable:
     """Thrust scale ``rho / rho_ref`` (1 when the model has no reference density)."""
     if propulsion.reference_density_kg_m3 is None:
         return 1.0
@@ -108,8 +108,11 @@ def unlapsed_density_warning(propulsion: Propulsion, density_kg_m3: float) -> st
 
 
 def engine_thrust_n(
-    engine: Engine, throttle: Any, airspeed_m_s: Any, density_scale: Any = 1.0
-) -> Any:
+    engine: Engine,
+    throttle: Vectorizable,
+    airspeed_m_s: Vectorizable,
+    density_scale: Vectorizable = 1.0,
+) -> Vectorizable:
     """Thrust of one engine in N at ``throttle`` (fraction) and ``airspeed_m_s`` (m/s).
 
     ``density_scale`` is ``rho / rho_ref`` (see :func:`density_ratio`).
@@ -121,11 +124,11 @@ def engine_thrust_n(
 
 def windmilling_thrust_n(
     engine: Engine,
-    airspeed_m_s: Any,
-    density_scale: Any = 1.0,
-    density_kg_m3: Any = None,
+    airspeed_m_s: Vectorizable,
+    density_scale: Vectorizable = 1.0,
+    density_kg_m3: Vectorizable = None,
     fan_area_m2: float | None = None,
-) -> Any:
+) -> Vectorizable:
     """A dead engine's contribution in N, a drag and never a thrust (SPEC 3).
 
     With the engine's ``windmilling_drag_coefficient`` and the propulsion's ``fan_area_m2``
@@ -143,12 +146,12 @@ def windmilling_thrust_n(
 
 def total_thrust_n(
     propulsion: Propulsion,
-    throttle: Any | Sequence[Any],
-    airspeed_m_s: Any,
-    density_kg_m3: Any,
+    throttle: Vectorizable | Sequence[Vectorizable],
+    airspeed_m_s: Vectorizable,
+    density_kg_m3: Vectorizable,
     dead_engine: int | None = None,
     dead_engine_mode: DeadEngineMode = "windmilling",
-) -> Any:
+) -> Vectorizable:
     """Sum of all engines' thrust in N, optionally with engine ``dead_engine`` inoperative.
 
     ``throttle`` is one value for all engines or a sequence with one per engine.
@@ -159,7 +162,7 @@ def total_thrust_n(
     if len(throttles) != len(engines):
         raise ValueError(f"{len(throttles)} throttles for {len(engines)} engines")
     scale = density_ratio(propulsion, density_kg_m3)
-    total: Any = 0.0
+    total: Vectorizable = 0.0
     for index, (engine, x) in enumerate(zip(engines, throttles, strict=True)):
         if index == dead_engine:
             if dead_engine_mode == "windmilling":
@@ -177,7 +180,9 @@ def is_extrapolated(propulsion: Propulsion, airspeed_m_s: float) -> bool:
     return bool(airspeed_m_s < low - 1e-9 or airspeed_m_s > high + 1e-9)
 
 
-def least_throttle_reaching(a: Any, b: Any, c: Any) -> tuple[Any, Any]:
+def least_throttle_reaching(
+    a: Vectorizable, b: Vectorizable, c: Vectorizable
+) -> tuple[Vectorizable, Vectorizable]:
     """Least ``x`` in [0, 1] with ``a x^2 + b x + c >= 0``, and whether one exists.
 
     Backend-neutral (floats, numpy arrays, CasADi SX). ``x = 0`` when ``c >= 0`` (idle suffices).
@@ -195,7 +200,7 @@ def least_throttle_reaching(a: Any, b: Any, c: Any) -> tuple[Any, Any]:
     r_near = where(q != 0.0, c / where(q != 0.0, q, 1.0), math.inf)
     r_far = where(a != 0.0, q / where(a != 0.0, a, 1.0), math.inf)
 
-    def candidate(r: Any) -> Any:
+    def candidate(r: Vectorizable) -> Vectorizable:
         return where(disc >= 0.0, where(r > 0.0, where(r <= 1.0, r, math.inf), math.inf), math.inf)
 
     root = fmin(candidate(r_near), candidate(r_far))
@@ -203,8 +208,9 @@ def least_throttle_reaching(a: Any, b: Any, c: Any) -> tuple[Any, Any]:
     # most thrust in [0, 1]: the vertex of a concave f if inside, else the better end
     vertex = -b / where(a != 0.0, 2.0 * a, 1.0)
     best_end = where(f_full > c, 1.0, 0.0)
-    best = where(a < 0.0, where(vertex > 0.0, where(vertex < 1.0, vertex, best_end), best_end),
-                 best_end)
+    best = where(
+        a < 0.0, where(vertex > 0.0, where(vertex < 1.0, vertex, best_end), best_end), best_end
+    )
     # f(1) >= 0 with no root <= 1 only happens by rounding when the demand is T(1) itself
     # within rounding of zero (1e-12 of the terms) the demand is T(1) itself (as the export's C)
     full_ok = f_full >= -1e-12 * (abs(a) + abs(b) + abs(c))
@@ -213,7 +219,7 @@ def least_throttle_reaching(a: Any, b: Any, c: Any) -> tuple[Any, Any]:
     return throttle, reached
 
 
-def least_throttle_of(excess: Any) -> tuple[Any, Any]:
+def least_throttle_of(excess: Callable[[float], Vectorizable]) -> tuple[Vectorizable, Vectorizable]:
     """Least throttle with ``excess(x) >= 0`` (``excess`` quadratic in ``x``), and if one exists.
 
     Poly22 thrust is quadratic in the throttle, and so is any sum of engines minus a drag
@@ -286,7 +292,7 @@ def lag_factor(lag_s: float, sample_time_s: float) -> float:
     return math.exp(-sample_time_s / lag_s) if lag_s > 0 else 0.0
 
 
-def lag_step(previous: Any, target: Any, factor: Any) -> Any:
+def lag_step(previous: Vectorizable, target: Vectorizable, factor: Vectorizable) -> Vectorizable:
     """One step of the spool lag: ``factor * previous + (1 - factor) * target``.
 
     Parameters

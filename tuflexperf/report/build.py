@@ -144,45 +144,49 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
 
     analyses = run_analyses(Study(case))
     step("analyses: check, take-off, trim, OEI, endurance")
+    # The figures of the analyses alone are drawn (PNG) by a forked copy of this process
+    # while this one reduces the campaign; those of the measured data by a second copy
+    # while this one writes the PDF (issue 9: the report in half its earlier time).
+    analysis_pages: dict[str, Callable[[], Any]] = {
+        "01_requirements": lambda: fg.requirement_table(case, analyses),
+        "02_thrust_required_available": lambda: fg.thrust_required_available(case, analyses),
+        "07_takeoff": lambda: fg.takeoff_history(case, analyses),
+    }
+    if analyses.trim is not None:
+        analysis_pages["08_trim_oei_throttle"] = lambda: fg.trim_oei_throttle(case, analyses)
+    if analyses.characterisation is not None:
+        analysis_pages["09_endurance"] = lambda: fg.endurance(case, analyses)
+    writers = [_start_png_writer(list(analysis_pages.items()), folder)]
     measured = load_measured(case, campaign, progress=step.detail)
     step(
         f"measured data: {measured.kind}" + (f" {measured.source.name}" if measured.source else "")
     )
-
-    pages: list[tuple[str | None, Callable[[], Any]]] = [
-        (None, lambda: _title_page(case, measured, analyses)),
-        ("01_requirements", lambda: fg.requirement_table(case, analyses)),
-        ("02_thrust_required_available", lambda: fg.thrust_required_available(case, analyses)),
-    ]
+    measured_pages: dict[str, Callable[[], Any]] = {}
     for index, engine in enumerate(case.propulsion.engines):
-        pages.append(
-            (
-                f"03_thrust_surface_{_safe_name(engine.name)}",
-                lambda i=index: fg.thrust_surface(case, measured, i),
-            )
+        measured_pages[f"03_thrust_surface_{_safe_name(engine.name)}"] = (
+            lambda i=index: fg.thrust_surface(case, measured, i)
         )
     if measured.processed is not None:
-        pages.append(("04_run_processing", lambda: fg.run_processing(measured.processed)))
+        measured_pages["04_run_processing"] = lambda: fg.run_processing(measured.processed)
     if measured.sweep is not None:
-        pages.append(("05_sine_sweep", lambda: fg.sine_sweep(measured)))
+        measured_pages["05_sine_sweep"] = lambda: fg.sine_sweep(measured)
     if measured.comparisons:
-        pages.append(("06_model_vs_measured", lambda: fg.model_vs_measured(case, measured)))
-    pages.append(("07_takeoff", lambda: fg.takeoff_history(case, analyses)))
-    if analyses.trim is not None:
-        pages.append(("08_trim_oei_throttle", lambda: fg.trim_oei_throttle(case, analyses)))
-    if analyses.characterisation is not None:
-        pages.append(("09_endurance", lambda: fg.endurance(case, analyses)))
+        measured_pages["06_model_vs_measured"] = lambda: fg.model_vs_measured(case, measured)
+    writers.append(_start_png_writer(list(measured_pages.items()), folder))
+
+    named = sorted({**analysis_pages, **measured_pages}.items())  # the report's page order
+    pages: list[tuple[str | None, Callable[[], Any]]] = [
+        (None, lambda: _title_page(case, measured, analyses)),
+        *named,
+    ]
     notes = measured.notes + analyses.notes
     step.total = step.done + len(pages) + 1
 
     pdf_path = folder / PDF_NAME
     from tuflexperf import __version__
 
-    named = [(name, draw) for name, draw in pages if name is not None]
     files = [folder / f"{name}.png" for name, _ in named]
-    # The PNGs are drawn by a forked copy of this process while this one writes the PDF:
-    # the two halves of the drawing share nothing but the figures' recipes (issue 9 speed).
-    writer = _start_png_writer(named, folder)
+    serial = any(writer is None for writer in writers)
     try:
         with PdfPages(
             pdf_path,
@@ -191,7 +195,7 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
         ) as pdf:
             for name, draw in pages:
                 fig = draw()
-                if writer is None and name is not None:
+                if serial and name is not None:
                     _save_png(fig, folder / f"{name}.png")
                     fig.set_layout_engine("none")  # solved by the PNG's draw; the page keeps it
                 pdf.savefig(fig)
@@ -204,15 +208,17 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
                 )
                 page_count += 1
             step("review.pdf")
-        if writer is not None:
-            writer.join()
-            if writer.exitcode != 0:  # never a report without its figures: draw them here
-                for name, draw in named:
-                    _save_png(draw(), folder / f"{name}.png")
+        for writer in writers:
+            if writer is not None:
+                writer.join()
+        if not serial and any(writer.exitcode != 0 for writer in writers):
+            for name, draw in named:  # never a report without its figures: draw them here
+                _save_png(draw(), folder / f"{name}.png")
     finally:
-        if writer is not None and writer.is_alive():  # interrupted: no PNG after the cleanup
-            writer.terminate()
-            writer.join()
+        for writer in writers:  # interrupted: no PNG written after the cleanup
+            if writer is not None and writer.is_alive():
+                writer.terminate()
+                writer.join()
     files.append(pdf_path)
     return ReportResult(
         out_dir=folder,
