@@ -41,7 +41,8 @@ from scipy.optimize import brentq
 
 from tuflexperf.io.battery import BatterySchema
 from tuflexperf.io.case import load_propulsion
-from tuflexperf.io.yamlio import atomic_write_text, load_model
+from tuflexperf.io.files import atomic_write_text
+from tuflexperf.io.yamlio import load_model
 from tuflexperf.models.battery import (
     FanPowerModel,
     published_static_power_w,

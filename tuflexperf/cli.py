@@ -315,7 +315,7 @@ def sweep(
 ) -> None:
     """Every requirement over a grid of parameter values."""
     from tuflexperf.analysis.sweep import parse_vary, run_sweep
-    from tuflexperf.io.yamlio import atomic_write_bytes, atomic_write_text
+    from tuflexperf.io.files import atomic_write_bytes, atomic_write_text
 
     case = load_case_with(case_file, sets)
     if workers is not None and workers < 1:
@@ -608,7 +608,7 @@ def mission(
     limit = requirement.min_landing_charge_fraction if requirement is not None else None
     result = solve_mission(case, plan, limit)
     if csv is not None:
-        from tuflexperf.io.yamlio import atomic_write_text
+        from tuflexperf.io.files import atomic_write_text
 
         names = list(result.history)
         rows = zip(*(result.history[k] for k in names), strict=True)

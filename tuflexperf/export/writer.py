@@ -7,7 +7,6 @@ all requested files exist, so a failure never leaves partial output (SPEC 5).
 from __future__ import annotations
 
 import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -105,17 +104,6 @@ def _write_format(model: ExportModel, fmt: str, directory: Path) -> None:
         raise InputError(f"--format: unknown format {fmt!r}")
 
 
-def _check_out(out_dir: Path) -> None:
-    """``--out`` must be a directory or not exist yet, under a writable existing directory."""
-    if out_dir.exists() and not out_dir.is_dir():
-        raise InputError(f"--out: {out_dir} exists and is not a directory")
-    existing = next(p for p in (out_dir.parent, *out_dir.parent.parents) if p.exists())
-    if not existing.is_dir():
-        raise InputError(f"--out: {existing} is not a directory")
-    if not os.access(existing, os.W_OK | os.X_OK):
-        raise InputError(f"--out: cannot write in {existing}")
-
-
 def export_model(
     case_path: Path | str | None, formats: tuple[str, ...], out_dir: Path | str
 ) -> ExportResult:
@@ -130,7 +118,6 @@ def export_model(
     unknown = [f for f in formats if f not in FORMATS]
     if unknown or not formats:
         raise InputError(f"--format: unknown format {(unknown or [''])[0]!r}")
-    _check_out(out_dir)
     check_output_dir(out_dir, "export")
     names = [name for fmt in formats for name in FILES[fmt]]
     model = load_export_model(case_path)

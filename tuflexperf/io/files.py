@@ -162,6 +162,12 @@ def check_output_dir(out: Path, command: str) -> None:
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out: {out} exists and is not a directory")
+    # the nearest existing ancestor is where the staging folder will be made
+    existing = next(p for p in (out.parent, *out.parent.parents) if p.exists())
+    if not existing.is_dir():
+        raise InputError(f"--out: {existing} is not a directory")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise InputError(f"--out: cannot write in {existing}")
     if out.is_dir():
         try:
             entries = [p.name for p in out.iterdir()]

@@ -156,7 +156,3 @@ def load_model(path: Path, model: type[M]) -> M:
         return model.model_validate(data)
     except ValidationError as exc:
         raise InputError(validation_message(path, exc, model)) from None
-
-
-# one writer for the whole tool (io/files.py); these names stay importable from here
-from tuflexperf.io.files import atomic_write_bytes, atomic_write_text  # noqa: E402, F401
