@@ -472,21 +472,25 @@ class _Model:
                 self._uniform = self.net_force(speeds)
                 return self._uniform
             breaks, fits = pieces
-            # each airspeed on its piece; an airspeed within 1e-9 above the tested range's
-            # end still counts as tested, as the thrust model decides (Model.thrust)
-            edge = self.propulsion.tested_airspeed_m_s[1]
-            index = sum((speeds > np.where(b == edge, b + 1e-9, b)).astype(np.intp)
-                        for b in breaks[1:3])
-            low, width, c0, c1, c2 = (
-                np.concatenate([f[i] for f in fits], axis=1) for i in range(5))
-            if index.any():  # some airspeeds beyond the first kink: each on its piece
-                low, width, c0, c1, c2 = (np.take_along_axis(a, index, axis=1)
-                                          for a in (low, width, c0, c1, c2))
-            else:
-                low, width, c0, c1, c2 = (a[:, :1] for a in (low, width, c0, c1, c2))
-            with np.errstate(divide="ignore", invalid="ignore"):
-                s = (speeds - low) / width - 0.5
-            force = c0 + s * (c1 + s * c2)
+            # a roll that is one smooth piece (no kink before lift-off): the airspeeds' own
+            # coordinate on it is k/100
+            u = np.linspace(0.0, 1.0, _HISTORY_POINTS)[None, :] - 0.5
+            _, _, c0, c1, c2 = fits[0]
+            force = c0 + u * (c1 + u * c2)
+            kinked = np.flatnonzero(breaks[1][:, 0] < v_lo[:, 0])
+            if kinked.size:
+                # each airspeed on its piece; an airspeed within 1e-9 above the tested
+                # range's end still counts as tested, as the thrust model decides (thrust)
+                edge = self.propulsion.tested_airspeed_m_s[1]
+                at = speeds[kinked]
+                index = sum((at > np.where(b[kinked] == edge, b[kinked] + 1e-9, b[kinked]))
+                            .astype(np.intp) for b in breaks[1:3])
+                low, width, c0, c1, c2 = (np.take_along_axis(
+                    np.concatenate([f[i][kinked] for f in fits], axis=1), index, axis=1)
+                    for i in range(5))
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    s = (at - low) / width - 0.5
+                force[kinked] = c0 + s * (c1 + s * c2)
             self._uniform = force
         return self._uniform
 
@@ -563,9 +567,17 @@ class _Model:
         return np.concatenate([np.zeros((self.size, 1)), np.cumsum(pieces, axis=1)], axis=1)
 
     # -- level flight --------------------------------------------------------------------------
-    def _engine_thrusts(self, speed: Array) -> tuple[list[list[Array]], list[Array]]:
-        """Per engine: thrust [N] at throttle 0, 1/2, 1 (with its extrapolation error), and
-        its dead-engine contribution, as :func:`total_thrust_n` sums them."""
+    def _engine_thrusts(self, speed: Array) -> tuple[list[tuple[Array, Array, Array]],
+                                                      list[Array]]:
+        """Per engine: its thrust [N] as ``a x^2 + b x + c`` in throttle at these airspeeds
+        (the extrapolation error in ``c``), and its dead-engine contribution, as
+        :func:`total_thrust_n` sums them.
+
+        poly22 is quadratic in throttle: ``a, b, c`` from its values at throttle 0, 1/2
+        and 1. Sampled coefficients against airspeeds common to all rows: poly22 is linear
+        in its coefficients, so the three values are each row's coefficients times
+        poly22's basis functions, one matrix product per coefficient.
+        """
         scale = density_ratio(self.propulsion, self.density)
         outside = None
         if self.extrapolation_n is not None:
@@ -577,46 +589,40 @@ class _Model:
             coefficients = engine.coefficients
             if np.shape(speed)[0] == 1 and all(np.ndim(coefficients[t]) == 2
                                                for t in POLY22_TERMS):
-                # sampled coefficients against airspeeds common to all rows: poly22 is
-                # linear in its coefficients, so each row's thrust is its coefficients
-                # times poly22's basis functions (one matrix product)
                 rows = np.concatenate([coefficients[t] for t in POLY22_TERMS], axis=1)
-                live.append([
-                    scale * (rows @ np.stack([
-                        np.broadcast_to(poly22(x * engine.throttle_scale, speed[0], _UNIT[t]),
-                                        speed[0].shape) for t in POLY22_TERMS]))
-                    + error
-                    for x in (0.0, 0.5, 1.0)])
+                f0, fh, f1 = (np.stack([
+                    np.broadcast_to(poly22(x * engine.throttle_scale, speed[0], _UNIT[t]),
+                                    speed[0].shape) for t in POLY22_TERMS])
+                    for x in (0.0, 0.5, 1.0))
+                basis_a = 2.0 * (f1 - 2.0 * fh + f0)
+                a_j, b_j, c_j = (scale * (rows @ basis)
+                                 for basis in (basis_a, f1 - f0 - basis_a, f0))
             else:
-                live.append([engine_thrust_n(engine, x, speed, scale) + error
-                             for x in (0.0, 0.5, 1.0)])
+                t0, th, t1 = (engine_thrust_n(engine, x, speed, scale) for x in (0.0, 0.5, 1.0))
+                a_j = 2.0 * (t1 - 2.0 * th + t0)
+                b_j, c_j = t1 - t0 - a_j, t0
+            live.append((a_j, b_j, c_j + error))
             dead.append(windmilling_thrust_n(engine, speed, scale, self.density,
                                              self.propulsion.fan_area_m2))
         return live, dead
 
     def _excess_quadratic(self, speed: Array, dead: int | None, mode: str,
-                          terms: tuple[list[list[Array]], list[Array]]
+                          terms: tuple[list[tuple[Array, Array, Array]], list[Array]]
                           ) -> tuple[Array, Array, Array]:
-        """Level-flight thrust excess ``a x^2 + b x + c`` [N] in throttle at each airspeed.
-
-        The total thrust is quadratic in throttle (poly22): its coefficients from its values
-        at throttle 0, 1/2 and 1; ``c`` is the idle thrust less the drag.
-        """
+        """Level-flight thrust excess ``a x^2 + b x + c`` [N] in throttle at each airspeed:
+        the live engines' sum (a windmilling dead engine adds its drag to ``c``) less the
+        drag."""
         live, windmill = terms
-        t0, th, t1 = (
-            sum(live[j][i] for j in range(len(live)) if j != dead) for i in range(3)
-        )
+        a, b, c = (sum(live[j][i] for j in range(len(live)) if j != dead) for i in range(3))
         if dead is not None and mode == "windmilling":
-            t0, th, t1 = t0 + windmill[dead], th + windmill[dead], t1 + windmill[dead]
-        quadratic = 2.0 * (t1 - 2.0 * th + t0)
-        linear = t1 - t0 - quadratic
+            c = c + windmill[dead]
         if self._drag is None or self._drag[0] is not speed:  # shared by trim and OEI
             self._drag = (speed, np.asarray(
                 level_flight_drag_n(self.aircraft, speed, self.density), dtype=float))
         drag = self._drag[1]
-        shape = np.broadcast_shapes(np.shape(quadratic), np.shape(drag), (self.size, 1))
-        return (np.broadcast_to(quadratic, shape), np.broadcast_to(linear, shape),
-                np.broadcast_to(t0 - drag, shape))
+        shape = np.broadcast_shapes(np.shape(a), np.shape(c), np.shape(drag), (self.size, 1))
+        return (np.broadcast_to(a, shape), np.broadcast_to(b, shape),
+                np.broadcast_to(c - drag, shape))
 
     @staticmethod
     def _roots(a: Array, b: Array, c: Array) -> Array:
@@ -628,7 +634,8 @@ class _Model:
 
     def least_throttle(self, speed: Array, dead: int | None = None,
                        mode: str = "windmilling",
-                       terms: tuple[list[list[Array]], list[Array]] | None = None) -> Array:
+                       terms: tuple[list[tuple[Array, Array, Array]], list[Array]] | None = None
+                       ) -> Array:
         """Least throttle [fraction] for level flight at each airspeed; NaN where none.
 
         ``terms`` reuses the engines' thrusts at these airspeeds across dead-engine cases.
@@ -712,7 +719,7 @@ class _Model:
             self._grid_terms(grid)
         return self._terms[2]
 
-    def _grid_terms(self, grid: Array) -> tuple[list[list[Array]], list[Array]]:
+    def _grid_terms(self, grid: Array) -> tuple[list[tuple[Array, Array, Array]], list[Array]]:
         if self._terms is None or self._terms[0] is not grid:
             row = grid[None, :]
             self._terms = (grid, self._engine_thrusts(row), row)

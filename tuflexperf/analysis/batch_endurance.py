@@ -2,12 +2,14 @@
 
 Per row, exactly as :class:`tuflexperf.analysis.endurance.EnduranceModel` does for one
 case: the launch (ground-roll time history, best full-throttle climb on the same 4001-point
-airspeed grid, the same RK4 of the constant-power current in 0.25 s steps), the least
-throttle of level flight, the fast level-flight root at the throttle, the pack's cut-off
-charge, and the Gauss-Legendre discharge time from the launch charge to the reserve.
-Newton per case becomes bisection over the batch (same roots, bracketed). The battery's
+airspeed grid, the same RK4 of the constant-power current: 0.25 s steps where the roll
+ends, strides of them where the power is smooth, the roll before and the steady climb
+after), the least throttle of level flight, the fast level-flight root at the throttle,
+the pack's cut-off charge, and the Gauss-Legendre discharge time from the launch charge to
+the reserve. Newton per case becomes bisection over the batch (same roots, bracketed). The battery's
 parameters and the fan's power model are the nominal case's (they come from the battery
-file, not from the sampled aircraft).
+file, not from the sampled aircraft). A catapult launch starts airborne at its release
+speed: no roll, the battery pays for the climb only.
 
 References
 ----------
@@ -84,6 +86,7 @@ def battery_side(case: Any) -> Any:
 
 _GOLDEN_STEPS = 25
 _CLIMB_STRIDE = 16  # single-case launch steps per batch RK4 step in the steady climb
+_ROLL_STRIDE = 2  # and in the roll (before the step that straddles the roll's end)
 _BISECTIONS = 60
 
 
@@ -123,27 +126,25 @@ def _best_climb(m: Any, v_lo: Array, stall: Array) -> tuple[Array, Array]:
     return speed[rows, best], rate[rows, best]
 
 
-def _interp_rows(step: Array, count: int, t_hist: Array, v_hist: Array) -> Array:
-    """``np.interp(j step[i], t_hist[i], v_hist[i])`` for every row ``i`` and ``j < count``.
+def _interp_rows(t: Array, t_hist: Array, v_hist: Array) -> Array:
+    """``np.interp(t[i, j], t_hist[i], v_hist[i])`` for every row ``i`` and column ``j``.
 
-    The query times are uniform per row, so each history time ``t_k`` is counted once, at
-    the first query ``j = ceil(t_k / step)`` that reaches it (one ``bincount`` over all
-    rows), and a cumulative sum gives every query's interval: no search.
+    A binary search of every query at once (each row's history increasing): the last
+    history time at or before the query, in ``ceil(log2(width))`` vectorised halvings.
     """
     rows, width = t_hist.shape
-    safe = np.where(step > 0, step, 1.0)[:, None]
-    first = np.clip(np.ceil(t_hist / safe), 0, count).astype(np.intp)
-    # a history time within rounding of a query time counts as reached (side="right")
-    first = np.where((first > 0) & ((first - 1) * safe >= t_hist), first - 1, first)
-    flat = (first + (count + 1) * np.arange(rows)[:, None]).ravel()
-    reached = np.cumsum(np.bincount(flat, minlength=rows * (count + 1)).reshape(
-        rows, count + 1)[:, :count], axis=1)
-    index = np.clip(reached - 1, 0, width - 2)
-    t = safe * np.arange(count)[None, :]
-    t0 = np.take_along_axis(t_hist, index, axis=1)
-    t1 = np.take_along_axis(t_hist, index + 1, axis=1)
-    v0 = np.take_along_axis(v_hist, index, axis=1)
-    v1 = np.take_along_axis(v_hist, index + 1, axis=1)
+    flat_t, flat_v = t_hist.ravel(), v_hist.ravel()
+    base = width * np.arange(rows)[:, None]  # row offsets into the flattened histories
+    low = np.zeros(t.shape, dtype=np.intp)
+    high = np.full(t.shape, width, dtype=np.intp)  # one past the end: "later than all"
+    for _ in range(max(1, math.ceil(math.log2(width)))):
+        mid = (low + high) >> 1
+        reached = (mid < width) & (np.take(flat_t, base + np.minimum(mid, width - 1)) <= t)
+        low = np.where(reached, mid, low)
+        high = np.where(reached, high, mid)
+    at = base + np.clip(low, 0, width - 2)
+    t0, t1 = np.take(flat_t, at), np.take(flat_t, at + 1)
+    v0, v1 = np.take(flat_v, at), np.take(flat_v, at + 1)
     with np.errstate(invalid="ignore", divide="ignore"):
         value = v0 + (t - t0) * (v1 - v0) / (t1 - t0)
     return np.where(t >= t_hist[:, -1:], v_hist[:, -1:], value)
@@ -168,55 +169,58 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     total = roll_time + climb_time_safe
     steps = np.maximum(1, np.ceil(total / single._LAUNCH_STEP_S)).astype(int)
     dt = total / steps
-    # RK4 stage times are the half-steps j dt / 2: the power at each, looked up at once
-    # where the row is still rolling (the same linear interpolation of the roll history).
-    rolling_stages = int(np.max(np.where(ok, np.ceil(2.0 * roll_time / np.where(dt > 0, dt, 1.0)),
-                                         0))) + 1
-    stage_t = dt[:, None] * 0.5 * np.arange(rolling_stages)[None, :]
-    rolling = _power_w(model, m, 1.0, _interp_rows(
-        np.where(ok, dt * 0.5, 0.0), rolling_stages, np.where(ok[:, None], t_hist, 0.0), v_hist))
-    stage_power = np.where(stage_t < roll_time[:, None], rolling, climb_power[:, None])
+    t_hist = np.where(ok[:, None], t_hist, 0.0)
 
-    def power_at(j: int) -> Array:
-        return stage_power[:, j] if j < rolling_stages else climb_power
+    def rk4(q: Array, h: Array, active: Array, powers: tuple[Array, Array, Array]) -> Array:
+        p0, p_half, p1 = powers
+        k1 = np.asarray(current_at_power_a(model.params, q, p0, packs)) / 3600.0
+        k2 = np.asarray(current_at_power_a(model.params, q + h / 2 * k1, p_half, packs)) / 3600.0
+        k3 = np.asarray(current_at_power_a(model.params, q + h / 2 * k2, p_half, packs)) / 3600.0
+        k4 = np.asarray(current_at_power_a(model.params, q + h * k3, p1, packs)) / 3600.0
+        return np.where(active, q + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), q)
 
-    def rate(j: int, charge: Array) -> Array:
-        return np.asarray(current_at_power_a(model.params, charge, power_at(j), packs)) / 3600.0
-
-    # the steps that touch the roll: the single case's RK4 step by step (its power lookups
-    # along the roll history); k0 is the first step whose stages all lie in the climb
+    # k0: the single case's first RK4 step whose stages all lie in the climb; the steps
+    # before k0 - 1 lie wholly in the roll, step k0 - 1 straddles the end of the roll
     with np.errstate(divide="ignore", invalid="ignore"):
         k0 = np.ceil(roll_time / dt)
     k0 = np.where(np.isfinite(k0), k0, 0.0)
     k0 = np.where((k0 > 0) & (dt * (k0 - 1) >= roll_time), k0 - 1, k0)
     k0 = np.where(dt * k0 < roll_time, k0 + 1, k0)
     k0 = np.clip(k0, 0, steps).astype(int)
+    rolled = np.maximum(k0 - 1, 0)
+    # the steps wholly in the roll: the power is smooth there (full throttle along the
+    # roll's airspeed history), RK4 in strides of _ROLL_STRIDE steps (the power looked up
+    # along the same history at the strides' stage times)
+    strides = np.ceil(rolled / _ROLL_STRIDE).astype(int)
+    h = np.where(strides > 0, rolled * dt / np.maximum(strides, 1), 0.0)
+    n = int(strides.max()) if strides.size else 0
+    # the straddling step exactly as the single case: roll power at its stages before the
+    # end of the roll (same lookup), climb power after
+    straddle = k0 >= 1
+    begin = (k0 - 1) * dt
+    straddle_t = begin[:, None] + 0.5 * dt[:, None] * np.arange(3)[None, :]
+    stride_t = 0.5 * h[:, None] * np.arange(2 * n + 1)[None, :]
+    rolling = _power_w(model, m, 1.0, _interp_rows(
+        np.concatenate([stride_t, straddle_t], axis=1), t_hist, v_hist))
     q = np.zeros(m.size)
-    for k in range(int(k0.max()) if k0.size else 0):
-        active = k < k0
-        k1 = rate(2 * k, q)
-        k2 = rate(2 * k + 1, q + dt / 2 * k1)
-        k3 = rate(2 * k + 1, q + dt / 2 * k2)
-        k4 = rate(2 * k + 2, q + dt * k3)
-        q = np.where(active, q + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4), q)
+    for k in range(n):
+        q = rk4(q, h, k < strides, (rolling[:, 2 * k], rolling[:, 2 * k + 1],
+                                    rolling[:, 2 * k + 2]))
+    if straddle.any():
+        power = np.where(straddle_t < roll_time[:, None], rolling[:, 2 * n + 1:],
+                         climb_power[:, None])
+        q = rk4(q, dt, straddle, (power[:, 0], power[:, 1], power[:, 2]))
     # the rest is the climb at constant power, dq/dt = i(q, P)/3600, smooth and slow (the
     # current changes ~1 % over it): RK4 in strides of _CLIMB_STRIDE of the single case's
-    # steps gives the same charge to ~1e-12 Ah in a sixteenth of the evaluations
+    # steps (with the roll's strides: the same endurance to ~1e-8 relative, held to 1e-7
+    # by tests/verification/test_batch_shortcuts.py)
     left = steps - k0
     strides = np.ceil(left / _CLIMB_STRIDE).astype(int)
     with np.errstate(divide="ignore", invalid="ignore"):
         h = np.where(strides > 0, left * dt / np.maximum(strides, 1), 0.0)
 
-    def climb_rate_ah(charge: Array) -> Array:
-        return np.asarray(current_at_power_a(model.params, charge, climb_power, packs)) / 3600.0
-
     for k in range(int(strides.max()) if strides.size else 0):
-        active = k < strides
-        k1 = climb_rate_ah(q)
-        k2 = climb_rate_ah(q + h / 2 * k1)
-        k3 = climb_rate_ah(q + h / 2 * k2)
-        k4 = climb_rate_ah(q + h * k3)
-        q = np.where(active, q + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), q)
+        q = rk4(q, h, k < strides, (climb_power,) * 3)
     return np.where(ok, q, np.nan), climb_time
 
 
