@@ -321,9 +321,10 @@ def _validation(
     if not errors:
         return {"mean_negative_error_n": None, "mean_positive_error_n": None, "rms_error_n": None}
     e = np.concatenate(errors)
+    below, above = e[e < 0], e[e > 0]
     return {
-        "mean_negative_error_n": _mean_or_none(list(e[e < 0])),
-        "mean_positive_error_n": _mean_or_none(list(e[e > 0])),
+        "mean_negative_error_n": float(below.mean()) if below.size else None,
+        "mean_positive_error_n": float(above.mean()) if above.size else None,
         "mean_error_n": float(e.mean()),
         "rms_error_n": float(np.sqrt(np.mean(e * e))),
     }
