@@ -602,9 +602,20 @@ def mission(
             fail_input("MISSION: give a mission file (the case has no mission requirement)")
         mission_file = mission_path(case)
     plan = load_mission(mission_file)
-    inputs = {Path(mission_file).resolve(), Path(case.path).resolve()}
-    if csv is not None and csv.resolve() in inputs:
-        fail_input(f"--csv: {csv} is an input of this command; choose another file")
+    if csv is not None:
+        from tuflexperf.io.files import guard_outputs
+
+        # every file the flight reads: the case, its aircraft/propulsion/battery files, the
+        # battery's discharge runs and the mission itself
+        inputs = [Path(mission_file), case.path, case.aircraft_path, case.propulsion_path]
+        if case.battery_path is not None:
+            from tuflexperf.io.battery import load_battery
+
+            inputs.append(case.battery_path)
+            inputs.extend(r.path for r in load_battery(case.battery_path).runs)
+        if csv.is_dir():
+            fail_input(f"--csv: {csv} is a folder; give a file name")
+        guard_outputs({"--csv": csv}, inputs)
     limit = requirement.min_landing_charge_fraction if requirement is not None else None
     result = solve_mission(case, plan, limit)
     if csv is not None:
@@ -633,8 +644,11 @@ def mission(
                 f"{sum(s.energy_wh):10.1f}{s.min_voltage_v:8.2f}{thr:>8}"
             )
         if result.solved is not None:
+            ends = result.solved.get("ends_at", "landing reserve")
             typer.echo(f"  solved: longest {result.solved['segment']} "
-                       f"{result.solved['time_min']:.2f} min that lands on the reserve")
+                       f"{result.solved['time_min']:.2f} min "
+                       + ("that lands on the reserve" if ends == "landing reserve"
+                          else "before the pack's cut-off voltage"))
         verdict = "PASS" if result.passed else "FAIL"
         typer.echo(f"  {result.reason}  {verdict}")
         if csv is not None:

@@ -166,6 +166,14 @@ def test_cli_mission_passes_and_writes_history(tmp_path: Path) -> None:
         ("{type: loiter, airspeed_m_s: 5, time_min: 1}", "below stall"),
         ("{type: climb, to_altitude_m: 200, airspeed_m_s: 20, climb_rate_m_s: 30}",
          "needs more than full throttle"),
+        ("{type: cruise, airspeed_m_s: 60, time_min: 1}",
+         "segment 2 (cruise): needs more than full throttle at "),
+        ("{type: climb, to_altitude_m: 100, airspeed_m_s: 8, throttle: 1.0}", "below stall"),
+        ("{type: loiter, throttle: 0.1, time_min: 1}", "holds level flight at no airspeed"),
+        ("{type: descent, to_altitude_m: 5, airspeed_m_s: 20, descent_rate_m_s: 5}",
+         "needs less than idle thrust"),
+        ("{type: climb, to_altitude_m: 3000, airspeed_m_s: 20, throttle: 0.3}",
+         "cannot climb at throttle 0.3"),
     ],
 )
 def test_cli_mission_not_attainable_names_the_segment(
@@ -219,3 +227,240 @@ def test_catapult_launch_starts_airborne_and_skips_the_runway(tmp_path: Path) ->
     result = MissionModel(case, load_mission(SHIPPED_MISSION), None).fly()
     assert result.attainable and result.segments[0].charge_ah == (0.0, 0.0)
     assert result.segments[1].start_altitude_m == 0.0
+
+
+# --- an independent integration of a whole mission, with the pack-voltage effect -----------
+def _voltage_case(tmp_path: Path, exponent: float = 2.0):
+    import shutil
+
+    for folder in ("requirements", "data"):
+        shutil.copytree(ROOT / folder, tmp_path / folder)
+    prop = tmp_path / "data" / "tuflex" / "propulsion.yaml"
+    prop.write_text(prop.read_text().replace(
+        "fan_area_m2:", f"reference_voltage_v: 46.0\nvoltage_exponent: {exponent}\n"
+        "fan_area_m2:", 1))
+    return load_case(tmp_path / "requirements" / "tuflex.yaml")
+
+
+class _Spec:
+    """SPEC 3/4 at one instant from the landed files, solved with scipy's brentq.
+
+    Loaded voltage ``U = OCV(q/n) - (R/n) P / U`` with ``P = sigma P_surface(x, V)
+    (U/U_ref)^(1.5 k)``, thrust ``sigma T(x, V) (U/U_ref)^k``; a dead engine windmills
+    (``-Cd_wm q A_fan``) and draws nothing.
+    """
+
+    def __init__(self, model: MissionModel) -> None:
+        self.m, self.case = model, model.case
+        self.prop, self.aircraft = model.case.propulsion, model.case.aircraft
+        self.u_ref, self.k = self.prop.reference_voltage_v, self.prop.voltage_exponent
+        self.r = model.params.resistance_ohm / model.packs
+
+    def rho(self, h: float) -> float:
+        return float(isa_density_kg_m3(h, 0.0))
+
+    def engine(self, i: int, q: float, x: float, v: float, rho: float) -> tuple[float, ...]:
+        from tuflexperf.models.battery import open_circuit_voltage_v
+        from tuflexperf.models.thrust import engine_thrust_n
+
+        e = self.prop.engines[i]
+        sigma = density_ratio(self.prop, rho)
+        p0 = sigma * float(engine_power_w(e, x, v))
+        ocv = float(open_circuit_voltage_v(self.m.params, q, self.m.packs))
+        u = brentq(lambda u: ocv - self.r * p0 * (u / self.u_ref) ** (1.5 * self.k) / u - u,
+                   0.6 * ocv, 1.2 * ocv, xtol=1e-14, rtol=1e-14)
+        power = p0 * (u / self.u_ref) ** (1.5 * self.k)
+        thrust = float(engine_thrust_n(e, x, v, sigma)) * (u / self.u_ref) ** self.k
+        return thrust, power / u, u
+
+    def state(self, q: np.ndarray, x: float, v: float, rho: float, dead: int | None
+              ) -> tuple[float, list[float], list[float]]:
+        from tuflexperf.models.thrust import windmilling_thrust_n
+
+        thrust, currents, volts = 0.0, [], []
+        for i in range(len(self.prop.engines)):
+            if i == dead:
+                e = self.prop.engines[i]
+                thrust += float(windmilling_thrust_n(e, v, density_ratio(self.prop, rho), rho,
+                                                     self.prop.fan_area_m2))
+                currents.append(0.0)
+                continue
+            t, c, u = self.engine(i, q[i], x, v, rho)
+            thrust, currents, volts = thrust + t, currents + [c], volts + [u]
+        return thrust, currents, volts
+
+    def excess(self, q: np.ndarray, x: float, v: float, rho: float, dead: int | None) -> float:
+        return self.state(q, x, v, rho, dead)[0] - float(
+            level_flight_drag_n(self.aircraft, v, rho))
+
+    def level_throttle(self, q: np.ndarray, v: float, rho: float, dead: int | None,
+                       extra_n: float = 0.0) -> float:
+        return brentq(lambda x: self.excess(q, x, v, rho, dead) - extra_n, 0.0, 1.0,
+                      xtol=1e-15, rtol=1e-14)
+
+
+def _spec_segment(spec: _Spec, s, q: np.ndarray, h0: float, dead: int | None,
+                  guess: float) -> tuple[np.ndarray, float, float, float | None]:
+    """One segment by solve_ivp: end charges, time [s], least live voltage, end airspeed."""
+    aircraft = spec.aircraft
+    opts = {"rtol": 1e-11, "atol": 1e-13, "method": "DOP853"}
+
+    def tas(h: float) -> float:
+        return float(true_airspeed_m_s(s.airspeed_m_s, spec.rho(h)))
+
+    if s.type in ("climb", "descent"):
+        cmd = s.climb_rate_m_s if s.type == "climb" else (
+            -s.descent_rate_m_s if s.descent_rate_m_s else None)
+
+        def point(h: float, y: np.ndarray) -> tuple[float, float, float]:
+            rho, v = spec.rho(h), tas(h)
+            if s.throttle is not None:
+                return s.throttle, v, spec.excess(y, s.throttle, v, rho, dead) * v \
+                    / aircraft.weight_n
+            return spec.level_throttle(y, v, rho, dead, aircraft.weight_n * cmd / v), v, cmd
+
+        def rhs(h: float, y: np.ndarray) -> list[float]:
+            x, v, rate = point(h, y[:2])
+            currents = spec.state(y[:2], x, v, spec.rho(h), dead)[1]
+            return [c / 3600.0 / rate for c in currents] + [1.0 / rate]
+
+        sol = solve_ivp(rhs, (h0, s.to_altitude_m), [*q, 0.0], dense_output=True, **opts)
+        least = np.inf
+        for h in np.linspace(h0, s.to_altitude_m, 201):
+            y = sol.sol(h)[:2]
+            x, v, _ = point(h, y)
+            least = min(least, *spec.state(y, x, v, spec.rho(h), dead)[2])
+        return sol.y[:2, -1], float(sol.y[2, -1]), least, None
+
+    rho = spec.rho(h0)
+
+    def level(y: np.ndarray) -> tuple[float, float]:
+        if s.throttle is None:
+            return spec.level_throttle(y, tas(h0), rho, dead), tas(h0)
+        return s.throttle, brentq(lambda v: spec.excess(y, s.throttle, v, rho, dead),
+                                  0.7 * guess, 1.2 * guess, xtol=1e-13, rtol=1e-14)
+
+    def rhs_t(t: float, y: np.ndarray) -> list[float]:
+        x, v = level(y)
+        return [c / 3600.0 for c in spec.state(y, x, v, rho, dead)[1]]
+
+    duration = 60.0 * s.time_min
+    sol = solve_ivp(rhs_t, (0.0, duration), q, dense_output=True, **opts)
+    least, v = np.inf, None
+    for t in np.linspace(0.0, duration, 201):
+        y = sol.sol(t)
+        x, v = level(y)
+        least = min(least, *spec.state(y, x, v, rho, dead)[2])
+    return sol.y[:, -1], duration, least, v
+
+
+def test_independent_mission_with_voltage_effect_and_engine_failure(tmp_path: Path) -> None:
+    """Every kind of airborne segment with the sagging pack: solve_ivp (DOP853, tight) per
+    segment, brentq for the loaded voltage, the throttle and the fixed throttle's airspeed;
+    segment times, landing charge and the least voltage agree to 1e-6."""
+    case = _voltage_case(tmp_path)
+    path = _mission(tmp_path, """\
+        name: every airborne segment, sagging pack
+        segments:
+          - {type: climb, to_altitude_m: 120, airspeed_m_s: 22, throttle: 0.9}
+          - {type: cruise, airspeed_m_s: 25, time_min: 4}
+          - {type: climb, to_altitude_m: 160, airspeed_m_s: 21, climb_rate_m_s: 1.5}
+          - {type: engine_failure, engine: EDF2}
+          - {type: loiter, throttle: 0.95, time_min: 1}
+          - {type: descent, to_altitude_m: 60, airspeed_m_s: 20, descent_rate_m_s: 1.0}
+          - {type: descent, to_altitude_m: 30, airspeed_m_s: 20, throttle: 0.2}
+        """)
+    model = MissionModel(case, load_mission(path), None)
+    result = model.fly()
+    assert result.attainable, result.reason
+    spec = _Spec(model)
+    q, h, dead, least = np.zeros(2), 0.0, None, np.inf
+    times, v_loiter = [], None
+    for k, s in enumerate(load_mission(path).segments):
+        if s.type == "engine_failure":
+            dead = 1
+            times.append(0.0)
+            continue
+        q, t, low, v_end = _spec_segment(spec, s, q, h, dead, model.plans[k].v_guess)
+        times.append(t)
+        least = min(least, low)
+        h = s.to_altitude_m if s.to_altitude_m is not None else h
+        v_loiter = v_end if s.throttle is not None and s.type == "loiter" else v_loiter
+    for k, seg in enumerate(result.segments):
+        assert seg.time_s == pytest.approx(times[k], rel=1e-6, abs=1e-9), seg.type
+    assert result.landing_charge_fraction == pytest.approx(
+        float(np.min(1.0 - q / model.capacity_ah)), rel=1e-7)
+    for i, name in enumerate(result.engines):
+        assert result.history[f"charge_ah_{name}"][-1] == pytest.approx(q[i], rel=1e-7)
+    flown = min(s.min_voltage_v for s in result.segments if s.type != "engine_failure")
+    assert flown == pytest.approx(least, rel=1e-6)
+    # the fixed-throttle loiter's airspeed fell as its pack sagged, to the SPEC's value
+    a, b = model.bounds[4]
+    assert result.history["airspeed_m_s"][b - 1] == pytest.approx(v_loiter, rel=1e-7)
+    assert result.history["airspeed_m_s"][b - 1] < result.history["airspeed_m_s"][a]
+
+
+def test_cutoff_ends_the_flight_at_the_event_time(tmp_path: Path) -> None:
+    """A cruise too long for the packs: not attainable, the segment named, the cut-off time
+    equal to solve_ivp's event (the loaded voltage U(q, i) = U_cut, constant power)."""
+    from tuflexperf.models.battery import terminal_voltage_v
+
+    path = _mission(tmp_path, """\
+        name: too long
+        segments:
+          - {type: takeoff}
+          - {type: cruise, airspeed_m_s: 26, time_min: 90}
+          - {type: loiter, airspeed_m_s: 20, time_min: 5}
+        """)
+    model = MissionModel(load_case(None), load_mission(path), None)
+    result = model.fly()
+    assert not result.attainable and not result.passed
+    assert result.reason.startswith("segment 2 (cruise): the pack reaches its cut-off voltage")
+    assert [s.type for s in result.segments] == ["takeoff", "cruise"]  # nothing after it
+    assert result.history["time_s"][-1] < result.ended_at_s
+    a = model.bounds[1][0]
+    q0 = np.array([result.history[f"charge_ah_{n}"][a] for n in result.engines])
+    t0 = float(result.history["time_s"][a])
+    power = [float(result.history[f"power_w_{n}"][a]) for n in result.engines]
+    p, packs = model.params, model.packs
+
+    def rhs(t: float, q: np.ndarray) -> list[float]:
+        return [float(current_at_power_a(p, q[i], power[i], packs)) / 3600.0 for i in range(2)]
+
+    def cut(t: float, q: np.ndarray) -> float:
+        return min(float(terminal_voltage_v(p, q[i], current_at_power_a(p, q[i], power[i],
+                                                                          packs), packs))
+                   for i in range(2)) - model.cutoff_v
+
+    cut.terminal = True
+    sol = solve_ivp(rhs, (0.0, 5400.0), q0, events=cut, rtol=1e-11, atol=1e-13,
+                    method="DOP853")
+    assert result.ended_at_s == pytest.approx(t0 + float(sol.t_events[0][0]), abs=1e-3)
+    code, out, _ = _run("mission", str(path), "--json")
+    assert code == 1
+    data = json.loads(out)
+    assert data["passed"] is False and data["ended_at_s"] == pytest.approx(result.ended_at_s)
+    assert "segment 2 (cruise)" in data["reason"]
+
+
+def test_solve_for_stops_at_the_cutoff_when_it_comes_before_the_reserve(
+    tmp_path: Path,
+) -> None:
+    """With no reserve the pack's cut-off ends the longest cruise: flown plainly, the answer
+    ends exactly on the cut-off voltage and is attainable."""
+    path = _mission(tmp_path, """\
+        name: to the cut-off
+        segments:
+          - {type: takeoff}
+          - {type: cruise, airspeed_m_s: 30, time_min: 1}
+        solve_for: cruise
+        """)
+    model = MissionModel(load_case(None), load_mission(path), 0.0)
+    result = model.solve_for()
+    assert result.solved["ends_at"] == "cut-off"
+    assert result.attainable and result.passed
+    assert result.segments[-1].min_voltage_v == pytest.approx(model.cutoff_v, abs=1e-6)
+    durations = model.durations.copy()
+    durations[1] = 60.0 * result.solved["time_min"]
+    assert model.fly(durations).segments[-1].min_voltage_v == pytest.approx(
+        model.cutoff_v, abs=1e-6)

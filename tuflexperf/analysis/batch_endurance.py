@@ -2,9 +2,9 @@
 
 Per row, exactly as :class:`tuflexperf.analysis.endurance.EnduranceModel` does for one
 case: the launch (ground-roll time history, best full-throttle climb on the same 4001-point
-airspeed grid, the same RK4 of the constant-power current: 0.25 s steps where the roll
-ends, strides of them where the power is smooth, the roll before and the steady climb
-after), the least throttle of level flight, the fast level-flight root at the throttle,
+airspeed grid, RK4 of the constant-power current in strides of 0.25 s steps, the roll
+and the steady climb apart as the single case's mission integrates them), the least
+throttle of level flight, the fast level-flight root at the throttle,
 the pack's cut-off charge, and the Gauss-Legendre discharge time from the launch charge to
 the reserve. Newton per case becomes bisection over the batch (same roots, bracketed). The battery's
 parameters and the fan's power model are the nominal case's (they come from the battery
@@ -86,7 +86,7 @@ def battery_side(case: Any) -> Any:
 
 _GOLDEN_STEPS = 25
 _CLIMB_STRIDE = 16  # single-case launch steps per batch RK4 step in the steady climb
-_ROLL_STRIDE = 2  # and in the roll (before the step that straddles the roll's end)
+_ROLL_STRIDE = 2  # and in the roll
 _BISECTIONS = 60
 
 
@@ -166,9 +166,6 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     t_hist = (np.zeros((m.size, 2)) if m.aircraft.launch == "catapult" else m.roll_history())
     v_hist = v_lo[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
     climb_power = _power_w(model, m, 1.0, climb_speed)
-    total = roll_time + climb_time_safe
-    steps = np.maximum(1, np.ceil(total / single._LAUNCH_STEP_S)).astype(int)
-    dt = total / steps
     t_hist = np.where(ok[:, None], t_hist, 0.0)
 
     def rk4(q: Array, h: Array, active: Array, powers: tuple[Array, Array, Array]) -> Array:
@@ -179,46 +176,26 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
         k4 = np.asarray(current_at_power_a(model.params, q + h * k3, p1, packs)) / 3600.0
         return np.where(active, q + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), q)
 
-    # k0: the single case's first RK4 step whose stages all lie in the climb; the steps
-    # before k0 - 1 lie wholly in the roll, step k0 - 1 straddles the end of the roll
-    with np.errstate(divide="ignore", invalid="ignore"):
-        k0 = np.ceil(roll_time / dt)
-    k0 = np.where(np.isfinite(k0), k0, 0.0)
-    k0 = np.where((k0 > 0) & (dt * (k0 - 1) >= roll_time), k0 - 1, k0)
-    k0 = np.where(dt * k0 < roll_time, k0 + 1, k0)
-    k0 = np.clip(k0, 0, steps).astype(int)
-    rolled = np.maximum(k0 - 1, 0)
-    # the steps wholly in the roll: the power is smooth there (full throttle along the
-    # roll's airspeed history), RK4 in strides of _ROLL_STRIDE steps (the power looked up
-    # along the same history at the strides' stage times)
-    strides = np.ceil(rolled / _ROLL_STRIDE).astype(int)
-    h = np.where(strides > 0, rolled * dt / np.maximum(strides, 1), 0.0)
+    # the roll (to the end of rotation) and the climb are integrated apart, as the single
+    # case's mission does (a step across the switch of power would be first-order only):
+    # the roll in steps of at most _LAUNCH_STEP_S x _ROLL_STRIDE, the power looked up along
+    # the roll's airspeed history at their stage times (the lift-off speed once rotating)
+    roll_steps = np.ceil(roll_time / single._LAUNCH_STEP_S)
+    strides = np.ceil(roll_steps / _ROLL_STRIDE).astype(int)
+    h = np.where(strides > 0, roll_time / np.maximum(strides, 1), 0.0)
     n = int(strides.max()) if strides.size else 0
-    # the straddling step exactly as the single case: roll power at its stages before the
-    # end of the roll (same lookup), climb power after
-    straddle = k0 >= 1
-    begin = (k0 - 1) * dt
-    straddle_t = begin[:, None] + 0.5 * dt[:, None] * np.arange(3)[None, :]
     stride_t = 0.5 * h[:, None] * np.arange(2 * n + 1)[None, :]
-    rolling = _power_w(model, m, 1.0, _interp_rows(
-        np.concatenate([stride_t, straddle_t], axis=1), t_hist, v_hist))
+    rolling = _power_w(model, m, 1.0, _interp_rows(stride_t, t_hist, v_hist))
     q = np.zeros(m.size)
     for k in range(n):
         q = rk4(q, h, k < strides, (rolling[:, 2 * k], rolling[:, 2 * k + 1],
                                     rolling[:, 2 * k + 2]))
-    if straddle.any():
-        power = np.where(straddle_t < roll_time[:, None], rolling[:, 2 * n + 1:],
-                         climb_power[:, None])
-        q = rk4(q, dt, straddle, (power[:, 0], power[:, 1], power[:, 2]))
-    # the rest is the climb at constant power, dq/dt = i(q, P)/3600, smooth and slow (the
-    # current changes ~1 % over it): RK4 in strides of _CLIMB_STRIDE of the single case's
-    # steps (with the roll's strides: the same endurance to ~1e-8 relative, held to 1e-7
-    # by tests/verification/test_batch_shortcuts.py)
-    left = steps - k0
-    strides = np.ceil(left / _CLIMB_STRIDE).astype(int)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        h = np.where(strides > 0, left * dt / np.maximum(strides, 1), 0.0)
-
+    # the climb at constant power, dq/dt = i(q, P)/3600, smooth and slow (the current
+    # changes ~1 % over it): RK4 in strides of _CLIMB_STRIDE steps of _LAUNCH_STEP_S
+    # (held to 1e-7 of single steps by tests/verification/test_batch_shortcuts.py)
+    climb_steps = np.ceil(climb_time_safe / single._LAUNCH_STEP_S)
+    strides = np.ceil(climb_steps / _CLIMB_STRIDE).astype(int)
+    h = np.where(strides > 0, climb_time_safe / np.maximum(strides, 1), 0.0)
     for k in range(int(strides.max()) if strides.size else 0):
         q = rk4(q, h, k < strides, (climb_power,) * 3)
     return np.where(ok, q, np.nan), climb_time

@@ -13,17 +13,25 @@ the tunnel at 30 m/s; with two packs per fan and the launch's energy, "a flight 
    curve), all engines at throttle ``x`` (SPEC 3).
 4. **Pack endurance**: one pack on one fan at ``P(x, V)`` from full to the cut-off
    under load: ``t = 3600 * integral_0^{q_c} dq / i(q, P)`` (constant-power discharge).
-5. **Flight endurance**: each fan on its ``n`` parallel packs. The launch (full-throttle
-   ground roll from :func:`solve_takeoff`, then a full-throttle climb at the best rate of
-   climb to the battery file's pattern altitude) draws charge first; cruise at ``P(x, V)``
-   then runs until each pack has given ``(1 - reserve)`` of its rated capacity (the
-   landing reserve) or reaches the cut-off, whichever comes first.
-   ``flight_endurance_min`` = climb + cruise time (airborne).
+5. **Flight endurance**: the mission "take off, climb to the pattern altitude, cruise at
+   ``x`` until the reserve" (:func:`endurance_mission`) flown by the one mission
+   integrator (:class:`tuflexperf.analysis.mission.MissionModel`, CasADi RK4): the
+   full-throttle ground roll along the history of :func:`solve_takeoff`, the full-throttle
+   climb at the best rate of climb to the battery file's pattern altitude, then level
+   flight at throttle ``x``, each fan on its ``n`` parallel packs at the loaded pack
+   voltage, until the first fan has given ``(1 - reserve)`` of its rated capacity (the
+   landing reserve) or reaches the cut-off, whichever comes first (Newton on the landing
+   charge). With the propulsion file's ``reference_voltage_v`` thrust and power fall as
+   the pack sags, and the cruise airspeed with them (SPEC 3).
+   ``flight_endurance_min`` = climb + cruise time (airborne). The endurance figure is
+   the case's point performance: flown at the case's density throughout.
 
-Steps 3-5 are one CasADi function (Newton rootfinders on the level-flight excess thrust
+Steps 3-4 are one CasADi function (Newton rootfinders on the level-flight excess thrust
 and on the cut-off condition, Gauss-Legendre quadrature of the discharge) built once per
-case and battery and called per throttle. ``--best`` solves two small IPOPT NLPs: the
-throttle and airspeed of longest flight, and of longest cruise distance.
+case and battery and called per throttle; the constant-power closed form of step 4 also
+starts the Newton iteration of step 5 (exact without a voltage effect, so it converges at
+once). ``--best`` solves two small IPOPT NLPs: the throttle and airspeed of longest
+flight, and of longest cruise distance (constant-power cruise, no voltage effect).
 """
 
 from __future__ import annotations
@@ -32,7 +40,6 @@ import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -76,6 +83,7 @@ _MAX_SPEED_OVER_STALL = 8.0
 _SPEED_GRID_POINTS = 4001
 # Least airspeed for the --best NLPs: the usual 20 % margin over the 1-g stall speed.
 BEST_MIN_AIRSPEED_OVER_STALL = 1.2
+# RK4 step of the batch evaluator's launch (batch_endurance.py keeps the earlier scheme)
 _LAUNCH_STEP_S = 0.25
 # A discharge run's measured power further than this from the power model is a warning.
 RUN_POWER_TOLERANCE = 0.10
@@ -288,69 +296,106 @@ def _best_climb(case: Case) -> tuple[float, float]:
     return float(speeds[best]), float(rate[best])
 
 
+def endurance_mission(case: Case, battery: Battery, throttle: float = 0.5) -> Any:
+    """The endurance flight as a mission: take off, climb to the pattern, cruise at ``throttle``.
+
+    Segments (SPEC 4 mission types): the full-throttle take-off to lift-off (runway; a
+    catapult starts airborne), a full-throttle climb at the best-rate airspeed
+    (:func:`_best_climb`) to the battery file's pattern altitude, and a level cruise at
+    ``throttle`` whose airspeed follows (its duration is solved, see
+    :meth:`EnduranceModel.solve`).
+
+    References
+    ----------
+    Paper section 4 (the launch, then cruise); Anderson, *Aircraft Performance and
+    Design*, 5.10 (climb).
+    """
+    from tuflexperf.io.mission import MissionFile, SegmentSchema
+
+    height = battery.pattern_altitude_m
+    segments = [SegmentSchema(type="takeoff")]
+    if height > 0:
+        climb_speed, climb_rate = _best_climb(case)
+        if climb_rate <= 0:
+            raise NotAttainable("cannot climb at full throttle: no excess power after lift-off")
+        eas = climb_speed * math.sqrt(case.density_kg_m3 / 1.225)  # flown at the case's rho
+        segments.append(SegmentSchema(type="climb", to_altitude_m=height, airspeed_m_s=eas,
+                                      throttle=1.0))
+    segments.append(SegmentSchema(type="cruise", throttle=throttle, time_min=1.0))
+    return MissionFile("endurance", case.path, tuple(segments), None)
+
+
+def endurance_mission_model(case: Case, battery: Battery) -> Any:
+    """The endurance mission built once (:class:`MissionModel`; the throttle is an input).
+
+    The endurance figure is the case's point performance: the whole flight is flown at
+    the case's density (the climb's height costs energy, not density), the take-off to
+    lift-off (the climb starts from the runway), the cruise to the battery file's landing
+    reserve.
+    """
+    from tuflexperf.analysis.mission import MissionModel
+
+    mission = endurance_mission(case, battery)
+    return MissionModel(case, mission, battery.landing_reserve_fraction,
+                        fixed_density_kg_m3=case.density_kg_m3, takeoff_to_obstacle=False,
+                        battery=battery)
+
+
+def _launch_of(model: Any) -> LaunchBudget:
+    """The launch segments of a flown endurance mission (per fan: the larger engine's)."""
+    flown = model.fly()
+    case = model.case
+    takeoff = getattr(model, "takeoff", None)
+    climb = next((s for s in flown.segments if s.type == "climb"), None)
+    if case.aircraft.launch == "catapult":
+        from tuflexperf.models.aircraft import true_airspeed_m_s
+
+        lift_off = float(true_airspeed_m_s(case.aircraft.launch_speed_m_s, case.density_kg_m3))
+        roll_s = 0.0
+    else:
+        lift_off, roll_s = float(takeoff.liftoff_speed_m_s), float(takeoff.time_s)
+    launch = [s for s in flown.segments if s.type in ("takeoff", "climb")]
+    charge = [sum(s.charge_ah[i] for s in launch) for i in range(model.n)]
+    energy = [sum(s.energy_wh[i] for s in launch) for i in range(model.n)]
+    worst = int(np.argmax(charge))
+    height = model.battery.pattern_altitude_m
+    climb_time = climb.time_s if climb is not None else 0.0
+    climb_speed = (float(flown.history["airspeed_m_s"][model.bounds[climb.index][0]])
+                   if climb is not None else lift_off)
+    return LaunchBudget(
+        ground_roll_time_s=roll_s,
+        liftoff_speed_m_s=lift_off,
+        climb_airspeed_m_s=climb_speed,
+        climb_rate_m_s=height / climb_time if climb_time > 0 else 0.0,
+        climb_time_s=climb_time,
+        pattern_altitude_m=height,
+        charge_ah=charge[worst],
+        energy_wh=energy[worst],
+    )
+
+
 def launch_budget(
-    case: Case, battery: Battery, params: DischargeParameters, power: Any
+    case: Case, battery: Battery, params: DischargeParameters | None = None, power: Any = None
 ) -> LaunchBudget:
     """Charge drawn per fan (its ``n`` parallel packs) by the take-off and the climb.
 
-    Ground roll: the full-throttle roll of :func:`solve_takeoff`, power ``P(1, V(t))``
-    along its time history. Climb: at the best-rate airspeed to the pattern altitude.
-    The charge is integrated by RK4 at constant-power current ``i(q, P)`` (0.25 s steps).
-    Raises :class:`NotAttainable` when the aircraft cannot take off or climb.
+    The launch segments of :func:`endurance_mission` flown by the mission integrator
+    (CasADi RK4, :mod:`tuflexperf.analysis.mission`): ground roll at full throttle along the
+    airspeed history of :func:`solve_takeoff`, rotation, then the full-throttle climb at
+    the best-rate airspeed to the pattern altitude, each fan drawing its own power (its
+    power surface, else the battery file's fan-power law) at the loaded pack voltage.
+    The fan that draws most sets the budget. ``params`` and ``power`` are accepted for
+    compatibility: the pack model and the power model are the case's own (the same that
+    :class:`EnduranceModel` uses). Raises :class:`NotAttainable` when the aircraft cannot
+    take off or climb.
+
+    References
+    ----------
+    Raymer, *Aircraft Design*, 17.8 (take-off); Anderson, *Aircraft Performance and
+    Design*, 5.10 (rate of climb).
     """
-    from tuflexperf.analysis.takeoff import solve_takeoff
-
-    if case.aircraft.launch == "catapult":
-        # the catapult's energy comes from ground equipment: the flight starts airborne at
-        # the release speed, and the battery pays only for the climb (SPEC 4, aircraft file)
-        from tuflexperf.models.aircraft import true_airspeed_m_s
-
-        release = float(true_airspeed_m_s(case.aircraft.launch_speed_m_s, case.density_kg_m3))
-        takeoff = SimpleNamespace(time_s=0.0, liftoff_speed_m_s=release,
-                                  history_time_s=[0.0], history_airspeed_m_s=[release])
-    else:
-        takeoff = solve_takeoff(case)
-    packs = battery.packs_in_parallel_per_engine
-    height = battery.pattern_altitude_m
-    climb_speed, climb_rate = _best_climb(case)
-    if height > 0 and climb_rate <= 0:
-        raise NotAttainable("cannot climb at full throttle: no excess power after lift-off")
-    climb_time = height / climb_rate if height > 0 else 0.0
-    roll_t = np.asarray(takeoff.history_time_s, dtype=float)
-    roll_v = np.asarray(takeoff.history_airspeed_m_s, dtype=float)
-    climb_power = float(power.electrical_power_w(1.0, climb_speed))
-
-    def power_at(t: float) -> float:
-        if t < takeoff.time_s:
-            return float(power.electrical_power_w(1.0, np.interp(t, roll_t, roll_v)))
-        return climb_power
-
-    total_s = takeoff.time_s + climb_time
-    steps = max(1, math.ceil(total_s / _LAUNCH_STEP_S))
-    dt = total_s / steps
-    q, energy = 0.0, 0.0
-
-    def rate(t: float, charge: float) -> float:
-        return float(current_at_power_a(params, charge, power_at(t), packs)) / 3600.0
-
-    for k in range(steps):
-        t = k * dt
-        k1 = rate(t, q)
-        k2 = rate(t + dt / 2, q + dt / 2 * k1)
-        k3 = rate(t + dt / 2, q + dt / 2 * k2)
-        k4 = rate(t + dt, q + dt * k3)
-        q += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        energy += dt / 6 * (power_at(t) + 4 * power_at(t + dt / 2) + power_at(t + dt))
-    return LaunchBudget(
-        ground_roll_time_s=float(takeoff.time_s),
-        liftoff_speed_m_s=float(takeoff.liftoff_speed_m_s),
-        climb_airspeed_m_s=climb_speed,
-        climb_rate_m_s=climb_rate,
-        climb_time_s=climb_time,
-        pattern_altitude_m=height,
-        charge_ah=q,
-        energy_wh=energy / 3600.0,
-    )
+    del params, power
+    return _launch_of(endurance_mission_model(case, battery))
 
 
 # --- results --------------------------------------------------------------------------------
@@ -381,6 +426,8 @@ class EnduranceResult:
     # thrust against electrical power at the cruise point, per engine (SPEC 3)
     power_agreement: tuple[PowerAgreement, ...] = ()
     power_used: dict[str, Any] = field(default_factory=dict)
+    # the flight itself (take-off, climb, cruise): a MissionResult with its time history
+    flight: Any = field(default=None, repr=False, compare=False)
 
     def to_dict(self) -> dict[str, Any]:
         ch = self.characterisation
@@ -420,6 +467,8 @@ class EnduranceResult:
             "power_used": self.power_used,
             "power_agreement": [a.to_dict() for a in self.power_agreement],
             "warnings": list(self.warnings),
+            # the flight as a mission (take-off, climb, cruise), segment by segment
+            "flight": self.flight.to_dict() if self.flight is not None else None,
         }
 
 
@@ -475,7 +524,13 @@ class EnduranceModel:
         # Cruise ends when each pack has given (1 - reserve) of its rated capacity.
         usable = 1.0 - battery.landing_reserve_fraction
         self.reserve_ah = self.packs * battery.capacity_ah * usable
-        self.launch = launch_budget(case, battery, self.params, self.power)
+        # the flight: take-off, climb, cruise at a throttle, flown by the mission integrator
+        self.mission = endurance_mission_model(case, battery)
+        self._cruise = len(self.mission.plans) - 1
+        self.launch = _launch_of(self.mission)
+        # the cruise starts where the launch ends, whatever its throttle
+        self._cruise_start = self.mission.start_state(self._cruise, self.mission.durations,
+                                                      self.mission.theta)
         self.min_throttle, self.min_throttle_airspeed = self._least_throttle()
 
         def excess(x: Any, v: Any) -> Any:
@@ -656,11 +711,37 @@ class EnduranceModel:
                 f"throttle {throttle:g}: the pack is below its cut-off voltage at "
                 f"{power_w:.0f} W per fan from the start"
             )
-        return self._result(throttle, speed, power_w, q1, qn, t1, tn)
+        flight, cruise_s, ends_at = self._fly(throttle, speed, tn)
+        return self._result(throttle, speed, power_w, q1, t1, flight, cruise_s, ends_at)
+
+    def _fly(self, throttle: float, speed: float, guess_s: float) -> tuple[Any, float, str]:
+        """The endurance mission at ``throttle``: the cruise runs to the reserve (or cut-off).
+
+        The cruise's duration is the root of the mission's landing charge (see
+        :meth:`MissionModel.longest`), started from the constant-power closed form
+        ``guess_s`` [s] (exact without a voltage effect, so Newton confirms it at once).
+        """
+        model = self.mission
+        theta = model.theta.copy()
+        theta[3 * self._cruise:3 * self._cruise + 3] = (throttle, 0.0, speed)
+        durations = model.durations.copy()
+        try:
+            cruise_s, ends_at = model.longest(self._cruise, durations, theta,
+                                              max(guess_s, 1.0), self._cruise_start)
+        except NotAttainable as exc:
+            raise NotAttainable(
+                f"throttle {throttle:g}: the launch leaves no cruise before the landing reserve "
+                f"or the cut-off ({exc})"
+            ) from None
+        durations[self._cruise] = cruise_s
+        flight = model.fly(durations, theta=theta)
+        if not flight.attainable:
+            raise NotAttainable(f"throttle {throttle:g}: {flight.reason}")
+        return flight, cruise_s, ends_at
 
     def _result(
-        self, throttle: float, speed: float, power_w: float, q1: float, qn: float, t1: float,
-        tn: float,
+        self, throttle: float, speed: float, power_w: float, q1: float, t1: float,
+        flight: Any, cruise_s: float, ends_at: str,
     ) -> EnduranceResult:
         warnings: list[str] = []
         extrapolated = is_extrapolated(self.case.propulsion, speed)
@@ -681,10 +762,9 @@ class EnduranceModel:
         density_note = unlapsed_density_warning(self.case.propulsion, self.case.density_kg_m3)
         if density_note:
             warnings.append(density_note)
-        ends_at = "landing reserve" if self.reserve_ah <= qn else "cut-off"
-        if self.launch.charge_ah >= min(qn, self.reserve_ah):
-            warnings.append("the launch alone uses the charge available before the reserve")
-        cruise_min = tn / 60.0
+        cruise_min = cruise_s / 60.0
+        cruise_end = max(float(flight.history[f"charge_ah_{name}"][-1])
+                         for name in flight.engines)
         agreement = agreement_at(
             f"endurance at throttle {throttle:.2f}", self.case.propulsion, throttle, speed,
             self.case.density_kg_m3, power_w,
@@ -701,7 +781,7 @@ class EnduranceModel:
             pack_current_a=float(self._current(0.0, power_w)),
             pack_energy_wh=power_w * t1 / 3600.0,
             cutoff_charge_ah=q1,
-            cruise_end_charge_ah=min(qn, self.reserve_ah),
+            cruise_end_charge_ah=cruise_end,
             cruise_ends_at=ends_at,
             engines=len(self.case.propulsion.engines),
             packs_in_parallel_per_engine=self.packs,
@@ -714,6 +794,7 @@ class EnduranceModel:
             warnings=tuple(warnings),
             power_agreement=agreement,
             power_used=self.power.to_dict(),
+            flight=flight,
         )
 
     # -- best endurance and best range (IPOPT) ----------------------------------------------

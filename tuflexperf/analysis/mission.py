@@ -14,20 +14,29 @@ case's temperature offset):
 - pack current from the power at the terminals, ``U(q, i) i = P`` (the smaller root, see
   :func:`tuflexperf.models.battery.current_at_power_a`), loaded voltage
   ``U = OCV(q/n) - (R/n) i`` with the fitted equivalent circuit of the battery file,
-  ``n`` packs in parallel per engine; ``dq_i/dt = i / 3600`` [Ah/s].
+  ``n`` packs in parallel per engine; ``dq_i/dt = i / 3600`` [Ah/s]. With a reference
+  voltage the loaded voltage is implicit (power depends on it): solved exactly at every
+  RK4 stage by unrolled Newton steps (:data:`NEWTON`).
 - climb and descent with ``L = W`` (small angle): rate of climb ``(T - D) V / W``; a segment
   flown at a climb (descent) rate needs ``T = D + W RC / V``; level flight ``T = D``.
   The throttle that gives a needed thrust is the least root of the quadratic in ``x``
   (:func:`tuflexperf.models.thrust.least_throttle_reaching`), solved at every RK4 stage.
+  A cruise or loiter at a fixed ``throttle`` flies the fast root of ``T(x, V) = D(V)``
+  (Newton with the loaded voltages from the full-pack airspeed): its airspeed falls as
+  the packs sag, and below stall it is not attainable.
 - take-off: the landed take-off analysis (ground roll from rest at full throttle with the
   airspeed history, rotation at ``V_LO``, the airborne part to the obstacle at the transition
   speed, height rising evenly to the obstacle height).
 
 Each segment is integrated by classic RK4 with :data:`STEPS` fixed steps (over time for
 level segments and the take-off, over height for climbs and descents, so their end is
-exact without an event), all segments chained into ONE CasADi function built once per
-case and mission. ``solve_for`` makes one segment's duration a symbol and solves
-"landing charge fraction = reserve" with a CasADi Newton rootfinder.
+exact without an event), all segments chained into ONE CasADi function of the durations
+and the segment settings (throttle, EAS), built once per case and mission. ``solve_for``
+makes one segment's duration the unknown and solves "landing charge fraction = reserve"
+(or, if the pack cuts off first, "loaded voltage at the segment's end = cut-off") with a
+CasADi Newton rootfinder; for the last segment the slope is the state equations' own rate
+(no derivative propagation). A cut-off inside a timed segment is located between two
+nodes by bisection, and the flight ends there (segments after it are not flown).
 
 References
 ----------
@@ -65,8 +74,10 @@ from tuflexperf.models.thrust import (
 
 STEPS = 64  # RK4 steps per segment: the states are smooth, 64 steps give ~1e-9 relative
 SECONDS_PER_HOUR = 3600.0
-# per-step auxiliary outputs (rows of the aux matrix)
-_AUX = ("throttle", "airspeed_m_s", "climb_rate_m_s", "reached", "idle_excess_n")
+# unrolled Newton steps on the loaded voltage (and a fixed throttle's airspeed): from the
+# open-circuit voltage (a few % off) quadratic convergence reaches rounding in 4; 5 for margin
+NEWTON = 5
+_P_SIZE = 10  # per-step parameters, see MissionModel._step_functions
 
 
 @dataclass(frozen=True)
@@ -126,6 +137,8 @@ class MissionResult:
     history: dict[str, np.ndarray] = field(repr=False)
     solved: dict[str, Any] | None = None
     warnings: tuple[str, ...] = ()
+    # when the flight ended early (cut-off, not attainable): the time of that event [s]
+    ended_at_s: float | None = None
 
     @property
     def passed(self) -> bool:
@@ -148,6 +161,8 @@ class MissionResult:
         }
         if self.solved is not None:
             out["solved"] = self.solved
+        if self.ended_at_s is not None:
+            out["ended_at_s"] = self.ended_at_s
         return out
 
 
@@ -167,19 +182,24 @@ class _Plan:
     rate_from_excess: bool
     duration_s: float
     dead: int | None
+    solve_v: bool = False  # level at a fixed throttle: the airspeed is solved
+    v_guess: float = 0.0  # true airspeed [m/s] of that level flight with full packs
 
 
 class MissionModel:
     """The whole mission as one CasADi function of the durations (built once)."""
 
-    def __init__(self, case: Case, mission: MissionFile, min_landing_fraction: float | None):
+    def __init__(self, case: Case, mission: MissionFile, min_landing_fraction: float | None,
+                 *, fixed_density_kg_m3: float | None = None,
+                 takeoff_to_obstacle: bool = True, battery: Any = None) -> None:
         from tuflexperf.analysis.endurance import characterise_battery
         from tuflexperf.io.battery import load_battery
 
         if case.battery_path is None:
             raise InputError(f"{case.path}: battery: a mission needs the case's battery file")
         self.case, self.mission = case, mission
-        battery = load_battery(case.battery_path)
+        if battery is None:  # the caller may hand over the file it has already read
+            battery = load_battery(case.battery_path)
         self.battery = battery
         ch = characterise_battery(battery, case)
         self.params = ch.fit.parameters
@@ -199,6 +219,11 @@ class MissionModel:
         oei = case.requirements.oei
         self.dead_mode = oei.dead_engine if oei is not None else "windmilling"
         self.own_power = all(e.power_coefficients is not None for e in prop.engines)
+        # the endurance figure is the case's point performance: flown at the case's density
+        self.fixed_density = fixed_density_kg_m3
+        self.takeoff_to_obstacle = takeoff_to_obstacle
+        self._instants: dict[Any, Any] = {}
+        self._roots: dict[int, Any] = {}
         self.plans = self._plan(mission.segments)
         self._takeoff_speeds: dict[int, np.ndarray] = {}
         self._build()
@@ -232,9 +257,18 @@ class MissionModel:
                     plans.append(_Plan(i, s.type, "event", 0.0, 0.0, None, False, 0.0, 0.0,
                                        False, 0.0, dead))
                     continue
-                h = obstacle_height_of(self.case)  # the take-off ends over the obstacle
+                # the take-off ends over the obstacle (or, for the endurance launch, at
+                # the lift-off: its climb starts from the runway)
+                h = obstacle_height_of(self.case) if self.takeoff_to_obstacle else 0.0
                 plans.append(_Plan(i, s.type, "takeoff", 0.0, h, None, False, 1.0, 0.0,
                                    False, 0.0, dead))
+                continue
+            if s.type in ("cruise", "loiter") and s.throttle is not None:
+                # level at a fixed throttle: the airspeed follows (the fast root)
+                v_guess = self._level_speed_at_throttle(s.throttle, h, dead, label)
+                plans.append(_Plan(i, s.type, "time", h, h, None, False, s.throttle, 0.0,
+                                   False, 60.0 * float(s.time_min), dead,  # type: ignore[arg-type]
+                                   True, v_guess))
                 continue
             eas = s.airspeed_m_s if s.airspeed_m_s is not None else self._best_endurance_eas(h)
             if eas < margin * stall_eas * (1 - 1e-12):
@@ -269,7 +303,33 @@ class MissionModel:
         return tuple(plans)
 
     def _rho(self, h: Any) -> Any:
+        if self.fixed_density is not None:
+            return self.fixed_density + 0.0 * h
         return isa_density_kg_m3(self.field_m + h, self.dt_k)
+
+    def _level_speed_at_throttle(self, throttle: float, h: float, dead: int | None,
+                                 label: str) -> float:
+        """Fastest true airspeed [m/s] of level flight at ``throttle`` (full packs, no sag)."""
+        from tuflexperf.models.thrust import total_thrust_n
+
+        aircraft, prop = self.case.aircraft, self.case.propulsion
+        rho = float(self._rho(h))
+        stall = float(stall_speed_eas_m_s(aircraft)) * math.sqrt(1.225 / rho)
+        v = np.linspace(0.5 * stall, 8.0 * stall, 4001)
+
+        def excess(speed: Any) -> Any:
+            return np.asarray(total_thrust_n(prop, throttle, speed, rho, dead, self.dead_mode)
+                              - level_flight_drag_n(aircraft, speed, rho), dtype=float)
+
+        ok = np.flatnonzero(excess(v) >= 0)
+        if not ok.size or ok[-1] == v.size - 1:
+            raise NotAttainable(f"{label}: throttle {throttle:g} holds level flight at no "
+                                "airspeed")
+        low, high = float(v[ok[-1]]), float(v[ok[-1] + 1])
+        for _ in range(60):
+            mid = 0.5 * (low + high)
+            low, high = (mid, high) if excess(mid) >= 0 else (low, mid)
+        return 0.5 * (low + high)
 
     def _best_endurance_eas(self, h: float) -> float:
         """EAS of least electrical power in level flight at height ``h`` (full packs)."""
@@ -313,10 +373,12 @@ class MissionModel:
             return density_ratio(prop, rho) * engine_power_w(prop.engines[i], x, v)
         return self.fan_power.electrical_power_w(x, v)
 
-    def _instant(self, q: Any, v: Any, rho: Any, plan_p: Any, dead: int | None) -> dict[str, Any]:
-        """Throttle, rate of climb, per-engine current/voltage/power at charges ``q``.
+    def _algebra(self, u: list[Any], v: Any, q: Any, rho: Any, plan_p: Any,
+                 dead: int | None) -> dict[str, Any]:
+        """Everything at loaded pack voltages ``u`` [V] and true airspeed ``v`` [m/s].
 
-        ``plan_p = [solve_x, throttle, rate, rate_from_excess]`` (CasADi or floats).
+        ``plan_p = [solve_x, throttle, rate, rate_from_excess]``. Without a reference
+        voltage ``u`` is ignored and the current is the closed-form constant-power root.
         """
         import casadi as ca
 
@@ -327,69 +389,129 @@ class MissionModel:
         drag = level_flight_drag_n(aircraft, v, rho)
         u_ref, k_exp = prop.reference_voltage_v, prop.voltage_exponent
         live = [i for i in range(self.n) if i != dead]
-        volt = [open_circuit_voltage_v(self.params, q[i], self.packs) for i in range(self.n)]
         # windmilling (or zero) dead engine: a drag independent of the throttle
         dead_t: Any = 0.0
         if dead is not None and self.dead_mode == "windmilling":
             dead_t = windmilling_thrust_n(prop.engines[dead], v, sigma, rho, prop.fan_area_m2)
-        iterations = 3 if u_ref is not None else 1  # fixed point on the loaded voltage
-        for _ in range(iterations):
-            factor = [(volt[i] / u_ref) ** k_exp if u_ref is not None else 1.0
-                      for i in range(self.n)]
-            t = [sum(factor[i] * engine_thrust_n(prop.engines[i], xs, v, sigma) for i in live)
-                 for xs in (0.0, 0.5, 1.0)]
-            a = 2.0 * (t[2] - 2.0 * t[1] + t[0])
-            b = t[2] - t[0] - a
-            needed = drag + weight * rate_cmd / v - dead_t
-            x_solved, reached = least_throttle_reaching(a, b, t[0] - needed)
-            x = ca.if_else(solve_x > 0.5, x_solved, x_fixed)
-            thrust = a * x * x + b * x + t[0] + dead_t
-            power = []
-            current = []
-            for i in range(self.n):
-                if i == dead:
-                    power.append(0.0 * x)
-                    current.append(0.0 * x)
-                    continue
-                p_i = self._engine_power(i, x, v, rho)
-                if u_ref is not None:
-                    p_i = p_i * (volt[i] / u_ref) ** (1.5 * k_exp)
-                power.append(p_i)
-                current.append(current_at_power_a(self.params, q[i], p_i, self.packs))
-            volt = [
-                open_circuit_voltage_v(self.params, q[i], self.packs)
-                - self.params.resistance_ohm / self.packs * current[i]
-                for i in range(self.n)
-            ]
+        factor = [(u[i] / u_ref) ** k_exp if u_ref is not None else 1.0 for i in range(self.n)]
+        t = [sum(factor[i] * engine_thrust_n(prop.engines[i], xs, v, sigma) for i in live)
+             for xs in (0.0, 0.5, 1.0)]
+        a = 2.0 * (t[2] - 2.0 * t[1] + t[0])
+        b = t[2] - t[0] - a
+        needed = drag + weight * rate_cmd / v - dead_t
+        x_solved, reached = least_throttle_reaching(a, b, t[0] - needed)
+        x = ca.if_else(solve_x > 0.5, x_solved, x_fixed)
+        thrust = a * x * x + b * x + t[0] + dead_t
+        r = self.params.resistance_ohm / self.packs
+        power, current, volt, residual = [], [], [], []
+        for i in range(self.n):
+            ocv = open_circuit_voltage_v(self.params, q[i], self.packs)
+            if i == dead:
+                power.append(0.0 * x)
+                current.append(0.0 * x)
+                volt.append(ocv)
+                residual.append(u[i] - ocv)
+                continue
+            p_i = self._engine_power(i, x, v, rho)
+            if u_ref is None:
+                i_i = current_at_power_a(self.params, q[i], p_i, self.packs)
+                residual.append(u[i] - (ocv - r * i_i))
+            else:
+                # fan laws: power ~ rpm^3 while thrust ~ rpm^2 (SPEC 3 voltage effect)
+                p_i = p_i * (u[i] / u_ref) ** (1.5 * k_exp)
+                i_i = p_i / u[i]
+                residual.append(ocv - r * i_i - u[i])
+            power.append(p_i)
+            current.append(i_i)
+            volt.append(ocv - r * i_i)
         rate = ca.if_else(from_excess > 0.5, (thrust - drag) * v / weight, rate_cmd)
         ok = ca.if_else(solve_x > 0.5, reached, 1.0)
         # thrust at idle beyond what a commanded descent needs: it cannot be flown that steep
         idle_excess = ca.if_else(solve_x > 0.5, t[0] - needed, 0.0)
         return {"x": x, "rate": rate, "reached": ok, "idle_excess": idle_excess,
-                "power": power, "current": current, "voltage": volt}
+                "power": power, "current": current, "voltage": volt, "v": v,
+                "u_residual": residual, "level_residual": (thrust - drag) / weight}
+
+    def _instant_function(self, dead: int | None, solve_v: bool) -> Any:
+        """``(q, v_in, rho, p) -> aux`` with the loaded voltages (and airspeed) solved.
+
+        With a reference voltage the loaded voltage ``U = OCV - (R/n) P(U) / U`` is implicit
+        (power follows the voltage); with ``solve_v`` the true airspeed of level flight at the
+        fixed throttle is unknown too (the fast root, from the guess ``v_in``). Both are
+        solved by :data:`NEWTON` unrolled Newton steps (quadratic convergence from the
+        open-circuit voltage and the full-pack airspeed: machine precision).
+        """
+        import casadi as ca
+
+        key = (dead, solve_v)
+        if key in self._instants:
+            return self._instants[key]
+        n = self.n
+        q = ca.SX.sym("q", n)
+        v_in, rho = ca.SX.sym("v_in"), ca.SX.sym("rho")
+        p = ca.SX.sym("p", 4)
+        voltage_unknown = self.case.propulsion.reference_voltage_v is not None
+        ocv = [open_circuit_voltage_v(self.params, q[i], self.packs) for i in range(n)]
+        m = (n if voltage_unknown else 0) + (1 if solve_v else 0)
+        z = ca.SX.sym("z", m)
+
+        def split(zz: Any) -> tuple[list[Any], Any]:
+            u = [zz[i] for i in range(n)] if voltage_unknown else ocv
+            return u, (zz[m - 1] if solve_v else v_in)
+
+        def equations(zz: Any) -> Any:
+            u, v = split(zz)
+            alg = self._algebra(u, v, q, rho, p, dead)
+            parts = list(alg["u_residual"]) if voltage_unknown else []
+            if solve_v:
+                parts.append(alg["level_residual"])
+            return ca.vertcat(*parts)
+
+        if m:
+            res = equations(z)
+            newton = ca.Function("newton_step", [z, q, v_in, rho, p],
+                                 [z - ca.solve(ca.jacobian(res, z), res)])
+            start = ca.vertcat(*(ocv if voltage_unknown else []), *([v_in] if solve_v else []))
+            zk = start
+            for _ in range(NEWTON):
+                zk = newton(zk, q, v_in, rho, p)
+            u, v = split(zk)
+        else:
+            u, v = ocv, v_in
+        alg = self._algebra(u, v, q, rho, p, dead)
+        out = ca.vertcat(alg["x"], alg["v"], alg["rate"], alg["reached"], alg["idle_excess"],
+                         alg["level_residual"], *alg["current"], *alg["voltage"],
+                         *alg["power"])
+        f = ca.Function(f"instant_{dead}_{int(solve_v)}", [q, v_in, rho, p], [out])
+        self._instants[key] = f
+        return f
 
     # -- the CasADi build -----------------------------------------------------------------
-    def _step_functions(self, dead: int | None) -> tuple[Any, Any, Any]:
-        """RK4 steps ``(state, step, p) -> state`` over time and over height."""
+    def _step_functions(self, dead: int | None, solve_v: bool) -> tuple[Any, Any, Any]:
+        """RK4 steps ``(state, step, p) -> state`` over time and over height, and the aux."""
         import casadi as ca
 
         n = self.n
         ns = 2 * n + 3  # q_i, e_i, h, distance, t
         s = ca.SX.sym("s", ns)
-        p = ca.SX.sym("p", 9)  # solve_x, x, rate, from_excess, eas, forced, v0, vmid, v1
+        # p: solve_x, x, rate, from_excess, eas, forced, v0, vmid, v1, v_guess
+        p = ca.SX.sym("p", _P_SIZE)
         step = ca.SX.sym("step")
+        instant = self._instant_function(dead, solve_v)
+
+        def evaluate(state: Any, v_given: Any) -> Any:
+            rho = self._rho(state[2 * n])
+            v_free = p[9] if solve_v else true_airspeed_m_s(p[4], rho)
+            v_in = ca.if_else(p[5] > 0.5, v_given, v_free)
+            a = instant(state[:n], v_in, rho, p[:4])
+            # a forced phase (the take-off) has its height rate given
+            return ca.vertcat(a[:2], ca.if_else(p[5] > 0.5, p[2], a[2]), a[3:])
 
         def rates(state: Any, v_given: Any) -> tuple[Any, Any]:
-            h = state[2 * n]
-            rho = self._rho(h)
-            v_eas = true_airspeed_m_s(p[4], rho)
-            v = ca.if_else(p[5] > 0.5, v_given, v_eas)
-            inst = self._instant(state[:n], v, rho, p[:4], dead)
-            rate = ca.if_else(p[5] > 0.5, p[2], inst["rate"])
-            dq = [inst["current"][i] / SECONDS_PER_HOUR for i in range(n)]
-            de = [inst["power"][i] / SECONDS_PER_HOUR for i in range(n)]
-            d = ca.vertcat(*dq, *de, rate, v, 1.0)
-            return d, rate
+            a = evaluate(state, v_given)
+            d = ca.vertcat(a[6:6 + n] / SECONDS_PER_HOUR, a[6 + 2 * n:6 + 3 * n]
+                           / SECONDS_PER_HOUR, a[2], a[1], 1.0)
+            return d, a[2]
 
         def rk4(derivative: Any) -> Any:
             k1 = derivative(s, p[6])
@@ -410,71 +532,101 @@ class MissionModel:
 
         f_time = ca.Function("step_time", [s, step, p], [rk4(in_time)])
         f_height = ca.Function("step_height", [s, step, p], [rk4(in_height)])
-        # auxiliary outputs at a state
-        h = s[2 * n]
-        rho = self._rho(h)
-        v = ca.if_else(p[5] > 0.5, p[6], true_airspeed_m_s(p[4], rho))
-        inst = self._instant(s[:n], v, rho, p[:4], dead)
-        rate = ca.if_else(p[5] > 0.5, p[2], inst["rate"])
-        aux = ca.vertcat(inst["x"], v, rate, inst["reached"], inst["idle_excess"],
-                         *inst["current"], *inst["voltage"], *inst["power"])
-        f_aux = ca.Function("aux", [s, p], [aux])
+        f_aux = ca.Function("aux", [s, p], [evaluate(s, p[6])])
         return f_time, f_height, f_aux
+
+    def _segment_graph(self, plan: _Plan, state: Any, durations: Any, theta: Any
+                       ) -> tuple[list[Any], list[Any], Any]:
+        """One segment flown from ``state`` (MX): its nodes, their aux outputs, the end state."""
+        import casadi as ca
+
+        key = (plan.dead, plan.solve_v)
+        if key not in self._steps:
+            self._steps[key] = self._step_functions(plan.dead, plan.solve_v)
+        f_time, f_height, f_aux = self._steps[key]
+        if plan.kind == "takeoff":
+            phases: list[tuple[str, Any, Any]] = [
+                (kind, step, ca.DM(rows.T)) for kind, step, rows in self._takeoff_phases(plan)
+            ]
+        else:
+            j = 3 * plan.index
+            p = ca.vertcat(1.0 if plan.solve_x else 0.0, theta[j], plan.rate,
+                           1.0 if plan.rate_from_excess else 0.0, theta[j + 1],
+                           0.0, 0.0, 0.0, 0.0, theta[j + 2])
+            rows = ca.repmat(p, 1, STEPS)
+            if plan.kind == "time":
+                phases = [("time", durations[plan.index] / STEPS, rows)]
+            else:
+                phases = [("height", (plan.end_h - plan.start_h) / STEPS, rows)]
+        nodes, auxes = [], []
+        for kind, step, p_rows in phases:
+            f = f_time if kind == "time" else f_height
+            steps = p_rows.shape[1]
+            history = f.mapaccum(steps)(state, ca.repmat(step, 1, steps), p_rows)
+            both = ca.horzcat(state, history)
+            # the aux at each node: the airspeed given at a step's start (first node) or end
+            after = ca.vertcat(p_rows[:6, :], p_rows[8, :], p_rows[7:, :])
+            auxes.append(f_aux.map(steps + 1)(both, ca.horzcat(p_rows[:, 0], after)))
+            nodes.append(both)
+            state = history[:, -1]
+        return nodes, auxes, state
+
+    def _segment_function(self, k: int) -> Any:
+        """``(start state, durations, theta) -> (end state, aux at the end)`` of segment ``k``."""
+        import casadi as ca
+
+        if k not in self._segments:
+            m = len(self.plans)
+            start = ca.MX.sym("start", 2 * self.n + 3)
+            durations, theta = ca.MX.sym("durations", m), ca.MX.sym("theta", 3 * m)
+            _, auxes, end = self._segment_graph(self.plans[k], start, durations, theta)
+            self._segments[k] = ca.Function(f"segment_{k}", [start, durations, theta],
+                                            [end, auxes[-1][:, -1]])
+        return self._segments[k]
 
     def _build(self) -> None:
         import casadi as ca
 
         n = self.n
         durations = ca.MX.sym("durations", len(self.plans))
+        # per segment: throttle, EAS [m/s], airspeed guess [m/s] (inputs, so that a study can
+        # fly the same mission at another throttle without a rebuild)
+        theta = ca.MX.sym("theta", 3 * len(self.plans))
         state = ca.MX.zeros(2 * n + 3, 1)
-        states, auxes, bounds = [], [], []
-        functions: dict[Any, Any] = {}
+        states, auxes, bounds, ends = [], [], [], []
+        self._steps: dict[Any, Any] = {}
+        self._segments: dict[int, Any] = {}
         for plan in self.plans:
-            if plan.kind == "event":
-                bounds.append((sum(x.shape[1] for x in states), 0))
-                continue
-            if plan.dead not in functions:
-                functions[plan.dead] = self._step_functions(plan.dead)
-            f_time, f_height, f_aux = functions[plan.dead]
-            if plan.kind == "takeoff":
-                phases = self._takeoff_phases(plan)
-            else:
-                p = [1.0 if plan.solve_x else 0.0, plan.throttle, plan.rate,
-                     1.0 if plan.rate_from_excess else 0.0, plan.eas, 0.0, 0.0, 0.0, 0.0]
-                if plan.kind == "time":
-                    phases = [("time", durations[plan.index] / STEPS, np.tile(p, (STEPS, 1)))]
-                else:
-                    phases = [("height", (plan.end_h - plan.start_h) / STEPS,
-                               np.tile(p, (STEPS, 1)))]
             start = sum(x.shape[1] for x in states)
-            for kind, step, p_rows in phases:
-                f = f_time if kind == "time" else f_height
-                steps = p_rows.shape[0]
-                run = f.mapaccum(steps)
-                history = run(state, ca.repmat(step, 1, steps) if not isinstance(step, float)
-                              else ca.DM(np.full((1, steps), step)), ca.DM(p_rows.T))
-                both = ca.horzcat(state, history)
-                after = p_rows.copy()
-                after[:, 6] = p_rows[:, 8]  # the airspeed at the end of each step
-                aux_rows = np.vstack([p_rows[:1], after])
-                aux = f_aux.map(steps + 1)(both, ca.DM(aux_rows.T))
-                states.append(both)
-                auxes.append(aux)
-                state = history[:, -1]
+            if plan.kind == "event":
+                bounds.append((start, 0))
+                ends.append(None)
+                continue
+            nodes, aux, state = self._segment_graph(plan, state, durations, theta)
+            states.extend(nodes)
+            auxes.extend(aux)
             bounds.append((start, sum(x.shape[1] for x in states)))
+            ends.append(auxes[-1][6 + n:6 + 2 * n, -1])
         self.bounds = bounds
-        self._history = ca.Function("mission", [durations],
+        self._history = ca.Function("mission", [durations, theta],
                                     [ca.horzcat(*states), ca.horzcat(*auxes)])
         landing = [1.0 - state[i] / self.capacity_ah for i in range(n)]
-        self._landing = ca.Function("landing", [durations], [ca.vertcat(*landing)])
+        self._landing = ca.Function("landing", [durations, theta], [ca.vertcat(*landing)])
+        # loaded voltage of each pack at each segment's end (events: the open-circuit value
+        # is irrelevant; they report +inf so a min over them ignores them)
+        end_v = [e if e is not None else ca.MX(ca.DM.inf(n, 1)) for e in ends]
+        self._end_voltage = ca.Function("end_voltage", [durations, theta],
+                                        [ca.horzcat(*end_v)])
         self.durations = np.array([p.duration_s for p in self.plans], dtype=float)
+        self.theta = np.array([[p.throttle, p.eas or 0.0, p.v_guess] for p in self.plans],
+                              dtype=float).ravel()
 
     def _takeoff_phases(self, plan: _Plan) -> list[tuple[str, float, np.ndarray]]:
         """Ground roll (airspeed history), rotation and the airborne part to the obstacle."""
         from tuflexperf.analysis.takeoff import solve_takeoff
 
         result = solve_takeoff(self.case)
-        if result.distance_to_obstacle_m is None:
+        if self.takeoff_to_obstacle and result.distance_to_obstacle_m is None:
             raise NotAttainable(f"segment {plan.index + 1} (takeoff): {result.obstacle_reason}")
         self.takeoff = result
         t_hist = np.asarray(result.history_time_s, dtype=float)
@@ -482,7 +634,7 @@ class MissionModel:
         t_acc = float(t_hist[-1])
         dt = t_acc / STEPS
         grid = np.arange(STEPS) * dt
-        rows = np.zeros((STEPS, 9))
+        rows = np.zeros((STEPS, _P_SIZE))
         rows[:, 1] = 1.0  # full throttle
         rows[:, 5] = 1.0  # airspeed given, height rate forced (0 on the runway)
         rows[:, 6] = np.interp(grid, t_hist, v_hist)
@@ -491,34 +643,68 @@ class MissionModel:
         phases: list[tuple[str, float, np.ndarray]] = [("time", dt, rows)]
         v_lo = result.liftoff_speed_m_s
         if result.rotation_time_s > 0:
-            rot = np.zeros((8, 9))
+            rot = np.zeros((8, _P_SIZE))
             rot[:, 1], rot[:, 5], rot[:, 6:9] = 1.0, 1.0, v_lo
             phases.append(("time", result.rotation_time_s / 8, rot))
+        if not self.takeoff_to_obstacle:
+            return phases
         v_tr = result.transition_speed_m_s
         airborne_s = float(result.airborne_distance_m) / v_tr
-        air = np.zeros((16, 9))
+        air = np.zeros((16, _P_SIZE))
         air[:, 1], air[:, 5], air[:, 6:9] = 1.0, 1.0, v_tr
         air[:, 2] = result.obstacle_height_m / airborne_s
         phases.append(("time", airborne_s / 16, air))
         return phases
 
     # -- flying ---------------------------------------------------------------------------
-    def fly(self, durations: np.ndarray | None = None, solved: dict[str, Any] | None = None
-            ) -> MissionResult:
-        """Fly the mission (the file's durations, or ``durations`` [s] per segment)."""
-        d = self.durations if durations is None else np.asarray(durations, dtype=float)
-        states, aux = (np.asarray(m, dtype=float) for m in self._history(d))
-        return self._result(states, aux, solved)
+    def fly(self, durations: np.ndarray | None = None, solved: dict[str, Any] | None = None,
+            theta: np.ndarray | None = None) -> MissionResult:
+        """Fly the mission (the file's durations, or ``durations`` [s] per segment).
 
-    def _result(self, states: np.ndarray, aux: np.ndarray, solved: dict[str, Any] | None
-                ) -> MissionResult:
+        ``theta`` (per segment: throttle, EAS [m/s], airspeed guess [m/s]) replaces the
+        file's settings without a rebuild (the endurance analysis flies its mission so).
+        """
+        d = self.durations if durations is None else np.asarray(durations, dtype=float)
+        th = self.theta if theta is None else np.asarray(theta, dtype=float)
+        states, aux = (np.asarray(m, dtype=float) for m in self._history(d, th))
+        return self._result(states, aux, solved, th, d)
+
+    def _cutoff_within(self, plan: _Plan, start: np.ndarray, durations: np.ndarray,
+                       theta: np.ndarray, low: float, high: float) -> float:
+        """Time [s] into a timed segment at which the loaded voltage meets the cut-off.
+
+        Bisection on the segment flown from ``start`` for ``tau`` in ``[low, high]`` (the
+        voltage is above the cut-off at ``low``, below at ``high``) to 1e-6 s.
+        """
+        f = self._segment_function(plan.index)
+        d = np.array(durations, dtype=float)
+        live = [i for i in range(self.n) if i != plan.dead]
+
+        def margin(tau: float) -> float:
+            d[plan.index] = tau
+            aux = np.asarray(f(start, d, theta)[1], dtype=float).ravel()
+            value = min(aux[6 + self.n + i] for i in live) - self.cutoff_v
+            return value if math.isfinite(value) else -1.0
+
+        for _ in range(60):
+            if high - low <= 1e-6:
+                break
+            mid = 0.5 * (low + high)
+            low, high = (mid, high) if margin(mid) >= 0 else (low, mid)
+        return 0.5 * (low + high)
+
+    def _result(self, states: np.ndarray, aux: np.ndarray, solved: dict[str, Any] | None,
+                theta: np.ndarray, durations: np.ndarray) -> MissionResult:
         n = self.n
         q, e = states[:n], states[n:2 * n]
         h, dist, t = states[2 * n], states[2 * n + 1], states[2 * n + 2]
-        x, v, rate, reached, idle = (aux[k] for k in range(5))
-        current, voltage = aux[5:5 + n], aux[5 + n:5 + 2 * n]
+        x, v, rate, reached, idle, level_residual = (aux[k] for k in range(6))
+        current, voltage = aux[6:6 + n], aux[6 + n:6 + 2 * n]
+        power = aux[6 + 2 * n:6 + 3 * n]
+        segment_of = np.full(t.size, -1, dtype=int)
+        stall_factor = self._stall_factor()
         reason = ""
-        first_bad = None
+        first_bad, ended_at = None, None
         segments: list[SegmentResult] = []
         for plan, (a, b) in zip(self.plans, self.bounds, strict=True):
             label = f"segment {plan.index + 1} ({plan.type})"
@@ -543,6 +729,22 @@ class MissionModel:
             bad = np.flatnonzero(reached[sl] < 0.5)
             if bad.size:
                 problems.append((int(bad[0]), "needs more than full throttle"))
+            segment_of[sl] = plan.index
+            if plan.solve_v:
+                throttle = float(theta[3 * plan.index])
+                off = np.flatnonzero(~(np.abs(level_residual[sl]) < 1e-9))
+                if off.size:
+                    problems.append((int(off[0]), f"throttle {throttle:g} no longer holds "
+                                     "level flight"))
+                # the airspeed is an outcome here: stall bounds it (SPEC 3)
+                stall_v = stall_factor * np.sqrt(1.225 / np.asarray(self._rho(h[sl]),
+                                                                      dtype=float))
+                slow = np.flatnonzero(v[sl] < stall_v * (1 - 1e-12))
+                if slow.size:
+                    k0 = int(slow[0])
+                    problems.append((k0, f"throttle {throttle:g} flies level at "
+                                     f"{v[a + k0]:.1f} m/s, below stall ({stall_v[k0]:.1f} m/s):"
+                                     " not attainable, below stall"))
             if plan.kind == "height":
                 climbing = plan.end_h > plan.start_h
                 wrong = np.flatnonzero((rate[sl] <= 0) if climbing else (rate[sl] >= 0))
@@ -559,72 +761,223 @@ class MissionModel:
             if problems and first_bad is None:
                 k, why = min(problems)
                 at = float(t[a + k])
-                first_bad = a + k
+                if why.startswith("the pack reaches") and plan.kind == "time" and k > 0:
+                    # the event between two nodes, exactly (the nodes are 1/64 segment apart)
+                    at = float(t[a]) + self._cutoff_within(plan, states[:, a], durations, theta,
+                                                           float(t[a + k - 1] - t[a]),
+                                                           float(t[a + k] - t[a]))
+                first_bad, ended_at = a + k, at
                 reason = f"{label}: {why} at {at:.1f} s ({at / 60:.2f} min into the mission)"
+                # the flight ends there: the segment as flown up to the event, nothing after
+                b = a + max(k, 1)
+                sl = slice(a, b)
+                volt_live = voltage[live, sl]
             xs = x[sl]
+            eas_flown = plan.eas
+            if plan.solve_v:  # the mean EAS the throttle gave
+                eas_flown = float(np.mean(v[sl] * np.sqrt(np.asarray(self._rho(h[sl]), dtype=float)
+                                                          / 1.225)))
             segments.append(SegmentResult(
                 index=plan.index, type=plan.type,
                 time_s=float(t[b - 1] - t[a]), distance_m=float(dist[b - 1] - dist[a]),
                 start_altitude_m=float(h[a]), end_altitude_m=float(h[b - 1]),
-                airspeed_eas_m_s=plan.eas,
+                airspeed_eas_m_s=eas_flown,
                 charge_ah=tuple(float(q[i, b - 1] - q[i, a]) for i in range(n)),
                 energy_wh=tuple(float(e[i, b - 1] - e[i, a]) for i in range(n)),
                 min_voltage_v=float(np.nanmin(volt_live)) if volt_live.size else math.nan,
                 max_throttle=float(np.nanmax(xs)) if live else None,
                 dead_engine=self.engines[plan.dead] if plan.dead is not None else None,
             ))
+            if first_bad is not None:
+                end = b
+                q, e, h, dist, t = q[:, :end], e[:, :end], h[:end], dist[:end], t[:end]
+                x, v, rate, segment_of = x[:end], v[:end], rate[:end], segment_of[:end]
+                current, voltage, power = current[:, :end], voltage[:, :end], power[:, :end]
+                break
         landing = float(np.min(1.0 - q[:, -1] / self.capacity_ah))
-        history = {"time_s": t, "altitude_m": h, "distance_m": dist, "airspeed_m_s": v,
+        rho_h = np.asarray(self._rho(h), dtype=float) * np.ones_like(h)
+        history = {"time_s": t, "segment": segment_of, "altitude_m": h, "distance_m": dist,
+                   "airspeed_m_s": v, "airspeed_eas_m_s": v * np.sqrt(rho_h / 1.225),
                    "throttle": x, "climb_rate_m_s": rate}
         for i, name in enumerate(self.engines):
             history[f"current_a_{name}"] = current[i]
             history[f"voltage_v_{name}"] = voltage[i]
             history[f"charge_ah_{name}"] = q[i]
+            history[f"charge_fraction_{name}"] = 1.0 - q[i] / self.capacity_ah
+            history[f"power_w_{name}"] = power[i]
+            history[f"energy_wh_{name}"] = e[i]
         return MissionResult(
             name=self.mission.name, segments=tuple(segments),
             landing_charge_fraction=landing if first_bad is None else math.nan,
             min_landing_charge_fraction=self.reserve, attainable=first_bad is None,
             reason=reason or (f"lands with {100 * landing:.1f} % charge (reserve "
                               f"{100 * self.reserve:g} %)"),
-            engines=self.engines, history=history, solved=solved,
+            engines=self.engines, history=history, solved=solved, ended_at_s=ended_at,
         )
+
+    def _stall_factor(self) -> float:
+        """Least EAS [m/s] of level flight: the stall speed (EAS) x the envelope's margin."""
+        envelope = self.case.requirements.envelope
+        margin = getattr(envelope, "stall_margin", 1.0) if envelope is not None else 1.0
+        return margin * float(stall_speed_eas_m_s(self.case.aircraft))
+
+    def _root_functions(self, k: int) -> tuple[Any, Any, Any]:
+        """Rootfinders on segment ``k``'s duration: landing on the reserve, and the cut-off.
+
+        Both take ``p = [durations; theta]`` (segment ``k``'s entry of ``durations`` is
+        ignored); the third function gives both residuals and their slopes.
+        """
+        import casadi as ca
+
+        if k in self._roots:
+            return self._roots[k]
+        m = len(self.plans)
+        tau = ca.MX.sym("tau")
+        base = ca.MX.sym("durations", m)
+        theta = ca.MX.sym("theta", 3 * m)
+        d = ca.vertcat(base[:k], tau, base[k + 1:]) if m > 1 else tau
+        g_reserve = ca.mmin(self._landing(d, theta)) - self.reserve
+        live = [i for i in range(self.n) if i != self.plans[k].dead]
+        end_v = self._end_voltage(d, theta)[:, k]
+        g_cut = ca.mmin(ca.vertcat(*(end_v[i] for i in live))) - self.cutoff_v
+        p = ca.vertcat(base, theta)
+        opts = {"abstol": 1e-10, "max_iter": 50, "error_on_fail": False}
+        to_reserve = ca.rootfinder("to_reserve", "newton", {"x": tau, "p": p, "g": g_reserve},
+                                   opts)
+        to_cutoff = ca.rootfinder("to_cutoff", "newton", {"x": tau, "p": p, "g": g_cut}, opts)
+        both = ca.Function("residuals", [tau, p],
+                           [g_reserve, g_cut, ca.jacobian(g_reserve, tau),
+                            ca.jacobian(g_cut, tau)])
+        self._roots[k] = (to_reserve, to_cutoff, both)
+        return self._roots[k]
+
+    def longest(self, k: int, durations: np.ndarray | None = None,
+                theta: np.ndarray | None = None, guess_s: float | None = None,
+                start: np.ndarray | None = None) -> tuple[float, str]:
+        """Longest duration [s] of segment ``k`` that lands on the reserve without a cut-off.
+
+        Newton (CasADi rootfinder, derivatives through the whole integration) on
+        ``min_i landing_fraction_i(T) - reserve = 0``; if the packs are below their cut-off
+        voltage at the end of the segment by then, on ``min_i U_i(T) - U_cutoff = 0``
+        instead (both fall monotonically with the segment's duration). For the last segment
+        with a ``guess_s`` (and optionally the ``start`` state where it begins, if the
+        caller knows it) see :meth:`_longest_last`. Returns the duration
+        and what ends it: ``"landing reserve"`` or ``"cut-off"``.
+        Raises :class:`NotAttainable` when no positive duration does.
+        """
+        d = (self.durations if durations is None else np.asarray(durations, float)).copy()
+        th = self.theta if theta is None else np.asarray(theta, dtype=float)
+        plan = self.plans[k]
+        if all(p.kind == "event" for p in self.plans[k + 1:]) and guess_s is not None:
+            return self._longest_last(k, d, th, guess_s, start)
+        to_reserve, to_cutoff, both = self._root_functions(k)
+        p = np.concatenate([d, th])
+        if guess_s is None:
+            # first-order estimate around a short segment: the landing fraction is
+            # near-linear in time
+            g0, _, slope, _ = (float(x) for x in both(60.0, p))
+            guess_s = 60.0 - g0 / slope if slope < 0 else 60.0
+        answer = float(to_reserve(max(guess_s, 1.0), p))
+        g_res, g_cut, _, slope_cut = (float(x) for x in both(answer, p))
+        ends = "landing reserve"
+        ok = math.isfinite(answer) and abs(g_res) < 1e-8
+        if ok and g_cut < 0:  # the pack cuts off before the reserve is reached
+            ends = "cut-off"
+            start = answer - g_cut / slope_cut if slope_cut < 0 else 0.5 * answer
+            answer = float(to_cutoff(max(start, 1e-3), p))
+            g_res, g_cut, _, _ = (float(x) for x in both(answer, p))
+            ok = math.isfinite(answer) and abs(g_cut) < 1e-8 and g_res >= -1e-8
+        if not (ok and answer > 0):
+            left = float(both(0.0, p)[0]) + self.reserve
+            raise NotAttainable(
+                f"segment {k + 1} ({plan.type}): no duration lands with the reserve "
+                f"{100 * self.reserve:g} % before the cut-off (the rest of the mission alone "
+                f"leaves {100 * left:.1f} %)"
+            )
+        return answer, ends
+
+    def start_state(self, k: int, durations: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """The state (charges, energies, height, distance, time) where segment ``k`` begins."""
+        states = np.asarray(self._history(durations, theta)[0], dtype=float)
+        a = self.bounds[k][0]
+        return states[:, a] if a < states.shape[1] else states[:, -1]
+
+    def _longest_last(self, k: int, d: np.ndarray, th: np.ndarray, guess_s: float,
+                      start: np.ndarray | None = None) -> tuple[float, str]:
+        """:meth:`longest` for the last segment: Newton with the slope from the equations.
+
+        The landing charge's derivative with respect to the last segment's duration is the
+        rate of the state equations at the end, ``-i_j / (3600 Q)`` for the engine ``j``
+        that lands with least charge: each iteration is one integration of that segment
+        alone (from ``start``, the state where it begins), no derivative propagation. The
+        cut-off, if it comes first, by the secant method on the end voltage.
+        """
+        n = self.n
+        f = self._segment_function(k)
+        x0 = self.start_state(k, d, th) if start is None else start
+        live = [i for i in range(n) if i != self.plans[k].dead]
+
+        def at(tau: float) -> tuple[float, float, float]:
+            d[k] = tau
+            end, aux = (np.asarray(v, dtype=float).ravel() for v in f(x0, d, th))
+            frac = 1.0 - end[:n] / self.capacity_ah
+            j = int(np.argmin(frac))
+            volt = min(aux[6 + n + i] for i in live)
+            return float(frac[j] - self.reserve), -aux[6 + j] / SECONDS_PER_HOUR \
+                / self.capacity_ah, float(volt - self.cutoff_v)
+
+        tau, ok = max(guess_s, 1.0), False
+        g, slope, cut = at(tau)
+        for _ in range(50):
+            if not (math.isfinite(g) and slope < 0):
+                break
+            step = -g / slope
+            tau = max(tau + step, 0.5 * tau)
+            g, slope, cut = at(tau)
+            # converged: the landing charge on the reserve to 1e-12 of the capacity
+            if abs(g) <= 1e-12 and abs(step) <= 1e-6 * max(tau, 1.0):
+                ok = True
+                break
+        ends = "landing reserve"
+        if ok and cut < 0:  # the pack cuts off before the reserve: secant on the end voltage
+            ends, ok = "cut-off", False
+            a, fa = tau, cut
+            b = 0.5 * tau
+            fb = at(b)[2]
+            for _ in range(100):
+                if not (math.isfinite(fa) and math.isfinite(fb)) or fa == fb:
+                    break
+                a, fa, b = b, fb, b - fb * (b - a) / (fb - fa)
+                b = min(max(b, 1e-3), tau)
+                fb = at(b)[2]
+                if abs(b - a) <= 1e-10 * max(b, 1.0):
+                    ok = abs(fb) < 1e-6
+                    break
+            tau = b
+            g, _, cut = at(tau)
+        if not (ok and tau > 0 and math.isfinite(g) and g >= -1e-8):
+            d[k] = 0.0
+            left = float(np.min(self._landing(d, th)))
+            raise NotAttainable(
+                f"segment {k + 1} ({self.plans[k].type}): no duration lands with the reserve "
+                f"{100 * self.reserve:g} % before the cut-off (the rest of the mission alone "
+                f"leaves {100 * left:.1f} %)"
+            )
+        return tau, ends
 
     def solve_for(self) -> MissionResult:
         """Longest duration of the ``solve_for`` segment that lands exactly on the reserve.
 
-        Newton (CasADi rootfinder) on ``min_i landing_fraction_i(T) - reserve = 0``; the
-        landing fraction falls monotonically with the segment's duration.
+        See :meth:`longest`; the answer is then flown as a plain mission.
         """
-        import casadi as ca
-
         k = self.mission.solve_for
         assert k is not None
         plan = self.plans[k]
-        tau = ca.MX.sym("tau")
-        d = ca.MX(ca.DM(self.durations))
-        d[k] = tau
-        g = ca.mmin(self._landing(d)) - self.reserve
-        rf = ca.rootfinder("solve_for", "newton", {"x": tau, "g": g},
-                           {"abstol": 1e-10, "max_iter": 50, "error_on_fail": False})
-        # start from the first-order estimate around a short segment (always attainable
-        # when the rest of the mission is): the landing fraction is near-linear in time
-        base = self.durations.copy()
-        base[k] = 60.0
-        f0 = float(np.min(self._landing(base)) - self.reserve)
-        jac = ca.Function("dg", [tau], [ca.jacobian(g, tau)])
-        slope = float(jac(60.0))
-        guess = 60.0 - f0 / slope if slope < 0 else 60.0
-        answer = float(rf(x0=max(guess, 1.0))["x"])
-        residual = float(ca.Function("g", [tau], [g])(answer))
-        if not (math.isfinite(answer) and answer > 0 and abs(residual) < 1e-8):
-            raise NotAttainable(
-                f"solve_for {plan.type}: no duration lands with the reserve "
-                f"{100 * self.reserve:g} % (the rest of the mission alone leaves "
-                f"{100 * (f0 + self.reserve):.1f} %)"
-            )
+        answer, ends = self.longest(k)
         final = self.durations.copy()
         final[k] = answer
-        solved = {"segment": plan.type, "index": k, "time_min": answer / 60.0}
+        solved = {"segment": plan.type, "index": k, "time_min": answer / 60.0,
+                  "ends_at": ends}
         if plan.eas is not None:
             v_true = float(true_airspeed_m_s(plan.eas, self._rho(plan.start_h)))
             solved["distance_km"] = answer * v_true / 1000.0

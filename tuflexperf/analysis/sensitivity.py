@@ -186,11 +186,12 @@ def _endurance_value(s: _Symbolic) -> Any:
         / ac.weight_n
     height = s.symbols.get("battery.mission.pattern_altitude_m", battery.pattern_altitude_m)
     climb_time = height / rate if battery.pattern_altitude_m > 0 else 0.0
-    # the launch's RK4 with the nominal step count; power looked up as the nominal does
-    total0 = launch.ground_roll_time_s + launch.climb_time_s
-    steps = max(1, math.ceil(total0 / single._LAUNCH_STEP_S))
-    dt0 = total0 / steps
-    dt = (roll_time + climb_time) / steps
+    # the launch's RK4 with the nominal step counts, the roll and the climb apart (as the
+    # single case's mission integrates them); power looked up as the nominal does
+    roll_steps = max(1, math.ceil(launch.ground_roll_time_s / single._LAUNCH_STEP_S))
+    climb_steps = max(1, math.ceil(launch.climb_time_s / single._LAUNCH_STEP_S))
+    dt0 = launch.ground_roll_time_s / roll_steps
+    dt = roll_time / roll_steps
     t_hist0 = np.asarray(ca.evalf(ca.substitute(t_hist, ca.vertcat(*s.symbols.values()),
                                                 _nominal_vector(s)))).ravel() \
         if s.symbols else np.asarray(ca.evalf(t_hist)).ravel()
@@ -198,8 +199,6 @@ def _endurance_value(s: _Symbolic) -> Any:
 
     def stage_power(j: int) -> Any:
         t0_value = 0.5 * j * dt0
-        if t0_value >= launch.ground_roll_time_s:
-            return climb_power
         index = min(max(int(np.searchsorted(t_hist0, t0_value, side="right")) - 1, 0),
                     count - 2)
         if t0_value >= t_hist0[-1]:
@@ -211,15 +210,23 @@ def _endurance_value(s: _Symbolic) -> Any:
         return _power_w(s, model, 1.0, speed)
 
     packs = battery.packs_in_parallel_per_engine
-    q: Any = 0.0
-    for step in range(steps):
-        def rate_at(j: int, charge: Any) -> Any:
-            return current_at_power_a(model.params, charge, stage_power(j), packs) / 3600.0
 
-        k1 = rate_at(2 * step, q)
-        k2 = rate_at(2 * step + 1, q + dt / 2 * k1)
-        k3 = rate_at(2 * step + 1, q + dt / 2 * k2)
-        k4 = rate_at(2 * step + 2, q + dt * k3)
+    def rate_at(power: Any, charge: Any) -> Any:
+        return current_at_power_a(model.params, charge, power, packs) / 3600.0
+
+    q: Any = 0.0
+    for step in range(roll_steps):
+        k1 = rate_at(stage_power(2 * step), q)
+        k2 = rate_at(stage_power(2 * step + 1), q + dt / 2 * k1)
+        k3 = rate_at(stage_power(2 * step + 1), q + dt / 2 * k2)
+        k4 = rate_at(stage_power(2 * step + 2), q + dt * k3)
+        q = q + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    dt = climb_time / climb_steps
+    for _ in range(climb_steps):
+        k1 = rate_at(climb_power, q)
+        k2 = rate_at(climb_power, q + dt / 2 * k1)
+        k3 = rate_at(climb_power, q + dt / 2 * k2)
+        k4 = rate_at(climb_power, q + dt * k3)
         q = q + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
     # level flight at the throttle (fast root) and the pack's cut-off charge
     x = s.throttle

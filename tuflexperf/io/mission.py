@@ -1,7 +1,9 @@
 """Mission file (SPEC 4, "Mission file"): segments flown in order from a full battery.
 
 Every airspeed in a mission file is an equivalent airspeed (EAS, SPEC 3); altitudes are
-heights above the airfield of the case's atmosphere block.
+heights above the airfield of the case's atmosphere block. A cruise or loiter may give a
+``throttle`` instead of an airspeed (with ``time_min``): it is then flown level at that
+throttle and its airspeed follows (the fast root of ``T = D``, falling as the packs sag).
 """
 
 from __future__ import annotations
@@ -23,8 +25,8 @@ SegmentType = Literal["takeoff", "climb", "cruise", "loiter", "descent", "engine
 _ALLOWED: dict[str, frozenset[str]] = {
     "takeoff": frozenset(),
     "climb": frozenset({"to_altitude_m", "airspeed_m_s", "throttle", "climb_rate_m_s"}),
-    "cruise": frozenset({"airspeed_m_s", "time_min", "distance_km"}),
-    "loiter": frozenset({"airspeed_m_s", "time_min"}),
+    "cruise": frozenset({"airspeed_m_s", "time_min", "distance_km", "throttle"}),
+    "loiter": frozenset({"airspeed_m_s", "time_min", "throttle"}),
     "descent": frozenset({"to_altitude_m", "airspeed_m_s", "throttle", "descent_rate_m_s"}),
     "engine_failure": frozenset({"engine"}),
 }
@@ -69,10 +71,15 @@ class SegmentSchema(StrictModel):
             need("to_altitude_m", "airspeed_m_s")
             one_of("throttle", "descent_rate_m_s")
         elif self.type == "cruise":
-            need("airspeed_m_s")
-            one_of("time_min", "distance_km")
+            one_of("airspeed_m_s", "throttle")
+            if self.throttle is not None:
+                need("time_min")  # at a throttle the airspeed is an outcome: time, not distance
+            else:
+                one_of("time_min", "distance_km")
         elif self.type == "loiter":
             need("time_min")
+            if self.throttle is not None and self.airspeed_m_s is not None:
+                raise ValueError("loiter takes at most one of airspeed_m_s or throttle")
         elif self.type == "engine_failure":
             need("engine")
         return self
