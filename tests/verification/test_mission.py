@@ -464,3 +464,31 @@ def test_solve_for_stops_at_the_cutoff_when_it_comes_before_the_reserve(
     durations[1] = 60.0 * result.solved["time_min"]
     assert model.fly(durations).segments[-1].min_voltage_v == pytest.approx(
         model.cutoff_v, abs=1e-6)
+
+
+def test_solve_for_with_the_voltage_effect_lands_on_the_reserve(tmp_path: Path) -> None:
+    """solve_for a middle segment (loiter at a fixed throttle, its airspeed sagging) with the
+    pack-voltage effect: flown as a plain mission, the answer lands exactly on the reserve."""
+    case = _voltage_case(tmp_path)
+    path = _mission(tmp_path, """\
+        name: how long may I loiter
+        segments:
+          - {type: takeoff}
+          - {type: climb, to_altitude_m: 100, airspeed_m_s: 20, throttle: 1.0}
+          - {type: loiter, throttle: 0.55, time_min: 1}
+          - {type: engine_failure, engine: EDF1}
+          - {type: descent, to_altitude_m: 30, airspeed_m_s: 20, throttle: 0.3}
+          - {type: cruise, airspeed_m_s: 22, distance_km: 1.5}
+        solve_for: loiter
+        """)
+    model = MissionModel(case, load_mission(path), 0.25)
+    solved = model.solve_for()
+    assert solved.passed and solved.solved["ends_at"] == "landing reserve"
+    assert solved.landing_charge_fraction == pytest.approx(0.25, abs=1e-9)
+    durations = model.durations.copy()
+    durations[2] = 60.0 * solved.solved["time_min"]
+    flown = model.fly(durations)
+    assert flown.passed and flown.landing_charge_fraction == pytest.approx(0.25, abs=1e-9)
+    longer = durations.copy()
+    longer[2] += 1.0  # a second more and the reserve is not met
+    assert not model.fly(longer).passed

@@ -223,7 +223,7 @@ class MissionModel:
         self.fixed_density = fixed_density_kg_m3
         self.takeoff_to_obstacle = takeoff_to_obstacle
         self._instants: dict[Any, Any] = {}
-        self._roots: dict[int, Any] = {}
+        self._suffixes: dict[int, Any] = {}
         self.plans = self._plan(mission.segments)
         self._takeoff_speeds: dict[int, np.ndarray] = {}
         self._build()
@@ -535,9 +535,12 @@ class MissionModel:
         f_aux = ca.Function("aux", [s, p], [evaluate(s, p[6])])
         return f_time, f_height, f_aux
 
-    def _segment_graph(self, plan: _Plan, state: Any, durations: Any, theta: Any
-                       ) -> tuple[list[Any], list[Any], Any]:
-        """One segment flown from ``state`` (MX): its nodes, their aux outputs, the end state."""
+    def _segment_graph(self, plan: _Plan, state: Any, durations: Any, theta: Any,
+                       nodes_aux: bool = True) -> tuple[list[Any], list[Any], Any]:
+        """One segment flown from ``state`` (MX): its nodes, their aux outputs, the end state.
+
+        Without ``nodes_aux`` only the aux at the segment's end is computed (a list of one).
+        """
         import casadi as ca
 
         key = (plan.dead, plan.solve_v)
@@ -566,9 +569,12 @@ class MissionModel:
             both = ca.horzcat(state, history)
             # the aux at each node: the airspeed given at a step's start (first node) or end
             after = ca.vertcat(p_rows[:6, :], p_rows[8, :], p_rows[7:, :])
-            auxes.append(f_aux.map(steps + 1)(both, ca.horzcat(p_rows[:, 0], after)))
+            if nodes_aux:
+                auxes.append(f_aux.map(steps + 1)(both, ca.horzcat(p_rows[:, 0], after)))
             nodes.append(both)
             state = history[:, -1]
+        if not nodes_aux:
+            auxes.append(f_aux(state, after[:, -1]))
         return nodes, auxes, state
 
     def _segment_function(self, k: int) -> Any:
@@ -579,7 +585,8 @@ class MissionModel:
             m = len(self.plans)
             start = ca.MX.sym("start", 2 * self.n + 3)
             durations, theta = ca.MX.sym("durations", m), ca.MX.sym("theta", 3 * m)
-            _, auxes, end = self._segment_graph(self.plans[k], start, durations, theta)
+            _, auxes, end = self._segment_graph(self.plans[k], start, durations, theta,
+                                                nodes_aux=False)
             self._segments[k] = ca.Function(f"segment_{k}", [start, durations, theta],
                                             [end, auxes[-1][:, -1]])
         return self._segments[k]
@@ -821,80 +828,34 @@ class MissionModel:
         margin = getattr(envelope, "stall_margin", 1.0) if envelope is not None else 1.0
         return margin * float(stall_speed_eas_m_s(self.case.aircraft))
 
-    def _root_functions(self, k: int) -> tuple[Any, Any, Any]:
-        """Rootfinders on segment ``k``'s duration: landing on the reserve, and the cut-off.
+    def _suffix_function(self, k: int) -> Any:
+        """``(start, durations, theta) -> (landing state, aux at segment k's end)``.
 
-        Both take ``p = [durations; theta]`` (segment ``k``'s entry of ``durations`` is
-        ignored); the third function gives both residuals and their slopes.
+        The mission from where segment ``k`` begins (``start``, its state) to the landing:
+        what the duration of segment ``k`` changes, without the part before it.
         """
         import casadi as ca
 
-        if k in self._roots:
-            return self._roots[k]
-        m = len(self.plans)
-        tau = ca.MX.sym("tau")
-        base = ca.MX.sym("durations", m)
-        theta = ca.MX.sym("theta", 3 * m)
-        d = ca.vertcat(base[:k], tau, base[k + 1:]) if m > 1 else tau
-        g_reserve = ca.mmin(self._landing(d, theta)) - self.reserve
-        live = [i for i in range(self.n) if i != self.plans[k].dead]
-        end_v = self._end_voltage(d, theta)[:, k]
-        g_cut = ca.mmin(ca.vertcat(*(end_v[i] for i in live))) - self.cutoff_v
-        p = ca.vertcat(base, theta)
-        opts = {"abstol": 1e-10, "max_iter": 50, "error_on_fail": False}
-        to_reserve = ca.rootfinder("to_reserve", "newton", {"x": tau, "p": p, "g": g_reserve},
-                                   opts)
-        to_cutoff = ca.rootfinder("to_cutoff", "newton", {"x": tau, "p": p, "g": g_cut}, opts)
-        both = ca.Function("residuals", [tau, p],
-                           [g_reserve, g_cut, ca.jacobian(g_reserve, tau),
-                            ca.jacobian(g_cut, tau)])
-        self._roots[k] = (to_reserve, to_cutoff, both)
-        return self._roots[k]
-
-    def longest(self, k: int, durations: np.ndarray | None = None,
-                theta: np.ndarray | None = None, guess_s: float | None = None,
-                start: np.ndarray | None = None) -> tuple[float, str]:
-        """Longest duration [s] of segment ``k`` that lands on the reserve without a cut-off.
-
-        Newton (CasADi rootfinder, derivatives through the whole integration) on
-        ``min_i landing_fraction_i(T) - reserve = 0``; if the packs are below their cut-off
-        voltage at the end of the segment by then, on ``min_i U_i(T) - U_cutoff = 0``
-        instead (both fall monotonically with the segment's duration). For the last segment
-        with a ``guess_s`` (and optionally the ``start`` state where it begins, if the
-        caller knows it) see :meth:`_longest_last`. Returns the duration
-        and what ends it: ``"landing reserve"`` or ``"cut-off"``.
-        Raises :class:`NotAttainable` when no positive duration does.
-        """
-        d = (self.durations if durations is None else np.asarray(durations, float)).copy()
-        th = self.theta if theta is None else np.asarray(theta, dtype=float)
-        plan = self.plans[k]
-        if all(p.kind == "event" for p in self.plans[k + 1:]) and guess_s is not None:
-            return self._longest_last(k, d, th, guess_s, start)
-        to_reserve, to_cutoff, both = self._root_functions(k)
-        p = np.concatenate([d, th])
-        if guess_s is None:
-            # first-order estimate around a short segment: the landing fraction is
-            # near-linear in time
-            g0, _, slope, _ = (float(x) for x in both(60.0, p))
-            guess_s = 60.0 - g0 / slope if slope < 0 else 60.0
-        answer = float(to_reserve(max(guess_s, 1.0), p))
-        g_res, g_cut, _, slope_cut = (float(x) for x in both(answer, p))
-        ends = "landing reserve"
-        ok = math.isfinite(answer) and abs(g_res) < 1e-8
-        if ok and g_cut < 0:  # the pack cuts off before the reserve is reached
-            ends = "cut-off"
-            start = answer - g_cut / slope_cut if slope_cut < 0 else 0.5 * answer
-            answer = float(to_cutoff(max(start, 1e-3), p))
-            g_res, g_cut, _, _ = (float(x) for x in both(answer, p))
-            ok = math.isfinite(answer) and abs(g_cut) < 1e-8 and g_res >= -1e-8
-        if not (ok and answer > 0):
-            left = float(both(0.0, p)[0]) + self.reserve
-            raise NotAttainable(
-                f"segment {k + 1} ({plan.type}): no duration lands with the reserve "
-                f"{100 * self.reserve:g} % before the cut-off (the rest of the mission alone "
-                f"leaves {100 * left:.1f} %)"
-            )
-        return answer, ends
+        if k not in self._suffixes:
+            m = len(self.plans)
+            start = ca.MX.sym("start", 2 * self.n + 3)
+            durations, theta = ca.MX.sym("durations", m), ca.MX.sym("theta", 3 * m)
+            state, at_k, nodes = start, None, [start]
+            for plan in self.plans[k:]:
+                if plan.kind == "event":
+                    continue
+                both, auxes, state = self._segment_graph(plan, state, durations, theta,
+                                                         nodes_aux=False)
+                nodes.extend(both)
+                if plan.index == k:
+                    at_k = auxes[-1][:, -1]
+            # the most charge each pack gave at any node: beyond the model's knee (the pole of
+            # the discharge curve) the charge stops rising and the answer means nothing
+            drawn = ca.horzcat(*nodes)
+            most = ca.vertcat(*(ca.mmax(drawn[i, :]) for i in range(self.n)))
+            self._suffixes[k] = ca.Function(f"from_segment_{k}", [start, durations, theta],
+                                            [state, at_k, most])
+        return self._suffixes[k]
 
     def start_state(self, k: int, durations: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """The state (charges, energies, height, distance, time) where segment ``k`` begins."""
@@ -902,64 +863,118 @@ class MissionModel:
         a = self.bounds[k][0]
         return states[:, a] if a < states.shape[1] else states[:, -1]
 
-    def _longest_last(self, k: int, d: np.ndarray, th: np.ndarray, guess_s: float,
-                      start: np.ndarray | None = None) -> tuple[float, str]:
-        """:meth:`longest` for the last segment: Newton with the slope from the equations.
+    def longest(self, k: int, durations: np.ndarray | None = None,
+                theta: np.ndarray | None = None, guess_s: float | None = None,
+                start: np.ndarray | None = None) -> tuple[float, str]:
+        """Longest duration [s] of segment ``k`` that lands on the reserve without a cut-off.
 
-        The landing charge's derivative with respect to the last segment's duration is the
-        rate of the state equations at the end, ``-i_j / (3600 Q)`` for the engine ``j``
-        that lands with least charge: each iteration is one integration of that segment
-        alone (from ``start``, the state where it begins), no derivative propagation. The
-        cut-off, if it comes first, by the secant method on the end voltage.
+        A rootfinder on ``g(T) = min_i landing_fraction_i(T) - reserve`` (it falls
+        monotonically with the segment's duration ``T``), each evaluation one integration of
+        the mission from where segment ``k`` begins (``start``, computed once if not given)
+        to the landing. For the last segment, Newton with the slope from the state equations,
+        ``dg/dT = -i_j / (3600 Q)`` at the landing for the engine ``j`` that lands with
+        least charge (from ``guess_s``, e.g. a closed form); otherwise regula falsi
+        (Illinois) on a bracket from ``T = 0``. If the packs are then below their cut-off
+        voltage at the segment's end, the same on ``min_i U_i(T) - U_cutoff`` instead.
+        Both to 1e-12 (fraction) and 1e-9 V. Returns the duration and what ends it:
+        ``"landing reserve"`` or ``"cut-off"``. Raises :class:`NotAttainable` when no
+        positive duration does.
         """
         n = self.n
-        f = self._segment_function(k)
+        d = (self.durations if durations is None else np.asarray(durations, float)).copy()
+        th = self.theta if theta is None else np.asarray(theta, dtype=float)
+        plan = self.plans[k]
+        f = self._suffix_function(k)
         x0 = self.start_state(k, d, th) if start is None else start
-        live = [i for i in range(n) if i != self.plans[k].dead]
+        live = [i for i in range(n) if i != plan.dead]
+        last = all(p.kind == "event" for p in self.plans[k + 1:])
+
+        pole = self.packs * self.params.max_capacity_ah
+        memo: dict[float, tuple[float, float, float]] = {}
 
         def at(tau: float) -> tuple[float, float, float]:
+            if tau not in memo:
+                memo[tau] = evaluate(tau)
+            return memo[tau]
+
+        def evaluate(tau: float) -> tuple[float, float, float]:
             d[k] = tau
-            end, aux = (np.asarray(v, dtype=float).ravel() for v in f(x0, d, th))
+            end, aux, most = (np.asarray(v, dtype=float).ravel() for v in f(x0, d, th))
+            if not (np.all(np.isfinite(end)) and np.all(most <= end[:n] + 1e-12)
+                    and np.all(most < pole)):
+                return -1.0, math.nan, -1.0  # the packs were emptied on the way: beyond
             frac = 1.0 - end[:n] / self.capacity_ah
             j = int(np.argmin(frac))
             volt = min(aux[6 + n + i] for i in live)
-            return float(frac[j] - self.reserve), -aux[6 + j] / SECONDS_PER_HOUR \
-                / self.capacity_ah, float(volt - self.cutoff_v)
+            slope = -aux[6 + j] / SECONDS_PER_HOUR / self.capacity_ah
+            return float(frac[j] - self.reserve), float(slope), float(volt - self.cutoff_v)
 
-        tau, ok = max(guess_s, 1.0), False
-        g, slope, cut = at(tau)
-        for _ in range(50):
-            if not (math.isfinite(g) and slope < 0):
-                break
-            step = -g / slope
-            tau = max(tau + step, 0.5 * tau)
-            g, slope, cut = at(tau)
-            # converged: the landing charge on the reserve to 1e-12 of the capacity
-            if abs(g) <= 1e-12 and abs(step) <= 1e-6 * max(tau, 1.0):
-                ok = True
-                break
+        def illinois(which: int, low: float, high: float, f_low: float, f_high: float
+                     ) -> float | None:
+            side = 0
+            for _ in range(200):
+                c = high - f_high * (high - low) / (f_high - f_low)
+                fc = at(c)[which]
+                if not math.isfinite(fc):
+                    c, fc = 0.5 * (low + high), at(0.5 * (low + high))[which]
+                if abs(fc) <= (1e-12 if which == 0 else 1e-10) or high - low <= 1e-9 * high:
+                    return c
+                if fc > 0:
+                    low, f_low = c, fc
+                    f_high = 0.5 * f_high if side == 1 else f_high
+                    side = 1
+                else:
+                    high, f_high = c, fc
+                    f_low = 0.5 * f_low if side == -1 else f_low
+                    side = -1
+            return None
+
+        def bracket(which: int, tau: float, f_tau: float
+                    ) -> tuple[float, float, float, float] | None:
+            # from a point with f > 0 forwards until f < 0 (finite), by doubling the step
+            step = max(tau, 60.0)
+            for _ in range(40):
+                high = tau + step
+                f_high = at(high)[which]
+                if math.isfinite(f_high) and f_high < 0:
+                    return tau, f_tau, high, f_high
+                if not math.isfinite(f_high):
+                    step *= 0.5
+                else:
+                    tau, f_tau, step = high, f_high, 2 * step
+            return None
+
+        tau: float | None = None
+        if last and guess_s is not None:  # Newton from the guess
+            tau = max(guess_s, 1.0)
+            g, slope, _ = at(tau)
+            for _ in range(50):
+                if not (math.isfinite(g) and slope < 0):
+                    tau = None
+                    break
+                step = -g / slope
+                tau = max(tau + step, 0.5 * tau)
+                g, slope, _ = at(tau)
+                if abs(g) <= 1e-12 and abs(step) <= 1e-6 * max(tau, 1.0):
+                    break
+            else:
+                tau = None
+        if tau is None:  # regula falsi on a bracket from a segment of no duration
+            zero = at(0.0)
+            if zero[0] >= 0 and zero[2] >= 0:
+                found = bracket(0, 0.0, zero[0])
+                tau = None if found is None else illinois(0, found[0], found[2], found[1],
+                                                          found[3])
         ends = "landing reserve"
-        if ok and cut < 0:  # the pack cuts off before the reserve: secant on the end voltage
-            ends, ok = "cut-off", False
-            a, fa = tau, cut
-            b = 0.5 * tau
-            fb = at(b)[2]
-            for _ in range(100):
-                if not (math.isfinite(fa) and math.isfinite(fb)) or fa == fb:
-                    break
-                a, fa, b = b, fb, b - fb * (b - a) / (fb - fa)
-                b = min(max(b, 1e-3), tau)
-                fb = at(b)[2]
-                if abs(b - a) <= 1e-10 * max(b, 1.0):
-                    ok = abs(fb) < 1e-6
-                    break
-            tau = b
-            g, _, cut = at(tau)
-        if not (ok and tau > 0 and math.isfinite(g) and g >= -1e-8):
-            d[k] = 0.0
-            left = float(np.min(self._landing(d, th)))
+        if tau is not None and at(tau)[2] < 0:  # the pack cuts off before the reserve
+            ends = "cut-off"
+            zero = at(0.0)
+            tau = illinois(2, 0.0, tau, zero[2], at(tau)[2]) if zero[2] >= 0 else None
+        if tau is None or not tau > 0 or at(tau)[0] < -1e-8:
+            zero = at(0.0)
+            left = zero[0] + self.reserve
             raise NotAttainable(
-                f"segment {k + 1} ({self.plans[k].type}): no duration lands with the reserve "
+                f"segment {k + 1} ({plan.type}): no duration lands with the reserve "
                 f"{100 * self.reserve:g} % before the cut-off (the rest of the mission alone "
                 f"leaves {100 * left:.1f} %)"
             )
