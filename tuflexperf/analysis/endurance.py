@@ -48,7 +48,7 @@ from tuflexperf.analysis.attainable import least_airspeed_m_s
 from tuflexperf.analysis.cache import BoundedCache, fingerprint
 from tuflexperf.analysis.powertrain import PowerAgreement, agreement_at
 from tuflexperf.errors import InputError, NotAttainable
-from tuflexperf.io.battery import Battery, load_battery
+from tuflexperf.io.battery import Battery, load_battery, refuse_contradicted_capacity
 from tuflexperf.io.case import Case
 from tuflexperf.io.discharge import (
     DischargeRun,
@@ -227,13 +227,10 @@ def _characterise(battery: Battery, case: Case) -> BatteryCharacterisation:
         drawn_of = [float(r.charge_ah[-1]) for r in runs]
         notes = (f"{battery.path.name} carries no fitted pack model: fitted now from its runs; "
                  f"`tuflexperf fit {battery.path.name} --out ...` stores it",)
-    for run, drawn in zip(runs, drawn_of, strict=True):
-        # one pack per run: it cannot give more than it holds (issue 10)
-        if drawn > 1.05 * battery.capacity_ah:
-            raise InputError(
-                f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah, but the discharge "
-                f"run {run.path.name} drew {drawn:.2f} Ah from one pack; the runs contradict it"
-            )
+    # one pack per run: it cannot give more than it holds (issue 10)
+    refuse_contradicted_capacity(
+        battery, [(run.path.name, drawn) for run, drawn in zip(runs, drawn_of, strict=True)]
+    )
     if battery.fitted is None:
         fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
     engine_name = next((r.engine for r in battery.runs if r.engine), None)

@@ -26,6 +26,7 @@ the discharge model is fitted (:mod:`tuflexperf.models.battery`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated
@@ -211,3 +212,32 @@ def load_battery(path: Path | str) -> Battery:
         max_discharge_c=schema.max_discharge_c,
         fitted=schema.fit,
     )
+
+
+CAPACITY_TOLERANCE = 1.05
+"""A run may draw up to 5 % more than the rated capacity (a fresh pack's spread) per pack."""
+
+
+def refuse_contradicted_capacity(battery: Battery, drawn: Sequence[tuple[str, float]]) -> None:
+    """Bad input when a discharge run drew more from one pack than the file says it holds.
+
+    Parameters
+    ----------
+    battery : Battery
+        The loaded battery file (``capacity_ah`` [Ah] per pack).
+    drawn : sequence of (str, float)
+        Each run's file name and the charge it drew from one pack [Ah].
+
+    Raises
+    ------
+    InputError
+        Naming the file, the key and the run (issue 10: never an endless endurance from a
+        capacity the data contradict).
+    """
+    for name, charge_ah in drawn:
+        if charge_ah > CAPACITY_TOLERANCE * battery.capacity_ah:
+            raise InputError(
+                f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah, but the discharge "
+                f"run {name} drew {charge_ah:.2f} Ah from one pack; the runs contradict it"
+            )
+

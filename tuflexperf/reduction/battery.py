@@ -263,16 +263,11 @@ def fit_battery_block(battery: Any, relative_to: Any) -> dict[str, Any]:
     relative to ``relative_to`` (the folder of the file written). A capacity the runs
     contradict (a run drew more than the pack holds) is bad input.
     """
+    from tuflexperf.io.battery import refuse_contradicted_capacity
     from tuflexperf.io.discharge import read_discharge_run, summarise_run
 
     runs = [read_discharge_run(r.path) for r in battery.runs]
-    for run in runs:
-        drawn = float(run.charge_ah[-1])
-        if drawn > 1.05 * battery.capacity_ah:
-            raise InputError(
-                f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah, but the discharge "
-                f"run {run.path.name} drew {drawn:.2f} Ah from one pack; the runs contradict it"
-            )
+    refuse_contradicted_capacity(battery, [(r.path.name, float(r.charge_ah[-1])) for r in runs])
     fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
     return {
         "parameters": {k: float(v) for k, v in fit.parameters.to_dict().items()},
