@@ -510,10 +510,11 @@ def oei(
         for c in result.cases:
             span = c.level_flight_airspeed_range_m_s
             typer.echo(
+                f"  {c.dead_engine} dead: level flight attainable nowhere in the envelope"
+                if span is None else
                 f"  {c.dead_engine} dead: least throttle {_fmt(c.min_throttle)} at "
                 f"{_fmt(c.airspeed_at_min_throttle_m_s, 1)} m/s; level flight "
-                + ("nowhere in the envelope" if span is None
-                   else f"{span[0]:.2f}-{span[1]:.2f} m/s")
+                f"{span[0]:.2f}-{span[1]:.2f} m/s"
             )
             if c.min_throttle is None or not c.all_feasible:
                 from tuflexperf.analysis.attainable import describe_unattainable
@@ -521,8 +522,10 @@ def oei(
                 for phrase in describe_unattainable(c.airspeed_m_s, c.reasons):
                     typer.echo(f"    not attainable: {phrase}")
         typer.echo(
-            f"  worse case: {worst.dead_engine} dead, throttle {_fmt(worst.min_throttle)} "
-            f"(limit {limit:g})  {'PASS' if met else 'FAIL'}"
+            f"  worse case: {worst.dead_engine} dead, "
+            + ("not attainable" if worst.min_throttle is None
+               else f"throttle {_fmt(worst.min_throttle)}")
+            + f" (limit {limit:g})  {'PASS' if met else 'FAIL'}"
         )
         _print_warnings(data["warnings"])
     raise typer.Exit(0 if met else 1)

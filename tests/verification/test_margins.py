@@ -186,3 +186,41 @@ def test_tornado_bars_are_the_single_case_values(case) -> None:
                        (bar.high_parameter, bar.value_at_high)):
             expected = deterministic(case, bar.parameter, x, "takeoff_ground_roll")
             assert got == pytest.approx(expected, rel=1e-6)
+
+
+def test_catapult_endurance_sensitivities_and_limits(tmp_path) -> None:
+    """launch: catapult: the endurance does not depend on the runway's keys (there is no
+    roll), its sensitivities to the rest equal central differences of the deterministic
+    analysis, and the heaviest mass is where 0.5 throttle no longer holds level flight."""
+    import shutil
+
+    root = SHIPPED_CASE.parent.parent
+    for folder in ("requirements", "data"):
+        shutil.copytree(root / folder, tmp_path / folder)
+    aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
+    aircraft.write_text(aircraft.read_text().replace(
+        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 2000\ntakeoff:", 1))
+    case_file = tmp_path / "requirements" / "tuflex.yaml"
+    case_file.write_text(case_file.read_text().replace("  takeoff: {max_ground_roll_m: 60}\n",
+                                                       ""))
+    catapult = load_case(case_file)
+    runway_keys = ["aircraft.takeoff.rolling_friction", "aircraft.takeoff.cl_ground",
+                   "aircraft.takeoff.liftoff_speed_factor", "aircraft.takeoff.rotation_time_s"]
+    keys = ["aircraft.mass_kg", "aircraft.cd0", "atmosphere.temperature_offset_k", *runway_keys]
+    slopes = sensitivities(catapult, keys)["flight_endurance"]
+    nominal = margin_parameters(catapult)
+    for key in runway_keys:
+        assert slopes[key] == 0.0, key
+    value = deterministic(catapult, "aircraft.mass_kg", nominal["aircraft.mass_kg"],
+                          "flight_endurance")
+    for key in keys[:3]:
+        step = 1e-6 * max(abs(nominal[key]), 1.0)
+        up = deterministic(catapult, key, nominal[key] + step, "flight_endurance")
+        down = deterministic(catapult, key, nominal[key] - step, "flight_endurance")
+        central = (up - down) / (2 * step)
+        assert slopes[key] == pytest.approx(central, rel=1e-3, abs=1e-9 * value / step), key
+    limit, binds, _ = limit_values(catapult)[("flight_endurance", "aircraft.mass_kg")]
+    assert binds == "not attainable"
+    below = deterministic(catapult, "aircraft.mass_kg", limit * (1 - 1e-4), "flight_endurance")
+    above = deterministic(catapult, "aircraft.mass_kg", limit * (1 + 1e-4), "flight_endurance")
+    assert below is not None and above is None

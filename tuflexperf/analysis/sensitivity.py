@@ -162,18 +162,27 @@ def _endurance_value(s: _Symbolic) -> Any:
         return None
     launch, battery = model.launch, model.battery
     ac, rho = s.aircraft, s.density
-    # the roll's time history on 101 airspeeds (the launch interpolates power along it)
-    v_lo = s.liftoff()
     count = 101
-    nodes = v_lo * ca.DM(np.linspace(0.0, 1.0, count))
-    g = ac.mass_kg / s.force(nodes)
-    h = v_lo / (count - 1)
-    left = ca.vertcat(2 * g[0] - g[1], g[0:count - 2])
-    right = ca.vertcat(g[2:count], 2 * g[count - 1] - g[count - 2])
-    pieces = h / 24.0 * (-left + 13.0 * g[0:count - 1] + 13.0 * g[1:count] - right)
-    t_hist = ca.vertcat(0.0, ca.cumsum(pieces))
-    v_hist = nodes
-    roll_time = t_hist[count - 1] + ac.takeoff.rotation_time_s
+    catapult = ac.launch == "catapult"
+    if catapult:
+        # airborne at the release speed (an EAS): no roll, the climb starts there
+        from tuflexperf.models.aircraft import true_airspeed_m_s
+
+        v_lo = true_airspeed_m_s(ac.launch_speed_m_s, rho)
+        t_hist = v_hist = None
+        roll_time: Any = 0.0
+    else:
+        # the roll's time history on 101 airspeeds (the launch interpolates power along it)
+        v_lo = s.liftoff()
+        nodes = v_lo * ca.DM(np.linspace(0.0, 1.0, count))
+        g = ac.mass_kg / s.force(nodes)
+        h = v_lo / (count - 1)
+        left = ca.vertcat(2 * g[0] - g[1], g[0:count - 2])
+        right = ca.vertcat(g[2:count], 2 * g[count - 1] - g[count - 2])
+        pieces = h / 24.0 * (-left + 13.0 * g[0:count - 1] + 13.0 * g[1:count] - right)
+        t_hist = ca.vertcat(0.0, ca.cumsum(pieces))
+        v_hist = nodes
+        roll_time = t_hist[count - 1] + ac.takeoff.rotation_time_s
     # best climb on the same grid point as the nominal
     stall = stall_speed_m_s(ac, rho)
     n = single._SPEED_GRID_POINTS
@@ -187,14 +196,17 @@ def _endurance_value(s: _Symbolic) -> Any:
     height = s.symbols.get("battery.mission.pattern_altitude_m", battery.pattern_altitude_m)
     climb_time = height / rate if battery.pattern_altitude_m > 0 else 0.0
     # the launch's RK4 with the nominal step counts, the roll and the climb apart (as the
-    # single case's mission integrates them); power looked up as the nominal does
-    roll_steps = max(1, math.ceil(launch.ground_roll_time_s / single._LAUNCH_STEP_S))
+    # single case's mission integrates them); power looked up as the nominal does; a
+    # catapult launch has no roll
+    roll_steps = 0 if catapult else max(
+        1, math.ceil(launch.ground_roll_time_s / single._LAUNCH_STEP_S))
     climb_steps = max(1, math.ceil(launch.climb_time_s / single._LAUNCH_STEP_S))
-    dt0 = launch.ground_roll_time_s / roll_steps
-    dt = roll_time / roll_steps
-    t_hist0 = np.asarray(ca.evalf(ca.substitute(t_hist, ca.vertcat(*s.symbols.values()),
-                                                _nominal_vector(s)))).ravel() \
-        if s.symbols else np.asarray(ca.evalf(t_hist)).ravel()
+    dt0 = launch.ground_roll_time_s / roll_steps if roll_steps else 0.0
+    dt = roll_time / roll_steps if roll_steps else 0.0
+    t_hist0 = None if catapult else (
+        np.asarray(ca.evalf(ca.substitute(t_hist, ca.vertcat(*s.symbols.values()),
+                                          _nominal_vector(s)))).ravel()
+        if s.symbols else np.asarray(ca.evalf(t_hist)).ravel())
     climb_power = _power_w(s, model, 1.0, v_climb)
 
     def stage_power(j: int) -> Any:
