@@ -417,7 +417,7 @@ def test_cutoff_ends_the_flight_at_the_event_time(tmp_path: Path) -> None:
     assert not result.attainable and not result.passed
     assert result.reason.startswith("segment 2 (cruise): the pack reaches its cut-off voltage")
     assert [s.type for s in result.segments] == ["takeoff", "cruise"]  # nothing after it
-    assert result.history["time_s"][-1] < result.ended_at_s
+    assert result.history["time_s"][-1] == pytest.approx(result.ended_at_s, abs=1e-5)
     a = model.bounds[1][0]
     q0 = np.array([result.history[f"charge_ah_{n}"][a] for n in result.engines])
     t0 = float(result.history["time_s"][a])
@@ -492,3 +492,40 @@ def test_solve_for_with_the_voltage_effect_lands_on_the_reserve(tmp_path: Path) 
     longer = durations.copy()
     longer[2] += 1.0  # a second more and the reserve is not met
     assert not model.fly(longer).passed
+
+
+def test_a_cruise_far_too_long_is_cut_off_not_a_pass(tmp_path: Path) -> None:
+    """70 days of cruise: one RK4 step would leap past the pack's knee (where the circuit
+    model's voltage rises again); the flight still ends at the same cut-off as a 90 min one."""
+    results = []
+    for minutes in (90, 100000):
+        path = _mission(tmp_path, f"""\
+            name: long
+            segments:
+              - {{type: takeoff}}
+              - {{type: cruise, airspeed_m_s: 26, time_min: {minutes}}}
+            """)
+        result = MissionModel(load_case(None), load_mission(path), None).fly()
+        assert not result.attainable and not result.passed
+        assert "cut-off voltage" in result.reason
+        results.append(result)
+    assert results[1].ended_at_s == pytest.approx(results[0].ended_at_s, abs=1e-5)
+    for r in results:  # the history ends at the event, on the cut-off voltage
+        assert r.history["time_s"][-1] == pytest.approx(r.ended_at_s, abs=1e-5)
+        assert min(r.history["voltage_v_EDF1"][-1], r.history["voltage_v_EDF2"][-1]) \
+            == pytest.approx(40.8, abs=1e-3)
+        assert np.all(np.diff(r.history["charge_ah_EDF1"]) >= 0)
+
+
+def test_a_second_engine_failure_is_bad_input(tmp_path: Path) -> None:
+    path = _mission(tmp_path, """\
+        name: both out
+        segments:
+          - {type: takeoff}
+          - {type: engine_failure, engine: EDF1}
+          - {type: engine_failure, engine: EDF2}
+          - {type: loiter, airspeed_m_s: 20, time_min: 1}
+        """)
+    code, out, err = _run("mission", str(path))
+    assert code == 2 and out == ""
+    assert str(path) in err and "segments[2]" in err and "second engine_failure" in err

@@ -756,6 +756,18 @@ class EnduranceModel:
         )
         warnings.extend(w for a in agreement for w in a.warnings)
         warnings.extend(self.run_checks)
+        u_ref = self.case.propulsion.reference_voltage_v
+        if u_ref is not None:  # the flight's own airspeed and power, sagging with the pack
+            a, b = self.mission.bounds[self._cruise]
+            hist = flight.history
+            v = hist["airspeed_m_s"][a:b]
+            p = np.max([hist[f"power_w_{name}"][a:b] for name in flight.engines], axis=0)
+            warnings.append(
+                f"pack-voltage effect (reference {u_ref:g} V): over the cruise the airspeed goes "
+                f"{v[0]:.2f} -> {v[-1]:.2f} m/s and the power per fan {p[0]:.0f} -> "
+                f"{p[-1]:.0f} W; the airspeed, power and one-pack figures above are at "
+                f"{u_ref:g} V, the flight time is flown with the sag"
+            )
         return EnduranceResult(
             throttle=throttle,
             airspeed_m_s=speed,

@@ -244,6 +244,15 @@ class MissionModel:
                         f"{where}[{i}].engine: {s.engine!r} is not an engine of the propulsion "
                         f"file ({', '.join(self.engines)})"
                     )
+                if dead is not None:  # SPEC 3: one engine inoperative, not two
+                    raise InputError(
+                        f"{where}[{i}]: a second engine_failure ({s.engine}): "
+                        f"{self.engines[dead]} has already failed and the SPEC's OEI rule "
+                        "flies on one engine inoperative"
+                    )
+                if self.n < 2:
+                    raise InputError(f"{where}[{i}]: engine_failure on a single-engine "
+                                     "aircraft leaves no engine to fly on")
                 dead = self.engines.index(s.engine)
                 plans.append(_Plan(i, s.type, "event", h, h, None, False, 0.0, 0.0, False, 0.0,
                                    dead))
@@ -676,12 +685,29 @@ class MissionModel:
         states, aux = (np.asarray(m, dtype=float) for m in self._history(d, th))
         return self._result(states, aux, solved, th, d)
 
+    def _charge_valid(self, q: np.ndarray, current: np.ndarray) -> np.ndarray:
+        """Per node: the packs' state is on the discharge curve (else they were emptied).
+
+        Charges finite, never falling, short of the pole of the model's knee (``n Q_max``),
+        currents finite and not negative: past the pole the equivalent circuit means nothing
+        (its voltage rises again), so such a node counts as beyond the cut-off.
+        """
+        pole = self.packs * self.params.max_capacity_ah
+        rising = np.ones(q.shape[1], dtype=bool)
+        rising[1:] = np.all(np.diff(q, axis=1) >= -1e-12, axis=0)
+        with np.errstate(invalid="ignore"):
+            return (np.all(np.isfinite(q), axis=0) & np.all(q < pole, axis=0)
+                    & np.all(np.isfinite(current), axis=0) & np.all(current >= 0.0, axis=0)
+                    & np.logical_and.accumulate(rising))
+
     def _cutoff_within(self, plan: _Plan, start: np.ndarray, durations: np.ndarray,
-                       theta: np.ndarray, low: float, high: float) -> float:
+                       theta: np.ndarray, low: float, high: float
+                       ) -> tuple[float, np.ndarray, np.ndarray]:
         """Time [s] into a timed segment at which the loaded voltage meets the cut-off.
 
         Bisection on the segment flown from ``start`` for ``tau`` in ``[low, high]`` (the
-        voltage is above the cut-off at ``low``, below at ``high``) to 1e-6 s.
+        voltage is above the cut-off at ``low``, below at ``high``) to 1e-6 s. Returns the
+        time and the state and aux outputs there.
         """
         f = self._segment_function(plan.index)
         d = np.array(durations, dtype=float)
@@ -689,7 +715,10 @@ class MissionModel:
 
         def margin(tau: float) -> float:
             d[plan.index] = tau
-            aux = np.asarray(f(start, d, theta)[1], dtype=float).ravel()
+            end, aux = (np.asarray(v, dtype=float).ravel() for v in f(start, d, theta))
+            q = np.stack([start[:self.n], end[:self.n]], axis=1)
+            if not self._charge_valid(q, aux[6:6 + self.n, None] * np.ones((1, 2))).all():
+                return -1.0
             value = min(aux[6 + self.n + i] for i in live) - self.cutoff_v
             return value if math.isfinite(value) else -1.0
 
@@ -698,7 +727,9 @@ class MissionModel:
                 break
             mid = 0.5 * (low + high)
             low, high = (mid, high) if margin(mid) >= 0 else (low, mid)
-        return 0.5 * (low + high)
+        d[plan.index] = low  # the last time still on the right side of the cut-off
+        end, aux = (np.asarray(v_, dtype=float).ravel() for v_ in f(start, d, theta))
+        return low, end, aux
 
     def _result(self, states: np.ndarray, aux: np.ndarray, solved: dict[str, Any] | None,
                 theta: np.ndarray, durations: np.ndarray) -> MissionResult:
@@ -729,7 +760,7 @@ class MissionModel:
             volt_live = voltage[live, sl]
             problems: list[tuple[int, str]] = []
             cut = np.flatnonzero(~(np.min(volt_live, axis=0) >= self.cutoff_v - 1e-9)
-                                 | ~np.isfinite(q[:, sl]).all(axis=0))
+                                 | ~self._charge_valid(q[:, sl], current[:, sl]))
             if cut.size:
                 problems.append((int(cut[0]), "the pack reaches its cut-off voltage "
                                  f"{self.cutoff_v:.1f} V"))
@@ -768,15 +799,30 @@ class MissionModel:
             if problems and first_bad is None:
                 k, why = min(problems)
                 at = float(t[a + k])
+                b = a + max(k, 1)  # the flight ends there: nothing after the event is flown
                 if why.startswith("the pack reaches") and plan.kind == "time" and k > 0:
-                    # the event between two nodes, exactly (the nodes are 1/64 segment apart)
-                    at = float(t[a]) + self._cutoff_within(plan, states[:, a], durations, theta,
-                                                           float(t[a + k - 1] - t[a]),
-                                                           float(t[a + k] - t[a]))
+                    # the event between two nodes, exactly (the nodes are 1/64 segment apart),
+                    # and the state there becomes the flight's last node
+                    tau, end_s, end_a = self._cutoff_within(
+                        plan, states[:, a], durations, theta, float(t[a + k - 1] - t[a]),
+                        float(t[a + k] - t[a]))
+                    at = float(t[a]) + tau
+
+                    def put(arr: np.ndarray, value: Any, b: int = b) -> np.ndarray:
+                        return np.concatenate(
+                            [arr[..., :b], np.reshape(value, arr.shape[:-1] + (1,))], axis=-1)
+
+                    q, e = put(q, end_s[:n]), put(e, end_s[n:2 * n])
+                    h, dist = put(h, end_s[2 * n]), put(dist, end_s[2 * n + 1])
+                    t, x, v, rate = (put(t, end_s[2 * n + 2]), put(x, end_a[0]),
+                                     put(v, end_a[1]), put(rate, end_a[2]))
+                    current, voltage = put(current, end_a[6:6 + n]), put(voltage,
+                                                                         end_a[6 + n:6 + 2 * n])
+                    power, segment_of = put(power, end_a[6 + 2 * n:6 + 3 * n]), put(
+                        segment_of, plan.index)
+                    b += 1
                 first_bad, ended_at = a + k, at
                 reason = f"{label}: {why} at {at:.1f} s ({at / 60:.2f} min into the mission)"
-                # the flight ends there: the segment as flown up to the event, nothing after
-                b = a + max(k, 1)
                 sl = slice(a, b)
                 volt_live = voltage[live, sl]
             xs = x[sl]
