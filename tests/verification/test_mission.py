@@ -529,3 +529,39 @@ def test_a_second_engine_failure_is_bad_input(tmp_path: Path) -> None:
     code, out, err = _run("mission", str(path))
     assert code == 2 and out == ""
     assert str(path) in err and "segments[2]" in err and "second engine_failure" in err
+
+
+@pytest.mark.parametrize("failed", [False, True])
+def test_loiter_without_airspeed_flies_the_least_power_speed(tmp_path: Path,
+                                                             failed: bool) -> None:
+    """A loiter with no airspeed flies at the least electrical power in level flight (SPEC 4:
+    the best-endurance speed), on the live engine alone after an engine failure: against
+    scipy's bounded minimisation of the SPEC's power at the level-flight throttle (brentq)."""
+    from scipy.optimize import minimize_scalar
+
+    from tuflexperf.models.thrust import total_thrust_n
+
+    failure = "  - {type: engine_failure, engine: EDF2}\n" if failed else ""
+    path = _mission(tmp_path, "name: loiter\nsegments:\n  - {type: takeoff}\n" + failure
+                    + "  - {type: loiter, time_min: 3}\n")
+    case = load_case(None)
+    model = MissionModel(case, load_mission(path), None)
+    result = model.fly()
+    assert result.attainable, result.reason
+    eas = result.segments[-1].airspeed_eas_m_s
+    rho = float(isa_density_kg_m3(15.0, 0.0))  # the loiter is at the obstacle height
+    dead = 1 if failed else None
+    prop = case.propulsion
+
+    def power(e: float) -> float:
+        v = float(true_airspeed_m_s(e, rho))
+        drag = float(level_flight_drag_n(case.aircraft, v, rho))
+        x = brentq(lambda s: float(total_thrust_n(prop, s, v, rho, dead)) - drag, 0.0, 1.0,
+                   xtol=1e-14)
+        return sum(float(density_ratio(prop, rho) * engine_power_w(en, x, v))
+                   for i, en in enumerate(prop.engines) if i != dead)
+
+    best = minimize_scalar(power, bounds=(0.9 * eas, 1.1 * eas), method="bounded",
+                           options={"xatol": 1e-6})
+    assert eas == pytest.approx(best.x, abs=0.03)
+    assert power(eas) == pytest.approx(best.fun, rel=1e-5)

@@ -279,7 +279,8 @@ class MissionModel:
                                    False, 60.0 * float(s.time_min), dead,  # type: ignore[arg-type]
                                    True, v_guess))
                 continue
-            eas = s.airspeed_m_s if s.airspeed_m_s is not None else self._best_endurance_eas(h)
+            eas = (s.airspeed_m_s if s.airspeed_m_s is not None
+                   else self._best_endurance_eas(h, dead))
             if eas < margin * stall_eas * (1 - 1e-12):
                 raise NotAttainable(
                     f"{label}: {eas:.1f} m/s EAS is below stall ({margin:g} x "
@@ -340,8 +341,12 @@ class MissionModel:
             low, high = (mid, high) if excess(mid) >= 0 else (low, mid)
         return 0.5 * (low + high)
 
-    def _best_endurance_eas(self, h: float) -> float:
-        """EAS of least electrical power in level flight at height ``h`` (full packs)."""
+    def _best_endurance_eas(self, h: float, dead: int | None = None) -> float:
+        """EAS of least electrical power in level flight at height ``h`` (full packs).
+
+        With a ``dead`` engine (after an engine failure) on the live engines alone, the dead
+        one windmilling (or not) as in flight.
+        """
         aircraft = self.case.aircraft
         rho = float(self._rho(h))
         envelope = self.case.requirements.envelope
@@ -349,17 +354,19 @@ class MissionModel:
         stall = margin * float(stall_speed_eas_m_s(aircraft))
         eas = np.linspace(stall, 4.0 * stall, 2001)
         v = np.asarray(true_airspeed_m_s(eas, rho), dtype=float)
-        x, ok = self._level_throttle_numpy(v, rho)
-        power = np.where(ok, self._power_numpy(x, v, rho), np.inf)
+        x, ok = self._level_throttle_numpy(v, rho, dead)
+        power = np.where(ok, self._power_numpy(x, v, rho, dead), np.inf)
         k = int(np.argmin(power))
         if not np.isfinite(power[k]):
             raise NotAttainable(f"loiter at {h:g} m: no level flight up to full throttle")
         return float(eas[k])
 
-    def _level_throttle_numpy(self, v: np.ndarray, rho: float) -> tuple[np.ndarray, np.ndarray]:
+    def _level_throttle_numpy(self, v: np.ndarray, rho: float, dead: int | None = None
+                              ) -> tuple[np.ndarray, np.ndarray]:
+        from tuflexperf.models.thrust import total_thrust_n
+
         prop = self.case.propulsion
-        sigma = density_ratio(prop, rho)
-        t = [sum(np.asarray(engine_thrust_n(e, x, v, sigma), dtype=float) for e in prop.engines)
+        t = [np.asarray(total_thrust_n(prop, x, v, rho, dead, self.dead_mode), dtype=float)
              for x in (0.0, 0.5, 1.0)]
         a = 2.0 * (t[2] - 2.0 * t[1] + t[0])
         b = t[2] - t[0] - a
@@ -368,9 +375,10 @@ class MissionModel:
             x, reached = least_throttle_reaching(a, b, c)
         return np.asarray(x, dtype=float), np.asarray(reached) > 0.5
 
-    def _power_numpy(self, x: np.ndarray, v: np.ndarray, rho: float) -> np.ndarray:
+    def _power_numpy(self, x: np.ndarray, v: np.ndarray, rho: float, dead: int | None = None
+                     ) -> np.ndarray:
         total = sum(np.asarray(self._engine_power(i, x, v, rho), dtype=float)
-                    for i in range(self.n))
+                    for i in range(self.n) if i != dead)
         return np.asarray(total, dtype=float)
 
     # -- physics at one instant (backend-neutral) -----------------------------------------
@@ -482,7 +490,9 @@ class MissionModel:
                                  [z - ca.solve(ca.jacobian(res, z), res)])
             start = ca.vertcat(*(ocv if voltage_unknown else []), *([v_in] if solve_v else []))
             zk = start
-            for _ in range(NEWTON):
+            # without the voltage effect a fixed throttle's airspeed does not change along
+            # the segment: the guess is the root already (to ~1e-15), one step polishes it
+            for _ in range(NEWTON if voltage_unknown else 1):
                 zk = newton(zk, q, v_in, rho, p)
             u, v = split(zk)
         else:
