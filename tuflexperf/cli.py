@@ -620,7 +620,16 @@ def mission(
             fail_input(f"--csv: {csv} is a folder; give a file name")
         guard_outputs({"--csv": csv}, inputs)
     limit = requirement.min_landing_charge_fraction if requirement is not None else None
-    result = solve_mission(case, plan, limit)
+    try:
+        result = solve_mission(case, plan, limit)
+    except NotAttainable as exc:
+        if as_json:  # the mission's own keys (SPEC 5), nothing flown
+            emit_json({"command": "mission", "mission": plan.name, "passed": False,
+                       "attainable": False, "reason": str(exc),
+                       "landing_charge_fraction": None, "min_landing_charge_fraction": limit,
+                       "segments": []})
+        sys.stderr.write(f"tuflexperf: not attainable: {exc}\n")
+        raise typer.Exit(1) from None
     if csv is not None:
         from tuflexperf.io.files import atomic_write_text
 

@@ -187,8 +187,10 @@ def test_cli_mission_not_attainable_names_the_segment(
         """)
     code, out, err = _run("mission", str(path), "--json")
     assert code == 1
-    text = out + err
-    assert reason in text
+    data = json.loads(out)  # one JSON object with the mission's keys on exit 1 too
+    assert data["passed"] is False and data["landing_charge_fraction"] is None
+    assert isinstance(data["segments"], list)
+    assert reason in data["reason"]
 
 
 def test_cli_mission_bad_key_is_exit_2(tmp_path: Path) -> None:
