@@ -567,3 +567,51 @@ def test_loiter_without_airspeed_flies_the_least_power_speed(tmp_path: Path,
                            options={"xatol": 1e-6})
     assert eas == pytest.approx(best.x, abs=0.03)
     assert power(eas) == pytest.approx(best.fun, rel=1e-5)
+
+
+def test_takeoff_segment_equals_an_independent_integration(tmp_path: Path) -> None:
+    """The take-off segment: the roll along the take-off analysis's airspeed history, the
+    rotation at V_LO, then the airborne path at V_tr: the arc R (1 - cos(V t / R)) to the
+    climb angle asin(G), the straight climb at V G to the obstacle (Anderson 6.7); full
+    throttle, each fan's sigma(h) P(1, V) from its packs (solve_ivp, DOP853)."""
+    import math
+
+    from tuflexperf.analysis.takeoff import solve_takeoff
+
+    case = load_case(None)
+    path = _mission(tmp_path, "name: take-off\nsegments:\n  - {type: takeoff}\n")
+    model = MissionModel(case, load_mission(path), None)
+    segment = model.fly().segments[0]
+    to = solve_takeoff(case)
+    t_hist, v_hist = np.asarray(to.history_time_s), np.asarray(to.history_airspeed_m_s)
+    radius, v_tr, g = to.transition_radius_m, to.transition_speed_m_s, to.climb_gradient
+    assert not to.obstacle_cleared_in_transition
+    angle = math.asin(g)
+    arc_s = radius * angle / v_tr
+    h_arc = radius * (1.0 - math.cos(angle))
+    climb_s = (to.obstacle_height_m - h_arc) / (v_tr * g)
+    prop, p, packs = case.propulsion, model.params, model.packs
+
+    def rhs(speed_height):
+        def f(t: float, q: np.ndarray) -> list[float]:
+            v, h = speed_height(t)
+            rho = float(isa_density_kg_m3(h, 0.0))
+            return [float(current_at_power_a(
+                p, q[i], float(density_ratio(prop, rho) * engine_power_w(e, 1.0, v)), packs))
+                / 3600.0 for i, e in enumerate(prop.engines)]
+        return f
+
+    opts = {"rtol": 1e-12, "atol": 1e-14, "method": "DOP853"}
+    q = solve_ivp(rhs(lambda t: (float(np.interp(t, t_hist, v_hist)), 0.0)),
+                  (0.0, float(t_hist[-1])), [0.0, 0.0], **opts).y[:, -1]
+    if to.rotation_time_s > 0:
+        q = solve_ivp(rhs(lambda t: (to.liftoff_speed_m_s, 0.0)), (0.0, to.rotation_time_s),
+                      q, **opts).y[:, -1]
+    q = solve_ivp(rhs(lambda t: (v_tr, radius * (1.0 - math.cos(v_tr * t / radius)))),
+                  (0.0, arc_s), q, **opts).y[:, -1]
+    q = solve_ivp(rhs(lambda t: (v_tr, h_arc + v_tr * g * t)), (0.0, climb_s), q,
+                  **opts).y[:, -1]
+    assert segment.time_s == pytest.approx(to.time_s + arc_s + climb_s, rel=1e-12)
+    assert segment.end_altitude_m == pytest.approx(to.obstacle_height_m, abs=1e-9)
+    for i in range(2):
+        assert segment.charge_ah[i] == pytest.approx(q[i], rel=1e-7)

@@ -25,8 +25,9 @@ case's temperature offset):
   (Newton with the loaded voltages from the full-pack airspeed): its airspeed falls as
   the packs sag, and below stall it is not attainable.
 - take-off: the landed take-off analysis (ground roll from rest at full throttle with the
-  airspeed history, rotation at ``V_LO``, the airborne part to the obstacle at the transition
-  speed, height rising evenly to the obstacle height).
+  airspeed history, rotation at ``V_LO``), then its airborne part flown along the path at
+  the transition speed: the arc ``h = R (1 - cos(V t / R))`` and the straight climb at the
+  full-throttle gradient to the obstacle height.
 
 Each segment is integrated by classic RK4 with :data:`STEPS` fixed steps (over time for
 level segments and the take-off, over height for climbs and descents, so their end is
@@ -674,12 +675,38 @@ class MissionModel:
             phases.append(("time", result.rotation_time_s / 8, rot))
         if not self.takeoff_to_obstacle:
             return phases
-        v_tr = result.transition_speed_m_s
-        airborne_s = float(result.airborne_distance_m) / v_tr
-        air = np.zeros((16, _P_SIZE))
-        air[:, 1], air[:, 5], air[:, 6:9] = 1.0, 1.0, v_tr
-        air[:, 2] = result.obstacle_height_m / airborne_s
-        phases.append(("time", airborne_s / 16, air))
+        phases.extend(self._airborne_phases(result))
+        return phases
+
+    @staticmethod
+    def _airborne_phases(result: Any) -> list[tuple[str, float, np.ndarray]]:
+        """The take-off's airborne part flown along its path at the transition speed.
+
+        The arc of radius ``R`` at ``V_tr`` (height ``R (1 - cos(V_tr t / R))``) up to the
+        climb angle ``asin(G)`` of the full-throttle gradient ``G``, or up to the obstacle if
+        the arc clears it, then the straight climb at ``V_tr G`` [m/s] to the obstacle height
+        (Anderson, *Aircraft Performance and Design*, 6.7): times from the path's length,
+        not its horizontal distance. Each arc step climbs its exact height difference.
+        """
+        v_tr, radius = result.transition_speed_m_s, result.transition_radius_m
+        height, gradient = result.obstacle_height_m, result.climb_gradient
+        if result.obstacle_cleared_in_transition:
+            angle, straight_s = math.acos(1.0 - height / radius), 0.0
+        else:
+            angle = math.asin(gradient)
+            straight_s = (height - radius * (1.0 - math.cos(angle))) / (v_tr * gradient)
+        arc_s = radius * angle / v_tr
+        t = np.linspace(0.0, arc_s, 17)
+        h = radius * (1.0 - np.cos(v_tr * t / radius))
+        arc = np.zeros((16, _P_SIZE))
+        arc[:, 1], arc[:, 5], arc[:, 6:9] = 1.0, 1.0, v_tr
+        arc[:, 2] = np.diff(h) / (arc_s / 16)
+        phases: list[tuple[str, float, np.ndarray]] = [("time", arc_s / 16, arc)]
+        if straight_s > 0:
+            climb = np.zeros((8, _P_SIZE))
+            climb[:, 1], climb[:, 5], climb[:, 6:9] = 1.0, 1.0, v_tr
+            climb[:, 2] = v_tr * gradient
+            phases.append(("time", straight_s / 8, climb))
         return phases
 
     # -- flying ---------------------------------------------------------------------------
