@@ -583,6 +583,9 @@ def performance(
 
 
 # ---- mission (issue 13) --------------------------------------------------------------------
+_MISSION_CSV_HEAD = b"time_s,segment,"  # how every mission history begins
+
+
 @app.command()
 def mission(
     mission_file: Path | None = typer.Argument(
@@ -619,6 +622,15 @@ def mission(
         if csv.is_dir():
             fail_input(f"--csv: {csv} is a folder; give a file name")
         guard_outputs({"--csv": csv}, inputs)
+        if csv.exists():  # replace only an earlier history of this command (SPEC 5)
+            try:
+                with csv.open("rb") as handle:
+                    first = handle.read(len(_MISSION_CSV_HEAD))
+            except OSError:
+                first = b""
+            if first != _MISSION_CSV_HEAD:
+                fail_input(f"--csv: {csv} exists and is not an earlier mission history; "
+                           "refusing to replace it, choose another path")
     limit = requirement.min_landing_charge_fraction if requirement is not None else None
     try:
         result = solve_mission(case, plan, limit)

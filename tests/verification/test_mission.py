@@ -615,3 +615,23 @@ def test_takeoff_segment_equals_an_independent_integration(tmp_path: Path) -> No
     assert segment.end_altitude_m == pytest.approx(to.obstacle_height_m, abs=1e-9)
     for i in range(2):
         assert segment.charge_ah[i] == pytest.approx(q[i], rel=1e-7)
+
+
+def test_cli_mission_csv_replaces_only_its_own_history(tmp_path: Path) -> None:
+    """--csv never replaces a file the command did not write: the case's inputs (down to the
+    battery's discharge runs) and any other existing file are bad input, untouched; its own
+    earlier history is replaced whole."""
+    foreign = tmp_path / "notes.csv"
+    foreign.write_text("my,data\n1,2\n")
+    run = ROOT / "data" / "tuflex" / "endurance" / "edf1_endurance_50.csv"
+    before = run.read_bytes()
+    for target in (foreign, run, SHIPPED_MISSION):
+        code, out, err = _run("mission", str(SHIPPED_MISSION), "--csv", str(target))
+        assert code == 2 and out == "" and "--csv" in err and str(target) in err
+    assert foreign.read_text() == "my,data\n1,2\n" and run.read_bytes() == before
+    own = tmp_path / "history.csv"
+    for _ in range(2):  # written, then replaced by the same command
+        code, _, _ = _run("mission", str(SHIPPED_MISSION), "--csv", str(own))
+        assert code == 0
+    assert own.read_text().startswith("time_s,segment,")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["history.csv", "notes.csv"]
