@@ -329,6 +329,10 @@ def endurance_mission_model(case: Case, battery: Battery) -> Any:
     the case's density (the climb's height costs energy, not density), the take-off to
     lift-off (the climb starts from the runway), the cruise to the battery file's landing
     reserve.
+
+    References
+    ----------
+    Paper section 4 (endurance estimate); SPEC 4 ("Mission file").
     """
     from tuflexperf.analysis.mission import MissionModel
 

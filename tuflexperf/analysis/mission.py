@@ -126,7 +126,17 @@ class SegmentResult:
 
 @dataclass(frozen=True)
 class MissionResult:
-    """A flown mission: per-segment results, the landing charge and the time history."""
+    """A flown mission: per-segment results, the landing charge and the time history.
+
+    ``history`` (one value per integration node, in time order; a flight that ended early
+    stops at its event) holds ``time_s`` [s], ``segment`` (index into ``segments``),
+    ``altitude_m`` [m above the field], ``distance_m`` [m flown], ``airspeed_m_s`` (true)
+    and ``airspeed_eas_m_s`` [m/s], ``throttle`` [-], ``climb_rate_m_s`` [m/s], and per
+    engine ``current_a_<name>`` [A], ``voltage_v_<name>`` (loaded, [V]),
+    ``charge_ah_<name>`` (drawn, [Ah]), ``charge_fraction_<name>`` (left, [-]),
+    ``power_w_<name>`` [W] and ``energy_wh_<name>`` (drawn, [Wh]). A dead engine's current
+    and power are 0, its voltage the open-circuit value.
+    """
 
     name: str
     segments: tuple[SegmentResult, ...]
@@ -716,6 +726,13 @@ class MissionModel:
 
         ``theta`` (per segment: throttle, EAS [m/s], airspeed guess [m/s]) replaces the
         file's settings without a rebuild (the endurance analysis flies its mission so).
+        Not attainable (below stall, beyond full throttle, cut-off, ...) is a result with
+        ``attainable`` false and the reason naming the segment and time, not an exception.
+
+        References
+        ----------
+        SPEC 3 (voltage effect, stall), SPEC 4 ("Mission file"); Raymer, *Aircraft Design*,
+        17.2-17.3.
         """
         d = self.durations if durations is None else np.asarray(durations, dtype=float)
         th = self.theta if theta is None else np.asarray(theta, dtype=float)
@@ -941,7 +958,13 @@ class MissionModel:
         return self._suffixes[k]
 
     def start_state(self, k: int, durations: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        """The state (charges, energies, height, distance, time) where segment ``k`` begins."""
+        """The state where segment ``k`` begins: charges [Ah], energies [Wh] per engine,
+        height [m], distance [m], time [s], for ``durations`` [s] and ``theta``.
+
+        References
+        ----------
+        SPEC 4 ("Mission file"): segments flown in order from full packs.
+        """
         states = np.asarray(self._history(durations, theta)[0], dtype=float)
         a = self.bounds[k][0]
         return states[:, a] if a < states.shape[1] else states[:, -1]
@@ -962,6 +985,11 @@ class MissionModel:
         Both to 1e-12 (fraction) and 1e-9 V. Returns the duration and what ends it:
         ``"landing reserve"`` or ``"cut-off"``. Raises :class:`NotAttainable` when no
         positive duration does.
+
+        References
+        ----------
+        Issue 13 item 3 (``solve_for``); Press et al., *Numerical Recipes*, 3rd ed., 9.2
+        (regula falsi, the Illinois variant) and 9.4 (Newton-Raphson).
         """
         n = self.n
         d = (self.durations if durations is None else np.asarray(durations, float)).copy()
@@ -1084,7 +1112,16 @@ class MissionModel:
 
 def solve_mission(case: Case, mission: MissionFile,
                   min_landing_fraction: float | None = None) -> MissionResult:
-    """Fly ``mission`` for ``case`` (solving its ``solve_for`` segment if it names one)."""
+    """Fly ``mission`` for ``case`` (solving its ``solve_for`` segment if it names one).
+
+    ``min_landing_fraction`` [-] is the reserve to land with (default: the battery file's
+    ``landing_reserve_fraction``). Raises :class:`NotAttainable` for a mission that cannot
+    be planned (a segment below stall, a throttle with no level flight).
+
+    References
+    ----------
+    SPEC 4 ("Mission file"), SPEC 5 (``mission`` command and JSON keys).
+    """
     model = MissionModel(case, mission, min_landing_fraction)
     return model.solve_for() if mission.solve_for is not None else model.fly()
 

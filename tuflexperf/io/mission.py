@@ -108,6 +108,10 @@ def load_mission(path: Path | str) -> MissionFile:
 
     ``solve_for`` names a segment type that occurs exactly once among the time- or
     distance-based segments (``cruise`` or ``loiter``).
+
+    References
+    ----------
+    SPEC 4 ("Mission file"), SPEC 5 (exit 2 naming the file and key).
     """
     from tuflexperf.errors import InputError
 
