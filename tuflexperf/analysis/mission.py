@@ -34,10 +34,11 @@ level segments and the take-off, over height for climbs and descents, so their e
 exact without an event), all segments chained into ONE CasADi function of the durations
 and the segment settings (throttle, EAS), built once per case and mission. ``solve_for``
 makes one segment's duration the unknown and solves "landing charge fraction = reserve"
-(or, if the pack cuts off first, "loaded voltage at the segment's end = cut-off") with a
-CasADi Newton rootfinder; for the last segment the slope is the state equations' own rate
-(no derivative propagation). A cut-off inside a timed segment is located between two
-nodes by bisection, and the flight ends there (segments after it are not flown).
+(or, if the pack cuts off first, "loaded voltage at the segment's end = cut-off"): Newton
+with the state equations' own slope for the last segment, regula falsi otherwise, each step
+one integration from where that segment begins (no derivative propagation). A cut-off
+inside a timed segment is located between two nodes by bisection, and the flight ends
+there (segments after it are not flown).
 
 References
 ----------
@@ -61,7 +62,7 @@ from tuflexperf.models.aircraft import (
     stall_speed_eas_m_s,
     true_airspeed_m_s,
 )
-from tuflexperf.models.atmosphere import G0_M_S2, isa_density_kg_m3
+from tuflexperf.models.atmosphere import isa_density_kg_m3
 from tuflexperf.models.battery import (
     current_at_power_a,
     open_circuit_voltage_v,
@@ -1124,6 +1125,3 @@ def solve_mission(case: Case, mission: MissionFile,
     """
     model = MissionModel(case, mission, min_landing_fraction)
     return model.solve_for() if mission.solve_for is not None else model.fly()
-
-
-_ = G0_M_S2  # weight comes from the aircraft (m g0); kept for the docstring's equations
