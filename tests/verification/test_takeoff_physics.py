@@ -295,3 +295,27 @@ def test_takeoff_model_functions_are_backend_neutral():
         num = [float(x) for x in obstacle_distances_m(np.array(args[0]), np.array(args[1]),
                                                       args[2])]
         assert sym == pytest.approx(num, rel=1e-14)
+
+
+def test_history_forces_are_the_written_out_ground_run_forces():
+    """The report's force breakdown: thrust, drag and friction along the roll, each the
+    textbook term written out here (Raymer eq. 17.97), summing to the accelerating force
+    whose integral is the history (m dV/dt = F: the history's own slope)."""
+    from tuflexperf.models.thrust import total_thrust_n
+
+    case = load_case(None)
+    result = solve_takeoff(case)
+    a, rho = case.aircraft, case.density_kg_m3
+    v = result.history_airspeed_m_s
+    to = a.takeoff
+    cd0 = a.cd0 if to.cd0_ground is None else to.cd0_ground
+    k = a.k if to.k_ground is None else to.k_ground
+    qs = 0.5 * rho * v**2 * a.wing_area_m2
+    np.testing.assert_allclose(result.history_drag_n, qs * (cd0 + k * to.cl_ground**2), rtol=1e-12)
+    np.testing.assert_allclose(
+        result.history_friction_n,
+        to.rolling_friction * np.maximum(a.mass_kg * G - qs * to.cl_ground, 0.0), rtol=1e-9)
+    np.testing.assert_allclose(result.history_thrust_n, total_thrust_n(case.propulsion, 1.0, v, rho))
+    net = result.history_thrust_n - result.history_drag_n - result.history_friction_n
+    slope = np.gradient(v, result.history_time_s)  # dV/dt of the integrated history
+    np.testing.assert_allclose(a.mass_kg * slope[1:-1], net[1:-1], rtol=2e-3)

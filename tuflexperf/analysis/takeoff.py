@@ -25,6 +25,7 @@ from tuflexperf.models.aircraft import (
     Aircraft,
     climb_gradient,
     ground_roll_net_force_n,
+    ground_roll_resistance_n,
     liftoff_speed_eas_m_s,
     liftoff_speed_m_s,
     obstacle_distances_m,
@@ -61,7 +62,10 @@ class TakeoffResult:
     acceleration plus ``V_LO t_R``); ``distance_to_obstacle_m`` adds the airborne
     part (transition arc and straight climb) and is ``None`` when the obstacle is
     never cleared (``obstacle_reason`` says why). The history covers the
-    acceleration only.
+    acceleration only (rotation holds the lift-off speed for ``rotation_time_s``);
+    its force arrays are at the history's airspeeds: full-throttle thrust, the
+    ground-run aerodynamic drag and the rolling friction [N] (net = thrust - drag -
+    friction), empty where a result was built without them.
     """
 
     ground_roll_m: float
@@ -90,6 +94,9 @@ class TakeoffResult:
     obstacle_height_m: float = DEFAULT_OBSTACLE_HEIGHT_M
     obstacle_cleared_in_transition: bool = False
     obstacle_reason: str = ""
+    history_thrust_n: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    history_drag_n: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    history_friction_n: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
 
     @property
     def climb_angle_deg(self) -> float | None:
@@ -222,6 +229,11 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
     distance = np.concatenate([[0.0], states[0, :]])
     time = np.concatenate([[0.0], states[1, :]])
     history_speed = np.linspace(0.0, v_lo, distance.size)
+    history_thrust = np.asarray(total_thrust_n(propulsion, 1.0, history_speed, rho), dtype=float)
+    history_drag, history_friction = (
+        np.broadcast_to(np.asarray(f, dtype=float), history_speed.shape).copy()
+        for f in ground_roll_resistance_n(aircraft, history_speed, rho)
+    )
     rotation_m = v_lo * to.rotation_time_s  # Raymer 17.8.2: rotation at the lift-off speed
 
     # transition arc at 1.15 V_stall and n, then the full-throttle climb (Anderson 6.7.2)
@@ -289,4 +301,7 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         obstacle_height_m=height,
         obstacle_cleared_in_transition=cleared_in_arc,
         obstacle_reason=reason,
+        history_thrust_n=history_thrust,
+        history_drag_n=history_drag,
+        history_friction_n=history_friction,
     )

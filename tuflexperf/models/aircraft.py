@@ -257,13 +257,29 @@ def ground_roll_net_force_n(
     ----------
     Raymer, *Aircraft Design*, eq. 17.97; Anderson, *Aircraft Performance and Design*, eq. 6.77.
     """
+    drag, friction = ground_roll_resistance_n(aircraft, airspeed_m_s, density_kg_m3)
+    return thrust_n - drag - friction
+
+
+def ground_roll_resistance_n(
+    aircraft: Aircraft, airspeed_m_s: Vectorizable, density_kg_m3: Vectorizable
+) -> tuple[Vectorizable, Vectorizable]:
+    """Aerodynamic drag and rolling friction on the ground roll, ``(D_g, mu max(W - L_g, 0))`` [N].
+
+    True airspeed [m/s], density [kg/m^3]; the two forces that
+    :func:`ground_roll_net_force_n` subtracts from the thrust (the report draws them).
+
+    References
+    ----------
+    Raymer, *Aircraft Design*, eq. 17.97.
+    """
     to = aircraft.takeoff
     cd0 = aircraft.cd0 if to.cd0_ground is None else to.cd0_ground
     k = aircraft.k if to.k_ground is None else to.k_ground
     q_s = dynamic_pressure_pa(density_kg_m3, airspeed_m_s) * aircraft.wing_area_m2
     lift = q_s * to.cl_ground
     drag = q_s * polar_drag_coefficient(to.cl_ground, cd0, k)
-    return thrust_n - drag - to.rolling_friction * fmax(aircraft.weight_n - lift, 0.0)
+    return drag, to.rolling_friction * fmax(aircraft.weight_n - lift, 0.0)
 
 
 def transition_speed_m_s(aircraft: Aircraft, density_kg_m3: Vectorizable) -> Vectorizable:
