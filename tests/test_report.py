@@ -147,7 +147,7 @@ def figures_of_shipped_case():
         "thrust": fg.thrust_required_available(case, analyses),
         "surface": fg.thrust_surface(case, measured, 0),
         "run": fg.run_processing(measured.processed),
-        "sweep": fg.sine_sweep(measured),
+        "sweep": fg.sine_sweep(measured, case),
         "model": fg.model_vs_measured(case, measured),
         "takeoff": fg.takeoff_history(case, analyses),
         "trim": fg.trim_oei_throttle(case, analyses),

@@ -315,7 +315,8 @@ def test_history_forces_are_the_written_out_ground_run_forces():
     np.testing.assert_allclose(
         result.history_friction_n,
         to.rolling_friction * np.maximum(a.mass_kg * G - qs * to.cl_ground, 0.0), rtol=1e-9)
-    np.testing.assert_allclose(result.history_thrust_n, total_thrust_n(case.propulsion, 1.0, v, rho))
+    np.testing.assert_allclose(result.history_thrust_n,
+                               total_thrust_n(case.propulsion, 1.0, v, rho))
     net = result.history_thrust_n - result.history_drag_n - result.history_friction_n
     slope = np.gradient(v, result.history_time_s)  # dV/dt of the integrated history
     np.testing.assert_allclose(a.mass_kg * slope[1:-1], net[1:-1], rtol=2e-3)

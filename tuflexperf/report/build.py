@@ -169,7 +169,7 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
     if measured.processed is not None:
         measured_pages["04_run_processing"] = lambda: fg.run_processing(measured.processed)
     if measured.sweep is not None:
-        measured_pages["05_sine_sweep"] = lambda: fg.sine_sweep(measured)
+        measured_pages["05_sine_sweep"] = lambda: fg.sine_sweep(measured, case)
     if measured.comparisons:
         measured_pages["06_model_vs_measured"] = lambda: fg.model_vs_measured(case, measured)
     writers.append(_start_png_writer(list(measured_pages.items()), folder))

@@ -247,6 +247,7 @@ class Analyses:
     oei: Any | None
     endurance_curve: list[tuple[float, Any]] = field(default_factory=list)
     endurance_at_requirement: Any | None = None
+    best_endurance: Any | None = None  # Study.best_endurance(): the longest flight (BestResult)
     characterisation: Any | None = None
     notes: list[str] = field(default_factory=list)
     study: Any | None = None  # the Study these came from: later pages ask it, never re-solve
@@ -302,6 +303,10 @@ def _endurance(study: Study, analyses: Analyses) -> None:
             analyses.endurance_curve.append((float(x), study.endurance(float(x))))
         except NotAttainable:
             continue
+    try:
+        analyses.best_endurance = study.best_endurance()
+    except NotAttainable as exc:
+        analyses.notes.append(f"best endurance: not attainable: {exc}")
     requirement = study.case.requirements.endurance
     if requirement is not None:
         try:

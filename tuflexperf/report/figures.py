@@ -5,6 +5,12 @@ Every function returns a :class:`matplotlib.figure.Figure` built without pyplot
 titles say what is shown and which of the paper's figures it corresponds to,
 requirement limits are drawn where one applies, and the thrust model's
 extrapolated airspeeds (beyond ``tested_airspeed_m_s``) are shaded.
+
+One meaning, one look (:mod:`tuflexperf.report.style`): a red dashed line is a
+requirement's limit on every page, grey dashes the envelope's edges, a black dotted
+line the stall speed, blue the all-engine analysis or the measurement, orange one
+engine out, purple a fitted model. Legends sit outside the axes, so they never cover
+data; long time series are drawn through :func:`tuflexperf.report.decimate.envelope`.
 """
 
 from __future__ import annotations
@@ -16,15 +22,33 @@ import numpy as np
 
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
-from tuflexperf.models.thrust import density_ratio, engine_thrust_n, total_thrust_n
+from tuflexperf.models.thrust import (
+    delay_samples,
+    density_ratio,
+    engine_thrust_n,
+    lag_factor,
+    total_thrust_n,
+)
 from tuflexperf.report.data import Analyses, Measured, ProcessedRun
+from tuflexperf.report.decimate import envelope as decimated
+from tuflexperf.report.style import (
+    EXTRAPOLATED_FILL,
+    FAIL_FILL,
+    PASS_FILL,
+    POINT,
+    STYLE,
+    legend_outside,
+    unit,
+)
 
 LANDSCAPE_IN = (11.69, 8.27)  # A4 landscape (297 x 210 mm)
-PASS_COLOUR = "#c8e6c9"
-FAIL_COLOUR = "#ffcdd2"
-LIMIT_COLOUR = "#c62828"
-EXTRAPOLATED_COLOUR = "0.88"
+PASS_COLOUR = PASS_FILL
+FAIL_COLOUR = FAIL_FILL
+LIMIT_COLOUR = STYLE["limit"]["color"]
+EXTRAPOLATED_COLOUR = EXTRAPOLATED_FILL
 ACCURACY_GOAL_N = 0.5  # paper section 1 and 2.1: model accuracy aimed for +-0.5 N
+LEGEND_FONT = 8
+AVAILABLE_COLOUR = "#5ec962"  # available thrust at full throttle (viridis' green, as on Fig. 18)
 
 
 def use_agg() -> None:
@@ -40,6 +64,22 @@ def new_figure(size: tuple[float, float] = LANDSCAPE_IN) -> Any:
     return Figure(figsize=size, layout="constrained")
 
 
+def _style(meaning: str, **override: Any) -> dict[str, Any]:
+    """``STYLE[meaning]`` with a few keys changed (a second curve of the same meaning)."""
+    return {**STYLE[meaning], **override}
+
+
+def _legend(ax: Any, **kwargs: Any) -> Any:
+    """The report's legend: right of the axes (:func:`legend_outside`), never over data."""
+    return legend_outside(ax, **kwargs)
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(first, last) index of each run of True in ``mask``."""
+    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1, strict=True))
+
+
 def _shade_extrapolated(ax: Any, case: Case, right: float, label: bool = True) -> None:
     """Grey band over airspeeds beyond the thrust model's tested range."""
     low, high = case.propulsion.tested_airspeed_m_s
@@ -47,7 +87,7 @@ def _shade_extrapolated(ax: Any, case: Case, right: float, label: bool = True) -
         ax.axvspan(
             high,
             right,
-            color=EXTRAPOLATED_COLOUR,
+            color=EXTRAPOLATED_FILL,
             zorder=0,
             label=f"thrust model extrapolated (tested {low:g}-{high:g} m/s)" if label else None,
         )
@@ -60,9 +100,7 @@ def _envelope_lines(ax: Any, case: Case) -> None:
     for k, v in enumerate((envelope.min_airspeed_m_s, envelope.max_airspeed_m_s)):
         ax.axvline(
             v,
-            color=LIMIT_COLOUR,
-            linestyle="--",
-            linewidth=1.2,
+            **STYLE["envelope"],
             label=(
                 f"envelope {envelope.min_airspeed_m_s:g}-{envelope.max_airspeed_m_s:g} m/s"
                 if k == 0
@@ -79,6 +117,13 @@ def _max_airspeed(case: Case) -> float:
     return 1.05 * top
 
 
+def _min_airspeed(case: Case, stall: float) -> float:
+    """Left edge of an airspeed axis: just below the stall speed or the envelope, not 0."""
+    envelope = case.requirements.envelope
+    low = stall if envelope is None else min(stall, envelope.min_airspeed_m_s)
+    return max(0.0, 0.9 * low)
+
+
 def _note(ax: Any, text: str) -> None:
     ax.text(
         0.5,
@@ -93,6 +138,58 @@ def _note(ax: Any, text: str) -> None:
     )
     ax.set_xticks([])
     ax.set_yticks([])
+
+
+def _wrap(text: str, width: int) -> str:
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width))
+
+
+def _label_line_ends(ax: Any, ends: list[tuple[float, str, Any]], fontsize: float = 8.0) -> None:
+    """Label lines in the margin right of the axes, spread so no two labels touch.
+
+    ``ends`` holds (y at the right edge [data], text, colour). A label outside the axes
+    can never sit on another curve (the "40 %" on the trim line of issue 15); a short
+    leader joins it to its line's end when it had to move.
+    """
+    low, high = ax.get_ylim()
+    fig = ax.get_figure()
+    # the axes' height before the layout is solved: the figure's, less titles and ticks
+    height_pt = 0.8 * fig.get_size_inches()[1] * 72.0 * ax.get_position().height
+    gap = 1.25 * fontsize / max(height_pt, 1.0)  # one text line, in axes fraction
+    items = sorted(
+        ((float(np.clip((y - low) / (high - low), 0.0, 1.0)), text, colour)
+         for y, text, colour in ends if math.isfinite(y) and low <= y <= high),
+        key=lambda item: item[0],
+    )
+    placed: list[float] = []
+    for frac, _, _ in items:  # bottom up, each at least a line above the one below
+        placed.append(frac if not placed else max(frac, placed[-1] + gap))
+    overshoot = (placed[-1] - (1.0 - gap / 2)) if placed else 0.0
+    if overshoot > 0:  # pushed off the top: shift down, then keep the spacing from the top
+        placed = [p - overshoot for p in placed]
+        for k in range(len(placed) - 2, -1, -1):
+            placed[k] = min(placed[k], placed[k + 1] - gap)
+    transform = ax.transAxes
+    for (frac, text, colour), y in zip(items, placed, strict=True):
+        ax.annotate(
+            text,
+            xy=(1.0, frac),
+            xycoords=transform,
+            xytext=(1.012, y),
+            textcoords=transform,
+            fontsize=fontsize,
+            color=colour,
+            va="center",
+            ha="left",
+            annotation_clip=False,
+            arrowprops=(
+                {"arrowstyle": "-", "color": colour, "linewidth": 0.6, "shrinkA": 0, "shrinkB": 0}
+                if abs(y - frac) > gap / 4
+                else None
+            ),
+        )
 
 
 # --- 2. requirement table -----------------------------------------------------------------------
@@ -118,7 +215,7 @@ def requirement_table(case: Case, analyses: Analyses) -> Any:
             v.name,
             fmt(v.value),
             f"{v.limit:g}",
-            v.unit,
+            unit(v.unit),
             fmt(v.margin),
             "max" if v.kind == "max" else "min",
             "PASS" if v.passed else "FAIL",
@@ -140,7 +237,7 @@ def requirement_table(case: Case, analyses: Analyses) -> Any:
                 cell.set_facecolor("0.85")
                 cell.set_text_props(weight="bold")
             else:
-                cell.set_facecolor(PASS_COLOUR if verdicts[r - 1].passed else FAIL_COLOUR)
+                cell.set_facecolor(PASS_FILL if verdicts[r - 1].passed else FAIL_FILL)
     lines = [
         "Margin: positive when met (limit - value for a maximum, value - limit for a minimum)."
     ]
@@ -172,94 +269,73 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
     fig = new_figure()
     ax = fig.add_subplot()
     _shade_extrapolated(ax, case, right)
+    # available thrust: the teal-to-yellow part of viridis (clear of the trim blue, the OEI
+    # orange, the required black and the limit red)
     cmap = mpl.colormaps["viridis"]
     throttles = np.round(np.arange(0.3, 1.0001, 0.1), 2)
+    ends: list[tuple[float, str, Any]] = []
+    full = np.asarray(total_thrust_n(propulsion, 1.0, v, rho), dtype=float)
     for k, x in enumerate(throttles):
         t = np.asarray(total_thrust_n(propulsion, float(x), v, rho), dtype=float)
-        colour = cmap(0.9 * (x - 0.3) / 0.7)
+        colour = cmap(0.5 + 0.48 * (x - 0.3) / 0.7)
         ax.plot(
             v,
             t,
             color=colour,
             linewidth=1.0,
-            label="available, all engines (throttle at the line's end)" if k == 0 else None,
+            label="available, all engines (throttle at the right edge)" if k == 0 else None,
         )
-        # label each line where it ends (or where it leaves the plot at zero thrust)
-        inside = np.flatnonzero(t >= 0.0)
-        if inside.size:
-            j = inside[-1]
-            ax.annotate(
-                f"{100 * x:.0f} %",
-                (v[j], t[j]),
-                textcoords="offset points",
-                xytext=(2, 2),
-                fontsize=8,
-                color=colour,
-                ha="right" if j < v.size - 1 else "left",
-                va="bottom",
-            )
+        ends.append((float(t[-1]), f"{100 * x:.0f} %", colour))
     stall = float(stall_speed_m_s(aircraft, rho))
     vd = v[v >= stall]
     drag = np.asarray(level_flight_drag_n(aircraft, vd, rho), dtype=float)
-    ax.plot(vd, drag, color="black", linewidth=2.5, label="required (level-flight drag)")
-    ax.axvline(stall, color="0.4", linestyle=":", label=f"stall speed {stall:.1f} m/s")
+    ax.plot(vd, drag, **STYLE["required"], label="required (level-flight drag)")
+    ax.axvline(stall, **STYLE["stall"], label=f"stall speed {stall:.1f} m/s")
     trim = analyses.trim
     if trim is not None and trim.min_throttle is not None:
         x = trim.min_throttle
         t = np.asarray(total_thrust_n(propulsion, x, v, rho), dtype=float)
-        ax.plot(
-            v,
-            t,
-            color="tab:blue",
-            linewidth=2.2,
-            linestyle="-.",
-            label=f"least trim throttle {100 * x:.1f} % (all engines)",
-        )
         va = trim.airspeed_at_min_throttle_m_s
-        ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], "o", color="tab:blue")
+        ax.plot(v, t, **_style("trim", linestyle="-."),
+                label=f"least trim throttle {100 * x:.1f} %, all engines (dot: {va:.1f} m/s)")
+        ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], **POINT["least"],
+                markerfacecolor=STYLE["trim"]["color"])
     oei = analyses.oei
     if oei is not None:
         worst = oei.critical
         index = [e.name for e in propulsion.engines].index(worst.dead_engine)
-        full = np.asarray(
+        one = np.asarray(
             total_thrust_n(propulsion, 1.0, v, rho, index, oei.dead_engine_mode), dtype=float
         )
-        ax.plot(
-            v,
-            full,
-            color="tab:red",
-            linewidth=2.0,
-            label=f"OEI: {worst.dead_engine} dead ({oei.dead_engine_mode}), others 100 %",
-        )
+        ax.plot(v, one, **STYLE["oei"],
+                label=f"OEI: {worst.dead_engine} dead ({oei.dead_engine_mode}), others 100 %")
         if worst.min_throttle is not None:
             x = worst.min_throttle
             t = np.asarray(
                 total_thrust_n(propulsion, x, v, rho, index, oei.dead_engine_mode), dtype=float
             )
-            ax.plot(
-                v,
-                t,
-                color="tab:red",
-                linewidth=2.0,
-                linestyle="-.",
-                label=f"OEI least throttle {100 * x:.1f} %",
-            )
             va = worst.airspeed_at_min_throttle_m_s
-            ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], "o", color="tab:red")
+            ax.plot(v, t, **_style("oei", linestyle="-."),
+                    label=f"OEI least throttle {100 * x:.1f} % (dot: {va:.1f} m/s)")
+            ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], **POINT["least"],
+                    markerfacecolor=STYLE["oei"]["color"])
     _envelope_lines(ax, case)
     ax.set_xlim(0, right)
-    top = 1.3 * float(np.max(total_thrust_n(propulsion, 1.0, v, rho)))  # room for the legend
+    top = 1.08 * float(np.max(full))
     if drag.size:
-        top = max(top, 1.1 * float(drag.max()))
+        top = max(top, 1.08 * float(drag.max()))
     ax.set_ylim(0, top)
+    _label_line_ends(ax, ends)
     ax.set_xlabel("true airspeed V (m/s)")
     ax.set_ylabel("thrust, drag (N)")
     fig.suptitle(
         "Required and available thrust in level flight (paper Fig. 18)\n"
-        f"{case.name}, rho = {rho:.3f} kg/m³"
+        f"{case.name}, {unit(f'rho = {rho:.3f} kg/m^3')}"
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper right", ncols=2, framealpha=0.95)
+    # right of the throttle labels in the margin, so neither covers the other
+    ax.legend(loc="upper left", bbox_to_anchor=(1.07, 1.0), borderaxespad=0.0,
+              fontsize=LEGEND_FONT)
     return fig
 
 
@@ -279,14 +355,18 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
     tt = np.asarray(engine_thrust_n(engine, xx, vv, scale), dtype=float)
 
     fig = new_figure()
-    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
-    ax3.plot_surface(xx, vv, tt, cmap="viridis", alpha=0.75, linewidth=0, antialiased=True)
-    ax3.set_xlabel("throttle (fraction)")
+    grid = fig.add_gridspec(1, 2, width_ratios=[1.6, 1.0])
+    ax3 = fig.add_subplot(grid[0], projection="3d")
+    # the scatter is drawn after the surface (no depth sort), so no point hides behind it
+    ax3.computed_zorder = False
+    ax3.plot_surface(xx, vv, tt, cmap="viridis", alpha=0.7, linewidth=0, antialiased=True,
+                     zorder=1)
+    ax3.set_xlabel("throttle x (fraction)")
     ax3.set_ylabel("airspeed V (m/s)")
     ax3.set_zlabel("thrust T (N)")
     ax3.view_init(elev=22, azim=-130)
-    ax3.set_box_aspect(None, zoom=0.85)  # room for the z label
-    ax_r = fig.add_subplot(1, 2, 2)
+    ax3.set_box_aspect(None, zoom=0.88)  # as large as the z label allows
+    ax_r = fig.add_subplot(grid[1])
     points = measured.points.select(engine.name) if measured.points is not None else None
     title = f"Thrust model of {engine.name}: poly22 surface"
     if points is None or points[0].size == 0:
@@ -300,43 +380,39 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
     px, pv, pt = points
     model = np.asarray(engine_thrust_n(engine, px, pv, scale), dtype=float)
     residual = pt - model
-    ax3.scatter(px, pv, pt, color="red", s=14, depthshade=False, label="measured (segment means)")
-    ax3.legend(loc="upper left", fontsize=8)
-    ax3.set_title("surface and measured points")
-    sc = ax_r.scatter(px, residual, c=pv, cmap="plasma", s=22)
-    fig.colorbar(sc, ax=ax_r, label="airspeed V (m/s)")
+    measured_colour = "#d62728"  # points on a viridis surface: the one colour it lacks
+    ax3.scatter(px, pv, pt, color=measured_colour, s=16, depthshade=False, zorder=5,
+                edgecolors="white", linewidths=0.4)
+    ax3.set_title(f"surface and measured points (red: segment means, n = {pt.size})",
+                  fontsize=10)
+    sc = ax_r.scatter(px, residual, c=pv, cmap="plasma", s=22, zorder=3)
+    fig.colorbar(sc, ax=ax_r, location="bottom", label="airspeed V (m/s)", shrink=0.8,
+                 aspect=40)
     ax_r.axhline(0.0, color="black", linewidth=0.8)
     for sign in (-1, 1):
         ax_r.axhline(
             sign * ACCURACY_GOAL_N,
-            color=LIMIT_COLOUR,
-            linestyle="--",
-            label="accuracy goal +-0.5 N (paper)" if sign > 0 else None,
+            **STYLE["goal"],
+            label=f"accuracy goal ±{ACCURACY_GOAL_N:g} N (paper)" if sign > 0 else None,
         )
     rmse = float(np.sqrt(np.mean(residual**2)))
     sst = float(np.sum((pt - pt.mean()) ** 2))
     r2 = 1.0 - float(np.sum(residual**2)) / sst if sst > 0 else math.nan
-    text = f"against this model: R^2 = {r2:.5f}, RMSE = {rmse:.3f} N, n = {pt.size}"
+    text = f"against this model: R² = {r2:.5f}, RMSE = {rmse:.3f} N"
     refit = _refit(measured, engine.name)
     if refit is not None:
         text += (
-            f"\ncampaign re-fit (tuflexperf fit): R^2 = {refit['r2']:.5f}, "
+            f"\ncampaign re-fit (tuflexperf fit): R² = {refit['r2']:.5f}, "
             f"RMSE = {refit['rmse_n']:.3f} N"
         )
-    ax_r.text(
-        0.02,
-        0.02,
-        text,
-        transform=ax_r.transAxes,
-        fontsize=8,
-        va="bottom",
-        bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "0.7"},
-    )
-    ax_r.set_xlabel("throttle (fraction)")
+    # the statistics are the panel's title: inside, a box would sit on a goal line or a point
+    ax_r.set_title(f"residuals of the measured points\n{text}", fontsize=9)
+    ax_r.set_xlabel("throttle x (fraction)")
     ax_r.set_ylabel("measured - model thrust (N)")
-    ax_r.set_title("residuals of the measured points")
     ax_r.grid(alpha=0.3)
-    ax_r.legend(fontsize=8, loc="upper right")
+    span = max(float(np.max(np.abs(residual))), ACCURACY_GOAL_N)
+    ax_r.set_ylim(-1.15 * span, 1.15 * span)
+    _legend(ax_r)
     source = measured.source.name if measured.source is not None else "?"
     fig.suptitle(f"{title} with the measured points from {source} (paper Figs. 11-12)")
     return fig
@@ -351,51 +427,41 @@ def _refit(measured: Measured, name: str) -> dict[str, Any] | None:
     return None
 
 
-def _wrap(text: str, width: int) -> str:
-    import textwrap
-
-    return "\n".join(textwrap.wrap(text, width))
-
-
 # --- 5. one run, raw and processed (paper Fig. 10) ----------------------------------------------
 def run_processing(run: ProcessedRun) -> Any:
-    """Raw and cleaned force of one throttle-step run, change points and steady segment means."""
+    """Raw and cleaned force of one throttle-step run, change points and steady segments."""
     fig = new_figure()
     gs = fig.add_gridspec(2, 1, height_ratios=[3, 1])
     ax = fig.add_subplot(gs[0])
     axt = fig.add_subplot(gs[1], sharex=ax)
     t = run.time_s
-    ax.plot(t, run.force_raw_n, color="0.7", linewidth=0.4, label="raw force")
+    tr, raw = decimated(t, run.force_raw_n)
+    tc, clean = decimated(t, run.force_clean_n)
+    ax.plot(tr, raw, **STYLE["measured_raw"], label="raw force")
     ax.plot(
-        t,
-        run.force_clean_n,
-        color="tab:blue",
-        linewidth=1.0,
+        tc,
+        clean,
+        **STYLE["measured"],
         label=f"processed (outliers filled: {run.outliers_replaced}, moving median)",
     )
     for k, (start, stop, mean) in enumerate(run.segments):
         ax.plot(
             [t[start], t[stop - 1]],
             [mean, mean],
-            color="tab:red",
-            linewidth=3,
+            **STYLE["segment"],
             solid_capstyle="butt",
             label="steady segment mean" if k == 0 else None,
         )
     for k, c in enumerate(run.changepoints):
-        ax.axvline(
-            t[c],
-            color="tab:green",
-            linestyle=":",
-            linewidth=0.9,
-            label="detected change point" if k == 0 else None,
-        )
-    ax.set_ylabel("balance force (N)")
+        ax.axvline(t[c], **STYLE["changepoint"],
+                   label="detected change point" if k == 0 else None)
+    ax.set_ylabel("balance force F (N)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper right")
+    _legend(ax)
     ax.tick_params(labelbottom=False)
-    axt.plot(t, run.throttle, color="black", linewidth=1.0, label="throttle command")
-    axt.set_ylabel("throttle (fraction)")
+    ts, x = decimated(t, run.throttle)
+    axt.plot(ts, x, **STYLE["command"], label="throttle command")
+    axt.set_ylabel("throttle x (fraction)")
     axt.set_xlabel("time t (s)")
     axt.grid(alpha=0.3)
     fig.suptitle(
@@ -406,98 +472,186 @@ def run_processing(run: ProcessedRun) -> Any:
     return fig
 
 
+# --- 6. the dynamic model on a logged throttle ------------------------------------------------
+def dynamic_thrust_n(
+    engine: Any,
+    time_s: np.ndarray,
+    throttle: np.ndarray,
+    airspeed_m_s: Any,
+    scale: float,
+    delay_s: float,
+    lag_s: float,
+) -> np.ndarray:
+    """The exports' discrete dynamic model evaluated on a logged throttle [N].
+
+    Per sample: the command ``round(delay_s / dt)`` samples ago (the first sample held
+    before that, as the C ring buffer and the CasADi step start), its poly22 thrust, then
+    the exact discrete first-order lag ``T_k = a T_(k-1) + (1 - a) T_static,k`` with
+    ``a = exp(-dt / lag_s)``, started at rest (``tfp_step`` in the exported C,
+    ``thrust_step_function`` in CasADi). Nothing is solved: the model is evaluated.
+
+    Parameters
+    ----------
+    engine : Engine
+        The fan's poly22 coefficients [N].
+    time_s : numpy.ndarray
+        Sample times [s], evenly spaced.
+    throttle : numpy.ndarray
+        Throttle command per sample [fraction].
+    airspeed_m_s : float or numpy.ndarray
+        Airspeed [m/s], scalar or per sample.
+    scale : float
+        Thrust scale ``rho / rho_ref`` [-].
+    delay_s, lag_s : float
+        Dead time and spool-lag time constant [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Thrust per sample [N].
+    """
+    from tuflexperf.reduction.filters import first_order_lag
+
+    x = np.asarray(throttle, dtype=float)
+    dt = float(time_s[-1] - time_s[0]) / max(x.size - 1, 1)
+    steps = min(delay_samples(delay_s, dt), x.size)
+    delayed = np.concatenate([np.full(steps, x[0]), x[: x.size - steps]]) if steps else x
+    static = np.asarray(engine_thrust_n(engine, delayed, airspeed_m_s, scale), dtype=float)
+    return first_order_lag(np.broadcast_to(static, x.shape), lag_factor(lag_s, dt))
+
+
+def _balance_model_n(
+    case: Case, measured: Measured, engine_name: str, time_s: np.ndarray, throttle: np.ndarray,
+    airspeed_m_s: Any, delay_s: float, lag_s: float,
+) -> np.ndarray | None:
+    """The balance force the model predicts: dynamic thrust minus the structure's drag [N]."""
+    names = [e.name for e in case.propulsion.engines]
+    if engine_name not in names:
+        return None
+    engine = case.propulsion.engines[names.index(engine_name)]
+    rho = measured.density_kg_m3
+    scale = 1.0 if rho is None else float(density_ratio(case.propulsion, rho))
+    force = dynamic_thrust_n(engine, time_s, throttle, airspeed_m_s, scale, delay_s, lag_s)
+    if measured.drag_c1_c2 is not None:
+        c1, c2 = measured.drag_c1_c2
+        force = force - (c1 * airspeed_m_s + c2 * np.square(airspeed_m_s))
+    return force
+
+
+def _dynamics(case: Case, measured: Measured) -> list[tuple[str, float, float]]:
+    """(label, delay [s], lag [s]) of the models to draw: the propulsion file's (what the
+    exports carry) and, where it differs, what ``fit`` measured on this campaign."""
+    prop = case.propulsion
+    shown = [("propulsion file", prop.delay_s, prop.lag_s)]
+    summary = measured.fit_summary or {}
+    delay, lag = summary.get("delay_s"), summary.get("lag_s")
+    if delay is not None and math.isfinite(delay):
+        lag = float(lag) if lag is not None and math.isfinite(lag) else 0.0
+        if abs(delay - prop.delay_s) > 5e-4 or abs(lag - prop.lag_s) > 5e-4:
+            shown.append(("this campaign's fit", float(delay), lag))
+    return shown
+
+
+def _dynamics_label(label: str, delay_s: float, lag_s: float) -> str:
+    lag = f"{1000 * lag_s:.0f} ms spool lag" if lag_s > 0 else "no spool lag"
+    return f"model, {label}: {1000 * delay_s:.0f} ms dead time + {lag}"
+
+
+def _model_styles(dynamics: list[tuple[str, float, float]]) -> list[dict[str, Any]]:
+    """Purple for every model; the one with a spool lag solid, the others dashed."""
+    lagged = [k for k, (_, _, lag) in enumerate(dynamics) if lag > 0]
+    main = lagged[-1] if lagged else 0
+    return [STYLE["model"] if k == main else _style("model", linestyle="--", linewidth=1.1)
+            for k in range(len(dynamics))]
+
+
 # --- 6. sine sweep and delay (paper Figs. 13-14) ------------------------------------------------
-def sine_sweep(measured: Measured) -> Any:
-    """Normalised throttle and force of a sine sweep, and its end with the measured delay."""
+def sine_sweep(measured: Measured, case: Case) -> Any:
+    """Measured force of a sine sweep against the fitted dynamic model (dead time + spool lag)
+    in newtons, the whole sweep and its fastest end."""
     from tuflexperf.reduction.filters import movmedian, window_samples
 
     sweep = measured.sweep
     fig = new_figure()
-    ax = fig.add_subplot(2, 1, 1)
-    az = fig.add_subplot(2, 1, 2)
+    gs = fig.add_gridspec(3, 1, height_ratios=[2.2, 2.2, 1.0])
+    ax = fig.add_subplot(gs[0])
+    az = fig.add_subplot(gs[1])
+    ac = fig.add_subplot(gs[2], sharex=az)
     t = sweep.time_s
     rate = (t.size - 1) / (t[-1] - t[0])
     # a 20 ms moving median takes the balance's spikes out without shifting the phase
     force = movmedian(sweep.force_n, window_samples(0.02, rate) | 1)
-    x = sweep.throttle / np.max(np.abs(sweep.throttle))
-    f = force / np.max(np.abs(force))
-    ax.plot(t, f, color="tab:orange", linewidth=0.5, label="force / max force (20 ms median)")
-    ax.plot(t, x, color="black", linewidth=0.7, label="throttle / max throttle")
-    ax.set_xlabel("time t (s)")
-    ax.set_ylabel("normalised (-)")
-    ax.set_title(f"whole sweep ({sweep.file})")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))  # off the traces
+    dynamics = _dynamics(case, measured)
+    styles = _model_styles(dynamics)
+    models = [
+        _balance_model_n(case, measured, sweep.engine, t, sweep.throttle, sweep.airspeed_m_s,
+                         delay, lag)
+        for _, delay, lag in dynamics
+    ]
     # the sweep ends where the throttle last leaves the value it holds at the end of the log
     moving = np.flatnonzero(np.abs(sweep.throttle - sweep.throttle[-1]) > 0.01)
     t_end = t[moving[-1]] if moving.size else t[-1]
     end = (t >= t_end - 1.5) & (t <= t_end + 0.3)
-    az.plot(t[end], f[end], color="tab:orange", linewidth=0.8, label="force / max force")
-    az.plot(t[end], x[end], color="black", linewidth=1.0, label="throttle / max throttle")
-    if math.isfinite(sweep.delay_s):
-        from scipy.signal import lfilter
-
-        from tuflexperf.models.thrust import lag_factor
-
-        # the dynamic model as fitted: dead time, then the first-order spool lag (exact
-        # discretisation, the exports' recursion), driven by the logged throttle
-        delayed = np.interp(t - sweep.delay_s, t, x)
-        lag = sweep.lag_s if math.isfinite(sweep.lag_s) else 0.0
-        a = lag_factor(lag, 1.0 / rate)
-        modelled = lfilter([1.0 - a], [1.0, -a], delayed, zi=[a * delayed[0]])[0]
-        az.plot(
-            t[end],
-            modelled[end],
-            color="tab:blue",
-            linestyle="--",
-            linewidth=1.2,
-            label=f"model: throttle after {1000 * sweep.delay_s:.0f} ms dead time and "
-            f"{1000 * lag:.0f} ms spool lag",
-        )
-    az.set_xlabel("time t (s)")
-    az.set_ylabel("normalised (-)")
-    az.set_title(
-        "end of the sweep (highest frequency): the force lags by the dead time plus "
-        "the fan's spool lag"
-    )
+    tw, fw = decimated(t, force)
+    ax.plot(tw, fw, **STYLE["measured"], label="measured force (20 ms moving median)")
+    az.plot(t[end], sweep.force_n[end], **STYLE["measured_raw"], label="measured force (raw)")
+    az.plot(t[end], force[end], **STYLE["measured"], label="measured force (20 ms median)")
+    for (label, delay, lag), style, model in zip(dynamics, styles, models, strict=True):
+        if model is None:
+            continue
+        if style is STYLE["model"]:  # the whole sweep shows the fitted model alone
+            tm, fm = decimated(t, model)
+            ax.plot(tm, fm, **style, label=_dynamics_label(label, delay, lag), zorder=1)
+        az.plot(t[end], model[end], **style, label=_dynamics_label(label, delay, lag))
+    if all(m is None for m in models):
+        ax.set_title(f"whole sweep ({sweep.file}); the case's propulsion has no engine "
+                     f"{sweep.engine!r}: no model drawn", fontsize=10)
+    else:
+        ax.set_title(f"whole sweep ({sweep.file}); model: poly22 thrust after dead time and "
+                     "spool lag, minus structure drag", fontsize=9)
+    ax.set_xlabel("time t (s)")
+    ax.set_ylabel("balance force F (N)")
+    ax.grid(alpha=0.3)
+    _legend(ax)
+    az.set_ylabel("balance force F (N)")
+    az.set_title("end of the sweep (highest frequency)", fontsize=10)
     az.grid(alpha=0.3)
-    # below the axes: inside, it would cover the traces it explains
-    az.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncols=3)
-    delay = (
-        f"dead time {1000 * sweep.delay_s:.0f} ms, spool lag {1000 * sweep.lag_s:.0f} ms"
-        if math.isfinite(sweep.delay_s)
-        else "delay not estimated"
-    )
-    model = measured.fit_summary.get("delay_s") if measured.fit_summary else None
-    if model is not None:
-        delay += f"; campaign mean delay {1000 * model:.0f} ms"
+    az.tick_params(labelbottom=False)
+    _legend(az)
+    ac.plot(t[end], sweep.throttle[end], **STYLE["command"], label="throttle command")
+    ac.set_xlabel("time t (s)")
+    ac.set_ylabel("throttle x (fraction)")
+    ac.grid(alpha=0.3)
+    _legend(ac)
+    parts = [f"this sweep: dead time {1000 * sweep.delay_s:.0f} ms, spool lag "
+             f"{1000 * sweep.lag_s:.0f} ms" if math.isfinite(sweep.delay_s)
+             else "this sweep: delay not estimated"]
+    parts += [f"{label}: {1000 * delay:.0f} ms + {1000 * lag:.0f} ms"
+              for label, delay, lag in dynamics]
     fig.suptitle(
-        f"Sine sweep of {sweep.engine} at {sweep.airspeed_m_s:.1f} m/s, normalised by each "
-        f"maximum (paper Figs. 13-14)\n{delay}"
+        f"Sine sweep of {sweep.engine} at {sweep.airspeed_m_s:.1f} m/s: measured force against "
+        f"the fitted dynamic model (paper Figs. 13-14)\n" + "; ".join(parts)
     )
     return fig
 
 
 # --- 7. model against measured force (paper Figs. 16-17) ----------------------------------------
-def model_force_n(case: Case, measured: Measured, run: ProcessedRun) -> np.ndarray | None:
-    """The model's balance force over a run: ``T(x(t - d), V(t)) - D_structure(V(t))`` in N.
+def model_force_n(
+    case: Case, measured: Measured, run: ProcessedRun,
+    delay_s: float | None = None, lag_s: float | None = None,
+) -> np.ndarray | None:
+    """The model's balance force over a run: the dynamic thrust minus the structure drag [N].
 
-    ``d`` is the propulsion model's delay, ``D`` the structure drag fitted from the
-    campaign (the paper compared a model "without the drag correction", section 4).
+    The thrust is :func:`dynamic_thrust_n` of the logged throttle (the propulsion file's
+    ``delay_s`` and ``lag_s`` unless given), ``D`` the structure drag ``c1 V + c2 V^2``
+    fitted from the campaign (the paper compared a model "without the drag correction",
+    section 4).
     """
-    names = [e.name for e in case.propulsion.engines]
-    if run.engine not in names:
-        return None
-    engine = case.propulsion.engines[names.index(run.engine)]
-    rho = measured.density_kg_m3
-    scale = 1.0 if rho is None else float(density_ratio(case.propulsion, rho))
-    t = run.time_s
-    x = np.interp(t - case.propulsion.delay_s, t, run.throttle)
-    force = np.asarray(engine_thrust_n(engine, x, run.airspeed_m_s, scale), dtype=float)
-    if measured.drag_c1_c2 is not None:
-        c1, c2 = measured.drag_c1_c2
-        force = force - (c1 * run.airspeed_m_s + c2 * run.airspeed_m_s**2)
-    return force
+    prop = case.propulsion
+    return _balance_model_n(
+        case, measured, run.engine, run.time_s, run.throttle, run.airspeed_m_s,
+        prop.delay_s if delay_s is None else delay_s, prop.lag_s if lag_s is None else lag_s,
+    )
 
 
 def model_vs_measured(case: Case, measured: Measured) -> Any:
@@ -505,53 +659,57 @@ def model_vs_measured(case: Case, measured: Measured) -> Any:
     runs = measured.comparisons
     fig = new_figure()
     gs = fig.add_gridspec(2, len(runs), height_ratios=[3, 1])
+    dynamics = _dynamics(case, measured)
+    styles = _model_styles(dynamics)
+    handles: dict[str, Any] = {}
     for k, run in enumerate(runs):
         ax = fig.add_subplot(gs[0, k])
         ae = fig.add_subplot(gs[1, k], sharex=ax)
-        model = model_force_n(case, measured, run)
         t = run.time_s
-        ax.plot(t, run.force_raw_n, color="0.75", linewidth=0.4, label="measured (raw)")
-        ax.plot(t, run.force_clean_n, color="tab:blue", linewidth=1.0, label="measured (processed)")
+        tr, raw = decimated(t, run.force_raw_n)
+        tc, clean = decimated(t, run.force_clean_n)
+        ax.plot(tr, raw, **STYLE["measured_raw"], label="measured (raw)")
+        ax.plot(tc, clean, **STYLE["measured"], label="measured (processed)")
         ax.set_title(f"{run.engine} at {run.mean_airspeed_m_s:.1f} m/s ({run.file})", fontsize=10)
-        ax.set_ylabel("balance force (N)")
+        ax.set_ylabel("balance force F (N)")
         ax.grid(alpha=0.3)
         ax.tick_params(labelbottom=False)
         ae.set_xlabel("time t (s)")
         ae.set_ylabel("model - measured (N)")
         ae.grid(alpha=0.3)
-        if model is None:
+        models = [model_force_n(case, measured, run, delay, lag) for _, delay, lag in dynamics]
+        if models[0] is None:
             _note(ae, f"the case's propulsion has no engine {run.engine!r}")
-            ax.legend(fontsize=8)
+            handles.update(zip(*reversed(ax.get_legend_handles_labels()), strict=True))
             continue
-        ax.plot(
-            t,
-            model,
-            color="tab:red",
-            linewidth=1.2,
-            label=f"model (delay {1000 * case.propulsion.delay_s:.0f} ms, minus structure drag)",
-        )
-        ax.legend(fontsize=8, loc="upper right")
-        error = model - run.force_clean_n
+        for (label, delay, lag), style, model in zip(dynamics, styles, models, strict=True):
+            tm, fm = decimated(t, model)
+            ax.plot(tm, fm, **style,
+                    label=_dynamics_label(label, delay, lag) + ", minus structure drag")
+        main = next(k for k, st in enumerate(styles) if st is STYLE["model"])
+        error = models[main] - run.force_clean_n
         steady = np.zeros(t.size, dtype=bool)
         for start, stop, _ in run.segments:
             steady[start:stop] = True
-        ae.plot(t, error, color="tab:red", linewidth=0.6)
+        te, ee = decimated(t, error)
+        ae.plot(te, ee, **STYLE["error"], label=f"model ({dynamics[main][0]}) - processed")
         for sign in (-1, 1):
-            ae.axhline(sign * ACCURACY_GOAL_N, color=LIMIT_COLOUR, linestyle="--", linewidth=0.9)
+            ae.axhline(sign * ACCURACY_GOAL_N, **STYLE["goal"],
+                       label=f"accuracy goal ±{ACCURACY_GOAL_N:g} N" if sign > 0 else None)
         e = error[steady]
         neg = e[e < 0].mean() if np.any(e < 0) else 0.0
         pos = e[e > 0].mean() if np.any(e > 0) else 0.0
-        ae.text(
-            0.01,
-            0.95,
-            f"steady segments: mean error {neg:+.2f} / {pos:+.2f} N; dashed: +-0.5 N goal",
-            transform=ae.transAxes,
-            fontsize=8,
-            va="top",
-        )
+        # the statistics are the panel's title: inside, they would cross the error spikes
+        ae.set_title(f"steady segments: mean error {neg:+.2f} N / {pos:+.2f} N", fontsize=9)
         ae.set_ylim(-3, 3)
+        for a in (ax, ae):
+            handles.update(zip(*reversed(a.get_legend_handles_labels()), strict=True))
+    # one legend for both columns, below them: it covers no trace
+    fig.legend(list(handles.values()), list(handles.keys()), loc="outside lower center",
+               ncols=3, fontsize=LEGEND_FONT)
     fig.suptitle(
-        "Thrust model driven by the logged throttle against the measured force (paper Figs. 16-17)"
+        "Thrust model driven by the logged throttle against the measured force "
+        "(paper Figs. 16-17)\nerror panels clipped at ±3 N"
     )
     return fig
 
@@ -562,80 +720,114 @@ def _verdict_passed(analyses: Analyses, name: str) -> bool:
     return any(v.name == name and v.passed for v in analyses.verdicts)
 
 
-def takeoff_history(case: Case, analyses: Analyses) -> Any:
-    """Ground roll at full throttle: airspeed and distance against time, runway limit."""
+def _takeoff_not_attainable(case: Case, analyses: Analyses) -> Any:
+    from tuflexperf.analysis.takeoff import net_force_n
+    from tuflexperf.models.aircraft import liftoff_speed_m_s
+
     fig = new_figure()
-    av = fig.add_subplot(1, 2, 1)
+    an = fig.add_subplot(1, 2, 1)
     ad = fig.add_subplot(1, 2, 2)
+    an.axis("off")
+    an.text(0.0, 0.5, _wrap(f"take-off not attainable: {analyses.takeoff_note}", 50),
+            transform=an.transAxes, ha="left", va="center", fontsize=11, color="0.3")
+    rho = case.density_kg_m3
+    v_lo = float(liftoff_speed_m_s(case.aircraft, rho))
+    v = np.linspace(0.0, 1.05 * v_lo, 300)
+    force = np.asarray(net_force_n(case.aircraft, case.propulsion, v, rho), dtype=float)
+    ad.plot(v, force, **STYLE["takeoff"], label="accelerating force at full throttle")
+    ad.axhline(0.0, color="black", linewidth=0.8)
+    ad.axvline(v_lo, **STYLE["stall"], label=f"lift-off speed {v_lo:.1f} m/s")
+    ad.set_xlabel("airspeed V (m/s)")
+    ad.set_ylabel("net force on the runway (N)")
+    ad.set_title("why: the net force on the runway", fontsize=10)
+    ad.grid(alpha=0.3)
+    _legend(ad)
+    fig.suptitle(f"Take-off of {case.name}: not attainable")
+    return fig
+
+
+def takeoff_history(case: Case, analyses: Analyses) -> Any:
+    """Take-off at full throttle along the runway: airspeed against distance (roll, rotation,
+    airborne part to the obstacle) with the runway limit, and the forces along the roll."""
     result = analyses.takeoff
     if result is None:
-        from tuflexperf.analysis.takeoff import net_force_n
-        from tuflexperf.models.aircraft import liftoff_speed_m_s
-
-        _note(av, _wrap(f"take-off not attainable: {analyses.takeoff_note}", 50))
-        rho = case.density_kg_m3
-        v_lo = float(liftoff_speed_m_s(case.aircraft, rho))
-        v = np.linspace(0.0, 1.05 * v_lo, 300)
-        force = np.asarray(net_force_n(case.aircraft, case.propulsion, v, rho), dtype=float)
-        ad.plot(v, force, color="tab:blue", label="accelerating force at full throttle")
-        ad.axhline(0.0, color="black", linewidth=0.8)
-        ad.axvline(v_lo, color=LIMIT_COLOUR, linestyle="--", label=f"lift-off speed {v_lo:.1f} m/s")
-        ad.set_xlabel("airspeed V (m/s)")
-        ad.set_ylabel("net force on the runway (N)")
-        ad.set_title("why: the net force on the runway")
-        ad.grid(alpha=0.3)
-        ad.legend(fontsize=8)
-        fig.suptitle(f"Take-off of {case.name}: not attainable")
-        return fig
-    t = result.history_time_s
+        return _takeoff_not_attainable(case, analyses)
+    fig = new_figure()
+    gs = fig.add_gridspec(2, 1, height_ratios=[1.0, 1.0])
+    av = fig.add_subplot(gs[0])
+    af = fig.add_subplot(gs[1])
+    s, v, t = result.history_distance_m, result.history_airspeed_m_s, result.history_time_s
+    v_lo, roll = result.liftoff_speed_m_s, result.ground_roll_m
+    s_acc = result.acceleration_distance_m
+    av.plot(s, v, **STYLE["takeoff"], label=f"ground run, full throttle ({t[-1]:.1f} s)")
+    if result.rotation_distance_m > 0:
+        av.plot([s_acc, roll], [v_lo, v_lo], **_style("takeoff", linestyle="-.", linewidth=3.0),
+                label=f"rotation at the lift-off speed ({result.rotation_time_s:.2f} s)")
+    av.plot([roll], [v_lo], **POINT["least"],
+            label=f"lift-off: {roll:.1f} m after {result.time_s:.1f} s at {v_lo:.1f} m/s")
+    right = roll
+    obstacle = result.distance_to_obstacle_m
+    if obstacle is not None:
+        # the airborne part flies the transition speed (Anderson 6.7.2): a level line to
+        # the obstacle, so the page shows how much of the take-off distance is in the air
+        av.plot([roll, obstacle], [result.transition_speed_m_s] * 2, **STYLE["airborne"],
+                label=f"airborne: arc and climb at {result.transition_speed_m_s:.1f} m/s")
+        av.plot([obstacle], [result.transition_speed_m_s], marker="^", markersize=8,
+                color=STYLE["airborne"]["color"], linestyle="none",
+                label=f"{result.obstacle_height_m:g} m obstacle cleared at {obstacle:.1f} m")
+        right = obstacle
+    av.axhline(result.stall_speed_m_s, **STYLE["stall"],
+               label=f"stall speed {result.stall_speed_m_s:.1f} m/s")
     high = case.propulsion.tested_airspeed_m_s[1]
-    av.plot(t, result.history_airspeed_m_s, color="tab:blue", label="airspeed")
-    av.axhline(
-        result.liftoff_speed_m_s,
-        color="black",
-        linestyle=":",
-        label=f"lift-off speed {result.liftoff_speed_m_s:.1f} m/s",
-    )
-    if result.liftoff_speed_m_s > high:
-        av.axhspan(
-            high,
-            result.liftoff_speed_m_s * 1.05,
-            color=EXTRAPOLATED_COLOUR,
-            zorder=0,
-            label="thrust model extrapolated",
-        )
-    av.set_xlabel("time t (s)")
-    av.set_ylabel("airspeed V (m/s)")
-    av.set_title("airspeed")
-    av.grid(alpha=0.3)
-    av.legend(fontsize=8, loc="lower right")
-    ad.plot(t, result.history_distance_m, color="tab:blue", label="distance rolled")
-    ad.plot(
-        [result.time_s],
-        [result.ground_roll_m],
-        "o",
-        color="tab:blue",
-        label=f"lift-off: {result.ground_roll_m:.1f} m after {result.time_s:.1f} s",
-    )
+    top = 1.12 * max(v_lo, result.transition_speed_m_s)
+    if top > high:
+        av.axhspan(high, top, color=EXTRAPOLATED_FILL, zorder=0,
+                   label="thrust model extrapolated")
     requirement = case.requirements.takeoff
-    if requirement is not None:
-        limit = requirement.max_ground_roll_m
-        met = _verdict_passed(analyses, "takeoff_ground_roll")
-        ad.axhline(
-            limit,
-            color=LIMIT_COLOUR,
-            linestyle="--",
-            label=f"runway limit {limit:g} m ({'PASS' if met else 'FAIL'})",
-        )
-        ad.set_ylim(0, 1.1 * max(limit, result.ground_roll_m))
-    ad.set_xlabel("time t (s)")
-    ad.set_ylabel("ground roll distance s (m)")
-    ad.set_title("distance")
-    ad.grid(alpha=0.3)
-    ad.legend(fontsize=8, loc="upper left")
+    limit = requirement.max_ground_roll_m if requirement is not None else None
+    for ax in (av, af):
+        if limit is not None:
+            met = _verdict_passed(analyses, "takeoff_ground_roll")
+            ax.axvline(limit, **STYLE["limit"],
+                       label=f"runway limit {limit:g} m ({'PASS' if met else 'FAIL'})")
+            right = max(right, limit)
+    av.set_xlim(0, 1.04 * right)
+    # the forces end at lift-off: their panel spans the runway, not the airborne part
+    af.set_xlim(0, 1.1 * (roll if limit is None else max(roll, limit)))
+    for ax in (av, af):
+        ax.grid(alpha=0.3)
+    av.set_ylim(0, top)
+    av.set_ylabel("true airspeed V (m/s)")
+    av.set_title("airspeed along the take-off", fontsize=10)
+    av.set_xlabel("distance from brake release s (m)")
+    # the forces along the roll; rotation holds the lift-off speed, so its forces too
+    s_f = np.append(s, roll)
+    forces = [
+        ("thrust, all engines at full throttle", result.history_thrust_n,
+         {"color": AVAILABLE_COLOUR, "linestyle": "-", "linewidth": 1.8}),
+        ("aerodynamic drag (ground run)", result.history_drag_n,
+         {"color": STYLE["required"]["color"], "linestyle": "--", "linewidth": 1.4}),
+        ("rolling friction", result.history_friction_n,
+         {"color": STYLE["error"]["color"], "linestyle": ":", "linewidth": 1.8}),
+    ]
+    if result.history_thrust_n.size:
+        for label, values, style in forces:
+            af.plot(s_f, np.append(values, values[-1]), **style, label=label)
+        net = result.history_thrust_n - result.history_drag_n - result.history_friction_n
+        af.plot(s_f, np.append(net, net[-1]), **STYLE["takeoff"], label="net accelerating force")
+        af.axvspan(s_acc, roll, color="0.93", zorder=0, label="rotation")
+    af.axhline(0.0, color="black", linewidth=0.8)
+    af.set_ylim(bottom=0.0)
+    af.set_xlabel("distance from brake release s (m)")
+    af.set_ylabel("force (N)")
+    af.set_title("forces on the ground run", fontsize=10)
+    _legend(av)
+    _legend(af)
     fig.suptitle(
-        f"Take-off of {case.name} at full throttle: ground roll {result.ground_roll_m:.1f} m "
-        f"to lift-off at {result.liftoff_speed_m_s:.1f} m/s"
+        f"Take-off of {case.name} at full throttle: ground roll {roll:.1f} m to lift-off at "
+        f"{v_lo:.1f} m/s"
+        + (f", {obstacle:.1f} m to the {result.obstacle_height_m:g} m obstacle"
+           if obstacle is not None else f"; {result.obstacle_reason}")
     )
     return fig
 
@@ -647,165 +839,112 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
     ax = fig.add_subplot()
     trim, oei = analyses.trim, analyses.oei
     right = _max_airspeed(case)
+    stall = float(stall_speed_m_s(case.aircraft, case.density_kg_m3))
+    left = _min_airspeed(case, stall)
     _shade_extrapolated(ax, case, right)
     envelope = case.requirements.envelope
-    ax.plot(
-        trim.airspeed_m_s, trim.throttle, color="tab:blue", linewidth=2, label="trim, all engines"
-    )
+    ax.plot(trim.airspeed_m_s, trim.throttle, **STYLE["trim"], label="trim, all engines")
     if trim.min_throttle is not None:
-        ax.plot([trim.airspeed_at_min_throttle_m_s], [trim.min_throttle], "o", color="tab:blue")
-        ax.annotate(
-            f"least {100 * trim.min_throttle:.1f} %",
-            (trim.airspeed_at_min_throttle_m_s, trim.min_throttle),
-            textcoords="offset points",
-            xytext=(8, -14),
-            color="tab:blue",
-        )
+        ax.plot([trim.airspeed_at_min_throttle_m_s], [trim.min_throttle], **POINT["least"],
+                markerfacecolor=STYLE["trim"]["color"],
+                label=f"least trim throttle {100 * trim.min_throttle:.1f} % at "
+                f"{trim.airspeed_at_min_throttle_m_s:.1f} m/s")
     if trim.max_throttle is not None:
-        k = int(np.argmax(trim.throttle))
-        ax.plot([trim.airspeed_m_s[k]], [trim.max_throttle], "s", color="tab:blue")
-        ax.annotate(
-            f"highest {100 * trim.max_throttle:.1f} % (the verdict)",
-            (trim.airspeed_m_s[k], trim.max_throttle),
-            textcoords="offset points",
-            xytext=(-10, -16),
-            ha="right",
-            color="tab:blue",
-        )
-    ax.axhline(
-        envelope.max_trim_throttle,
-        color=LIMIT_COLOUR,
-        linestyle="--",
-        label=f"max trim throttle {envelope.max_trim_throttle:g}",
-    )
-    styles = ["-", "--", ":", "-."]
+        k = int(np.nanargmax(trim.throttle))
+        ax.plot([trim.airspeed_m_s[k]], [trim.max_throttle], **POINT["verdict"],
+                label=f"highest trim throttle {100 * trim.max_throttle:.1f} % at "
+                f"{trim.airspeed_m_s[k]:.1f} m/s (the verdict)")
+    ax.axhline(envelope.max_trim_throttle, **STYLE["limit"],
+               label=f"limit: max trim throttle {envelope.max_trim_throttle:g}")
     if oei is not None:
-        for k, c in enumerate(oei.cases):
+        for c in oei.cases:
             critical = c is oei.critical
-            ax.plot(
-                c.airspeed_m_s,
-                c.throttle,
-                color="tab:red",
-                linestyle=styles[k % 4],
-                linewidth=2 if critical else 1.2,
-                label=f"OEI, {c.dead_engine} dead ({oei.dead_engine_mode})"
-                + (" - worse case" if critical else ""),
-            )
+            ax.plot(c.airspeed_m_s, c.throttle, **STYLE["oei" if critical else "oei_other"],
+                    label=f"OEI, {c.dead_engine} dead ({oei.dead_engine_mode})"
+                    + (", the worse case" if critical else ""))
         worst = oei.critical
-        missing = ~np.isfinite(worst.throttle)
-        if missing.any():
-            ax.plot(
-                worst.airspeed_m_s[missing],
-                np.ones(int(missing.sum())),
-                "x",
-                color="tab:red",
-                label=f"OEI ({worst.dead_engine} dead) not attainable: needs > full throttle",
-            )
+        missing = ~np.isfinite(np.asarray(worst.throttle, dtype=float))
+        speeds = np.asarray(worst.airspeed_m_s, dtype=float)
+        # not attainable: one hatched band per stretch of airspeeds, marked once in the legend
+        for k, (a, b) in enumerate(_runs(missing)):
+            lo = speeds[a - 1] if a > 0 else speeds[a]
+            hi = speeds[b + 1] if b + 1 < speeds.size else speeds[b]
+            # above full throttle (y 1 to 1.08): where the OEI curve would have to go
+            ax.axvspan(0.5 * (lo + speeds[a]), 0.5 * (hi + speeds[b]), ymin=1.0 / 1.08,
+                       ymax=1.0, facecolor="none", edgecolor=STYLE["oei"]["color"], hatch="//",
+                       linewidth=0.0, alpha=0.9, zorder=0,
+                       label=f"OEI ({worst.dead_engine} dead) not attainable: needs more than "
+                       "full throttle" if k == 0 else None)
         if worst.min_throttle is not None:
-            ax.plot(
-                [worst.airspeed_at_min_throttle_m_s], [worst.min_throttle], "o", color="tab:red"
-            )
-            ax.annotate(
-                f"least {100 * worst.min_throttle:.1f} %",
-                (worst.airspeed_at_min_throttle_m_s, worst.min_throttle),
-                textcoords="offset points",
-                xytext=(8, 8),
-                color="tab:red",
-            )
+            ax.plot([worst.airspeed_at_min_throttle_m_s], [worst.min_throttle], **POINT["least"],
+                    markerfacecolor=STYLE["oei"]["color"],
+                    label=f"OEI least throttle {100 * worst.min_throttle:.1f} % at "
+                    f"{worst.airspeed_at_min_throttle_m_s:.1f} m/s")
         requirement = case.requirements.oei
         if (
             requirement is not None
             and abs(requirement.max_throttle - envelope.max_trim_throttle) > 1e-9
         ):
-            ax.axhline(
-                requirement.max_throttle,
-                color=LIMIT_COLOUR,
-                linestyle=":",
-                label=f"OEI max throttle {requirement.max_throttle:g}",
-            )
-    bad = trim.unattainable_airspeed_m_s
-    if bad:
-        ax.axvspan(
-            min(bad),
-            max(bad),
-            color=FAIL_COLOUR,
-            alpha=0.6,
-            zorder=0,
-            label="trim not attainable (> full throttle)",
-        )
+            ax.axhline(requirement.max_throttle, **_style("limit", linewidth=2.2),
+                       label=f"limit: OEI max throttle {requirement.max_throttle:g}")
+    bad = np.isin(np.asarray(trim.airspeed_m_s, dtype=float),
+                  np.asarray(trim.unattainable_airspeed_m_s or [], dtype=float))
+    for k, (a, b) in enumerate(_runs(bad)):
+        ax.axvspan(trim.airspeed_m_s[a], trim.airspeed_m_s[b], color=FAIL_FILL, alpha=0.6,
+                   zorder=0, label="trim not attainable (> full throttle)" if k == 0 else None)
+    ax.axvline(stall, **STYLE["stall"], label=f"stall speed {stall:.1f} m/s")
     _envelope_lines(ax, case)
-    ax.set_xlim(0, right)
+    ax.set_xlim(left, right)
     ax.set_ylim(0, 1.08)
     ax.set_xlabel("true airspeed V (m/s)")
-    ax.set_ylabel("least throttle for level flight (fraction)")
-    ax.set_title(f"Trim and one-engine-inoperative throttle over the envelope, {case.name}")
+    ax.set_ylabel("least throttle for level flight x (fraction)")
+    fig.suptitle(f"Trim and one-engine-inoperative throttle over the envelope, {case.name}")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="lower left")
+    _legend(ax)
     return fig
 
 
 # --- 10. endurance --------------------------------------------------------------------------
 def endurance(case: Case, analyses: Analyses) -> Any:
-    """Pack voltage of the discharge runs, model and data; flight time against throttle."""
+    """Pack voltage of the discharge runs, model and data; flight time against throttle
+    with the level-flight airspeed on a second axis and the best-endurance point."""
     from tuflexperf.models.battery import terminal_voltage_v
 
     ch = analyses.characterisation
     fig = new_figure()
-    av = fig.add_subplot(1, 2, 1)
-    af = fig.add_subplot(1, 2, 2)
-    colours = ["tab:blue", "tab:orange", "tab:green", "tab:purple"]
+    gs = fig.add_gridspec(2, 1, height_ratios=[1.0, 1.15])
+    av = fig.add_subplot(gs[0])
+    af = fig.add_subplot(gs[1])
+    colours = [STYLE["measured"]["color"], "#17becf", "#8c564b", "#e377c2"]
     for k, run in enumerate(ch.discharge_runs()):
         colour = colours[k % len(colours)]
         minutes = (run.time_s - run.time_s[0]) / 60.0
         model = np.asarray(
             terminal_voltage_v(ch.fit.parameters, run.charge_ah, run.current_a), dtype=float
         )
+        m_t, data_v, model_v = decimated(minutes, run.voltage_v, model)
         label = f"{run.path.name} (throttle {run.throttle_setting:.2f})"
-        av.plot(
-            minutes, run.voltage_v, color=colour, linewidth=3.0, alpha=0.35, label=f"data: {label}"
-        )
-        av.plot(
-            minutes,
-            model,
-            color="black",
-            linestyle="--",
-            linewidth=0.9,
-            label="model (fitted equivalent circuit)" if k == 0 else None,
-        )
-    av.axhline(
-        ch.battery.cutoff_voltage_v,
-        color=LIMIT_COLOUR,
-        linestyle="--",
-        label=f"cut-off {ch.battery.cutoff_voltage_v:.1f} V",
-    )
+        av.plot(m_t, data_v, color=colour, linewidth=3.0, alpha=0.35, label=f"data: {label}")
+        av.plot(m_t, model_v, **_style("model", linestyle="--", linewidth=1.0),
+                label="model (fitted equivalent circuit)" if k == 0 else None)
+    av.axhline(ch.battery.cutoff_voltage_v, **STYLE["limit"],
+               label=f"cut-off {ch.battery.cutoff_voltage_v:.1f} V")
     av.set_xlabel("time t (min)")
-    av.set_ylabel("pack terminal voltage (V)")
+    av.set_ylabel("pack terminal voltage U (V)")
     av.set_title(f"discharge runs, one pack; model rms error {ch.fit.rms_v:.3f} V", fontsize=10)
     av.grid(alpha=0.3)
-    av.legend(fontsize=7, loc="upper right")
+    _legend(av)
     curve = analyses.endurance_curve
     if curve:
         x = np.array([c[0] for c in curve])
         flight = np.array([c[1].flight_endurance_min for c in curve])
         pack = np.array([c[1].battery_endurance_min for c in curve])
-        af.plot(
-            x,
-            flight,
-            "o-",
-            color="tab:blue",
-            markersize=3,
-            label=f"flight ({ch.battery.packs_in_parallel_per_engine} packs per fan, "
-            "launch and landing reserve)",
-        )
-        af.plot(
-            x,
-            pack,
-            "s-",
-            color="tab:gray",
-            markersize=3,
-            label="one pack on one fan, full to cut-off",
-        )
         speeds = np.array([c[1].airspeed_m_s for c in curve])
+        af.plot(x, flight, **_style("mission", linewidth=2.0),
+                label=f"flight ({ch.battery.packs_in_parallel_per_engine} packs per fan, "
+                "launch and landing reserve)")
+        af.plot(x, pack, **_style("full_throttle", linestyle="-", linewidth=1.4),
+                label="one pack on one fan, full to cut-off")
         tested_high = case.propulsion.tested_airspeed_m_s[1]
         envelope = case.requirements.envelope
         for limit, alpha, what in (
@@ -819,38 +958,42 @@ def endurance(case: Case, analyses: Analyses) -> Any:
             beyond = x[speeds > limit] if limit is not None else x[:0]
             if beyond.size:
                 af.axvspan(beyond.min(), x.max(), color="0.5", alpha=alpha, linewidth=0, label=what)
+        if x.size >= 2 and np.all(np.diff(speeds) > 0):
+            # level-flight airspeed at each throttle (the endurance results'), on top
+            top = af.secondary_xaxis(
+                "top",
+                functions=(lambda u: np.interp(u, x, speeds), lambda w: np.interp(w, speeds, x)),
+            )
+            from matplotlib.ticker import MaxNLocator
+
+            # ticks inside the curve's airspeeds only (np.interp clamps beyond them)
+            ticks = MaxNLocator(nbins=8).tick_values(float(speeds[0]), float(speeds[-1]))
+            top.set_xticks(ticks[(ticks >= speeds[0]) & (ticks <= speeds[-1])])
+            top.set_xlabel("level-flight true airspeed V (m/s)")
+    best = analyses.best_endurance
+    if best is not None:
+        b = best.endurance
+        af.plot([b.throttle], [b.flight_endurance_min], **POINT["best"],
+                label=f"best endurance {b.flight_endurance_min:.1f} min at throttle "
+                f"{b.throttle:.3f}, {b.airspeed_m_s:.1f} m/s")
     requirement = case.requirements.endurance
     result = analyses.endurance_at_requirement
     if requirement is not None:
-        af.axhline(
-            requirement.min_flight_time_min,
-            color=LIMIT_COLOUR,
-            linestyle="--",
-            label=f"required >= {requirement.min_flight_time_min:g} min",
-        )
-        af.axvline(
-            requirement.throttle,
-            color=LIMIT_COLOUR,
-            linestyle=":",
-            label=f"at throttle {requirement.throttle:g}",
-        )
+        af.axhline(requirement.min_flight_time_min, **STYLE["limit"],
+                   label=f"limit: flight time >= {requirement.min_flight_time_min:g} min")
+        af.axvline(requirement.throttle, **_style("limit", linestyle=":"),
+                   label=f"at the required throttle {requirement.throttle:g}")
         if result is not None:
             met = _verdict_passed(analyses, "flight_endurance")
-            af.plot(
-                [requirement.throttle],
-                [result.flight_endurance_min],
-                "D",
-                color="tab:green" if met else LIMIT_COLOUR,
-                markersize=8,
-                label=f"{result.flight_endurance_min:.1f} min at "
-                f"{result.airspeed_m_s:.1f} m/s ({'PASS' if met else 'FAIL'})",
-            )
-    af.set_xlabel("throttle, all engines (fraction)")
+            af.plot([requirement.throttle], [result.flight_endurance_min], **POINT["verdict"],
+                    label=f"{result.flight_endurance_min:.1f} min at "
+                    f"{result.airspeed_m_s:.1f} m/s ({'PASS' if met else 'FAIL'})")
+    af.set_xlabel("throttle, all engines x (fraction)")
     af.set_ylabel("endurance (min)")
     af.set_title("level flight: endurance against throttle", fontsize=10)
     af.set_ylim(bottom=0)
     af.grid(alpha=0.3)
-    af.legend(fontsize=7, loc="upper right")
+    _legend(af)
     fig.suptitle(f"Endurance of {case.name} with {ch.battery.name}")
     return fig
 

@@ -34,6 +34,9 @@ STYLE: dict[str, dict[str, Any]] = {
     "command": {"color": "black", "linestyle": "-", "linewidth": 0.9},  # throttle command
     "error": {"color": BROWN, "linestyle": "-", "linewidth": 0.8},  # model minus measured
     "goal": {"color": GREEN, "linestyle": "--", "linewidth": 1.1},  # accuracy goal (+-0.5 N)
+    "segment": {"color": PINK, "linestyle": "-", "linewidth": 3.0},  # a steady segment's mean
+    "changepoint": {"color": OLIVE, "linestyle": ":", "linewidth": 0.9},  # detected change
+    "airborne": {"color": CYAN, "linestyle": "--", "linewidth": 1.6},  # after lift-off
 }
 
 POINT: dict[str, dict[str, Any]] = {
