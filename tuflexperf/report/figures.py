@@ -277,7 +277,7 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
     full = np.asarray(total_thrust_n(propulsion, 1.0, v, rho), dtype=float)
     for k, x in enumerate(throttles):
         t = np.asarray(total_thrust_n(propulsion, float(x), v, rho), dtype=float)
-        colour = cmap(0.5 + 0.48 * (x - 0.3) / 0.7)
+        colour = cmap(0.45 + 0.43 * (x - 0.3) / 0.7)
         ax.plot(
             v,
             t,
@@ -960,9 +960,14 @@ def endurance(case: Case, analyses: Analyses) -> Any:
                 af.axvspan(beyond.min(), x.max(), color="0.5", alpha=alpha, linewidth=0, label=what)
         if x.size >= 2 and np.all(np.diff(speeds) > 0):
             # level-flight airspeed at each throttle (the endurance results'), on top
+            # straight on past the ends: a clamped map would squeeze the axis (the axes' limits
+            # reach beyond the curve)
+            xe = np.concatenate([[x[0] - 1.0], x, [x[-1] + 1.0]])
+            se = np.concatenate([[speeds[0] - (speeds[1] - speeds[0]) / (x[1] - x[0])], speeds,
+                                 [speeds[-1] + (speeds[-1] - speeds[-2]) / (x[-1] - x[-2])]])
             top = af.secondary_xaxis(
                 "top",
-                functions=(lambda u: np.interp(u, x, speeds), lambda w: np.interp(w, speeds, x)),
+                functions=(lambda u: np.interp(u, xe, se), lambda w: np.interp(w, se, xe)),
             )
             from matplotlib.ticker import MaxNLocator
 
