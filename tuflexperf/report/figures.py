@@ -226,6 +226,7 @@ def requirement_table(case: Case, analyses: Analyses) -> Any:
         table = ax.table(
             cellText=rows,
             colLabels=["requirement", "value", "limit", "unit", "margin", "limit is", "verdict"],
+            colWidths=[0.22, 0.15, 0.1, 0.1, 0.15, 0.1, 0.1],  # the names are the longest
             cellLoc="center",
             loc="upper center",
             bbox=[0.0, 0.55, 1.0, 0.4],
@@ -373,7 +374,8 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
         reason = measured.notes[0] if measured.notes else "no measured points"
         if measured.points is not None:
             reason = f"the measured data name no engine {engine.name!r}"
-        _note(ax_r, "No measured points for this engine:\n" + _wrap(reason, 60))
+        _note(ax_r, "No measured points for this engine:\n" + _wrap(reason, 38))
+        ax_r.axis("off")  # a note, not an empty plot
         ax3.set_title(title + " (model alone)")
         fig.suptitle(f"{title}; no measured data to compare (paper Figs. 11-12)")
         return fig
@@ -725,8 +727,9 @@ def _takeoff_not_attainable(case: Case, analyses: Analyses) -> Any:
     from tuflexperf.models.aircraft import liftoff_speed_m_s
 
     fig = new_figure()
-    an = fig.add_subplot(1, 2, 1)
-    ad = fig.add_subplot(1, 2, 2)
+    gs = fig.add_gridspec(1, 2, width_ratios=[1.0, 2.0])
+    an = fig.add_subplot(gs[0])
+    ad = fig.add_subplot(gs[1])
     an.axis("off")
     an.text(0.0, 0.5, _wrap(f"take-off not attainable: {analyses.takeoff_note}", 50),
             transform=an.transAxes, ha="left", va="center", fontsize=11, color="0.3")
