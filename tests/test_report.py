@@ -329,3 +329,41 @@ def test_a_failing_case_is_still_reported_with_its_reasons(tmp_path):
     assert data["passed"] is False
     assert {"07_takeoff", "08_trim_oei_throttle"} <= {Path(f).stem for f in data["figures"]}
     assert pdf_page_count(out / "review.pdf") == data["pages"]
+
+
+def test_takeoff_draws_the_roll_through_rotation_and_its_forces(figures_of_shipped_case):
+    """Issue 15: the distance drawn reaches lift-off (rotation included, not the acceleration
+    alone), and the force panel's net force is thrust - drag - friction."""
+    from tuflexperf.analysis.study import Study
+    from tuflexperf.io.case import load_case
+
+    result = Study(load_case(None)).takeoff()
+    speed, forces = figures_of_shipped_case["takeoff"].axes[:2]
+    lines = {line.get_label(): line for line in speed.get_lines()}
+    rotation = next(line for label, line in lines.items() if label.startswith("rotation"))
+    assert max(rotation.get_xdata()) == pytest.approx(result.ground_roll_m)
+    assert min(rotation.get_xdata()) == pytest.approx(result.acceleration_distance_m)
+    obstacle = next(line for label, line in lines.items() if "obstacle" in label)
+    assert obstacle.get_xdata()[0] == pytest.approx(result.distance_to_obstacle_m)
+    by_label = {line.get_label().split(",")[0]: np.asarray(line.get_ydata(), dtype=float)
+                for line in forces.get_lines() if not line.get_label().startswith("_")}
+    net = by_label["net accelerating force"]
+    np.testing.assert_allclose(
+        net, by_label["thrust"] - by_label["aerodynamic drag (ground run)"]
+        - by_label["rolling friction"], rtol=1e-12)
+    thrust = next(line for line in forces.get_lines() if line.get_label().startswith("thrust"))
+    assert max(thrust.get_xdata()) == pytest.approx(result.ground_roll_m)
+
+
+def test_endurance_marks_the_best_endurance_and_has_an_airspeed_axis(figures_of_shipped_case):
+    from tuflexperf.analysis.study import Study
+    from tuflexperf.io.case import load_case
+
+    best = Study(load_case(None)).best_endurance().endurance
+    flight = figures_of_shipped_case["endurance"].axes[1]
+    marks = [line for line in flight.get_lines() if line.get_label().startswith("best endurance")]
+    assert len(marks) == 1
+    assert marks[0].get_xdata()[0] == pytest.approx(best.throttle)
+    assert marks[0].get_ydata()[0] == pytest.approx(best.flight_endurance_min)
+    (top,) = flight.child_axes
+    assert "airspeed" in top.get_xlabel() and "(m/s)" in top.get_xlabel()
