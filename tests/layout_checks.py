@@ -148,6 +148,19 @@ def text_overlaps(fig: Any, tolerance_px: float = 1.0) -> list[str]:
             for a, b in zip(i, j, strict=True)]
 
 
+def texts_off_the_page(fig: Any, tolerance_px: float = 1.0) -> list[str]:
+    """Texts cut off by the page's edge (a title wider than its axes, a label pushed out)."""
+    renderer = renderer_of(fig)
+    page = fig.bbox
+    problems = []
+    for text in _texts(fig):
+        box = text.get_window_extent(renderer)
+        if (box.x0 < page.x0 - tolerance_px or box.x1 > page.x1 + tolerance_px
+                or box.y0 < page.y0 - tolerance_px or box.y1 > page.y1 + tolerance_px):
+            problems.append(f"{text.get_text()!r} runs off the page ({box.bounds!r})")
+    return problems
+
+
 def missing_units(fig: Any) -> list[str]:
     """Axes whose x or y axis (with ticks) has no label with a unit in brackets."""
     problems = []

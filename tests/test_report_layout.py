@@ -10,7 +10,13 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from tests.layout_checks import legend_overlaps, missing_units, text_over_data, text_overlaps
+from tests.layout_checks import (
+    legend_overlaps,
+    missing_units,
+    text_over_data,
+    text_overlaps,
+    texts_off_the_page,
+)
 from tuflexperf.cli import app
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -142,9 +148,9 @@ def test_no_legend_or_label_covers_plotted_data(report_figures):
     assert not problems, "\n".join(problems)
 
 
-def test_no_text_overlaps_other_text(report_figures):
+def test_no_text_overlaps_other_text_or_runs_off_the_page(report_figures):
     problems = [f"{name}: {p}" for name, fig in _every(report_figures)
-                for p in text_overlaps(fig)]
+                for p in text_overlaps(fig) + texts_off_the_page(fig)]
     assert not problems, "\n".join(problems)
 
 
@@ -180,6 +186,8 @@ def test_the_checks_catch_a_bad_figure():
     assert any("'label one' overlaps 'label two'" in p for p in text_overlaps(fig))
     assert any("'label one' covers" in p and "diagonal" in p for p in text_over_data(fig))
     assert missing_units(fig) == ["y axis without a unit: ['no unit here']"]
+    ax.set_title("a title far too long for its axes " * 6)
+    assert any("runs off the page" in p for p in texts_off_the_page(fig))
 
     good = fg.new_figure()
     ax = good.add_subplot()
@@ -188,6 +196,7 @@ def test_the_checks_catch_a_bad_figure():
     ax.set_xlabel("time (s)")
     ax.set_ylabel("force (N)")
     assert legend_overlaps(good) == text_overlaps(good) == text_over_data(good) == []
+    assert texts_off_the_page(good) == []
     assert missing_units(good) == []
 
 

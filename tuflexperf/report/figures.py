@@ -550,13 +550,13 @@ def _dynamics(case: Case, measured: Measured) -> list[tuple[str, float, float]]:
     if delay is not None and math.isfinite(delay):
         lag = float(lag) if lag is not None and math.isfinite(lag) else 0.0
         if abs(delay - prop.delay_s) > 5e-4 or abs(lag - prop.lag_s) > 5e-4:
-            shown.append(("this campaign's fit", float(delay), lag))
+            shown.append(("campaign fit", float(delay), lag))
     return shown
 
 
 def _dynamics_label(label: str, delay_s: float, lag_s: float) -> str:
     lag = f"{1000 * lag_s:.0f} ms spool lag" if lag_s > 0 else "no spool lag"
-    return f"model, {label}: {1000 * delay_s:.0f} ms dead time + {lag}"
+    return f"model ({label} dynamics): {1000 * delay_s:.0f} ms dead time + {lag}"
 
 
 def _model_styles(dynamics: list[tuple[str, float, float]]) -> list[dict[str, Any]]:
@@ -609,8 +609,8 @@ def sine_sweep(measured: Measured, case: Case) -> Any:
         ax.set_title(f"whole sweep ({sweep.file}); the case's propulsion has no engine "
                      f"{sweep.engine!r}: no model drawn", fontsize=10)
     else:
-        ax.set_title(f"whole sweep ({sweep.file}); model: poly22 thrust after dead time and "
-                     "spool lag, minus structure drag", fontsize=9)
+        ax.set_title(f"whole sweep ({sweep.file}); model: poly22 thrust, dead time, spool lag, "
+                     "minus structure drag", fontsize=9)
     ax.set_xlabel("time t (s)")
     ax.set_ylabel("balance force F (N)")
     ax.grid(alpha=0.3)
@@ -694,7 +694,7 @@ def model_vs_measured(case: Case, measured: Measured) -> Any:
         for start, stop, _ in run.segments:
             steady[start:stop] = True
         te, ee = decimated(t, error)
-        ae.plot(te, ee, **STYLE["error"], label=f"model ({dynamics[main][0]}) - processed")
+        ae.plot(te, ee, **STYLE["error"], label=f"model ({dynamics[main][0]} dynamics) - processed")
         for sign in (-1, 1):
             ae.axhline(sign * ACCURACY_GOAL_N, **STYLE["goal"],
                        label=f"accuracy goal ±{ACCURACY_GOAL_N:g} N" if sign > 0 else None)
@@ -959,7 +959,7 @@ def endurance(case: Case, analyses: Analyses) -> Any:
             ),
         ):
             beyond = x[speeds > limit] if limit is not None else x[:0]
-            if beyond.size:
+            if beyond.size and beyond.min() < x.max():  # a band, not a zero-width sliver
                 af.axvspan(beyond.min(), x.max(), color="0.5", alpha=alpha, linewidth=0, label=what)
         if x.size >= 2 and np.all(np.diff(speeds) > 0):
             # level-flight airspeed at each throttle (the endurance results'), on top
@@ -988,7 +988,7 @@ def endurance(case: Case, analyses: Analyses) -> Any:
     result = analyses.endurance_at_requirement
     if requirement is not None:
         af.axhline(requirement.min_flight_time_min, **STYLE["limit"],
-                   label=f"limit: flight time >= {requirement.min_flight_time_min:g} min")
+                   label=f"limit: flight time ≥ {requirement.min_flight_time_min:g} min")
         af.axvline(requirement.throttle, **_style("limit", linestyle=":"),
                    label=f"at the required throttle {requirement.throttle:g}")
         if result is not None:
