@@ -42,8 +42,8 @@ from tuflexperf.report.style import (
 )
 
 LANDSCAPE_IN = (11.69, 8.27)  # A4 landscape (297 x 210 mm)
-PASS_COLOUR = PASS_FILL
-FAIL_COLOUR = FAIL_FILL
+# the earlier names of the style's colours, for pages built on them (style.py is the source)
+PASS_COLOUR, FAIL_COLOUR = PASS_FILL, FAIL_FILL
 LIMIT_COLOUR = STYLE["limit"]["color"]
 EXTRAPOLATED_COLOUR = EXTRAPOLATED_FILL
 ACCURACY_GOAL_N = 0.5  # paper section 1 and 2.1: model accuracy aimed for +-0.5 N
