@@ -71,6 +71,9 @@ class OeiPerformance:
     max_level_speed_m_s: float | None
     max_climb_gradient: float
     max_climb_gradient_speed_m_s: float
+    # full-throttle rate of climb [m/s] at the result's ``climb_airspeed_m_s`` (the report's
+    # curve; negative where the live engines cannot hold level flight)
+    climb_rate_curve_m_s: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -78,6 +81,7 @@ class OeiPerformance:
             "max_level_speed_m_s": self.max_level_speed_m_s,
             "max_climb_gradient": self.max_climb_gradient,
             "max_climb_gradient_speed_m_s": self.max_climb_gradient_speed_m_s,
+            "climb_rate_m_s": [float(v) for v in self.climb_rate_curve_m_s],
         }
 
 
@@ -246,11 +250,10 @@ class PerformanceProblems:
         thrust = total_thrust_n(self.propulsion, 1.0, v, rho, dead, self.mode)
         return thrust - level_flight_drag_n(self.aircraft, v, rho)
 
-    def climb_rate(self, v: Any, rho: Any) -> Any:
-        """Full-throttle rate of climb [m/s], all engines (numpy)."""
-        return climb_rate_m_s(
-            self.aircraft, total_thrust_n(self.propulsion, 1.0, v, rho), v, rho
-        )
+    def climb_rate(self, v: Any, rho: Any, dead: int | None = None) -> Any:
+        """Full-throttle rate of climb [m/s], all engines or engine ``dead`` out (numpy)."""
+        thrust = total_thrust_n(self.propulsion, 1.0, v, rho, dead, self.mode)
+        return climb_rate_m_s(self.aircraft, thrust, v, rho)
 
     def gradient(self, v: Any, rho: Any, dead: int | None = None) -> Any:
         """Full-throttle climb gradient [-] (numpy)."""
@@ -495,11 +498,17 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
     absolute, why = p.ceiling_m(0.0)
     if why:
         notes.append(f"absolute ceiling: {why}")
+    top = v_max if v_max is not None else float(p.scan(rho)[0][-1])
+    top = max(top, least)
+    n = min(_CLIMB_TABLE_MAX_POINTS, max(2, math.ceil((top - least) / _CLIMB_TABLE_STEP_M_S) + 1))
+    climb_v = np.linspace(least, top, n)
+    climb_rate = np.asarray(p.climb_rate(climb_v, rho), dtype=float)
     oei: list[OeiPerformance] = []
     for dead in p.dead_cases[1:]:
         _, oei_max, _ = p.level_speed_range(rho, dead)
         gradient, speed = p.max_gradient(rho, dead)
-        oei.append(OeiPerformance(prop.engines[dead].name, oei_max, gradient, speed))
+        curve = np.asarray(p.climb_rate(climb_v, rho, dead), dtype=float) * np.ones_like(climb_v)
+        oei.append(OeiPerformance(prop.engines[dead].name, oei_max, gradient, speed, curve))
     height = obstacle_height_of(case)
     try:
         takeoff = solve_takeoff(case)
@@ -509,11 +518,6 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
     except NotAttainable as exc:
         obstacle = None
         notes.append(f"take-off: {exc}")
-    top = v_max if v_max is not None else float(p.scan(rho)[0][-1])
-    top = max(top, least)
-    n = min(_CLIMB_TABLE_MAX_POINTS, max(2, math.ceil((top - least) / _CLIMB_TABLE_STEP_M_S) + 1))
-    climb_v = np.linspace(least, top, n)
-    climb_rate = np.asarray(p.climb_rate(climb_v, rho), dtype=float)
     speeds = [s for s in (v_max, vy, vx, least) if s is not None]
     beyond = [s for s in speeds if is_extrapolated(prop, s)]
     if beyond:

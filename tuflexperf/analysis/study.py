@@ -22,6 +22,7 @@ from tuflexperf.io.case import Case
 
 if TYPE_CHECKING:  # the analyses are imported when first asked for: `check` stays lean
     from tuflexperf.analysis.endurance import BestResult, EnduranceModel, EnduranceResult
+    from tuflexperf.analysis.margins import Tornado
     from tuflexperf.analysis.mission import MissionResult
     from tuflexperf.analysis.oei import OeiResult
     from tuflexperf.analysis.performance import PerformanceResult
@@ -127,6 +128,19 @@ class Study:
             return solve_mission(self.case, mission, requirement.min_landing_charge_fraction)
 
         return self._once("mission", fly)
+
+    def tornado(self, requirement: str) -> Tornado:
+        """A requirement's value with each parameter moved -/+ 10 % (:func:`tornado`)."""
+        from tuflexperf.analysis.margins import tornado
+
+        return self._once(("tornado", requirement), lambda: tornado(self.case, requirement))
+
+    def limit_values(self) -> dict[tuple[str, str], tuple[float | None, str, tuple[float, float]]]:
+        """(requirement, parameter) -> the parameter's value where the requirement just
+        holds, how it binds, and the search range (:func:`limit_values`)."""
+        from tuflexperf.analysis.margins import limit_values
+
+        return self._once("limit_values", lambda: limit_values(self.case))
 
     # --- the verdicts ---------------------------------------------------------------------
     def verdicts(self) -> list[Verdict]:

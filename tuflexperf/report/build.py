@@ -120,7 +120,7 @@ def build_report(
     if campaign_path is not None and not campaign_path.is_file():
         raise InputError(f"--campaign: file not found: {campaign_path}")
     with staged_directory(out, "report") as staging:
-        result = _render(case, staging, campaign_path, StepCounter(14, stream, progress))
+        result = _render(case, staging, campaign_path, StepCounter(18, stream, progress))
     files = [out / p.name for p in result.files]
     return ReportResult(
         out_dir=out,
@@ -134,6 +134,7 @@ def build_report(
 
 
 def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -> ReportResult:
+    from tuflexperf.report import analysis_figures as af
     from tuflexperf.report import figures as fg
 
     fg.use_agg()
@@ -143,7 +144,7 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
     from tuflexperf.report.data import load_measured, run_analyses
 
     analyses = run_analyses(Study(case))
-    step("analyses: check, take-off, trim, OEI, endurance")
+    step("analyses: check, take-off, trim, OEI, endurance, performance, margins, mission")
     # The figures of the analyses alone are drawn (PNG) by a forked copy of this process
     # while this one reduces the campaign; those of the measured data by a second copy
     # while this one writes the PDF (issue 9: the report in half its earlier time).
@@ -154,8 +155,12 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
     }
     if analyses.trim is not None:
         analysis_pages["08_trim_oei_throttle"] = lambda: fg.trim_oei_throttle(case, analyses)
+    analysis_pages["08b_performance"] = lambda: af.performance(case, analyses)
     if analyses.characterisation is not None:
         analysis_pages["09_endurance"] = lambda: fg.endurance(case, analyses)
+    if analyses.mission is not None or analyses.mission_note is not None:
+        analysis_pages["10_mission"] = lambda: af.mission(case, analyses)
+    analysis_pages["11_tornado"] = lambda: af.tornado(case, analyses)
     writers = [_start_png_writer(list(analysis_pages.items()), folder)]
     measured = load_measured(case, campaign, progress=step.detail)
     step(
@@ -172,6 +177,7 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
         measured_pages["05_sine_sweep"] = lambda: fg.sine_sweep(measured, case)
     if measured.comparisons:
         measured_pages["06_model_vs_measured"] = lambda: fg.model_vs_measured(case, measured)
+    measured_pages["06b_thrust_band"] = lambda: af.thrust_band(case, analyses, measured)
     writers.append(_start_png_writer(list(measured_pages.items()), folder))
 
     named = sorted({**analysis_pages, **measured_pages}.items())  # the report's page order

@@ -251,9 +251,23 @@ class Analyses:
     characterisation: Any | None = None
     notes: list[str] = field(default_factory=list)
     study: Any | None = None  # the Study these came from: later pages ask it, never re-solve
+    # point performance (Study.performance), or why there is none
+    performance: Any | None = None
+    performance_note: str | None = None
+    # the thrust model's 95 % band per engine at BAND_THROTTLES (analysis.thrust_band)
+    thrust_bands: list[Any] = field(default_factory=list)
+    # per requirement the tornado (Study.tornado) and every limit value (Study.limit_values)
+    tornadoes: list[Any] = field(default_factory=list)
+    limit_values: dict[Any, Any] | None = None
+    margins_note: str | None = None
+    # the case's mission flown (Study.mission), or why not; both None: the case has none
+    mission: Any | None = None
+    mission_note: str | None = None
 
 
 ENDURANCE_CURVE_POINTS = 15
+BAND_THROTTLES = (0.4, 0.7, 1.0)  # measured step levels of the shipped campaign
+BAND_STEP_M_S = 0.5
 
 
 def run_analyses(study: Study | Case) -> Analyses:
@@ -281,6 +295,10 @@ def run_analyses(study: Study | Case) -> Analyses:
     else:
         notes.append("the case has no envelope requirement: trim and OEI are not drawn")
     analyses = Analyses(verdicts, takeoff, takeoff_note, trim, oei, notes=notes, study=study)
+    _performance(study, analyses)
+    _thrust_bands(study, analyses)
+    _margins(study, analyses)
+    _mission(study, analyses)
     if case.battery_path is None:
         notes.append("the case names no battery file: the endurance figure is left out")
         return analyses
@@ -289,6 +307,54 @@ def run_analyses(study: Study | Case) -> Analyses:
     except NotAttainable as exc:  # a failing aircraft still gets its review (issue 10)
         notes.append(f"endurance: not attainable: {exc}")
     return analyses
+
+
+def _performance(study: Study, analyses: Analyses) -> None:
+    try:
+        analyses.performance = study.performance()
+    except NotAttainable as exc:
+        analyses.performance_note = str(exc)
+        analyses.notes.append(f"point performance: not attainable: {exc}")
+
+
+def _thrust_bands(study: Study, analyses: Analyses) -> None:
+    """Each engine's thrust at BAND_THROTTLES over 0 to the envelope's top (or 1.5x the
+    tested range), with the fit's 95 % band; as measured (no density scaling)."""
+    from tuflexperf.analysis.thrust_band import thrust_band
+
+    case = study.case
+    top = 1.5 * case.propulsion.tested_airspeed_m_s[1]
+    if case.requirements.envelope is not None:
+        top = max(top, case.requirements.envelope.max_airspeed_m_s)
+    airspeed = np.linspace(0.0, top, int(math.ceil(top / BAND_STEP_M_S)) + 1)
+    for index in range(len(case.propulsion.engines)):
+        for throttle in BAND_THROTTLES:
+            analyses.thrust_bands.append(thrust_band(case.propulsion, index, throttle, airspeed))
+
+
+def _margins(study: Study, analyses: Analyses) -> None:
+    """Tornado bars and limit values of every requirement the batch evaluates."""
+    from tuflexperf.analysis.batch import present_requirements
+
+    names = [r.name for r in present_requirements(study.case)]
+    if not names:
+        analyses.margins_note = "the case states no requirement that the margins cover"
+        return
+    try:
+        analyses.tornadoes = [study.tornado(name) for name in names]
+        analyses.limit_values = study.limit_values()
+    except (NotAttainable, InputError) as exc:
+        analyses.margins_note = f"margins: {exc}"
+        analyses.notes.append(f"tornado figure left out: {exc}")
+
+
+def _mission(study: Study, analyses: Analyses) -> None:
+    if study.case.requirements.mission is None:
+        return
+    try:
+        analyses.mission = study.mission()
+    except NotAttainable as exc:
+        analyses.mission_note = str(exc)
 
 
 def _endurance(study: Study, analyses: Analyses) -> None:
