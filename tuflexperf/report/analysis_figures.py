@@ -251,10 +251,10 @@ def thrust_band(case: Case, analyses: Analyses, measured: Measured | None = None
         sd = [f"residual sd {engine.residual_sd_n:.2f} N"] if engine.residual_sd_n else []
         if engine.extrapolation_sd_n is not None:
             sd.append(f"extrapolation sd {engine.extrapolation_sd_n:.2f} N")
-        band_text = (f"95 % band at {100 * full.throttle:.0f} % throttle: " + ", ".join(half)
+        band_text = (f"95 % band at {100 * full.throttle:.0f} % throttle:\n" + ", ".join(half)
                      if full.has_covariance else "no covariance in the propulsion file")
-        ax.set_title(f"{name}\n{band_text}" + (f"\n{', '.join(sd)}" if sd else ""),
-                     fontsize=9.5)
+        ax.set_title(f"{name}" + (f": {', '.join(sd)}" if sd else "") + f"\n{band_text}",
+                     fontsize=9)
         ax.set_xlim(0.0, 1.02 * right)  # the envelope's top edge stays visible
         ax.set_xlabel("airspeed V (m/s)")
         ax.grid(alpha=0.3)
@@ -325,8 +325,10 @@ def tornado(case: Case, analyses: Analyses) -> Any:
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
+    from tuflexperf.report.data import margins
+
     fig = new_figure()
-    tornadoes = analyses.tornadoes
+    tornadoes = margins(analyses).tornadoes
     if not tornadoes:
         _note(fig.add_subplot(), analyses.margins_note or "no requirement to vary")
         fig.suptitle(f"Tornado of {case.name}: nothing to draw")
@@ -350,6 +352,10 @@ def tornado(case: Case, analyses: Analyses) -> Any:
         if not bars or base is None:
             why = ("not attainable at the nominal case: no bar to draw" if base is None
                    else "no parameter changes this requirement")
+            holds = [f"{_short(k[1])} {_limit_label(k[1], v)}" for k, v in limits.items()
+                     if k[0] == t.requirement and v[0] is not None]
+            why += ("; it would hold at " + "; ".join(holds) if holds
+                    else "; it holds at no parameter value in the searched ranges")
             _note(ax, why, 50)
             continue
         y = np.arange(len(bars))
@@ -375,10 +381,10 @@ def tornado(case: Case, analyses: Analyses) -> Any:
         ax.set_yticks(y, [_short(b.parameter) for b in bars], fontsize=7.5)
         ax.set_ylim(len(bars) - 0.4, -0.6)  # the largest effect on top
         # right of the bars: where the requirement just holds (margins' exact root)
-        holds = ax.secondary_yaxis("right")
-        holds.set_yticks(y, [_limit_label(b.parameter, limits.get((t.requirement, b.parameter)))
-                             for b in bars], fontsize=7.5)
-        holds.tick_params(length=0)
+        beside = ax.get_yaxis_transform()  # x in axes fractions, y in bar rows
+        for i, b in enumerate(bars):
+            ax.text(1.02, i, _limit_label(b.parameter, limits.get((t.requirement, b.parameter))),
+                    transform=beside, ha="left", va="center", fontsize=7.5, clip_on=False)
         ax.set_xlim(lo, hi)
         ax.set_xlabel(f"{t.requirement} ({u or '-'})", fontsize=9)
         ax.tick_params(axis="x", labelsize=8)

@@ -15,6 +15,7 @@ import math
 import os
 import re
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -119,8 +120,10 @@ def build_report(
     campaign_path = Path(campaign) if campaign is not None else None
     if campaign_path is not None and not campaign_path.is_file():
         raise InputError(f"--campaign: file not found: {campaign_path}")
-    with staged_directory(out, "report") as staging:
-        result = _render(case, staging, campaign_path, StepCounter(18, stream, progress))
+    with (staged_directory(out, "report") as staging,
+          tempfile.TemporaryDirectory(prefix="tuflexperf-report-") as kept):
+        result = _render(case, staging, campaign_path, StepCounter(18, stream, progress),
+                         Path(kept))
     files = [out / p.name for p in result.files]
     return ReportResult(
         out_dir=out,
@@ -133,7 +136,10 @@ def build_report(
     )
 
 
-def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -> ReportResult:
+def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
+            kept: Path) -> ReportResult:
+    """Draw every page into ``folder``; ``kept`` is a private temporary folder for the
+    laid-out figures the PNG writer hands to the PDF."""
     from tuflexperf.report import analysis_figures as af
     from tuflexperf.report import figures as fg
 
@@ -161,8 +167,16 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
     if analyses.mission is not None or analyses.mission_note is not None:
         analysis_pages["10_mission"] = lambda: af.mission(case, analyses)
     analysis_pages["11_tornado"] = lambda: af.tornado(case, analyses)
-    writers = [_start_png_writer(list(analysis_pages.items()), folder)]
-    measured = load_measured(case, campaign, progress=step.detail)
+    # The analysis pages' writer also keeps each figure, laid out, for the PDF (a pickle in
+    # ``kept``): this process then writes those PDF pages without building and laying them
+    # out again (issue 9; the margins behind the tornado are solved there too, while this
+    # process reduces the campaign).
+    writers = [_start_png_writer(list(analysis_pages.items()), folder, kept)]
+    try:
+        measured = load_measured(case, campaign, progress=step.detail)
+    except BaseException:  # bad campaign, interrupt: no PNG written after the cleanup
+        _stop(writers)
+        raise
     step(
         f"measured data: {measured.kind}" + (f" {measured.source.name}" if measured.source else "")
     )
@@ -200,7 +214,9 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
                       "Creator": f"tuflexperf {__version__}"},
         ) as pdf:
             for name, draw in pages:
-                fig = draw()
+                fig = _kept_figure(kept, name, writers[0]) if name in analysis_pages else None
+                if fig is None:
+                    fig = draw()
                 if serial and name is not None:
                     _save_png(fig, folder / f"{name}.png")
                     fig.set_layout_engine("none")  # solved by the PNG's draw; the page keeps it
@@ -221,10 +237,7 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
             for name, draw in named:  # never a report without its figures: draw them here
                 _save_png(draw(), folder / f"{name}.png")
     finally:
-        for writer in writers:  # interrupted: no PNG written after the cleanup
-            if writer is not None and writer.is_alive():
-                writer.terminate()
-                writer.join()
+        _stop(writers)  # interrupted: no PNG written after the cleanup
     files.append(pdf_path)
     return ReportResult(
         out_dir=folder,
@@ -237,23 +250,68 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter) -
     )
 
 
+def _stop(writers: list[Any]) -> None:
+    for writer in writers:
+        if writer is not None and writer.is_alive():
+            writer.terminate()
+            writer.join()
+
+
 def _save_png(fig: Any, path: Path) -> None:
     fig.savefig(path, dpi=PNG_DPI, pil_kwargs={"compress_level": PNG_COMPRESSION})
 
 
-def _write_pngs(named: list[tuple[str, Callable[[], Any]]], folder: Path) -> None:
+def _write_pngs(named: list[tuple[str, Callable[[], Any]]], folder: Path,
+                keep: Path | None = None) -> None:
+    import pickle
+
     for name, draw in named:
-        _save_png(draw(), folder / f"{name}.png")
+        fig = draw()
+        _save_png(fig, folder / f"{name}.png")
+        if keep is not None:
+            fig.set_layout_engine("none")  # solved by the PNG's draw; the PDF page keeps it
+            staged = keep / f"{name}.pickle.part"
+            try:
+                with open(staged, "wb") as handle:
+                    pickle.dump(fig, handle, protocol=pickle.HIGHEST_PROTOCOL)
+            except Exception:  # not picklable: the PDF draws this page itself
+                staged.unlink(missing_ok=True)
+                continue
+            os.replace(staged, keep / f"{name}.pickle")  # never read half-written
 
 
-def _start_png_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path) -> Any:
-    """A forked process drawing the PNGs, or None where fork is not available (then serial)."""
+def _kept_figure(keep: Path, name: str | None, writer: Any) -> Any:
+    """The figure the PNG writer kept for page ``name``, or None (then draw it here).
+
+    Waits for the writer only while it is still running; a writer that failed or
+    was never started (serial) leaves nothing to read.
+    """
+    import pickle
+
+    if name is None or writer is None:
+        return None
+    path = keep / f"{name}.pickle"
+    while not path.exists() and writer.is_alive():
+        writer.join(0.02)
+    if not path.exists():
+        return None
+    try:
+        with open(path, "rb") as handle:
+            return pickle.load(handle)
+    except Exception:  # a figure that does not survive the round trip is drawn again
+        return None
+
+
+def _start_png_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path,
+                      keep: Path | None = None) -> Any:
+    """A forked process drawing the PNGs (and keeping the figures in ``keep``), or None
+    where fork is not available (then serial)."""
     import multiprocessing
 
     if os.environ.get("TUFLEXPERF_SERIAL_REPORT") or not hasattr(os, "fork"):
         return None
     writer = multiprocessing.get_context("fork").Process(
-        target=_write_pngs, args=(named, folder), daemon=True
+        target=_write_pngs, args=(named, folder, keep), daemon=True
     )
     writer.start()
     return writer

@@ -256,10 +256,13 @@ class Analyses:
     performance_note: str | None = None
     # the thrust model's 95 % band per engine at BAND_THROTTLES (analysis.thrust_band)
     thrust_bands: list[Any] = field(default_factory=list)
-    # per requirement the tornado (Study.tornado) and every limit value (Study.limit_values)
+    # per requirement the tornado (Study.tornado) and every limit value (Study.limit_values):
+    # filled by margins() when the tornado page is first drawn (about 1 s of batch solves,
+    # spent in the forked PNG writer while this process reduces the campaign)
     tornadoes: list[Any] = field(default_factory=list)
     limit_values: dict[Any, Any] | None = None
     margins_note: str | None = None
+    _margins_done: bool = field(default=False, repr=False)
     # the case's mission flown (Study.mission), or why not; both None: the case has none
     mission: Any | None = None
     mission_note: str | None = None
@@ -297,7 +300,6 @@ def run_analyses(study: Study | Case) -> Analyses:
     analyses = Analyses(verdicts, takeoff, takeoff_note, trim, oei, notes=notes, study=study)
     _performance(study, analyses)
     _thrust_bands(study, analyses)
-    _margins(study, analyses)
     _mission(study, analyses)
     if case.battery_path is None:
         notes.append("the case names no battery file: the endurance figure is left out")
@@ -332,20 +334,25 @@ def _thrust_bands(study: Study, analyses: Analyses) -> None:
             analyses.thrust_bands.append(thrust_band(case.propulsion, index, throttle, airspeed))
 
 
-def _margins(study: Study, analyses: Analyses) -> None:
-    """Tornado bars and limit values of every requirement the batch evaluates."""
+def margins(analyses: Analyses) -> Analyses:
+    """Fill ``analyses`` with the tornado bars and limit values of every requirement the
+    batch evaluates (from its Study, once); a failure becomes ``margins_note``."""
     from tuflexperf.analysis.batch import present_requirements
 
+    if analyses._margins_done or analyses.study is None:
+        return analyses
+    analyses._margins_done = True
+    study = analyses.study
     names = [r.name for r in present_requirements(study.case)]
     if not names:
         analyses.margins_note = "the case states no requirement that the margins cover"
-        return
+        return analyses
     try:
         analyses.tornadoes = [study.tornado(name) for name in names]
         analyses.limit_values = study.limit_values()
     except (NotAttainable, InputError) as exc:
         analyses.margins_note = f"margins: {exc}"
-        analyses.notes.append(f"tornado figure left out: {exc}")
+    return analyses
 
 
 def _mission(study: Study, analyses: Analyses) -> None:
