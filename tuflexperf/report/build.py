@@ -154,6 +154,10 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
     # The figures of the analyses alone are drawn (PNG) by a forked copy of this process
     # while this one reduces the campaign; those of the measured data by a second copy
     # while this one writes the PDF (issue 9: the report in half its earlier time).
+    # Each page is drawn once: whoever claims it first (a file created exclusively in
+    # ``kept``) draws its PNG and lays it out; a writer then keeps the laid-out figure (a
+    # pickle) for this process to put in the PDF. The second writer works from the last
+    # page back while this process writes the PDF from the first page on.
     analysis_pages: dict[str, Callable[[], Any]] = {
         "01_requirements": lambda: fg.requirement_table(case, analyses),
         "02_thrust_required_available": lambda: fg.thrust_required_available(case, analyses),
@@ -167,10 +171,8 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
     if analyses.mission is not None or analyses.mission_note is not None:
         analysis_pages["10_mission"] = lambda: af.mission(case, analyses)
     analysis_pages["11_tornado"] = lambda: af.tornado(case, analyses)
-    # The analysis pages' writer also keeps each figure, laid out, for the PDF (a pickle in
-    # ``kept``): this process then writes those PDF pages without building and laying them
-    # out again (issue 9; the margins behind the tornado are solved there too, while this
-    # process reduces the campaign).
+    # (The margins behind the tornado are solved in the first writer, while this process
+    # reduces the campaign.)
     writers = [_start_png_writer(list(analysis_pages.items()), folder, kept)]
     try:
         measured = load_measured(case, campaign, progress=step.detail)
@@ -192,7 +194,9 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
     if measured.comparisons:
         measured_pages["06_model_vs_measured"] = lambda: fg.model_vs_measured(case, measured)
     measured_pages["06b_thrust_band"] = lambda: af.thrust_band(case, analyses, measured)
-    writers.append(_start_png_writer(list(measured_pages.items()), folder))
+    writers.append(_start_png_writer(list(measured_pages.items())[::-1], folder, kept))
+    writer_of = {name: writers[0] for name in analysis_pages}
+    writer_of.update({name: writers[1] for name in measured_pages})
 
     named = sorted({**analysis_pages, **measured_pages}.items())  # the report's page order
     pages: list[tuple[str | None, Callable[[], Any]]] = [
@@ -214,10 +218,12 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
                       "Creator": f"tuflexperf {__version__}"},
         ) as pdf:
             for name, draw in pages:
-                fig = _kept_figure(kept, name, writers[0]) if name in analysis_pages else None
+                fig, mine = None, serial
+                if name is not None and not serial:
+                    fig, mine = _kept_figure(kept, name, writer_of[name])
                 if fig is None:
                     fig = draw()
-                if serial and name is not None:
+                if mine and name is not None:
                     _save_png(fig, folder / f"{name}.png")
                     fig.set_layout_engine("none")  # solved by the PNG's draw; the page keeps it
                 pdf.savefig(fig)
@@ -261,45 +267,60 @@ def _save_png(fig: Any, path: Path) -> None:
     fig.savefig(path, dpi=PNG_DPI, pil_kwargs={"compress_level": PNG_COMPRESSION})
 
 
+def _claim(keep: Path, name: str) -> bool:
+    """True for the one process that first claims page ``name`` (an exclusive create)."""
+    try:
+        os.close(os.open(keep / f"{name}.claim", os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+    except FileExistsError:
+        return False
+    return True
+
+
 def _write_pngs(named: list[tuple[str, Callable[[], Any]]], folder: Path,
                 keep: Path | None = None) -> None:
+    """Draw each page's PNG; with ``keep``, only the pages this process claims, each then
+    kept laid out (``NAME.pickle``, or ``NAME.drawn`` when it cannot be pickled)."""
     import pickle
 
     for name, draw in named:
+        if keep is not None and not _claim(keep, name):
+            continue  # the PDF's process is drawing it
         fig = draw()
         _save_png(fig, folder / f"{name}.png")
-        if keep is not None:
-            fig.set_layout_engine("none")  # solved by the PNG's draw; the PDF page keeps it
-            staged = keep / f"{name}.pickle.part"
-            try:
-                with open(staged, "wb") as handle:
-                    pickle.dump(fig, handle, protocol=pickle.HIGHEST_PROTOCOL)
-            except Exception:  # not picklable: the PDF draws this page itself
-                staged.unlink(missing_ok=True)
-                continue
+        if keep is None:
+            continue
+        fig.set_layout_engine("none")  # solved by the PNG's draw; the PDF page keeps it
+        staged = keep / f"{name}.pickle.part"
+        try:
+            with open(staged, "wb") as handle:
+                pickle.dump(fig, handle, protocol=pickle.HIGHEST_PROTOCOL)
             os.replace(staged, keep / f"{name}.pickle")  # never read half-written
+        except Exception:  # not picklable: the PDF's process draws this page itself
+            staged.unlink(missing_ok=True)
+            (keep / f"{name}.drawn").touch()
 
 
-def _kept_figure(keep: Path, name: str | None, writer: Any) -> Any:
-    """The figure the PNG writer kept for page ``name``, or None (then draw it here).
+def _kept_figure(keep: Path, name: str, writer: Any) -> tuple[Any, bool]:
+    """(figure, mine) for the PDF page ``name``.
 
-    Waits for the writer only while it is still running; a writer that failed or
-    was never started (serial) leaves nothing to read.
+    ``mine`` is True when this process claimed the page: it draws it and writes its PNG.
+    Otherwise the writer has it: its kept figure once written, or ``(None, False)`` when
+    the writer could not keep it or stopped (then the page is drawn for the PDF alone).
     """
     import pickle
 
-    if name is None or writer is None:
-        return None
-    path = keep / f"{name}.pickle"
-    while not path.exists() and writer.is_alive():
-        writer.join(0.02)
+    if _claim(keep, name):
+        return None, True
+    path, drawn = keep / f"{name}.pickle", keep / f"{name}.drawn"
+    while not (path.exists() or drawn.exists()) and writer.is_alive():
+        writer.join(0.01)
     if not path.exists():
-        return None
+        return None, False
     try:
         with open(path, "rb") as handle:
-            return pickle.load(handle)
+            return pickle.load(handle), False
     except Exception:  # a figure that does not survive the round trip is drawn again
-        return None
+        return None, False
 
 
 def _start_png_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path,
