@@ -301,9 +301,9 @@ def test_kept_figures_are_the_pngs_pixel_for_pixel(tmp_path, shipped_figures):
     """The PDF's analysis pages come from the PNG writer's kept figures: same layout."""
     from matplotlib.image import imread
 
-    from tuflexperf.report.build import _write_pngs
-    from tuflexperf.report import analysis_figures as af
     from tuflexperf.io.case import load_case
+    from tuflexperf.report import analysis_figures as af
+    from tuflexperf.report.build import _write_pngs
 
     case = load_case(None)
     _, analyses, _ = shipped_figures

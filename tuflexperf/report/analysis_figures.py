@@ -200,8 +200,12 @@ def _performance_table(ax: Any, perf: Any) -> None:
            [0.32, 0.30, 0.38])
     if remarks:
         text = "; ".join(remarks)
-        ax.text(0.0, bottom - 0.04, "\n".join(textwrap.wrap("notes: " + text, 170)[:3]),
-                transform=ax.transAxes, va="top", ha="left", fontsize=8, color="0.25")
+        lines = textwrap.wrap("notes: " + text, 170)
+        if len(lines) > 3:  # the page has room for three; the rest is in the JSON
+            lines = [*lines[:2], textwrap.shorten(" ".join(lines[2:]), 140,
+                                                  placeholder=" ... (all in performance --json)")]
+        ax.text(0.0, bottom - 0.04, "\n".join(lines), transform=ax.transAxes, va="top",
+                ha="left", fontsize=8, color="0.25")
 
 
 # --- thrust model confidence band (issue 12) --------------------------------------------------
@@ -246,7 +250,8 @@ def thrust_band(case: Case, analyses: Analyses, measured: Measured | None = None
                 ax.plot(speed[near], thrust[near], "o", color=c, markeredgecolor="black",
                         markeredgewidth=0.6, markersize=4.5)
         full = max(mine, key=lambda b: b.throttle)
-        half = [f"\u00b1{1.96 * float(np.interp(s, v, full.sd_n)):.2f} N at {s:g} m/s"
+        half_width = 0.5 * (full.high_n - full.low_n)
+        half = [f"\u00b1{float(np.interp(s, v, half_width)):.2f} N at {s:g} m/s"
                 for s in (high_t, right) if s <= right]
         sd = [f"residual sd {engine.residual_sd_n:.2f} N"] if engine.residual_sd_n else []
         if engine.extrapolation_sd_n is not None:
@@ -266,10 +271,11 @@ def thrust_band(case: Case, analyses: Analyses, measured: Measured | None = None
     for x in reversed(throttles):
         handles.append(Line2D([], [], color=colour[x], linewidth=1.8,
                               label=f"model, throttle {100 * x:.0f} %"))
-    handles.append(Patch(color="0.5", alpha=0.35, linewidth=0,
-                         label="95 % confidence band of the\nmodel (fit covariance, +\n"
-                         "extrapolation error beyond\nthe tested range); single\n"
-                         f"points scatter more (sd {_residual_text(case)})"))
+    if any(np.any(b.sd_n > 0) for b in bands):
+        handles.append(Patch(color="0.5", alpha=0.35, linewidth=0,
+                             label="95 % confidence band of the\nmodel (fit covariance, +\n"
+                             "extrapolation error beyond\nthe tested range); single\n"
+                             f"points scatter more (sd {_residual_text(case)})"))
     if points is not None:
         handles.append(Line2D([], [], marker="o", linestyle="none", color="0.5",
                               markeredgecolor="black", markeredgewidth=0.6,
