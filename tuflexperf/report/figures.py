@@ -42,6 +42,7 @@ from tuflexperf.report.style import (
 )
 
 LANDSCAPE_IN = (11.69, 8.27)  # A4 landscape (297 x 210 mm)
+TEXT_PAGE_MARGIN_IN = 0.6  # about 15 mm: a printer's unprintable edge plus room to staple
 # the earlier names of the style's colours, for pages built on them (style.py is the source)
 PASS_COLOUR, FAIL_COLOUR = PASS_FILL, FAIL_FILL
 LIMIT_COLOUR = STYLE["limit"]["color"]
@@ -62,6 +63,12 @@ def new_figure(size: tuple[float, float] = LANDSCAPE_IN) -> Any:
     from matplotlib.figure import Figure
 
     return Figure(figsize=size, layout="constrained")
+
+
+def _page_margins(fig: Any) -> None:
+    """Margins of a printed page for text and table pages (an axes without decorations
+    would otherwise reach the paper's edge)."""
+    fig.get_layout_engine().set(w_pad=TEXT_PAGE_MARGIN_IN, h_pad=TEXT_PAGE_MARGIN_IN / 2)
 
 
 def _style(meaning: str, **override: Any) -> dict[str, Any]:
@@ -196,6 +203,7 @@ def _label_line_ends(ax: Any, ends: list[tuple[float, str, Any]], fontsize: floa
 def requirement_table(case: Case, analyses: Analyses) -> Any:
     """The verdicts of ``check``: value, limit, margin, PASS/FAIL, colour-coded."""
     fig = new_figure()
+    _page_margins(fig)
     ax = fig.add_subplot()
     ax.axis("off")
     verdicts = analyses.verdicts
@@ -1013,6 +1021,7 @@ def text_page(
 ) -> Any:
     """A page of text (title page, notes)."""
     fig = new_figure(size)
+    _page_margins(fig)
     ax = fig.add_subplot()
     ax.axis("off")
     fig.suptitle(title, fontsize=15, weight="bold")
