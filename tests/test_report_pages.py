@@ -404,3 +404,31 @@ def test_a_case_without_measured_data_or_battery_draws_the_pages(tmp_path):
     data = _report(case_path, tmp_path / "review")
     names = {Path(f).stem for f in data["figures"]}
     assert set(NEW_PAGES) <= names
+
+
+def test_trim_below_stall_is_drawn_as_below_stall_and_five_tornadoes_stay_on_the_page(tmp_path):
+    """34 kg at 500 m, ISA+15: stall 17.2 m/s above the envelope's 15 m/s floor, so trim is
+    not attainable there *below stall* (not 'more than full throttle'); with the obstacle
+    requirement five tornado panels, every label and note on the page, none over another."""
+    from tests.layout_checks import text_overlaps, texts_off_the_page
+
+    case_path = _shipped_copy(tmp_path / "heavy", mission=None, mass_kg=34)
+    text = case_path.read_text()
+    text = text.replace("takeoff: {max_ground_roll_m: 60}",
+                        "takeoff: {max_ground_roll_m: 60, max_distance_to_obstacle_m: 150}")
+    text = text.replace("atmosphere: {altitude_m: 0, temperature_offset_k: 0}",
+                        "atmosphere: {altitude_m: 500, temperature_offset_k: 15}")
+    case_path.write_text(text)
+    from tuflexperf.report import figures as fg
+
+    case, analyses, figures = _figures(case_path)
+    assert analyses.trim.reasons[0] == "below stall"
+    trim = fg.trim_oei_throttle(case, analyses)
+    labels = [t.get_text() for legend in trim.legends + [a.get_legend() for a in trim.axes]
+              if legend is not None for t in legend.get_texts()]
+    assert "trim not attainable: below stall" in labels
+    assert not any(label.startswith("trim not attainable: needs") for label in labels)
+    tornado = figures["tornado"]
+    assert len([ax for ax in tornado.axes if ax.get_visible()]) == 5
+    assert text_overlaps(tornado) == []
+    assert texts_off_the_page(tornado) == []

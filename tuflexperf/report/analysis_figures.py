@@ -48,9 +48,11 @@ _ENGINE_DASHES = ("-", "--", ":", "-.")
 def _note(ax: Any, text: str, width: int = 80) -> None:
     """A panel that says why there is nothing to draw (no ticks: not a data axes)."""
     ax.text(0.5, 0.5, textwrap.fill(text, width), transform=ax.transAxes, ha="center",
-            va="center", fontsize=11, color="0.3")
+            va="center", fontsize=10, color="0.3")
     ax.set_xticks([])
     ax.set_yticks([])
+    for spine in ax.spines.values():  # no frame: a long note must not seem to cross a box
+        spine.set_visible(False)
 
 
 def _fmt(value: float | None, unit_text: str = "", digits: int = 2) -> str:
@@ -340,7 +342,9 @@ def tornado(case: Case, analyses: Analyses) -> Any:
         fig.suptitle(f"Tornado of {case.name}: nothing to draw")
         return fig
     n = len(tornadoes)
-    cols = 1 if n == 1 else 2 if n <= 4 else 3
+    # two columns at most: each panel needs room for its parameter names on the left and the
+    # limit values on the right
+    cols = 1 if n == 1 else 2
     rows = math.ceil(n / cols)
     axes = fig.subplots(rows, cols, squeeze=False).ravel()
     limits = analyses.limit_values or {}
@@ -362,7 +366,7 @@ def tornado(case: Case, analyses: Analyses) -> Any:
                      if k[0] == t.requirement and v[0] is not None]
             why += ("; it would hold at " + "; ".join(holds) if holds
                     else "; it holds at no parameter value in the searched ranges")
-            _note(ax, why, 50)
+            _note(ax, why, 42)
             continue
         y = np.arange(len(bars))
         ends = [v for b in bars for v in (b.value_at_low, b.value_at_high) if v is not None]

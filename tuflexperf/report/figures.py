@@ -16,10 +16,12 @@ data; long time series are drawn through :func:`tuflexperf.report.decimate.envel
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.attainable import BELOW_STALL, NEEDS_MORE_THAN_FULL_THROTTLE
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.thrust import (
@@ -81,10 +83,22 @@ def _legend(ax: Any, **kwargs: Any) -> Any:
     return legend_outside(ax, **kwargs)
 
 
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(first, last) index of each run of True in ``mask``."""
-    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
-    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1, strict=True))
+def _reason_runs(reasons: Sequence[str | None], throttle: Any) -> list[tuple[int, int, str]]:
+    """(first, last, reason) of each stretch of grid airspeeds not attainable for one reason;
+    a missing throttle without a stated reason needs more than full throttle."""
+    values = np.asarray(throttle, dtype=float)
+    stated = list(reasons) if len(reasons) == values.size else [None] * values.size
+    why = [r if r is not None else (None if np.isfinite(v) else NEEDS_MORE_THAN_FULL_THROTTLE)
+           for r, v in zip(stated, values, strict=True)]
+    runs: list[tuple[int, int, str]] = []
+    for k, w in enumerate(why):
+        if w is None:
+            continue
+        if runs and runs[-1][1] == k - 1 and runs[-1][2] == w:
+            runs[-1] = (runs[-1][0], k, w)
+        else:
+            runs.append((k, k, w))
+    return runs
 
 
 def _shade_extrapolated(ax: Any, case: Case, right: float, label: bool = True) -> None:
@@ -874,18 +888,19 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
                     label=f"OEI, {c.dead_engine} dead ({oei.dead_engine_mode})"
                     + (", the worse case" if critical else ""))
         worst = oei.critical
-        missing = ~np.isfinite(np.asarray(worst.throttle, dtype=float))
         speeds = np.asarray(worst.airspeed_m_s, dtype=float)
-        # not attainable: one hatched band per stretch of airspeeds, marked once in the legend
-        for k, (a, b) in enumerate(_runs(missing)):
+        # not attainable: one hatched band per stretch of airspeeds and reason (the OEI
+        # result's own), each reason once in the legend; above full throttle (y 1 to 1.08)
+        # where the curve would have to go
+        oei_runs = _reason_runs(worst.reasons, worst.throttle)
+        for k, (a, b, why) in enumerate(oei_runs):
             lo = speeds[a - 1] if a > 0 else speeds[a]
             hi = speeds[b + 1] if b + 1 < speeds.size else speeds[b]
-            # above full throttle (y 1 to 1.08): where the OEI curve would have to go
             ax.axvspan(0.5 * (lo + speeds[a]), 0.5 * (hi + speeds[b]), ymin=1.0 / 1.08,
-                       ymax=1.0, facecolor="none", edgecolor=STYLE["oei"]["color"], hatch="//",
-                       linewidth=0.0, alpha=0.9, zorder=0,
-                       label=f"OEI ({worst.dead_engine} dead) not attainable: needs more than "
-                       "full throttle" if k == 0 else None)
+                       ymax=1.0, facecolor="none", edgecolor=STYLE["oei"]["color"],
+                       hatch=".." if why == BELOW_STALL else "//", linewidth=0.0, alpha=0.9,
+                       zorder=0, label=f"OEI ({worst.dead_engine} dead) not attainable: {why}"
+                       if all(w != why for _, _, w in oei_runs[:k]) else None)
         if worst.min_throttle is not None:
             ax.plot([worst.airspeed_at_min_throttle_m_s], [worst.min_throttle], **POINT["least"],
                     markerfacecolor=STYLE["oei"]["color"],
@@ -898,11 +913,12 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
         ):
             ax.axhline(requirement.max_throttle, **_style("limit", linewidth=2.2),
                        label=f"limit: OEI max throttle {requirement.max_throttle:g}")
-    bad = np.isin(np.asarray(trim.airspeed_m_s, dtype=float),
-                  np.asarray(trim.unattainable_airspeed_m_s or [], dtype=float))
-    for k, (a, b) in enumerate(_runs(bad)):
+    runs = _reason_runs(trim.reasons, trim.throttle)
+    for k, (a, b, why) in enumerate(runs):
         ax.axvspan(trim.airspeed_m_s[a], trim.airspeed_m_s[b], color=FAIL_FILL, alpha=0.6,
-                   zorder=0, label="trim not attainable (> full throttle)" if k == 0 else None)
+                   hatch=".." if why == BELOW_STALL else None, zorder=0,
+                   label=f"trim not attainable: {why}"
+                   if all(w != why for _, _, w in runs[:k]) else None)
     ax.axvline(stall, **STYLE["stall"], label=f"stall speed {stall:.1f} m/s")
     _envelope_lines(ax, case)
     ax.set_xlim(left, right)
