@@ -10,6 +10,7 @@ import json
 import math
 import os
 import sys
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -220,12 +221,14 @@ def check(
         emit_json(payload)
     else:
         typer.echo(f"{case.name}  ({case.path})")
-        header = f"{'requirement':<22}{'value':>10}{'limit':>10}{'unit':>10}{'margin':>10}  verdict"
+        w = _name_width(v.name for v in verdicts)
+        header = (f"{'requirement':<{w}}{'value':>10}{'limit':>10}{'unit':>10}{'margin':>10}"
+                  "  verdict")
         typer.echo(header)
         typer.echo("-" * len(header))
         for v in verdicts:
             typer.echo(
-                f"{v.name:<22}{_fmt(v.value):>10}{_fmt(v.limit):>10}{v.unit:>10}"
+                f"{v.name:<{w}}{_fmt(v.value):>10}{_fmt(v.limit):>10}{v.unit:>10}"
                 f"{_fmt(v.margin):>10}  {'PASS' if v.passed else 'FAIL'}"
             )
             typer.echo(f"  {v.reason}")
@@ -241,13 +244,19 @@ def check(
     raise typer.Exit(0 if passed else 1)
 
 
+def _name_width(names: Iterable[str]) -> int:
+    """Width of the requirement column: 22, or the longest name and two spaces."""
+    return max([22, *(len(n) + 2 for n in names)])
+
+
 def _print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
     typer.echo("")
     typer.echo(
         f"Monte Carlo: {plan.samples} samples, seed {plan.seed}; a requirement passes when the "
         f"95 % interval of P(met) lies at or above {plan.required_probability:g}"
     )
-    header = (f"{'requirement':<22}{'P(met)':>8}{'95 % CI':>17}{'p05':>10}{'p50':>10}"
+    w = _name_width(probabilistic)
+    header = (f"{'requirement':<{w}}{'P(met)':>8}{'95 % CI':>17}{'p05':>10}{'p50':>10}"
               f"{'p95':>10}{'n/a':>7}  verdict")
     typer.echo(header)
     typer.echo("-" * len(header))
@@ -255,7 +264,7 @@ def _print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
         low, high = p.probability_ci
         p05, p50, p95 = p.quantiles
         typer.echo(
-            f"{name:<22}{p.probability:>8.4f}{f'[{low:.4f}, {high:.4f}]':>17}{_fmt(p05):>10}"
+            f"{name:<{w}}{p.probability:>8.4f}{f'[{low:.4f}, {high:.4f}]':>17}{_fmt(p05):>10}"
             f"{_fmt(p50):>10}{_fmt(p95):>10}{p.not_attainable:>7}  "
             f"{'PASS' if p.passed else 'FAIL'}"
         )
