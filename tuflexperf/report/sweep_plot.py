@@ -17,6 +17,18 @@ from typing import Any
 
 import numpy as np
 
+# a parameter key's unit from its suffix (SPEC 4 names every numeric key with its unit)
+_SUFFIX_UNITS = (("_m_s", "m/s"), ("_kg_m3", "kg/m\u00b3"), ("_m2", "m\u00b2"), ("_kg", "kg"),
+                 ("_min", "min"), ("_m", "m"), ("_k", "K"), ("_s", "s"), ("_v", "V"),
+                 ("_n", "N"), ("_w", "W"), ("_a", "A"), ("_fraction", "fraction"))
+
+
+def axis_label(key: str) -> str:
+    """``aircraft.mass_kg`` -> ``aircraft.mass_kg (kg)``; ``(-)`` for a key without a unit."""
+    leaf = key.rsplit(".", 1)[-1]
+    unit = next((u for suffix, u in _SUFFIX_UNITS if leaf.endswith(suffix)), "-")
+    return f"{key} ({unit})"
+
 
 def carpet_png(result: Any, title: str) -> bytes:
     """PNG bytes (150 dpi) of the sweep's carpet plot, one panel per requirement."""
@@ -42,8 +54,8 @@ def carpet_png(result: Any, title: str) -> bytes:
                 ax.plot(result.points[bad, 0], np.where(np.isfinite(value[bad]), value[bad],
                                                         limit), "x", color="C3",
                         label="not met / not attainable")
-            ax.set_xlabel(keys[0])
-            ax.set_ylabel(f"{name} [{unit}]")
+            ax.set_xlabel(axis_label(keys[0]))
+            ax.set_ylabel(f"{name} ({unit})")
             ax.legend(fontsize=8)
         else:
             x_axis, y_axis = result.axes[0], result.axes[1]
@@ -52,18 +64,17 @@ def carpet_png(result: Any, title: str) -> bytes:
             met = result.met[name].reshape(shape)[:, :, 0].T
             filled = ax.contourf(x_axis, y_axis, np.ma.masked_invalid(grid), levels=14,
                                  cmap="viridis")
-            fig.colorbar(filled, ax=ax, label=f"{name} [{unit}]")
+            fig.colorbar(filled, ax=ax, label=f"{name} ({unit})")
             if np.nanmin(grid) < limit < np.nanmax(grid):
                 line = ax.contour(x_axis, y_axis, grid, levels=[limit], colors="k",
                                   linewidths=2.0)
                 ax.clabel(line, fmt=f"limit {limit:g}", fontsize=8)
             ax.contourf(x_axis, y_axis, (~met).astype(float), levels=[0.5, 1.5],
                         colors="none", hatches=["//"])
-            ax.set_xlabel(keys[0])
-            ax.set_ylabel(keys[1])
-            if len(keys) > 2:
-                ax.set_title(f"first value of {', '.join(keys[2:])}", fontsize=8)
-        ax.set_title(f"{name} (hatched/x: not met)", fontsize=10)
+            ax.set_xlabel(axis_label(keys[0]))
+            ax.set_ylabel(axis_label(keys[1]))
+        more = f"\nat the first value of {', '.join(keys[2:])}" if len(keys) > 2 else ""
+        ax.set_title(f"{name} (hatched/x: not met){more}", fontsize=10)
     for ax in axes.ravel()[len(names):]:
         ax.set_visible(False)
     fig.suptitle(title, fontsize=11)
