@@ -207,6 +207,52 @@ MORE = [
 ]
 
 
+def _foreign(name: str) -> Callable[[Path], None]:
+    return lambda w: (w / name).write_text("the user's own file, not an output\n")
+
+
+FOREIGN = [  # a file the user wrote is never replaced by an output (SPEC 5, nothing is lost)
+    Case("fit over a foreign file", ("fit", "data/tuflex/campaign/campaign.yaml", "--out",
+                                     "mine.yaml"), 2, "--out", _foreign("mine.yaml")),
+    Case("battery fit over a foreign file", ("fit", "data/tuflex/battery.yaml", "--out",
+                                             "mine.yaml"), 2, "--out", _foreign("mine.yaml")),
+    Case("fit table over a foreign file", ("fit", "data/tuflex/campaign/campaign.yaml", "--out",
+                                           "p.yaml", "--table", "mine.csv"), 2, "--table",
+         _foreign("mine.csv")),
+    Case("sweep csv over a foreign file", ("sweep", "--vary", "aircraft.mass_kg=24:28:3",
+                                           "--csv", "mine.csv"), 2, "--csv", _foreign("mine.csv")),
+    Case("sweep plot over a foreign file", ("sweep", "--vary", "aircraft.mass_kg=24:28:3",
+                                            "--plot", "mine.png"), 2, "--plot",
+         _foreign("mine.png")),
+    Case("mission csv over a foreign file", ("mission", "data/tuflex/missions/test_flight.yaml",
+                                             "--csv", "mine.csv"), 2, "--csv",
+         _foreign("mine.csv")),
+    Case("sweep plot onto a folder", ("sweep", "--vary", "aircraft.mass_kg=24:28:3", "--plot",
+                                      "out.png"), 2, "directory",
+         lambda w: (w / "out.png").mkdir()),
+]
+
+
+@pytest.mark.parametrize("case", FOREIGN, ids=[c.name for c in FOREIGN])
+def test_foreign_files_are_never_replaced(workdir: Path, case: Case) -> None:
+    test_hostile_case(workdir, case)
+
+
+@pytest.mark.parametrize("args", [
+    ("fit", "data/tuflex/campaign/campaign.yaml", "--out", "p.yaml", "--table", "t.csv"),
+    ("fit", "data/tuflex/battery.yaml", "--out", "b.yaml"),
+    ("fit", "data/tuflex/battery.yaml", "--out", "data/tuflex/b.yaml"),
+    ("sweep", "--vary", "aircraft.mass_kg=24:28:3", "--csv", "s.csv", "--plot", "s.png"),
+    ("mission", "data/tuflex/missions/test_flight.yaml", "--csv", "m.csv"),
+], ids=["fit", "battery fit", "battery fit beside its runs", "sweep", "mission"])
+def test_a_second_run_replaces_its_own_outputs(workdir: Path, args: tuple[str, ...]) -> None:
+    first = _run(workdir, *args)
+    assert first.returncode in (0, 1), first.stderr
+    second = _run(workdir, *args)
+    assert second.returncode == first.returncode, second.stderr
+    assert "refusing" not in second.stderr
+
+
 @pytest.mark.parametrize("case", MORE, ids=[c.name for c in MORE])
 def test_more_hostile_cases(workdir: Path, case: Case) -> None:
     if case.name == "table to a full disk":

@@ -329,19 +329,15 @@ def sweep(
     case = load_case_with(case_file, sets)
     if workers is not None and workers < 1:
         fail_input(f"--workers: must be at least 1, got {workers}")
-    inputs = {p.resolve() for p in (case.path, case.aircraft_path, case.propulsion_path,
-                                    case.battery_path) if p is not None}
-    for flag, target in (("--csv", csv_out), ("--plot", plot)):
-        if target is None:
-            continue
-        if target.resolve() in inputs:
-            fail_input(f"{flag} {target}: is one of the case's input files; not overwritten")
-        if target.is_dir():
-            fail_input(f"{flag} {target}: is a directory, expected a file")
-        if flag == "--plot" and target.suffix.lower() != ".png":
-            fail_input(f"--plot {target}: the carpet plot is written as PNG (use .png)")
-    if csv_out is not None and plot is not None and csv_out.resolve() == plot.resolve():
-        fail_input("--csv and --plot name the same file")
+    outputs = {flag: target for flag, target in (("--csv", csv_out), ("--plot", plot))
+               if target is not None}
+    if plot is not None and plot.suffix.lower() != ".png":
+        fail_input(f"--plot {plot}: the carpet plot is written as PNG (use .png)")
+    if outputs:
+        from tuflexperf.io.case import case_files
+        from tuflexperf.io.files import guard_outputs
+
+        guard_outputs(outputs, [path for _, path in case_files(case)])
     axes = [parse_vary(case, spec) for spec in vary]
     result = run_sweep(case, axes, workers, dask)
     if plot is not None:
@@ -592,9 +588,6 @@ def performance(
 
 
 # ---- mission (issue 13) --------------------------------------------------------------------
-_MISSION_CSV_HEAD = b"time_s,segment,"  # how every mission history begins
-
-
 @app.command()
 def mission(
     mission_file: Path | None = typer.Argument(
@@ -618,28 +611,12 @@ def mission(
         mission_file = mission_path(case)
     plan = load_mission(mission_file)
     if csv is not None:
+        from tuflexperf.io.case import case_files
         from tuflexperf.io.files import guard_outputs
 
-        # every file the flight reads: the case, its aircraft/propulsion/battery files, the
-        # battery's discharge runs and the mission itself
-        inputs = [Path(mission_file), case.path, case.aircraft_path, case.propulsion_path]
-        if case.battery_path is not None:
-            from tuflexperf.io.battery import load_battery
-
-            inputs.append(case.battery_path)
-            inputs.extend(r.path for r in load_battery(case.battery_path).runs)
-        if csv.is_dir():
-            fail_input(f"--csv: {csv} is a folder; give a file name")
+        # every file the flight reads: the case's (SPEC 5) and the mission itself
+        inputs = [Path(mission_file), *(path for _, path in case_files(case))]
         guard_outputs({"--csv": csv}, inputs)
-        if csv.exists():  # replace only an earlier history of this command (SPEC 5)
-            try:
-                with csv.open("rb") as handle:
-                    first = handle.read(len(_MISSION_CSV_HEAD))
-            except OSError:
-                first = b""
-            if first != _MISSION_CSV_HEAD:
-                fail_input(f"--csv: {csv} exists and is not an earlier mission history; "
-                           "refusing to replace it, choose another path")
     limit = requirement.min_landing_charge_fraction if requirement is not None else None
     try:
         result = solve_mission(case, plan, limit)

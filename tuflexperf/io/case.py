@@ -462,3 +462,26 @@ def load_case(path: Path | str | None = None) -> Case:
         for key in schema.uncertainty.parameters:
             check_key(case, key, f"{case_path}: uncertainty.parameters")
     return case
+
+
+def case_files(case: Case) -> list[tuple[str, Path]]:
+    """(role, path) of every file a case's analyses read: the case, its aircraft, propulsion
+    and battery files, the battery's discharge runs and the mission file of its mission
+    requirement. Outputs may never replace one of these (SPEC 5)."""
+    files: list[tuple[str, Path]] = [
+        ("case", case.path),
+        ("aircraft", case.aircraft_path),
+        ("propulsion", case.propulsion_path),
+    ]
+    if case.battery_path is not None:
+        files.append(("battery", case.battery_path))
+        try:
+            from tuflexperf.io.battery import load_battery
+
+            files.extend(("discharge run", r.path) for r in load_battery(case.battery_path).runs)
+        except InputError:
+            pass  # a broken battery file is reported by the analysis that reads it
+    mission = case.requirements.mission
+    if mission is not None:
+        files.append(("mission", (Path(case.path).parent / mission.file).resolve()))
+    return files

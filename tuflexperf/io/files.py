@@ -131,8 +131,59 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
+# How each single-file output of the tool begins (the folders carry MARKER instead): an
+# existing file is replaced only when it begins like one of these, i.e. an earlier output.
+_CSV_HEADS = (
+    b"engine,throttle,airspeed_m_s,thrust_n,",  # fit's thrust table
+    b"time_s,segment,",  # mission --csv (the flight's history)
+)
+_SWEEP_COLUMN_ENDS = (b"_value", b"_limit", b"_passed")
+PNG_SOFTWARE = "tuflexperf"  # the PNG text chunk 'Software' of every single PNG written
+
+
+def written_by_tuflexperf(head: bytes) -> bool:
+    """True if ``head`` (a file's first bytes) is how an output of this tool begins.
+
+    YAML written by ``fit`` says ``written by `tuflexperf ...``` on its first comment line; a
+    PNG carries ``Software: tuflexperf``; each CSV has its own header (a sweep's: the varied
+    keys, then ``<requirement>_value, _limit, _passed`` per requirement).
+    """
+    first_line = head.split(b"\n", 1)[0]
+    # fit's YAML (thrust model, battery) says so on its first comment line
+    if first_line.startswith(b"#") and b"written by `tuflexperf " in first_line.lower():
+        return True
+    if head.startswith(b"\x89PNG"):
+        return b"Software\x00" + PNG_SOFTWARE.encode() in head
+    if head.startswith(_CSV_HEADS):
+        return True
+    columns = head.split(b"\n", 1)[0].strip().split(b",")
+    tail = [c for c in columns if c.endswith(_SWEEP_COLUMN_ENDS)]
+    keys = columns[: len(columns) - len(tail)]
+    return (bool(tail) and len(tail) % 3 == 0 and columns[len(keys):] == tail
+            and all(b"." in k for k in keys))
+
+
+def refuse_foreign_files(outputs: dict[str, Path]) -> None:
+    """Refuse (exit 2) to replace an existing file that this tool did not write (SPEC 5)."""
+    for flag, out in outputs.items():
+        out = Path(out)
+        if not os.path.lexists(out) or out.is_dir():
+            continue
+        try:
+            with open(out, "rb") as handle:
+                head = handle.read(4096)
+        except OSError:
+            head = None
+        if head is None or not written_by_tuflexperf(head):
+            raise InputError(
+                f"{flag}: {out} exists and is not an earlier output of tuflexperf; refusing "
+                "to replace it, choose another path"
+            )
+
+
 def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path]) -> None:
-    """Refuse an output that is, or would overwrite, one of the command's inputs (exit 2).
+    """Refuse an output that is, or would overwrite, one of the command's inputs, or an
+    existing file that is not an earlier output of this tool (exit 2).
 
     ``outputs`` maps the flag (``--out``) to its path. Also refuses an output that is an
     existing directory where a file is expected. Two outputs may not be the same path.
@@ -151,6 +202,9 @@ def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path]) -> None:
                     f"{flag}: {out} is an input of this command ({source}); refusing to "
                     "overwrite it, choose another path"
                 )
+        if out.is_dir():
+            raise InputError(f"{flag}: {out} is a directory, expected a file")
+    refuse_foreign_files(outputs)
 
 
 def check_output_dir(out: Path, command: str) -> None:

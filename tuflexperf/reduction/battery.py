@@ -315,7 +315,11 @@ def fitted_battery_text(battery_path: Any, out_path: Any) -> tuple[str, dict[str
                 continue
             skipping = False
             kept.append(line)
-        text = "".join(kept).rstrip("\n") + "\n" + header + dumped
+        if kept and "written by `tuflexperf fit`" in kept[0]:
+            kept = kept[1:]
+        # first line says who wrote it, so a later fit may replace it (SPEC 5, nothing is lost)
+        text = (f"# {battery.name}: written by `tuflexperf fit` from {battery_path.name}\n"
+                + "".join(kept).rstrip("\n") + "\n" + header + dumped)
     else:
         data = read_yaml(battery_path)
         for entry in data.get("runs", []):

@@ -390,19 +390,9 @@ def _endurance(study: Study, analyses: Analyses) -> None:
 
 def input_files(case: Case, measured: Measured) -> list[tuple[str, Path]]:
     """(role, path) of every file the report's numbers come from, for the title page."""
-    files: list[tuple[str, Path]] = [
-        ("case", case.path),
-        ("aircraft", case.aircraft_path),
-        ("propulsion", case.propulsion_path),
-    ]
-    if case.battery_path is not None:
-        files.append(("battery", case.battery_path))
-        try:
-            from tuflexperf.io.battery import load_battery
+    from tuflexperf.io.case import case_files
 
-            files.extend(("discharge run", r.path) for r in load_battery(case.battery_path).runs)
-        except InputError:
-            pass
+    files = case_files(case)
     for k, path in enumerate(measured.files):
         files.append(
             (

@@ -80,6 +80,9 @@ def carpet_png(result: Any, title: str) -> bytes:
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=150)
+    from tuflexperf.io.files import PNG_SOFTWARE
+
+    # 'Software: tuflexperf' marks the PNG as ours: a later sweep may replace it (SPEC 5)
+    fig.savefig(buffer, format="png", dpi=150, metadata={"Software": PNG_SOFTWARE})
     plt.close(fig)
     return buffer.getvalue()
