@@ -8,7 +8,6 @@ a case with a mission; and every page for a failing made-up case (no traceback).
 
 from __future__ import annotations
 
-import json
 import pickle
 import re
 import shutil
@@ -16,9 +15,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
-from tuflexperf.cli import app
+from tests.test_report_layout import _drawn_inputs, _report
 
 ROOT = Path(__file__).resolve().parents[1]
 NEW_PAGES = ("06b_thrust_band", "08b_performance", "11_tornado")
@@ -29,16 +27,6 @@ MISSION_LINE = ("  mission: {file: ../data/tuflex/missions/test_flight.yaml, "
 
 def _pdf_pages(path: Path) -> int:
     return len(re.findall(rb"/Type\s*/Page(?![a-zA-Z])", path.read_bytes()))
-
-
-def _report(case: Path | None, out: Path) -> dict:
-    args = ["report", "--out", str(out), "--json"]
-    if case is not None:
-        args += ["--case", str(case)]
-    result = CliRunner().invoke(app, args)
-    assert result.exit_code == 0, result.output
-    assert "Traceback" not in result.output
-    return json.loads(result.stdout)
 
 
 def _shipped_copy(folder: Path, mission: str | None = MISSION_LINE, mass_kg: float | None = None,
@@ -158,16 +146,9 @@ def _all_text(fig) -> str:
 
 
 def _figures(case_path: Path | None):
-    from tuflexperf.analysis.study import Study
-    from tuflexperf.io.case import load_case
     from tuflexperf.report import analysis_figures as af
-    from tuflexperf.report import figures as fg
-    from tuflexperf.report.data import load_measured, run_analyses
 
-    fg.use_agg()
-    case = load_case(case_path)
-    analyses = run_analyses(Study(case))
-    measured = load_measured(case, None)
+    case, analyses, measured = _drawn_inputs(case_path)
     figures = {
         "performance": af.performance(case, analyses),
         "thrust_band": af.thrust_band(case, analyses, measured),
