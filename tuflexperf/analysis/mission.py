@@ -24,10 +24,12 @@ case's temperature offset):
   A cruise or loiter at a fixed ``throttle`` flies the fast root of ``T(x, V) = D(V)``
   (Newton with the loaded voltages from the full-pack airspeed): its airspeed falls as
   the packs sag, and below stall it is not attainable.
-- take-off: the landed take-off analysis (ground roll from rest at full throttle with the
-  airspeed history, rotation at ``V_LO``), then its airborne part flown along the path at
-  the transition speed: the arc ``h = R (1 - cos(V t / R))`` and the straight climb at the
-  full-throttle gradient to the obstacle height.
+- take-off: the ground roll from rest at full throttle, ``m dV/dt = T - D_g - mu max(W - L_g,
+  0)`` with the thrust at the packs' loaded voltage (integrated over airspeed, so it ends at
+  ``V_LO`` exactly), the rotation at ``V_LO``, then the landed take-off analysis's airborne
+  part flown along the path at the transition speed: the arc ``h = R (1 - cos(V t / R))``
+  and the straight climb at the full-throttle gradient to the obstacle height (that path's
+  geometry is the analysis's, at the reference voltage).
 
 Each segment is integrated by classic RK4 with :data:`STEPS` fixed steps (over time for
 level segments and the take-off, over height for climbs and descents, so their end is
@@ -58,6 +60,7 @@ from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
 from tuflexperf.io.mission import MissionFile, SegmentSchema
 from tuflexperf.models.aircraft import (
+    ground_roll_resistance_n,
     level_flight_drag_n,
     stall_speed_eas_m_s,
     true_airspeed_m_s,
@@ -76,6 +79,7 @@ from tuflexperf.models.thrust import (
 
 STEPS = 64  # RK4 steps per segment: the states are smooth, 64 steps give ~1e-9 relative
 SECONDS_PER_HOUR = 3600.0
+ARC_STEPS = 64  # the take-off's transition arc (see MissionModel._airborne_phases)
 # unrolled Newton steps on the loaded voltage (and a fixed throttle's airspeed): from the
 # open-circuit voltage (a few % off) quadratic convergence reaches rounding in 4; 5 for margin
 NEWTON = 5
@@ -365,13 +369,34 @@ class MissionModel:
         margin = getattr(envelope, "stall_margin", 1.0) if envelope is not None else 1.0
         stall = margin * float(stall_speed_eas_m_s(aircraft))
         eas = np.linspace(stall, 4.0 * stall, 2001)
-        v = np.asarray(true_airspeed_m_s(eas, rho), dtype=float)
-        x, ok = self._level_throttle_numpy(v, rho, dead)
-        power = np.where(ok, self._power_numpy(x, v, rho, dead), np.inf)
+
+        def power_at(speeds_eas: np.ndarray) -> np.ndarray:
+            v = np.asarray(true_airspeed_m_s(speeds_eas, rho), dtype=float)
+            x, ok = self._level_throttle_numpy(v, rho, dead)
+            return np.where(ok, self._power_numpy(x, v, rho, dead), np.inf)
+
+        power = power_at(eas)
         k = int(np.argmin(power))
         if not np.isfinite(power[k]):
             raise NotAttainable(f"loiter at {h:g} m: no level flight up to full throttle")
-        return float(eas[k])
+        if k == 0 or k == eas.size - 1:
+            return float(eas[k])
+        # the grid's best point is up to half a step off the minimum: golden section on
+        # its neighbours (the power is smooth and unimodal there) to 1e-9 m/s
+        low, high = float(eas[k - 1]), float(eas[k + 1])
+        ratio = 0.5 * (math.sqrt(5.0) - 1.0)
+        a, b = high - ratio * (high - low), low + ratio * (high - low)
+        f_a, f_b = power_at(np.array([a, b]))
+        while high - low > 1e-9:
+            if f_a <= f_b:
+                high, b, f_b = b, a, f_a
+                a = high - ratio * (high - low)
+                f_a = float(power_at(np.array([a]))[0])
+            else:
+                low, a, f_a = a, b, f_b
+                b = low + ratio * (high - low)
+                f_b = float(power_at(np.array([b]))[0])
+        return 0.5 * (low + high)
 
     def _level_throttle_numpy(self, v: np.ndarray, rho: float, dead: int | None = None
                               ) -> tuple[np.ndarray, np.ndarray]:
@@ -459,7 +484,8 @@ class MissionModel:
         idle_excess = ca.if_else(solve_x > 0.5, t[0] - needed, 0.0)
         return {"x": x, "rate": rate, "reached": ok, "idle_excess": idle_excess,
                 "power": power, "current": current, "voltage": volt, "v": v,
-                "u_residual": residual, "level_residual": (thrust - drag) / weight}
+                "u_residual": residual, "level_residual": (thrust - drag) / weight,
+                "thrust": thrust}
 
     def _instant_function(self, dead: int | None, solve_v: bool) -> Any:
         """``(q, v_in, rho, p) -> aux`` with the loaded voltages (and airspeed) solved.
@@ -512,14 +538,19 @@ class MissionModel:
         alg = self._algebra(u, v, q, rho, p, dead)
         out = ca.vertcat(alg["x"], alg["v"], alg["rate"], alg["reached"], alg["idle_excess"],
                          alg["level_residual"], *alg["current"], *alg["voltage"],
-                         *alg["power"])
+                         *alg["power"], alg["thrust"])
         f = ca.Function(f"instant_{dead}_{int(solve_v)}", [q, v_in, rho, p], [out])
         self._instants[key] = f
         return f
 
     # -- the CasADi build -----------------------------------------------------------------
-    def _step_functions(self, dead: int | None, solve_v: bool) -> tuple[Any, Any, Any]:
-        """RK4 steps ``(state, step, p) -> state`` over time and over height, and the aux."""
+    def _step_functions(self, dead: int | None, solve_v: bool) -> dict[str, Any]:
+        """RK4 steps ``(state, step, p) -> state`` over time, height and airspeed; the aux.
+
+        Over airspeed (the take-off's ground roll): ``dstate/dV = rates / (dV/dt)`` with
+        ``m dV/dt = T - D_g - mu max(W - L_g, 0)`` and the thrust at the packs' loaded
+        voltage (SPEC 3), so a roll ends exactly at the lift-off speed.
+        """
         import casadi as ca
 
         n = self.n
@@ -542,7 +573,7 @@ class MissionModel:
             a = evaluate(state, v_given)
             d = ca.vertcat(a[6:6 + n] / SECONDS_PER_HOUR, a[6 + 2 * n:6 + 3 * n]
                            / SECONDS_PER_HOUR, a[2], a[1], 1.0)
-            return d, a[2]
+            return d, a
 
         def rk4(derivative: Any) -> Any:
             k1 = derivative(s, p[6])
@@ -555,16 +586,29 @@ class MissionModel:
             return rates(state, v_given)[0]
 
         def in_height(state: Any, v_given: Any) -> Any:
-            d, rate = rates(state, v_given)
+            d, a = rates(state, v_given)
+            rate = a[2]
             # climbs integrate over height: a rate of the wrong sign is flagged by the aux
             # outputs; here it is kept away from zero so the arithmetic stays finite
             safe = ca.if_else(step > 0, ca.fmax(rate, 1e-6), ca.fmin(rate, -1e-6))
             return d / safe
 
-        f_time = ca.Function("step_time", [s, step, p], [rk4(in_time)])
-        f_height = ca.Function("step_height", [s, step, p], [rk4(in_height)])
-        f_aux = ca.Function("aux", [s, p], [evaluate(s, p[6])])
-        return f_time, f_height, f_aux
+        aircraft = self.case.aircraft
+
+        def in_speed(state: Any, v_given: Any) -> Any:
+            d, a = rates(state, v_given)
+            drag, friction = ground_roll_resistance_n(aircraft, v_given, self._rho(state[2 * n]))
+            # the take-off analysis has refused a roll whose net force vanishes at the
+            # reference voltage; the floor only keeps the arithmetic finite
+            accel = ca.fmax((a[6 + 3 * n] - drag - friction) / aircraft.mass_kg, 1e-9)
+            return d / accel
+
+        return {
+            "time": ca.Function("step_time", [s, step, p], [rk4(in_time)]),
+            "height": ca.Function("step_height", [s, step, p], [rk4(in_height)]),
+            "speed": ca.Function("step_speed", [s, step, p], [rk4(in_speed)]),
+            "aux": ca.Function("aux", [s, p], [evaluate(s, p[6])]),
+        }
 
     def _segment_graph(self, plan: _Plan, state: Any, durations: Any, theta: Any,
                        nodes_aux: bool = True) -> tuple[list[Any], list[Any], Any]:
@@ -577,7 +621,8 @@ class MissionModel:
         key = (plan.dead, plan.solve_v)
         if key not in self._steps:
             self._steps[key] = self._step_functions(plan.dead, plan.solve_v)
-        f_time, f_height, f_aux = self._steps[key]
+        steppers = self._steps[key]
+        f_aux = steppers["aux"]
         if plan.kind == "takeoff":
             phases: list[tuple[str, Any, Any]] = [
                 (kind, step, ca.DM(rows.T)) for kind, step, rows in self._takeoff_phases(plan)
@@ -594,7 +639,7 @@ class MissionModel:
                 phases = [("height", (plan.end_h - plan.start_h) / STEPS, rows)]
         nodes, auxes = [], []
         for kind, step, p_rows in phases:
-            f = f_time if kind == "time" else f_height
+            f = steppers[kind]
             steps = p_rows.shape[1]
             history = f.mapaccum(steps)(state, ca.repmat(step, 1, steps), p_rows)
             both = ca.horzcat(state, history)
@@ -660,26 +705,23 @@ class MissionModel:
                               dtype=float).ravel()
 
     def _takeoff_phases(self, plan: _Plan) -> list[tuple[str, float, np.ndarray]]:
-        """Ground roll (airspeed history), rotation and the airborne part to the obstacle."""
+        """Ground roll (over airspeed), rotation and the airborne part to the obstacle."""
         from tuflexperf.analysis.takeoff import solve_takeoff
 
         result = solve_takeoff(self.case)
         if self.takeoff_to_obstacle and result.distance_to_obstacle_m is None:
             raise NotAttainable(f"segment {plan.index + 1} (takeoff): {result.obstacle_reason}")
         self.takeoff = result
-        t_hist = np.asarray(result.history_time_s, dtype=float)
-        v_hist = np.asarray(result.history_airspeed_m_s, dtype=float)
-        t_acc = float(t_hist[-1])
-        dt = t_acc / STEPS
-        grid = np.arange(STEPS) * dt
+        v_lo = result.liftoff_speed_m_s
+        # the ground roll is integrated over airspeed from rest to the lift-off speed, with
+        # the thrust at the packs' voltage (the take-off analysis knows no pack state)
+        dv = v_lo / STEPS
+        grid = np.arange(STEPS) * dv
         rows = np.zeros((STEPS, _P_SIZE))
         rows[:, 1] = 1.0  # full throttle
         rows[:, 5] = 1.0  # airspeed given, height rate forced (0 on the runway)
-        rows[:, 6] = np.interp(grid, t_hist, v_hist)
-        rows[:, 7] = np.interp(grid + dt / 2, t_hist, v_hist)
-        rows[:, 8] = np.interp(grid + dt, t_hist, v_hist)
-        phases: list[tuple[str, float, np.ndarray]] = [("time", dt, rows)]
-        v_lo = result.liftoff_speed_m_s
+        rows[:, 6], rows[:, 7], rows[:, 8] = grid, grid + 0.5 * dv, grid + dv
+        phases: list[tuple[str, float, np.ndarray]] = [("speed", dv, rows)]
         if result.rotation_time_s > 0:
             rot = np.zeros((8, _P_SIZE))
             rot[:, 1], rot[:, 5], rot[:, 6:9] = 1.0, 1.0, v_lo
@@ -707,12 +749,14 @@ class MissionModel:
             angle = math.asin(gradient)
             straight_s = (height - radius * (1.0 - math.cos(angle))) / (v_tr * gradient)
         arc_s = radius * angle / v_tr
-        t = np.linspace(0.0, arc_s, 17)
+        # each step climbs its chord at a constant rate: the height inside a step (and so the
+        # density the fans see) is off by ~ (dt^2/8) V^2/R; 64 steps keep the charge to 1e-8
+        t = np.linspace(0.0, arc_s, ARC_STEPS + 1)
         h = radius * (1.0 - np.cos(v_tr * t / radius))
-        arc = np.zeros((16, _P_SIZE))
+        arc = np.zeros((ARC_STEPS, _P_SIZE))
         arc[:, 1], arc[:, 5], arc[:, 6:9] = 1.0, 1.0, v_tr
-        arc[:, 2] = np.diff(h) / (arc_s / 16)
-        phases: list[tuple[str, float, np.ndarray]] = [("time", arc_s / 16, arc)]
+        arc[:, 2] = np.diff(h) / (arc_s / ARC_STEPS)
+        phases: list[tuple[str, float, np.ndarray]] = [("time", arc_s / ARC_STEPS, arc)]
         if straight_s > 0:
             climb = np.zeros((8, _P_SIZE))
             climb[:, 1], climb[:, 5], climb[:, 6:9] = 1.0, 1.0, v_tr
