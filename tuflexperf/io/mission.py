@@ -16,7 +16,12 @@ from pydantic import Field, model_validator
 
 from tuflexperf.io.yamlio import StrictModel, load_model
 
-Positive = Annotated[float, Field(gt=0)]
+# upper bounds keep absurd numbers (1e300) out of the integrator as bad input, far beyond any
+# flight of a battery aircraft: below Mach 1 (as the envelope), a week, 100 000 km, 100 m/s
+Airspeed = Annotated[float, Field(gt=0, le=340)]
+Minutes = Annotated[float, Field(gt=0, le=10080)]
+Kilometres = Annotated[float, Field(gt=0, le=100000)]
+Rate = Annotated[float, Field(gt=0, le=100)]
 Height = Annotated[float, Field(ge=0, le=10000)]
 Fraction = Annotated[float, Field(ge=0, le=1)]
 SegmentType = Literal["takeoff", "climb", "cruise", "loiter", "descent", "engine_failure"]
@@ -39,12 +44,12 @@ class SegmentSchema(StrictModel):
 
     type: SegmentType
     to_altitude_m: Height | None = None
-    airspeed_m_s: Positive | None = None
+    airspeed_m_s: Airspeed | None = None
     throttle: Fraction | None = None
-    climb_rate_m_s: Positive | None = None
-    descent_rate_m_s: Positive | None = None
-    time_min: Positive | None = None
-    distance_km: Positive | None = None
+    climb_rate_m_s: Rate | None = None
+    descent_rate_m_s: Rate | None = None
+    time_min: Minutes | None = None
+    distance_km: Kilometres | None = None
     engine: Annotated[str, Field(min_length=1)] | None = None
 
     @model_validator(mode="after")
