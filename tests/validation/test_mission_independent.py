@@ -727,6 +727,21 @@ def test_cutoff_exits_1_naming_the_segment_and_the_time(tmp_path: Path) -> None:
     assert "Traceback" not in human.stderr
 
 
+def test_cutoff_of_an_absurdly_long_cruise_is_the_same_cut_off(tmp_path: Path) -> None:
+    """A cruise of 1e7 km (months: one RK4 step of ~6e6 s leaps past the pack's knee) ends at
+    the same cut-off as a 30-min one; it reported 1988 s instead of 1537 s before the
+    cut-off search judged every node, not only the segment's end."""
+    text = SHIPPED_MISSION.read_text().replace("time_min: 8}", "distance_km: 10000000}")
+    path = tmp_path / "far.yaml"
+    path.write_text(text)
+    ref = Reference(SHIPPED_CASE)
+    with pytest.raises(CutOff) as caught:
+        fly(ref, yaml.safe_load(_long_cruise(tmp_path, 30).read_text())["segments"])
+    code, tool = tool_json(path)
+    assert code == 1 and tool["reason"].startswith("segment 3 (cruise): ")
+    assert tool["ended_at_s"] == pytest.approx(caught.value.time_s, abs=1e-3)
+
+
 def test_cutoff_with_the_voltage_effect_after_an_engine_failure(tmp_path: Path) -> None:
     """The made-up case's loiter on two fans runs the packs to the cut-off: exit 1 naming
     segment 6 (loiter) at the reference's cut-off time."""

@@ -663,8 +663,20 @@ class MissionModel:
             durations, theta = ca.MX.sym("durations", m), ca.MX.sym("theta", 3 * m)
             _, auxes, end = self._segment_graph(self.plans[k], start, durations, theta,
                                                 nodes_aux=False)
+            # over the segment's nodes: the least loaded voltage of a live engine and
+            # whether the charge stays on the discharge curve (rising, short of the pole):
+            # a step too long for the discharge leaps past the knee, where the circuit's
+            # voltage rises again, and its end alone would look fine
+            nodes, node_aux, _ = self._segment_graph(self.plans[k], start, durations, theta)
+            states, aux = ca.horzcat(*nodes), ca.horzcat(*node_aux)
+            n, dead = self.n, self.plans[k].dead
+            live = [i for i in range(n) if i != dead]
+            least_v = ca.mmin(ca.vertcat(*(aux[6 + n + i, :].T for i in live)))
+            q = states[:n, :]
+            fall = ca.mmin(ca.vec(q[:, 1:] - q[:, :-1])) if q.shape[1] > 1 else ca.MX(0.0)
             self._segments[k] = ca.Function(f"segment_{k}", [start, durations, theta],
-                                            [end, auxes[-1][:, -1]])
+                                            [end, auxes[-1][:, -1], least_v, fall,
+                                             ca.mmax(ca.vec(q))])
         return self._segments[k]
 
     def _build(self) -> None:
@@ -805,29 +817,45 @@ class MissionModel:
         """Time [s] into a timed segment at which the loaded voltage meets the cut-off.
 
         Bisection on the segment flown from ``start`` for ``tau`` in ``[low, high]`` (the
-        voltage is above the cut-off at ``low``, below at ``high``) to 1e-6 s. Returns the
-        time and the state and aux outputs there.
+        voltage is above the cut-off at ``low``, below at ``high``) to 1e-6 s, each ``tau``
+        judged by the least voltage over its nodes (and the charge staying on the discharge
+        curve); a bracket wider than a minute is first narrowed by doubling steps from
+        ``low``. Returns the time and the state and aux outputs there.
         """
         f = self._segment_function(plan.index)
         d = np.array(durations, dtype=float)
-        live = [i for i in range(self.n) if i != plan.dead]
+        pole = self.packs * self.params.max_capacity_ah
 
         def margin(tau: float) -> float:
             d[plan.index] = tau
-            end, aux = (np.asarray(v, dtype=float).ravel() for v in f(start, d, theta))
+            end, aux, least_v, fall, most = (np.asarray(v, dtype=float).ravel()
+                                             for v in f(start, d, theta))
             q = np.stack([start[:self.n], end[:self.n]], axis=1)
-            if not self._charge_valid(q, aux[6:6 + self.n, None] * np.ones((1, 2))).all():
+            if not (self._charge_valid(q, aux[6:6 + self.n, None] * np.ones((1, 2))).all()
+                    and fall[0] >= -1e-12 and most[0] < pole):
                 return -1.0
-            value = min(aux[6 + self.n + i] for i in live) - self.cutoff_v
+            value = float(least_v[0]) - self.cutoff_v
             return value if math.isfinite(value) else -1.0
 
-        for _ in range(60):
+        # a bracket far wider than the discharge (a segment of months): march out from
+        # ``low`` by doubling, so that every integration tried spans at most twice the time
+        # to the cut-off and its nodes see the voltage cross before the knee
+        span = high - low
+        if span > 60.0:
+            step = 60.0
+            while step < span:
+                if margin(low + step) < 0:
+                    high = low + step
+                    break
+                low, span = low + step, span - step
+                step *= 2.0
+        for _ in range(200):
             if high - low <= 1e-6:
                 break
             mid = 0.5 * (low + high)
             low, high = (mid, high) if margin(mid) >= 0 else (low, mid)
         d[plan.index] = low  # the last time still on the right side of the cut-off
-        end, aux = (np.asarray(v_, dtype=float).ravel() for v_ in f(start, d, theta))
+        end, aux = (np.asarray(v_, dtype=float).ravel() for v_ in f(start, d, theta)[:2])
         return low, end, aux
 
     def _result(self, states: np.ndarray, aux: np.ndarray, solved: dict[str, Any] | None,

@@ -16,11 +16,13 @@ from pydantic import Field, model_validator
 
 from tuflexperf.io.yamlio import StrictModel, load_model
 
-# upper bounds keep absurd numbers (1e300) out of the integrator as bad input, far beyond any
-# flight of a battery aircraft: below Mach 1 (as the envelope), a week, 100 000 km, 100 m/s
+# upper bounds keep absurd numbers (1e300) out of the integrator as bad input (a cut-off inside
+# a 1e300-min segment cannot be located: 60 bisections of a 1e298 s step), yet far beyond any
+# flight of a battery aircraft, which the cut-off ends: below Mach 1 (as the envelope), about
+# two years, 1e7 km, 100 m/s
 Airspeed = Annotated[float, Field(gt=0, le=340)]
-Minutes = Annotated[float, Field(gt=0, le=10080)]
-Kilometres = Annotated[float, Field(gt=0, le=100000)]
+Minutes = Annotated[float, Field(gt=0, le=1e6)]
+Kilometres = Annotated[float, Field(gt=0, le=1e7)]
 Rate = Annotated[float, Field(gt=0, le=100)]
 Height = Annotated[float, Field(ge=0, le=10000)]
 Fraction = Annotated[float, Field(ge=0, le=1)]
