@@ -204,6 +204,8 @@ MORE = [
     Case("--set tightens a limit", ("check", "--case", "requirements/tuflex.yaml", "--set",
                                     "requirements.takeoff.max_ground_roll_m=50"), 1, "FAIL"),
     Case("table to a full disk", ("trim", "--table"), 2, "disk full", None),
+    Case("dask address without a port", ("check", "--samples", "10", "--dask", "nonsense"), 2,
+         "--dask"),
 ]
 
 

@@ -201,6 +201,9 @@ def run_chunks(
             ) from None
         try:
             client = Client(dask_address, timeout="5s")
+        except ValueError as exc:  # distributed's own word on a malformed address
+            raise InputError(f"--dask: {dask_address!r} is not a scheduler address "
+                             f"(expected tcp://HOST:PORT): {exc}") from None
         except (OSError, TimeoutError) as exc:
             raise InputError(f"--dask: cannot reach the scheduler at {dask_address}: {exc}") \
                 from None
