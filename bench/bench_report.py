@@ -27,6 +27,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 TAG = "before-study-restructure"
+TAG_COMMIT = "9bc9fc8"  # what the tag names: a clone without tags still has the commit
 
 
 def console_run(out: Path, pythonpath: Path | None) -> float:
@@ -44,6 +45,9 @@ def console_run(out: Path, pythonpath: Path | None) -> float:
 def export_tag(tag: str, into: Path) -> Path | None:
     """The tagged tree, unpacked (None when this is not a git checkout with that tag)."""
     archive = subprocess.run(["git", "-C", str(ROOT), "archive", tag], capture_output=True)
+    if archive.returncode != 0 and tag == TAG:
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", TAG_COMMIT],
+                                 capture_output=True)
     if archive.returncode != 0:
         return None
     with tarfile.open(fileobj=io.BytesIO(archive.stdout)) as tar:
