@@ -103,23 +103,33 @@ def estimate_delay(
     basis, _ = np.linalg.qr(np.column_stack([np.ones_like(t), tn]))
     y_free = y - basis @ (basis.T @ y)
 
+    yy = float(y_free @ y_free)
+
     def sse_of_taus(delay: float, taus: NDArray[np.float64]) -> NDArray[np.float64]:
         u = np.interp(t - delay, t, x)
         both = np.stack([u, u * u])
-        out = np.empty(taus.size)
+        rows = np.empty((6, t.size))
+        rows[3:5], rows[5] = basis.T, y_free
+        grams = np.empty((taus.size, 3, 3))
+        rhs = np.empty((taus.size, 3))
         for m, tau in enumerate(taus):
-            lu, lu2 = _lag_filter(both, float(tau), dt)
-            fan = np.stack([lu, lu * lu, lu2])
-            fan -= (fan @ basis) @ basis.T
-            # 3 x 3 normal equations (rank-deficient at tau = 0, where lu2 = lu^2), columns
-            # scaled to unit norm; the residual is formed explicitly
-            scale = np.sqrt(np.einsum("ij,ij->i", fan, fan))
-            scale[scale == 0.0] = 1.0
-            fan /= scale[:, None]
-            coef = np.linalg.lstsq(fan @ fan.T, fan @ y_free, rcond=1e-12)[0]
-            residual = y_free - coef @ fan
-            out[m] = residual @ residual
-        return out
+            rows[0], rows[2] = _lag_filter(both, float(tau), dt)
+            np.multiply(rows[0], rows[0], out=rows[1])
+            # one product gives every dot product of the fan columns L[u], L[u]^2, L[u^2]
+            # with each other, the constant/trend basis and the data
+            dots = rows[:3] @ rows.T
+            cross = dots[:, 3:5]
+            grams[m] = dots[:, :3] - cross @ cross.T  # fan columns with the basis projected out
+            rhs[m] = dots[:, 5]  # y_free is orthogonal to the basis already
+        # columns scaled to unit norm; 3 x 3 normal equations (rank-deficient at tau = 0, where
+        # L[u^2] = L[u]^2): the pseudo-inverse drops singular values below 1e-12 of the
+        # largest, as lstsq does; the least-squares residual is ||y||^2 - b' G^+ b
+        scale = np.sqrt(np.maximum(np.einsum("mii->mi", grams), 0.0))
+        scale[scale == 0.0] = 1.0
+        grams /= scale[:, :, None] * scale[:, None, :]
+        rhs /= scale
+        coef = np.einsum("mij,mj->mi", np.linalg.pinv(grams, rcond=1e-12), rhs)
+        return yy - np.einsum("mi,mi->m", coef, rhs)
 
     max_lag = min(int(round(max_delay_s / dt)), t.size // 4)
     xcorr = _xcorr_lag(x, y, dt, max_lag)
