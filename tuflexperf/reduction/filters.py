@@ -54,20 +54,29 @@ def movstd(x: ArrayLike, k: int) -> Array:
 
     A one-sample window has a standard deviation of 0, as in MATLAB.
     """
+    return _moving_mean_std(x, k)[1]
+
+
+def _moving_mean_std(x: ArrayLike, k: int) -> tuple[Array, Array]:
+    """:func:`movmean` and :func:`movstd` from one pair of cumulative sums (equal to both)."""
     values = np.asarray(x, dtype=float)
     if values.size == 0:
-        return values.copy()
-    centred = values - float(np.mean(values))
-    c1 = np.concatenate(([0.0], np.cumsum(centred)))
-    c2 = np.concatenate(([0.0], np.cumsum(centred * centred)))
+        return values.copy(), values.copy()
+    offset = float(np.mean(values))  # centring keeps the cumulative sums well conditioned
+    centred = values - offset
+    c1 = np.zeros(values.size + 1)
+    np.cumsum(centred, out=c1[1:])
+    c2 = np.zeros(values.size + 1)
+    np.cumsum(centred * centred, out=c2[1:])
     lo, hi = _bounds(values.size, k)
     count = (hi - lo).astype(float)
     s1 = c1[hi] - c1[lo]
     s2 = c2[hi] - c2[lo]
+    mean = s1 / count + offset
     with np.errstate(invalid="ignore", divide="ignore"):
         variance = (s2 - s1 * s1 / count) / (count - 1.0)
     variance = np.where(count > 1, np.maximum(variance, 0.0), 0.0)
-    return np.sqrt(variance)
+    return mean, np.sqrt(variance)
 
 
 def movmedian(x: ArrayLike, k: int) -> Array:
@@ -133,8 +142,7 @@ def isoutlier_movmean(x: ArrayLike, k: int, threshold: float = 3.0) -> NDArray[n
     same window (which includes the sample itself); the test is strict (``>``).
     """
     values = np.asarray(x, dtype=float)
-    centre = movmean(values, k)
-    spread = movstd(values, k)
+    centre, spread = _moving_mean_std(values, k)
     return np.abs(values - centre) > threshold * spread
 
 
@@ -152,8 +160,7 @@ def filloutliers_movmean(x: ArrayLike, k: int, threshold: float = 3.0) -> tuple[
         How many samples were replaced.
     """
     values = np.asarray(x, dtype=float)
-    centre = movmean(values, k)
-    spread = movstd(values, k)
+    centre, spread = _moving_mean_std(values, k)
     outlier = np.abs(values - centre) > threshold * spread
     filled = np.where(outlier, centre, values)
     return filled, int(np.count_nonzero(outlier))
