@@ -19,6 +19,7 @@ with frequency, the dead time's keeps growing.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -55,6 +56,46 @@ def _xcorr_lag(x: NDArray[np.float64], y: NDArray[np.float64], dt: float, max_la
     size = 1 << int(2 * xc.size - 1).bit_length()
     corr = np.fft.irfft(np.fft.rfft(yc, size) * np.conj(np.fft.rfft(xc, size)), size)
     return float(np.argmax(corr[: max_lag + 1])) * dt
+
+
+def _projected_sse(
+    t: NDArray[np.float64], x: NDArray[np.float64], y: NDArray[np.float64], dt: float
+) -> Callable[[float, NDArray[np.float64]], NDArray[np.float64]]:
+    """``(delay, taus) -> residual sum of squares per tau`` of the variable-projection fit
+    on one sampling ``t`` [s] of throttle ``x`` [-] and force ``y`` [N] (step ``dt`` [s])."""
+    tn = (t - t[0]) / max(t[-1] - t[0], dt)
+    # constant and trend columns do not depend on (d, tau): project them out once
+    basis, _ = np.linalg.qr(np.column_stack([np.ones_like(t), tn]))
+    y_free = y - basis @ (basis.T @ y)
+    yy = float(y_free @ y_free)
+
+    def sse_of_taus(delay: float, taus: NDArray[np.float64]) -> NDArray[np.float64]:
+        u = np.interp(t - delay, t, x)
+        both = np.stack([u, u * u])
+        rows = np.empty((6, t.size))
+        rows[3:5], rows[5] = basis.T, y_free
+        grams = np.empty((taus.size, 3, 3))
+        rhs = np.empty((taus.size, 3))
+        for m, tau in enumerate(taus):
+            rows[0], rows[2] = _lag_filter(both, float(tau), dt)
+            np.multiply(rows[0], rows[0], out=rows[1])
+            # one product gives every dot product of the fan columns L[u], L[u]^2, L[u^2]
+            # with each other, the constant/trend basis and the data
+            dots = rows[:3] @ rows.T
+            cross = dots[:, 3:5]
+            grams[m] = dots[:, :3] - cross @ cross.T  # fan columns with the basis projected out
+            rhs[m] = dots[:, 5]  # y_free is orthogonal to the basis already
+        # columns scaled to unit norm; 3 x 3 normal equations (rank-deficient at tau = 0, where
+        # L[u^2] = L[u]^2): the pseudo-inverse drops singular values below 1e-12 of the
+        # largest, as lstsq does; the least-squares residual is ||y||^2 - b' G^+ b
+        scale = np.sqrt(np.maximum(np.einsum("mii->mi", grams), 0.0))
+        scale[scale == 0.0] = 1.0
+        grams /= scale[:, :, None] * scale[:, None, :]
+        rhs /= scale
+        coef = np.einsum("mij,mj->mi", np.linalg.pinv(grams, rcond=1e-12), rhs)
+        return yy - np.einsum("mi,mi->m", coef, rhs)
+
+    return sse_of_taus
 
 
 def estimate_delay(
@@ -97,39 +138,16 @@ def estimate_delay(
     x = block_mean(throttle, block)
     y = block_mean(force, block)
     dt = block / sample_rate_hz
-    tn = (t - t[0]) / max(t[-1] - t[0], dt)
     sst = float(np.sum((y - y.mean()) ** 2))
-    # constant and trend columns do not depend on (d, tau): project them out once
-    basis, _ = np.linalg.qr(np.column_stack([np.ones_like(t), tn]))
-    y_free = y - basis @ (basis.T @ y)
-
-    yy = float(y_free @ y_free)
-
-    def sse_of_taus(delay: float, taus: NDArray[np.float64]) -> NDArray[np.float64]:
-        u = np.interp(t - delay, t, x)
-        both = np.stack([u, u * u])
-        rows = np.empty((6, t.size))
-        rows[3:5], rows[5] = basis.T, y_free
-        grams = np.empty((taus.size, 3, 3))
-        rhs = np.empty((taus.size, 3))
-        for m, tau in enumerate(taus):
-            rows[0], rows[2] = _lag_filter(both, float(tau), dt)
-            np.multiply(rows[0], rows[0], out=rows[1])
-            # one product gives every dot product of the fan columns L[u], L[u]^2, L[u^2]
-            # with each other, the constant/trend basis and the data
-            dots = rows[:3] @ rows.T
-            cross = dots[:, 3:5]
-            grams[m] = dots[:, :3] - cross @ cross.T  # fan columns with the basis projected out
-            rhs[m] = dots[:, 5]  # y_free is orthogonal to the basis already
-        # columns scaled to unit norm; 3 x 3 normal equations (rank-deficient at tau = 0, where
-        # L[u^2] = L[u]^2): the pseudo-inverse drops singular values below 1e-12 of the
-        # largest, as lstsq does; the least-squares residual is ||y||^2 - b' G^+ b
-        scale = np.sqrt(np.maximum(np.einsum("mii->mi", grams), 0.0))
-        scale[scale == 0.0] = 1.0
-        grams /= scale[:, :, None] * scale[:, None, :]
-        rhs /= scale
-        coef = np.einsum("mij,mj->mi", np.linalg.pinv(grams, rcond=1e-12), rhs)
-        return yy - np.einsum("mi,mi->m", coef, rhs)
+    sse_of_taus = _projected_sse(t, x, y, dt)
+    # the grid on block means four times coarser, its best cell and neighbours again at
+    # the fit rate: the grid is where most (d, tau) pairs are tried
+    coarse = 4 if t.size >= 256 else 1
+    sse_coarse = (
+        _projected_sse(block_mean(t, coarse), block_mean(x, coarse), block_mean(y, coarse),
+                       dt * coarse)
+        if coarse > 1 else sse_of_taus
+    )
 
     max_lag = min(int(round(max_delay_s / dt)), t.size // 4)
     xcorr = _xcorr_lag(x, y, dt, max_lag)
@@ -137,9 +155,17 @@ def estimate_delay(
     step_d = max(dt, 0.02)
     delays = np.arange(0.0, top + 1e-12, step_d)
     taus = np.concatenate(([0.0], np.geomspace(dt / 2, max(2 * top, 4 * dt), 12)))
-    grid = np.array([sse_of_taus(float(d), taus) for d in delays])
+    grid = np.array([sse_coarse(float(d), taus) for d in delays])
     i, j = np.unravel_index(int(np.argmin(grid)), grid.shape)
-    delay, tau, best = float(delays[i]), float(taus[j]), float(grid[i, j])
+    if coarse > 1:
+        near_d = np.arange(max(i - 1, 0), min(i + 2, delays.size))
+        near_tau = np.arange(max(j - 1, 0), min(j + 2, taus.size))
+        fine = np.array([sse_of_taus(float(delays[a]), taus[near_tau]) for a in near_d])
+        a, b = np.unravel_index(int(np.argmin(fine)), fine.shape)
+        i, j, best = int(near_d[a]), int(near_tau[b]), float(fine[a, b])
+    else:
+        best = float(grid[i, j])
+    delay, tau = float(delays[i]), float(taus[j])
 
     # refine on a 3 x 3 stencil: jump to the minimum of the quadratic through it
     # (within the stencil), else to its best point; shrink the stencil each round
