@@ -75,6 +75,23 @@ Probe(x=1.0)
 import typer._adapters
 """
 
+# The least a typer CLI on this stack can do: two commands, one bool option, and the same
+# imports as the floor made real (typer >= 0.2x builds its parameters through pydantic
+# adapters on every parse, so the parse itself imports pydantic's model machinery).
+MINIMAL_TYPER_CLI = """
+import sys
+import casadi, numpy, yaml, typer
+app = typer.Typer()
+@app.command()
+def check(as_json: bool = typer.Option(False, "--json")) -> None:
+    print("PASS")
+@app.command()
+def other() -> None:
+    pass
+sys.argv = ["minimal", "check"]
+app()
+"""
+
 
 def main() -> None:
     exe = shutil.which("tuflexperf", path=str(Path(sys.executable).parent)) or "tuflexperf"
@@ -96,6 +113,11 @@ def main() -> None:
     print(
         f"  + one pydantic model validated, typer's parser {used_s * 1e3:6.1f} ms   "
         f"ratio to the floor {used_s / stack_s:5.2f} (no tuflexperf code at all)"
+    )
+    minimal_s = wall([sys.executable, "-c", MINIMAL_TYPER_CLI])
+    print(
+        f"  a do-nothing typer CLI on the same imports {minimal_s * 1e3:6.1f} ms   "
+        f"ratio to the floor {minimal_s / stack_s:5.2f} (the least any typer CLI here takes)"
     )
     print(
         f"  tuflexperf's own share (check - that)  {(check_s - used_s) * 1e3:6.1f} ms"

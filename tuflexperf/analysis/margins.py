@@ -9,7 +9,8 @@ endurance throttle and the obstacle height):
   crossing nearest the nominal bracketed, and all brackets refined together, each batch
   call cutting every bracket into 16 (15 points in each: a batch call costs about the same
   for one row as for hundreds), to below 1e-15 of the range (a rootfinder on the met / not
-  met boundary, so a requirement that becomes not attainable binds too). "none in range" when it never binds.
+  met boundary, so a requirement that becomes not attainable binds too). "none in range"
+  when it never binds.
 - **sensitivity** d(value)/d(parameter) at the nominal case by CasADi's automatic
   differentiation of the requirement's value written with the model functions on CasADi
   symbols -- not finite differences. Where the deterministic value is a discrete choice
