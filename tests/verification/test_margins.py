@@ -224,3 +224,16 @@ def test_catapult_endurance_sensitivities_and_limits(tmp_path) -> None:
     below = deterministic(catapult, "aircraft.mass_kg", limit * (1 - 1e-4), "flight_endurance")
     above = deterministic(catapult, "aircraft.mass_kg", limit * (1 + 1e-4), "flight_endurance")
     assert below is not None and above is None
+
+
+def test_cl_max_binds_trim_where_stall_reaches_the_envelope_foot(case, limits) -> None:
+    """The same boundary in cl_max: below ``2 m g / (rho S (V_min / margin)^2)`` trim at the
+    envelope's least airspeed is below stall, so it fails as not attainable (a midpoint of the
+    final bracket used to call it a limit: the value just past it is NaN, not over 1)."""
+    got, binds, _ = limits[("trim_throttle_max", "aircraft.cl_max")]
+    ac, v_min = case.aircraft, case.requirements.envelope.min_airspeed_m_s
+    margin = case.requirements.envelope.stall_margin
+    cl_max = 2 * ac.mass_kg * 9.80665 / (case.density_kg_m3 * ac.wing_area_m2
+                                         * (v_min / margin) ** 2)
+    assert got == pytest.approx(cl_max, rel=1e-9)
+    assert binds == "not attainable"

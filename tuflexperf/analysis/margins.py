@@ -170,7 +170,10 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
             edges = np.column_stack([low, points, high])
             at = np.arange(len(brackets))
             low, high = edges[at, first], edges[at, first + 1]
-        edge = evaluator.evaluate(_rows_pairs(nominal, brackets, 0.5 * (low + high)))
+        # how it binds is judged at the bracket's failing end, the first value past the
+        # limit (a midpoint of a bracket a float wide would land on either side)
+        failing = np.where(met_low, high, low)
+        edge = evaluator.evaluate(_rows_pairs(nominal, brackets, failing))
         for i, (name, key, _, _, _) in enumerate(brackets):
             root = 0.5 * (low[i] + high[i])
             binds = "limit" if np.isfinite(edge.values[name][i]) else "not attainable"
