@@ -156,19 +156,23 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
         high = np.array([b[3] for b in brackets])
         met_low = np.array([b[4] for b in brackets])
         inside = np.arange(1, _SECTIONS) / _SECTIONS
+        # every bracket's inner points in one batch: row i * 15 + j is point j of bracket i
+        rows = np.repeat(np.arange(len(brackets)), inside.size)
+        row_brackets = [brackets[i] for i in rows]
+        row_names = np.array([b[0] for b in row_brackets])
+        at = np.arange(len(brackets))
         for _ in range(_REFINEMENTS):
-            # every bracket's inner points in one batch: row i * 15 + j is point j of bracket i
             points = low[:, None] + (high - low)[:, None] * inside[None, :]
-            rows = np.repeat(np.arange(len(brackets)), inside.size)
-            result = evaluator.evaluate(_rows_pairs(nominal, [brackets[i] for i in rows],
-                                                    points.ravel()))
-            met = np.array([result.met(brackets[i][0])[r] for r, i in enumerate(rows)])
+            result = evaluator.evaluate(_rows_pairs(nominal, row_brackets, points.ravel()))
+            met = np.zeros(rows.size, dtype=bool)
+            for name in set(row_names):  # each requirement's verdicts once, not once a row
+                mine = row_names == name
+                met[mine] = result.met(name)[mine]
             changed = met.reshape(points.shape) != met_low[:, None]
             # the first point past the crossing (the high end when none is): the crossing
             # lies between it and the point before it, as a bisection would keep it
             first = np.where(changed.any(axis=1), np.argmax(changed, axis=1), inside.size)
             edges = np.column_stack([low, points, high])
-            at = np.arange(len(brackets))
             low, high = edges[at, first], edges[at, first + 1]
         # how it binds is judged at the bracket's failing end, the first value past the
         # limit (a midpoint of a bracket a float wide would land on either side)

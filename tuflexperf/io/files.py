@@ -156,7 +156,7 @@ def written_by_tuflexperf(head: bytes) -> bool:
         return b"Software\x00" + PNG_SOFTWARE.encode() in head
     if head.startswith(_CSV_HEADS):
         return True
-    columns = head.split(b"\n", 1)[0].strip().split(b",")
+    columns = first_line.strip().split(b",")
     tail = [c for c in columns if c.endswith(_SWEEP_COLUMN_ENDS)]
     keys = columns[: len(columns) - len(tail)]
     return (bool(tail) and len(tail) % 3 == 0 and columns[len(keys):] == tail

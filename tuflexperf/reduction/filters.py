@@ -40,13 +40,7 @@ def _bounds(n: int, k: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
 
 def movmean(x: ArrayLike, k: int) -> Array:
     """Moving mean over ``k`` samples with shrinking end windows (MATLAB ``movmean(x, k)``)."""
-    values = np.asarray(x, dtype=float)
-    if values.size == 0:
-        return values.copy()
-    offset = float(np.mean(values))  # centring keeps the cumulative sums well conditioned
-    csum = np.concatenate(([0.0], np.cumsum(values - offset)))
-    lo, hi = _bounds(values.size, k)
-    return (csum[hi] - csum[lo]) / (hi - lo) + offset
+    return _moving_mean_std(x, k)[0]
 
 
 def movstd(x: ArrayLike, k: int) -> Array:
