@@ -150,6 +150,45 @@ def test_sigterm_during_report_leaves_earlier_output_intact(workdir: Path) -> No
     assert not [p for p in workdir.iterdir() if p.name.startswith(".review")]
 
 
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_interrupting_the_whole_report_process_group(workdir: Path, signum: int) -> None:
+    """Ctrl-C in a terminal signals every process of the group: the forked PNG writers too.
+    They end quietly; the report's own process removes the staging, exit 130, no traceback."""
+    assert _run(workdir, "report", "--out", "review").returncode == 0
+    earlier = _tree(workdir / "review")
+    process = subprocess.Popen(
+        [sys.executable, "-m", "tuflexperf", "report", "--out", "review"], cwd=workdir,
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True,
+    )
+    deadline = time.monotonic() + 120
+    # a PNG in the staging folder: the writers are drawing
+    while not any(workdir.glob(".review.tmp-*/*.png")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    os.killpg(process.pid, signum)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130 and "Traceback" not in err, err
+    assert _tree(workdir / "review") == earlier
+    assert not [p for p in workdir.iterdir() if p.name.startswith(".review")]
+
+
+def test_an_error_after_an_interrupt_is_the_interrupt(monkeypatch, capsys) -> None:
+    """pandas turns Ctrl-C inside a gzip read into "Calling read(nbytes) on source failed":
+    once an interrupt has come, such an error exits 130 and never blames the input file."""
+    from tuflexperf import cli
+    from tuflexperf.io import files
+
+    monkeypatch.setattr(files, "install_interrupt_handlers", lambda: None)  # pytest's own stay
+    monkeypatch.setattr(files, "_signals_received", [signal.SIGINT])
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["check", "no-such-case.yaml"])
+    assert stop.value.code == 130
+    assert "no-such-case" not in capsys.readouterr().err
+    monkeypatch.setattr(files, "_signals_received", [])  # no interrupt: the same is bad input
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["check", "no-such-case.yaml"])
+    assert stop.value.code == 2 and "no-such-case" in capsys.readouterr().err
+
+
 def test_fit_writes_with_the_users_umask(workdir: Path) -> None:
     result = _run(workdir, "fit", "data/tuflex/campaign/campaign.yaml", "--out", "p.yaml")
     assert result.returncode == 0, result.stderr

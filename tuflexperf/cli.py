@@ -947,6 +947,15 @@ def export_command(
         typer.echo(f"  wrote {path}")
 
 
+def _unless_interrupted() -> None:
+    """An error after Ctrl-C or SIGTERM is the interrupt, whatever a library made of it
+    (pandas reports an interrupted read as a parse error): exit 130, never "bad input"."""
+    from tuflexperf.io.files import interrupted
+
+    if interrupted():
+        raise KeyboardInterrupt from None
+
+
 def _guarded(callback: Any) -> Any:
     """Turn InputError into exit 2 and NotAttainable into exit 1, one line on stderr each."""
 
@@ -955,11 +964,13 @@ def _guarded(callback: Any) -> Any:
         try:
             return callback(*args, **kwargs)
         except InputError as exc:
+            _unless_interrupted()
             sys.stderr.write(f"tuflexperf: error: {exc}\n")
             raise typer.Exit(2) from None
         except BrokenPipeError:  # the reader went away (`| head`): nothing more to say
             raise typer.Exit(0) from None
         except OSError as exc:  # a file the OS refuses (name too long, disk full, ...)
+            _unless_interrupted()
             import errno
 
             where = exc.filename or "stdout"
@@ -984,9 +995,9 @@ def main(argv: list[str] | None = None) -> None:
     """Console entry point: usage errors become one line on stderr and exit 2."""
     from typer.exceptions import Abort, TyperException
 
-    from tuflexperf.io.files import install_sigterm_handler
+    from tuflexperf.io.files import install_interrupt_handlers
 
-    install_sigterm_handler()  # SIGTERM unwinds like Ctrl-C: no staging left behind
+    install_interrupt_handlers()  # SIGTERM unwinds like Ctrl-C: no staging left behind
     # pydantic otherwise scans every installed package's entry points for plugins on the
     # first model (importlib.metadata, ~10 ms of each `check`); a user may still enable them
     os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")

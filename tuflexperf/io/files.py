@@ -247,14 +247,27 @@ class _Terminated(KeyboardInterrupt):
     """SIGTERM, delivered as an interrupt so every cleanup path runs (and exit is 130)."""
 
 
-def _raise_terminated(signum: int, frame: object) -> None:
-    raise _Terminated()
+_signals_received: list[int] = []
 
 
-def install_sigterm_handler() -> None:
-    """Make SIGTERM unwind like Ctrl-C (staging removed, earlier output intact)."""
-    with contextlib.suppress(ValueError):  # not the main thread: leave the default
-        signal.signal(signal.SIGTERM, _raise_terminated)
+def _raise_interrupt(signum: int, frame: object) -> None:
+    _signals_received.append(signum)
+    raise _Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
+def install_interrupt_handlers() -> None:
+    """Make SIGTERM unwind like Ctrl-C (staging removed, earlier output intact), and note
+    that either came, for :func:`interrupted`."""
+    with contextlib.suppress(ValueError):  # not the main thread: leave the defaults
+        signal.signal(signal.SIGINT, _raise_interrupt)
+        signal.signal(signal.SIGTERM, _raise_interrupt)
+
+
+def interrupted() -> bool:
+    """True once Ctrl-C or SIGTERM has come. A reader may turn the interrupt raised inside
+    it into an error of its own (pandas: "Calling read(nbytes) on source failed"), which
+    must not then be reported as a bad input file."""
+    return bool(_signals_received)
 
 
 @contextlib.contextmanager

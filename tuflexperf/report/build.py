@@ -301,6 +301,17 @@ def _write_pngs(named: list[tuple[str, Callable[[], Any]]], folder: Path,
             (keep / f"{name}.drawn").touch()
 
 
+def _png_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path,
+                keep: Path | None) -> None:
+    """A forked writer's body: on Ctrl-C or SIGTERM (sent to the whole process group) it
+    just ends; the report's own process reports the interrupt and removes what was staged."""
+    import signal
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, signal.SIG_DFL)
+    _write_pngs(named, folder, keep)
+
+
 def _kept_figure(keep: Path, name: str, writer: Any) -> tuple[Any, bool]:
     """(figure, mine) for the PDF page ``name``.
 
@@ -333,7 +344,7 @@ def _start_png_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path,
     if os.environ.get("TUFLEXPERF_SERIAL_REPORT") or not hasattr(os, "fork"):
         return None
     writer = multiprocessing.get_context("fork").Process(
-        target=_write_pngs, args=(named, folder, keep), daemon=True
+        target=_png_writer, args=(named, folder, keep), daemon=True
     )
     writer.start()
     return writer
