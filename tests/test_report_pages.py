@@ -8,7 +8,6 @@ a case with a mission; and every page for a failing made-up case (no traceback).
 
 from __future__ import annotations
 
-import pickle
 import re
 import shutil
 from pathlib import Path
@@ -181,7 +180,9 @@ def test_shipped_report_has_every_new_page_as_png_and_pdf_page(shipped_report):
     assert order.index("06b_thrust_band") > order.index("06_model_vs_measured")
     assert order.index("08b_performance") > order.index("08_trim_oei_throttle")
     assert order[-1] == "11_tornado"
-    assert not list(out.glob("*.pickle*"))  # the kept figures stay out of the report
+    # the one-page PDFs the report is put together from stay out of it
+    assert not list(out.glob("*.pickle*")) and not list(out.glob("*.part"))
+    assert [p.name for p in out.glob("*.pdf")] == ["review.pdf"]
 
 
 @pytest.fixture(scope="module")
@@ -278,25 +279,31 @@ def test_tornado_labels_each_bar_with_the_limit_value_or_none_in_range(shipped_f
     assert f"{mass:.4g} kg" in texts
 
 
-def test_kept_figures_are_the_pngs_pixel_for_pixel(tmp_path, shipped_figures):
-    """The PDF's analysis pages come from the PNG writer's kept figures: same layout."""
-    from matplotlib.image import imread
+def test_every_png_is_its_page_of_the_pdf_pixel_for_pixel(shipped_report):
+    """Each page is drawn once (a vector PDF page); its PNG is that page rasterised, so the
+    PNG shows exactly what the PDF does, in the PDF's page order (title page first)."""
+    import pypdfium2
+    from PIL import Image
 
-    from tuflexperf.io.case import load_case
-    from tuflexperf.report import analysis_figures as af
-    from tuflexperf.report.build import _write_pngs
+    from tuflexperf.report.build import PNG_DPI
 
-    case = load_case(None)
-    _, analyses, _ = shipped_figures
-    _write_pngs([("08b_performance", lambda: af.performance(case, analyses))], tmp_path,
-                tmp_path)
-    with open(tmp_path / "08b_performance.pickle", "rb") as handle:
-        fig = pickle.load(handle)
-    assert fig.get_layout_engine() is None or type(fig.get_layout_engine()).__name__ == (
-        "PlaceHolderLayoutEngine")
-    fig.savefig(tmp_path / "again.png", dpi=150)
-    np.testing.assert_array_equal(imread(tmp_path / "08b_performance.png"),
-                                  imread(tmp_path / "again.png"))
+    out, data = shipped_report
+    pngs = sorted(Path(f) for f in data["figures"])
+    document = pypdfium2.PdfDocument(out / "review.pdf")
+    try:
+        assert len(document) == data["pages"]
+        for page, png in enumerate(pngs, start=1):  # page 0 is the title page
+            rendered = np.asarray(document[page].render(scale=PNG_DPI / 72.0).to_pil())
+            written = np.asarray(Image.open(png).convert("RGB"))
+            np.testing.assert_array_equal(written, rendered, err_msg=png.name)
+        # and no PNG matches a neighbouring page: the comparison can tell pages apart
+        other = np.asarray(document[1].render(scale=PNG_DPI / 72.0).to_pil())
+        assert not np.array_equal(np.asarray(Image.open(pngs[1]).convert("RGB")), other)
+    finally:
+        document.close()
+    with Image.open(pngs[0]) as image:
+        assert image.info.get("Software", "").startswith("tuflexperf")  # ours (SPEC 5)
+        assert round(image.info["dpi"][0]) == PNG_DPI
 
 
 # --- a case with a mission ------------------------------------------------------------------

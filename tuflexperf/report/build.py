@@ -139,25 +139,33 @@ def build_report(
 def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
             kept: Path) -> ReportResult:
     """Draw every page into ``folder``; ``kept`` is a private temporary folder for the
-    laid-out figures the PNG writer hands to the PDF."""
-    from tuflexperf.report import analysis_figures as af
-    from tuflexperf.report import figures as fg
+    one-page PDFs that the PDF is assembled from."""
+    # The campaign is reduced by a forked copy of this process from the start (before
+    # matplotlib is imported: it needs none), while this one solves the analyses and a
+    # second copy draws their pages (the two need nothing of each other's).
+    reduction = _start_campaign_reduction(case, campaign, kept, step.detail)
+    writers: list[Any] = [reduction.process]
+    try:
+        from tuflexperf.report import analysis_figures as af
+        from tuflexperf.report import figures as fg
 
-    fg.use_agg()
-    from matplotlib.backends.backend_pdf import PdfPages
+        fg.use_agg()
+        from tuflexperf.analysis.study import Study
+        from tuflexperf.report.data import run_analyses
 
-    from tuflexperf.analysis.study import Study
-    from tuflexperf.report.data import load_measured, run_analyses
-
-    analyses = run_analyses(Study(case))
+        fg.preload()  # once here, inherited by every writer forked below
+        analyses = run_analyses(Study(case))
+    except BaseException:
+        _stop(writers)
+        raise
     step("analyses: check, take-off, trim, OEI, endurance, performance, margins, mission")
-    # The figures of the analyses alone are drawn (PNG) by a forked copy of this process
-    # while this one reduces the campaign; those of the measured data by a second copy
-    # while this one writes the PDF (issue 9: the report in half its earlier time).
-    # Each page is drawn once: whoever claims it first (a file created exclusively in
-    # ``kept``) draws its PNG and lays it out; a writer then keeps the laid-out figure (a
-    # pickle) for this process to put in the PDF. The second writer works from the last
-    # page back while this process writes the PDF from the first page on.
+    # Each page is drawn once, as a vector PDF page (``kept/NAME.pdf``); its PNG is that
+    # page rasterised by PDFium, so the PNG is the PDF's page, and the PDF is those pages
+    # put together (issue 9: a page was drawn twice, once per backend). The pages of the
+    # analyses alone are drawn by a forked writer while the campaign is still reduced;
+    # those of the measured data by a second writer (last page first) while this process
+    # draws from the first page on. Whoever claims a page first (a file created
+    # exclusively in ``kept``) draws it.
     analysis_pages: dict[str, Callable[[], Any]] = {
         "01_requirements": lambda: fg.requirement_table(case, analyses),
         "02_thrust_required_available": lambda: fg.thrust_required_available(case, analyses),
@@ -172,12 +180,16 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
         analysis_pages["10_mission"] = lambda: af.mission(case, analyses)
     analysis_pages["11_tornado"] = lambda: af.tornado(case, analyses)
     # The first writer starts with the tornado: the margins behind it (about 1 s of batch
-    # solves) are then solved while this process reduces the campaign, not at the PDF's end.
+    # solves) are then solved while this process reduces the campaign, not at the end.
     first = sorted(analysis_pages.items(), key=lambda item: item[0] != "11_tornado")
-    writers = [_start_png_writer(first, folder, kept)]
+    writers.append(_start_page_writer(first, folder, kept))
     try:
-        measured = load_measured(case, campaign, progress=step.detail)
-    except BaseException:  # bad campaign, interrupt: no PNG written after the cleanup
+        # the measured pages simulate the spool lag (SciPy's lfilter): its import (~0.6 s)
+        # is made while the campaign is reduced elsewhere, and the next writer inherits it
+        import scipy.signal  # noqa: F401
+
+        measured = reduction.result()
+    except BaseException:  # bad campaign, interrupt: no page written after the cleanup
         _stop(writers)
         raise
     step(
@@ -195,66 +207,117 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
     if measured.comparisons:
         measured_pages["06_model_vs_measured"] = lambda: fg.model_vs_measured(case, measured)
     measured_pages["06b_thrust_band"] = lambda: af.thrust_band(case, analyses, measured)
-    writers.append(_start_png_writer(list(measured_pages.items())[::-1], folder, kept))
-    writer_of = {name: writers[0] for name in analysis_pages}
-    writer_of.update({name: writers[1] for name in measured_pages})
+    writers.append(_start_page_writer(list(measured_pages.items())[::-1], folder, kept))
 
     named = sorted({**analysis_pages, **measured_pages}.items())  # the report's page order
-    pages: list[tuple[str | None, Callable[[], Any]]] = [
-        (None, lambda: _title_page(case, measured, analyses)),
-        *named,
-    ]
     notes = measured.notes + analyses.notes
-    step.total = step.done + len(pages) + 1
-
-    pdf_path = folder / PDF_NAME
+    step.total = step.done + len(named) + 2
     from tuflexperf import __version__
 
-    files = [folder / f"{name}.png" for name, _ in named]
-    serial = any(writer is None for writer in writers)
     try:
-        with PdfPages(
-            pdf_path,
+        # the title page carries the PDF's metadata: the assembled PDF keeps the first page's
+        _save_pdf_pages(
+            [_title_page(case, measured, analyses)], kept / "_title.pdf",
             metadata={"Title": f"Design review: {case.name}",
                       "Creator": f"tuflexperf {__version__}"},
-        ) as pdf:
-            for name, draw in pages:
-                fig, mine = None, serial
-                if name is not None and not serial:
-                    fig, mine = _kept_figure(kept, name, writer_of[name])
-                if fig is None:
-                    fig = draw()
-                if mine and name is not None:
-                    _save_png(fig, folder / f"{name}.png")
-                    fig.set_layout_engine("none")  # solved by the PNG's draw; the page keeps it
-                pdf.savefig(fig)
-                step(name or "title page")
-            pdf.savefig(_hash_page(case, measured))
-            page_count = len(pages) + 1
-            if notes:
-                pdf.savefig(
-                    fg.text_page("What this report leaves out, and why", [f"- {n}" for n in notes])
-                )
-                page_count += 1
-            step("review.pdf")
+        )
+        step("title page")
+        _draw_pages(named, folder, kept, step)  # what the writers have not claimed yet
+        end = [_hash_page(case, measured)]
+        if notes:
+            end.append(
+                fg.text_page("What this report leaves out, and why", [f"- {n}" for n in notes])
+            )
+        _save_pdf_pages(end, kept / "_end.pdf")
         for writer in writers:
             if writer is not None:
                 writer.join()
-        if not serial and any(writer.exitcode != 0 for writer in writers):
-            for name, draw in named:  # never a report without its figures: draw them here
-                _save_png(draw(), folder / f"{name}.png")
+        # never a report without its figures: a page a writer did not finish is drawn here
+        for part in folder.glob("*.part"):
+            part.unlink()
+        for name, draw in named:
+            if not (kept / f"{name}.pdf").is_file() or not (folder / f"{name}.png").is_file():
+                _draw_page(name, draw, folder, kept)
     finally:
-        _stop(writers)  # interrupted: no PNG written after the cleanup
-    files.append(pdf_path)
+        _stop(writers)  # interrupted: no page written after the cleanup
+    pdf_path = folder / PDF_NAME
+    page_count = _assemble_pdf(
+        [kept / "_title.pdf", *(kept / f"{name}.pdf" for name, _ in named), kept / "_end.pdf"],
+        pdf_path,
+    )
+    step("review.pdf")
     return ReportResult(
         out_dir=folder,
-        files=files,
+        files=[*(folder / f"{name}.png" for name, _ in named), pdf_path],
         pdf=pdf_path,
         pages=page_count,
         passed=all(v.passed for v in analyses.verdicts),
         seconds=0.0,
         notes=notes,
     )
+
+
+@dataclass
+class _Reduction:
+    """The campaign reduction (:func:`~tuflexperf.report.data.load_measured`) under way in
+    ``process`` (None: run here, when ``result`` is asked for)."""
+
+    process: Any
+    result: Callable[[], Any]
+
+
+def _start_campaign_reduction(case: Any, campaign: Path | None, keep: Path,
+                              progress: Callable[..., None]) -> _Reduction:
+    """Start reducing the campaign in a forked process; ``result()`` waits for it and
+    returns the :class:`~tuflexperf.report.data.Measured` (or raises its error here)."""
+    import multiprocessing
+    import pickle
+
+    from tuflexperf.report.data import load_measured
+
+    def here() -> Any:
+        return load_measured(case, campaign, progress=progress)
+
+    if os.environ.get("TUFLEXPERF_SERIAL_REPORT") or not hasattr(os, "fork"):
+        return _Reduction(None, here)
+    path = keep / "measured.pickle"
+    process = multiprocessing.get_context("fork").Process(
+        target=_reduce_campaign, args=(case, campaign, path, progress), daemon=True
+    )
+    process.start()
+
+    def result() -> Any:
+        process.join()
+        if not path.is_file():  # the process died without an answer: reduce here instead
+            return here()
+        with open(path, "rb") as handle:
+            ok, value = pickle.load(handle)
+        if not ok:
+            raise value
+        return value
+
+    return _Reduction(process, result)
+
+
+def _reduce_campaign(case: Any, campaign: Path | None, path: Path,
+                     progress: Callable[..., None]) -> None:
+    """The forked reduction's body: the Measured, or the error it raised, pickled to
+    ``path``; on Ctrl-C or SIGTERM it just ends (the report's process cleans up)."""
+    import pickle
+    import signal
+
+    from tuflexperf.report.data import load_measured
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, signal.SIG_DFL)
+    try:
+        answer: tuple[bool, Any] = (True, load_measured(case, campaign, progress=progress))
+    except Exception as exc:  # raised again by the report's own process
+        answer = (False, exc)
+    staged = path.with_name(path.name + ".part")
+    with open(staged, "wb") as handle:
+        pickle.dump(answer, handle, protocol=pickle.HIGHEST_PROTOCOL)
+    os.replace(staged, path)  # never read half-written
 
 
 def _stop(writers: list[Any]) -> None:
@@ -264,8 +327,61 @@ def _stop(writers: list[Any]) -> None:
             writer.join()
 
 
-def _save_png(fig: Any, path: Path) -> None:
-    fig.savefig(path, dpi=PNG_DPI, pil_kwargs={"compress_level": PNG_COMPRESSION})
+def _save_pdf_pages(figures: list[Any], path: Path,
+                    metadata: dict[str, str] | None = None) -> None:
+    """Vector PDF pages, written beside ``path`` and renamed (never read half-written)."""
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    staged = path.with_name(path.name + ".part")
+    with PdfPages(staged, metadata=metadata) as pdf:
+        for fig in figures:
+            pdf.savefig(fig)
+    os.replace(staged, path)
+
+
+def rasterise_page(pdf_page: Path, png: Path) -> None:
+    """The first page of ``pdf_page`` as a PNG at :data:`PNG_DPI` (PDFium)."""
+    import pypdfium2
+    from PIL.PngImagePlugin import PngInfo
+
+    from tuflexperf import __version__
+
+    document = pypdfium2.PdfDocument(pdf_page)
+    try:
+        image = document[0].render(scale=PNG_DPI / 72.0).to_pil()
+    finally:
+        document.close()
+    info = PngInfo()
+    info.add_text("Software", f"tuflexperf {__version__}")  # whose file it is (SPEC 5)
+    staged = png.with_name(png.name + ".part")
+    image.save(staged, format="png", dpi=(PNG_DPI, PNG_DPI), pnginfo=info,
+               compress_level=PNG_COMPRESSION)
+    os.replace(staged, png)  # a writer stopped half-way leaves no half PNG
+
+
+def _draw_page(name: str, draw: Callable[[], Any], folder: Path, kept: Path) -> None:
+    """One page drawn once: ``kept/NAME.pdf`` (vector), then ``folder/NAME.png`` from it."""
+    _save_pdf_pages([draw()], kept / f"{name}.pdf")
+    rasterise_page(kept / f"{name}.pdf", folder / f"{name}.png")
+
+
+def _assemble_pdf(pages: list[Path], path: Path) -> int:
+    """The one-page PDFs put together in order (PDFium); returns the page count."""
+    import pypdfium2
+
+    document = pypdfium2.PdfDocument(pages[0])
+    try:
+        for page in pages[1:]:
+            part = pypdfium2.PdfDocument(page)
+            try:
+                document.import_pages(part)
+            finally:
+                part.close()
+        count = len(document)
+        document.save(path)
+    finally:
+        document.close()
+    return count
 
 
 def _claim(keep: Path, name: str) -> bool:
@@ -277,74 +393,36 @@ def _claim(keep: Path, name: str) -> bool:
     return True
 
 
-def _write_pngs(named: list[tuple[str, Callable[[], Any]]], folder: Path,
-                keep: Path | None = None) -> None:
-    """Draw each page's PNG; with ``keep``, only the pages this process claims, each then
-    kept laid out (``NAME.pickle``, or ``NAME.drawn`` when it cannot be pickled)."""
-    import pickle
-
+def _draw_pages(named: list[tuple[str, Callable[[], Any]]], folder: Path, keep: Path,
+                step: Callable[[str], None] | None = None) -> None:
+    """Draw each page that this process claims (:func:`_draw_page`)."""
     for name, draw in named:
-        if keep is not None and not _claim(keep, name):
-            continue  # the PDF's process is drawing it
-        fig = draw()
-        _save_png(fig, folder / f"{name}.png")
-        if keep is None:
-            continue
-        fig.set_layout_engine("none")  # solved by the PNG's draw; the PDF page keeps it
-        staged = keep / f"{name}.pickle.part"
-        try:
-            with open(staged, "wb") as handle:
-                pickle.dump(fig, handle, protocol=pickle.HIGHEST_PROTOCOL)
-            os.replace(staged, keep / f"{name}.pickle")  # never read half-written
-        except Exception:  # not picklable: the PDF's process draws this page itself
-            staged.unlink(missing_ok=True)
-            (keep / f"{name}.drawn").touch()
+        if _claim(keep, name):
+            _draw_page(name, draw, folder, keep)
+        if step is not None:
+            step(name)
 
 
-def _png_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path,
-                keep: Path | None) -> None:
+def _page_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path, keep: Path) -> None:
     """A forked writer's body: on Ctrl-C or SIGTERM (sent to the whole process group) it
     just ends; the report's own process reports the interrupt and removes what was staged."""
     import signal
 
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, signal.SIG_DFL)
-    _write_pngs(named, folder, keep)
+    _draw_pages(named, folder, keep)
 
 
-def _kept_figure(keep: Path, name: str, writer: Any) -> tuple[Any, bool]:
-    """(figure, mine) for the PDF page ``name``.
-
-    ``mine`` is True when this process claimed the page: it draws it and writes its PNG.
-    Otherwise the writer has it: its kept figure once written, or ``(None, False)`` when
-    the writer could not keep it or stopped (then the page is drawn for the PDF alone).
-    """
-    import pickle
-
-    if _claim(keep, name):
-        return None, True
-    path, drawn = keep / f"{name}.pickle", keep / f"{name}.drawn"
-    while not (path.exists() or drawn.exists()) and writer.is_alive():
-        writer.join(0.01)
-    if not path.exists():
-        return None, False
-    try:
-        with open(path, "rb") as handle:
-            return pickle.load(handle), False
-    except Exception:  # a figure that does not survive the round trip is drawn again
-        return None, False
-
-
-def _start_png_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path,
-                      keep: Path | None = None) -> Any:
-    """A forked process drawing the PNGs (and keeping the figures in ``keep``), or None
-    where fork is not available (then serial)."""
+def _start_page_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path,
+                       keep: Path) -> Any:
+    """A forked process drawing pages (:func:`_draw_pages`), or None where fork is not
+    available (then this process draws them all)."""
     import multiprocessing
 
     if os.environ.get("TUFLEXPERF_SERIAL_REPORT") or not hasattr(os, "fork"):
         return None
     writer = multiprocessing.get_context("fork").Process(
-        target=_png_writer, args=(named, folder, keep), daemon=True
+        target=_page_writer, args=(named, folder, keep), daemon=True
     )
     writer.start()
     return writer

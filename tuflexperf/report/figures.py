@@ -61,6 +61,22 @@ def use_agg() -> None:
     matplotlib.use("Agg")
 
 
+def preload() -> None:
+    """Import the drawing stack and load its fonts once, before the report forks its
+    writers: each forked copy then inherits them instead of paying ~0.4 s of its own."""
+    from io import BytesIO
+
+    import pypdfium2  # noqa: F401 - rasterises the pages (report.build)
+    from matplotlib.backends import backend_pdf  # noqa: F401
+    from mpl_toolkits.mplot3d import Axes3D  # noqa: F401 - the thrust surfaces
+
+    fig = new_figure((2.0, 1.0))
+    ax = fig.add_subplot()
+    ax.text(0.5, 0.5, "tuflexperf 0-9", weight="bold")
+    ax.set_title("preload", fontsize=9)
+    fig.savefig(BytesIO(), format="pdf")
+
+
 def new_figure(size: tuple[float, float] = LANDSCAPE_IN) -> Any:
     from matplotlib.figure import Figure
 
