@@ -184,10 +184,6 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
     first = sorted(analysis_pages.items(), key=lambda item: item[0] != "11_tornado")
     writers.append(_start_page_writer(first, folder, kept))
     try:
-        # the measured pages simulate the spool lag (SciPy's lfilter): its import (~0.6 s)
-        # is made while the campaign is reduced elsewhere, and the next writer inherits it
-        import scipy.signal  # noqa: F401
-
         measured = reduction.result()
     except BaseException:  # bad campaign, interrupt: no page written after the cleanup
         _stop(writers)

@@ -31,6 +31,7 @@ import numpy as np
 
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
+from tuflexperf.models.thrust import delay_samples, density_ratio, engine_thrust_n, lag_factor
 
 if TYPE_CHECKING:
     from tuflexperf.analysis.study import Study
@@ -85,6 +86,8 @@ class SweepRun:
     airspeed_m_s: float
     delay_s: float
     lag_s: float
+    # a 20 ms moving median takes the balance's spikes out without shifting the phase
+    force_median_n: np.ndarray
 
 
 @dataclass
@@ -102,6 +105,10 @@ class Measured:
     drag_c1_c2: tuple[float, float] | None = None
     files: list[Path] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    # (run file, delay s, lag s) -> the model's balance force over that run [N]
+    model_force: dict[tuple[str, float, float], np.ndarray | None] = field(
+        default_factory=dict
+    )
 
 
 def find_measured_source(case: Case, explicit: Path | None) -> Path | None:
@@ -220,19 +227,152 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
             enumerate(result.sweep_runs),
             key=lambda item: (round(float(np.mean(item[1].data["airspeed_m_s"])), 0), item[0]),
         )[1]
+        from tuflexperf.reduction.filters import movmedian, window_samples
+
+        t = sweep.data.time_s
+        rate = (t.size - 1) / (t[-1] - t[0])
         measured.sweep = SweepRun(
             file=sweep.run.file,
             engine=str(sweep.run.engine),
-            time_s=sweep.data.time_s,
+            time_s=t,
             throttle=sweep.data["throttle"],
             force_n=sweep.data["force_n"],
             airspeed_m_s=float(np.mean(sweep.data["airspeed_m_s"])),
             delay_s=sweep.estimate.delay_s,
             lag_s=sweep.estimate.lag_s,
+            force_median_n=movmedian(sweep.data["force_n"], window_samples(0.02, rate) | 1),
         )
     else:
         measured.notes.append(f"{source.name}: no sine_sweep run, delay figure left out")
+    _model_responses(case, measured)
     return measured
+
+
+# --- the model against the measured force (paper Figs. 13-17) ----------------------------
+def dynamic_thrust_n(
+    engine: Any,
+    time_s: np.ndarray,
+    throttle: np.ndarray,
+    airspeed_m_s: Any,
+    scale: float,
+    delay_s: float,
+    lag_s: float,
+) -> np.ndarray:
+    """The exports' discrete dynamic model evaluated on a logged throttle [N].
+
+    Per sample: the command ``round(delay_s / dt)`` samples ago (the first sample held
+    before that, as the C ring buffer and the CasADi step start), its poly22 thrust, then
+    the exact discrete first-order lag ``T_k = a T_(k-1) + (1 - a) T_static,k`` with
+    ``a = exp(-dt / lag_s)``, started at rest (``tfp_step`` in the exported C,
+    ``thrust_step_function`` in CasADi). Nothing is solved: the model is evaluated.
+
+    Parameters
+    ----------
+    engine : Engine
+        The fan's poly22 coefficients [N].
+    time_s : numpy.ndarray
+        Sample times [s], evenly spaced.
+    throttle : numpy.ndarray
+        Throttle command per sample [fraction].
+    airspeed_m_s : float or numpy.ndarray
+        Airspeed [m/s], scalar or per sample.
+    scale : float
+        Thrust scale ``rho / rho_ref`` [-].
+    delay_s, lag_s : float
+        Dead time and spool-lag time constant [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Thrust per sample [N].
+    """
+    from tuflexperf.reduction.filters import first_order_lag
+
+    x = np.asarray(throttle, dtype=float)
+    dt = float(time_s[-1] - time_s[0]) / max(x.size - 1, 1)
+    steps = min(delay_samples(delay_s, dt), x.size)
+    delayed = np.concatenate([np.full(steps, x[0]), x[: x.size - steps]]) if steps else x
+    static = np.asarray(engine_thrust_n(engine, delayed, airspeed_m_s, scale), dtype=float)
+    return first_order_lag(np.broadcast_to(static, x.shape), lag_factor(lag_s, dt))
+
+
+def balance_model_n(
+    case: Case, measured: Measured, engine_name: str, time_s: np.ndarray, throttle: np.ndarray,
+    airspeed_m_s: Any, delay_s: float, lag_s: float,
+) -> np.ndarray | None:
+    """The balance force the model predicts: dynamic thrust minus the structure's drag [N]."""
+    names = [e.name for e in case.propulsion.engines]
+    if engine_name not in names:
+        return None
+    engine = case.propulsion.engines[names.index(engine_name)]
+    rho = measured.density_kg_m3
+    scale = 1.0 if rho is None else float(density_ratio(case.propulsion, rho))
+    force = dynamic_thrust_n(engine, time_s, throttle, airspeed_m_s, scale, delay_s, lag_s)
+    if measured.drag_c1_c2 is not None:
+        c1, c2 = measured.drag_c1_c2
+        force = force - (c1 * airspeed_m_s + c2 * np.square(airspeed_m_s))
+    return force
+
+
+def model_dynamics(case: Case, measured: Measured) -> list[tuple[str, float, float]]:
+    """(label, delay [s], lag [s]) of the models to draw: the propulsion file's (what the
+    exports carry) and, where it differs, what ``fit`` measured on this campaign."""
+    prop = case.propulsion
+    shown = [("propulsion file", prop.delay_s, prop.lag_s)]
+    summary = measured.fit_summary or {}
+    delay, lag = summary.get("delay_s"), summary.get("lag_s")
+    if delay is not None and math.isfinite(delay):
+        lag = float(lag) if lag is not None and math.isfinite(lag) else 0.0
+        if abs(delay - prop.delay_s) > 5e-4 or abs(lag - prop.lag_s) > 5e-4:
+            shown.append(("campaign fit", float(delay), lag))
+    return shown
+
+
+def model_force_n(
+    case: Case, measured: Measured, run: ProcessedRun,
+    delay_s: float | None = None, lag_s: float | None = None,
+) -> np.ndarray | None:
+    """The model's balance force over a run: the dynamic thrust minus the structure drag [N].
+
+    The thrust is :func:`dynamic_thrust_n` of the logged throttle (the propulsion file's
+    ``delay_s`` and ``lag_s`` unless given), ``D`` the structure drag ``c1 V + c2 V^2``
+    fitted from the campaign (the paper compared a model "without the drag correction",
+    section 4). Computed once per run and dynamics (kept in ``measured.model_force``).
+    """
+    prop = case.propulsion
+    delay = prop.delay_s if delay_s is None else delay_s
+    lag = prop.lag_s if lag_s is None else lag_s
+    key = (run.file, float(delay), float(lag))
+    if key not in measured.model_force:
+        measured.model_force[key] = balance_model_n(
+            case, measured, run.engine, run.time_s, run.throttle, run.airspeed_m_s, delay, lag
+        )
+    return measured.model_force[key]
+
+
+def sweep_model_force_n(case: Case, measured: Measured, delay_s: float,
+                        lag_s: float) -> np.ndarray | None:
+    """:func:`model_force_n` over the sine sweep ``measured.sweep`` [N]."""
+    sweep = measured.sweep
+    key = (sweep.file, float(delay_s), float(lag_s))
+    if key not in measured.model_force:
+        measured.model_force[key] = balance_model_n(
+            case, measured, sweep.engine, sweep.time_s, sweep.throttle, sweep.airspeed_m_s,
+            delay_s, lag_s,
+        )
+    return measured.model_force[key]
+
+
+def _model_responses(case: Case, measured: Measured) -> None:
+    """Every model response the report draws, computed with the reduction (the figures
+    then evaluate nothing; the forked page writers need no filter code of their own)."""
+    for _, delay, lag in model_dynamics(case, measured):
+        for run in measured.comparisons:
+            model_force_n(case, measured, run, delay, lag)
+        if measured.sweep is not None:
+            sweep_model_force_n(case, measured, delay, lag)
+
+
 
 
 # --- the case's analyses ----------------------------------------------------------------------

@@ -25,13 +25,19 @@ from tuflexperf.analysis.attainable import BELOW_STALL, NEEDS_MORE_THAN_FULL_THR
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.thrust import (
-    delay_samples,
     density_ratio,
     engine_thrust_n,
-    lag_factor,
     total_thrust_n,
 )
-from tuflexperf.report.data import Analyses, Measured, ProcessedRun
+from tuflexperf.report.data import (  # noqa: F401 - dynamic_thrust_n, model_force_n: API
+    Analyses,
+    Measured,
+    ProcessedRun,
+    dynamic_thrust_n,
+    model_dynamics,
+    model_force_n,
+    sweep_model_force_n,
+)
 from tuflexperf.report.decimate import envelope as decimated
 from tuflexperf.report.style import (
     EXTRAPOLATED_FILL,
@@ -512,86 +518,6 @@ def run_processing(run: ProcessedRun) -> Any:
     return fig
 
 
-# --- 6. the dynamic model on a logged throttle ------------------------------------------------
-def dynamic_thrust_n(
-    engine: Any,
-    time_s: np.ndarray,
-    throttle: np.ndarray,
-    airspeed_m_s: Any,
-    scale: float,
-    delay_s: float,
-    lag_s: float,
-) -> np.ndarray:
-    """The exports' discrete dynamic model evaluated on a logged throttle [N].
-
-    Per sample: the command ``round(delay_s / dt)`` samples ago (the first sample held
-    before that, as the C ring buffer and the CasADi step start), its poly22 thrust, then
-    the exact discrete first-order lag ``T_k = a T_(k-1) + (1 - a) T_static,k`` with
-    ``a = exp(-dt / lag_s)``, started at rest (``tfp_step`` in the exported C,
-    ``thrust_step_function`` in CasADi). Nothing is solved: the model is evaluated.
-
-    Parameters
-    ----------
-    engine : Engine
-        The fan's poly22 coefficients [N].
-    time_s : numpy.ndarray
-        Sample times [s], evenly spaced.
-    throttle : numpy.ndarray
-        Throttle command per sample [fraction].
-    airspeed_m_s : float or numpy.ndarray
-        Airspeed [m/s], scalar or per sample.
-    scale : float
-        Thrust scale ``rho / rho_ref`` [-].
-    delay_s, lag_s : float
-        Dead time and spool-lag time constant [s].
-
-    Returns
-    -------
-    numpy.ndarray
-        Thrust per sample [N].
-    """
-    from tuflexperf.reduction.filters import first_order_lag
-
-    x = np.asarray(throttle, dtype=float)
-    dt = float(time_s[-1] - time_s[0]) / max(x.size - 1, 1)
-    steps = min(delay_samples(delay_s, dt), x.size)
-    delayed = np.concatenate([np.full(steps, x[0]), x[: x.size - steps]]) if steps else x
-    static = np.asarray(engine_thrust_n(engine, delayed, airspeed_m_s, scale), dtype=float)
-    return first_order_lag(np.broadcast_to(static, x.shape), lag_factor(lag_s, dt))
-
-
-def _balance_model_n(
-    case: Case, measured: Measured, engine_name: str, time_s: np.ndarray, throttle: np.ndarray,
-    airspeed_m_s: Any, delay_s: float, lag_s: float,
-) -> np.ndarray | None:
-    """The balance force the model predicts: dynamic thrust minus the structure's drag [N]."""
-    names = [e.name for e in case.propulsion.engines]
-    if engine_name not in names:
-        return None
-    engine = case.propulsion.engines[names.index(engine_name)]
-    rho = measured.density_kg_m3
-    scale = 1.0 if rho is None else float(density_ratio(case.propulsion, rho))
-    force = dynamic_thrust_n(engine, time_s, throttle, airspeed_m_s, scale, delay_s, lag_s)
-    if measured.drag_c1_c2 is not None:
-        c1, c2 = measured.drag_c1_c2
-        force = force - (c1 * airspeed_m_s + c2 * np.square(airspeed_m_s))
-    return force
-
-
-def _dynamics(case: Case, measured: Measured) -> list[tuple[str, float, float]]:
-    """(label, delay [s], lag [s]) of the models to draw: the propulsion file's (what the
-    exports carry) and, where it differs, what ``fit`` measured on this campaign."""
-    prop = case.propulsion
-    shown = [("propulsion file", prop.delay_s, prop.lag_s)]
-    summary = measured.fit_summary or {}
-    delay, lag = summary.get("delay_s"), summary.get("lag_s")
-    if delay is not None and math.isfinite(delay):
-        lag = float(lag) if lag is not None and math.isfinite(lag) else 0.0
-        if abs(delay - prop.delay_s) > 5e-4 or abs(lag - prop.lag_s) > 5e-4:
-            shown.append(("campaign fit", float(delay), lag))
-    return shown
-
-
 def _dynamics_label(label: str, delay_s: float, lag_s: float) -> str:
     lag = f"{1000 * lag_s:.0f} ms spool lag" if lag_s > 0 else "no spool lag"
     return f"model ({label} dynamics): {1000 * delay_s:.0f} ms dead time + {lag}"
@@ -609,8 +535,6 @@ def _model_styles(dynamics: list[tuple[str, float, float]]) -> list[dict[str, An
 def sine_sweep(measured: Measured, case: Case) -> Any:
     """Measured force of a sine sweep against the fitted dynamic model (dead time + spool lag)
     in newtons, the whole sweep and its fastest end."""
-    from tuflexperf.reduction.filters import movmedian, window_samples
-
     sweep = measured.sweep
     fig = new_figure()
     gs = fig.add_gridspec(3, 1, height_ratios=[2.2, 2.2, 1.0])
@@ -618,16 +542,10 @@ def sine_sweep(measured: Measured, case: Case) -> Any:
     az = fig.add_subplot(gs[1])
     ac = fig.add_subplot(gs[2], sharex=az)
     t = sweep.time_s
-    rate = (t.size - 1) / (t[-1] - t[0])
-    # a 20 ms moving median takes the balance's spikes out without shifting the phase
-    force = movmedian(sweep.force_n, window_samples(0.02, rate) | 1)
-    dynamics = _dynamics(case, measured)
+    force = sweep.force_median_n
+    dynamics = model_dynamics(case, measured)
     styles = _model_styles(dynamics)
-    models = [
-        _balance_model_n(case, measured, sweep.engine, t, sweep.throttle, sweep.airspeed_m_s,
-                         delay, lag)
-        for _, delay, lag in dynamics
-    ]
+    models = [sweep_model_force_n(case, measured, delay, lag) for _, delay, lag in dynamics]
     # the sweep ends where the throttle last leaves the value it holds at the end of the log
     moving = np.flatnonzero(np.abs(sweep.throttle - sweep.throttle[-1]) > 0.01)
     t_end = t[moving[-1]] if moving.size else t[-1]
@@ -676,30 +594,12 @@ def sine_sweep(measured: Measured, case: Case) -> Any:
 
 
 # --- 7. model against measured force (paper Figs. 16-17) ----------------------------------------
-def model_force_n(
-    case: Case, measured: Measured, run: ProcessedRun,
-    delay_s: float | None = None, lag_s: float | None = None,
-) -> np.ndarray | None:
-    """The model's balance force over a run: the dynamic thrust minus the structure drag [N].
-
-    The thrust is :func:`dynamic_thrust_n` of the logged throttle (the propulsion file's
-    ``delay_s`` and ``lag_s`` unless given), ``D`` the structure drag ``c1 V + c2 V^2``
-    fitted from the campaign (the paper compared a model "without the drag correction",
-    section 4).
-    """
-    prop = case.propulsion
-    return _balance_model_n(
-        case, measured, run.engine, run.time_s, run.throttle, run.airspeed_m_s,
-        prop.delay_s if delay_s is None else delay_s, prop.lag_s if lag_s is None else lag_s,
-    )
-
-
 def model_vs_measured(case: Case, measured: Measured) -> Any:
     """The case's thrust model driven by the logged throttle against the measured force."""
     runs = measured.comparisons
     fig = new_figure()
     gs = fig.add_gridspec(2, len(runs), height_ratios=[3, 1])
-    dynamics = _dynamics(case, measured)
+    dynamics = model_dynamics(case, measured)
     styles = _model_styles(dynamics)
     handles: dict[str, Any] = {}
     for k, run in enumerate(runs):
