@@ -346,6 +346,21 @@ def test_degenerate_campaign_runs_are_named(workdir: Path) -> None:
     assert "structure_drag.csv: drag sweep without wind" in warnings
 
 
+def test_report_with_a_corrupt_run_names_it_from_the_forked_reduction(workdir: Path) -> None:
+    """The campaign is reduced in a forked process: its error still reaches the user as one
+    line naming the run (exit 2), with no traceback from either process and no output."""
+    (workdir / "data/tuflex/campaign/runs/edf1_v15p0.csv.gz").write_bytes(b"not gzip at all")
+    before = _tree(workdir)
+    result = _run(workdir, "report", "--case", "requirements/tuflex.yaml", "--out", "review")
+    assert result.returncode == 2, (result.stdout, result.stderr)
+    assert "Traceback" not in result.stderr
+    errors = [line for line in result.stderr.splitlines() if "error" in line]
+    assert len(errors) == 1 and "edf1_v15p0.csv.gz" in errors[0], result.stderr
+    assert not (workdir / "review").exists()
+    assert _tree(workdir) == before
+    assert not [p for p in workdir.rglob(".*") if p.name != ".tuflexperf-output.json"]
+
+
 def test_flags_show_no_value_and_empty_answers_read_well(workdir: Path) -> None:
     help_text = _run(workdir, "check", "--help").stdout
     json_line = next(line for line in help_text.splitlines() if "--json" in line)

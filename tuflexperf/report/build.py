@@ -311,8 +311,12 @@ def _reduce_campaign(case: Any, campaign: Path | None, path: Path,
     except Exception as exc:  # raised again by the report's own process
         answer = (False, exc)
     staged = path.with_name(path.name + ".part")
-    with open(staged, "wb") as handle:
-        pickle.dump(answer, handle, protocol=pickle.HIGHEST_PROTOCOL)
+    try:
+        with open(staged, "wb") as handle:
+            pickle.dump(answer, handle, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception:  # an error that does not pickle: the report's process reduces again
+        staged.unlink(missing_ok=True)
+        return
     os.replace(staged, path)  # never read half-written
 
 
