@@ -2,7 +2,8 @@
 
 Prints, measured in this run:
 - the whole console command as a user runs it (cold process: imports, CasADi builds,
-  campaign reduction, drawing, PDF), for this checkout and for the tagged earlier version
+  campaign reduction, drawing each page once as a vector PDF page and rasterising it into its
+  PNG, on every core), for this checkout and for the tagged earlier version
   (``git archive before-study-restructure``, run with the same interpreter), alternated
   so that machine load hits both alike; the ratio is issue 9's figure (target <= 0.5);
 - this checkout in-process, step by step (from the report's own step counter);

@@ -103,6 +103,30 @@ def test_shipped_report_draws_every_paper_figure(shipped):
         assert expected in names
 
 
+def test_without_fork_the_report_draws_the_same_pages_in_one_process(made_up, tmp_path,
+                                                                    monkeypatch):
+    """Where no process can be forked, the reduction and every page run in the report's own
+    process: the same files and pages, each PNG still its PDF page."""
+    import pypdfium2
+    from PIL import Image
+
+    case, _, data = made_up
+    monkeypatch.setenv("TUFLEXPERF_SERIAL_REPORT", "1")
+    out = tmp_path / "serial"
+    result = runner.invoke(app, ["report", "--case", str(case), "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    serial = json.loads(result.stdout)
+    assert [Path(f).name for f in serial["files"]] == [Path(f).name for f in data["files"]]
+    assert serial["pages"] == data["pages"] == pdf_page_count(out / "review.pdf")
+    document = pypdfium2.PdfDocument(out / "review.pdf")
+    try:
+        first = sorted(serial["figures"])[0]
+        page = np.asarray(document[1].render(scale=150 / 72).to_pil())
+        np.testing.assert_array_equal(np.asarray(Image.open(first).convert("RGB")), page)
+    finally:
+        document.close()
+
+
 def test_json_lists_the_files_written_and_nothing_else_is_left(shipped):
     parent, out, data = shipped
     from tuflexperf.io.files import MARKER, read_marker
