@@ -20,6 +20,7 @@ Anderson, *Aircraft Performance and Design*, 5.10 (climb).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -90,6 +91,33 @@ _ROLL_STRIDE = 2  # and in the roll
 _BISECTIONS = 60
 
 
+def _golden_section_max(
+    f: Callable[[Array], Array], a: Array, b: Array,
+    done: Callable[[Array, Array, int], bool],
+) -> tuple[Array, Array]:
+    """The bracket ``[a, b]`` per row around the maximum of a unimodal ``f`` (vectorised
+    golden-section search, one evaluation of ``f`` per step) once ``done(a, b, steps)``.
+
+    References
+    ----------
+    Kiefer, "Sequential minimax search for a maximum", Proc. AMS 4 (1953).
+    """
+    golden = (math.sqrt(5.0) - 1.0) / 2.0
+    c, d = b - golden * (b - a), a + golden * (b - a)
+    fc, fd = f(c), f(d)
+    steps = 0
+    while not done(a, b, steps):
+        left = fc >= fd
+        a, b = np.where(left, a, c), np.where(left, d, b)
+        c_new = np.where(left, b - golden * (b - a), d)
+        d_new = np.where(left, c, a + golden * (b - a))
+        fp = f(np.where(left, c_new, d_new))
+        fc, fd = np.where(left, fp, fd), np.where(left, fc, fp)
+        c, d = c_new, d_new
+        steps += 1
+    return a, b
+
+
 def _best_climb(m: Any, v_lo: Array, stall: Array) -> tuple[Array, Array]:
     """Best-rate airspeed and rate per row on the 4001-point grid of ``endurance._best_climb``.
 
@@ -106,19 +134,11 @@ def _best_climb(m: Any, v_lo: Array, stall: Array) -> tuple[Array, Array]:
             level_flight_drag_n(m.aircraft, speed, m.density), dtype=float)
         return excess * speed / weight, speed
 
-    golden = (math.sqrt(5.0) - 1.0) / 2.0
-    a, b = np.zeros(m.size), np.full(m.size, float(n - 1))
-    c, d = b - golden * (b - a), a + golden * (b - a)
-    fc, fd = rate_at(c[:, None])[0][:, 0], rate_at(d[:, None])[0][:, 0]
-    while np.any(b - a > 4.0):
-        left = fc >= fd
-        a, b = np.where(left, a, c), np.where(left, d, b)
-        c_new = np.where(left, b - golden * (b - a), d)
-        d_new = np.where(left, c, a + golden * (b - a))
-        probe = np.where(left, c_new, d_new)
-        fp = rate_at(probe[:, None])[0][:, 0]
-        fc, fd = np.where(left, fp, fd), np.where(left, fc, fp)
-        c, d = c_new, d_new
+    a, _ = _golden_section_max(
+        lambda index: rate_at(index[:, None])[0][:, 0],
+        np.zeros(m.size), np.full(m.size, float(n - 1)),
+        lambda a, b, _: not np.any(b - a > 4.0),
+    )
     near = np.clip(np.floor(a)[:, None] + np.arange(-2, 8)[None, :], 0, n - 1)
     rate, speed = rate_at(near)
     best = np.argmax(rate, axis=1)
@@ -214,18 +234,8 @@ def _most_excess(m: Any, throttle: Array, stall: Array) -> tuple[Array, Array]:
     rows = np.arange(m.size)
     a = grid[rows, np.maximum(k - 1, 0)]
     b = grid[rows, np.minimum(k + 1, grid.shape[1] - 1)]
-    golden = (math.sqrt(5.0) - 1.0) / 2.0
-    c, d = b - golden * (b - a), a + golden * (b - a)
-    fc, fd = _excess(m, throttle, c), _excess(m, throttle, d)
-    for _ in range(_GOLDEN_STEPS):
-        left = fc >= fd
-        a, b = np.where(left, a, c), np.where(left, d, b)
-        c_new = np.where(left, b - golden * (b - a), d)
-        d_new = np.where(left, c, a + golden * (b - a))
-        probe = np.where(left, c_new, d_new)
-        fp = _excess(m, throttle, probe)
-        fc, fd = np.where(left, fp, fd), np.where(left, fc, fp)
-        c, d = c_new, d_new
+    a, b = _golden_section_max(lambda speed: _excess(m, throttle, speed), a, b,
+                               lambda _a, _b, steps: steps >= _GOLDEN_STEPS)
     speed = 0.5 * (a + b)
     return _excess(m, throttle, speed), speed
 
