@@ -150,10 +150,15 @@ def test_sigterm_during_report_leaves_earlier_output_intact(workdir: Path) -> No
     assert not [p for p in workdir.iterdir() if p.name.startswith(".review")]
 
 
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
-def test_interrupting_the_whole_report_process_group(workdir: Path, signum: int) -> None:
-    """Ctrl-C in a terminal signals every process of the group: the forked PNG writers too.
-    They end quietly; the report's own process removes the staging, exit 130, no traceback."""
+@pytest.mark.parametrize(("signum", "when"), [
+    (signal.SIGINT, "*.png"), (signal.SIGTERM, "*.png"), (signal.SIGINT, ""),
+])
+def test_interrupting_the_whole_report_process_group(workdir: Path, signum: int,
+                                                     when: str) -> None:
+    """Ctrl-C in a terminal signals every process of the group: the forked campaign
+    reduction and page writers too. They end quietly; the report's own process removes the
+    staging, exit 130, no traceback. Signalled once a PNG is in the staging folder (the
+    writers draw), or as soon as the folder exists (the campaign is being reduced)."""
     assert _run(workdir, "report", "--out", "review").returncode == 0
     earlier = _tree(workdir / "review")
     process = subprocess.Popen(
@@ -161,9 +166,9 @@ def test_interrupting_the_whole_report_process_group(workdir: Path, signum: int)
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True,
     )
     deadline = time.monotonic() + 120
-    # a PNG in the staging folder: the writers are drawing
-    while not any(workdir.glob(".review.tmp-*/*.png")) and time.monotonic() < deadline:
-        time.sleep(0.05)
+    pattern = ".review.tmp-*" + (f"/{when}" if when else "")
+    while not any(workdir.glob(pattern)) and time.monotonic() < deadline:
+        time.sleep(0.02)
     os.killpg(process.pid, signum)
     _, err = process.communicate(timeout=60)
     assert process.returncode == 130 and "Traceback" not in err, err
