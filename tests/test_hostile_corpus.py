@@ -150,11 +150,19 @@ def test_sigterm_during_report_leaves_earlier_output_intact(workdir: Path) -> No
     assert not [p for p in workdir.iterdir() if p.name.startswith(".review")]
 
 
-@pytest.mark.parametrize(("signum", "when"), [
-    (signal.SIGINT, "*.png"), (signal.SIGTERM, "*.png"), (signal.SIGINT, ""),
+# Early on, Ctrl-C may land while Python runs code it made from a string (a dataclass or a
+# namedtuple being created as a module is imported): CPython 3.11 then remembers an
+# "unhandled" KeyboardInterrupt even though it was handled, and ends the process by SIGINT
+# after the same clean exit (the shell shows 130 either way).
+_BY_SIGINT = {130, -signal.SIGINT}
+
+
+@pytest.mark.parametrize(("signum", "when", "codes"), [
+    (signal.SIGINT, "*.png", {130}), (signal.SIGTERM, "*.png", {130}),
+    (signal.SIGINT, "", _BY_SIGINT), (signal.SIGTERM, "", {130}),
 ])
-def test_interrupting_the_whole_report_process_group(workdir: Path, signum: int,
-                                                     when: str) -> None:
+def test_interrupting_the_whole_report_process_group(workdir: Path, signum: int, when: str,
+                                                     codes: set[int]) -> None:
     """Ctrl-C in a terminal signals every process of the group: the forked campaign
     reduction and page writers too. They end quietly; the report's own process removes the
     staging, exit 130, no traceback. Signalled once a PNG is in the staging folder (the
@@ -171,9 +179,37 @@ def test_interrupting_the_whole_report_process_group(workdir: Path, signum: int,
         time.sleep(0.02)
     os.killpg(process.pid, signum)
     _, err = process.communicate(timeout=60)
-    assert process.returncode == 130 and "Traceback" not in err, err
+    assert process.returncode in codes and "Traceback" not in err, (process.returncode, err)
     assert _tree(workdir / "review") == earlier
     assert not [p for p in workdir.iterdir() if p.name.startswith(".review")]
+
+
+def test_an_interrupt_during_a_fork_is_held_then_raised_and_never_lost(monkeypatch) -> None:
+    """A Ctrl-C that lands while the report forks a helper waits for the block's end (inside
+    the fork's own callbacks Python would print it as "ignored" and go on), and one that a
+    library dropped is raised again at the next step."""
+    from tuflexperf.io import files
+
+    monkeypatch.setattr(files, "_signals_received", [])
+    previous = signal.signal(signal.SIGINT, files._raise_interrupt)
+    reached = False
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with files.interrupts_held():
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)
+                reached = True  # held: the handler has not run inside the block
+        assert reached
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert files.interrupted()
+    with pytest.raises(KeyboardInterrupt):
+        files.raise_if_interrupted()  # e.g. dropped in a finalizer: raised again here
+    monkeypatch.setattr(files, "_signals_received", [signal.SIGTERM])
+    with pytest.raises(files._Terminated):
+        files.raise_if_interrupted()
+    monkeypatch.setattr(files, "_signals_received", [])
+    files.raise_if_interrupted()  # nothing came: nothing raised
 
 
 def test_an_error_after_an_interrupt_is_the_interrupt(monkeypatch, capsys) -> None:

@@ -250,9 +250,13 @@ class _Terminated(KeyboardInterrupt):
 _signals_received: list[int] = []
 
 
+_holding = [False]  # inside interrupts_held(): an interrupt is noted, raised at its end
+
+
 def _raise_interrupt(signum: int, frame: object) -> None:
     _signals_received.append(signum)
-    raise _Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+    if not _holding[0]:
+        raise _Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
 
 
 def install_interrupt_handlers() -> None:
@@ -261,6 +265,44 @@ def install_interrupt_handlers() -> None:
     with contextlib.suppress(ValueError):  # not the main thread: leave the defaults
         signal.signal(signal.SIGINT, _raise_interrupt)
         signal.signal(signal.SIGTERM, _raise_interrupt)
+
+
+@contextlib.contextmanager
+def interrupts_held() -> Iterator[None]:
+    """Hold Ctrl-C and SIGTERM back while the block runs (e.g. a fork): noted, not raised,
+    then raised when the block ends.
+
+    Python runs a signal's handler at any bytecode of the main thread, also inside the
+    callbacks that ``os.fork`` runs, where the interrupt it raises is printed as "ignored"
+    and dropped: the report went on to the end. (Blocking the signal would not do: the
+    kernel hands it to another thread, e.g. a BLAS worker.) A helper forked inside the
+    block calls :func:`release_interrupts`.
+    """
+    seen = len(_signals_received)
+    _holding[0] = True
+    try:
+        yield
+    finally:
+        _holding[0] = False
+    if len(_signals_received) > seen:
+        raise_if_interrupted()
+
+
+def release_interrupts() -> None:
+    """In a forked helper: Ctrl-C and SIGTERM end it at once (the default action); the
+    parent reports the interrupt and removes what was staged."""
+    _signals_received.clear()  # the parent's to report, not this helper's
+    _holding[0] = False
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, signal.SIG_DFL)
+
+
+def raise_if_interrupted() -> None:
+    """Raise the interrupt again if one has come: Python prints an exception raised in a
+    finalizer (or a fork's callback) as "ignored" and goes on, so a Ctrl-C that lands there
+    is lost unless long work looks again between its steps."""
+    if _signals_received:
+        raise _Terminated() if _signals_received[-1] == signal.SIGTERM else KeyboardInterrupt()
 
 
 def interrupted() -> bool:

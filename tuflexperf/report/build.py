@@ -140,24 +140,35 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
             kept: Path) -> ReportResult:
     """Draw every page into ``folder``; ``kept`` is a private temporary folder for the
     one-page PDFs that the PDF is assembled from."""
+    writers: list[Any] = []
+    try:  # bad campaign, interrupt: every forked helper stopped, no page written after
+        return _render_pages(case, folder, campaign, step, kept, writers)
+    finally:
+        _stop(writers)
+
+
+def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
+                  kept: Path, writers: list[Any]) -> ReportResult:
+    """:func:`_render`'s work; each forked helper is listed in ``writers`` as it starts."""
+    from tuflexperf.io.files import interrupts_held, raise_if_interrupted
+
     # The campaign is reduced by a forked copy of this process from the start (before
     # matplotlib is imported: it needs none), while this one solves the analyses and a
-    # second copy draws their pages (the two need nothing of each other's).
-    reduction = _start_campaign_reduction(case, campaign, kept, step.detail)
-    writers: list[Any] = [reduction.process]
-    try:
-        from tuflexperf.report import analysis_figures as af
-        from tuflexperf.report import figures as fg
+    # second copy draws their pages (the two need nothing of each other's). Each fork
+    # holds the interrupts back until its helper is listed: one raised inside the fork's
+    # own callbacks would be dropped.
+    with interrupts_held():
+        reduction = _start_campaign_reduction(case, campaign, kept, step.detail)
+        writers.append(reduction.process)
+    from tuflexperf.report import analysis_figures as af
+    from tuflexperf.report import figures as fg
 
-        fg.use_agg()
-        from tuflexperf.analysis.study import Study
-        from tuflexperf.report.data import run_analyses
+    fg.use_agg()
+    from tuflexperf.analysis.study import Study
+    from tuflexperf.report.data import run_analyses
 
-        fg.preload()  # once here, inherited by every writer forked below
-        analyses = run_analyses(Study(case))
-    except BaseException:
-        _stop(writers)
-        raise
+    fg.preload()  # once here, inherited by every writer forked below
+    analyses = run_analyses(Study(case))
     step("analyses: check, take-off, trim, OEI, endurance, performance, margins, mission")
     # Each page is drawn once, as a vector PDF page (``kept/NAME.pdf``); its PNG is that
     # page rasterised by PDFium, so the PNG is the PDF's page, and the PDF is those pages
@@ -180,14 +191,12 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
         analysis_pages["10_mission"] = lambda: af.mission(case, analyses)
     analysis_pages["11_tornado"] = lambda: af.tornado(case, analyses)
     # The first writer starts with the tornado: the margins behind it (about 1 s of batch
-    # solves) are then solved while this process reduces the campaign, not at the end.
+    # solves) are then solved while the campaign is reduced, not at the end.
     first = sorted(analysis_pages.items(), key=lambda item: item[0] != "11_tornado")
-    writers.append(_start_page_writer(first, folder, kept))
-    try:
-        measured = reduction.result()
-    except BaseException:  # bad campaign, interrupt: no page written after the cleanup
-        _stop(writers)
-        raise
+    with interrupts_held():
+        writers.append(_start_page_writer(first, folder, kept))
+    measured = reduction.result()
+    raise_if_interrupted()
     step(
         f"measured data: {measured.kind}" + (f" {measured.source.name}" if measured.source else "")
     )
@@ -203,39 +212,35 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
     if measured.comparisons:
         measured_pages["06_model_vs_measured"] = lambda: fg.model_vs_measured(case, measured)
     measured_pages["06b_thrust_band"] = lambda: af.thrust_band(case, analyses, measured)
-    writers.append(_start_page_writer(list(measured_pages.items())[::-1], folder, kept))
+    with interrupts_held():
+        writers.append(_start_page_writer(list(measured_pages.items())[::-1], folder, kept))
 
     named = sorted({**analysis_pages, **measured_pages}.items())  # the report's page order
     notes = measured.notes + analyses.notes
     step.total = step.done + len(named) + 2
     from tuflexperf import __version__
 
-    try:
-        # the title page carries the PDF's metadata: the assembled PDF keeps the first page's
-        _save_pdf_pages(
-            [_title_page(case, measured, analyses)], kept / "_title.pdf",
-            metadata={"Title": f"Design review: {case.name}",
-                      "Creator": f"tuflexperf {__version__}"},
-        )
-        step("title page")
-        _draw_pages(named, folder, kept, step)  # what the writers have not claimed yet
-        end = [_hash_page(case, measured)]
-        if notes:
-            end.append(
-                fg.text_page("What this report leaves out, and why", [f"- {n}" for n in notes])
-            )
-        _save_pdf_pages(end, kept / "_end.pdf")
-        for writer in writers:
-            if writer is not None:
-                writer.join()
-        # never a report without its figures: a page a writer did not finish is drawn here
-        for part in folder.glob("*.part"):
-            part.unlink()
-        for name, draw in named:
-            if not (kept / f"{name}.pdf").is_file() or not (folder / f"{name}.png").is_file():
-                _draw_page(name, draw, folder, kept)
-    finally:
-        _stop(writers)  # interrupted: no page written after the cleanup
+    # the title page carries the PDF's metadata: the assembled PDF keeps the first page's
+    _save_pdf_pages(
+        [_title_page(case, measured, analyses)], kept / "_title.pdf",
+        metadata={"Title": f"Design review: {case.name}", "Creator": f"tuflexperf {__version__}"},
+    )
+    step("title page")
+    _draw_pages(named, folder, kept, step)  # what the writers have not claimed yet
+    end = [_hash_page(case, measured)]
+    if notes:
+        end.append(fg.text_page("What this report leaves out, and why", [f"- {n}" for n in notes]))
+    _save_pdf_pages(end, kept / "_end.pdf")
+    for writer in writers:
+        if writer is not None:
+            writer.join()
+    # never a report without its figures: a page a writer did not finish is drawn here
+    for part in folder.glob("*.part"):
+        part.unlink()
+    for name, draw in named:
+        if not (kept / f"{name}.pdf").is_file() or not (folder / f"{name}.png").is_file():
+            _draw_page(name, draw, folder, kept)
+    raise_if_interrupted()
     pdf_path = folder / PDF_NAME
     page_count = _assemble_pdf(
         [kept / "_title.pdf", *(kept / f"{name}.pdf" for name, _ in named), kept / "_end.pdf"],
@@ -300,12 +305,11 @@ def _reduce_campaign(case: Any, campaign: Path | None, path: Path,
     """The forked reduction's body: the Measured, or the error it raised, pickled to
     ``path``; on Ctrl-C or SIGTERM it just ends (the report's process cleans up)."""
     import pickle
-    import signal
 
+    from tuflexperf.io.files import release_interrupts
     from tuflexperf.report.data import load_measured
 
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, signal.SIG_DFL)
+    release_interrupts()
     try:
         answer: tuple[bool, Any] = (True, load_measured(case, campaign, progress=progress))
     except Exception as exc:  # raised again by the report's own process
@@ -396,7 +400,10 @@ def _claim(keep: Path, name: str) -> bool:
 def _draw_pages(named: list[tuple[str, Callable[[], Any]]], folder: Path, keep: Path,
                 step: Callable[[str], None] | None = None) -> None:
     """Draw each page that this process claims (:func:`_draw_page`)."""
+    from tuflexperf.io.files import raise_if_interrupted
+
     for name, draw in named:
+        raise_if_interrupted()
         if _claim(keep, name):
             _draw_page(name, draw, folder, keep)
         if step is not None:
@@ -406,10 +413,9 @@ def _draw_pages(named: list[tuple[str, Callable[[], Any]]], folder: Path, keep: 
 def _page_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path, keep: Path) -> None:
     """A forked writer's body: on Ctrl-C or SIGTERM (sent to the whole process group) it
     just ends; the report's own process reports the interrupt and removes what was staged."""
-    import signal
+    from tuflexperf.io.files import release_interrupts
 
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, signal.SIG_DFL)
+    release_interrupts()
     _draw_pages(named, folder, keep)
 
 
