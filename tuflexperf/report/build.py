@@ -150,16 +150,12 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
 def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
                   kept: Path, writers: list[Any]) -> ReportResult:
     """:func:`_render`'s work; each forked helper is listed in ``writers`` as it starts."""
-    from tuflexperf.io.files import interrupts_held, raise_if_interrupted
+    from tuflexperf.io.files import raise_if_interrupted
 
     # The campaign is reduced by a forked copy of this process from the start (before
     # matplotlib is imported: it needs none), while this one solves the analyses and a
-    # second copy draws their pages (the two need nothing of each other's). Each fork
-    # holds the interrupts back until its helper is listed: one raised inside the fork's
-    # own callbacks would be dropped.
-    with interrupts_held():
-        reduction = _start_campaign_reduction(case, campaign, kept, step.detail)
-        writers.append(reduction.process)
+    # second copy draws their pages (the two need nothing of each other's).
+    reduced = _start_campaign_reduction(case, campaign, kept, step.detail, writers)
     from tuflexperf.report import analysis_figures as af
     from tuflexperf.report import figures as fg
 
@@ -193,9 +189,8 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     # The first writer starts with the tornado: the margins behind it (about 1 s of batch
     # solves) are then solved while the campaign is reduced, not at the end.
     first = sorted(analysis_pages.items(), key=lambda item: item[0] != "11_tornado")
-    with interrupts_held():
-        writers.append(_start_page_writer(first, folder, kept))
-    measured = reduction.result()
+    _start_helper(_draw_pages, (first, folder, kept), writers)
+    measured = reduced()
     raise_if_interrupted()
     step(
         f"measured data: {measured.kind}" + (f" {measured.source.name}" if measured.source else "")
@@ -212,8 +207,7 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     if measured.comparisons:
         measured_pages["06_model_vs_measured"] = lambda: fg.model_vs_measured(case, measured)
     measured_pages["06b_thrust_band"] = lambda: af.thrust_band(case, analyses, measured)
-    with interrupts_held():
-        writers.append(_start_page_writer(list(measured_pages.items())[::-1], folder, kept))
+    _start_helper(_draw_pages, (list(measured_pages.items())[::-1], folder, kept), writers)
 
     named = sorted({**analysis_pages, **measured_pages}.items())  # the report's page order
     notes = measured.notes + analyses.notes
@@ -232,8 +226,7 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
         end.append(fg.text_page("What this report leaves out, and why", [f"- {n}" for n in notes]))
     _save_pdf_pages(end, kept / "_end.pdf")
     for writer in writers:
-        if writer is not None:
-            writer.join()
+        writer.join()
     # never a report without its figures: a page a writer did not finish is drawn here
     for part in folder.glob("*.part"):
         part.unlink()
@@ -258,20 +251,13 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     )
 
 
-@dataclass
-class _Reduction:
-    """The campaign reduction (:func:`~tuflexperf.report.data.load_measured`) under way in
-    ``process`` (None: run here, when ``result`` is asked for)."""
-
-    process: Any
-    result: Callable[[], Any]
-
-
 def _start_campaign_reduction(case: Any, campaign: Path | None, keep: Path,
-                              progress: Callable[..., None]) -> _Reduction:
-    """Start reducing the campaign in a forked process; ``result()`` waits for it and
-    returns the :class:`~tuflexperf.report.data.Measured` (or raises its error here)."""
-    import multiprocessing
+                              progress: Callable[..., None],
+                              helpers: list[Any]) -> Callable[[], Any]:
+    """Start reducing the campaign (:func:`~tuflexperf.report.data.load_measured`) in a
+    forked helper (:func:`_start_helper`); the function returned waits for it and returns
+    the :class:`~tuflexperf.report.data.Measured` (or raises its error here). Without a
+    helper, that function reduces the campaign here."""
     import pickle
 
     from tuflexperf.report.data import load_measured
@@ -279,13 +265,10 @@ def _start_campaign_reduction(case: Any, campaign: Path | None, keep: Path,
     def here() -> Any:
         return load_measured(case, campaign, progress=progress)
 
-    if os.environ.get("TUFLEXPERF_SERIAL_REPORT") or not hasattr(os, "fork"):
-        return _Reduction(None, here)
     path = keep / "measured.pickle"
-    process = multiprocessing.get_context("fork").Process(
-        target=_reduce_campaign, args=(case, campaign, path, progress), daemon=True
-    )
-    process.start()
+    process = _start_helper(_reduce_campaign, (case, campaign, path, progress), helpers)
+    if process is None:
+        return here
 
     def result() -> Any:
         process.join()
@@ -297,19 +280,17 @@ def _start_campaign_reduction(case: Any, campaign: Path | None, keep: Path,
             raise value
         return value
 
-    return _Reduction(process, result)
+    return result
 
 
 def _reduce_campaign(case: Any, campaign: Path | None, path: Path,
                      progress: Callable[..., None]) -> None:
     """The forked reduction's body: the Measured, or the error it raised, pickled to
-    ``path``; on Ctrl-C or SIGTERM it just ends (the report's process cleans up)."""
+    ``path``."""
     import pickle
 
-    from tuflexperf.io.files import release_interrupts
     from tuflexperf.report.data import load_measured
 
-    release_interrupts()
     try:
         answer: tuple[bool, Any] = (True, load_measured(case, campaign, progress=progress))
     except Exception as exc:  # raised again by the report's own process
@@ -326,7 +307,7 @@ def _reduce_campaign(case: Any, campaign: Path | None, path: Path,
 
 def _stop(writers: list[Any]) -> None:
     for writer in writers:
-        if writer is not None and writer.is_alive():
+        if writer.is_alive():
             writer.terminate()
             writer.join()
 
@@ -410,28 +391,36 @@ def _draw_pages(named: list[tuple[str, Callable[[], Any]]], folder: Path, keep: 
             step(name)
 
 
-def _page_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path, keep: Path) -> None:
-    """A forked writer's body: on Ctrl-C or SIGTERM (sent to the whole process group) it
-    just ends; the report's own process reports the interrupt and removes what was staged."""
-    from tuflexperf.io.files import release_interrupts
+def _start_helper(target: Callable[..., None], args: tuple[Any, ...],
+                  helpers: list[Any]) -> Any:
+    """``target(*args)`` in a forked helper process, listed in ``helpers`` (stopped by
+    :func:`_stop`); None where fork is not available (the caller then does the work).
 
-    release_interrupts()
-    _draw_pages(named, folder, keep)
-
-
-def _start_page_writer(named: list[tuple[str, Callable[[], Any]]], folder: Path,
-                       keep: Path) -> Any:
-    """A forked process drawing pages (:func:`_draw_pages`), or None where fork is not
-    available (then this process draws them all)."""
+    The interrupts are held across the fork until the helper is listed: one raised inside
+    the fork's own callbacks would be dropped, and one raised before the listing would
+    leave the helper running. In the helper, Ctrl-C or SIGTERM (sent to the whole process
+    group) just ends it; the report's own process reports it and removes what was staged.
+    """
     import multiprocessing
+
+    from tuflexperf.io.files import interrupts_held
 
     if os.environ.get("TUFLEXPERF_SERIAL_REPORT") or not hasattr(os, "fork"):
         return None
-    writer = multiprocessing.get_context("fork").Process(
-        target=_page_writer, args=(named, folder, keep), daemon=True
-    )
-    writer.start()
-    return writer
+    with interrupts_held():
+        helper = multiprocessing.get_context("fork").Process(
+            target=_helper_body, args=(target, args), daemon=True
+        )
+        helper.start()
+        helpers.append(helper)
+    return helper
+
+
+def _helper_body(target: Callable[..., None], args: tuple[Any, ...]) -> None:
+    from tuflexperf.io.files import release_interrupts
+
+    release_interrupts()
+    target(*args)
 
 
 def _title_page(case: Any, measured: Any, analyses: Any) -> Any:
