@@ -253,10 +253,14 @@ _signals_received: list[int] = []
 _holding = [False]  # inside interrupts_held(): an interrupt is noted, raised at its end
 
 
+def _interrupt(signum: int) -> KeyboardInterrupt:
+    return _Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
 def _raise_interrupt(signum: int, frame: object) -> None:
     _signals_received.append(signum)
     if not _holding[0]:
-        raise _Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+        raise _interrupt(signum)
 
 
 def install_interrupt_handlers() -> None:
@@ -302,7 +306,7 @@ def raise_if_interrupted() -> None:
     finalizer (or a fork's callback) as "ignored" and goes on, so a Ctrl-C that lands there
     is lost unless long work looks again between its steps."""
     if _signals_received:
-        raise _Terminated() if _signals_received[-1] == signal.SIGTERM else KeyboardInterrupt()
+        raise _interrupt(_signals_received[-1])
 
 
 def interrupted() -> bool:

@@ -329,10 +329,11 @@ def model_dynamics(case: Case, measured: Measured) -> list[tuple[str, float, flo
 
 
 def model_force_n(
-    case: Case, measured: Measured, run: ProcessedRun,
+    case: Case, measured: Measured, run: ProcessedRun | SweepRun,
     delay_s: float | None = None, lag_s: float | None = None,
 ) -> np.ndarray | None:
-    """The model's balance force over a run: the dynamic thrust minus the structure drag [N].
+    """The model's balance force over a run (a step run or the sine sweep): the dynamic
+    thrust minus the structure drag [N].
 
     The thrust is :func:`dynamic_thrust_n` of the logged throttle (the propulsion file's
     ``delay_s`` and ``lag_s`` unless given), ``D`` the structure drag ``c1 V + c2 V^2``
@@ -350,19 +351,6 @@ def model_force_n(
     return measured.model_force[key]
 
 
-def sweep_model_force_n(case: Case, measured: Measured, delay_s: float,
-                        lag_s: float) -> np.ndarray | None:
-    """:func:`model_force_n` over the sine sweep ``measured.sweep`` [N]."""
-    sweep = measured.sweep
-    key = (sweep.file, float(delay_s), float(lag_s))
-    if key not in measured.model_force:
-        measured.model_force[key] = balance_model_n(
-            case, measured, sweep.engine, sweep.time_s, sweep.throttle, sweep.airspeed_m_s,
-            delay_s, lag_s,
-        )
-    return measured.model_force[key]
-
-
 def _model_responses(case: Case, measured: Measured) -> None:
     """Every model response the report draws, computed with the reduction (the figures
     then evaluate nothing; the forked page writers need no filter code of their own)."""
@@ -370,7 +358,7 @@ def _model_responses(case: Case, measured: Measured) -> None:
         for run in measured.comparisons:
             model_force_n(case, measured, run, delay, lag)
         if measured.sweep is not None:
-            sweep_model_force_n(case, measured, delay, lag)
+            model_force_n(case, measured, measured.sweep, delay, lag)
 
 
 

@@ -36,7 +36,6 @@ from tuflexperf.report.data import (  # noqa: F401 - dynamic_thrust_n, model_for
     dynamic_thrust_n,
     model_dynamics,
     model_force_n,
-    sweep_model_force_n,
 )
 from tuflexperf.report.decimate import envelope as decimated
 from tuflexperf.report.style import (
@@ -545,7 +544,7 @@ def sine_sweep(measured: Measured, case: Case) -> Any:
     force = sweep.force_median_n
     dynamics = model_dynamics(case, measured)
     styles = _model_styles(dynamics)
-    models = [sweep_model_force_n(case, measured, delay, lag) for _, delay, lag in dynamics]
+    models = [model_force_n(case, measured, sweep, delay, lag) for _, delay, lag in dynamics]
     # the sweep ends where the throttle last leaves the value it holds at the end of the log
     moving = np.flatnonzero(np.abs(sweep.throttle - sweep.throttle[-1]) > 0.01)
     t_end = t[moving[-1]] if moving.size else t[-1]
