@@ -544,8 +544,19 @@ class MissionModel:
         return f
 
     # -- the CasADi build -----------------------------------------------------------------
-    def _step_functions(self, dead: int | None, solve_v: bool) -> dict[str, Any]:
-        """RK4 steps ``(state, step, p) -> state`` over time, height and airspeed; the aux.
+    def _stepper(self, dead: int | None, solve_v: bool, kind: str) -> Any:
+        """One step function of :meth:`_step_functions`, built the first time it is asked for.
+
+        A segment uses one or two of the four (a cruise only ``time`` and ``aux``), so the
+        others are never built (each is a few milliseconds of symbolic construction).
+        """
+        key = (dead, solve_v, kind)
+        if key not in self._steps:
+            self._steps[key] = self._step_functions(dead, solve_v, kind)
+        return self._steps[key]
+
+    def _step_functions(self, dead: int | None, solve_v: bool, kind: str) -> Any:
+        """RK4 step ``(state, step, p) -> state`` over ``kind`` (time, height, speed), or the aux.
 
         Over airspeed (the take-off's ground roll): ``dstate/dV = rates / (dV/dt)`` with
         ``m dV/dt = T - D_g - mu max(W - L_g, 0)`` and the thrust at the packs' loaded
@@ -603,12 +614,10 @@ class MissionModel:
             accel = ca.fmax((a[6 + 3 * n] - drag - friction) / aircraft.mass_kg, 1e-9)
             return d / accel
 
-        return {
-            "time": ca.Function("step_time", [s, step, p], [rk4(in_time)]),
-            "height": ca.Function("step_height", [s, step, p], [rk4(in_height)]),
-            "speed": ca.Function("step_speed", [s, step, p], [rk4(in_speed)]),
-            "aux": ca.Function("aux", [s, p], [evaluate(s, p[6])]),
-        }
+        if kind == "aux":
+            return ca.Function("aux", [s, p], [evaluate(s, p[6])])
+        derivative = {"time": in_time, "height": in_height, "speed": in_speed}[kind]
+        return ca.Function(f"step_{kind}", [s, step, p], [rk4(derivative)])
 
     def _segment_graph(self, plan: _Plan, state: Any, durations: Any, theta: Any,
                        nodes_aux: bool = True) -> tuple[list[Any], list[Any], Any]:
@@ -618,11 +627,7 @@ class MissionModel:
         """
         import casadi as ca
 
-        key = (plan.dead, plan.solve_v)
-        if key not in self._steps:
-            self._steps[key] = self._step_functions(plan.dead, plan.solve_v)
-        steppers = self._steps[key]
-        f_aux = steppers["aux"]
+        f_aux = self._stepper(plan.dead, plan.solve_v, "aux")
         if plan.kind == "takeoff":
             phases: list[tuple[str, Any, Any]] = [
                 (kind, step, ca.DM(rows.T)) for kind, step, rows in self._takeoff_phases(plan)
@@ -639,7 +644,7 @@ class MissionModel:
                 phases = [("height", (plan.end_h - plan.start_h) / STEPS, rows)]
         nodes, auxes = [], []
         for kind, step, p_rows in phases:
-            f = steppers[kind]
+            f = self._stepper(plan.dead, plan.solve_v, kind)
             steps = p_rows.shape[1]
             history = f.mapaccum(steps)(state, ca.repmat(step, 1, steps), p_rows)
             both = ca.horzcat(state, history)
