@@ -61,6 +61,25 @@ def test_moving_filters_equal_brute_force(k: int) -> None:
     np.testing.assert_allclose(movstd(x, k), stds, atol=1e-9)
 
 
+@pytest.mark.parametrize("k", [2, 4, 100, 250])
+def test_even_window_median_equals_both_rank_filters_to_the_bit(k: int) -> None:
+    # the even window's one-pass running median (Bottleneck) against the mean of SciPy's
+    # two middle-rank filters it replaced, on a long signal with steps and ties, and
+    # against the brute-force median of every window
+    from scipy.ndimage import rank_filter
+
+    rng = np.random.default_rng(k)
+    x = np.round(rng.normal(size=5000) * 2 + np.repeat([0.0, 40.0, -7.0, 12.0], 1250), 1)
+    out = movmedian(x, k)
+    before, after = k // 2, k - 1 - k // 2
+    upper = rank_filter(x, rank=k // 2, size=k, mode="nearest")
+    lower = rank_filter(x, rank=k // 2 - 1, size=k, mode="nearest")
+    np.testing.assert_array_equal(out[before : x.size - after],
+                                  (0.5 * (lower + upper))[before : x.size - after])
+    windows = [x[max(i - before, 0) : i + after + 1] for i in range(x.size)]
+    np.testing.assert_allclose(out, [np.median(w) for w in windows], rtol=0, atol=1e-12)
+
+
 def test_isoutlier_mean_matlab_doc_example() -> None:
     # MATLAB isoutlier doc, "Outliers Using Mean Detection": only 300 is 3 std from the mean.
     # A moving window covering the whole vector reduces to that global method.
