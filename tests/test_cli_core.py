@@ -77,10 +77,35 @@ def test_takeoff_not_attainable_is_exit_1_with_reason(tmp_path):
     result = run("takeoff", "--case", str(case))
     assert result.exit_code == 1
     assert "never" in result.stderr and "Traceback" not in result.output
+    # --json on exit 1: the SPEC's keys are there (null: no roll), the lift-off speed known
+    out = run("takeoff", "--case", str(case), "--json")
+    assert out.exit_code == 1
+    payload = json.loads(out.stdout)
+    assert payload["ground_roll_m"] is None and payload["time_s"] is None
+    assert payload["liftoff_speed_m_s"] > 0 and payload["passed"] is False
+    endurance = json.loads(run("endurance", "--throttle", "0.05", "--json").stdout)
+    assert endurance["throttle"] == 0.05 and endurance["flight_endurance_min"] is None
     check = run("check", str(case), "--json")
     assert check.exit_code == 1
     item = json.loads(check.stdout)["results"][0]
     assert item["value"] is None and item["passed"] is False and "never" in item["reason"]
+
+
+def test_set_gives_an_optional_key_the_case_leaves_unset():
+    # the shipped aircraft has no lift-off speed (it uses the factor); --set may give one,
+    # as the file could, and the take-off then lifts off at it (an EAS, sea level: = TAS)
+    plain = json.loads(run("takeoff", "--json").stdout)
+    given = run("takeoff", "--json", "--set", "aircraft.takeoff.liftoff_speed_m_s=18.5")
+    assert given.exit_code in (0, 1), given.output
+    out = json.loads(given.stdout)
+    assert out["liftoff_speed_m_s"] == pytest.approx(18.5, rel=1e-9)
+    assert out["ground_roll_m"] > plain["ground_roll_m"]
+    # below the stall speed: bad input naming the key, one line
+    low = run("takeoff", "--set", "aircraft.takeoff.liftoff_speed_m_s=5")
+    assert low.exit_code == 2 and "liftoff_speed_m_s" in low.stderr
+    assert len(low.stderr.strip().splitlines()) == 1 and "Value error" not in low.stderr
+    typo = run("check", "--set", "aircraft.takeoff.liftof_speed_m_s=18")
+    assert typo.exit_code == 2 and "did you mean aircraft.takeoff.liftoff_speed_m_s" in typo.stderr
 
 
 def test_oei_dead_engine_flag(tmp_path):

@@ -956,6 +956,20 @@ def _unless_interrupted() -> None:
         raise KeyboardInterrupt from None
 
 
+# SPEC 5's JSON keys of each command: on exit 1 (not attainable) they are there, null
+_RESULT_KEYS: dict[str, tuple[str, ...]] = {
+    "takeoff": ("ground_roll_m", "liftoff_speed_m_s", "time_s"),
+    "trim": ("airspeed_m_s", "throttle", "min_throttle", "max_throttle", "all_feasible"),
+    "oei": ("min_throttle", "airspeed_at_min_throttle_m_s", "level_flight_airspeed_range_m_s"),
+    "endurance": ("throttle", "airspeed_m_s", "electrical_power_w", "battery_endurance_min",
+                  "flight_endurance_min"),
+    "performance": ("stall_speed_m_s", "minimum_drag_speed_m_s", "max_level_speed_m_s",
+                    "max_climb_rate_m_s", "best_climb_rate_speed_m_s",
+                    "best_climb_angle_speed_m_s", "service_ceiling_m", "absolute_ceiling_m",
+                    "oei_max_climb_gradient", "takeoff_distance_to_obstacle_m", "climb"),
+}
+
+
 def _guarded(callback: Any) -> Any:
     """Turn InputError into exit 2 and NotAttainable into exit 1, one line on stderr each."""
 
@@ -979,8 +993,13 @@ def _guarded(callback: Any) -> Any:
             raise typer.Exit(2) from None
         except NotAttainable as exc:
             if kwargs.get("as_json"):  # SPEC 5: one JSON object on exit 1 as well
-                emit_json({"command": callback.__name__.removesuffix("_command"),
-                           "passed": False, "attainable": False, "reason": str(exc)})
+                command = callback.__name__.removesuffix("_command")
+                # the command's SPEC keys, null where there is no answer, and what was known
+                results = dict.fromkeys(_RESULT_KEYS.get(command, ()))
+                if command == "endurance" and kwargs.get("throttle") is not None:
+                    results["throttle"] = kwargs["throttle"]
+                emit_json({"command": command, "passed": False, "attainable": False,
+                           "reason": str(exc), **results, **exc.known})
             sys.stderr.write(f"tuflexperf: not attainable: {exc}\n")
             raise typer.Exit(1) from None
 

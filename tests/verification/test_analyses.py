@@ -83,9 +83,25 @@ def test_ground_roll_equals_closed_form(tmp_path, static_n, lapse, extra):
 
 def test_ground_roll_never_lifts_off(tmp_path):
     # net force A - B V^2 vanishes at sqrt(A/B) < lift-off speed
+    import re
+
+    from scipy.optimize import brentq
+
+    from tuflexperf.analysis.takeoff import net_force_n
+    from tuflexperf.models.aircraft import liftoff_speed_m_s
+
     case = _quadratic_thrust_case(tmp_path, 40.0, 0.3, liftoff=15.0)
-    with pytest.raises(NotAttainable, match="never reaches lift-off"):
+    with pytest.raises(NotAttainable, match="never reaches lift-off") as caught:
         solve_takeoff(case)
+    rho = case.density_kg_m3
+    v_lo = float(liftoff_speed_m_s(case.aircraft, rho))
+    # the speed where the roll stalls, to the message's two decimals, against a root-finder
+    root = brentq(lambda v: float(net_force_n(case.aircraft, case.propulsion, v, rho)),
+                  0.0, v_lo, xtol=1e-12)
+    said = float(re.search(r"vanishes at ([0-9.]+) m/s", str(caught.value)).group(1))
+    assert said == pytest.approx(root, abs=0.006)
+    # what was known before the answer was no goes with it (the JSON's keys on exit 1)
+    assert caught.value.known["liftoff_speed_m_s"] == pytest.approx(v_lo, rel=1e-12)
 
 
 def test_ground_roll_never_starts(tmp_path):

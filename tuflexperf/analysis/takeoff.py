@@ -206,16 +206,20 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         )
     speeds = np.linspace(0.0, v_lo, _CHECK_POINTS)
     force = np.asarray(net_force_n(aircraft, propulsion, speeds, rho), dtype=float)
+    known = {"liftoff_speed_m_s": v_lo, "stall_speed_m_s": stall}
     if force[0] <= 0.0:
         raise NotAttainable(
             f"never starts rolling: static thrust does not overcome rolling friction "
-            f"(net force {force[0]:.2f} N at rest)"
+            f"(net force {force[0]:.2f} N at rest)", known
         )
     if np.any(force <= 0.0):
-        stuck = speeds[int(np.argmax(force <= 0.0))]
+        i = int(np.argmax(force <= 0.0))
+        # where the net force crosses zero, between the two check points around it
+        stuck = speeds[i - 1] + (speeds[i] - speeds[i - 1]) * force[i - 1] / (
+            force[i - 1] - force[i])
         raise NotAttainable(
-            f"never reaches lift-off: the net force vanishes at {stuck:.1f} m/s, below the "
-            f"lift-off speed {v_lo:.1f} m/s"
+            f"never reaches lift-off: the net force vanishes at {stuck:.2f} m/s, below the "
+            f"lift-off speed {v_lo:.2f} m/s", known
         )
     try:
         states = np.asarray(_integrator_for(case)(v_lo))
@@ -224,7 +228,7 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
     if not np.all(np.isfinite(states)):
         raise NotAttainable(
             f"never reaches lift-off: the net force all but vanishes below the lift-off speed "
-            f"{v_lo:.1f} m/s (least {force.min():.3g} N)"
+            f"{v_lo:.2f} m/s (least {force.min():.3g} N)", known
         )
     distance = np.concatenate([[0.0], states[0, :]])
     time = np.concatenate([[0.0], states[1, :]])

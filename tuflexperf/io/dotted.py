@@ -69,10 +69,56 @@ def numeric_keys(case: Case, battery: bool = True) -> dict[str, float]:
     return out
 
 
-def check_key(case: Case, key: str, where: str) -> None:
-    """Raise :class:`InputError` naming ``where`` and the closest key if ``key`` is unknown."""
+def unset_optional_keys(case: Case) -> set[str]:
+    """Optional numeric keys the case leaves unset, e.g. ``aircraft.takeoff.liftoff_speed_m_s``.
+
+    ``--set`` may give them (the file could); they have no nominal value, so samples,
+    sweeps and margins, which vary a key about its nominal, do not take them.
+    """
+    import typing
+
+    from tuflexperf.io.case import AtmosphereSchema, TakeoffSchema
+
+    def numeric_optional(annotation: Any) -> bool:
+        stack, kinds = [annotation], set()
+        while stack:
+            kind = stack.pop()
+            args = typing.get_args(kind)
+            if typing.get_origin(kind) is typing.Annotated:
+                stack.append(args[0])
+            elif args:
+                stack += list(args)
+            else:
+                kinds.add(kind)
+        return type(None) in kinds and bool(kinds & {float, int})
+
+    blocks: list[tuple[str, type[BaseModel], Mapping[str, Any]]] = [
+        ("aircraft", AircraftSchema, dataclasses.asdict(case.aircraft)),
+        ("aircraft.takeoff", TakeoffSchema, dataclasses.asdict(case.aircraft.takeoff)),
+        ("atmosphere", AtmosphereSchema, case.atmosphere.model_dump()),
+    ]
+    for name in type(case.requirements).model_fields:
+        block = getattr(case.requirements, name)
+        if block is not None:
+            blocks.append((f"requirements.{name}", type(block), block.model_dump()))
+    return {
+        f"{prefix}.{name}"
+        for prefix, schema, values in blocks
+        for name, field in schema.model_fields.items()
+        if values.get(name) is None and numeric_optional(field.annotation)
+    }
+
+
+def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
+    """Raise :class:`InputError` naming ``where`` and the closest key if ``key`` is unknown.
+
+    With ``unset``, an optional numeric key the case leaves unset is known too (``--set``).
+    """
     known = numeric_keys(case)
     if key in known:
+        return
+    optional = unset_optional_keys(case) if unset else set()
+    if key in optional:
         return
     if key in _FIXED:
         raise InputError(
@@ -85,7 +131,7 @@ def check_key(case: Case, key: str, where: str) -> None:
             f"{', '.join(BATTERY_KEYS)}: the pack model is fitted to its runs at check time; "
             "the thrust model's uncertainty is `uncertainty.propulsion`)"
         )
-    close = difflib.get_close_matches(key, list(known), n=1)
+    close = difflib.get_close_matches(key, [*known, *optional], n=1)
     hint = f" (did you mean {close[0]}?)" if close else ""
     raise InputError(f"{where}: unknown or non-numeric key {key!r}{hint}")
 
@@ -149,7 +195,12 @@ def check_value(case: Case, key: str, value: float, where: str) -> None:
             else field.annotation
         TypeAdapter(kind).validate_python(value)
     except ValidationError as exc:
-        raise InputError(f"{where}: {key}={value:g}: {exc.errors()[0]['msg']}") from None
+        raise InputError(f"{where}: {key}={value:g}: {_problem(exc)}") from None
+
+
+def _problem(exc: ValidationError) -> str:
+    """The first error's message, without pydantic's "Value error, " prefix."""
+    return str(exc.errors()[0]["msg"]).removeprefix("Value error, ")
 
 
 def _replace_pydantic(model: BaseModel, path: list[str], value: float) -> BaseModel:
@@ -172,7 +223,7 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
     aircraft = dataclasses.asdict(case.aircraft)
     atmosphere, requirements = case.atmosphere, case.requirements
     for key, value in values.items():
-        check_key(case, key, where)
+        check_key(case, key, where, unset=True)
         head, *rest = key.split(".")
         if head == "battery":
             raise InputError(
@@ -190,13 +241,13 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
             else:
                 requirements = _replace_pydantic(requirements, rest, float(value))
         except ValidationError as exc:
-            raise InputError(f"{where}: {key}={value:g}: {exc.errors()[0]['msg']}") from None
+            raise InputError(f"{where}: {key}={value:g}: {_problem(exc)}") from None
     try:
         AircraftSchema.model_validate({k: v for k, v in aircraft.items()})
     except ValidationError as exc:
         error = exc.errors()[0]
-        loc = ".".join(str(p) for p in error["loc"])
-        raise InputError(f"{where}: aircraft.{loc}: {error['msg']}") from None
+        loc = ".".join(["aircraft", *(str(p) for p in error["loc"])])
+        raise InputError(f"{where}: {loc}: {_problem(exc)}") from None
     takeoff = dataclasses.replace(case.aircraft.takeoff, **aircraft.pop("takeoff"))
     new_aircraft = Aircraft(**{**aircraft, "takeoff": takeoff})
     assert isinstance(requirements, Requirements)
