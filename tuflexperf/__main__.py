@@ -1,3 +1,3 @@
-from tuflexperf.cli import main
+from tuflexperf.entry import main
 
 main()

@@ -1022,7 +1022,7 @@ def main(argv: list[str] | None = None) -> None:
     os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
     try:
         code = app(args=argv, standalone_mode=False, prog_name="tuflexperf")
-    except Abort:
+    except (Abort, KeyboardInterrupt):  # click's word for an interrupt, or one before click's
         sys.stderr.write("tuflexperf: aborted\n")
         sys.exit(130)
     except TyperException as exc:
@@ -1030,4 +1030,9 @@ def main(argv: list[str] | None = None) -> None:
             app(args=["--help"], prog_name="tuflexperf")
         sys.stderr.write(f"tuflexperf: error: {exc.format_message()}\n")
         sys.exit(getattr(exc, "exit_code", 2) or 2)
+    from tuflexperf.io.files import interrupted
+
+    if interrupted():  # one a library dropped (printed as "ignored"): still no success
+        sys.stderr.write("tuflexperf: aborted\n")
+        sys.exit(130)
     sys.exit(code if isinstance(code, int) else 0)

@@ -213,11 +213,87 @@ def run_chunks(
         finally:
             client.close()
     if workers is not None and workers > 1 and len(arguments) > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            return list(pool.map(function, *zip(*arguments, strict=True)))
+        return _in_processes(function, arguments, workers)
     return [function(*a) for a in arguments]
+
+
+def _in_processes(
+    function: Callable[..., dict[str, Array]], arguments: Sequence[tuple[Any, ...]], workers: int
+) -> list[dict[str, Array]]:
+    """``function(*a)`` for each argument tuple in ``workers`` local processes, in order.
+
+    Each worker takes every ``workers``-th chunk and sends each result on its own pipe.
+    Ctrl-C or SIGTERM ends the workers at once (the default action: none prints a
+    traceback) and is raised here, where the command reports it (exit 130); one that
+    lands while a worker is forked is held until the fork is done, never dropped. A
+    worker that dies shows as the end of its pipe, so nothing waits on it for ever (a
+    process pool's shared result pipe did: a worker killed while it wrote left half a
+    message that its reader waited on at exit). An error in a chunk is raised here.
+    """
+    import multiprocessing
+    from multiprocessing.connection import wait
+
+    from tuflexperf.io.files import interrupts_held, raise_if_interrupted
+
+    context = multiprocessing.get_context(
+        "fork" if "fork" in multiprocessing.get_all_start_methods() else None)
+    count = min(workers, len(arguments))
+    results: list[Any] = [None] * len(arguments)
+    helpers: list[Any] = []
+    owed: dict[Any, int] = {}  # each worker's pipe: the results still to come on it
+    finished = False
+    try:
+        for k in range(count):
+            reader, writer = context.Pipe(duplex=False)
+            indices = range(k, len(arguments), count)
+            with interrupts_held():
+                helper = context.Process(target=_worker, args=(function, arguments, indices,
+                                                               writer), daemon=True)
+                helper.start()
+                helpers.append(helper)
+            writer.close()  # the worker's end: the pipe ends here when the worker does
+            owed[reader] = len(indices)
+        while owed:
+            for reader in wait(list(owed)):
+                try:
+                    index, outcome = reader.recv()
+                except EOFError:
+                    raise_if_interrupted()  # the workers ended by the interrupt: that is news
+                    raise InputError("--workers: a worker process ended without its results "
+                                     "(killed from outside?); run again, or without --workers"
+                                     ) from None
+                if isinstance(outcome, BaseException):
+                    raise outcome
+                results[index] = outcome
+                owed[reader] -= 1
+                if not owed[reader]:
+                    del owed[reader]
+                    reader.close()
+        finished = True
+        return results
+    finally:
+        for helper in helpers:
+            if not finished and helper.is_alive():
+                helper.terminate()
+            helper.join()
+        for reader in owed:
+            reader.close()
+
+
+def _worker(function: Callable[..., dict[str, Array]], arguments: Sequence[tuple[Any, ...]],
+            indices: range, writer: Any) -> None:
+    """One worker of :func:`_in_processes`: its chunks in order, each result (or the error
+    it raised) sent as ``(index, outcome)``."""
+    from tuflexperf.io.files import release_interrupts
+
+    release_interrupts()
+    for index in indices:
+        try:
+            outcome: Any = function(*arguments[index])
+        except Exception as exc:  # raised again in the parent, as if the chunk ran there
+            outcome = exc
+        writer.send((index, outcome))
+    writer.close()
 
 
 @dataclass(frozen=True)

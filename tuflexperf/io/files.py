@@ -17,6 +17,7 @@ import os
 import signal
 from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
 from tuflexperf.errors import InputError
 
@@ -265,10 +266,24 @@ def _raise_interrupt(signum: int, frame: object) -> None:
 
 def install_interrupt_handlers() -> None:
     """Make SIGTERM unwind like Ctrl-C (staging removed, earlier output intact), and note
-    that either came, for :func:`interrupted`."""
+    that either came, for :func:`interrupted`.
+
+    An interrupt raised where Python cannot raise it (a finalizer, an import's callback) is
+    dropped with an "Exception ignored" traceback on stderr; it is noted already, and raised
+    again later (:func:`raise_if_interrupted`, the CLI's exit), so that traceback goes.
+    """
+    import sys
+
+    default_hook = sys.unraisablehook
+
+    def quiet_interrupts(unraisable: Any) -> None:
+        if not isinstance(unraisable.exc_value, KeyboardInterrupt):
+            default_hook(unraisable)
+
     with contextlib.suppress(ValueError):  # not the main thread: leave the defaults
         signal.signal(signal.SIGINT, _raise_interrupt)
         signal.signal(signal.SIGTERM, _raise_interrupt)
+        sys.unraisablehook = quiet_interrupts
 
 
 @contextlib.contextmanager

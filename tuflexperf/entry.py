@@ -1,0 +1,28 @@
+"""The console entry point: a Ctrl-C that lands before the command runs ends it quietly.
+
+Python's own Ctrl-C handler raises KeyboardInterrupt wherever the interrupt lands: inside
+the ~0.2 s of imports before :func:`tuflexperf.cli.main` installs its handlers that printed
+a traceback, or, raised inside an import's callback, was printed as "ignored" and dropped
+(the command then ran to the end and exited 0). Until then nothing has been written, so
+no cleanup is owed: the process ends at once with the interrupt's exit code.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+
+INTERRUPTED_EXIT = 130  # 128 + SIGINT; SIGTERM unwinds like Ctrl-C (tuflexperf.io.files)
+
+
+def _exit_at_once(signum: int, frame: object) -> None:
+    os._exit(INTERRUPTED_EXIT)
+
+
+def main() -> None:
+    """``tuflexperf`` (the console script) and ``python -m tuflexperf``."""
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, _exit_at_once)
+    from tuflexperf.cli import main as cli_main
+
+    cli_main()
