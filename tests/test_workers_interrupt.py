@@ -61,13 +61,17 @@ def _start_with_workers() -> tuple[subprocess.Popen[str], list[int]]:
     return process, workers
 
 
-@pytest.mark.parametrize(("signum", "after_s"), [(signal.SIGINT, 0.0), (signal.SIGINT, 0.3),
-                                                 (signal.SIGTERM, 0.15)])
-def test_an_interrupt_ends_the_command_and_its_workers_quietly(signum: int,
-                                                               after_s: float) -> None:
+@pytest.mark.parametrize(("signum", "after_s", "group"), [
+    (signal.SIGINT, 0.0, True), (signal.SIGINT, 0.3, True), (signal.SIGTERM, 0.15, True),
+    # to the command alone (a supervisor's SIGTERM): its workers are stopped by it
+    (signal.SIGTERM, 0.0, False), (signal.SIGINT, 0.3, False),
+])
+def test_an_interrupt_ends_the_command_and_its_workers_quietly(
+    signum: int, after_s: float, group: bool
+) -> None:
     process, _ = _start_with_workers()
     time.sleep(after_s)
-    os.killpg(process.pid, signum)
+    (os.killpg if group else os.kill)(process.pid, signum)
     _, err = process.communicate(timeout=60)  # a hang fails here
     assert process.returncode == 130, (process.returncode, err)
     assert "Traceback" not in err and "Exception ignored" not in err, err

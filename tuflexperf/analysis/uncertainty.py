@@ -224,8 +224,9 @@ def _in_processes(
 
     Each worker takes every ``workers``-th chunk and sends each result on its own pipe.
     Ctrl-C or SIGTERM ends the workers at once (the default action: none prints a
-    traceback) and is raised here, where the command reports it (exit 130); one that
-    lands while a worker is forked is held until the fork is done, never dropped. A
+    traceback; any still running when the interrupt is raised here are killed) and is
+    raised here, where the command reports it (exit 130); one that lands while a worker
+    is forked is held until the fork is done, never dropped. A
     worker that dies shows as the end of its pipe, so nothing waits on it for ever (a
     process pool's shared result pipe did: a worker killed while it wrote left half a
     message that its reader waited on at exit). An error in a chunk is raised here.
@@ -272,12 +273,16 @@ def _in_processes(
         finished = True
         return results
     finally:
-        for helper in helpers:
-            if not finished and helper.is_alive():
-                helper.terminate()
-            helper.join()
+        if not finished:
+            # SIGKILL, not SIGTERM: a worker holds nothing to clean up, and a SIGTERM landing
+            # between its fork and its taking the default action would be lost (the worker
+            # then blocked on its full pipe while this process waited for it: a hang)
+            for helper in helpers:
+                helper.kill()
         for reader in owed:
             reader.close()
+        for helper in helpers:
+            helper.join()
 
 
 def _worker(function: Callable[..., dict[str, Array]], arguments: Sequence[tuple[Any, ...]],
@@ -292,7 +297,10 @@ def _worker(function: Callable[..., dict[str, Array]], arguments: Sequence[tuple
             outcome: Any = function(*arguments[index])
         except Exception as exc:  # raised again in the parent, as if the chunk ran there
             outcome = exc
-        writer.send((index, outcome))
+        try:
+            writer.send((index, outcome))
+        except OSError:  # the parent is gone (killed): nobody to tell
+            return
     writer.close()
 
 

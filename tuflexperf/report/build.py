@@ -306,10 +306,13 @@ def _reduce_campaign(case: Any, campaign: Path | None, path: Path,
 
 
 def _stop(writers: list[Any]) -> None:
+    # SIGKILL, not SIGTERM: a helper holds nothing to clean up (its files are in the
+    # staging folder), and a SIGTERM landing before it takes the default action is lost
     for writer in writers:
         if writer.is_alive():
-            writer.terminate()
-            writer.join()
+            writer.kill()
+    for writer in writers:
+        writer.join()
 
 
 def _save_pdf_pages(figures: list[Any], path: Path,
