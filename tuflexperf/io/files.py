@@ -133,21 +133,60 @@ def _same_file(a: Path, b: Path) -> bool:
 
 
 # How each single-file output of the tool begins (the folders carry MARKER instead): an
-# existing file is replaced only when it begins like one of these, i.e. an earlier output.
-_CSV_HEADS = (
-    b"engine,throttle,airspeed_m_s,thrust_n,",  # fit's thrust table
-    b"time_s,segment,",  # mission --csv (the flight's history)
+# existing file is replaced only when it begins exactly like one of these, i.e. an earlier
+# output. A user's file that merely looks alike (an extra column) is never replaced.
+THRUST_TABLE_HEADERS = (
+    # fit's thrust table from a campaign (SPEC 4's four columns, then the reduction's)
+    "engine,throttle,airspeed_m_s,thrust_n,airspeed_measured_m_s,force_n,drag_n,force_std_n,"
+    "n_samples,glauert_ratio,run,thrust_at_voltage_n,voltage_v,current_a,electrical_power_w,"
+    "ideal_power_w,figure_of_merit,overall_efficiency",
+    "engine,throttle,airspeed_m_s,thrust_n",  # refitted from a table: the four only
 )
-_SWEEP_COLUMN_ENDS = (b"_value", b"_limit", b"_passed")
+MISSION_CSV_COLUMNS = ("time_s", "segment", "altitude_m", "distance_m", "airspeed_m_s",
+                       "airspeed_eas_m_s", "throttle", "climb_rate_m_s")
+MISSION_CSV_ENGINE_COLUMNS = ("current_a", "voltage_v", "charge_ah", "charge_fraction",
+                              "power_w", "energy_wh")  # each + "_<engine>", per engine
+REQUIREMENT_NAMES = frozenset({  # check's result names (analysis/requirements.py)
+    "takeoff_ground_roll", "takeoff_distance_to_obstacle", "trim_throttle_max",
+    "oei_min_throttle", "flight_endurance", "mission_landing_charge",
+})
 PNG_SOFTWARE = "tuflexperf"  # the PNG text chunk 'Software' of every single PNG written
+
+
+def _is_mission_history(columns: list[str]) -> bool:
+    fixed, rest = columns[: len(MISSION_CSV_COLUMNS)], columns[len(MISSION_CSV_COLUMNS):]
+    width = len(MISSION_CSV_ENGINE_COLUMNS)
+    if tuple(fixed) != MISSION_CSV_COLUMNS or not rest or len(rest) % width:
+        return False
+    for start in range(0, len(rest), width):
+        group = rest[start : start + width]
+        engine = group[0].removeprefix(MISSION_CSV_ENGINE_COLUMNS[0] + "_")
+        if group != [f"{name}_{engine}" for name in MISSION_CSV_ENGINE_COLUMNS]:
+            return False
+    return True
+
+
+def _is_sweep_grid(columns: list[str]) -> bool:
+    """The varied dotted keys, then ``<requirement>_value, _limit, _passed`` per requirement."""
+    keys = [c for c in columns if "." in c]
+    tail = columns[len(keys):]
+    if not keys or columns[: len(keys)] != keys or not tail or len(tail) % 3:
+        return False
+    for start in range(0, len(tail), 3):
+        name = tail[start].removesuffix("_value")
+        if name not in REQUIREMENT_NAMES or tail[start : start + 3] != [
+                f"{name}_value", f"{name}_limit", f"{name}_passed"]:
+            return False
+    return True
 
 
 def written_by_tuflexperf(head: bytes) -> bool:
     """True if ``head`` (a file's first bytes) is how an output of this tool begins.
 
     YAML written by ``fit`` says ``written by `tuflexperf ...``` on its first comment line; a
-    PNG carries ``Software: tuflexperf``; each CSV has its own header (a sweep's: the varied
-    keys, then ``<requirement>_value, _limit, _passed`` per requirement).
+    PNG carries ``Software: tuflexperf``; each CSV has its own header, matched whole: fit's
+    thrust table, a mission's history (its columns, then six per engine), a sweep's grid
+    (the varied keys, then ``<requirement>_value, _limit, _passed`` per requirement).
     """
     first_line = head.split(b"\n", 1)[0]
     # fit's YAML (thrust model, battery) says so on its first comment line
@@ -155,19 +194,24 @@ def written_by_tuflexperf(head: bytes) -> bool:
         return True
     if head.startswith(b"\x89PNG"):
         return b"Software\x00" + PNG_SOFTWARE.encode() in head
-    if head.startswith(_CSV_HEADS):
-        return True
-    columns = first_line.strip().split(b",")
-    tail = [c for c in columns if c.endswith(_SWEEP_COLUMN_ENDS)]
-    keys = columns[: len(columns) - len(tail)]
-    return (bool(tail) and len(tail) % 3 == 0 and columns[len(keys):] == tail
-            and all(b"." in k for k in keys))
+    if b"\n" not in head:  # a header is a whole first line
+        return False
+    try:
+        header = first_line.decode("utf-8").strip()
+    except UnicodeDecodeError:
+        return False
+    columns = header.split(",")
+    return (header in THRUST_TABLE_HEADERS or _is_mission_history(columns)
+            or _is_sweep_grid(columns))
 
 
 def refuse_foreign_files(outputs: dict[str, Path]) -> None:
     """Refuse (exit 2) to replace an existing file that this tool did not write (SPEC 5)."""
     for flag, out in outputs.items():
         out = Path(out)
+        if out.is_symlink():  # replacing it would replace the user's link, not write through
+            raise InputError(f"{flag}: {out} is a symbolic link; give the file it points to, "
+                             "or another path")
         if not os.path.lexists(out) or out.is_dir():
             continue
         try:
@@ -209,12 +253,17 @@ def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path]) -> None:
 
 
 def check_output_dir(out: Path, command: str) -> None:
-    """``out`` may be new, empty, or an earlier output of ``command`` (it carries the marker).
+    """``out`` may be new, empty, or an earlier output of ``command`` holding only what that
+    command wrote (the marker lists it).
 
-    Anything else — a file, a folder of the user's — is bad input: the command would
-    replace what it did not write.
+    Anything else — a file, a symbolic link, a folder of the user's, an earlier output the
+    user has added files to — is bad input: replacing it would delete what the command did
+    not write.
     """
     out = Path(out)
+    if out.is_symlink():  # the swap would replace the user's link, not write through it
+        raise InputError(f"--out: {out} is a symbolic link; give the folder it points to, or "
+                         "another path")
     if out.exists() and not out.is_dir():
         raise InputError(f"--out: {out} exists and is not a directory")
     # the nearest existing ancestor is where the staging folder will be made
@@ -225,23 +274,56 @@ def check_output_dir(out: Path, command: str) -> None:
         raise InputError(f"--out: cannot write in {existing}")
     if out.is_dir():
         try:
-            entries = [p.name for p in out.iterdir()]
+            entries = _relative_files(out)
         except OSError as exc:
             raise InputError(f"--out: cannot read {out}: {exc.strerror}") from None
-        if entries and read_marker(out) != command:
+        if not entries:
+            return
+        marker = _read_marker_data(out)
+        if marker.get("command") != command:
             raise InputError(
                 f"--out: {out} is a non-empty folder that an earlier `tuflexperf {command}` did "
                 "not write; refusing to replace it, choose a new or empty folder"
             )
+        written = {str(name) for name in marker.get("files") or []}
+        foreign = [name for name in entries if name != MARKER and not _listed(name, written)]
+        if foreign:
+            raise InputError(
+                f"--out: {out} holds {foreign[0]}"
+                + (f" (and {len(foreign) - 1} more)" if len(foreign) > 1 else "")
+                + f", which the earlier `tuflexperf {command}` did not write; refusing to "
+                "replace the folder, move that out or choose another folder"
+            )
+
+
+def _relative_files(folder: Path) -> list[str]:
+    """Every file (and empty folder) under ``folder``, as sorted relative POSIX paths."""
+    found = []
+    for path in sorted(folder.rglob("*")):
+        if path.is_symlink() or not path.is_dir() or not any(path.iterdir()):
+            found.append(path.relative_to(folder).as_posix())
+    return found
+
+
+def _listed(name: str, written: set[str]) -> bool:
+    # a marker of an earlier version lists only top-level names: a folder listed there
+    # covers what is in it
+    parts = name.split("/")
+    return any("/".join(parts[:i]) in written for i in range(1, len(parts) + 1))
+
+
+def _read_marker_data(folder: Path) -> dict[str, Any]:
+    try:
+        data = json.loads((Path(folder) / MARKER).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
 
 
 def read_marker(folder: Path) -> str | None:
     """The command that wrote ``folder`` (its marker), or ``None``."""
-    try:
-        data = json.loads((Path(folder) / MARKER).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return data.get("command") if isinstance(data, dict) else None
+    command = _read_marker_data(folder).get("command")
+    return command if isinstance(command, str) else None
 
 
 class _Terminated(KeyboardInterrupt):
@@ -363,19 +445,24 @@ def staged_directory(out: Path, command: str) -> Iterator[Path]:
         raise InputError(f"--out: cannot write in {out.parent}: {exc.strerror}") from None
     try:
         yield staging
-        names = sorted(p.name for p in staging.iterdir())
-        marker = json.dumps({"command": command, "files": names}, indent=1)
+        # every file written (relative paths): a later run replaces the folder only while
+        # it holds nothing else
+        marker = json.dumps({"command": command, "files": _relative_files(staging)}, indent=1)
         try:
             (staging / MARKER).write_text(marker + "\n", encoding="utf-8")
         except OSError as exc:
             raise _os_error(staging / MARKER, exc) from None
-        if out.exists():
-            old = out.parent / f".{out.name}.old-{secrets.token_hex(6)}"
-            os.replace(out, old)
-            os.replace(staging, out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(staging, out)
+        # the swap and the earlier output's removal run to their end: an interrupt there
+        # would leave `out` missing between the renames, or the earlier output behind as
+        # a hidden folder; it is raised when they are done
+        with interrupts_held():
+            if out.exists():
+                old = out.parent / f".{out.name}.old-{secrets.token_hex(6)}"
+                os.replace(out, old)
+                os.replace(staging, out)
+                shutil.rmtree(old, ignore_errors=True)
+            else:
+                os.replace(staging, out)
     except BaseException as exc:
         shutil.rmtree(staging, ignore_errors=True)
         for folder in reversed(created):

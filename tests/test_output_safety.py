@@ -1,0 +1,130 @@
+"""Nothing is lost (SPEC 5): what an output path may replace, found by a hostile audit.
+
+- an earlier output folder the user has added files to is not replaced (they were deleted);
+- a symbolic link given as the output is refused (it was replaced and left as debris);
+- a user's CSV that only looks like an output (an extra column) is not replaced;
+- an interrupt during the swap of an earlier output leaves no hidden folder behind.
+"""
+
+from __future__ import annotations
+
+import ast
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tuflexperf.io import files
+
+ROOT = Path(__file__).resolve().parent.parent
+TUFLEXPERF = [sys.executable, "-m", "tuflexperf"]
+
+
+def _run(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*TUFLEXPERF, *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=300)
+
+
+def _tree(folder: Path) -> dict[str, bytes]:
+    return {p.relative_to(folder).as_posix(): p.read_bytes()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("added", ["NOTES.txt", "sub/keep.c"])
+def test_an_earlier_output_with_the_users_files_in_it_is_not_replaced(tmp_path, added) -> None:
+    assert _run(tmp_path, "export", "--out", "exp").returncode == 0
+    assert _run(tmp_path, "export", "--out", "exp").returncode == 0  # its own: replaced
+    user_file = tmp_path / "exp" / added
+    user_file.parent.mkdir(exist_ok=True)
+    user_file.write_text("the user's own\n")
+    before = _tree(tmp_path / "exp")
+    again = _run(tmp_path, "export", "--out", "exp")
+    assert again.returncode == 2, again.stderr
+    assert added in again.stderr and len(again.stderr.strip().splitlines()) == 1
+    assert _tree(tmp_path / "exp") == before
+
+
+def test_the_marker_lists_every_file_written_nested_ones_too(tmp_path) -> None:
+    with files.staged_directory(tmp_path / "out", "probe") as staging:
+        (staging / "a.txt").write_text("a")
+        (staging / "kept").mkdir()
+        (staging / "kept" / "b.pdf").write_text("b")
+    import json
+
+    marker = json.loads((tmp_path / "out" / files.MARKER).read_text())
+    assert marker == {"command": "probe", "files": ["a.txt", "kept/b.pdf"]}
+
+
+def test_a_symbolic_link_as_the_output_is_refused_and_left_alone(tmp_path) -> None:
+    (tmp_path / "target").mkdir()
+    (tmp_path / "link").symlink_to("target")
+    out = _run(tmp_path, "export", "--out", "link")
+    assert out.returncode == 2 and "symbolic link" in out.stderr
+    assert (tmp_path / "link").is_symlink() and not any((tmp_path / "target").iterdir())
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "target"]  # no debris
+    (tmp_path / "mine.csv").write_text("the user's own\n")
+    (tmp_path / "grid.csv").symlink_to("mine.csv")
+    csv = _run(tmp_path, "sweep", "--vary", "aircraft.mass_kg=20:22:2", "--csv", "grid.csv")
+    assert csv.returncode == 2 and "symbolic link" in csv.stderr
+    assert (tmp_path / "mine.csv").read_text() == "the user's own\n"
+
+
+@pytest.mark.parametrize(("flag_args", "header"), [
+    (("fit", "{campaign}", "--out", "f.yaml", "--table", "mine.csv"),
+     "engine,throttle,airspeed_m_s,thrust_n,comment"),
+    (("mission", "{mission}", "--csv", "mine.csv"), "time_s,segment,my_notes"),
+    (("sweep", "--vary", "aircraft.mass_kg=20:22:2", "--csv", "mine.csv"),
+     "aircraft.mass_kg,my_value,my_limit,my_passed"),
+])
+def test_a_users_csv_that_looks_like_an_output_is_not_replaced(tmp_path, flag_args,
+                                                               header) -> None:
+    mine = tmp_path / "mine.csv"
+    mine.write_text(header + "\n1,2,3,4\n")
+    campaign = ROOT / "data/tuflex/campaign/campaign.yaml"
+    mission = next((ROOT / "data/tuflex/missions").glob("*.yaml"))
+    args = [a.format(campaign=campaign, mission=mission) for a in flag_args]
+    out = _run(tmp_path, *args)
+    assert out.returncode == 2 and "mine.csv" in out.stderr, out.stderr
+    assert mine.read_text() == header + "\n1,2,3,4\n"
+    # the command's own earlier output is replaced as before
+    own = [a.replace("mine.csv", "own.csv") for a in args]
+    assert _run(tmp_path, *own).returncode == 0
+    assert _run(tmp_path, *own).returncode == 0
+
+
+def test_the_recognised_sweep_names_are_every_requirement_check_can_name() -> None:
+    source = (ROOT / "tuflexperf/analysis/requirements.py").read_text()
+    names = {call.args[0].value for call in ast.walk(ast.parse(source))
+             if isinstance(call, ast.Call) and getattr(call.func, "id", None) == "Verdict"
+             and call.args and isinstance(call.args[0], ast.Constant)}
+    assert names and names == set(files.REQUIREMENT_NAMES)
+
+
+def test_an_interrupt_during_the_swap_leaves_the_new_output_whole_and_no_debris(
+    tmp_path, monkeypatch
+) -> None:
+    with files.staged_directory(tmp_path / "out", "probe") as staging:
+        (staging / "old.txt").write_text("earlier")
+    removed = []
+    real_rmtree = __import__("shutil").rmtree
+
+    def interrupted_rmtree(path, ignore_errors=False):
+        os.kill(os.getpid(), signal.SIGINT)  # lands while the earlier output is removed
+        removed.append(Path(path).name)
+        real_rmtree(path, ignore_errors=ignore_errors)
+
+    monkeypatch.setattr("shutil.rmtree", interrupted_rmtree)
+    monkeypatch.setattr(files, "_signals_received", [])
+    previous = signal.signal(signal.SIGINT, files._raise_interrupt)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with files.staged_directory(tmp_path / "out", "probe") as staging:
+                (staging / "new.txt").write_text("new")
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert removed and removed[0].startswith(".out.old-")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no .old-*, no .tmp-*
+    assert _tree(tmp_path / "out").keys() == {"new.txt", files.MARKER}
