@@ -148,3 +148,59 @@ def test_check_does_not_import_plotting_or_dataframes():
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.stderr == "", f"check imported: {done.stderr}"
+
+
+def test_an_error_raised_by_an_interrupt_is_the_interrupt(monkeypatch):
+    """A SIGTERM landing inside an import or a C extension comes out as that code's error
+    (RuntimeError, SystemError): exit 130 "aborted", not a traceback (hostile audit)."""
+    import signal
+    import sys as _sys
+
+    import tuflexperf.analysis.requirements as requirements
+    from tuflexperf.cli import main
+    from tuflexperf.io import files
+
+    def broken(case):
+        files._signals_received.append(signal.SIGTERM)
+        raise RuntimeError("error return without exception set")
+
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    hook = _sys.unraisablehook
+    monkeypatch.setattr(files, "_signals_received", [])
+    monkeypatch.setattr(requirements, "check_case", broken)
+    try:
+        with pytest.raises(SystemExit) as done:
+            main(["check"])
+    finally:
+        for signum, handler in handlers.items():
+            signal.signal(signum, handler)
+        _sys.unraisablehook = hook
+    assert done.value.code == 130
+    # without an interrupt the same error is a real failure and is not hidden
+    monkeypatch.setattr(files, "_signals_received", [])
+    monkeypatch.setattr(requirements, "check_case",
+                        lambda case: (_ for _ in ()).throw(RuntimeError("a real bug")))
+    try:
+        with pytest.raises(RuntimeError, match="a real bug"):
+            main(["check"])
+    finally:
+        for signum, handler in handlers.items():
+            signal.signal(signum, handler)
+        _sys.unraisablehook = hook
+
+
+def test_unreadable_numbers_and_unflyable_climbs_are_one_line(tmp_path):
+    """Found by a hostile audit: a 5000-digit integer in a case (Python refuses to read it)
+    and a wing so small that the best climb is beyond Mach 1 gave tracebacks."""
+    case = tmp_path / "huge.yaml"
+    case.write_text("name: huge\naircraft: a.yaml\npropulsion: p.yaml\nrequirements:\n"
+                    "  takeoff: {max_ground_roll_m: 1" + "0" * 5000 + "}\n")
+    out = run("check", str(case))
+    assert out.exit_code == 2 and "huge.yaml" in out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1
+    tiny = run("endurance", "--throttle", "0.5", "--json", "--set", "aircraft.wing_area_m2=0.01")
+    assert tiny.exit_code == 1 and "Traceback" not in tiny.output
+    assert json.loads(tiny.stdout)["flight_endurance_min"] is None
+    check = run("check", "--json", "--set", "aircraft.wing_area_m2=0.01")
+    assert check.exit_code == 1
+    assert not any(r["passed"] for r in json.loads(check.stdout)["results"])

@@ -1025,6 +1025,15 @@ def main(argv: list[str] | None = None) -> None:
     except (Abort, KeyboardInterrupt):  # click's word for an interrupt, or one before click's
         sys.stderr.write("tuflexperf: aborted\n")
         sys.exit(130)
+    except Exception:
+        from tuflexperf.io.files import interrupted
+
+        # an interrupt raised inside an import or a C extension comes out as its error
+        # (RuntimeError, SystemError, ...): it is still the interrupt, not a failure
+        if not interrupted():
+            raise
+        sys.stderr.write("tuflexperf: aborted\n")
+        sys.exit(130)
     except TyperException as exc:
         if type(exc).__name__ == "NoArgsIsHelpError":
             app(args=["--help"], prog_name="tuflexperf")

@@ -316,8 +316,16 @@ def endurance_mission(case: Case, battery: Battery, throttle: float = 0.5) -> An
         if climb_rate <= 0:
             raise NotAttainable("cannot climb at full throttle: no excess power after lift-off")
         eas = climb_speed * math.sqrt(case.density_kg_m3 / 1.225)  # flown at the case's rho
-        segments.append(SegmentSchema(type="climb", to_altitude_m=height, airspeed_m_s=eas,
-                                      throttle=1.0))
+        from pydantic import ValidationError
+
+        try:
+            segments.append(SegmentSchema(type="climb", to_altitude_m=height,
+                                          airspeed_m_s=eas, throttle=1.0))
+        except ValidationError as exc:  # e.g. a stall near Mach 1: no climb a mission flies
+            raise NotAttainable(
+                f"the best-rate climb at {eas:.0f} m/s EAS cannot be flown: "
+                f"{exc.errors()[0]['msg'].lower()} m/s"
+            ) from None
     segments.append(SegmentSchema(type="cruise", throttle=throttle, time_min=1.0))
     return MissionFile("endurance", case.path, tuple(segments), None)
 

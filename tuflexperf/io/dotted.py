@@ -125,11 +125,16 @@ def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
             f"{where}: {key}: the envelope's bounds cannot be varied (they fix the airspeed "
             "grid every trim/OEI point is solved on)"
         )
-    if key.startswith("battery.") or key.startswith("propulsion."):
+    if key.startswith("propulsion."):
+        raise InputError(
+            f"{where}: {key}: the propulsion file's keys cannot be varied (they are the fitted "
+            "thrust model: refit with `tuflexperf fit`; its uncertainty is "
+            "`uncertainty.propulsion`)"
+        )
+    if key.startswith("battery."):
         raise InputError(
             f"{where}: {key}: cannot be varied (of the battery only "
-            f"{', '.join(BATTERY_KEYS)}: the pack model is fitted to its runs at check time; "
-            "the thrust model's uncertainty is `uncertainty.propulsion`)"
+            f"{', '.join(BATTERY_KEYS)}: the pack model is fitted to its discharge runs)"
         )
     close = difflib.get_close_matches(key, [*known, *optional], n=1)
     hint = f" (did you mean {close[0]}?)" if close else ""

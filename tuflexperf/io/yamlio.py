@@ -80,6 +80,11 @@ def read_yaml(path: Path) -> Any:
         where = f" (line {mark.line + 1})" if mark is not None else ""
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
         raise InputError(f"{path}: invalid YAML{where}: {problem}") from None
+    except (ValueError, OverflowError) as exc:  # e.g. an integer of more than 4300 digits
+        raise InputError(f"{path}: invalid YAML: a value cannot be read: "
+                         f"{str(exc).split(';')[0][:120]}") from None
+    except RecursionError:
+        raise InputError(f"{path}: invalid YAML: nested too deeply") from None
 
 
 def format_location(loc: tuple[Any, ...]) -> str:
