@@ -1014,7 +1014,7 @@ def main(argv: list[str] | None = None) -> None:
     """Console entry point: usage errors become one line on stderr and exit 2."""
     from typer.exceptions import Abort, TyperException
 
-    from tuflexperf.io.files import install_interrupt_handlers
+    from tuflexperf.io.files import install_interrupt_handlers, interrupted
 
     install_interrupt_handlers()  # SIGTERM unwinds like Ctrl-C: no staging left behind
     # pydantic otherwise scans every installed package's entry points for plugins on the
@@ -1025,22 +1025,18 @@ def main(argv: list[str] | None = None) -> None:
     except (Abort, KeyboardInterrupt):  # click's word for an interrupt, or one before click's
         sys.stderr.write("tuflexperf: aborted\n")
         sys.exit(130)
+    except TyperException as exc:
+        if type(exc).__name__ == "NoArgsIsHelpError":
+            app(args=["--help"], prog_name="tuflexperf")
+        sys.stderr.write(f"tuflexperf: error: {exc.format_message()}\n")
+        sys.exit(getattr(exc, "exit_code", 2) or 2)
     except Exception:
-        from tuflexperf.io.files import interrupted
-
         # an interrupt raised inside an import or a C extension comes out as its error
         # (RuntimeError, SystemError, ...): it is still the interrupt, not a failure
         if not interrupted():
             raise
         sys.stderr.write("tuflexperf: aborted\n")
         sys.exit(130)
-    except TyperException as exc:
-        if type(exc).__name__ == "NoArgsIsHelpError":
-            app(args=["--help"], prog_name="tuflexperf")
-        sys.stderr.write(f"tuflexperf: error: {exc.format_message()}\n")
-        sys.exit(getattr(exc, "exit_code", 2) or 2)
-    from tuflexperf.io.files import interrupted
-
     if interrupted():  # one a library dropped (printed as "ignored"): still no success
         sys.stderr.write("tuflexperf: aborted\n")
         sys.exit(130)

@@ -234,3 +234,32 @@ def test_a_nominal_case_that_never_rolls_still_evaluates_other_rows() -> None:
         {"aircraft.takeoff.rolling_friction": np.array([0.9, 0.07])})
     assert math.isnan(result.values["flight_endurance"][0])
     assert_equal_to_deterministic(load_case(SHIPPED_CASE), result.values, 1)
+
+
+def test_liftoff_beyond_the_fans_jet_velocity_is_not_attainable_in_both() -> None:
+    """A wing so small that lift-off lies beyond the fans' static jet velocity (momentum
+    theory, ~103 m/s for the shipped DS-51 pair): the extrapolated poly22 still gives
+    thrust there, a fan does not, so the take-off is not attainable, never a PASS (found
+    by a hostile audit: 104.7 m/s passed). Just inside it, both still give the roll."""
+    from tuflexperf.models.powertrain import static_jet_velocity_m_s
+
+    case = load_case(SHIPPED_CASE)
+    jet = float(static_jet_velocity_m_s(case.propulsion, case.density_kg_m3))
+    from tuflexperf.models.thrust import density_ratio, engine_thrust_n
+
+    scale = density_ratio(case.propulsion, case.density_kg_m3)
+    static_n = min(float(engine_thrust_n(e, 1.0, 0.0, scale)) for e in case.propulsion.engines)
+    # hover momentum theory: T = rho A v^2
+    assert jet == pytest.approx(
+        math.sqrt(static_n / (case.density_kg_m3 * case.propulsion.fan_area_m2)), rel=1e-12)
+    areas = np.array([0.030, 0.032])  # lift-off ~105 m/s (beyond) and ~101.5 m/s (inside)
+    result = BatchEvaluator(case).evaluate({"aircraft.wing_area_m2": areas})
+    for row, area in enumerate(areas):
+        single = with_values(case, {"aircraft.wing_area_m2": float(area)})
+        verdict = {v.name: v for v in check_case(single)}["takeoff_ground_roll"]
+        assert_equal_to_deterministic(single, result.values, row)
+        if row == 0:
+            assert verdict.value is None and not verdict.passed
+            assert "jet velocity" in verdict.reason
+        else:
+            assert verdict.value is not None

@@ -29,8 +29,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from tuflexperf.models._math import Vectorizable, fmax, sqrt, where
-from tuflexperf.models.thrust import Engine, Propulsion, density_ratio, poly22
+from tuflexperf.models._math import Vectorizable, fmax, fmin, sqrt, where
+from tuflexperf.models.thrust import Engine, Propulsion, density_ratio, engine_thrust_n, poly22
 
 # In-flight overall efficiency below this is implausible for a working fan (SPEC 3).
 MIN_OVERALL_EFFICIENCY = 0.2
@@ -120,6 +120,42 @@ def exit_velocity_m_s(
     return 0.5 * (
         airspeed_m_s + sqrt(airspeed_m_s * airspeed_m_s + 4.0 * t / (density_kg_m3 * area_m2))
     )
+
+
+def static_jet_velocity_m_s(propulsion: Propulsion, density_kg_m3: Vectorizable) -> Vectorizable:
+    """The least jet velocity of the engines at full throttle at rest [m/s] (momentum theory).
+
+    A fixed-pitch fan's jet velocity stays near its static value as the airspeed rises, so
+    its thrust ``rho A v_j (v_j - V)`` falls to nothing as ``V`` reaches ``v_j``: beyond it
+    a thrust model extrapolated from lower airspeeds has no physics behind it (the paper's
+    DS-51 data, 0-30 m/s, follow this line to within ~7 %). ``inf`` without the
+    propulsion's ``fan_area_m2``.
+
+    Parameters
+    ----------
+    propulsion : Propulsion
+        The engines (their coefficients may be arrays of samples) and ``fan_area_m2``.
+    density_kg_m3 : float or array
+        Air density [kg/m^3] (the static thrust scales with it as the model says).
+
+    Returns
+    -------
+    ``min_i sqrt(T0_i / (rho A))`` [m/s], ``T0_i`` engine ``i``'s full-throttle static thrust.
+
+    References
+    ----------
+    Leishman, *Principles of Helicopter Aerodynamics*, eq. 2.14 (hover: ``v = sqrt(T/(rho A))``
+    across the far wake for a ducted fan, whose exit area fixes the contraction).
+    """
+    if propulsion.fan_area_m2 is None:
+        return float("inf")
+    scale = density_ratio(propulsion, density_kg_m3)
+    speeds = [exit_velocity_m_s(engine_thrust_n(engine, 1.0, 0.0, scale), 0.0, density_kg_m3,
+                                propulsion.fan_area_m2) for engine in propulsion.engines]
+    least = speeds[0]
+    for speed in speeds[1:]:
+        least = fmin(least, speed)
+    return least
 
 
 def ideal_power_w(
