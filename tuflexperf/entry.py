@@ -9,8 +9,10 @@ no cleanup is owed: the process ends at once with the interrupt's exit code.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
+import sys
 
 INTERRUPTED_EXIT = 130  # 128 + SIGINT; SIGTERM unwinds like Ctrl-C (tuflexperf.io.files)
 
@@ -25,4 +27,13 @@ def main() -> None:
         signal.signal(signum, _exit_at_once)
     from tuflexperf.cli import main as cli_main
 
-    cli_main()
+    try:
+        cli_main()
+    finally:
+        # the command is done, only the interpreter's teardown is left: an interrupt there
+        # would be raised where nothing reports it (the process died of the signal)
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(OSError, ValueError):
+                stream.flush()
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, _exit_at_once)
