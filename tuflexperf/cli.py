@@ -228,8 +228,8 @@ def check(
         typer.echo("-" * len(header))
         for v in verdicts:
             typer.echo(
-                f"{v.name:<{w}}{_fmt(v.value):>10}{_fmt(v.limit):>10}{v.unit:>10}"
-                f"{_fmt(v.margin):>10}  {'PASS' if v.passed else 'FAIL'}"
+                f"{v.name:<{w}}{_cell(_fmt(v.value))}{_cell(_fmt(v.limit))}{_cell(v.unit)}"
+                f"{_cell(_fmt(v.margin))}  {'PASS' if v.passed else 'FAIL'}"
             )
             typer.echo(f"  {v.reason}")
             _print_warnings(v.details.get("warnings", []))
@@ -242,6 +242,11 @@ def check(
                            "they count as not met")
         typer.echo(f"overall: {'PASS' if passed else 'FAIL'}")
     raise typer.Exit(0 if passed else 1)
+
+
+def _cell(text: str, width: int = 10) -> str:
+    """Right-aligned in ``width``; a longer value keeps a space before it (never run on)."""
+    return text.rjust(width) if len(text) < width else " " + text
 
 
 def _name_width(names: Iterable[str]) -> int:
