@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from timing import per_call, wall  # noqa: E402
+from timing import per_call, wall, walls  # noqa: E402
 
 from tuflexperf.analysis.oei import solve_oei
 from tuflexperf.analysis.takeoff import net_force_n, solve_takeoff
@@ -101,11 +101,19 @@ load_case()
 
 def main() -> None:
     exe = shutil.which("tuflexperf", path=str(Path(sys.executable).parent)) or "tuflexperf"
-    check_s = wall([exe, "check"])
-    casadi_s = wall([sys.executable, "-c", "import casadi"])
-    stack_s = wall([sys.executable, "-c", "import casadi, numpy, typer, yaml, pydantic"])
-    python_s = wall([sys.executable, "-c", "pass"])
-    print("whole process (median of 5)")
+    measured = walls({
+        "check": [exe, "check"],
+        "casadi": [sys.executable, "-c", "import casadi"],
+        "stack": [sys.executable, "-c", "import casadi, numpy, typer, yaml, pydantic"],
+        "python": [sys.executable, "-c", "pass"],
+        "used": [sys.executable, "-c", USED_STACK],
+        "minimal": [sys.executable, "-c", MINIMAL_TYPER_CLI],
+        "validated": [sys.executable, "-c", VALIDATE_ONLY],
+    })
+    check_s, casadi_s, stack_s, python_s = (measured[k] for k in ("check", "casadi", "stack",
+                                                                  "python"))
+    used_s, minimal_s, validated_s = (measured[k] for k in ("used", "minimal", "validated"))
+    print("whole process (median of 15 rounds, the commands taking turns)")
     print(f"  python -c pass                {python_s * 1e3:8.1f} ms")
     print(f"  python -c 'import casadi'     {casadi_s * 1e3:8.1f} ms")
     print(f"  import casadi, numpy, typer, yaml, pydantic {stack_s * 1e3:8.1f} ms (the floor)")
@@ -115,12 +123,10 @@ def main() -> None:
     )
     # What any typer + pydantic CLI pays beyond that floor: `import pydantic` is lazy, so the
     # floor holds none of pydantic's model machinery, nor typer's parser (imported on parse).
-    used_s = wall([sys.executable, "-c", USED_STACK])
     print(
         f"  + one pydantic model validated, typer's parser {used_s * 1e3:6.1f} ms   "
         f"ratio to the floor {used_s / stack_s:5.2f} (no tuflexperf code at all)"
     )
-    minimal_s = wall([sys.executable, "-c", MINIMAL_TYPER_CLI])
     print(
         f"  a do-nothing typer CLI on the same imports {minimal_s * 1e3:6.1f} ms   "
         f"ratio to the floor {minimal_s / stack_s:5.2f} (the least any typer CLI here takes)"
@@ -128,7 +134,6 @@ def main() -> None:
     # The input check alone: the case's four files read and validated by tuflexperf's
     # pydantic schemas (no typer, no analysis). Any check that validates its input with
     # pydantic models pays this before it computes anything.
-    validated_s = wall([sys.executable, "-c", VALIDATE_ONLY])
     print(
         f"  + the shipped case read and validated (schemas only) {validated_s * 1e3:6.1f} ms   "
         f"ratio to the floor {validated_s / stack_s:5.2f} (no CLI, no analysis)"

@@ -34,6 +34,25 @@ def wall(argv: list[str], repeats: int = 5) -> float:
     return statistics.median(times)
 
 
+def walls(commands: dict[str, list[str]], rounds: int = 15) -> dict[str, float]:
+    """Median wall time [s] of each whole process, the commands taking turns each round.
+
+    On a shared VM whose speed drifts within a minute, timing one command five times and
+    then the next compares different minutes; taking turns puts each ratio's two sides in
+    the same ones.
+    """
+    byte_compile_package()
+    for argv in commands.values():  # warm the file cache
+        subprocess.run(argv, capture_output=True, check=False)
+    times: dict[str, list[float]] = {name: [] for name in commands}
+    for _ in range(rounds):
+        for name, argv in commands.items():
+            start = time.perf_counter()
+            subprocess.run(argv, capture_output=True, check=False)
+            times[name].append(time.perf_counter() - start)
+    return {name: statistics.median(values) for name, values in times.items()}
+
+
 def per_call(fn: Callable[[], object], repeats: int = 7) -> float:
     """Median time [s] of one call, after a warm-up call that builds what it needs."""
     fn()
