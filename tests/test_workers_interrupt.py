@@ -24,29 +24,24 @@ COMMAND = [sys.executable, "-m", "tuflexperf", "check", "--samples", "400000", "
            "--workers", "2"]
 
 
-def _children(pid: int) -> list[int]:
-    """The processes whose parent is ``pid`` (from /proc)."""
+def _processes() -> list[tuple[int, str, int, int]]:
+    """(pid, state, parent pid, process group) of every process, from /proc."""
     found = []
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
             fields = stat.read_text().rsplit(")", 1)[1].split()
         except OSError:
             continue
-        if int(fields[1]) == pid:
-            found.append(int(stat.parent.name))
+        found.append((int(stat.parent.name), fields[0], int(fields[1]), int(fields[2])))
     return found
 
 
+def _children(pid: int) -> list[int]:
+    return [child for child, _, parent, _ in _processes() if parent == pid]
+
+
 def _group_alive(group: int) -> list[int]:
-    alive = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        if int(fields[2]) == group and fields[0] != "Z":
-            alive.append(int(stat.parent.name))
-    return alive
+    return [pid for pid, state, _, pgrp in _processes() if pgrp == group and state != "Z"]
 
 
 def _start_with_workers() -> tuple[subprocess.Popen[str], list[int]]:
