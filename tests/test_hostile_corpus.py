@@ -43,6 +43,26 @@ def _edit(path: Path, old: str, new: str) -> None:
     path.write_text(text.replace(old, new))
 
 
+def _table(speeds: tuple[float, ...] = (0.0, 15.0, 30.0), thrust: str = "20") -> str:
+    rows = [f"EDF1,{x},{v},{thrust}" for v in speeds for x in (0.0, 0.5, 1.0)]
+    return "engine,throttle,airspeed_m_s,thrust_n\n" + "\n".join(rows) + "\n"
+
+
+def _unfitted_capacity_500(w: Path) -> None:
+    battery = w / "data/tuflex/battery.yaml"
+    text = battery.read_text()
+    battery.write_text(text[: text.index("\nfit:")].replace("capacity_ah: 5.0",
+                                                            "capacity_ah: 500.0") + "\n")
+
+
+def _negate_current(w: Path) -> None:
+    run = w / "data/tuflex/endurance/edf1_endurance_50.csv"
+    lines = run.read_text().splitlines()
+    flipped = [lines[0]] + [",".join([*line.split(",")[:-1], repr(-float(line.split(",")[-1]))])
+                            for line in lines[1:]]
+    run.write_text("\n".join(flipped) + "\n")
+
+
 @dataclass(frozen=True)
 class Case:
     name: str
@@ -278,6 +298,30 @@ MORE = [
     Case("absurd envelope", ("trim", "--case", "requirements/tuflex.yaml"), 2,
          "max_airspeed_m_s", lambda w: _edit(w / "requirements/tuflex.yaml",
                                              "max_airspeed_m_s: 45", "max_airspeed_m_s: 1e7")),
+    # found by the second hostile audit (fit, battery, thrust tables)
+    Case("campaign density of thin air", ("fit", "data/tuflex/campaign/campaign.yaml", "--out",
+                                          "p.yaml"), 2, "air_density_kg_m3",
+         lambda w: _edit(w / "data/tuflex/campaign/campaign.yaml", "\nruns:",
+                         "\nair_density_kg_m3: 0.01\nruns:")),
+    Case("table force beyond measurement", ("fit", "t.csv", "--out", "p.yaml"), 2,
+         "no measurement", lambda w: (w / "t.csv").write_text(_table(thrust="1e300"))),
+    Case("table at one airspeed", ("fit", "t.csv", "--out", "p.yaml"), 2, "set point",
+         lambda w: (w / "t.csv").write_text(_table(speeds=(30.0,)))),
+    Case("table airspeed of the wrong sign", ("fit", "t.csv", "--out", "p.yaml"), 2,
+         "negative", lambda w: (w / "t.csv").write_text(_table(speeds=(0.0, -15.0, -30.0)))),
+    Case("battery fit with the capacity 100x", ("fit", "data/tuflex/battery.yaml", "--out",
+                                                "b.yaml"), 2, "capacity_ah",
+         lambda w: _edit(w / "data/tuflex/battery.yaml", "capacity_ah: 5.0",
+                         "capacity_ah: 500.0")),
+    Case("capacity 100x the runs, fitted on the fly", ("check", "--case",
+                                                      "requirements/tuflex.yaml"), 2,
+         "capacity_ah", _unfitted_capacity_500),
+    Case("discharge current of the wrong sign", ("fit", "data/tuflex/battery.yaml", "--out",
+                                                 "b.yaml"), 2, "current_a", _negate_current),
+    Case("drag sweep at one airspeed", ("fit", "data/tuflex/campaign/campaign.yaml", "--out",
+                                        "p.yaml"), 0, "drag sweep over",
+         lambda w: _edit(w / "data/tuflex/campaign/campaign.yaml",
+                         "runs/structure_drag.csv", "runs/edf1_v30p0.csv.gz")),
     Case("--set a misspelt key", ("check", "--set", "aircraft.mas_kg=30"), 2,
          "did you mean aircraft.mass_kg"),
     Case("--set out of range", ("trim", "--set", "aircraft.mass_kg=-3"), 2, "aircraft.mass_kg"),

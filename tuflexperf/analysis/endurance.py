@@ -76,6 +76,7 @@ from tuflexperf.reduction.battery import (
     PowerFit,
     fit_discharge,
     fit_fan_power,
+    refuse_unreproduced_runs,
 )
 
 # Level flight is searched between the stall speed and this multiple of it.
@@ -233,6 +234,7 @@ def _characterise(battery: Battery, case: Case) -> BatteryCharacterisation:
     )
     if battery.fitted is None:
         fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
+    refuse_unreproduced_runs(battery, fit.parameters, runs)
     engine_name = next((r.engine for r in battery.runs if r.engine), None)
     engines = {e.name: e for e in case.propulsion.engines}
     if engine_name is not None and engine_name not in engines:

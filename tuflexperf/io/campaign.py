@@ -87,7 +87,9 @@ class CampaignSchema(ThrustStandKeys):
     name: Annotated[str, Field(min_length=1)]
     fan_area_m2: Positive
     tunnel_area_m2: Positive
-    air_density_kg_m3: Positive | None = None
+    # a tunnel's air: from a hot day at altitude to a cold pressurised one (0.01 scaled
+    # the fitted thrust x122 as the reference density and let everything pass)
+    air_density_kg_m3: Annotated[float, Field(ge=0.3, le=2.0)] | None = None
     filters: FilterSettings = FilterSettings()
     runs: Annotated[list[RunEntry], Field(min_length=1)]
 

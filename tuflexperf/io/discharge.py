@@ -149,6 +149,10 @@ def read_discharge_run(path: Path | str) -> DischargeRun:
     if np.any(columns["voltage_v"] <= 0):
         raise InputError(f"{path}: voltage_v: must be positive")
     current = columns["current_a"]
+    loaded = float(np.mean(current[throttle > 1e-6]))
+    if not loaded > 0:  # a discharge draws current out of the pack
+        raise InputError(f"{path}: current_a: mean {loaded:.3g} A under load; a discharge "
+                         "draws a positive current (a sign or a unit slip?)")
     charge = np.concatenate(
         [[0.0], np.cumsum(0.5 * (current[1:] + current[:-1]) * np.diff(t))]
     ) / SECONDS_PER_HOUR

@@ -31,6 +31,8 @@ from tuflexperf.io.vendor import VendorSettings, read_vendor_columns
 
 RUN_COLUMNS: tuple[str, ...] = ("time_s", "force_n", "airspeed_m_s", "throttle")
 TABLE_COLUMNS: tuple[str, ...] = ("engine", "throttle", "airspeed_m_s", "thrust_n")
+MAX_MAGNITUDE = 1e9  # no force, airspeed, voltage or current of a thrust stand comes near it
+STATIC_AIRSPEED_NOISE_M_S = 0.5  # a thrust table's airspeed may dip this far below 0 at rest
 MAX_NAN_FRACTION = 0.01
 """Largest share of NaN samples per column that is repaired rather than refused."""
 MIN_SAMPLES = 10
@@ -233,13 +235,17 @@ def read_run(
         row = int(np.flatnonzero(steps <= 0)[0]) + 1
         raise InputError(
             f"{path}: column time_s: not strictly increasing at sample {row} "
-            f"({time_s[row - 1]!r} -> {time_s[row]!r})"
+            f"({float(time_s[row - 1])!r} -> {float(time_s[row])!r})"
         )
     for name in names[1:]:
         count = _repair_nans(path, name, time_s, arrays[name])
         if count:
             nan_samples[name] = count
             warnings.append(f"{count} NaN samples in {name} interpolated")
+        worst = float(np.max(np.abs(arrays[name])))
+        if worst > MAX_MAGNITUDE:  # squares of it overflow the filters' sums
+            raise InputError(f"{path}: column {name}: a value of {worst:.3g} is no measurement "
+                             f"(beyond {MAX_MAGNITUDE:g})")
     if "throttle" in arrays:
         throttle = arrays["throttle"]
         high, low = float(throttle.max()), float(throttle.min())
@@ -326,6 +332,9 @@ def read_thrust_table(path: Path | str) -> ThrustTable:
                 raise InputError(f"{path}: line {line}: {column}: not a number: {cell!r}") from None
             if not math.isfinite(number):
                 raise InputError(f"{path}: line {line}: {column}: {cell!r} is not finite")
+            if abs(number) > MAX_MAGNITUDE:
+                raise InputError(f"{path}: line {line}: {column}: {cell} is no measurement "
+                                 f"(beyond {MAX_MAGNITUDE:g})")
             values[column].append(number)
     if not engines:
         raise InputError(f"{path}: no data rows")
@@ -336,11 +345,18 @@ def read_thrust_table(path: Path | str) -> ThrustTable:
         raise InputError(
             f"{path}: line {bad[0] + 2}: throttle: {throttle[bad[0]]:g} is outside [0, 1]{hint}"
         )
+    airspeed = np.array(values["airspeed_m_s"])
+    # a tunnel blows one way: beyond a static point's sensor noise (fit's own tables carry
+    # mean airspeeds of -0.002 m/s at rest) a negative airspeed is a sign slip
+    backwards = np.flatnonzero(airspeed < -STATIC_AIRSPEED_NOISE_M_S)
+    if backwards.size:
+        raise InputError(f"{path}: line {backwards[0] + 2}: airspeed_m_s: "
+                         f"{airspeed[backwards[0]]:g} is negative (a tunnel blows one way)")
     return ThrustTable(
         path=path,
         engine=tuple(engines),
         throttle=throttle,
-        airspeed_m_s=np.array(values["airspeed_m_s"]),
+        airspeed_m_s=airspeed,
         thrust_n=np.array(values["thrust_n"]),
     )
 

@@ -238,6 +238,42 @@ def fit_fan_power(
 
 
 # --- the battery file as a fitted artefact (issue 9) -------------------------------------------
+CUTOFF_TIME_TOLERANCE = 0.25
+"""Largest relative miss of a run's own time to cut-off by the pack fitted to the runs
+(the shipped pack: < 1 %; a capacity 100x too large: 50x)."""
+
+
+def refuse_unreproduced_runs(battery: Any, parameters: Any, runs: Sequence[Any]) -> None:
+    """Bad input when the pack fitted to the runs misses a run's own time to cut-off.
+
+    The equivalent circuit fits the voltage of each run; a ``capacity_ah`` far above the
+    charge the runs drew lets that fit succeed while the state of charge barely moves, and
+    the pack then "lasts" many times as long as any run did (an endurance PASS from a
+    misprint). ``runs`` are discharge runs or their stored summaries (``mean_power_w``,
+    ``start_charge_ah``, ``time_to_cutoff_s``).
+
+    References
+    ----------
+    Paper section 4 (endurance from the measured discharge); issue 10 (never an endless
+    endurance from a capacity the data contradict).
+    """
+    from tuflexperf.models.battery import time_to_cutoff_s
+
+    for run in runs:
+        observed = float(run.time_to_cutoff_s)
+        if not observed > 0:
+            continue
+        predicted = float(time_to_cutoff_s(parameters, run.mean_power_w,
+                                           battery.cutoff_voltage_v, 1, run.start_charge_ah))
+        if not abs(predicted / observed - 1.0) <= CUTOFF_TIME_TOLERANCE:
+            raise InputError(
+                f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah: the pack fitted to "
+                f"the runs reaches cut-off after {predicted / 60:.1f} min at {run.path.name}'s "
+                f"power, which reached it after {observed / 60:.1f} min; the runs contradict "
+                "the capacity (or the cut-off voltage)"
+            )
+
+
 def _cross_validation(runs: Sequence[DischargeRun], cells: int, capacity_ah: float,
                       cutoff_v: float) -> list[dict[str, Any]]:
     """Each run's model (fitted on it alone) predicting every other run's time to cut-off."""
@@ -269,6 +305,7 @@ def fit_battery_block(battery: Any, relative_to: Any) -> dict[str, Any]:
     runs = [read_discharge_run(r.path) for r in battery.runs]
     refuse_contradicted_capacity(battery, [(r.path.name, float(r.charge_ah[-1])) for r in runs])
     fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
+    refuse_unreproduced_runs(battery, fit.parameters, runs)
     return {
         "parameters": {k: float(v) for k, v in fit.parameters.to_dict().items()},
         "rms_v": float(fit.rms_v),

@@ -333,6 +333,7 @@ def _validation(
 # --- campaign ---------------------------------------------------------------------------------
 MIN_SWEEP_THROTTLE_SWING = 0.05  # a sweep whose throttle barely moves measures no delay
 MIN_DRAG_SWEEP_AIRSPEED_M_S = 1.0  # a drag sweep that never blows measures no drag
+MIN_DRAG_SWEEP_SPAN_M_S = 5.0  # ... and one that holds one airspeed measures no curve
 SET_POINT_RESOLUTION_M_S = 0.5  # tunnel set points closer than this are one set point
 
 
@@ -438,6 +439,14 @@ def fit_campaign(
                 "structure drag measured, none added"
             )
             run_reports.append({**_run_header(run, data), "wind": "none"})
+            continue
+        span = top - float(np.min(data["airspeed_m_s"]))
+        if span < MIN_DRAG_SWEEP_SPAN_M_S:  # one airspeed: a curve in V^2 is not determined
+            degenerate.append(
+                f"{run.file}: drag sweep over {span:.2f} m/s of airspeed only (needs "
+                f">= {MIN_DRAG_SWEEP_SPAN_M_S:g}): no drag curve from it, left out"
+            )
+            run_reports.append({**_run_header(run, data), "wind": "one airspeed"})
             continue
         force, replaced = clean_run(campaign, data)
         _, _, k_med = _windows(campaign, data.sample_rate_hz)
@@ -839,6 +848,16 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
 
     manifest = is_propeller_manifest(Path(path))
     table: ThrustTable = read_propeller_tables(path) if manifest else read_thrust_table(path)
+    for engine in table.engines():
+        # a surface in airspeed needs airspeeds: as a campaign's step runs must cover three
+        # set points, a table's rows must (counted at the set-point resolution)
+        points = {round(float(v) / SET_POINT_RESOLUTION_M_S)
+                  for v in table.select(engine)[1]}
+        if len(points) < 3:
+            raise InputError(
+                f"{table.path}: {engine}: the rows cover only {len(points)} airspeed set "
+                "point(s); a poly22 surface needs at least 3"
+            )
     fits = {
         engine: fit_poly22(*table.select(engine), label=f"{table.path}: engine {engine}")
         for engine in table.engines()
@@ -991,7 +1010,13 @@ def _propulsion_text(
     try:
         PropulsionSchema.model_validate(yaml.load(text, Loader=loader))  # noqa: S506 - safe
     except Exception as exc:  # noqa: BLE001 - the fit must never write a file check refuses
-        raise InputError(f"the fitted propulsion file would not be valid: {exc}") from None
+        from pydantic import ValidationError
+
+        from tuflexperf.io.yamlio import validation_message
+
+        problem = (validation_message(source.get("input", "the fit"), exc, PropulsionSchema)
+                   if isinstance(exc, ValidationError) else str(exc).splitlines()[0])
+        raise InputError(f"the fitted propulsion file would not be valid: {problem}") from None
     return text
 
 
