@@ -55,6 +55,19 @@ def _unfitted_capacity_500(w: Path) -> None:
                                                             "capacity_ah: 500.0") + "\n")
 
 
+_STEP_RUN = "  - {file: runs/edf1_v15p0.csv.gz, engine: EDF1, kind: throttle_steps}\n"
+
+
+def _drop_battery_run(w: Path) -> None:
+    # the fit block still lists both runs: `fit` replaces it (it said "fit it again" of itself)
+    battery = w / "data/tuflex/battery.yaml"
+    lines = battery.read_text().splitlines(keepends=True)
+    runs = [i for i, line in enumerate(lines) if "edf1_endurance_75.csv" in line
+            and line.lstrip().startswith("- {file")]
+    del lines[runs[0]]
+    battery.write_text("".join(lines))
+
+
 def _negate_current(w: Path) -> None:
     run = w / "data/tuflex/endurance/edf1_endurance_50.csv"
     lines = run.read_text().splitlines()
@@ -316,6 +329,11 @@ MORE = [
     Case("capacity 100x the runs, fitted on the fly", ("check", "--case",
                                                       "requirements/tuflex.yaml"), 2,
          "capacity_ah", _unfitted_capacity_500),
+    Case("a step run listed twice", ("fit", "data/tuflex/campaign/campaign.yaml", "--out",
+                                     "p.yaml"), 2, "listed twice",
+         lambda w: _edit(w / "data/tuflex/campaign/campaign.yaml", _STEP_RUN, 2 * _STEP_RUN)),
+    Case("battery refit after a run was dropped", ("fit", "data/tuflex/battery.yaml", "--out",
+                                                   "b.yaml"), 0, "wrote", _drop_battery_run),
     Case("discharge current of the wrong sign", ("fit", "data/tuflex/battery.yaml", "--out",
                                                  "b.yaml"), 2, "current_a", _negate_current),
     Case("drag sweep at one airspeed", ("fit", "data/tuflex/campaign/campaign.yaml", "--out",

@@ -165,8 +165,12 @@ class Battery:
         return self.cells_in_series * self.cutoff_voltage_per_cell_v
 
 
-def load_battery(path: Path | str) -> Battery:
+def load_battery(path: Path | str, refitting: bool = False) -> Battery:
     """Load and validate a battery file; every run file it names must exist.
+
+    ``refitting`` (``tuflexperf fit`` on the file): a ``fit:`` block whose runs are no
+    longer the file's is about to be replaced, so it is not an error (it is anywhere else:
+    the pack model would not be the one its runs give).
 
     Raises :class:`InputError` naming the file and key on any problem.
     """
@@ -181,8 +185,10 @@ def load_battery(path: Path | str) -> Battery:
             raise InputError(
                 f"{path}: runs[{index}].file: expected a .csv or .mat run file, got {run.file}"
             )
+        if any(target == earlier.path for earlier in runs):  # it would count twice
+            raise InputError(f"{path}: runs[{index}].file: {run.file} is listed twice")
         runs.append(DischargeRunRef(path=target, engine=run.engine))
-    if schema.fit is not None:
+    if schema.fit is not None and not refitting:
         # matched by position and name (a copied file may point at its runs another way);
         # the content is then checked by sha256 where the fit is used
         stored = [Path(r.file).name for r in schema.fit.runs]

@@ -181,6 +181,10 @@ def load_campaign(path: Path | str) -> Campaign:
             continue
         if not resolved.is_file():
             raise InputError(f"{path}: runs[{index}].file: file not found: {entry.file}")
+        if any(earlier.path == resolved and earlier.kind == run.kind for earlier in used):
+            # its points would count twice in the fit (and shrink the covariance)
+            raise InputError(f"{path}: runs[{index}].file: {entry.file} is listed twice as "
+                             f"{entry.kind}")
         used.append(run)
     if not any(run.kind == "throttle_steps" for run in used):
         raise InputError(f"{path}: runs: no throttle_steps run, nothing to fit")

@@ -334,7 +334,7 @@ def fitted_battery_text(battery_path: Any, out_path: Any) -> tuple[str, dict[str
     from tuflexperf.io.yamlio import read_yaml
 
     battery_path, out_path = Path(battery_path), Path(out_path)
-    battery = load_battery(battery_path)
+    battery = load_battery(battery_path, refitting=True)
     folder = out_path.absolute().parent
     block = fit_battery_block(battery, folder)
     header = ("# fit: written by `tuflexperf fit` (equivalent circuit fitted to the runs, "
