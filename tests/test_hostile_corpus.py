@@ -68,6 +68,12 @@ def _drop_battery_run(w: Path) -> None:
     battery.write_text("".join(lines))
 
 
+def _edf2_sweeps_only(w: Path) -> None:
+    manifest = w / "data/tuflex/campaign/campaign.yaml"
+    manifest.write_text("".join(line for line in manifest.read_text().splitlines(True)
+                                if not ("EDF2" in line and "throttle_steps" in line)))
+
+
 def _negate_current(w: Path) -> None:
     run = w / "data/tuflex/endurance/edf1_endurance_50.csv"
     lines = run.read_text().splitlines()
@@ -334,6 +340,9 @@ MORE = [
          lambda w: _edit(w / "data/tuflex/campaign/campaign.yaml", _STEP_RUN, 2 * _STEP_RUN)),
     Case("battery refit after a run was dropped", ("fit", "data/tuflex/battery.yaml", "--out",
                                                    "b.yaml"), 0, "wrote", _drop_battery_run),
+    Case("an engine with sweeps but no steps", ("fit", "data/tuflex/campaign/campaign.yaml",
+                                                "--out", "p.yaml"), 0,
+         "EDF2: runs but no throttle_steps run", _edf2_sweeps_only),
     Case("discharge current of the wrong sign", ("fit", "data/tuflex/battery.yaml", "--out",
                                                  "b.yaml"), 2, "current_a", _negate_current),
     Case("drag sweep at one airspeed", ("fit", "data/tuflex/campaign/campaign.yaml", "--out",

@@ -101,7 +101,7 @@ def _read_columns(path: Path) -> dict[str, np.ndarray]:
                 raise InputError(f"{path}: {key}: not numbers (a text column?)") from None
         return columns
     try:
-        with path.open(newline="", encoding="utf-8") as handle:
+        with path.open(newline="", encoding="utf-8-sig") as handle:
             header = next(csv.reader(handle), None)
             if header is None:
                 raise InputError(f"{path}: empty file, expected a header row")

@@ -464,6 +464,10 @@ def fit_campaign(
     if progress is not None:
         progress(total, total, "fit")
     _check_set_points(campaign, step_results)
+    stepped = {str(r.engine) for r in campaign.of_kind("throttle_steps")}
+    for engine in sorted({str(r.engine) for r in campaign.runs if r.engine} - stepped):
+        degenerate.append(f"{engine}: runs but no throttle_steps run: no thrust model for it "
+                          "(its sine sweeps still enter the delay)")
 
     points: list[Point] = []
     point_ratios: dict[int, list[float]] = {}
