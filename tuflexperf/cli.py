@@ -950,6 +950,12 @@ def export_command(
     )
     for path in result.files:
         typer.echo(f"  wrote {path}")
+    if prop.reference_voltage_v is not None:
+        typer.echo(
+            f"  note: the exported thrust is at the reference pack voltage "
+            f"{prop.reference_voltage_v:g} V; at U it is (U / {prop.reference_voltage_v:g})"
+            f"^{prop.voltage_exponent:.3g} times that (the JSON's pack_voltage)"
+        )
 
 
 def _unless_interrupted() -> None:

@@ -175,3 +175,24 @@ def test_inverse_round_trip_numpy_and_casadi(models: dict, key: str) -> None:
     c_throttle, c_reached = inverse(demand[None, :], airspeed[None, :], density[None, :])
     np.testing.assert_allclose(np.asarray(c_throttle).ravel(), throttle, rtol=0, atol=1e-12)
     np.testing.assert_array_equal(np.asarray(c_reached).ravel() == 1.0, reached)
+
+
+def test_a_fitted_voltage_law_is_stated_not_dropped(tmp_path) -> None:
+    """The exported functions give thrust at the reference pack voltage; the JSON says so
+    and keeps the fitted law (a second hostile audit: it was silently dropped, 25 % too much
+    thrust at a sagged 41 V pack)."""
+    import json
+
+    from tests.conftest import MADE_UP_PROPULSION, write_case
+    from tuflexperf.export import export_model, parse_formats
+
+    plain = write_case(tmp_path / "plain")
+    export_model(plain, parse_formats("json"), tmp_path / "plain_out")
+    described = json.loads((tmp_path / "plain_out" / "tfp_thrust.json").read_text())
+    assert described["pack_voltage"] is None
+    with_voltage = {**MADE_UP_PROPULSION, "reference_voltage_v": 47.3, "voltage_exponent": 1.9}
+    case = write_case(tmp_path / "volt", propulsion=with_voltage)
+    export_model(case, parse_formats("json"), tmp_path / "volt_out")
+    described = json.loads((tmp_path / "volt_out" / "tfp_thrust.json").read_text())
+    assert described["pack_voltage"]["reference_voltage_v"] == 47.3
+    assert described["pack_voltage"]["voltage_exponent"] == 1.9

@@ -341,6 +341,14 @@ def model_description(model: ExportModel) -> dict[str, Any]:
             "thrust_k = a * thrust_(k-1) + (1 - a) * thrust(throttle_(k - round(delay_s / dt)), "
             "v, rho), a = exp(-dt / lag_s) (0 when lag_s = 0: the paper's pure delay)"
         ),
+        # the fitted voltage effect (SPEC 3) is not in the exported functions: they give the
+        # thrust at the reference pack voltage, and say so (the fit's own law is kept here)
+        "pack_voltage": None if prop.reference_voltage_v is None else {
+            "reference_voltage_v": prop.reference_voltage_v,
+            "voltage_exponent": prop.voltage_exponent,
+            "exported_at": "the reference voltage: thrust at pack voltage U is "
+                           "(U / reference_voltage_v)^voltage_exponent times the equation's",
+        },
         "validity": {
             "tested_airspeed_m_s": [low, high],
             "max_model_airspeed_m_s": max_model_airspeed_m_s(prop),
