@@ -445,6 +445,32 @@ def test_cutoff_ends_the_flight_at_the_event_time(tmp_path: Path) -> None:
     assert "segment 2 (cruise)" in data["reason"]
 
 
+def test_a_climb_that_meets_the_cutoff_ends_at_its_last_node_and_says_so(tmp_path) -> None:
+    """A climb (integrated over height) too long for the packs: the history, the segment
+    table and ended_at_s end at the last node before the cut-off, and the reason names the
+    two nodes around it (it named the node after, past the history's end: a second audit)."""
+    from tuflexperf.io.dotted import with_values
+
+    path = _mission(tmp_path, """\
+        name: too high
+        segments:
+          - {type: takeoff}
+          - {type: climb, to_altitude_m: 9500, airspeed_m_s: 28, throttle: 1.0}
+          - {type: cruise, airspeed_m_s: 28, time_min: 1}
+        """)
+    case = with_values(load_case(None), {"aircraft.mass_kg": 50.0})
+    model = MissionModel(case, load_mission(path), None)
+    result = model.fly()
+    assert not result.attainable
+    assert "segment 2 (climb): the pack reaches its cut-off voltage" in result.reason
+    assert "between" in result.reason
+    last = float(result.history["time_s"][-1])
+    assert result.ended_at_s == pytest.approx(last, abs=1e-9)
+    assert sum(s.time_s for s in result.segments) == pytest.approx(last, abs=1e-9)
+    assert result.segments[-1].min_voltage_v >= model.cutoff_v - 1e-9  # before the cut-off
+    assert f"{last:.1f}" in result.reason
+
+
 def test_solve_for_stops_at_the_cutoff_when_it_comes_before_the_reserve(
     tmp_path: Path,
 ) -> None:

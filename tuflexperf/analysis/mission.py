@@ -955,6 +955,14 @@ class MissionModel:
                     b += 1
                 first_bad, ended_at = a + k, at
                 reason = f"{label}: {why} at {at:.1f} s ({at / 60:.2f} min into the mission)"
+                if why.startswith("the pack reaches") and plan.kind != "time" and k > 0:
+                    # between two nodes of a climb or descent (integrated over height, 1/64 of
+                    # it apart): the flight, its history and ended_at_s end at the last node
+                    # before the cut-off, and the reason says so (it named the node after,
+                    # past the history's end)
+                    ended_at = float(t[a + k - 1])
+                    reason = (f"{label}: {why} between {ended_at:.1f} and {at:.1f} s "
+                              f"({ended_at / 60:.2f}-{at / 60:.2f} min into the mission)")
                 sl = slice(a, b)
                 volt_live = voltage[live, sl]
             xs = x[sl]
