@@ -189,6 +189,12 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
             raise InputError(f"{path}: runs[{index}].file: {run.file} is listed twice")
         runs.append(DischargeRunRef(path=target, engine=run.engine))
     if schema.fit is not None and not refitting:
+        fitted = schema.fit.parameters.max_capacity_ah
+        if not 0.5 <= fitted / schema.capacity_ah <= 2.0:  # edited after the fit
+            raise InputError(
+                f"{path}: capacity_ah: {schema.capacity_ah:g} Ah, but the pack model in `fit:` "
+                f"holds {fitted:.2f} Ah; fit it again (tuflexperf fit {path.name} --out ...)"
+            )
         # matched by position and name (a copied file may point at its runs another way);
         # the content is then checked by sha256 where the fit is used
         stored = [Path(r.file).name for r in schema.fit.runs]
