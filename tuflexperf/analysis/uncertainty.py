@@ -234,10 +234,8 @@ def _in_processes(
     import multiprocessing
     from multiprocessing.connection import wait
 
-    from tuflexperf.io.files import interrupts_held, raise_if_interrupted
+    from tuflexperf.io.files import raise_if_interrupted, start_helper, stop_helpers
 
-    context = multiprocessing.get_context(
-        "fork" if "fork" in multiprocessing.get_all_start_methods() else None)
     count = min(workers, len(arguments))
     results: list[Any] = [None] * len(arguments)
     helpers: list[Any] = []
@@ -245,13 +243,9 @@ def _in_processes(
     finished = False
     try:
         for k in range(count):
-            reader, writer = context.Pipe(duplex=False)
+            reader, writer = multiprocessing.Pipe(duplex=False)
             indices = range(k, len(arguments), count)
-            with interrupts_held():
-                helper = context.Process(target=_worker, args=(function, arguments, indices,
-                                                               writer), daemon=True)
-                helper.start()
-                helpers.append(helper)
+            start_helper(_worker, (function, arguments, indices, writer), helpers)
             writer.close()  # the worker's end: the pipe ends here when the worker does
             owed[reader] = len(indices)
         while owed:
@@ -274,11 +268,7 @@ def _in_processes(
         return results
     finally:
         if not finished:
-            # SIGKILL, not SIGTERM: a worker holds nothing to clean up, and a SIGTERM landing
-            # between its fork and its taking the default action would be lost (the worker
-            # then blocked on its full pipe while this process waited for it: a hang)
-            for helper in helpers:
-                helper.kill()
+            stop_helpers(helpers)
         for reader in owed:
             reader.close()
         for helper in helpers:
@@ -289,9 +279,6 @@ def _worker(function: Callable[..., dict[str, Array]], arguments: Sequence[tuple
             indices: range, writer: Any) -> None:
     """One worker of :func:`_in_processes`: its chunks in order, each result (or the error
     it raised) sent as ``(index, outcome)``."""
-    from tuflexperf.io.files import release_interrupts
-
-    release_interrupts()
     for index in indices:
         try:
             outcome: Any = function(*arguments[index])

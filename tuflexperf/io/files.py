@@ -15,7 +15,7 @@ import hashlib
 import json
 import os
 import signal
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -396,6 +396,47 @@ def release_interrupts() -> None:
     _holding[0] = False
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, signal.SIG_DFL)
+
+
+def start_helper(target: Callable[..., None], args: tuple[Any, ...],
+                 helpers: list[Any]) -> Any:
+    """``target(*args)`` in a helper process (forked where the platform can), listed in
+    ``helpers`` for :func:`stop_helpers`; returns the process.
+
+    The interrupts are held across the fork until the helper is listed: one raised inside
+    the fork's own callbacks would be dropped, and one raised before the listing would
+    leave the helper running. In the helper, Ctrl-C or SIGTERM (sent to the whole process
+    group) just ends it; the parent reports it and removes what was staged.
+    """
+    import multiprocessing
+
+    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
+    with interrupts_held():
+        helper = multiprocessing.get_context(method).Process(
+            target=_helper_body, args=(target, args), daemon=True
+        )
+        helper.start()
+        helpers.append(helper)
+    return helper
+
+
+def _helper_body(target: Callable[..., None], args: tuple[Any, ...]) -> None:
+    release_interrupts()
+    target(*args)
+
+
+def stop_helpers(helpers: list[Any]) -> None:
+    """Stop every helper of :func:`start_helper` still running, and wait for them all.
+
+    SIGKILL, not SIGTERM: a helper holds nothing to clean up (what it writes is staged),
+    and a SIGTERM landing between its fork and its taking the default action would be
+    lost (the helper then ran on, e.g. blocked on a full pipe, while the parent waited).
+    """
+    for helper in helpers:
+        if helper.is_alive():
+            helper.kill()
+    for helper in helpers:
+        helper.join()
 
 
 def raise_if_interrupted() -> None:

@@ -144,7 +144,9 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
     try:  # bad campaign, interrupt: every forked helper stopped, no page written after
         return _render_pages(case, folder, campaign, step, kept, writers)
     finally:
-        _stop(writers)
+        from tuflexperf.io.files import stop_helpers
+
+        stop_helpers(writers)
 
 
 def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
@@ -305,16 +307,6 @@ def _reduce_campaign(case: Any, campaign: Path | None, path: Path,
     os.replace(staged, path)  # never read half-written
 
 
-def _stop(writers: list[Any]) -> None:
-    # SIGKILL, not SIGTERM: a helper holds nothing to clean up (its files are in the
-    # staging folder), and a SIGTERM landing before it takes the default action is lost
-    for writer in writers:
-        if writer.is_alive():
-            writer.kill()
-    for writer in writers:
-        writer.join()
-
-
 def _save_pdf_pages(figures: list[Any], path: Path,
                     metadata: dict[str, str] | None = None) -> None:
     """Vector PDF pages, written beside ``path`` and renamed (never read half-written)."""
@@ -396,34 +388,14 @@ def _draw_pages(named: list[tuple[str, Callable[[], Any]]], folder: Path, keep: 
 
 def _start_helper(target: Callable[..., None], args: tuple[Any, ...],
                   helpers: list[Any]) -> Any:
-    """``target(*args)`` in a forked helper process, listed in ``helpers`` (stopped by
-    :func:`_stop`); None where fork is not available (the caller then does the work).
-
-    The interrupts are held across the fork until the helper is listed: one raised inside
-    the fork's own callbacks would be dropped, and one raised before the listing would
-    leave the helper running. In the helper, Ctrl-C or SIGTERM (sent to the whole process
-    group) just ends it; the report's own process reports it and removes what was staged.
-    """
-    import multiprocessing
-
-    from tuflexperf.io.files import interrupts_held
+    """``target(*args)`` in a forked helper (:func:`tuflexperf.io.files.start_helper`),
+    listed in ``helpers``; None where fork is not available or
+    ``TUFLEXPERF_SERIAL_REPORT`` is set (the caller then does the work)."""
+    from tuflexperf.io.files import start_helper
 
     if os.environ.get("TUFLEXPERF_SERIAL_REPORT") or not hasattr(os, "fork"):
         return None
-    with interrupts_held():
-        helper = multiprocessing.get_context("fork").Process(
-            target=_helper_body, args=(target, args), daemon=True
-        )
-        helper.start()
-        helpers.append(helper)
-    return helper
-
-
-def _helper_body(target: Callable[..., None], args: tuple[Any, ...]) -> None:
-    from tuflexperf.io.files import release_interrupts
-
-    release_interrupts()
-    target(*args)
+    return start_helper(target, args, helpers)
 
 
 def _title_page(case: Any, measured: Any, analyses: Any) -> Any:
