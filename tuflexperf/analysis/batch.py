@@ -62,7 +62,7 @@ from tuflexperf.models.aircraft import (
     true_airspeed_m_s,
 )
 from tuflexperf.models.atmosphere import isa_density_kg_m3
-from tuflexperf.models.powertrain import static_jet_velocity_m_s
+from tuflexperf.models.powertrain import beyond_jet_velocity
 from tuflexperf.models.thrust import (
     POLY22_TERMS,
     Propulsion,
@@ -507,12 +507,8 @@ class _Model:
         attainable = np.all(self.uniform_force() > 0.0, axis=1) & (
             v_lo >= stall * (1.0 - 1e-12))[:, 0]
         # beyond the fans' jet velocity an extrapolated thrust model is not physics (as
-        # solve_takeoff says)
-        jet = np.asarray(static_jet_velocity_m_s(self.propulsion, self.density),
-                         dtype=float).reshape(-1) * np.ones(self.size)
-        beyond = (v_lo[:, 0] > self.propulsion.tested_airspeed_m_s[1] + 1e-9) & (
-            v_lo[:, 0] >= jet)
-        attainable &= ~beyond
+        # solve_takeoff says); v_lo is a column, as the jet velocity of sampled rows is
+        attainable &= ~beyond_jet_velocity(self.propulsion, v_lo, self.density)[:, 0]
         pieces = self._roll_pieces()
         breaks = self._breaks(v_lo) if pieces is None else pieces[0]
         distance = np.zeros(self.size)

@@ -34,7 +34,7 @@ from tuflexperf.models.aircraft import (
     transition_radius_m,
     transition_speed_m_s,
 )
-from tuflexperf.models.powertrain import static_jet_velocity_m_s
+from tuflexperf.models.powertrain import beyond_jet_velocity, static_jet_velocity_m_s
 from tuflexperf.models.thrust import (
     Propulsion,
     is_extrapolated,
@@ -222,9 +222,9 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
             f"never reaches lift-off: the net force vanishes at {stuck:.2f} m/s, below the "
             f"lift-off speed {v_lo:.2f} m/s", known
         )
-    jet = float(static_jet_velocity_m_s(propulsion, rho))
-    if v_lo > propulsion.tested_airspeed_m_s[1] + 1e-9 and v_lo >= jet:
+    if beyond_jet_velocity(propulsion, v_lo, rho):
         # the extrapolated polynomial may still give thrust there; a fan does not
+        jet = float(static_jet_velocity_m_s(propulsion, rho))
         raise NotAttainable(
             f"lift-off at {v_lo:.1f} m/s is beyond the fans' jet velocity {jet:.1f} m/s "
             f"(momentum theory, full-throttle static thrust on fan_area_m2), where they make "

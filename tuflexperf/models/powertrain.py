@@ -158,6 +158,18 @@ def static_jet_velocity_m_s(propulsion: Propulsion, density_kg_m3: Vectorizable)
     return least
 
 
+def beyond_jet_velocity(propulsion: Propulsion, airspeed_m_s: Any, density_kg_m3: Any) -> Any:
+    """True where the airspeed is past the thrust model's tested range and at or beyond the
+    fans' static jet velocity (:func:`static_jet_velocity_m_s`): no thrust a fan makes,
+    whatever the extrapolated polynomial gives (floats or numpy arrays, broadcast).
+    """
+    import numpy as np
+
+    v = np.asarray(airspeed_m_s, dtype=float)
+    jet = np.asarray(static_jet_velocity_m_s(propulsion, density_kg_m3), dtype=float)
+    return (v > propulsion.tested_airspeed_m_s[1] + 1e-9) & (v >= jet)
+
+
 def ideal_power_w(
     thrust_n: Vectorizable,
     airspeed_m_s: Vectorizable,
