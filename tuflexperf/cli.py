@@ -1031,11 +1031,14 @@ def main(argv: list[str] | None = None) -> None:
     # pydantic otherwise scans every installed package's entry points for plugins on the
     # first model (importlib.metadata, ~10 ms of each `check`); a user may still enable them
     os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
+    def aborted() -> None:
+        sys.stderr.write("tuflexperf: aborted\n")
+        sys.exit(130)
+
     try:
         code = app(args=argv, standalone_mode=False, prog_name="tuflexperf")
     except (Abort, KeyboardInterrupt):  # click's word for an interrupt, or one before click's
-        sys.stderr.write("tuflexperf: aborted\n")
-        sys.exit(130)
+        aborted()
     except TyperException as exc:
         if type(exc).__name__ == "NoArgsIsHelpError":
             app(args=["--help"], prog_name="tuflexperf")
@@ -1046,9 +1049,7 @@ def main(argv: list[str] | None = None) -> None:
         # (RuntimeError, SystemError, ...): it is still the interrupt, not a failure
         if not interrupted():
             raise
-        sys.stderr.write("tuflexperf: aborted\n")
-        sys.exit(130)
+        aborted()
     if interrupted():  # one a library dropped (printed as "ignored"): still no success
-        sys.stderr.write("tuflexperf: aborted\n")
-        sys.exit(130)
+        aborted()
     sys.exit(code if isinstance(code, int) else 0)

@@ -21,10 +21,14 @@ def _exit_at_once(signum: int, frame: object) -> None:
     os._exit(INTERRUPTED_EXIT)
 
 
-def main() -> None:
-    """``tuflexperf`` (the console script) and ``python -m tuflexperf``."""
+def _exit_on_interrupt() -> None:
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, _exit_at_once)
+
+
+def main() -> None:
+    """``tuflexperf`` (the console script) and ``python -m tuflexperf``."""
+    _exit_on_interrupt()
     from tuflexperf.cli import main as cli_main
 
     try:
@@ -35,5 +39,4 @@ def main() -> None:
         for stream in (sys.stdout, sys.stderr):
             with contextlib.suppress(OSError, ValueError):
                 stream.flush()
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(signum, _exit_at_once)
+        _exit_on_interrupt()
