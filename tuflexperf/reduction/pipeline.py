@@ -335,6 +335,7 @@ MIN_SWEEP_THROTTLE_SWING = 0.05  # a sweep whose throttle barely moves measures 
 MIN_DRAG_SWEEP_AIRSPEED_M_S = 1.0  # a drag sweep that never blows measures no drag
 MIN_DRAG_SWEEP_SPAN_M_S = 5.0  # ... and one that holds one airspeed measures no curve
 SET_POINT_RESOLUTION_M_S = 0.5  # tunnel set points closer than this are one set point
+MIN_SET_POINTS = 3  # airspeeds a poly22 surface (quadratic in airspeed) needs
 
 
 def _check_set_points(campaign: Any, step_results: list[Any]) -> None:
@@ -348,17 +349,21 @@ def _check_set_points(campaign: Any, step_results: list[Any]) -> None:
     for result in step_results:
         runs = by_engine.setdefault(str(result.run.engine), {})
         speeds = [seg.airspeed_m_s for seg in result.segments] or [0.0]
-        step = SET_POINT_RESOLUTION_M_S
-        point = round(float(np.median(speeds)) / step) * step
-        runs.setdefault(point, []).append(result.run.file)
+        runs.setdefault(_set_point(float(np.median(speeds))), []).append(result.run.file)
     for engine, points in by_engine.items():
-        if len(points) < 3:
+        if len(points) < MIN_SET_POINTS:
             listed = "; ".join(f"{v:g} m/s ({', '.join(files)})" for v, files in
                                sorted(points.items()))
             raise InputError(
                 f"{campaign.path}: {engine}: the throttle-step runs cover only {len(points)} "
-                f"airspeed set point(s), {listed}; a poly22 surface needs at least 3"
+                f"airspeed set point(s), {listed}; a poly22 surface needs at least "
+                f"{MIN_SET_POINTS}"
             )
+
+
+def _set_point(airspeed_m_s: float) -> float:
+    """The tunnel set point [m/s] an airspeed belongs to (:data:`SET_POINT_RESOLUTION_M_S`)."""
+    return round(airspeed_m_s / SET_POINT_RESOLUTION_M_S) * SET_POINT_RESOLUTION_M_S
 
 
 def fit_campaign(
@@ -855,12 +860,11 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
     for engine in table.engines():
         # a surface in airspeed needs airspeeds: as a campaign's step runs must cover three
         # set points, a table's rows must (counted at the set-point resolution)
-        points = {round(float(v) / SET_POINT_RESOLUTION_M_S)
-                  for v in table.select(engine)[1]}
-        if len(points) < 3:
+        points = {_set_point(float(v)) for v in table.select(engine)[1]}
+        if len(points) < MIN_SET_POINTS:
             raise InputError(
                 f"{table.path}: {engine}: the rows cover only {len(points)} airspeed set "
-                "point(s); a poly22 surface needs at least 3"
+                f"point(s); a poly22 surface needs at least {MIN_SET_POINTS}"
             )
     fits = {
         engine: fit_poly22(*table.select(engine), label=f"{table.path}: engine {engine}")
