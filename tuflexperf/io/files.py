@@ -135,13 +135,14 @@ def _same_file(a: Path, b: Path) -> bool:
 # How each single-file output of the tool begins (the folders carry MARKER instead): an
 # existing file is replaced only when it begins exactly like one of these, i.e. an earlier
 # output. A user's file that merely looks alike (an extra column) is never replaced.
-THRUST_TABLE_HEADERS = (
-    # fit's thrust table from a campaign (SPEC 4's four columns, then the reduction's)
-    "engine,throttle,airspeed_m_s,thrust_n,airspeed_measured_m_s,force_n,drag_n,force_std_n,"
-    "n_samples,glauert_ratio,run,thrust_at_voltage_n,voltage_v,current_a,electrical_power_w,"
-    "ideal_power_w,figure_of_merit,overall_efficiency",
-    "engine,throttle,airspeed_m_s,thrust_n",  # refitted from a table: the four only
-)
+def _thrust_table_headers() -> tuple[str, ...]:
+    from tuflexperf.io.runs import TABLE_COLUMNS, TABLE_EXTRA_COLUMNS
+
+    # fit's thrust table from a campaign (SPEC 4's four columns, then the reduction's), and
+    # refitted from a table (the four only)
+    return ",".join((*TABLE_COLUMNS, *TABLE_EXTRA_COLUMNS)), ",".join(TABLE_COLUMNS)
+
+
 MISSION_CSV_COLUMNS = ("time_s", "segment", "altitude_m", "distance_m", "airspeed_m_s",
                        "airspeed_eas_m_s", "throttle", "climb_rate_m_s")
 MISSION_CSV_ENGINE_COLUMNS = ("current_a", "voltage_v", "charge_ah", "charge_fraction",
@@ -201,7 +202,7 @@ def written_by_tuflexperf(head: bytes) -> bool:
     except UnicodeDecodeError:
         return False
     columns = header.split(",")
-    return (header in THRUST_TABLE_HEADERS or _is_mission_history(columns)
+    return (header in _thrust_table_headers() or _is_mission_history(columns)
             or _is_sweep_grid(columns))
 
 

@@ -31,6 +31,12 @@ from tuflexperf.io.vendor import VendorSettings, read_vendor_columns
 
 RUN_COLUMNS: tuple[str, ...] = ("time_s", "force_n", "airspeed_m_s", "throttle")
 TABLE_COLUMNS: tuple[str, ...] = ("engine", "throttle", "airspeed_m_s", "thrust_n")
+# what fit's thrust table from a campaign adds after them (the reduction's diagnostics)
+TABLE_EXTRA_COLUMNS: tuple[str, ...] = (
+    "airspeed_measured_m_s", "force_n", "drag_n", "force_std_n", "n_samples", "glauert_ratio",
+    "run", "thrust_at_voltage_n", "voltage_v", "current_a", "electrical_power_w",
+    "ideal_power_w", "figure_of_merit", "overall_efficiency",
+)
 MAX_MAGNITUDE = 1e9  # no force, airspeed, voltage or current of a thrust stand comes near it
 STATIC_AIRSPEED_NOISE_M_S = 0.5  # a thrust table's airspeed may dip this far below 0 at rest
 MAX_NAN_FRACTION = 0.01

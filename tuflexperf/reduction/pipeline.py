@@ -38,6 +38,7 @@ from tuflexperf.errors import InputError
 from tuflexperf.io.campaign import Campaign, CampaignRun, load_campaign
 from tuflexperf.io.files import sha256_of
 from tuflexperf.io.runs import (
+    TABLE_EXTRA_COLUMNS,
     Run,
     ThrustTable,
     format_number,
@@ -71,22 +72,6 @@ Progress = Callable[[int, int, str], None]
 """``progress(done, total, label)``: called before each run is reduced."""
 
 MIN_SEGMENT_S = 0.5
-TABLE_EXTRA_COLUMNS = (
-    "airspeed_measured_m_s",
-    "force_n",
-    "drag_n",
-    "force_std_n",
-    "n_samples",
-    "glauert_ratio",
-    "run",
-    "thrust_at_voltage_n",
-    "voltage_v",
-    "current_a",
-    "electrical_power_w",
-    "ideal_power_w",
-    "figure_of_merit",
-    "overall_efficiency",
-)
 ELECTRICAL_COLUMNS = ("voltage_v", "current_a")
 
 
