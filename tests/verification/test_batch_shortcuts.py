@@ -71,7 +71,7 @@ def test_candidate_airspeeds_give_the_full_grid_answer(seed: int) -> None:
     # and the verification rejected the candidates for some rows (the fallback ran): the
     # least OEI throttle sits away from the nominal's candidate airspeeds there
     terms = full._grid_terms(grid)
-    above = full._above_stall(grid)
+    above = full._flyable(grid)
     throttle = full.least_throttle(grid[None, :], 0, "windmilling", terms)
     lowest = np.argmin(np.where(above & np.isfinite(throttle), throttle, np.inf), axis=1)
     assert not np.isin(lowest[np.isfinite(want_oei)], oei_candidates[0]).all()

@@ -1,10 +1,13 @@
-"""Where level flight is attainable: above stall (times the margin) and within full throttle.
+"""Where level flight is attainable: above stall (times the margin), within full throttle,
+and short of the fans' jet velocity.
 
 SPEC 3: level flight needs ``CL <= cl_max``; below ``stall_margin x V_stall`` it is
-*not attainable, below stall* — never a pass with a note. Trim, OEI and endurance mark
-each grid airspeed with why it is not attainable, and report the exact bounds of the
-attainable airspeeds (the stall bound, and the full-throttle roots of ``T(1, V) = D(V)``
-refined by bisection to 1e-12 m/s).
+*not attainable, below stall* — never a pass with a note. At or beyond the fans' static jet
+velocity (past the tested range) a fan makes no thrust, whatever the extrapolated poly22
+gives: not attainable there either (the rule of the take-off, :func:`beyond_jet_velocity`).
+Trim, OEI and endurance mark each grid airspeed with why it is not attainable, and report
+the exact bounds of the attainable airspeeds (the stall bound, the jet-velocity ceiling,
+and the full-throttle roots of ``T(1, V) = D(V)`` refined by bisection to 1e-12 m/s).
 
 References
 ----------
@@ -21,8 +24,10 @@ import numpy as np
 
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import stall_speed_m_s
+from tuflexperf.models.powertrain import beyond_jet_velocity, jet_velocity_ceiling_m_s
 
 BELOW_STALL = "below stall"
+BEYOND_JET_VELOCITY = "beyond the fans' jet velocity"
 NEEDS_MORE_THAN_FULL_THROTTLE = "needs more than full throttle"
 _SCAN_POINTS = 2001
 _BISECTIONS = 100
@@ -44,22 +49,44 @@ def least_airspeed_m_s(case: Case) -> float:
     return stall_margin_of(case) * float(stall_speed_m_s(case.aircraft, case.density_kg_m3))
 
 
+def jet_ceiling_m_s(case: Case) -> float:
+    """Airspeed [m/s] from which level flight is beyond the fans' jet velocity at the case's
+    density (``inf`` without ``fan_area_m2``; :func:`jet_velocity_ceiling_m_s`)."""
+    return float(jet_velocity_ceiling_m_s(case.propulsion, case.density_kg_m3))
+
+
+def jet_ceiling_note(case: Case, airspeed_m_s: np.ndarray) -> list[str]:
+    """The warning that some of these airspeeds are beyond the fans' jet velocity (or none)."""
+    beyond = np.asarray(beyond_jet_velocity(case.propulsion, airspeed_m_s, case.density_kg_m3))
+    if not beyond.any():
+        return []
+    return [
+        f"at {jet_ceiling_m_s(case):.1f} m/s and above the fans' static jet velocity is reached "
+        "(momentum theory on fan_area_m2): a fan makes no thrust there, whatever the "
+        "extrapolated thrust model gives, so level flight is not attainable"
+    ]
+
+
 def stall_bounded(
-    airspeed_m_s: np.ndarray, throttle: np.ndarray, least_m_s: float
+    airspeed_m_s: np.ndarray, throttle: np.ndarray, least_m_s: float, case: Case | None = None
 ) -> tuple[np.ndarray, tuple[str | None, ...]]:
-    """Throttles with points below ``least_m_s`` [m/s] made NaN, and each point's reason.
+    """Throttles with points below ``least_m_s`` [m/s] (and, given the ``case``, beyond the
+    fans' jet velocity) made NaN, and each point's reason.
 
     ``throttle`` holds the least throttle per airspeed (NaN where full throttle is not
-    enough). The reason is ``None`` where attainable, else ``below stall`` or
-    ``needs more than full throttle``.
+    enough). The reason is ``None`` where attainable, else ``below stall``, ``beyond the
+    fans' jet velocity`` or ``needs more than full throttle``.
     """
     v = np.asarray(airspeed_m_s, dtype=float)
     x = np.asarray(throttle, dtype=float).copy()
     below = v < least_m_s * (1.0 - 1e-12)
-    x[below] = np.nan
+    beyond = (np.zeros(v.shape, dtype=bool) if case is None else
+              np.asarray(beyond_jet_velocity(case.propulsion, v, case.density_kg_m3)) & ~below)
+    x[below | beyond] = np.nan
     reasons = tuple(
-        BELOW_STALL if b else (None if np.isfinite(t) else NEEDS_MORE_THAN_FULL_THROTTLE)
-        for b, t in zip(below, x, strict=True)
+        BELOW_STALL if b else BEYOND_JET_VELOCITY if j else (
+            None if np.isfinite(t) else NEEDS_MORE_THAN_FULL_THROTTLE)
+        for b, j, t in zip(below, beyond, x, strict=True)
     )
     return x, reasons
 
@@ -125,7 +152,7 @@ def describe_unattainable(airspeed_m_s: np.ndarray, reasons: tuple[str | None, .
     """One phrase per reason: ``below stall at 15-23 m/s (17 of 61 grid airspeeds)``."""
     v = np.asarray(airspeed_m_s, dtype=float)
     phrases = []
-    for reason in (BELOW_STALL, NEEDS_MORE_THAN_FULL_THROTTLE):
+    for reason in (BELOW_STALL, BEYOND_JET_VELOCITY, NEEDS_MORE_THAN_FULL_THROTTLE):
         hit = np.array([r == reason for r in reasons], dtype=bool)
         if hit.any():
             low, high = v[hit].min(), v[hit].max()

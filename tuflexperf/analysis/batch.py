@@ -314,7 +314,7 @@ class BatchEvaluator:
             return np.unique(np.clip(np.concatenate([near, [0, last]]), 0, last))
 
         terms = model._grid_terms(grid)
-        above = model._above_stall(grid)[0]
+        above = model._flyable(grid)[0]
         throttle = np.where(above, model.least_throttle(grid[None, :], terms=terms)[0], np.nan)
         trim = beside(int(np.nanargmax(throttle))) if np.any(np.isfinite(throttle)) else None
         oei: dict[int, Array] = {}
@@ -359,8 +359,12 @@ class _Model:
         """Least level-flight airspeed [m/s] per row: stall x the envelope's margin (SPEC 3)."""
         return np.asarray(self.stall_margin, dtype=float).reshape(-1) * stall_speed(self)
 
-    def _above_stall(self, grid: Array) -> Array:
-        return grid[None, :] >= self.least_airspeed()[:, None] * (1.0 - 1e-12)
+    def _flyable(self, grid: Array) -> Array:
+        """Where level flight may be attainable per row: at or above the least airspeed and
+        short of the fans' jet velocity (the single-case ``stall_bounded``)."""
+        above = grid[None, :] >= self.least_airspeed()[:, None] * (1.0 - 1e-12)
+        density = np.asarray(self.density, dtype=float).reshape(-1, 1)
+        return above & ~beyond_jet_velocity(self.propulsion, grid[None, :], density)
 
     def thrust(self, throttle: Any, speed: Array, dead: int | None = None,
                mode: str = "windmilling") -> Array:
@@ -656,7 +660,7 @@ class _Model:
         all other airspeeds (there the least throttle is <= m); the other rows are solved at
         every airspeed. Each row's answer depends on that row alone.
         """
-        above = self._above_stall(grid)
+        above = self._flyable(grid)
         a, b, c = self._excess_quadratic(self._grid_row(grid), None, "windmilling",
                                          self._grid_terms(grid))
         everywhere = np.all(above, axis=1)  # below stall somewhere: not attainable there
@@ -690,7 +694,7 @@ class _Model:
         """
         worst = np.full(self.size, -np.inf)
         terms = self._grid_terms(grid)
-        above = self._above_stall(grid)
+        above = self._flyable(grid)
         for dead in range(len(self.propulsion.engines)):
             a, b, c = self._excess_quadratic(self._grid_row(grid), dead, mode, terms)
             picked = None if candidates is None else candidates.get(dead)

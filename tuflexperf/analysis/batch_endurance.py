@@ -33,7 +33,11 @@ from tuflexperf.models.battery import (
     cutoff_residual_v,
     discharge_time_s,
 )
-from tuflexperf.models.powertrain import PowerSurfaces
+from tuflexperf.models.powertrain import (
+    PowerSurfaces,
+    beyond_jet_velocity,
+    jet_velocity_ceiling_m_s,
+)
 from tuflexperf.models.thrust import density_ratio
 
 Array = NDArray[np.float64]
@@ -126,13 +130,17 @@ def _best_climb(m: Any, v_lo: Array, stall: Array) -> tuple[Array, Array]:
     """
     n = single._SPEED_GRID_POINTS
     top = single._MAX_SPEED_OVER_STALL * stall
+    ceiling = np.asarray(jet_velocity_ceiling_m_s(m.propulsion, m.density),
+                         dtype=float).reshape(-1, 1) * np.ones((m.size, 1))
     weight = np.asarray(m.aircraft.weight_n, dtype=float).reshape(-1, 1)
 
     def rate_at(index: Array) -> tuple[Array, Array]:
         speed = v_lo[:, None] + (top - v_lo)[:, None] * index / (n - 1)
         excess = m.thrust(1.0, speed) - np.asarray(
             level_flight_drag_n(m.aircraft, speed, m.density), dtype=float)
-        return excess * speed / weight, speed
+        # no climb at or beyond the jet velocity (the grid's first point excepted)
+        rate = np.where((speed >= ceiling) & (index > 0), -np.inf, excess * speed / weight)
+        return rate, speed
 
     a, _ = _golden_section_max(
         lambda index: rate_at(index[:, None])[0][:, 0],
@@ -311,6 +319,9 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     speed = _bracketed_root(
         lambda v: _excess(m, throttle, v), np.where(ok, least_speed, 1.0), np.where(ok, guess, 2.0)
     )
+    # a cruise at or beyond the fans' jet velocity flies on no thrust (the mission's rule)
+    density = np.asarray(m.density, dtype=float).reshape(-1, 1)
+    ok &= ~beyond_jet_velocity(m.propulsion, speed[:, None], density)[:, 0]
     power_w = _power_w(model, m, throttle, speed)
     params, packs = model.params, model.packs
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, 1) > 0.0)

@@ -277,9 +277,11 @@ def _best_climb(case: Case) -> tuple[float, float]:
     """Airspeed (m/s) and rate (m/s) of the best full-throttle climb, ``(T - D) V / W``.
 
     Small-angle climb with ``L = W`` (Anderson, *Aircraft Performance and Design*, 5.10).
-    Searched between the lift-off speed and the full-throttle level-flight speed.
+    Searched from the lift-off speed to 8 x stall, short of the fans' jet velocity (beyond
+    it a fan makes no thrust, :func:`jet_velocity_ceiling_m_s`).
     """
     from tuflexperf.models.aircraft import liftoff_speed_m_s
+    from tuflexperf.models.powertrain import jet_velocity_ceiling_m_s
 
     aircraft, rho = case.aircraft, case.density_kg_m3
     low = float(liftoff_speed_m_s(aircraft, rho))
@@ -287,10 +289,15 @@ def _best_climb(case: Case) -> tuple[float, float]:
         from tuflexperf.models.aircraft import true_airspeed_m_s
 
         low = float(true_airspeed_m_s(aircraft.launch_speed_m_s, rho))
-    speeds = np.linspace(low, _MAX_SPEED_OVER_STALL * float(stall_speed_m_s(aircraft, rho)), 4001)
+    speeds = np.linspace(low, _MAX_SPEED_OVER_STALL * float(stall_speed_m_s(aircraft, rho)),
+                         _SPEED_GRID_POINTS)
     thrust = total_thrust_n(case.propulsion, 1.0, speeds, rho)
     excess = np.asarray(thrust - level_flight_drag_n(aircraft, speeds, rho), dtype=float)
     rate = excess * speeds / aircraft.weight_n
+    # at or beyond the jet velocity no climb (the first grid point stays: a lift-off there
+    # is refused by the take-off)
+    beyond = speeds[1:] >= float(jet_velocity_ceiling_m_s(case.propulsion, rho))
+    rate[1:] = np.where(beyond, -np.inf, rate[1:])
     best = int(np.argmax(rate))
     return float(speeds[best]), float(rate[best])
 
@@ -332,8 +339,11 @@ def endurance_mission(case: Case, battery: Battery, throttle: float = 0.5) -> An
     return MissionFile("endurance", case.path, tuple(segments), None)
 
 
-def endurance_mission_model(case: Case, battery: Battery) -> Any:
+def endurance_mission_model(case: Case, battery: Battery, throttle: float = 0.5) -> Any:
     """The endurance mission built once (:class:`MissionModel`; the throttle is an input).
+
+    ``throttle`` [fraction] only plans the cruise (it must hold level flight); each solve
+    flies the cruise at its own throttle.
 
     The endurance figure is the case's point performance: the whole flight is flown at
     the case's density (the climb's height costs energy, not density), the take-off to
@@ -346,7 +356,7 @@ def endurance_mission_model(case: Case, battery: Battery) -> Any:
     """
     from tuflexperf.analysis.mission import MissionModel
 
-    mission = endurance_mission(case, battery)
+    mission = endurance_mission(case, battery, throttle)
     return MissionModel(case, mission, battery.landing_reserve_fraction,
                         fixed_density_kg_m3=case.density_kg_m3, takeoff_to_obstacle=False,
                         battery=battery)
@@ -535,14 +545,17 @@ class EnduranceModel:
         # Cruise ends when each pack has given (1 - reserve) of its rated capacity.
         usable = 1.0 - battery.landing_reserve_fraction
         self.reserve_ah = self.packs * battery.capacity_ah * usable
-        # the flight: take-off, climb, cruise at a throttle, flown by the mission integrator
-        self.mission = endurance_mission_model(case, battery)
+        self.min_throttle, self.min_throttle_airspeed = self._least_throttle()
+        # the flight: take-off, climb, cruise at a throttle, flown by the mission integrator;
+        # its cruise is planned at a throttle that holds level flight (half, else full), as
+        # each solve flies its own throttle there
+        self.mission = endurance_mission_model(
+            case, battery, 0.5 if self.min_throttle < 0.5 - 1e-9 else 1.0)
         self._cruise = len(self.mission.plans) - 1
         self.launch = _launch_of(self.mission)
         # the cruise starts where the launch ends, whatever its throttle
         self._cruise_start = self.mission.start_state(self._cruise, self.mission.durations,
                                                       self.mission.theta)
-        self.min_throttle, self.min_throttle_airspeed = self._least_throttle()
 
         def excess(x: Any, v: Any) -> Any:
             return total_thrust_n(propulsion, x, v, rho) - level_flight_drag_n(aircraft, v, rho)
@@ -631,7 +644,8 @@ class EnduranceModel:
 
     # -- least throttle for level flight (closed form per airspeed, numpy) -------------------
     def _least_throttle(self) -> tuple[float, float]:
-        """Least throttle (all engines) holding level flight at some speed >= stall, and that speed.
+        """Least throttle (all engines) holding level flight at some speed >= stall (and short of
+        the fans' jet velocity), and that speed.
 
         The required throttle at each airspeed is the exact least root of the quadratic
         excess (:func:`least_throttle_of`, the one least-throttle solver), evaluated on a grid
@@ -649,10 +663,14 @@ class EnduranceModel:
                 )
             return np.where(np.asarray(reached) > 0.5, np.asarray(throttle, dtype=float), np.inf)
 
+        from tuflexperf.models.powertrain import jet_velocity_ceiling_m_s
+
+        # short of the fans' jet velocity: beyond it a fan makes no thrust
+        ceiling = float(jet_velocity_ceiling_m_s(propulsion, rho))
         speeds = np.linspace(self.least_m_s, _MAX_SPEED_OVER_STALL * self.stall_m_s,
                              _SPEED_GRID_POINTS)
         for _ in range(6):
-            values = required(speeds)
+            values = np.where(speeds < ceiling, required(speeds), np.inf)
             k = int(np.argmin(values))
             if not np.isfinite(values[k]):
                 return math.inf, math.nan

@@ -70,6 +70,11 @@ from tuflexperf.models.battery import (
     current_at_power_a,
     open_circuit_voltage_v,
 )
+from tuflexperf.models.powertrain import (
+    beyond_jet_velocity,
+    jet_velocity_ceiling_m_s,
+    static_jet_velocity_m_s,
+)
 from tuflexperf.models.thrust import (
     density_ratio,
     engine_thrust_n,
@@ -348,6 +353,12 @@ class MissionModel:
                               - level_flight_drag_n(aircraft, speed, rho), dtype=float)
 
         ok = np.flatnonzero(excess(v) >= 0)
+        ceiling = float(jet_velocity_ceiling_m_s(prop, rho))
+        if ok.size and v[ok[-1]] >= ceiling:
+            raise NotAttainable(
+                f"{label}: throttle {throttle:g} flies level only at or beyond the fans' static "
+                f"jet velocity {ceiling:.1f} m/s, where they make no thrust (the thrust model "
+                "is extrapolated there): not attainable")
         if not ok.size or ok[-1] == v.size - 1:
             raise NotAttainable(f"{label}: throttle {throttle:g} holds level flight at no "
                                 "airspeed")
@@ -915,6 +926,15 @@ class MissionModel:
                     problems.append((k0, f"throttle {throttle:g} flies level at "
                                      f"{v[a + k0]:.1f} m/s, below stall ({stall_v[k0]:.1f} m/s):"
                                      " not attainable, below stall"))
+            if plan.kind != "takeoff":  # the take-off analysis holds its own lift-off to it
+                rho_sl = np.asarray(self._rho(h[sl]), dtype=float)
+                fast = np.flatnonzero(beyond_jet_velocity(self.case.propulsion, v[sl], rho_sl))
+                if fast.size:
+                    k0 = int(fast[0])
+                    jet = float(static_jet_velocity_m_s(self.case.propulsion, rho_sl[k0]))
+                    problems.append((k0, f"{v[a + k0]:.1f} m/s is beyond the fans' static jet "
+                                     f"velocity {jet:.1f} m/s, where they make no thrust "
+                                     "(the thrust model is extrapolated there): not attainable"))
             if plan.kind == "height":
                 climbing = plan.end_h > plan.start_h
                 wrong = np.flatnonzero((rate[sl] <= 0) if climbing else (rate[sl] >= 0))

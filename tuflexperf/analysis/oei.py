@@ -16,6 +16,8 @@ import numpy as np
 from tuflexperf.analysis.attainable import (
     AttainableRange,
     attainable_range,
+    jet_ceiling_m_s,
+    jet_ceiling_note,
     least_airspeed_m_s,
     stall_bounded,
     stall_margin_of,
@@ -124,15 +126,18 @@ def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
     aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
     cases = []
     for index, engine in enumerate(propulsion.engines):
-        throttle, reasons = stall_bounded(speeds, oei_solver(case, index, mode)(speeds), least)
+        throttle, reasons = stall_bounded(speeds, oei_solver(case, index, mode)(speeds), least,
+                                          case)
 
         def full_throttle_excess(v: np.ndarray, dead: int = index) -> np.ndarray:
             thrust = total_thrust_n(propulsion, 1.0, v, rho, dead, mode)
             return thrust - level_flight_drag_n(aircraft, v, rho)
 
-        attainable = attainable_range(full_throttle_excess, least, v_min, v_max)
+        attainable = attainable_range(full_throttle_excess, least, v_min,
+                                      min(v_max, jet_ceiling_m_s(case)))
         cases.append(DeadEngineCase(speeds, throttle, engine.name, reasons, attainable))
     extrapolated, warnings = extrapolation_note(case, speeds)
+    warnings.extend(jet_ceiling_note(case, speeds))
     density_note = unlapsed_density_warning(propulsion, rho)
     if density_note:
         warnings.append(density_note)

@@ -42,6 +42,7 @@ from tuflexperf.models.aircraft import (
     stall_speed_m_s,
 )
 from tuflexperf.models.atmosphere import isa_density_kg_m3
+from tuflexperf.models.powertrain import jet_velocity_ceiling_m_s
 from tuflexperf.models.thrust import (
     DeadEngineMode,
     is_extrapolated,
@@ -332,12 +333,25 @@ class PerformanceProblems:
                 low = a
         return 0.5 * (low + high)
 
+    def jet_ceiling_m_s(self, rho: Any) -> Any:
+        """Airspeed [m/s] from which the fans make no thrust (:func:`jet_velocity_ceiling_m_s`;
+        ``inf`` without ``fan_area_m2``). Vectorised over ``rho``."""
+        ceiling = np.asarray(jet_velocity_ceiling_m_s(self.propulsion, rho), dtype=float)
+        return float(ceiling) if ceiling.ndim == 0 else ceiling
+
     def scan(self, rho: float) -> tuple[np.ndarray, float]:
-        """Airspeed grid [m/s] from the least airspeed to the speed cap, and that cap."""
+        """Airspeed grid [m/s] from the least airspeed to the speed cap, and that cap.
+
+        The grid ends at the fans' jet velocity when that comes first: beyond it the
+        extrapolated thrust model has no fan behind it (then the cap is that ceiling).
+        """
         low = float(self.least_airspeed_m_s(rho))
         cap = self.speed_cap_m_s(rho)
         top = cap if math.isfinite(cap) else 10.0 * low
         top = max(top * 1.001, low * 1.001)
+        ceiling = self.jet_ceiling_m_s(rho)
+        if ceiling < top:
+            cap, top = ceiling, max(ceiling, low * 1.001)
         return np.linspace(low, top, _SCAN_POINTS), cap
 
     def level_speed_range(
@@ -350,7 +364,7 @@ class PerformanceProblems:
         """
         grid, cap = self.scan(rho)
         ok = np.asarray(self.excess_n(grid, rho, dead), dtype=float) >= 0.0
-        if not ok.any():
+        if not ok.any() or self.jet_ceiling_m_s(rho) <= grid[0]:
             return None, None, True
         first, last = int(np.argmax(ok)), int(len(ok) - 1 - np.argmax(ok[::-1]))
         rf = self._excess_root[dead]
@@ -445,7 +459,8 @@ class PerformanceProblems:
             rho = np.asarray(isa_density_kg_m3(altitudes, self.offset_k), dtype=float)[:, None]
             low = np.asarray(self.least_airspeed_m_s(rho), dtype=float)
             cap = self.speed_cap_m_s(rho)
-            top = np.where(np.isfinite(cap), cap, 10.0 * low)
+            top = np.minimum(np.where(np.isfinite(cap), cap, 10.0 * low),
+                             self.jet_ceiling_m_s(rho))
             grid = low + (np.maximum(top, 1.001 * low) - low) * np.linspace(
                 0.0, 1.0, _CEILING_SCAN_SPEEDS
             )
@@ -481,8 +496,20 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
             f"{least:.2f} m/s (stall x {p.margin:g}): least drag is at the stall bound"
         )
     v_min, v_max, bounded = p.level_speed_range(rho)
+    ceiling = p.jet_ceiling_m_s(rho)
     if v_min is None:
         notes.append("no level flight at full throttle at any airspeed above stall")
+    if v_max is not None and v_max >= ceiling * (1.0 - 1e-12):
+        notes.append(
+            f"max level speed: the fans' static jet velocity {ceiling:.1f} m/s (momentum theory "
+            "on fan_area_m2), beyond which a fan makes no thrust; the extrapolated thrust "
+            "model would give more"
+        )
+    if least >= ceiling:
+        notes.append(
+            f"the least airspeed {least:.2f} m/s is at or beyond the fans' static jet velocity "
+            f"{ceiling:.1f} m/s: no level flight"
+        )
     elif not bounded:
         notes.append(
             "full-throttle thrust keeps up with parasite drag at every airspeed: the thrust "

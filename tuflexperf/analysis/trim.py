@@ -15,6 +15,8 @@ import numpy as np
 from tuflexperf.analysis.attainable import (
     AttainableRange,
     attainable_range,
+    jet_ceiling_m_s,
+    jet_ceiling_note,
     least_airspeed_m_s,
     stall_bounded,
     stall_margin_of,
@@ -122,7 +124,7 @@ def solve_trim(case: Case) -> TrimResult:
     v_min, v_max = envelope_of(case)
     speeds = airspeed_grid(v_min, v_max)
     least = least_airspeed_m_s(case)
-    throttle, reasons = stall_bounded(speeds, trim_solver(case)(speeds), least)
+    throttle, reasons = stall_bounded(speeds, trim_solver(case)(speeds), least, case)
     extrapolated, warnings = extrapolation_note(case, speeds)
     stall = float(stall_speed_m_s(case.aircraft, case.density_kg_m3))
     aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
@@ -131,7 +133,9 @@ def solve_trim(case: Case) -> TrimResult:
         thrust = total_thrust_n(propulsion, 1.0, v, rho)
         return thrust - level_flight_drag_n(aircraft, v, rho)
 
-    attainable = attainable_range(full_throttle_excess, least, v_min, v_max)
+    attainable = attainable_range(full_throttle_excess, least, v_min,
+                                  min(v_max, jet_ceiling_m_s(case)))
+    warnings.extend(jet_ceiling_note(case, speeds))
     density_note = unlapsed_density_warning(propulsion, rho)
     if density_note:
         warnings.append(density_note)

@@ -162,12 +162,41 @@ def beyond_jet_velocity(propulsion: Propulsion, airspeed_m_s: Any, density_kg_m3
     """True where the airspeed is past the thrust model's tested range and at or beyond the
     fans' static jet velocity (:func:`static_jet_velocity_m_s`): no thrust a fan makes,
     whatever the extrapolated polynomial gives (floats or numpy arrays, broadcast).
+
+    The one rule for every analysis: the take-off's lift-off, the trim and OEI grid
+    airspeeds, the endurance cruise and climb, a mission's flown airspeeds, and the
+    point-performance scans (:func:`jet_velocity_ceiling_m_s`).
     """
     import numpy as np
 
     v = np.asarray(airspeed_m_s, dtype=float)
     jet = np.asarray(static_jet_velocity_m_s(propulsion, density_kg_m3), dtype=float)
     return (v > propulsion.tested_airspeed_m_s[1] + 1e-9) & (v >= jet)
+
+
+def jet_velocity_ceiling_m_s(propulsion: Propulsion, density_kg_m3: Vectorizable) -> Vectorizable:
+    """The airspeed [m/s] from which :func:`beyond_jet_velocity` holds: the fans' static jet
+    velocity, never below the top tested airspeed (up to there the model is measured, not
+    extrapolated); ``inf`` without ``fan_area_m2``.
+
+    Parameters
+    ----------
+    propulsion : Propulsion
+        The engines and ``fan_area_m2``.
+    density_kg_m3 : float or array
+        Air density [kg/m^3].
+
+    Returns
+    -------
+    ``max(v_j, V_tested_max)`` [m/s].
+
+    References
+    ----------
+    Leishman, *Principles of Helicopter Aerodynamics*, eq. 2.14; paper section 4 (tested
+    0-30 m/s).
+    """
+    return fmax(static_jet_velocity_m_s(propulsion, density_kg_m3),
+                float(propulsion.tested_airspeed_m_s[1]))
 
 
 def ideal_power_w(

@@ -21,7 +21,11 @@ from typing import Any
 
 import numpy as np
 
-from tuflexperf.analysis.attainable import BELOW_STALL, NEEDS_MORE_THAN_FULL_THROTTLE
+from tuflexperf.analysis.attainable import (
+    BELOW_STALL,
+    BEYOND_JET_VELOCITY,
+    NEEDS_MORE_THAN_FULL_THROTTLE,
+)
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.thrust import (
@@ -102,6 +106,10 @@ def _style(meaning: str, **override: Any) -> dict[str, Any]:
 def _legend(ax: Any, **kwargs: Any) -> Any:
     """The report's legend: right of the axes (:func:`legend_outside`), never over data."""
     return legend_outside(ax, **kwargs)
+
+
+# hatch of a stretch not attainable, by reason (full throttle not enough: the plain band)
+_REASON_HATCH = {BELOW_STALL: "..", BEYOND_JET_VELOCITY: "xx"}
 
 
 def _reason_runs(reasons: Sequence[str | None], throttle: Any) -> list[tuple[int, int, str]]:
@@ -813,7 +821,7 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
             hi = speeds[b + 1] if b + 1 < speeds.size else speeds[b]
             ax.axvspan(0.5 * (lo + speeds[a]), 0.5 * (hi + speeds[b]), ymin=1.0 / 1.08,
                        ymax=1.0, facecolor="none", edgecolor=STYLE["oei"]["color"],
-                       hatch=".." if why == BELOW_STALL else "//", linewidth=0.0, alpha=0.9,
+                       hatch=_REASON_HATCH.get(why, "//"), linewidth=0.0, alpha=0.9,
                        zorder=0, label=f"OEI ({worst.dead_engine} dead) not attainable: {why}"
                        if all(w != why for _, _, w in oei_runs[:k]) else None)
         if worst.min_throttle is not None:
@@ -831,7 +839,7 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
     runs = _reason_runs(trim.reasons, trim.throttle)
     for k, (a, b, why) in enumerate(runs):
         ax.axvspan(trim.airspeed_m_s[a], trim.airspeed_m_s[b], color=FAIL_FILL, alpha=0.6,
-                   hatch=".." if why == BELOW_STALL else None, zorder=0,
+                   hatch=_REASON_HATCH.get(why), zorder=0,
                    label=f"trim not attainable: {why}"
                    if all(w != why for _, _, w in runs[:k]) else None)
     ax.axvline(stall, **STYLE["stall"], label=f"stall speed {stall:.1f} m/s")
