@@ -135,3 +135,29 @@ def test_installed_script_fits_a_table(tmp_path: Path) -> None:
         [script, "fit", "missing.csv"], cwd=tmp_path, capture_output=True, text=True
     )
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "missing.csv" in bad.stderr
+
+
+def test_one_run_without_voltage_fits_without_the_voltage_effect(tmp_path: Path) -> None:
+    """One engine's run lost its voltage and current columns: the file's one reference
+    voltage and exponent cannot hold for that engine, so no voltage effect is fitted (a
+    warning names the engine) and the fit completes. It stopped with "the fitted propulsion
+    file would not be valid: p00 None": the other engine's exponent scaled the thrust of
+    points whose voltage is unknown to NaN."""
+    import pandas as pd
+
+    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
+    folder = tmp_path / "campaign"
+    shutil.copytree(shipped, folder)
+    run = folder / "runs" / "edf1_v20p0.csv.gz"
+    pd.read_csv(run).drop(columns=["voltage_v", "current_a"]).to_csv(run, index=False)
+    out = tmp_path / "fitted.yaml"
+    result = CliRunner().invoke(app, ["fit", str(folder / "campaign.yaml"), "--out", str(out),
+                                      "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert any("not logged at every point of engine EDF1" in w
+               for w in summary["warnings"]), summary["warnings"]
+    model = load_propulsion(out)
+    assert model.reference_voltage_v is None
+    for engine in model.engines:
+        assert all(np.isfinite(list(engine.coefficients.values())))

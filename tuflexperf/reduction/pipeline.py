@@ -698,6 +698,7 @@ def _electrical_fits(campaign: Campaign, engines: list[str], points: list[Point]
         thrusting = [p.voltage_v for p in logged if p.thrust_n > 0]
         chosen = full or thrusting or [p.voltage_v for p in logged]
         out.reference_voltage_v = round(float(np.mean(chosen)), 1)
+    unlogged: list[str] = []
     for engine in engines:
         mine = [p for p in points if p.engine == engine]
         label = f"{campaign.path}: engine {engine}"
@@ -712,11 +713,8 @@ def _electrical_fits(campaign: Campaign, engines: list[str], points: list[Point]
                 [p.voltage_v for p in fit_pts],
                 out.reference_voltage_v,
             )
-        elif with_volts:
-            out.warnings.append(
-                f"{label}: only {len(with_volts)} of {len(mine)} points log voltage and "
-                "current: no voltage effect fitted"
-            )
+        elif out.reference_voltage_v is not None:
+            unlogged.append(f"engine {engine} ({len(with_volts)} of {len(mine)} points)")
         with_power = [p for p in mine if math.isfinite(p.electrical_power_w)]
         if len(with_power) >= 6:
             try:
@@ -728,6 +726,15 @@ def _electrical_fits(campaign: Campaign, engines: list[str], points: list[Point]
                 )
             except InputError as exc:
                 out.warnings.append(f"no power surface: {exc}")
+    if unlogged:
+        # one reference voltage and exponent hold for every engine of the file: the thrust of
+        # an engine whose voltage is not known everywhere cannot be brought to it
+        out.warnings.append(
+            f"{campaign.path}: voltage and current are not logged at every point of "
+            f"{', '.join(unlogged)}: no voltage effect fitted, thrust used as measured"
+        )
+        out.reference_voltage_v = None
+        out.voltage.clear()
     exponent = out.exponent
     for name, fit in out.voltage.items():
         if not fit.identified:
