@@ -546,11 +546,8 @@ class EnduranceModel:
         usable = 1.0 - battery.landing_reserve_fraction
         self.reserve_ah = self.packs * battery.capacity_ah * usable
         self.min_throttle, self.min_throttle_airspeed = self._least_throttle()
-        # the flight: take-off, climb, cruise at a throttle, flown by the mission integrator;
-        # its cruise is planned at a throttle that holds level flight (half, else full), as
-        # each solve flies its own throttle there
-        self.mission = endurance_mission_model(
-            case, battery, 0.5 if self.min_throttle < 0.5 - 1e-9 else 1.0)
+        # the flight: take-off, climb, cruise at a throttle, flown by the mission integrator
+        self.mission = self._planned_mission(case, battery)
         self._cruise = len(self.mission.plans) - 1
         self.launch = _launch_of(self.mission)
         # the cruise starts where the launch ends, whatever its throttle
@@ -641,6 +638,31 @@ class EnduranceModel:
             )
             warnings.extend(check.warnings)
         return tuple(warnings)
+
+    def _planned_mission(self, case: Case, battery: Battery) -> Any:
+        """The endurance mission, its cruise planned at a throttle that holds level flight.
+
+        Each solve flies the cruise at its own throttle; the plan only needs one whose level
+        flight exists short of the fans' jet velocity: half throttle where it flies, else full,
+        else throttles ever nearer the least one (whose airspeed lies short of it).
+        """
+        low = self.min_throttle
+        candidates = [0.5] if low < 0.5 - 1e-9 else []
+        if math.isfinite(low):
+            candidates += [low + (1.0 - low) * share for share in (1.0, 0.5, 0.2, 0.05)]
+        else:
+            candidates.append(1.0)
+        failures: list[NotAttainable] = []
+        for throttle in candidates:
+            try:
+                return endurance_mission_model(case, battery, throttle)
+            except NotAttainable as exc:
+                failures.append(exc)
+        if len({str(f) for f in failures}) == 1:  # the launch, whatever the cruise
+            raise failures[0]
+        tried = ", ".join(f"{x:.3g}" for x in candidates)
+        raise NotAttainable(f"{failures[-1]} (the cruise planned at throttle {tried} in turn)",
+                            failures[-1].known)
 
     # -- least throttle for level flight (closed form per airspeed, numpy) -------------------
     def _least_throttle(self) -> tuple[float, float]:
