@@ -96,6 +96,8 @@ def broken_campaign(folder: Path) -> Path:
         (["{percent}"], "percent"),
         (["{table}", "--glauert"], "--glauert"),
         (["{table}", "--delay-s", "-1"], "--delay-s"),
+        # longer than any throttle plateau: it blamed the airspeed coverage of the runs
+        (["{table}", "--delay-s", "5"], "--delay-s: 5 s is beyond 1 s"),
         (["{table}", "--out", "{tmp}"], "--out"),
         (["{campaign}"], "missing column 'force_n'"),
     ],

@@ -98,12 +98,17 @@ def _projected_sse(
     return sse_of_taus
 
 
+#: The longest dead time the reduction looks for [s]: an EDF answers within tens of ms (the
+#: paper's 0.05 s), and the shortest throttle plateau a run may hold is half a second.
+MAX_DELAY_S = 1.0
+
+
 def estimate_delay(
     time_s: NDArray[np.float64],
     throttle: NDArray[np.float64],
     force_n: NDArray[np.float64],
     sample_rate_hz: float,
-    max_delay_s: float = 1.0,
+    max_delay_s: float = MAX_DELAY_S,
 ) -> DelayEstimate:
     """Fit dead time and spool lag of one sine-sweep run (see the module docstring).
 

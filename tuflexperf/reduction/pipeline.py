@@ -48,7 +48,7 @@ from tuflexperf.io.runs import (
 )
 from tuflexperf.models.thrust import POLY22_TERMS
 from tuflexperf.reduction.changepoints import cross_check, force_changepoints, throttle_plateaus
-from tuflexperf.reduction.delay import DelayEstimate, estimate_delay
+from tuflexperf.reduction.delay import MAX_DELAY_S, DelayEstimate, estimate_delay
 from tuflexperf.reduction.drag import DragModel, fit_structure_drag
 from tuflexperf.reduction.filters import filloutliers_movmean, movmedian, window_samples
 from tuflexperf.reduction.glauert import glauert_ratio
@@ -1133,6 +1133,10 @@ def run_fit(
         raise InputError(f"{input_path}: is a directory, expected campaign.yaml or a table .csv")
     if delay_s is not None and not (math.isfinite(delay_s) and delay_s >= 0):
         raise InputError(f"--delay-s: must be a finite number >= 0, got {delay_s}")
+    if delay_s is not None and delay_s > MAX_DELAY_S:
+        # a dead time past every throttle plateau would leave no steady data to fit
+        raise InputError(f"--delay-s: {delay_s:g} s is beyond {MAX_DELAY_S:g} s, the longest "
+                         "delay the reduction knows (an EDF answers within tens of ms)")
     out = Path(out)
     _check_output(out, "--out")
     from tuflexperf.io.files import guard_outputs
