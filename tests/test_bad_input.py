@@ -147,6 +147,16 @@ def test_trim_without_envelope_names_the_missing_block(tmp_path):
     )
 
 
+def test_check_of_a_case_without_requirements_is_no_pass(tmp_path):
+    """Every requirement block commented out: check verified nothing and said "overall:
+    PASS" (exit 0). Now bad input naming the file and key; the analyses still run on it."""
+    case = write_case(tmp_path, requirements={})
+    for args in (["check", str(case)], ["check", str(case), "--json"],
+                 ["check", str(case), "--samples", "8"]):
+        _assert_bad(runner.invoke(app, args), "case.yaml", "requirements: none stated")
+    assert runner.invoke(app, ["takeoff", "--case", str(case)]).exit_code in (0, 1)
+
+
 def test_bad_flags_give_one_line_and_exit_2():
     for argv in (["check", "--bogus"], ["trim", "--case"], ["nosuchcommand"]):
         done = subprocess.run(

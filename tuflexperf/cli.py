@@ -191,6 +191,12 @@ def check(
         fail_input(f"--workers: must be at least 1, got {workers}")
     if seed is not None and seed < 0:
         fail_input(f"--seed: must be >= 0, got {seed}")
+    from tuflexperf.analysis.requirements import CHECKS
+
+    if all(getattr(case.requirements, name) is None for name in CHECKS):
+        # a check of nothing is no PASS: the blocks may all have been commented out
+        fail_input(f"{case.path}: requirements: none stated, nothing to verify (give at least "
+                   f"one of {', '.join(CHECKS)})")
     verdicts = check_case(case)
     passed = all(v.passed for v in verdicts)
     probabilistic: dict[str, Any] = {}
@@ -233,8 +239,6 @@ def check(
             )
             typer.echo(f"  {v.reason}")
             _print_warnings(v.details.get("warnings", []))
-        if not verdicts:
-            typer.echo("(the case states no requirements)")
         if plan is not None:
             _print_probabilities(plan, probabilistic)
             for key, count in outside.items():
