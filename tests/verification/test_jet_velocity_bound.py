@@ -110,6 +110,7 @@ def test_performance_stops_at_the_jet_velocity(tmp_path: Path) -> None:
     for speed in (perf.best_climb_rate_speed_m_s, perf.best_climb_angle_speed_m_s):
         assert speed <= jet * (1 + 1e-9)
     assert perf.max_climb_rate_m_s < 50.0  # was 967 m/s at 711 m/s
+    assert perf.to_dict()["jet_velocity_ceiling_m_s"] == pytest.approx(jet, rel=1e-12)
     # the shipped case is unchanged: its top speed lies well short of the jet velocity
     shipped = solve_performance(load_case(SHIPPED_CASE))
     assert shipped.max_level_speed_m_s < 0.5 * jet

@@ -117,6 +117,8 @@ class PerformanceResult:
     climb_rate_curve_m_s: np.ndarray = field(repr=False)
     notes: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
+    # airspeed from which the fans make no thrust (None without fan_area_m2)
+    jet_velocity_ceiling_m_s: float | None = None
 
     @property
     def oei_critical(self) -> OeiPerformance | None:
@@ -161,6 +163,7 @@ class PerformanceResult:
             "oei": [c.to_dict() for c in self.oei],
             "takeoff_distance_to_obstacle_m": self.takeoff_distance_to_obstacle_m,
             "takeoff_obstacle_height_m": self.takeoff_obstacle_height_m,
+            "jet_velocity_ceiling_m_s": self.jet_velocity_ceiling_m_s,
             "climb": {
                 "airspeed_m_s": [float(v) for v in self.climb_airspeed_m_s],
                 "climb_rate_m_s": [float(v) for v in self.climb_rate_curve_m_s],
@@ -587,4 +590,5 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
         climb_rate_curve_m_s=climb_rate,
         notes=tuple(notes),
         warnings=tuple(warnings),
+        jet_velocity_ceiling_m_s=ceiling if math.isfinite(ceiling) else None,
     )
