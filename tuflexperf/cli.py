@@ -583,6 +583,8 @@ def performance(
             (f"take-off to {r.takeoff_obstacle_height_m:g} m obstacle",
              r.takeoff_distance_to_obstacle_m, "m"),
         ]
+        if r.jet_velocity_ceiling_m_s is not None:  # the fans make no thrust from there on
+            rows.append(("fans' static jet velocity", r.jet_velocity_ceiling_m_s, "m/s"))
         for label, value, unit in rows:
             typer.echo(f"  {label:<36}{_fmt(value, 3 if unit == '-' else 2):>10} {unit}")
         worst = r.oei_critical
