@@ -82,6 +82,7 @@ from tuflexperf.models.thrust import (
     windmilling_thrust_n,
 )
 
+SPEED_OF_SOUND_M_S = 340.0  # the schemas' top airspeed: no subsonic polar beyond it
 STEPS = 64  # RK4 steps per segment: the states are smooth, 64 steps give ~1e-9 relative
 SECONDS_PER_HOUR = 3600.0
 ARC_STEPS = 64  # the take-off's transition arc (see MissionModel._airborne_phases)
@@ -346,14 +347,20 @@ class MissionModel:
         aircraft, prop = self.case.aircraft, self.case.propulsion
         rho = float(self._rho(h))
         stall = float(stall_speed_eas_m_s(aircraft)) * math.sqrt(1.225 / rho)
-        v = np.linspace(0.5 * stall, 8.0 * stall, 4001)
+        ceiling = float(jet_velocity_ceiling_m_s(prop, rho))
 
         def excess(speed: Any) -> Any:
             return np.asarray(total_thrust_n(prop, throttle, speed, rho, dead, self.dead_mode)
                               - level_flight_drag_n(aircraft, speed, rho), dtype=float)
 
+        # up to 8 x stall, further while the throttle still flies level at the top (a large
+        # cl_max puts the stall far below the cruise), to the jet velocity or Mach 1 at most
+        top = 8.0 * stall
+        limit = max(top, min(ceiling, SPEED_OF_SOUND_M_S))
+        while top < limit and float(excess(top)) >= 0.0:
+            top = min(2.0 * top, limit)
+        v = np.linspace(0.5 * stall, top, 4001)
         ok = np.flatnonzero(excess(v) >= 0)
-        ceiling = float(jet_velocity_ceiling_m_s(prop, rho))
         if ok.size and v[ok[-1]] >= ceiling:
             raise NotAttainable(
                 f"{label}: throttle {throttle:g} flies level only at or beyond the fans' static "

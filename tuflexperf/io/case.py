@@ -17,6 +17,7 @@ from tuflexperf.models.aircraft import (
     DEFAULT_OBSTACLE_HEIGHT_M,
     DEFAULT_TRANSITION_LOAD_FACTOR,
     EAS_REFERENCE_DENSITY_KG_M3,
+    TRANSITION_SPEED_OVER_STALL,
     Aircraft,
     TakeoffConfig,
 )
@@ -29,13 +30,24 @@ Fraction = Annotated[float, Field(ge=0, le=1)]
 
 
 # --- aircraft -------------------------------------------------------------------------------
+# Highest cl_max a wing reaches (flapped and slotted ~3; beyond 5 only blown lift, which the
+# drag polar does not model)
+MAX_CL_MAX = 5.0
+# Highest obstacle of the take-off [m]: the climb to it is flown at the field's density and
+# gradient (FAR 23/25: 15 m or 10.7 m)
+MAX_OBSTACLE_HEIGHT_M = 100.0
+
 class TakeoffSchema(StrictModel):
     cl_ground: NonNegative
     rolling_friction: Annotated[float, Field(ge=0, le=1)] = 0.04
     liftoff_speed_m_s: Positive | None = None  # EAS; replaces the factor
     liftoff_speed_factor: Annotated[float, Field(ge=1, le=3)] = DEFAULT_LIFTOFF_SPEED_FACTOR
     rotation_time_s: Annotated[float, Field(ge=0, le=30)] = 0.0
-    transition_load_factor: Annotated[float, Field(gt=1, le=5)] = DEFAULT_TRANSITION_LOAD_FACTOR
+    # the arc is flown at 1.15 V_stall: a load factor n needs CL = n cl_max / 1.15^2, so above
+    # 1.15^2 = 1.3225 the pull-up is beyond cl_max (the default 1.19 is CL = 0.9 cl_max)
+    transition_load_factor: Annotated[
+        float, Field(gt=1, le=round(TRANSITION_SPEED_OVER_STALL ** 2, 12))
+    ] = DEFAULT_TRANSITION_LOAD_FACTOR
     cd0_ground: Positive | None = None
     k_ground: NonNegative | None = None
 
@@ -46,7 +58,7 @@ class AircraftSchema(StrictModel):
     wing_area_m2: Positive
     cd0: Positive
     k: Positive
-    cl_max: Positive
+    cl_max: Annotated[float, Field(gt=0, le=MAX_CL_MAX)]
     takeoff: TakeoffSchema
     launch: Literal["runway", "catapult"] = "runway"
     launch_speed_m_s: Positive | None = None  # EAS at the end of the catapult stroke
@@ -174,7 +186,9 @@ class AtmosphereSchema(StrictModel):
 class TakeoffRequirement(StrictModel):
     max_ground_roll_m: Positive | None = None
     max_distance_to_obstacle_m: Positive | None = None
-    obstacle_height_m: Positive = DEFAULT_OBSTACLE_HEIGHT_M  # FAR 23: 50 ft
+    obstacle_height_m: Annotated[
+        float, Field(gt=0, le=MAX_OBSTACLE_HEIGHT_M)
+    ] = DEFAULT_OBSTACLE_HEIGHT_M  # FAR 23: 50 ft
 
     @model_validator(mode="after")
     def _check(self) -> TakeoffRequirement:
