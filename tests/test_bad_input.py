@@ -173,3 +173,29 @@ def test_bad_flags_give_one_line_and_exit_2():
         assert done.returncode == 2, (argv, done.stderr)
         assert done.stderr.strip().count("\n") == 0, done.stderr
         assert "Traceback" not in done.stderr
+
+
+def test_symbolic_link_loops_are_one_line_not_a_traceback(tmp_path):
+    """A link that points at itself, as a campaign's run and as a case's propulsion file:
+    pathlib raised RuntimeError("Symlink loop ...") out of fit, report, check, mission and
+    export as a traceback (found by an outside audit)."""
+    import shutil
+    from pathlib import Path
+
+    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
+    campaign = tmp_path / "campaign"
+    shutil.copytree(shipped, campaign)
+    run = campaign / "runs" / "edf1_v15p0.csv.gz"
+    run.unlink()
+    run.symlink_to(run.name)
+    _assert_bad(runner.invoke(app, ["fit", str(campaign / "campaign.yaml"), "--out",
+                                    str(tmp_path / "fitted.yaml")]),
+                "edf1_v15p0.csv.gz", "symbolic link loop")
+    assert not (tmp_path / "fitted.yaml").exists()
+    case = write_case(tmp_path / "case")
+    propulsion = case.parent / "propulsion.yaml"
+    propulsion.unlink()
+    propulsion.symlink_to(propulsion.name)
+    for args in (["check", str(case)], ["takeoff", "--case", str(case)],
+                 ["export", "--case", str(case), "--out", str(tmp_path / "export")]):
+        _assert_bad(runner.invoke(app, args), "propulsion.yaml", "symbolic link loop")

@@ -987,6 +987,9 @@ _RESULT_KEYS: dict[str, tuple[str, ...]] = {
 }
 
 
+_SYMLINK_LOOP = "Symlink loop from "
+
+
 def _guarded(callback: Any) -> Any:
     """Turn InputError into exit 2 and NotAttainable into exit 1, one line on stderr each."""
 
@@ -1007,6 +1010,15 @@ def _guarded(callback: Any) -> Any:
             where = exc.filename or "stdout"
             why = "disk full" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
             sys.stderr.write(f"tuflexperf: error: {where}: {why}\n")
+            raise typer.Exit(2) from None
+        except RuntimeError as exc:
+            # pathlib's resolve() of a symbolic link that leads back to itself (Python < 3.13;
+            # later versions raise the OSError above)
+            if not str(exc).startswith(_SYMLINK_LOOP):
+                raise
+            _unless_interrupted()
+            where = str(exc).removeprefix(_SYMLINK_LOOP).strip("'\"")
+            sys.stderr.write(f"tuflexperf: error: {where}: symbolic link loop\n")
             raise typer.Exit(2) from None
         except NotAttainable as exc:
             if kwargs.get("as_json"):  # SPEC 5: one JSON object on exit 1 as well
