@@ -75,6 +75,12 @@ def test_a_symbolic_link_as_the_output_is_refused_and_left_alone(tmp_path) -> No
 @pytest.mark.parametrize(("flag_args", "header"), [
     (("fit", "{campaign}", "--out", "f.yaml", "--table", "mine.csv"),
      "engine,throttle,airspeed_m_s,thrust_n,comment"),
+    # the user's own thrust table in SPEC 4's input format, also from a table refit: it was
+    # taken for the refit's four-column output and replaced (outside audit)
+    (("fit", "{campaign}", "--out", "f.yaml", "--table", "mine.csv"),
+     "engine,throttle,airspeed_m_s,thrust_n"),
+    (("fit", "{table}", "--out", "f.yaml", "--table", "mine.csv"),
+     "engine,throttle,airspeed_m_s,thrust_n"),
     (("mission", "{mission}", "--csv", "mine.csv"), "time_s,segment,my_notes"),
     (("sweep", "--vary", "aircraft.mass_kg=20:22:2", "--csv", "mine.csv"),
      "aircraft.mass_kg,my_value,my_limit,my_passed"),
@@ -85,7 +91,11 @@ def test_a_users_csv_that_looks_like_an_output_is_not_replaced(tmp_path, flag_ar
     mine.write_text(header + "\n1,2,3,4\n")
     campaign = ROOT / "data/tuflex/campaign/campaign.yaml"
     mission = next((ROOT / "data/tuflex/missions").glob("*.yaml"))
-    args = [a.format(campaign=campaign, mission=mission) for a in flag_args]
+    table = tmp_path / "input_table.csv"
+    table.write_text("engine,throttle,airspeed_m_s,thrust_n\n" + "".join(
+        f"E,{x / 10:g},{v},{30 * x / 10 + 20 * (x / 10) ** 2 - 0.2 * v:g}\n"
+        for v in (0, 10, 20, 30) for x in range(1, 11)))
+    args = [a.format(campaign=campaign, mission=mission, table=table) for a in flag_args]
     out = _run(tmp_path, *args)
     assert out.returncode == 2 and "mine.csv" in out.stderr, out.stderr
     assert mine.read_text() == header + "\n1,2,3,4\n"

@@ -136,11 +136,13 @@ def _same_file(a: Path, b: Path) -> bool:
 # existing file is replaced only when it begins exactly like one of these, i.e. an earlier
 # output. A user's file that merely looks alike (an extra column) is never replaced.
 def _thrust_table_headers() -> tuple[str, ...]:
-    from tuflexperf.io.runs import TABLE_COLUMNS, TABLE_EXTRA_COLUMNS
+    from tuflexperf.io.runs import REFIT_TABLE_EXTRA_COLUMNS, TABLE_COLUMNS, TABLE_EXTRA_COLUMNS
 
     # fit's thrust table from a campaign (SPEC 4's four columns, then the reduction's), and
-    # refitted from a table (the four only)
-    return ",".join((*TABLE_COLUMNS, *TABLE_EXTRA_COLUMNS)), ",".join(TABLE_COLUMNS)
+    # refitted from a table (then the model and its misfit); never the four alone, which is
+    # the input format a user's own table has
+    return (",".join((*TABLE_COLUMNS, *TABLE_EXTRA_COLUMNS)),
+            ",".join((*TABLE_COLUMNS, *REFIT_TABLE_EXTRA_COLUMNS)))
 
 
 MISSION_CSV_COLUMNS = ("time_s", "segment", "altitude_m", "distance_m", "airspeed_m_s",

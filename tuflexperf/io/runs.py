@@ -37,6 +37,9 @@ TABLE_EXTRA_COLUMNS: tuple[str, ...] = (
     "run", "thrust_at_voltage_n", "voltage_v", "current_a", "electrical_power_w",
     "ideal_power_w", "figure_of_merit", "overall_efficiency",
 )
+# what fit's thrust table refitted from a table adds: the model at each row and the misfit
+# (also what tells that table from a user's own four-column one: the output guard)
+REFIT_TABLE_EXTRA_COLUMNS: tuple[str, ...] = ("fitted_thrust_n", "residual_n")
 MAX_MAGNITUDE = 1e9  # no force, airspeed, voltage or current of a thrust stand comes near it
 STATIC_AIRSPEED_NOISE_M_S = 0.5  # a thrust table's airspeed may dip this far below 0 at rest
 MAX_NAN_FRACTION = 0.01

@@ -38,6 +38,7 @@ from tuflexperf.errors import InputError
 from tuflexperf.io.campaign import Campaign, CampaignRun, load_campaign
 from tuflexperf.io.files import sha256_of
 from tuflexperf.io.runs import (
+    REFIT_TABLE_EXTRA_COLUMNS,
     TABLE_EXTRA_COLUMNS,
     Run,
     ThrustTable,
@@ -877,16 +878,16 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
         density=None,
         source=source,
     )
-    rows = [
-        {"engine": e, "throttle": x, "airspeed_m_s": v, "thrust_n": t}
-        for e, x, v, t in zip(
-            table.engine, table.throttle, table.airspeed_m_s, table.thrust_n, strict=True
-        )
-    ]
+    rows = []
+    for e, x, v, t in zip(table.engine, table.throttle, table.airspeed_m_s, table.thrust_n,
+                          strict=True):
+        fitted = float(np.ravel(fits[e].predict(x, v))[0])
+        rows.append({"engine": e, "throttle": x, "airspeed_m_s": v, "thrust_n": t,
+                     "fitted_thrust_n": fitted, "residual_n": float(t) - fitted})
     return FitResult(
         summary=summary,
         propulsion_text=propulsion,
-        table_text=render_thrust_table(rows),
+        table_text=render_thrust_table(rows, REFIT_TABLE_EXTRA_COLUMNS),
         engines=fits,
     )
 
