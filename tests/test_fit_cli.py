@@ -163,3 +163,33 @@ def test_one_run_without_voltage_fits_without_the_voltage_effect(tmp_path: Path)
     assert model.reference_voltage_v is None
     for engine in model.engines:
         assert all(np.isfinite(list(engine.coefficients.values())))
+
+
+# (files, force factor, message): a fit no rig gives is bad input
+UNPHYSICAL = [
+    # the drag sweep logged in mN: 3058 N of "structure drag" added to every point, and
+    # check then passed at trim throttle 0 (outside audit)
+    ("structure_drag.csv", 1000.0, "in other units (mN)"),
+    ("structure_drag.csv", -1.0, "force sign of the drag sweep"),
+    # EDF1's balance wired the other way: fit wrote T(1,0) = -54.7 N, which check refuses
+    ("edf1_v*.csv.gz", -1.0, "engine EDF1: the fitted full-throttle static"),
+]
+
+
+@pytest.mark.parametrize(("pattern", "factor", "message"), UNPHYSICAL)
+def test_a_fit_no_rig_gives_is_refused(tmp_path: Path, pattern: str, factor: float,
+                                       message: str) -> None:
+    import pandas as pd
+
+    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
+    folder = tmp_path / "campaign"
+    shutil.copytree(shipped, folder)
+    for run in (folder / "runs").glob(pattern):
+        frame = pd.read_csv(run)
+        frame["force_n"] *= factor
+        frame.to_csv(run, index=False)
+    out = tmp_path / "fitted.yaml"
+    result = CliRunner().invoke(app, ["fit", str(folder / "campaign.yaml"), "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    assert message in result.stderr and result.stderr.count("\n") == 1, result.stderr
+    assert not out.exists() and not (tmp_path / "fitted_thrust_table.csv").exists()

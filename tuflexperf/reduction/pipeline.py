@@ -514,6 +514,7 @@ def fit_campaign(
             [p.thrust_n for p in mine],
             label=f"{campaign.path}: engine {engine}",
         )
+    refuse_unphysical_fit(str(campaign.path), fits, drag, points)
     for index, result in enumerate(step_results):
         result.report["validation"] = _validation(
             result, fits[str(result.run.engine)], drag, point_ratios[index], glauert,
@@ -840,6 +841,42 @@ def _table_row(p: Point) -> dict[str, Any]:
 
 
 # --- table ----------------------------------------------------------------------------------
+# A structure drag this far below zero at the top airspeed (as a share of the largest force
+# the fans' runs measured) is no drag: the sweep's sign is flipped, not noise around a clean rig
+NEGATIVE_DRAG_SHARE = 0.01
+
+
+def refuse_unphysical_fit(
+    label: str, fits: dict[str, Poly22Fit], drag: DragModel | None = None,
+    points: list[Point] | None = None,
+) -> None:
+    """Bad input: a fit that ``check`` would refuse, or a structure drag no rig has.
+
+    A full-throttle static thrust that is not positive (the runs' force sign flipped); a
+    structure drag at the top airspeed that is negative beyond noise (the drag sweep's sign
+    flipped) or larger than every force the fans' runs measured (the sweep in mN: it was
+    added to every point and "passed" check with a 3000 N fan).
+    """
+    for engine, fit in fits.items():
+        static = float(np.ravel(fit.predict(1.0, 0.0))[0])
+        if not static > 0:
+            raise InputError(f"{label}: engine {engine}: the fitted full-throttle static thrust "
+                             f"is {static:.3g} N, not positive: is the force sign of its runs "
+                             "flipped?")
+    if drag is None or not points:
+        return
+    top = max(p.airspeed_measured_m_s for p in points)
+    at_top = float(drag.drag_n(top))
+    largest = max(abs(p.force_n) for p in points)
+    if at_top < -NEGATIVE_DRAG_SHARE * largest:
+        raise InputError(f"{label}: drag_sweep: the structure drag at {top:.1f} m/s is "
+                         f"{at_top:.3g} N, negative: is the force sign of the drag sweep flipped?")
+    if at_top > largest:
+        raise InputError(f"{label}: drag_sweep: the structure drag at {top:.1f} m/s is "
+                         f"{at_top:.4g} N, more than any force the fans' runs measured "
+                         f"({largest:.4g} N): is the drag sweep in other units (mN)?")
+
+
 def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
     """Fit the poly22 per engine to a thrust table alone (no reduction).
 
@@ -863,6 +900,7 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
         engine: fit_poly22(*table.select(engine), label=f"{table.path}: engine {engine}")
         for engine in table.engines()
     }
+    refuse_unphysical_fit(str(table.path), fits)
     speeds = list(table.airspeed_m_s)
     source = {
         "tool": "tuflexperf fit",
