@@ -193,3 +193,33 @@ def test_a_fit_no_rig_gives_is_refused(tmp_path: Path, pattern: str, factor: flo
     assert result.exit_code == 2, result.output
     assert message in result.stderr and result.stderr.count("\n") == 1, result.stderr
     assert not out.exists() and not (tmp_path / "fitted_thrust_table.csv").exists()
+
+
+def test_a_run_that_gives_no_test_point_is_named_and_a_backwards_wind_refused(
+        tmp_path: Path) -> None:
+    """A 50-row step run and one with its time in microseconds were dropped without a word
+    (66 of 77 points fitted); a step run with its airspeed sign flipped was fitted, where the
+    same values in a table are refused (outside audit)."""
+    import pandas as pd
+
+    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
+    folder = tmp_path / "campaign"
+    shutil.copytree(shipped, folder)
+    runs = folder / "runs"
+    pd.read_csv(runs / "edf1_v20p0.csv.gz").iloc[:50].to_csv(runs / "edf1_v20p0.csv.gz",
+                                                             index=False)
+    micro = pd.read_csv(runs / "edf1_v25p0.csv.gz")
+    micro["time_s"] *= 1e-6
+    micro.to_csv(runs / "edf1_v25p0.csv.gz", index=False)
+    result = CliRunner().invoke(app, ["fit", str(folder / "campaign.yaml"), "--out",
+                                      str(tmp_path / "fitted.yaml"), "--json"])
+    assert result.exit_code == 0, result.output
+    warnings = json.loads(result.stdout)["warnings"]
+    for name in ("edf1_v20p0.csv.gz", "edf1_v25p0.csv.gz"):
+        assert any(name in w and "no test point" in w for w in warnings), warnings
+    backwards = pd.read_csv(runs / "edf1_v30p0.csv.gz")
+    backwards["airspeed_m_s"] *= -1
+    backwards.to_csv(runs / "edf1_v30p0.csv.gz", index=False)
+    result = CliRunner().invoke(app, ["fit", str(folder / "campaign.yaml"), "--out",
+                                      str(tmp_path / "again.yaml")])
+    assert result.exit_code == 2 and "edf1_v30p0.csv.gz: column airspeed_m_s" in result.stderr

@@ -264,6 +264,13 @@ def read_run(
                 f"{path}: column throttle: values from {low:g} to {high:g}, "
                 f"expected a fraction in [0, 1]{hint}"
             )
+    if "airspeed_m_s" in arrays:
+        # a tunnel blows one way (as a thrust table's rows): noise dips below zero at rest,
+        # a run that sits below it had its sign flipped
+        typical = float(np.median(arrays["airspeed_m_s"]))
+        if typical < -STATIC_AIRSPEED_NOISE_M_S:
+            raise InputError(f"{path}: column airspeed_m_s: median {typical:.4g} m/s is "
+                             "negative (a tunnel blows one way: is its sign flipped?)")
     step = float(np.median(steps))
     if steps.max() > 10 * step:
         gap = int(np.argmax(steps))

@@ -451,7 +451,14 @@ def fit_campaign(
         tick(run.file)
         data = read_run(run.path, vendor=run.vendor)
         onset = onset_delay.get(str(run.engine)) or delay or 0.0
-        step_results.append(reduce_step_run(campaign, run, data, max(onset, 0.0)))
+        result = reduce_step_run(campaign, run, data, max(onset, 0.0))
+        if not result.segments:  # e.g. 50 rows, or time stamps in microseconds
+            degenerate.append(
+                f"{run.file}: no steady throttle plateau of at least {MIN_SEGMENT_S:g} s "
+                f"({data.time_s[-1] - data.time_s[0]:.3g} s logged at "
+                f"{data.sample_rate_hz:.4g} Hz): no test point from it"
+            )
+        step_results.append(result)
     if progress is not None:
         progress(total, total, "fit")
     _check_set_points(campaign, step_results)
