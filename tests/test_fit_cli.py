@@ -223,3 +223,89 @@ def test_a_run_that_gives_no_test_point_is_named_and_a_backwards_wind_refused(
     result = CliRunner().invoke(app, ["fit", str(folder / "campaign.yaml"), "--out",
                                       str(tmp_path / "again.yaml")])
     assert result.exit_code == 2 and "edf1_v30p0.csv.gz: column airspeed_m_s" in result.stderr
+
+
+def test_sweeps_without_response_or_shifted_and_a_dead_load_cell_are_said(
+        tmp_path: Path) -> None:
+    """Noise-only sine sweeps entered the delay (0.087 and 0.49 s into the mean, no note); a
+    sweep shifted by 0.2 s moved the written delay silently; a load cell stuck at 1 N gave
+    a run of points with no word (outside audit)."""
+    import pandas as pd
+
+    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
+    folder = tmp_path / "campaign"
+    shutil.copytree(shipped, folder)
+    runs = folder / "runs"
+    rng = np.random.default_rng(0)
+    for name in ("edf2_sweep_v00.csv.gz", "edf2_sweep_v30.csv.gz"):
+        frame = pd.read_csv(runs / name)
+        frame["force_n"] = rng.normal(0.0, 0.3, len(frame))
+        frame.to_csv(runs / name, index=False)
+    stuck = pd.read_csv(runs / "edf1_v20p0.csv.gz")
+    stuck["force_n"] = 1.0
+    stuck.to_csv(runs / "edf1_v20p0.csv.gz", index=False)
+
+    def fit(name: str) -> dict:
+        result = CliRunner().invoke(app, ["fit", str(folder / "campaign.yaml"), "--out",
+                                          str(tmp_path / name), "--json"])
+        assert result.exit_code == 0, result.output
+        return json.loads(result.stdout)
+
+    summary = fit("noise.yaml")
+    warnings = summary["warnings"]
+    for name in ("edf2_sweep_v00.csv.gz", "edf2_sweep_v30.csv.gz"):
+        assert any(name in w and "does not follow the sine sweep" in w for w in warnings)
+    assert any("EDF2: no sine sweep of its own" in w for w in warnings)
+    assert any("edf1_v20p0.csv.gz" in w and "dead load cell" in w for w in warnings)
+    assert summary["delay_s"] == pytest.approx(0.052, abs=0.003)  # EDF1's sweeps alone
+    shutil.copy(shipped / "runs" / "edf2_sweep_v30.csv.gz", runs / "edf2_sweep_v30.csv.gz")
+    shifted = pd.read_csv(shipped / "runs" / "edf2_sweep_v00.csv.gz")
+    shifted["force_n"] = np.roll(shifted["force_n"].to_numpy(), 200)  # 0.2 s at 1 kHz
+    shifted.to_csv(runs / "edf2_sweep_v00.csv.gz", index=False)
+    warnings = fit("shifted.yaml")["warnings"]
+    assert any("the sine sweeps disagree on the delay" in w for w in warnings), warnings
+
+
+def test_one_engines_undetermined_voltage_exponent_leaves_the_other_engine_alone(
+        tmp_path: Path) -> None:
+    """A stuck load cell in one EDF1 run left EDF1's voltage exponent undetermined, and with
+    it every engine's thrust went uncorrected to the reference voltage still written: the
+    untouched EDF2's static thrust moved by 3.6 % (outside audit). Now the determined
+    engines' exponent serves the file and EDF2 stays as fitted from clean runs."""
+    import pandas as pd
+
+    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
+    folder = tmp_path / "campaign"
+    shutil.copytree(shipped, folder)
+    stuck = pd.read_csv(folder / "runs" / "edf1_v20p0.csv.gz")
+    stuck["force_n"] = 1.0
+    stuck.to_csv(folder / "runs" / "edf1_v20p0.csv.gz", index=False)
+
+    def edf2(manifest: Path, name: str) -> tuple[dict, list[str]]:
+        result = CliRunner().invoke(app, ["fit", str(manifest), "--out", str(tmp_path / name),
+                                          "--json"])
+        assert result.exit_code == 0, result.output
+        summary = json.loads(result.stdout)
+        engine = next(e for e in summary["engines"] if e["name"] == "EDF2")
+        return engine["coefficients"], summary["warnings"]
+
+    clean, _ = edf2(shipped / "campaign.yaml", "clean.yaml")
+    corrupt, warnings = edf2(folder / "campaign.yaml", "corrupt.yaml")
+    assert any("engine EDF1: voltage exponent not determined" in w
+               and "the other engines'" in w for w in warnings), warnings
+    static = {name: c["p00"] + c["p10"] + c["p20"] for name, c in (("clean", clean),
+                                                                   ("corrupt", corrupt))}
+    assert static["corrupt"] == pytest.approx(static["clean"], rel=2e-3)
+
+
+def test_a_misspelt_battery_key_is_named_with_the_closest_one(tmp_path: Path) -> None:
+    """`fit battery.yaml` with `cells_in_seires`: the file was taken for a campaign manifest
+    ("unknown key ... and 12 more problems", no hint); check named the right key."""
+    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex"
+    shutil.copy(shipped / "battery.yaml", tmp_path / "battery.yaml")
+    shutil.copytree(shipped / "endurance", tmp_path / "endurance")
+    path = tmp_path / "battery.yaml"
+    path.write_text(path.read_text().replace("cells_in_series:", "cells_in_seires:"))
+    result = CliRunner().invoke(app, ["fit", str(path), "--out", str(tmp_path / "b.yaml")])
+    assert result.exit_code == 2
+    assert "did you mean 'cells_in_series'?" in result.stderr, result.stderr

@@ -22,7 +22,12 @@ from tuflexperf.models.aircraft import (
     TakeoffConfig,
 )
 from tuflexperf.models.atmosphere import G0_M_S2, isa_density_kg_m3
-from tuflexperf.models.thrust import POLY22_TERMS, Engine, Propulsion
+from tuflexperf.models.thrust import (
+    DEFAULT_VOLTAGE_EXPONENT,
+    POLY22_TERMS,
+    Engine,
+    Propulsion,
+)
 
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
@@ -155,7 +160,7 @@ class PropulsionSchema(StrictModel):
     lag_s: NonNegative = 0.0  # first-order spool lag after delay_s (0 = pure delay)
     reference_density_kg_m3: Positive | None = None
     reference_voltage_v: Positive | None = None
-    voltage_exponent: float = 2.0
+    voltage_exponent: float = DEFAULT_VOLTAGE_EXPONENT
     fan_area_m2: Positive | None = None
     throttle_unit: Literal["fraction", "percent"] = "fraction"
     engines: Annotated[list[EngineSchema], Field(min_length=1)]

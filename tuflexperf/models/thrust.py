@@ -54,6 +54,10 @@ class Engine:
     power_coefficients: Mapping[str, float] | None = None
 
 
+# SPEC 3: rpm follows duty cycle times voltage, thrust rpm^2
+DEFAULT_VOLTAGE_EXPONENT = 2.0
+
+
 @dataclass(frozen=True)
 class Propulsion:
     """The aircraft's engines and what their model is valid for.
@@ -71,7 +75,7 @@ class Propulsion:
     metadata: Mapping[str, Any] = field(default_factory=dict)
     fan_area_m2: float | None = None  # momentum theory and windmilling drag (SPEC 3)
     reference_voltage_v: float | None = None  # the tests' pack voltage (SPEC 3)
-    voltage_exponent: float = 2.0  # thrust ~ (U / U_ref)^n
+    voltage_exponent: float = DEFAULT_VOLTAGE_EXPONENT  # thrust ~ (U / U_ref)^n
     # first-order spool lag (s) on thrust after the dead time delay_s; 0 = the paper's pure delay
     lag_s: float = 0.0
 

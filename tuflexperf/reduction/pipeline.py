@@ -47,7 +47,7 @@ from tuflexperf.io.runs import (
     read_thrust_table,
     render_thrust_table,
 )
-from tuflexperf.models.thrust import POLY22_TERMS
+from tuflexperf.models.thrust import DEFAULT_VOLTAGE_EXPONENT, POLY22_TERMS
 from tuflexperf.reduction.changepoints import cross_check, force_changepoints, throttle_plateaus
 from tuflexperf.reduction.delay import MAX_DELAY_S, DelayEstimate, estimate_delay
 from tuflexperf.reduction.drag import DragModel, fit_structure_drag
@@ -73,6 +73,11 @@ Progress = Callable[[int, int, str], None]
 """``progress(done, total, label)``: called before each run is reduced."""
 
 MIN_SEGMENT_S = 0.5
+# A sine sweep whose delay-and-lag model explains less of the force than this measured no
+# response (noise alone fits R^2 ~0.01; the shipped sweeps 0.999)
+MIN_SWEEP_R2 = 0.5
+# Sweeps of one rig further apart than this in their delay say one of them is off
+MAX_DELAY_SPREAD_S = 0.05
 ELECTRICAL_COLUMNS = ("voltage_v", "current_a")
 
 
@@ -285,22 +290,23 @@ def _validation(
     drag: DragModel | None,
     ratios: list[float],
     glauert: bool,
-    voltage: VoltageFit | None = None,
+    electrical: ElectricalFits | None = None,
 ) -> dict[str, Any]:
     """Model minus measured force over a run's steady segments (paper Fig. 16/17).
 
     The model sees the airspeed the fit used (Glauert-corrected with ``--glauert``) and,
-    with a fitted voltage exponent, the logged pack voltage; the structure drag is the
-    measured airspeed's.
+    with a reference voltage, the logged pack voltage (the exponent the fit brought the
+    thrust to it with); the structure drag is the measured airspeed's.
     """
+    exponent = electrical.exponent if electrical is not None else None
     errors = []
     for segment, ratio in zip(result.segments, ratios, strict=True):
         v = result.data["airspeed_m_s"][segment.start : segment.stop]
         v_model = v * ratio if glauert and math.isfinite(ratio) else v
         model = fit.predict(np.full(v.size, segment.throttle), v_model)
-        if voltage is not None and voltage.identified:
+        if exponent is not None and electrical is not None:
             u = result.data["voltage_v"][segment.start : segment.stop]
-            model = model * (u / voltage.reference_voltage_v) ** voltage.exponent
+            model = model * (u / electrical.reference_voltage_v) ** exponent
         if drag is not None:
             model = model - drag.drag_n(v)
         errors.append(model - segment.filtered_force_n)
@@ -387,6 +393,14 @@ def fit_campaign(
         estimate = estimate_delay(
             data.time_s, data["throttle"], data["force_n"], data.sample_rate_hz
         )
+        if not estimate.r2 >= MIN_SWEEP_R2:  # noise fits some delay too: it measures nothing
+            degenerate.append(
+                f"{run.file}: the force does not follow the sine sweep (fit R^2 "
+                f"{estimate.r2:.2f} < {MIN_SWEEP_R2:g}): left out of the delay"
+            )
+            run_reports.append({**_run_header(run, data), "response": "none",
+                                "fit_r2": estimate.r2})
+            continue
         sweep_results.append(SweepRunResult(run, data, estimate))
         delay_runs.append(
             {
@@ -407,6 +421,13 @@ def fit_campaign(
             }
         )
     measured_delay = _mean_or_none([d["delay_s"] for d in delay_runs])
+    spread = [d["delay_s"] for d in delay_runs]
+    if spread and max(spread) - min(spread) > MAX_DELAY_SPREAD_S:
+        degenerate.append(
+            f"the sine sweeps disagree on the delay: {min(spread):.3f}-{max(spread):.3f} s "
+            f"(more than {MAX_DELAY_SPREAD_S:g} s apart; their mean {measured_delay:.3f} s "
+            "is written): is a run's time base shifted?"
+        )
     # the spool lag after the dead time (issue 15): the sweeps' mean, written as lag_s
     measured_lag = _mean_or_none([d["lag_s"] for d in delay_runs])
     delay = delay_s if delay_s is not None else measured_delay
@@ -461,8 +482,14 @@ def fit_campaign(
         step_results.append(result)
     if progress is not None:
         progress(total, total, "fit")
+    degenerate.extend(_deaf_runs(step_results))
     _check_set_points(campaign, step_results)
     stepped = {str(r.engine) for r in campaign.of_kind("throttle_steps")}
+    if delay_s is None and measured_delay is not None:
+        swept = {str(d["engine"]) for d in delay_runs}
+        for engine in sorted(stepped - swept):
+            degenerate.append(f"{engine}: no sine sweep of its own measured a delay: its "
+                              f"throttle steps settle with the others' {measured_delay:.3f} s")
     for engine in sorted({str(r.engine) for r in campaign.runs if r.engine} - stepped):
         degenerate.append(f"{engine}: runs but no throttle_steps run: no thrust model for it "
                           "(its sine sweeps still enter the delay)")
@@ -524,8 +551,7 @@ def fit_campaign(
     refuse_unphysical_fit(str(campaign.path), fits, drag, points)
     for index, result in enumerate(step_results):
         result.report["validation"] = _validation(
-            result, fits[str(result.run.engine)], drag, point_ratios[index], glauert,
-            electrical.voltage.get(str(result.run.engine)),
+            result, fits[str(result.run.engine)], drag, point_ratios[index], glauert, electrical,
         )
         run_reports.append(result.report)
 
@@ -671,9 +697,10 @@ class ElectricalFits:
 
     @property
     def exponent(self) -> float | None:
-        """One exponent for the file: the mean over engines, if every engine determines it."""
-        fits = list(self.voltage.values())
-        if not fits or not all(f.identified for f in fits):
+        """One exponent for the file: the mean over the engines whose runs determine it
+        (None if none does: then the SPEC default applies)."""
+        fits = [f for f in self.voltage.values() if f.identified]
+        if not fits:
             return None
         return float(np.mean([f.exponent for f in fits]))
 
@@ -749,9 +776,15 @@ def _electrical_fits(campaign: Campaign, engines: list[str], points: list[Point]
         if not fit.identified:
             out.warnings.append(
                 f"{campaign.path}: engine {name}: voltage exponent not determined by the runs "
-                f"({fit.reason}); the SPEC default 2 applies"
+                f"({fit.reason}); " + (f"the other engines' {exponent:.3g} applies"
+                                       if exponent is not None else
+                                       f"the SPEC default {DEFAULT_VOLTAGE_EXPONENT:g} applies")
             )
     if exponent is not None and out.reference_voltage_v is not None:
+        # every engine's thrust at U_ref with the one exponent the file states: an engine
+        # whose own runs do not determine it takes the others' (one engine's corrupt run left
+        # every engine uncorrected). Where none determines it, the thrust stays as measured:
+        # the voltage then moved with the throttle, and the poly22 holds the two together
         for p in points:
             p.thrust_n = _rounded(p.thrust_at_voltage_n
                                   * (out.reference_voltage_v / p.voltage_v) ** exponent)
@@ -851,6 +884,31 @@ def _table_row(p: Point) -> dict[str, Any]:
 # A structure drag this far below zero at the top airspeed (as a share of the largest force
 # the fans' runs measured) is no drag: the sweep's sign is flipped, not noise around a clean rig
 NEGATIVE_DRAG_SHARE = 0.01
+
+
+# A throttle-step run whose steady force moves by less than this share of the campaign's
+# largest while its throttle moves by at least DEAF_THROTTLE_SPAN measured no thrust
+DEAF_FORCE_SHARE = 0.02
+DEAF_THROTTLE_SPAN = 0.3
+
+
+def _deaf_runs(results: list[StepRunResult]) -> list[str]:
+    """A note per step run whose force does not follow its throttle (a dead load cell)."""
+    largest = max((abs(s.force_n) for r in results for s in r.segments), default=0.0)
+    notes = []
+    for result in results:
+        if len(result.segments) < 2:
+            continue
+        throttle = [s.throttle for s in result.segments]
+        force = [s.force_n for s in result.segments]
+        if (max(throttle) - min(throttle) >= DEAF_THROTTLE_SPAN
+                and max(force) - min(force) < DEAF_FORCE_SHARE * largest):
+            notes.append(
+                f"{result.run.file}: the force stays within {max(force) - min(force):.3g} N "
+                f"while the throttle moves {min(throttle):.2f}-{max(throttle):.2f}: a dead load "
+                "cell? its points are fitted as measured"
+            )
+    return notes
 
 
 def refuse_unphysical_fit(
@@ -1123,13 +1181,21 @@ def _fit_inputs(input_path: Path) -> list[Path]:
 
 
 def is_battery_file(path: Path) -> bool:
-    """A battery file (SPEC 4): a YAML mapping with the pack's ``cells_in_series``."""
+    """A battery file (SPEC 4): a YAML mapping whose keys are more a battery file's than a
+    campaign manifest's (so that a misspelt ``cells_in_series`` is still told apart, and
+    named with the closest key, rather than read as a manifest with a dozen unknown keys)."""
     if is_thrust_table(path):
         return False
+    from tuflexperf.io.battery import BatterySchema
+    from tuflexperf.io.campaign import CampaignSchema
     from tuflexperf.io.yamlio import read_yaml
 
     data = read_yaml(path)
-    return isinstance(data, dict) and "cells_in_series" in data
+    if not isinstance(data, dict):
+        return False
+    keys = set(map(str, data))
+    battery, campaign = set(BatterySchema.model_fields), set(CampaignSchema.model_fields)
+    return len(keys & battery) > len(keys & campaign)
 
 
 def _fit_battery(path: Path, out: Path, table: Path | None, glauert: bool) -> dict[str, Any]:
