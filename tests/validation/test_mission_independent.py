@@ -680,7 +680,7 @@ def test_catapult_and_a_dead_engine_that_adds_nothing(tmp_path: Path) -> None:
     """A catapult launch (the take-off costs the packs nothing, the climb starts at 0 m) and
     ``dead_engine: zero`` (the failed fan's windmilling coefficient is then not used)."""
     aircraft = {**MADE_UP_AIRCRAFT, "launch": "catapult", "launch_speed_m_s": 19.0,
-                "launch_energy_j": 3000.0}
+                "launch_energy_j": 4000.0}
     mission = """\
         name: catapult
         segments:

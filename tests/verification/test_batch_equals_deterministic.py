@@ -169,7 +169,7 @@ def _catapult_case(tmp_path, rolling_friction: float = 0.9):
         shutil.copytree(root / folder, tmp_path / folder)
     aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
     text = aircraft.read_text().replace(
-        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 2000\ntakeoff:", 1)
+        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 12000\ntakeoff:", 1)
     text = "\n".join(f"  rolling_friction: {rolling_friction}"
                      if line.strip().startswith("rolling_friction") else line
                      for line in text.splitlines()) + "\n"
@@ -189,6 +189,8 @@ def test_catapult_launch_in_a_batch_equals_the_deterministic_check(tmp_path) -> 
         {"aircraft.launch_speed_m_s": 16.0, "aircraft.k": 0.045},
         {"requirements.endurance.throttle": 0.7, "atmosphere.altitude_m": 800.0},
         {"aircraft.mass_kg": 40.0},  # stall 17.8 m/s EAS: 18 m/s still launches
+        # the catapult cannot give 26.7 kg its 18 m/s (m V^2 / 2 = 4326 J): not attainable
+        {"aircraft.launch_energy_j": 4000.0},
         {"aircraft.mass_kg": 45.0},  # stall 18.8 m/s EAS: below stall, bad input alone
     ]
     nominal = numeric_keys(case)
@@ -206,7 +208,7 @@ def test_catapult_launch_in_a_batch_equals_the_deterministic_check(tmp_path) -> 
         assert_equal_to_deterministic(single, result.values, row)
     endurance = result.values["flight_endurance"]
     # a faster release leaves less to climb... and a runway launch would not be attainable
-    assert np.isfinite(endurance[:-1]).all()
+    assert np.isfinite(endurance[:-2]).all() and math.isnan(endurance[-2])
     assert endurance[2] != endurance[0] and endurance[3] != endurance[0]
 
 
@@ -263,3 +265,24 @@ def test_liftoff_beyond_the_fans_jet_velocity_is_not_attainable_in_both() -> Non
             assert "jet velocity" in verdict.reason
         else:
             assert verdict.value is not None
+
+
+def test_a_catapults_take_off_is_its_release_and_needs_its_energy(tmp_path) -> None:
+    """SPEC 4: with a catapult the take-off requirement is about the catapult, not a runway.
+    It checked a runway roll (PASS at 55.5 m, or FAIL "never starts rolling" for an aircraft
+    the catapult launches), and launch_energy_j was never used: 100 J "launched" 26.7 kg at
+    18 m/s (outside audit). Now: no roll, the airborne part to the obstacle, and not
+    attainable below the kinetic energy at release m V^2 / 2."""
+    from tuflexperf.analysis.takeoff import solve_takeoff
+    from tuflexperf.errors import NotAttainable
+
+    case = _catapult_case(tmp_path)  # friction 0.9: a runway roll would never lift off
+    result = solve_takeoff(case)
+    assert result.launch == "catapult" and result.ground_roll_m == 0.0 and result.time_s == 0.0
+    assert result.distance_to_obstacle_m == pytest.approx(result.airborne_distance_m)
+    kinetic = 0.5 * case.aircraft.mass_kg * result.liftoff_speed_m_s ** 2
+    assert 4300 < kinetic < 4350  # 26.7 kg at 18 m/s (ISA sea level: EAS = TAS)
+    with pytest.raises(NotAttainable, match=f"kinetic energy at release, m V\\^2 / 2 = "
+                                            f"{kinetic:.0f} J"):
+        solve_takeoff(with_values(case, {"aircraft.launch_energy_j": kinetic - 1.0}))
+    assert solve_takeoff(with_values(case, {"aircraft.launch_energy_j": kinetic + 1.0}))

@@ -199,7 +199,7 @@ def test_catapult_endurance_sensitivities_and_limits(tmp_path) -> None:
         shutil.copytree(root / folder, tmp_path / folder)
     aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
     aircraft.write_text(aircraft.read_text().replace(
-        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 2000\ntakeoff:", 1))
+        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 12000\ntakeoff:", 1))
     case_file = tmp_path / "requirements" / "tuflex.yaml"
     case_file.write_text(case_file.read_text().replace("  takeoff: {max_ground_roll_m: 60}\n",
                                                        ""))

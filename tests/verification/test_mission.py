@@ -215,7 +215,7 @@ def test_catapult_launch_starts_airborne_and_skips_the_runway(tmp_path: Path) ->
         shutil.copytree(ROOT / folder, tmp_path / folder)
     aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
     text = aircraft.read_text().replace(
-        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 2000\ntakeoff:", 1)
+        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 12000\ntakeoff:", 1)
     text = "\n".join("  rolling_friction: 0.9" if line.strip().startswith("rolling_friction")
                      else line for line in text.splitlines()) + "\n"
     aircraft.write_text(text)

@@ -51,6 +51,7 @@ from tuflexperf.analysis.takeoff import obstacle_height_of
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     Aircraft,
+    catapult_energy_shortfall,
     climb_gradient,
     ground_roll_net_force_n,
     level_flight_drag_n,
@@ -248,13 +249,15 @@ class BatchEvaluator:
         out: dict[str, Array] = {}
         limits: dict[str, Array] = {}
         roll: tuple[Array, Array, Array, Array] | None = None
+        catapult = self.case.aircraft.launch == "catapult"
         for requirement in self.requirements:
             limits[requirement.name] = self._limit(values, requirement, size)
             if requirement.name == "takeoff_ground_roll":
-                roll = roll or model.ground_roll()
-                out[requirement.name] = roll[0]
+                # a catapult's "roll" is its release: no runway (SPEC 4), as solve_takeoff
+                roll = roll or (model.catapult_release() if catapult else model.ground_roll())
+                out[requirement.name] = np.where(roll[3] > 0.5, roll[0], np.nan)
             elif requirement.name == "takeoff_distance_to_obstacle":
-                roll = roll or model.ground_roll()
+                roll = roll or (model.catapult_release() if catapult else model.ground_roll())
                 height = _column(values, "requirements.takeoff.obstacle_height_m",
                                  obstacle_height_of(self.case), size)
                 out[requirement.name] = model.distance_to_obstacle(roll, height)
@@ -267,10 +270,8 @@ class BatchEvaluator:
                     self._grid(), mode, self._candidates()[1])
             else:
                 # a catapult launch starts airborne at its release speed (no runway)
-                launch = (model.catapult_release() if self.case.aircraft.launch == "catapult"
-                          else roll or model.ground_roll())
-                if self.case.aircraft.launch != "catapult":
-                    roll = launch
+                launch = roll or (model.catapult_release() if catapult else model.ground_roll())
+                roll = launch
                 key = "requirements.endurance.throttle"
                 throttle = _column(values, key, self.case.requirements.endurance.throttle, size)
                 throttle = np.asarray(throttle, dtype=float).reshape(-1) * np.ones(size)
@@ -538,11 +539,16 @@ class _Model:
 
         The catapult's energy is the ground equipment's, not the battery's (SPEC 4): the
         flight starts airborne at the release speed, which must not be below stall (bad input
-        for one case; not attainable for a sampled mass or ``cl_max`` that raises the stall).
+        for one case; not attainable for a sampled mass or ``cl_max`` that raises the stall),
+        and which the catapult's ``launch_energy_j`` must give the mass (m V^2 / 2).
         """
         release = np.asarray(true_airspeed_m_s(self.aircraft.launch_speed_m_s, self.density),
                              dtype=float).reshape(-1) * np.ones(self.size)
-        ok = release >= stall_speed(self) * (1.0 - 1e-12)
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float).reshape(-1) * np.ones(self.size)
+        energy = self.aircraft.launch_energy_j
+        short = catapult_energy_shortfall(
+            mass, release, None if energy is None else np.asarray(energy, dtype=float).reshape(-1))
+        ok = (release >= stall_speed(self) * (1.0 - 1e-12)) & ~short
         zero = np.zeros(self.size)
         return zero, zero, release, ok.astype(float)
 
@@ -555,7 +561,8 @@ class _Model:
         gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
         arc, climb, _ = obstacle_distances_m(radius, gradient, height)
         total = roll[0] + (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
-        return np.where(np.isfinite(total), total, np.nan)
+        # a launch that is not attainable (a catapult's "roll" of 0 m included) reaches nothing
+        return np.where(np.isfinite(total) & (roll[3] > 0.5), total, np.nan)
 
     def roll_history(self) -> Array:
         """Time [s] at 101 equally spaced airspeeds from rest to V_LO (as the CVODES history).

@@ -285,6 +285,12 @@ class MissionModel:
                 from tuflexperf.analysis.takeoff import obstacle_height_of
 
                 if self.case.aircraft.launch == "catapult":  # airborne at release, 0 m
+                    from tuflexperf.analysis.takeoff import solve_takeoff
+
+                    try:  # the catapult must give the mass its release speed
+                        solve_takeoff(self.case)
+                    except NotAttainable as exc:
+                        raise NotAttainable(f"{label}: {exc}") from None
                     plans.append(_Plan(i, s.type, "event", 0.0, 0.0, None, False, 0.0, 0.0,
                                        False, 0.0, dead))
                     continue

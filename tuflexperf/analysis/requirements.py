@@ -111,9 +111,12 @@ def takeoff_verdicts(requirement: Any, result: Any) -> list[Verdict]:
                 requirement.max_ground_roll_m,
                 "m",
                 "max",
-                f"lift-off at {result.liftoff_speed_m_s:.1f} m/s "
-                f"({result.liftoff_speed_eas_m_s:.1f} m/s EAS) after {result.time_s:.1f} s"
-                + rotation,
+                (f"catapult release at {result.liftoff_speed_m_s:.1f} m/s "
+                 f"({result.liftoff_speed_eas_m_s:.1f} m/s EAS): no runway"
+                 if result.launch == "catapult" else
+                 f"lift-off at {result.liftoff_speed_m_s:.1f} m/s "
+                 f"({result.liftoff_speed_eas_m_s:.1f} m/s EAS) after {result.time_s:.1f} s"
+                 + rotation),
                 warnings,
             )
         )

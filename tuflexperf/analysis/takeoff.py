@@ -23,6 +23,7 @@ from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     DEFAULT_OBSTACLE_HEIGHT_M,
     Aircraft,
+    catapult_energy_shortfall,
     climb_gradient,
     ground_roll_net_force_n,
     ground_roll_resistance_n,
@@ -33,6 +34,7 @@ from tuflexperf.models.aircraft import (
     stall_speed_m_s,
     transition_radius_m,
     transition_speed_m_s,
+    true_airspeed_m_s,
 )
 from tuflexperf.models.powertrain import beyond_jet_velocity, static_jet_velocity_m_s
 from tuflexperf.models.thrust import (
@@ -98,6 +100,7 @@ class TakeoffResult:
     history_thrust_n: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     history_drag_n: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     history_friction_n: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    launch: str = "runway"  # or "catapult": released airborne, no ground roll
 
     @property
     def climb_angle_deg(self) -> float | None:
@@ -181,6 +184,95 @@ def obstacle_height_of(case: Case) -> float:
     return float(requirement.obstacle_height_m)
 
 
+@dataclass(frozen=True)
+class _Airborne:
+    """The airborne part of a take-off: the arc at 1.15 V_stall, then the straight climb."""
+
+    speed_m_s: float
+    radius_m: float
+    gradient: float
+    arc_m: float
+    climb_m: float
+    arc_top_m: float
+    reason: str
+
+    @property
+    def distance_m(self) -> float | None:
+        total = self.arc_m + self.climb_m
+        return total if math.isfinite(total) else None
+
+    def fields(self, ground_roll_m: float, load_factor: float, height_m: float) -> dict[str, Any]:
+        """The :class:`TakeoffResult` fields after a ground roll (or none) of ``ground_roll_m``."""
+        airborne = self.distance_m
+        return {
+            "transition_speed_m_s": self.speed_m_s,
+            "transition_load_factor": load_factor,
+            "transition_radius_m": self.radius_m,
+            "climb_gradient": self.gradient,
+            "transition_distance_m": self.arc_m,
+            "transition_height_m": self.arc_top_m,
+            "climb_distance_m": self.climb_m if math.isfinite(self.climb_m) else None,
+            "airborne_distance_m": airborne,
+            "distance_to_obstacle_m": None if airborne is None else ground_roll_m + airborne,
+            "obstacle_height_m": height_m,
+            "obstacle_cleared_in_transition": self.climb_m == 0.0,
+            "obstacle_reason": self.reason,
+        }
+
+
+def _airborne(case: Case, height: float) -> _Airborne:
+    """Transition arc at 1.15 V_stall and n, then the full-throttle climb (Anderson 6.7.2)."""
+    aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
+    v_tr = float(transition_speed_m_s(aircraft, rho))
+    radius = float(transition_radius_m(v_tr, aircraft.takeoff.transition_load_factor))
+    thrust_tr = total_thrust_n(propulsion, 1.0, v_tr, rho)
+    gradient = float(climb_gradient(aircraft, thrust_tr, v_tr, rho))
+    arc_m, climb_m, arc_top_m = (float(x) for x in obstacle_distances_m(radius, gradient, height))
+    reason = "" if math.isfinite(arc_m + climb_m) else (
+        f"the {height:g} m obstacle is never cleared: the arc tops out at {arc_top_m:.1f} m "
+        f"and the full-throttle climb gradient at {v_tr:.1f} m/s is {gradient:.3f} (no climb)"
+    )
+    return _Airborne(v_tr, radius, gradient, arc_m, climb_m, arc_top_m, reason)
+
+
+def _catapult_launch(case: Case, height: float) -> TakeoffResult:
+    """A catapult launch (SPEC 4): no runway, airborne at the release speed, then the arc and
+    the climb to the obstacle; not attainable when the catapult's energy cannot give the
+    aircraft its release speed."""
+    aircraft, rho = case.aircraft, case.density_kg_m3
+    release = float(true_airspeed_m_s(aircraft.launch_speed_m_s, rho))
+    stall = float(stall_speed_m_s(aircraft, rho))
+    kinetic = 0.5 * aircraft.mass_kg * release ** 2
+    known = {"liftoff_speed_m_s": release, "stall_speed_m_s": stall}
+    if catapult_energy_shortfall(aircraft.mass_kg, release, aircraft.launch_energy_j):
+        raise NotAttainable(
+            f"the catapult's launch_energy_j {aircraft.launch_energy_j:g} J is below the "
+            f"kinetic energy at release, m V^2 / 2 = {kinetic:.0f} J ({aircraft.mass_kg:g} kg "
+            f"at {release:.1f} m/s)", known)
+    warnings = [f"catapult launch at {aircraft.launch_speed_m_s:g} m/s EAS: no runway, no "
+                "ground roll"]
+    if aircraft.launch_energy_j is None:
+        warnings.append(f"launch_energy_j not given: the catapult's energy is not checked "
+                        f"(the release needs m V^2 / 2 = {kinetic:.0f} J)")
+    air = _airborne(case, height)
+    return TakeoffResult(
+        ground_roll_m=0.0,
+        liftoff_speed_m_s=release,
+        time_s=0.0,
+        history_time_s=np.zeros(1),
+        history_airspeed_m_s=np.full(1, release),
+        history_distance_m=np.zeros(1),
+        extrapolated=is_extrapolated(case.propulsion, air.speed_m_s),
+        warnings=tuple(warnings),
+        liftoff_speed_eas_m_s=float(aircraft.launch_speed_m_s),
+        stall_speed_m_s=stall,
+        density_kg_m3=rho,
+        acceleration_distance_m=0.0,
+        **air.fields(0.0, aircraft.takeoff.transition_load_factor, height),
+        launch="catapult",
+    )
+
+
 def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> TakeoffResult:
     """Take-off at full throttle for ``case``: ground roll, rotation, arc and climb to the obstacle.
 
@@ -197,6 +289,8 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
     aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
     to = aircraft.takeoff
     height = obstacle_height_of(case) if obstacle_height_m is None else float(obstacle_height_m)
+    if aircraft.launch == "catapult":
+        return _catapult_launch(case, height)
     v_lo = float(liftoff_speed_m_s(aircraft, rho))
     stall = float(stall_speed_m_s(aircraft, rho))
     if v_lo < stall * (1.0 - 1e-12):
@@ -251,26 +345,12 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
     )
     rotation_m = v_lo * to.rotation_time_s  # Raymer 17.8.2: rotation at the lift-off speed
 
-    # transition arc at 1.15 V_stall and n, then the full-throttle climb (Anderson 6.7.2)
-    v_tr = float(transition_speed_m_s(aircraft, rho))
-    radius = float(transition_radius_m(v_tr, to.transition_load_factor))
-    thrust_tr = total_thrust_n(propulsion, 1.0, v_tr, rho)
-    gradient = float(climb_gradient(aircraft, thrust_tr, v_tr, rho))
-    arc_m, climb_m, arc_top_m = (float(x) for x in obstacle_distances_m(radius, gradient, height))
-    cleared_in_arc = climb_m == 0.0
-    airborne: float | None = arc_m + climb_m
-    reason = ""
-    if not math.isfinite(airborne):
-        airborne = None
-        reason = (
-            f"the {height:g} m obstacle is never cleared: the arc tops out at {arc_top_m:.1f} m "
-            f"and the full-throttle climb gradient at {v_tr:.1f} m/s is {gradient:.3f} (no climb)"
-        )
+    air = _airborne(case, height)
     ground_roll = float(distance[-1]) + rotation_m
 
     warnings: list[str] = []
     low, high = propulsion.tested_airspeed_m_s
-    beyond = [v for v in (v_lo, v_tr) if is_extrapolated(propulsion, v)]
+    beyond = [v for v in (v_lo, air.speed_m_s) if is_extrapolated(propulsion, v)]
     extrapolated = bool(beyond)
     if extrapolated:
         warnings.append(
@@ -304,18 +384,7 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         acceleration_distance_m=float(distance[-1]),
         rotation_time_s=to.rotation_time_s,
         rotation_distance_m=rotation_m,
-        transition_speed_m_s=v_tr,
-        transition_load_factor=to.transition_load_factor,
-        transition_radius_m=radius,
-        climb_gradient=gradient,
-        transition_distance_m=arc_m,
-        transition_height_m=arc_top_m,
-        climb_distance_m=climb_m if math.isfinite(climb_m) else None,
-        airborne_distance_m=airborne,
-        distance_to_obstacle_m=None if airborne is None else ground_roll + airborne,
-        obstacle_height_m=height,
-        obstacle_cleared_in_transition=cleared_in_arc,
-        obstacle_reason=reason,
+        **air.fields(ground_roll, to.transition_load_factor, height),
         history_thrust_n=history_thrust,
         history_drag_n=history_drag,
         history_friction_n=history_friction,

@@ -339,3 +339,20 @@ def obstacle_distances_m(
 def _at_most_one(value: Vectorizable) -> Vectorizable:
     """``min(value, 1)`` element-wise: keeps ``sqrt(1 - s^2)`` real when rounding exceeds 1."""
     return where(value < 1.0, value, 1.0)
+
+
+def catapult_energy_shortfall(
+    mass_kg: Vectorizable, release_m_s: Vectorizable, energy_j: Vectorizable | None
+) -> Vectorizable:
+    """True where the catapult's energy [J] is below the kinetic energy at release
+    ``m V^2 / 2`` [J] (``V`` the release true airspeed [m/s], no wind); False without an
+    energy (``None``: not checked). Floats or numpy arrays.
+
+    References
+    ----------
+    SPEC 4 (``launch_energy_j``: the ground equipment's energy, not the battery's).
+    """
+    kinetic = 0.5 * mass_kg * release_m_s * release_m_s
+    if energy_j is None:
+        return kinetic < 0.0  # never: the same shape as the kinetic energy
+    return energy_j < kinetic
