@@ -84,6 +84,11 @@ def test_verdict_needs_the_lower_confidence_bound(tmp_path) -> None:
     [
         (["--samples", "0"], "--samples"),
         (["--workers", "0"], "--workers"),
+        # outside audit: 1e9 samples ran for hours (the block refuses above 1e8), and flags
+        # that change nothing without samples were ignored (a closed --dask port: PASS)
+        (["--samples", "1000000000"], "--samples: must be from 1 to 1e+08"),
+        (["--seed", "5"], "--seed: nothing is sampled"),
+        (["--dask", "tcp://127.0.0.1:1"], "--dask: nothing is sampled"),
     ],
 )
 def test_bad_flags_exit_2_one_line(args: list[str], message: str) -> None:
@@ -101,6 +106,19 @@ def test_bad_uncertainty_block_names_the_key(tmp_path) -> None:
                                                                        "uniform": [1, 2]}}})
     result = runner.invoke(app, ["check", str(path)])
     assert result.exit_code == 2 and "exactly one" in result.stderr
+    # P(met)'s lower confidence bound never reaches 1 with finite samples: it could not pass
+    path = shipped_with(tmp_path, {"samples": 10, "required_probability": 1})
+    result = runner.invoke(app, ["check", str(path)])
+    assert result.exit_code == 2 and "required_probability" in result.stderr
+
+
+def test_set_on_a_sampled_key_says_the_samples_follow_the_block(tmp_path) -> None:
+    path = shipped_with(tmp_path, {"samples": 40, "propulsion": {"covariance": False,
+                                                                 "extrapolation": False},
+                                   "parameters": {"aircraft.mass_kg": {"uniform": [25, 29]}}})
+    result = runner.invoke(app, ["check", str(path), "--set", "aircraft.mass_kg=20", "--json"])
+    notes = json.loads(result.stdout)["uncertainty"]["notes"]
+    assert notes and "--set aircraft.mass_kg" in notes[0], notes
 
 
 def _uncertain_made_up(tmp_path):

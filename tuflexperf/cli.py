@@ -197,16 +197,28 @@ def check(
         # a check of nothing is no PASS: the blocks may all have been commented out
         fail_input(f"{case.path}: requirements: none stated, nothing to verify (give at least "
                    f"one of {', '.join(CHECKS)})")
+    sampling = samples is not None or case.uncertainty is not None
+    for flag, value in (("--seed", seed), ("--workers", workers), ("--dask", dask)):
+        if value is not None and not sampling:  # it would change nothing: say so
+            fail_input(f"{flag}: nothing is sampled (give --samples N, or an uncertainty: "
+                       "block in the case)")
     verdicts = check_case(case)
     passed = all(v.passed for v in verdicts)
     probabilistic: dict[str, Any] = {}
     outside: dict[str, int] = {}
     plan = None
-    if samples is not None or case.uncertainty is not None:
+    sample_notes: list[str] = []
+    if sampling:
         from tuflexperf.analysis.requirements import probabilistic_verdicts
         from tuflexperf.analysis.uncertainty import plan_for, run_samples
 
         plan = plan_for(case, samples, seed)
+        drawn = {key for key, _, _ in plan.parameters}
+        for item in sets or []:
+            key = item.split("=", 1)[0].strip()
+            if key in drawn:  # the deterministic row takes --set, the samples the block
+                sample_notes.append(f"--set {key}: the samples draw it from the uncertainty "
+                                    "block (the deterministic value uses --set)")
         sample_set = run_samples(case, plan, workers, dask)
         probabilistic = probabilistic_verdicts(sample_set)
         outside = {k: n for k, n in sample_set.outside_bounds.items() if n}
@@ -223,7 +235,8 @@ def check(
             "results": results,
         }
         if plan is not None:
-            payload["uncertainty"] = {**plan.to_dict(), "samples_outside_bounds": outside}
+            payload["uncertainty"] = {**plan.to_dict(), "samples_outside_bounds": outside,
+                                      "notes": sample_notes}
         emit_json(payload)
     else:
         typer.echo(f"{case.name}  ({case.path})")
@@ -244,6 +257,8 @@ def check(
             for key, count in outside.items():
                 typer.echo(f"  note: {count} samples of {key} fall outside its valid range; "
                            "they count as not met")
+            for note in sample_notes:
+                typer.echo(f"  note: {note}")
         typer.echo(f"overall: {'PASS' if passed else 'FAIL'}")
     raise typer.Exit(0 if passed else 1)
 

@@ -120,3 +120,19 @@ def test_distributions_draw_what_they_say(tmp_path) -> None:
     np.testing.assert_allclose(np.sqrt(np.diag(spread)), sd, rtol=0.1)
     assert draw.extrapolation_n[0].std() == pytest.approx(engine.extrapolation_sd_n, rel=0.1)
     assert math.isfinite(float(draw.extrapolation_n.sum()))
+
+
+@pytest.mark.parametrize("window", [(8.0, 9.0), (9.0, 10.0), (-10.0, -9.0), (-1.0, 2.0),
+                                    (9.25, 11.5)])
+def test_truncated_normal_far_in_a_tail_draws_its_quantiles(window) -> None:
+    """A window 9-10 sd above the mean put every sample on its upper end: Phi rounds to 1
+    there (an outside audit found cd0 in [0.08, 0.09] around 0.043 +- 0.004 all at 0.09).
+    The upper tail is now drawn as its mirror image in the lower one."""
+    from tuflexperf.analysis.uncertainty import _draw
+
+    low, high = window
+    x = _draw(np.random.default_rng(7), "truncated_normal", (0.0, 1.0, low, high), 100_000)
+    assert low <= x.min() and x.max() <= high
+    got = np.quantile(x, [0.05, 0.5, 0.95])
+    want = stats.truncnorm.ppf([0.05, 0.5, 0.95], low, high)
+    np.testing.assert_allclose(got, want, atol=0.01 * (high - low))

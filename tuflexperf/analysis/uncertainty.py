@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from tuflexperf.analysis.batch import BatchEvaluator, BatchResult, nominal_engines
 from tuflexperf.analysis.probability import normal_cdf, normal_ppf
 from tuflexperf.errors import InputError
-from tuflexperf.io.case import Case, UncertaintySchema
+from tuflexperf.io.case import MAX_SAMPLES, Case, UncertaintySchema
 from tuflexperf.io.dotted import value_bounds
 
 Array = NDArray[np.float64]
@@ -78,8 +78,8 @@ def plan_for(case: Case, samples: int | None = None, seed: int | None = None) ->
     """
     block = case.uncertainty or UncertaintySchema()
     n = block.samples if samples is None else samples
-    if n < 1:
-        raise InputError(f"--samples: must be at least 1, got {n}")
+    if not 1 <= n <= MAX_SAMPLES:
+        raise InputError(f"--samples: must be from 1 to {MAX_SAMPLES:g}, got {n}")
     return SamplingPlan(
         samples=int(n),
         seed=int(block.seed if seed is None else seed),
@@ -99,9 +99,18 @@ def _draw(rng: np.random.Generator, kind: str, args: Sequence[float], size: int)
     if kind == "uniform":
         return rng.uniform(args[0], args[1], size)
     mean, sd, low, high = args
-    lo, hi = normal_cdf((low - mean) / sd), normal_cdf((high - mean) / sd)
-    u = lo + (hi - lo) * rng.uniform(0.0, 1.0, size)
-    return np.clip(mean + sd * normal_ppf(u), low, high)
+    a, b = (low - mean) / sd, (high - mean) / sd
+    u = rng.uniform(0.0, 1.0, size)
+    if a + b > 0.0:
+        # a window in the upper tail: Phi rounds to 1 beyond ~8.3 sd (every sample fell on
+        # `high`); its mirror image in the lower tail has full precision. With 1 - u the
+        # mirrored draw is the same sample, in exact arithmetic, as the direct one
+        lo, hi = normal_cdf(-b), normal_cdf(-a)
+        z = -normal_ppf(lo + (hi - lo) * (1.0 - u))
+    else:
+        lo, hi = normal_cdf(a), normal_cdf(b)
+        z = normal_ppf(lo + (hi - lo) * u)
+    return np.clip(mean + sd * z, low, high)
 
 
 def _square_root(covariance: Array) -> Array:
@@ -167,9 +176,12 @@ def evaluate_chunk(case: Case, plan: SamplingPlan, index: int) -> dict[str, Arra
     run it as they are.
     """
     draw = draw_chunk(case, plan, index)
-    result = evaluator_for(case).evaluate(
-        draw.values, draw.size, draw.coefficients, draw.extrapolation_n
-    )
+    # a sample outside its key's range (mass 1e300) may overflow on the way: it counts as
+    # not met below, and numpy's warnings about it would only clutter stderr
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        result = evaluator_for(case).evaluate(
+            draw.values, draw.size, draw.coefficients, draw.extrapolation_n
+        )
     # a sample outside a key's schema bounds (a negative cd0 from a wide normal) is no
     # aircraft: every requirement counts it as not met, and it is reported
     outside = np.zeros(draw.size, dtype=bool)

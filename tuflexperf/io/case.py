@@ -34,6 +34,9 @@ NonNegative = Annotated[float, Field(ge=0)]
 Fraction = Annotated[float, Field(ge=0, le=1)]
 
 
+# Most Monte Carlo samples one check draws (block or --samples): ~1e8 already takes hours
+MAX_SAMPLES = 100_000_000
+
 # --- aircraft -------------------------------------------------------------------------------
 # Highest cl_max a wing reaches (flapped and slotted ~3; beyond 5 only blown lift, which the
 # drag polar does not model)
@@ -284,9 +287,10 @@ class PropulsionUncertaintySchema(StrictModel):
 
 
 class UncertaintySchema(StrictModel):
-    samples: Annotated[int, Field(ge=1, le=100_000_000)] = 10_000
+    samples: Annotated[int, Field(ge=1, le=MAX_SAMPLES)] = 10_000
     seed: Annotated[int, Field(ge=0)] = 1
-    required_probability: Annotated[float, Field(gt=0, le=1)] = 0.95
+    # below 1: the lower confidence bound of P(met) never reaches 1 with finite samples
+    required_probability: Annotated[float, Field(gt=0, lt=1)] = 0.95
     propulsion: PropulsionUncertaintySchema = PropulsionUncertaintySchema()
     parameters: dict[str, DistributionSchema] = {}
 
