@@ -223,6 +223,50 @@ def test_fmu_refuses_meaningless_inputs(tmp_path: Path) -> None:
                           input=signal)
 
 
+@pytest.mark.skipif(find_compiler() is None, reason="no C compiler (gcc) to build the FMU")
+def test_fmu_refuses_a_throttle_outside_the_model(tmp_path: Path) -> None:
+    """Throttle 1.5 gave 174 N, 60 % above full throttle (outside audit)."""
+    fmpy = pytest.importorskip("fmpy", reason="fmpy not installed (pip install fmpy)")
+    out = _export(tmp_path, SHIPPED, ("fmu",))
+    signal = np.array([(0.0, 1.5, 0.5, 20.0)],
+                      dtype=[("time", float), ("throttle_1", float), ("throttle_2", float),
+                             ("airspeed_m_s", float)])
+    with pytest.raises(Exception, match="failed with status"):  # the log: outside [0, 1]
+        fmpy.simulate_fmu(str(out / "tfp_thrust.fmu"), stop_time=0.01, step_size=0.001,
+                          input=signal)
+
+
+def test_jsbsim_holds_throttle_and_airspeed_at_the_models_edges(tmp_path: Path) -> None:
+    """A simulation has no error channel: beyond [0, 1] and the model's airspeed limit the
+    JSBSim export holds the input at the edge, where it extrapolated on (1.5 gave 77.5 N per
+    engine; 100 m/s a rising quadratic), unlike the C code and the FMU (outside audit)."""
+    pytest.importorskip("jsbsim", reason="jsbsim not installed (pip install jsbsim)")
+    from tuflexperf.io.case import load_propulsion
+    from tuflexperf.models.thrust import max_model_airspeed_m_s
+
+    data = yaml.safe_load(SHIPPED.read_text())
+    limit = max_model_airspeed_m_s(load_propulsion(SHIPPED))
+    out = _export(tmp_path, SHIPPED, ("jsbsim",))
+    for airspeed, command, held in ((20.0, 1.5, (1.0, 20.0)), (20.0, -0.3, (0.0, 20.0)),
+                                    (limit + 20.0, 0.6, (0.6, limit))):
+        fdm = _jsbsim_fdm(tmp_path / f"jsb_{airspeed:g}_{command:g}", out)
+        fdm["ic/h-sl-ft"] = 0.0
+        fdm["ic/vt-fps"] = airspeed / FT
+        fdm.run_ic()
+        for axis in ("rate/translational", "rate/rotational", "position/translational",
+                     "position/rotational"):
+            fdm["simulation/integrator/" + axis] = 0
+        for i in range(2):
+            fdm[f"fcs/throttle-cmd-norm[{i}]"] = command
+        for _ in range(int((data["delay_s"] + 0.1) / fdm.get_delta_t()) + 2):
+            fdm.run()
+        rho = fdm["atmosphere/rho-slugs_ft3"] * SLUG_FT3
+        for i, engine in enumerate(data["engines"]):
+            expected = _thrust(engine, *held, rho, data.get("reference_density_kg_m3"))
+            got = fdm[f"tfp/engine-{i + 1}/thrust-lbs"] * LBF_N
+            assert got == pytest.approx(expected, rel=1e-6), (airspeed, command, i)
+
+
 def test_jsbsim_lag_filter_follows_the_spool_lag(tmp_path: Path) -> None:
     """Lagged model: one time constant after the dead time JSBSim's force has made 63 % of the
     step (its lag_filter is Tustin's discretisation; 1 % is its error at 120 Hz and more)."""

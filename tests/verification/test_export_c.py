@@ -185,6 +185,25 @@ def test_c_inverse_edges(built: dict) -> None:
     assert c.throttle_for_thrust(10.0, math.inf, 1.225)[0] == RETURN_BAD_ARGUMENT
 
 
+def test_c_thrust_refuses_what_the_model_does_not_have(built: dict) -> None:
+    """Throttle 1.5 gave 60 % more than full throttle with TFP_OK, and tfp_total_thrust
+    answered anything (-10 m/s, a negative density, 60 m/s past the model's limit) (outside
+    audit): now TFP_BAD_THROTTLE / the point's code, and NaN from the total."""
+    from tuflexperf.export.c_code import RETURN_BAD_THROTTLE
+
+    model, c = built["shipped"]
+    for throttle in ((1.5, 0.5), (0.5, -0.2)):
+        code, thrust = c.thrust(throttle, 20.0, 1.225)
+        assert code == RETURN_BAD_THROTTLE and all(math.isnan(t) for t in thrust)
+        code, thrust = c.thrust_v(throttle, 20.0, 1.225)
+        assert code == RETURN_BAD_THROTTLE and all(math.isnan(t) for t in thrust)
+    for args in ((1.5, 20.0, 1.225), (1.0, -10.0, 1.225), (1.0, 20.0, -1.225),
+                 (1.0, 60.0, 1.225), (math.nan, 20.0, 1.225)):
+        assert math.isnan(c.total_thrust(*args)), args
+    assert c.thrust((1.0, 0.0), 20.0, 1.225)[0] == 0 and math.isfinite(c.total_thrust(1.0, 20.0,
+                                                                                      1.225))
+
+
 def test_extrapolation_flag(built: dict) -> None:
     model, c = built["shipped"]
     low, high = model.propulsion.tested_airspeed_m_s

@@ -31,6 +31,7 @@ RETURN_CAPACITY = 3
 RETURN_NEGATIVE_AIRSPEED = 4
 RETURN_AIRSPEED_BEYOND_MODEL = 5
 RETURN_BAD_DENSITY = 6
+RETURN_BAD_THROTTLE = 7
 
 
 def c_double(value: float) -> str:
@@ -181,12 +182,14 @@ extern "C" {{
 #define TFP_NEGATIVE_AIRSPEED {RETURN_NEGATIVE_AIRSPEED}
 #define TFP_AIRSPEED_BEYOND_MODEL {RETURN_AIRSPEED_BEYOND_MODEL}
 #define TFP_BAD_DENSITY {RETURN_BAD_DENSITY}
+#define TFP_BAD_THROTTLE {RETURN_BAD_THROTTLE}
 
 /*
  * Thrust of each engine in N at its throttle fraction, the airspeed (m/s) and the density
- * (kg/m^3). {per_engine} Throttles are not clamped: outside [0, 1] (and outside the tested
- * airspeeds) the polynomial extrapolates. Returns TFP_OK; TFP_BAD_ARGUMENT for a NULL output
- * or non-finite input, TFP_NEGATIVE_AIRSPEED, TFP_AIRSPEED_BEYOND_MODEL or TFP_BAD_DENSITY as
+ * (kg/m^3). {per_engine} Outside the tested airspeeds the polynomial extrapolates (see
+ * tfp_is_extrapolated). Returns TFP_OK; TFP_BAD_ARGUMENT for a NULL output or non-finite
+ * input, TFP_BAD_THROTTLE for a throttle outside [0, 1] (no model there: the tests ended at
+ * full throttle), TFP_NEGATIVE_AIRSPEED, TFP_AIRSPEED_BEYOND_MODEL or TFP_BAD_DENSITY as
  * tfp_throttle_for_thrust (the outputs are then NaN).
  */
 {thrust_signature(n)};
@@ -195,7 +198,8 @@ extern "C" {{
 int tfp_thrust_v(const double *throttle, double airspeed_m_s, double density_kg_m3,
                  double *thrust_n);
 
-/* Total thrust in N of all engines at one common throttle fraction. */
+/* Total thrust in N of all engines at one common throttle fraction; NaN for what
+ * tfp_thrust refuses (a throttle outside [0, 1], a point outside the model). */
 double tfp_total_thrust(double throttle, double airspeed_m_s, double density_kg_m3);
 
 /*
@@ -327,6 +331,10 @@ def source_text(model: ExportModel) -> str:
         for i in range(n)
     )
     null_check = " || ".join(f"!thrust_{i + 1}" for i in range(n))
+    throttle_checks = "\n".join(
+        f"    if (code == TFP_OK) {{\n        code = tfp_check_throttle(throttle_{i + 1});\n    }}"
+        for i in range(n)
+    )
     return f"""{_provenance_comment(model)}
 #include "{HEADER_NAME}"
 
@@ -356,6 +364,15 @@ static double tfp_density_scale(double density_kg_m3)
 {scale_body}
 }}
 
+/* A throttle fraction the model has: finite and in [0, 1]. */
+static int tfp_check_throttle(double throttle)
+{{
+    if (!isfinite(throttle)) {{
+        return TFP_BAD_ARGUMENT;
+    }}
+    return throttle < 0.0 || throttle > 1.0 ? TFP_BAD_THROTTLE : TFP_OK;
+}}
+
 /* Argument checks shared by every entry point: what is physically meaningless is refused. */
 static int tfp_check_point(double airspeed_m_s, double density_kg_m3)
 {{
@@ -377,7 +394,8 @@ static int tfp_check_point(double airspeed_m_s, double density_kg_m3)
 {thrust_signature(n)}
 {{
     const double scale = tfp_density_scale(density_kg_m3);
-    const int code = tfp_check_point(airspeed_m_s, density_kg_m3);
+    int code = tfp_check_point(airspeed_m_s, density_kg_m3);
+{throttle_checks}
     if ({null_check}) {{
         return TFP_BAD_ARGUMENT;
     }}
@@ -393,10 +411,13 @@ int tfp_thrust_v(const double *throttle, double airspeed_m_s, double density_kg_
                  double *thrust_n)
 {{
     const double scale = tfp_density_scale(density_kg_m3);
-    const int code = tfp_check_point(airspeed_m_s, density_kg_m3);
+    int code = tfp_check_point(airspeed_m_s, density_kg_m3);
     int i;
     if (!throttle || !thrust_n) {{
         return TFP_BAD_ARGUMENT;
+    }}
+    for (i = 0; i < TFP_N_ENGINES && code == TFP_OK; ++i) {{
+        code = tfp_check_throttle(throttle[i]);
     }}
     for (i = 0; i < TFP_N_ENGINES; ++i) {{
         thrust_n[i] = code != TFP_OK ? NAN
@@ -412,6 +433,10 @@ double tfp_total_thrust(double throttle, double airspeed_m_s, double density_kg_
     const double scale = tfp_density_scale(density_kg_m3);
     double total = 0.0;
     int i;
+    if (tfp_check_point(airspeed_m_s, density_kg_m3) != TFP_OK
+        || tfp_check_throttle(throttle) != TFP_OK) {{
+        return NAN;
+    }}
     for (i = 0; i < TFP_N_ENGINES; ++i) {{
         total = total + scale * tfp_poly22(TFP_COEFFICIENTS[i], throttle * TFP_THROTTLE_SCALE,
                                            airspeed_m_s);
@@ -616,8 +641,9 @@ int tfp_step(tfp_state_t *state, const double *throttle_command, double airspeed
     }}
     code = tfp_check_point(airspeed_m_s, density_kg_m3);
     for (i = 0; i < TFP_N_ENGINES; ++i) {{
-        if (!isfinite(throttle_command[i])) {{
-            code = TFP_BAD_ARGUMENT; /* a NaN would stay in the lag state for good */
+        if (code == TFP_OK) {{
+            /* a NaN would stay in the lag state for good; beyond [0, 1] there is no model */
+            code = tfp_check_throttle(throttle_command[i]);
         }}
     }}
     if (code != TFP_OK) {{

@@ -209,6 +209,7 @@ static const char *why(int code)
     case TFP_NEGATIVE_AIRSPEED: return "airspeed_m_s is negative";
     case TFP_AIRSPEED_BEYOND_MODEL: return "airspeed_m_s is above TFP_MAX_MODEL_AIRSPEED_M_S";
     case TFP_BAD_DENSITY: return "density_kg_m3 is not > 0";
+    case TFP_BAD_THROTTLE: return "a throttle is outside [0, 1]";
     case TFP_CAPACITY_EXCEEDED: return "sample_time_s too small for the delay buffer";
     default: return "bad (non-finite) input or sample_time_s";
     }}

@@ -35,7 +35,7 @@ import re
 from xml.sax.saxutils import escape
 
 from tuflexperf.export.model import EXTRAPOLATION_WARNING, ExportModel
-from tuflexperf.models.thrust import POLY22_TERMS
+from tuflexperf.models.thrust import POLY22_TERMS, max_model_airspeed_m_s
 
 SYSTEM_FILE = "tfp_thrust_system.xml"
 REACTIONS_FILE = "tfp_thrust_reactions.xml"
@@ -101,6 +101,13 @@ def _header(model: ExportModel, what: str) -> str:
     return "\n".join(f"  {_comment(line)}" for line in lines)
 
 
+# the true airspeed in m/s the thrust functions read, held to the model's range
+AIRSPEED_PROPERTY = "tfp/airspeed-m_s"
+# a throttle or airspeed beyond the model is held at its edge: a simulation has no error
+# channel, and the C code and the FMU refuse the same inputs (TFP_BAD_THROTTLE, ...)
+_THROTTLE_CLIP = "      <clipto><min>0</min><max>1</max></clipto>\n"
+
+
 def _poly22_function(model: ExportModel, index: int, indent: str) -> str:
     """The poly22 of engine ``index`` in lbf as a JSBSim ``<function>`` body."""
     prop = model.propulsion
@@ -109,7 +116,7 @@ def _poly22_function(model: ExportModel, index: int, indent: str) -> str:
     c = {t: float(engine.coefficients[t]) for t in POLY22_TERMS}
     x = f"{base}/throttle-delayed"
     scale = float(engine.throttle_scale)
-    v_terms = f"<property>velocities/vtrue-fps</property><value>{_number(FT_M)}</value>"
+    v_terms = f"<property>{AIRSPEED_PROPERTY}</property>"
 
     def product(*items: str) -> str:
         return "<product>" + "".join(items) + "</product>"
@@ -167,14 +174,16 @@ def system_text(model: ExportModel) -> str:
                 f'    <actuator name="{base}/throttle-delayed">\n'
                 f"      <input>{throttle_property(i)}</input>\n"
                 f'      <delay type="time">{_number(prop.delay_s + DELAY_NUDGE_S)}</delay>\n'
-                "    </actuator>"
+                + _THROTTLE_CLIP
+                + "    </actuator>"
             )
         else:
             dead_time = (
                 f'    <pure_gain name="{base}/throttle-delayed">\n'
                 f"      <input>{throttle_property(i)}</input>\n"
                 "      <gain>1</gain>\n"
-                "    </pure_gain>"
+                + _THROTTLE_CLIP
+                + "    </pure_gain>"
             )
         if prop.lag_s > 0:
             lag = (
@@ -204,6 +213,18 @@ def system_text(model: ExportModel) -> str:
             f"{lag}\n"
             "  </channel>"
         )
+    airspeed = (
+        '  <channel name="tfp-airspeed">\n'
+        "    <!-- true airspeed in m/s, held to 0 .. the model's limit "
+        f"{_number(max_model_airspeed_m_s(prop))} m/s -->\n"
+        f'    <pure_gain name="{AIRSPEED_PROPERTY}">\n'
+        "      <input>velocities/vtrue-fps</input>\n"
+        f"      <gain>{_number(FT_M)}</gain>\n"
+        f"      <clipto><min>0</min><max>{_number(max_model_airspeed_m_s(prop))}</max></clipto>\n"
+        "    </pure_gain>\n"
+        "  </channel>"
+    )
+    channels.insert(0, airspeed)
     return (
         '<?xml version="1.0"?>\n<!--\n'
         + _header(model, "JSBSim system")
