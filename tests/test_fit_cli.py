@@ -309,3 +309,20 @@ def test_a_misspelt_battery_key_is_named_with_the_closest_one(tmp_path: Path) ->
     result = CliRunner().invoke(app, ["fit", str(path), "--out", str(tmp_path / "b.yaml")])
     assert result.exit_code == 2
     assert "did you mean 'cells_in_series'?" in result.stderr, result.stderr
+
+
+def test_two_runs_of_one_engine_at_one_airspeed_are_said(tmp_path: Path) -> None:
+    """An EDF2 run labelled EDF1 gave EDF1 two runs at 30 m/s (88 points) without a word
+    (outside audit); repeats are legitimate, so it is a note naming both runs."""
+    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
+    folder = tmp_path / "campaign"
+    shutil.copytree(shipped, folder)
+    manifest = folder / "campaign.yaml"
+    manifest.write_text(manifest.read_text().replace(
+        "{file: runs/edf2_v30p0.mat, engine: EDF2", "{file: runs/edf2_v30p0.mat, engine: EDF1"))
+    result = CliRunner().invoke(app, ["fit", str(manifest), "--out", str(tmp_path / "f.yaml"),
+                                      "--json"])
+    assert result.exit_code == 0, result.output
+    warnings = json.loads(result.stdout)["warnings"]
+    assert any("EDF1: 2 throttle-step runs at 30 m/s" in w and "edf2_v30p0.mat" in w
+               for w in warnings), warnings

@@ -330,8 +330,10 @@ SET_POINT_RESOLUTION_M_S = 0.5  # tunnel set points closer than this are one set
 MIN_SET_POINTS = 3  # airspeeds a poly22 surface (quadratic in airspeed) needs
 
 
-def _check_set_points(campaign: Any, step_results: list[Any]) -> None:
-    """Bad input: an engine whose step runs cover fewer than 3 airspeed set points.
+def _check_set_points(campaign: Any, step_results: list[Any]) -> list[str]:
+    """Bad input: an engine whose step runs cover fewer than 3 airspeed set points; and a
+    note per set point an engine has two or more runs at (repeats are fitted together; a run
+    labelled with the wrong engine looks the same, and only the user can tell).
 
     Counted from each run's median airspeed rounded to the set-point resolution, not from
     the measured values (their noise makes any two runs look like many airspeeds and
@@ -351,6 +353,12 @@ def _check_set_points(campaign: Any, step_results: list[Any]) -> None:
                 f"airspeed set point(s), {listed}; a poly22 surface needs at least "
                 f"{MIN_SET_POINTS}"
             )
+    return [
+        f"{engine}: {len(files)} throttle-step runs at {v:g} m/s ({', '.join(files)}): fitted "
+        "together as repeats; is one another engine's?"
+        for engine, points in by_engine.items() for v, files in sorted(points.items())
+        if len(files) > 1
+    ]
 
 
 def _set_point(airspeed_m_s: float) -> float:
@@ -483,7 +491,7 @@ def fit_campaign(
     if progress is not None:
         progress(total, total, "fit")
     degenerate.extend(_deaf_runs(step_results))
-    _check_set_points(campaign, step_results)
+    degenerate.extend(_check_set_points(campaign, step_results))
     stepped = {str(r.engine) for r in campaign.of_kind("throttle_steps")}
     if delay_s is None and measured_delay is not None:
         swept = {str(d["engine"]) for d in delay_runs}
