@@ -217,6 +217,13 @@ def test_a_run_that_gives_no_test_point_is_named_and_a_backwards_wind_refused(
     warnings = json.loads(result.stdout)["warnings"]
     for name in ("edf1_v20p0.csv.gz", "edf1_v25p0.csv.gz"):
         assert any(name in w and "no test point" in w for w in warnings), warnings
+    # a pitot's zero offset at rest (-0.6 m/s on a real rig) is no flipped sign
+    offset = pd.read_csv(runs / "edf1_v00p0.csv.gz")
+    offset["airspeed_m_s"] = offset["airspeed_m_s"] - 0.6
+    offset.to_csv(runs / "edf1_v00p0.csv.gz", index=False)
+    result = CliRunner().invoke(app, ["fit", str(folder / "campaign.yaml"), "--out",
+                                      str(tmp_path / "offset.yaml")])
+    assert result.exit_code == 0, result.output
     backwards = pd.read_csv(runs / "edf1_v30p0.csv.gz")
     backwards["airspeed_m_s"] *= -1
     backwards.to_csv(runs / "edf1_v30p0.csv.gz", index=False)
@@ -263,7 +270,7 @@ def test_sweeps_without_response_or_shifted_and_a_dead_load_cell_are_said(
     shifted["force_n"] = np.roll(shifted["force_n"].to_numpy(), 200)  # 0.2 s at 1 kHz
     shifted.to_csv(runs / "edf2_sweep_v00.csv.gz", index=False)
     warnings = fit("shifted.yaml")["warnings"]
-    assert any("the sine sweeps disagree on the delay" in w for w in warnings), warnings
+    assert any("EDF2: its sine sweeps disagree on the delay" in w for w in warnings), warnings
 
 
 def test_one_engines_undetermined_voltage_exponent_leaves_the_other_engine_alone(

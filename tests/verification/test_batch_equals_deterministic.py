@@ -286,3 +286,24 @@ def test_a_catapults_take_off_is_its_release_and_needs_its_energy(tmp_path) -> N
                                             f"{kinetic:.0f} J"):
         solve_takeoff(with_values(case, {"aircraft.launch_energy_j": kinetic - 1.0}))
     assert solve_takeoff(with_values(case, {"aircraft.launch_energy_j": kinetic + 1.0}))
+
+
+def test_a_transition_arc_beyond_cl_max_reaches_no_obstacle_in_both() -> None:
+    """The arc is flown at 1.15 V_stall: a load factor above 1.15^2 needs CL above cl_max.
+    n = 2 'passed' the obstacle at 110.6 m (outside review). Now the obstacle distance alone
+    is not attainable (single case and batch alike); the ground roll and the other
+    requirements are untouched, so a sampled n does not fail them."""
+    case = with_values(load_case(SHIPPED_CASE), {
+        "requirements.takeoff.max_distance_to_obstacle_m": 200.0})
+    factors = np.array([1.19, 1.3225, 1.33, 2.0])
+    result = BatchEvaluator(case).evaluate({"aircraft.takeoff.transition_load_factor": factors})
+    for row, n in enumerate(factors):
+        single = with_values(case, {"aircraft.takeoff.transition_load_factor": float(n)})
+        assert_equal_to_deterministic(single, result.values, row)
+        verdicts = {v.name: v for v in check_case(single)}
+        assert verdicts["takeoff_ground_roll"].passed
+        obstacle = verdicts["takeoff_distance_to_obstacle"]
+        if n > 1.3225:
+            assert obstacle.value is None and "beyond cl_max" in obstacle.reason
+        else:
+            assert obstacle.passed

@@ -202,6 +202,9 @@ def test_c_thrust_refuses_what_the_model_does_not_have(built: dict) -> None:
         assert math.isnan(c.total_thrust(*args)), args
     assert c.thrust((1.0, 0.0), 20.0, 1.225)[0] == 0 and math.isfinite(c.total_thrust(1.0, 20.0,
                                                                                       1.225))
+    # one rounding step above full throttle (0.1 * 3 / 0.3) is still full throttle
+    assert c.thrust((0.1 * 3 / 0.3, 0.0), 20.0, 1.225)[0] == 0
+    assert c.thrust((1.0001, 0.0), 20.0, 1.225)[0] == RETURN_BAD_THROTTLE
 
 
 def test_extrapolation_flag(built: dict) -> None:

@@ -126,3 +126,32 @@ def test_endurance_flies_a_throttle_above_half_when_half_cannot_hold_level_fligh
     assert verdict.value is not None and verdict.value > 0.0, verdict.reason
     result = BatchEvaluator(case).evaluate()
     assert_equal_to_deterministic(case, result.values, 0)
+
+
+def test_an_idle_dive_past_the_jet_velocity_needs_no_thrust(tmp_path: Path) -> None:
+    """Only thrust the fans cannot make counts: a 5 kg jet whose fans' jet velocity is ~59
+    m/s dives at idle at 62 m/s EAS; that needs no thrust, and it flew before the bound came
+    (a review of the bound found it refused)."""
+    import shutil
+
+    from tuflexperf.analysis.mission import MissionModel
+    from tuflexperf.io.mission import load_mission
+
+    root = SHIPPED_CASE.parent.parent
+    for folder in ("requirements", "data"):
+        shutil.copytree(root / folder, tmp_path / folder)
+    propulsion = tmp_path / "data" / "tuflex" / "propulsion.yaml"
+    propulsion.write_text(propulsion.read_text().replace("fan_area_m2: 0.004342",
+                                                         "fan_area_m2: 0.013"))
+    case = with_values(load_case(tmp_path / "requirements" / "tuflex.yaml"), {
+        "aircraft.mass_kg": 5.0, "aircraft.wing_area_m2": 0.45, "aircraft.cd0": 0.012,
+        "aircraft.k": 0.05, "aircraft.cl_max": 1.2, "aircraft.takeoff.cl_ground": 0.3})
+    assert 55.0 < _jet(case) < 62.0
+    mission = tmp_path / "dive.yaml"
+    mission.write_text(
+        "name: dive\nsegments:\n  - {type: takeoff}\n"
+        "  - {type: climb, to_altitude_m: 300, airspeed_m_s: 30, throttle: 1.0}\n"
+        "  - {type: descent, to_altitude_m: 100, airspeed_m_s: 62, throttle: 0.0}\n"
+        "  - {type: loiter, airspeed_m_s: 20, time_min: 1}\n")
+    flown = MissionModel(case, load_mission(mission), None).fly()
+    assert flown.attainable, flown.reason

@@ -58,6 +58,7 @@ from tuflexperf.models.aircraft import (
     liftoff_speed_m_s,
     obstacle_distances_m,
     stall_speed_m_s,
+    transition_beyond_cl_max,
     transition_radius_m,
     transition_speed_m_s,
     true_airspeed_m_s,
@@ -561,8 +562,11 @@ class _Model:
         gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
         arc, climb, _ = obstacle_distances_m(radius, gradient, height)
         total = roll[0] + (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
-        # a launch that is not attainable (a catapult's "roll" of 0 m included) reaches nothing
-        return np.where(np.isfinite(total) & (roll[3] > 0.5), total, np.nan)
+        # a launch that is not attainable (a catapult's "roll" of 0 m included) reaches nothing;
+        # nor does an arc that needs more than cl_max (solve_takeoff)
+        flown = ~np.asarray(transition_beyond_cl_max(np.asarray(
+            self.aircraft.takeoff.transition_load_factor, dtype=float)), dtype=bool).reshape(-1)
+        return np.where(np.isfinite(total) & (roll[3] > 0.5) & flown, total, np.nan)
 
     def roll_history(self) -> Array:
         """Time [s] at 101 equally spaced airspeeds from rest to V_LO (as the CVODES history).

@@ -444,12 +444,18 @@ class MissionModel:
 
     # -- physics at one instant (backend-neutral) -----------------------------------------
     def _engine_power(self, i: int, x: Any, v: Any, rho: Any) -> Any:
+        from tuflexperf.models._math import fmax
         from tuflexperf.models.powertrain import engine_power_w
 
         prop = self.case.propulsion
         if self.own_power:
-            return density_ratio(prop, rho) * engine_power_w(prop.engines[i], x, v)
-        return self.fan_power.electrical_power_w(x, v)
+            power = density_ratio(prop, rho) * engine_power_w(prop.engines[i], x, v)
+        else:
+            power = self.fan_power.electrical_power_w(x, v)
+        # an ESC draws, it does not charge: the power surface extrapolated to idle at high
+        # airspeed dips below zero, which "charged" the pack past its circuit (a dive failed
+        # on a cut-off it never reached)
+        return fmax(power, 0.0)
 
     def _algebra(self, u: list[Any], v: Any, q: Any, rho: Any, plan_p: Any,
                  dead: int | None) -> dict[str, Any]:
@@ -941,7 +947,11 @@ class MissionModel:
                                      " not attainable, below stall"))
             if plan.kind != "takeoff":  # the take-off analysis holds its own lift-off to it
                 rho_sl = np.asarray(self._rho(h[sl]), dtype=float)
-                fast = np.flatnonzero(beyond_jet_velocity(self.case.propulsion, v[sl], rho_sl))
+                # only thrust the fans cannot make counts: an idle dive past the jet velocity
+                # needs none (the live engines' thrust is the aux's last row)
+                pushing = aux[6 + 3 * n, sl] > 0.0
+                fast = np.flatnonzero(beyond_jet_velocity(self.case.propulsion, v[sl], rho_sl)
+                                      & pushing)
                 if fast.size:
                     k0 = int(fast[0])
                     jet = float(static_jet_velocity_m_s(self.case.propulsion, rho_sl[k0]))

@@ -32,6 +32,7 @@ from tuflexperf.models.aircraft import (
     obstacle_distances_m,
     stall_speed_eas_m_s,
     stall_speed_m_s,
+    transition_beyond_cl_max,
     transition_radius_m,
     transition_speed_m_s,
     true_airspeed_m_s,
@@ -232,6 +233,11 @@ def _airborne(case: Case, height: float) -> _Airborne:
         f"the {height:g} m obstacle is never cleared: the arc tops out at {arc_top_m:.1f} m "
         f"and the full-throttle climb gradient at {v_tr:.1f} m/s is {gradient:.3f} (no climb)"
     )
+    n = aircraft.takeoff.transition_load_factor
+    if transition_beyond_cl_max(n):
+        arc_m = climb_m = math.nan
+        reason = (f"the transition arc at {v_tr:.1f} m/s (1.15 V_stall) with load factor {n:g} "
+                  f"needs CL = {n / 1.15 ** 2:.2f} cl_max, beyond cl_max (at most n = 1.3225)")
     return _Airborne(v_tr, radius, gradient, arc_m, climb_m, arc_top_m, reason)
 
 

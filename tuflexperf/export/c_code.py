@@ -364,13 +364,14 @@ static double tfp_density_scale(double density_kg_m3)
 {scale_body}
 }}
 
-/* A throttle fraction the model has: finite and in [0, 1]. */
+/* A throttle fraction the model has: finite and in [0, 1] (to 1e-9: 0.1 * 3 / 0.3 is one
+ * rounding step above 1 and still full throttle). */
 static int tfp_check_throttle(double throttle)
 {{
     if (!isfinite(throttle)) {{
         return TFP_BAD_ARGUMENT;
     }}
-    return throttle < 0.0 || throttle > 1.0 ? TFP_BAD_THROTTLE : TFP_OK;
+    return throttle < -1e-9 || throttle > 1.0 + 1e-9 ? TFP_BAD_THROTTLE : TFP_OK;
 }}
 
 /* Argument checks shared by every entry point: what is physically meaningless is refused. */

@@ -42,6 +42,9 @@ TABLE_EXTRA_COLUMNS: tuple[str, ...] = (
 REFIT_TABLE_EXTRA_COLUMNS: tuple[str, ...] = ("fitted_thrust_n", "residual_n")
 MAX_MAGNITUDE = 1e9  # no force, airspeed, voltage or current of a thrust stand comes near it
 STATIC_AIRSPEED_NOISE_M_S = 0.5  # a thrust table's airspeed may dip this far below 0 at rest
+# a run's median airspeed this far below 0 is a flipped sign, not a pitot's zero offset at rest
+# (a signed root of a slightly negative dynamic pressure reads -0.6 m/s on a real rig)
+BACKWARDS_RUN_AIRSPEED_M_S = 2.0
 MAX_NAN_FRACTION = 0.01
 """Largest share of NaN samples per column that is repaired rather than refused."""
 MIN_SAMPLES = 10
@@ -268,7 +271,7 @@ def read_run(
         # a tunnel blows one way (as a thrust table's rows): noise dips below zero at rest,
         # a run that sits below it had its sign flipped
         typical = float(np.median(arrays["airspeed_m_s"]))
-        if typical < -STATIC_AIRSPEED_NOISE_M_S:
+        if typical < -BACKWARDS_RUN_AIRSPEED_M_S:
             raise InputError(f"{path}: column airspeed_m_s: median {typical:.4g} m/s is "
                              "negative (a tunnel blows one way: is its sign flipped?)")
     step = float(np.median(steps))

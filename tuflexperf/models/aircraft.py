@@ -356,3 +356,15 @@ def catapult_energy_shortfall(
     if energy_j is None:
         return kinetic < 0.0  # never: the same shape as the kinetic energy
     return energy_j < kinetic
+
+
+def transition_beyond_cl_max(load_factor: Vectorizable) -> Vectorizable:
+    """True where the transition arc, flown at ``1.15 V_stall``, needs more than ``cl_max``:
+    a load factor ``n`` needs ``CL = n cl_max / 1.15^2`` (the default 1.19 is 0.9 cl_max).
+
+    References
+    ----------
+    Raymer, *Aircraft Design*, 17.8.3 (transition at 1.15 V_stall, CL = 0.9 cl_max);
+    Anderson, *Aircraft Performance and Design*, 6.7.
+    """
+    return load_factor > TRANSITION_SPEED_OVER_STALL ** 2 * (1.0 + 1e-12)
