@@ -108,6 +108,9 @@ def _legend(ax: Any, **kwargs: Any) -> Any:
     return legend_outside(ax, **kwargs)
 
 
+# characters per line of the requirements page's text (monospace, 9 pt, landscape A4)
+_REQUIREMENT_TEXT_COLUMNS = 128
+
 # hatch of a stretch not attainable, by reason (full throttle not enough: the plain band)
 _REASON_HATCH = {BELOW_STALL: "..", BEYOND_JET_VELOCITY: "xx"}
 
@@ -296,16 +299,22 @@ def requirement_table(case: Case, analyses: Analyses) -> Any:
     for v in verdicts:
         lines.append(f"{v.name}: {v.reason}")
         lines.extend(f"    note: {w}" for w in v.details.get("warnings", []))
+    import textwrap
+
+    # monospace at 9 pt: the page holds ~130 characters; matplotlib's own wrap cut at the
+    # figure's edge, past the table's right side
+    wrapped = [textwrap.fill(line, width=_REQUIREMENT_TEXT_COLUMNS,
+                             subsequent_indent=" " * (len(line) - len(line.lstrip()) + 4))
+               for line in lines]
     ax.text(
         0.0,
         0.5,
-        "\n".join(lines),
+        "\n".join(wrapped),
         transform=ax.transAxes,
         va="top",
         ha="left",
         fontsize=9,
         family="monospace",
-        wrap=True,
     )
     return fig
 
