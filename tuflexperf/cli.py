@@ -416,15 +416,19 @@ def takeoff(
         emit_json(payload)
     else:
         r = result
-        typer.echo(f"{case.name}: take-off at full throttle ({r.density_kg_m3:.4f} kg/m^3)")
+        catapult = r.launch == "catapult"
+        typer.echo(f"{case.name}: take-off at full throttle ({r.density_kg_m3:.4f} kg/m^3)"
+                   + (", catapult launch" if catapult else ""))
         typer.echo(
-            f"  lift-off speed     {r.liftoff_speed_m_s:8.2f} m/s  "
+            f"  {'release speed ' if catapult else 'lift-off speed'}     "
+            f"{r.liftoff_speed_m_s:8.2f} m/s  "
             f"({r.liftoff_speed_eas_m_s:.2f} m/s EAS; stall {r.stall_speed_m_s:.2f} m/s)"
         )
-        typer.echo(f"  acceleration       {r.acceleration_distance_m:8.2f} m")
-        typer.echo(
-            f"  rotation           {r.rotation_distance_m:8.2f} m  ({r.rotation_time_s:g} s)"
-        )
+        if not catapult:  # a catapult has no runway: nothing rolls
+            typer.echo(f"  acceleration       {r.acceleration_distance_m:8.2f} m")
+            typer.echo(
+                f"  rotation           {r.rotation_distance_m:8.2f} m  ({r.rotation_time_s:g} s)"
+            )
         typer.echo(f"  ground roll        {r.ground_roll_m:8.2f} m  in {r.time_s:.2f} s")
         typer.echo(
             f"  transition arc     {r.transition_distance_m:8.2f} m  (R {r.transition_radius_m:.1f}"

@@ -716,12 +716,15 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     s, v, t = result.history_distance_m, result.history_airspeed_m_s, result.history_time_s
     v_lo, roll = result.liftoff_speed_m_s, result.ground_roll_m
     s_acc = result.acceleration_distance_m
-    av.plot(s, v, **STYLE["takeoff"], label=f"ground run, full throttle ({t[-1]:.1f} s)")
+    catapult = result.launch == "catapult"  # released airborne: no ground run to draw
+    if not catapult:
+        av.plot(s, v, **STYLE["takeoff"], label=f"ground run, full throttle ({t[-1]:.1f} s)")
     if result.rotation_distance_m > 0:
         av.plot([s_acc, roll], [v_lo, v_lo], **_style("takeoff", linestyle="-.", linewidth=3.0),
                 label=f"rotation at the lift-off speed ({result.rotation_time_s:.2f} s)")
     av.plot([roll], [v_lo], **POINT["least"],
-            label=f"lift-off: {roll:.1f} m after {result.time_s:.1f} s at {v_lo:.1f} m/s")
+            label=f"catapult release at {v_lo:.1f} m/s (no runway)" if catapult else
+            f"lift-off: {roll:.1f} m after {result.time_s:.1f} s at {v_lo:.1f} m/s")
     right = roll
     obstacle = result.distance_to_obstacle_m
     if obstacle is not None:
@@ -778,11 +781,16 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     af.set_xlabel("distance from brake release s (m)")
     af.set_ylabel("force (N)")
     af.set_title("forces on the ground run", fontsize=10)
+    if catapult:
+        af.text(0.5, 0.5, "catapult launch: no ground run (the catapult's energy, not the "
+                "battery's, brings the aircraft to its release speed)", transform=af.transAxes,
+                ha="center", va="center", fontsize=10)
     _legend(av)
     _legend(af)
+    start = (f"catapult release at {v_lo:.1f} m/s, no ground roll" if catapult else
+             f"ground roll {roll:.1f} m to lift-off at {v_lo:.1f} m/s")
     fig.suptitle(
-        f"Take-off of {case.name} at full throttle: ground roll {roll:.1f} m to lift-off at "
-        f"{v_lo:.1f} m/s"
+        f"Take-off of {case.name} at full throttle: {start}"
         + (f", {obstacle:.1f} m to the {result.obstacle_height_m:g} m obstacle"
            if obstacle is not None else f"; {result.obstacle_reason}")
     )
