@@ -143,6 +143,11 @@ def test_invalid_yaml_duplicate_keys_and_non_mapping(tmp_path):
     )
     (tmp_path / "aircraft.yaml").write_text("- just\n- a list\n")
     _assert_bad(runner.invoke(app, ["check", str(case)]), "aircraft.yaml", "mapping")
+    # a merge key: "could not determine a constructor for the tag ...:merge" told nothing
+    (tmp_path / "aircraft.yaml").write_text(
+        "shared: &t {cl_ground: 0.4}\n" + yaml.safe_dump(MADE_UP_AIRCRAFT).replace(
+            "takeoff:", "takeoff:\n  <<: *t\nunused_takeoff:", 1))
+    _assert_bad(runner.invoke(app, ["check", str(case)]), "aircraft.yaml", "merge key '<<'")
 
 
 def test_trim_without_envelope_names_the_missing_block(tmp_path):

@@ -98,6 +98,8 @@ def broken_campaign(folder: Path) -> Path:
         (["{table}", "--delay-s", "-1"], "--delay-s"),
         # longer than any throttle plateau: it blamed the airspeed coverage of the runs
         (["{table}", "--delay-s", "5"], "--delay-s: 5 s is beyond 1 s"),
+        # it wrote files named "-" and "-_thrust_table.csv" (outside audit)
+        (["{table}", "--out", "-"], "--out: '-' (stdout) is no file name"),
         (["{table}", "--out", "{tmp}"], "--out"),
         (["{campaign}"], "missing column 'force_n'"),
     ],

@@ -79,6 +79,9 @@ def read_yaml(path: Path) -> Any:
         mark = getattr(exc, "problem_mark", None)
         where = f" (line {mark.line + 1})" if mark is not None else ""
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        if "yaml.org,2002:merge" in problem:  # the loader knows plain anchors and aliases only
+            problem = ("a merge key '<<' is not read here (anchors and aliases are): write "
+                       "the merged keys out")
         raise InputError(f"{path}: invalid YAML{where}: {problem}") from None
     except (ValueError, OverflowError) as exc:  # e.g. an integer of more than 4300 digits
         raise InputError(f"{path}: invalid YAML: a value cannot be read: "

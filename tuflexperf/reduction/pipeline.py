@@ -1223,6 +1223,9 @@ def _fit_battery(path: Path, out: Path, table: Path | None, glauert: bool) -> di
 
 
 def _check_output(path: Path, flag: str) -> None:
+    if str(path) == "-":  # the shell's "stdout": fit writes files, and JSON with --json
+        raise InputError(f"{flag}: '-' (stdout) is no file name; give a file, and --json for "
+                         "the summary on stdout")
     if path.is_dir():
         raise InputError(f"{flag}: {path} is a directory, expected a file name")
 
