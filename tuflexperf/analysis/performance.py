@@ -502,6 +502,11 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
     ceiling = p.jet_ceiling_m_s(rho)
     if v_min is None:
         notes.append("no level flight at full throttle at any airspeed above stall")
+    elif not bounded:
+        notes.append(
+            "full-throttle thrust keeps up with parasite drag at every airspeed: the thrust "
+            "model gives no maximum level speed (extrapolation far beyond the tested range)"
+        )
     if v_max is not None and v_max >= ceiling * (1.0 - 1e-12):
         notes.append(
             f"max level speed: the fans' static jet velocity {ceiling:.1f} m/s (momentum theory "
@@ -512,11 +517,6 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
         notes.append(
             f"the least airspeed {least:.2f} m/s is at or beyond the fans' static jet velocity "
             f"{ceiling:.1f} m/s: no level flight"
-        )
-    elif not bounded:
-        notes.append(
-            "full-throttle thrust keeps up with parasite drag at every airspeed: the thrust "
-            "model gives no maximum level speed (extrapolation far beyond the tested range)"
         )
     max_rate, vy = p.max_climb_rate(rho)
     max_grad, vx = p.max_gradient(rho)

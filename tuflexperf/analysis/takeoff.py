@@ -22,6 +22,7 @@ from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     DEFAULT_OBSTACLE_HEIGHT_M,
+    TRANSITION_SPEED_OVER_STALL,
     Aircraft,
     catapult_energy_shortfall,
     climb_gradient,
@@ -236,8 +237,10 @@ def _airborne(case: Case, height: float) -> _Airborne:
     n = aircraft.takeoff.transition_load_factor
     if transition_beyond_cl_max(n):
         arc_m = climb_m = math.nan
-        reason = (f"the transition arc at {v_tr:.1f} m/s (1.15 V_stall) with load factor {n:g} "
-                  f"needs CL = {n / 1.15 ** 2:.2f} cl_max, beyond cl_max (at most n = 1.3225)")
+        reason = (f"the transition arc at {v_tr:.1f} m/s ({TRANSITION_SPEED_OVER_STALL:g} "
+                  f"V_stall) with load factor {n:g} needs CL = "
+                  f"{n / TRANSITION_SPEED_OVER_STALL ** 2:.2f} cl_max, beyond cl_max (at most "
+                  f"n = {TRANSITION_SPEED_OVER_STALL ** 2:.5g})")
     return _Airborne(v_tr, radius, gradient, arc_m, climb_m, arc_top_m, reason)
 
 

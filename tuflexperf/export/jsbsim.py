@@ -213,14 +213,14 @@ def system_text(model: ExportModel) -> str:
             f"{lag}\n"
             "  </channel>"
         )
+    limit = _number(max_model_airspeed_m_s(prop))
     airspeed = (
         '  <channel name="tfp-airspeed">\n'
-        "    <!-- true airspeed in m/s, held to 0 .. the model's limit "
-        f"{_number(max_model_airspeed_m_s(prop))} m/s -->\n"
+        f"    <!-- true airspeed in m/s, held to 0 .. the model's limit {limit} m/s -->\n"
         f'    <pure_gain name="{AIRSPEED_PROPERTY}">\n'
         "      <input>velocities/vtrue-fps</input>\n"
         f"      <gain>{_number(FT_M)}</gain>\n"
-        f"      <clipto><min>0</min><max>{_number(max_model_airspeed_m_s(prop))}</max></clipto>\n"
+        f"      <clipto><min>0</min><max>{limit}</max></clipto>\n"
         "    </pure_gain>\n"
         "  </channel>"
     )
