@@ -1,0 +1,53 @@
+"""The console entry point ends the process at once, with Python's exit status and every
+byte of output written (it skips only the interpreter's teardown)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from tuflexperf.entry import exit_status
+
+
+def test_exit_status_is_pythons(capsys):
+    assert exit_status(None) == 0
+    assert exit_status(0) == 0 and exit_status(1) == 1 and exit_status(2) == 2
+    assert exit_status(256 + 3) == 3  # as the OS keeps it
+    assert exit_status("gone") == 1  # SystemExit("gone"): the message on stderr, status 1
+    assert capsys.readouterr().err == "gone\n"
+
+
+@pytest.mark.parametrize(
+    ("argv", "status"),
+    [(["check", "--json"], 0), (["check", "--json", "--set", "aircraft.mass_kg=60"], 1)],
+)
+def test_a_command_ends_with_its_status_and_whole_output(argv, status):
+    done = subprocess.run([sys.executable, "-m", "tuflexperf", *argv], capture_output=True,
+                          text=True)
+    assert done.returncode == status, done.stderr
+    result = json.loads(done.stdout)  # the whole object, not a buffer cut at exit
+    assert result["passed"] is (status == 0)
+
+
+def test_bad_input_still_one_line_and_exit_2():
+    done = subprocess.run([sys.executable, "-m", "tuflexperf", "check", "--set",
+                           "aircraft.mas_kg=3"], capture_output=True, text=True)
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1 and "aircraft.mass_kg" in done.stderr
+
+
+def test_a_bug_still_unwinds_with_its_traceback():
+    """Only an exit skips the teardown: an error that is not one is raised as usual."""
+    code = (
+        "import tuflexperf.cli as cli\n"
+        "def broken(argv=None):\n    raise ZeroDivisionError('bug')\n"
+        "cli.main = broken\n"
+        "from tuflexperf.entry import main\n"
+        "main()\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 1
+    assert "ZeroDivisionError: bug" in done.stderr and "Traceback" in done.stderr
