@@ -105,6 +105,62 @@ def test_a_users_csv_that_looks_like_an_output_is_not_replaced(tmp_path, flag_ar
     assert _run(tmp_path, *own).returncode == 0
 
 
+def test_a_command_never_replaces_what_another_command_wrote(tmp_path) -> None:
+    """SPEC 5: no command replaces a file it did not write itself. A mission's --csv onto
+    fit's propulsion file, a sweep's plot onto a report page, were accepted as "an earlier
+    output of tuflexperf" (outside audit)."""
+    campaign = ROOT / "data/tuflex/campaign/campaign.yaml"
+    mission = next((ROOT / "data/tuflex/missions").glob("*.yaml"))
+    assert _run(tmp_path, "fit", str(campaign), "--out", "p.yaml").returncode == 0
+    assert _run(tmp_path, "mission", str(mission), "--csv", "m.csv").returncode == 0
+    vary = ("sweep", "--vary", "aircraft.mass_kg=24:26:2")
+    assert _run(tmp_path, *vary, "--csv", "s.csv", "--plot", "s.png").returncode == 0
+    assert _run(tmp_path, "report", "--out", "rv").returncode == 0
+    written = {name: (tmp_path / name).read_bytes() for name in
+               ("p.yaml", "p_thrust_table.csv", "m.csv", "s.csv", "s.png",
+                "rv/01_requirements.png")}
+    attempts = [
+        ("mission", ("mission", str(mission), "--csv", "p.yaml"), "fit"),
+        ("mission", ("mission", str(mission), "--csv", "p_thrust_table.csv"), "fit"),
+        ("mission", ("mission", str(mission), "--csv", "s.csv"), "sweep"),
+        ("sweep", (*vary, "--csv", "m.csv"), "mission"),
+        ("sweep", (*vary, "--csv", "p_thrust_table.csv"), "fit"),
+        ("sweep", (*vary, "--plot", "rv/01_requirements.png"), "report"),
+        ("fit", ("fit", str(campaign), "--out", "q.yaml", "--table", "m.csv"), "mission"),
+    ]
+    for command, args, owner in attempts:
+        out = _run(tmp_path, *args)
+        assert out.returncode == 2, (args, out.stderr)
+        assert f"written by `tuflexperf {owner}`, not by `tuflexperf {command}`" in out.stderr
+        assert len(out.stderr.strip().splitlines()) == 1
+    assert {name: (tmp_path / name).read_bytes() for name in written} == written
+    assert not (tmp_path / "q.yaml").exists()
+    # each command still replaces its own
+    assert _run(tmp_path, "mission", str(mission), "--csv", "m.csv").returncode == 0
+    assert _run(tmp_path, *vary, "--csv", "s.csv", "--plot", "s.png").returncode == 0
+
+
+def test_written_by_reads_the_png_software_chunk() -> None:
+    import io
+
+    from PIL import Image
+    from PIL.PngImagePlugin import PngInfo
+
+    def png(software: str | None) -> bytes:
+        info = PngInfo()
+        if software is not None:
+            info.add_text("Software", software)
+        buffer = io.BytesIO()
+        Image.new("RGB", (4, 4)).save(buffer, format="png", pnginfo=info)
+        return buffer.getvalue()
+
+    assert files.written_by(png("tuflexperf sweep")) == "sweep"
+    assert files.written_by(png("tuflexperf 0.1.0")) == "report"
+    assert files.written_by(png("tuflexperfX")) is None
+    assert files.written_by(png("GIMP")) is None
+    assert files.written_by(png(None)) is None
+
+
 def test_the_recognised_sweep_names_are_every_requirement_check_can_name() -> None:
     source = (ROOT / "tuflexperf/analysis/requirements.py").read_text()
     names = {call.args[0].value for call in ast.walk(ast.parse(source))

@@ -361,7 +361,7 @@ def sweep(
         from tuflexperf.io.case import case_files
         from tuflexperf.io.files import guard_outputs
 
-        guard_outputs(outputs, [path for _, path in case_files(case)])
+        guard_outputs(outputs, [path for _, path in case_files(case)], "sweep")
     axes = [parse_vary(case, spec) for spec in vary]
     result = run_sweep(case, axes, workers, dask)
     if plot is not None:
@@ -646,7 +646,7 @@ def mission(
 
         # every file the flight reads: the case's (SPEC 5) and the mission itself
         inputs = [Path(mission_file), *(path for _, path in case_files(case))]
-        guard_outputs({"--csv": csv}, inputs)
+        guard_outputs({"--csv": csv}, inputs, "mission")
     limit = requirement.min_landing_charge_fraction if requirement is not None else None
     try:
         result = solve_mission(case, plan, limit)

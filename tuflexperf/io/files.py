@@ -153,7 +153,8 @@ REQUIREMENT_NAMES = frozenset({  # check's result names (analysis/requirements.p
     "takeoff_ground_roll", "takeoff_distance_to_obstacle", "trim_throttle_max",
     "oei_min_throttle", "flight_endurance", "mission_landing_charge",
 })
-PNG_SOFTWARE = "tuflexperf"  # the PNG text chunk 'Software' of every single PNG written
+PNG_SOFTWARE = "tuflexperf"  # the PNG text chunk 'Software' of a report page: + " VERSION"
+SWEEP_PNG_SOFTWARE = "tuflexperf sweep"  # ... and of sweep's carpet plot
 
 
 def _is_mission_history(columns: list[str]) -> bool:
@@ -183,33 +184,55 @@ def _is_sweep_grid(columns: list[str]) -> bool:
     return True
 
 
-def written_by_tuflexperf(head: bytes) -> bool:
-    """True if ``head`` (a file's first bytes) is how an output of this tool begins.
+def _png_software(head: bytes) -> str | None:
+    """The text of a PNG's ``Software`` chunk among ``head``'s chunks (None without one)."""
+    at = 8  # past the signature
+    while at + 8 <= len(head):
+        length = int.from_bytes(head[at:at + 4], "big")
+        kind, body = head[at + 4:at + 8], head[at + 8:at + 8 + length]
+        if kind == b"IDAT" or len(body) < length:  # metadata comes before the image
+            return None
+        if kind == b"tEXt" and body.startswith(b"Software\x00"):
+            return body.removeprefix(b"Software\x00").decode("latin-1")
+        at += 12 + length
+    return None
+
+
+def written_by(head: bytes) -> str | None:
+    """Which command wrote a file that begins with ``head`` (None: not this tool).
 
     YAML written by ``fit`` says ``written by `tuflexperf ...``` on its first comment line; a
-    PNG carries ``Software: tuflexperf``; each CSV has its own header, matched whole: fit's
-    thrust table, a mission's history (its columns, then six per engine), a sweep's grid
-    (the varied keys, then ``<requirement>_value, _limit, _passed`` per requirement).
+    PNG carries ``Software: tuflexperf sweep`` (the carpet plot) or ``tuflexperf VERSION`` (a
+    report page); each CSV has its own header, matched whole: fit's thrust table, a
+    mission's history (its columns, then six per engine), a sweep's grid (the varied keys,
+    then ``<requirement>_value, _limit, _passed`` per requirement).
     """
     first_line = head.split(b"\n", 1)[0]
     # fit's YAML (thrust model, battery) says so on its first comment line
-    if first_line.startswith(b"#") and b"written by `tuflexperf " in first_line.lower():
-        return True
+    if first_line.startswith(b"#") and b"written by `tuflexperf fit" in first_line.lower():
+        return "fit"
     if head.startswith(b"\x89PNG"):
-        return b"Software\x00" + PNG_SOFTWARE.encode() in head
+        software = _png_software(head) or ""
+        if software == SWEEP_PNG_SOFTWARE:
+            return "sweep"
+        return "report" if software.startswith(PNG_SOFTWARE + " ") else None
     if b"\n" not in head:  # a header is a whole first line
-        return False
+        return None
     try:
         header = first_line.decode("utf-8").strip()
     except UnicodeDecodeError:
-        return False
+        return None
     columns = header.split(",")
-    return (header in _thrust_table_headers() or _is_mission_history(columns)
-            or _is_sweep_grid(columns))
+    if header in _thrust_table_headers():
+        return "fit"
+    if _is_mission_history(columns):
+        return "mission"
+    return "sweep" if _is_sweep_grid(columns) else None
 
 
-def refuse_foreign_files(outputs: dict[str, Path]) -> None:
-    """Refuse (exit 2) to replace an existing file that this tool did not write (SPEC 5)."""
+def refuse_foreign_files(outputs: dict[str, Path], command: str) -> None:
+    """Refuse (exit 2) to replace an existing file that ``command`` did not write (SPEC 5:
+    a fitted model is not a mission's to overwrite, nor a report page a sweep's)."""
     for flag, out in outputs.items():
         out = Path(out)
         if out.is_symlink():  # replacing it would replace the user's link, not write through
@@ -222,16 +245,22 @@ def refuse_foreign_files(outputs: dict[str, Path]) -> None:
                 head = handle.read(4096)
         except OSError:
             head = None
-        if head is None or not written_by_tuflexperf(head):
+        writer = written_by(head) if head is not None else None
+        if writer is None:
             raise InputError(
                 f"{flag}: {out} exists and is not an earlier output of tuflexperf; refusing "
                 "to replace it, choose another path"
             )
+        if writer != command:
+            raise InputError(
+                f"{flag}: {out} was written by `tuflexperf {writer}`, not by `tuflexperf "
+                f"{command}`; refusing to replace it, choose another path"
+            )
 
 
-def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path]) -> None:
+def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str) -> None:
     """Refuse an output that is, or would overwrite, one of the command's inputs, or an
-    existing file that is not an earlier output of this tool (exit 2).
+    existing file that is not an earlier output of ``command`` (exit 2).
 
     ``outputs`` maps the flag (``--out``) to its path. Also refuses an output that is an
     existing directory where a file is expected. Two outputs may not be the same path.
@@ -252,7 +281,7 @@ def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path]) -> None:
                 )
         if out.is_dir():
             raise InputError(f"{flag}: {out} is a directory, expected a file")
-    refuse_foreign_files(outputs)
+    refuse_foreign_files(outputs, command)
 
 
 def check_output_dir(out: Path, command: str) -> None:

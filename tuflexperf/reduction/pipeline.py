@@ -1269,7 +1269,7 @@ def run_fit(
     from tuflexperf.io.proptables import is_propeller_manifest
 
     inputs = _fit_inputs(input_path)
-    guard_outputs({"--out": out}, inputs)
+    guard_outputs({"--out": out}, inputs, "fit")
     if is_battery_file(input_path):
         return _fit_battery(input_path, out, table, glauert)
 
@@ -1287,7 +1287,7 @@ def run_fit(
         _check_output(table, "--table")
         if table.resolve() == out.resolve():
             raise InputError("--table: must differ from --out")
-        guard_outputs({"--out": out, "--table": table}, inputs)
+        guard_outputs({"--out": out, "--table": table}, inputs, "fit")
         if result.table_text is not None:
             files[table] = result.table_text
     write_files(files)

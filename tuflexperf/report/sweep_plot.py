@@ -80,9 +80,10 @@ def carpet_png(result: Any, title: str) -> bytes:
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     buffer = io.BytesIO()
-    from tuflexperf.io.files import PNG_SOFTWARE
+    from tuflexperf.io.files import SWEEP_PNG_SOFTWARE
 
-    # 'Software: tuflexperf' marks the PNG as ours: a later sweep may replace it (SPEC 5)
-    fig.savefig(buffer, format="png", dpi=150, metadata={"Software": PNG_SOFTWARE})
+    # 'Software: tuflexperf sweep' marks the PNG as a sweep's: a later sweep may replace it
+    # (SPEC 5), nothing else
+    fig.savefig(buffer, format="png", dpi=150, metadata={"Software": SWEEP_PNG_SOFTWARE})
     plt.close(fig)
     return buffer.getvalue()
