@@ -209,7 +209,7 @@ def check(
     plan = None
     sample_notes: list[str] = []
     if sampling:
-        from tuflexperf.analysis.requirements import probabilistic_verdicts
+        from tuflexperf.analysis.requirements import probabilistic_verdicts, sampled_result
         from tuflexperf.analysis.uncertainty import plan_for, run_samples
 
         plan = plan_for(case, samples, seed)
@@ -222,12 +222,12 @@ def check(
         sample_set = run_samples(case, plan, workers, dask)
         probabilistic = probabilistic_verdicts(sample_set)
         outside = {k: n for k, n in sample_set.outside_bounds.items() if n}
-        passed = passed and all(p.passed for p in probabilistic.values())
+        passed = all(sampled_result(v, probabilistic.get(v.name))["passed"]
+                     for v in verdicts)
     if as_json:
-        results = [
-            {**v.to_dict(), **(probabilistic[v.name].to_dict() if v.name in probabilistic else {})}
-            for v in verdicts
-        ]
+        from tuflexperf.analysis.requirements import sampled_result
+
+        results = [sampled_result(v, probabilistic.get(v.name)) for v in verdicts]
         payload: dict[str, Any] = {
             "case": case.name,
             "case_file": str(case.path),

@@ -339,6 +339,19 @@ class ProbabilisticVerdict:
         }
 
 
+def sampled_result(verdict: Verdict, probabilistic: ProbabilisticVerdict | None) -> dict[str, Any]:
+    """One requirement's JSON with its samples: ``passed`` is the verdict the exit code
+    follows (the nominal case met and P(met) shown), ``nominal_passed`` the nominal alone.
+
+    A ``passed: true`` beside a failed probability read as "met" to any tool that reads
+    the results (outside audit): the overall verdict and each result's now agree.
+    """
+    if probabilistic is None:
+        return verdict.to_dict()
+    return {**verdict.to_dict(), **probabilistic.to_dict(), "nominal_passed": verdict.passed,
+            "passed": verdict.passed and probabilistic.passed}
+
+
 def probabilistic_verdicts(samples: Any) -> dict[str, ProbabilisticVerdict]:
     """Per requirement of a :class:`tuflexperf.analysis.uncertainty.SampleSet`."""
     from tuflexperf.analysis.probability import clopper_pearson
