@@ -200,13 +200,15 @@ def test_duplicate_key_in_battery_file(tmp_path):
     ],
 )
 def test_bad_run_file_is_exit_2_naming_the_run(tmp_path, content, problem):
-    # without its fit block the battery file's runs are read (and refused) at check time;
-    # with it, a changed run is refused by its sha256 (test below)
+    # the runs are read (and refused) by the fit that writes the pack model; check reads
+    # that model only, and refuses a changed run by its sha256 (test below)
     path = _battery_copy(tmp_path, lambda d: d.pop("fit", None))
     run_file = path.parent / "endurance" / "edf1_endurance_75.csv"
     run_file.write_text(content)
-    result = run("endurance", "--throttle", "0.5", "--case", str(_case_with(tmp_path, path)))
+    out = tmp_path / "fitted.yaml"
+    result = run("fit", str(path), "--out", str(out))
     assert result.exit_code == 2, result.output
+    assert not out.exists()
     assert run_file.name in result.stderr and problem in result.stderr
     assert result.stderr.count("\n") == 1
 

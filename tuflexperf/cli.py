@@ -482,7 +482,8 @@ def trim(
     if case.requirements.envelope is None:
         fail_input(f"{case.path}: requirements.envelope: trim needs the envelope requirement")
     limit = case.requirements.envelope.max_trim_throttle
-    met = trim_verdict(case.requirements.envelope, result).passed  # the one verdict rule
+    verdict = trim_verdict(case.requirements.envelope, result)  # the one verdict rule
+    met = verdict.passed
     if as_json:
         emit_json({**data, "max_trim_throttle": limit, "passed": met})
     else:
@@ -509,6 +510,11 @@ def trim(
         if table:
             _throttle_table(v, data["throttle"], data["not_attainable_reason"])
         _print_warnings(data["warnings"])
+        # the verdict and why, as take-off and OEI print theirs (SPEC 5: exit 1 says why)
+        why = (verdict.reason if verdict.value is None else
+               f"highest throttle {verdict.value:.3f} above the limit {limit:g}")
+        typer.echo(f"  {verdict.name}: {'PASS' if met else 'FAIL'}"
+                   + ("" if met else f" ({why})"))
     raise typer.Exit(0 if met else 1)
 
 
@@ -1068,6 +1074,12 @@ def main(argv: list[str] | None = None) -> None:
     # pydantic otherwise scans every installed package's entry points for plugins on the
     # first model (importlib.metadata, ~10 ms of each `check`); a user may still enable them
     os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
+    # numpy's overflow in an extreme sample or margin search (exp of a huge charge) gives an
+    # inf that the analysis turns into "not attainable"; its warning, with a source line, is
+    # noise on the user's screen (outside audit)
+    import warnings
+
+    warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"tuflexperf(\.|$)")
     def aborted() -> None:
         sys.stderr.write("tuflexperf: aborted\n")
         sys.exit(130)

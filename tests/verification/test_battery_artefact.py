@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import json
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -36,7 +39,6 @@ def test_check_neither_reads_nor_fits_the_discharge_runs(monkeypatch: pytest.Mon
         raise AssertionError("check read or fitted the discharge runs")
 
     monkeypatch.setattr(endurance, "read_discharge_run", forbidden)
-    monkeypatch.setattr(endurance, "fit_discharge", forbidden)
     monkeypatch.setattr(fits, "fit_discharge", forbidden)
     endurance._characterisation_cache = endurance.BoundedCache()
     endurance._model_cache = endurance.BoundedCache()
@@ -44,18 +46,31 @@ def test_check_neither_reads_nor_fits_the_discharge_runs(monkeypatch: pytest.Mon
     assert any(v.name == "flight_endurance" and v.passed for v in verdicts)
 
 
-def test_unfitted_and_fitted_battery_give_the_same_endurance(tmp_path: Path) -> None:
-    """Without its fit block a battery file is fitted on the fly (with a note): same answer."""
-    from tuflexperf.analysis.endurance import solve_endurance
-
+def test_an_unfitted_battery_is_bad_input_and_fit_makes_it_whole(tmp_path: Path) -> None:
+    """SPEC 4: check reads the pack model and never fits. Without its fit block a battery
+    file was fitted on the fly (outside audit); now check names the file and the command
+    that fits it, and the file `fit` writes gives the shipped answer."""
     for folder in ("requirements", "data"):
         shutil.copytree(ROOT / folder, tmp_path / folder)
     path = tmp_path / "data" / "tuflex" / "battery.yaml"
     data = yaml.safe_load(path.read_text())
-    fitted = solve_endurance(load_case(tmp_path / "requirements" / "tuflex.yaml"), 0.5)
     data.pop("fit")
     path.write_text(yaml.safe_dump(data))
-    unfitted = solve_endurance(load_case(tmp_path / "requirements" / "tuflex.yaml"), 0.5)
-    assert unfitted.flight_endurance_min == pytest.approx(fitted.flight_endurance_min, rel=1e-9)
-    assert any("no fitted pack model" in w for w in unfitted.warnings)
-    assert not any("no fitted pack model" in w for w in fitted.warnings)
+    case_file = tmp_path / "requirements" / "tuflex.yaml"
+    done = subprocess.run([sys.executable, "-m", "tuflexperf", "check", str(case_file)],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.count("\n") == 1
+    assert "battery.yaml: no fitted pack model" in done.stderr and "tuflexperf fit" in done.stderr
+    fitted = tmp_path / "data" / "tuflex" / "battery_fitted.yaml"
+    written = subprocess.run([sys.executable, "-m", "tuflexperf", "fit", str(path), "--out",
+                              str(fitted)], capture_output=True, text=True)
+    assert written.returncode == 0, written.stderr
+    case_file.write_text(case_file.read_text().replace("battery.yaml", "battery_fitted.yaml"))
+    again = subprocess.run([sys.executable, "-m", "tuflexperf", "check", str(case_file),
+                            "--json"], capture_output=True, text=True)
+    assert again.returncode == 0, again.stderr
+    endurance = next(r for r in json.loads(again.stdout)["results"]
+                     if r["name"] == "flight_endurance")
+    shipped = next(v for v in check_case(load_case(None)) if v.name == "flight_endurance")
+    assert endurance["value"] == pytest.approx(shipped.value, rel=1e-9)

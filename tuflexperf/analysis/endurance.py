@@ -36,7 +36,6 @@ flight, and of longest cruise distance (constant-power cruise, no voltage effect
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -61,7 +60,6 @@ from tuflexperf.models.battery import (
     cutoff_residual_v,
     discharge_time_s,
     published_static_power_w,
-    time_to_cutoff_s,
 )
 from tuflexperf.models.powertrain import PowerSurfaces, engine_power_w, power_surfaces
 from tuflexperf.models.thrust import (
@@ -74,7 +72,6 @@ from tuflexperf.models.thrust import (
 from tuflexperf.reduction.battery import (
     DischargeFit,
     PowerFit,
-    fit_discharge,
     fit_fan_power,
     refuse_unreproduced_runs,
 )
@@ -125,7 +122,7 @@ class BatteryCharacterisation:
     runs: tuple[Any, ...]  # DischargeRun, or the RunSummary a fitted battery file stores
     fit: DischargeFit
     power: PowerFit
-    stored_cross_validation: tuple[CrossValidation, ...] | None = None
+    stored_cross_validation: tuple[CrossValidation, ...] = ()
     notes: tuple[str, ...] = ()
 
     def discharge_runs(self) -> tuple[DischargeRun, ...]:
@@ -133,39 +130,10 @@ class BatteryCharacterisation:
         return tuple(r if isinstance(r, DischargeRun) else read_discharge_run(r.path)
                      for r in self.runs)
 
-    @functools.cached_property
+    @property
     def cross_validation(self) -> tuple[CrossValidation, ...]:
-        """Each run's model predicting every other run's time to cut-off.
-
-        Stored by ``fit`` in a fitted battery file; otherwise computed on first use
-        (``check`` needs the fit, not its validation).
-        """
-        if self.stored_cross_validation is not None:
-            return self.stored_cross_validation
-        cells, capacity = self.battery.cells_in_series, self.battery.capacity_ah
-        checks = []
-        if len(self.runs) > 1:
-            for k, source in enumerate(self.runs):
-                alone = fit_discharge([source], cells, capacity).parameters
-                for j, target in enumerate(self.runs):
-                    if j == k:
-                        continue
-                    predicted = time_to_cutoff_s(
-                        alone,
-                        target.mean_power_w,
-                        self.battery.cutoff_voltage_v,
-                        1,
-                        target.start_charge_ah,
-                    )
-                    checks.append(
-                        CrossValidation(
-                            source.path.name,
-                            target.path.name,
-                            target.time_to_cutoff_s / 60.0,
-                            predicted / 60.0,
-                        )
-                    )
-        return tuple(checks)
+        """Each run's model predicting every other run's time to cut-off (stored by ``fit``)."""
+        return self.stored_cross_validation or ()
 
 
 def _file_key(path: Path) -> tuple[str, float, int]:
@@ -219,21 +187,18 @@ def _stored_fit(battery: Battery) -> tuple[tuple[Any, ...], DischargeFit, tuple[
 
 def _characterise(battery: Battery, case: Case) -> BatteryCharacterisation:
     notes: tuple[str, ...] = ()
-    stored_checks = None
-    if battery.fitted is not None:
-        runs, fit, stored_checks = _stored_fit(battery)
-        drawn_of = [r.charge_drawn_ah for r in runs]
-    else:
-        runs = tuple(read_discharge_run(r.path) for r in battery.runs)
-        drawn_of = [float(r.charge_ah[-1]) for r in runs]
-        notes = (f"{battery.path.name} carries no fitted pack model: fitted now from its runs; "
-                 f"`tuflexperf fit {battery.path.name} --out ...` stores it",)
+    if battery.fitted is None:
+        # SPEC 4: check, endurance and report read the pack model and never fit it
+        raise InputError(
+            f"{battery.path}: no fitted pack model (its 'fit:' block); write one with "
+            f"`tuflexperf fit {battery.path.name} --out FILE` and name FILE in the case"
+        )
+    runs, fit, stored_checks = _stored_fit(battery)
+    drawn_of = [r.charge_drawn_ah for r in runs]
     # one pack per run: it cannot give more than it holds (issue 10)
     refuse_contradicted_capacity(
         battery, [(run.path.name, drawn) for run, drawn in zip(runs, drawn_of, strict=True)]
     )
-    if battery.fitted is None:
-        fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
     refuse_unreproduced_runs(battery, fit.parameters, runs)
     engine_name = next((r.engine for r in battery.runs if r.engine), None)
     engines = {e.name: e for e in case.propulsion.engines}
