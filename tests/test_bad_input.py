@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import copy
+import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 import yaml
@@ -14,6 +16,7 @@ from tests.conftest import MADE_UP_AIRCRAFT, MADE_UP_PROPULSION, MADE_UP_REQUIRE
 from tuflexperf.cli import app
 
 runner = CliRunner()
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def _assert_bad(result, *needles):
@@ -201,3 +204,19 @@ def test_symbolic_link_loops_are_one_line_not_a_traceback(tmp_path):
     for args in (["check", str(case)], ["takeoff", "--case", str(case)],
                  ["export", "--case", str(case), "--out", str(tmp_path / "export")]):
         _assert_bad(runner.invoke(app, args), "propulsion.yaml", "symbolic link loop")
+
+
+def test_a_misspelt_required_key_is_matched_to_the_missing_one(tmp_path):
+    """'p12' for 'p11' was answered 'did you mean p20?' (a key that is present); the key
+    left missing beside the unknown one is the likelier meaning (outside audit)."""
+    from tuflexperf.errors import InputError
+    from tuflexperf.io.case import load_case
+
+    for folder in ("requirements", "data"):
+        shutil.copytree(ROOT / folder, tmp_path / folder)
+    propulsion = tmp_path / "data" / "tuflex" / "propulsion.yaml"
+    original = propulsion.read_text()
+    for wrong, meant in (("p12", "p11"), ("p2", "p02")):
+        propulsion.write_text(original.replace(f"      {meant}:", f"      {wrong}:", 1))
+        with pytest.raises(InputError, match=rf"unknown key '{wrong}' \(did you mean '{meant}'"):
+            load_case(tmp_path / "requirements" / "tuflex.yaml")

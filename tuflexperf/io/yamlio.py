@@ -138,7 +138,13 @@ def validation_message(
     kind = first["type"]
     if kind == "extra_forbidden":
         key = str(first["loc"][-1])
-        close = difflib.get_close_matches(key, _valid_keys(model, tuple(first["loc"])), n=1)
+        parent = tuple(first["loc"][:-1])
+        # a misspelt required key leaves that key missing beside it: the missing one is
+        # the likelier meaning ('p12' for a missing 'p11', not the present 'p20')
+        missing = [str(e["loc"][-1]) for e in errors
+                   if e["type"] == "missing" and tuple(e["loc"][:-1]) == parent]
+        close = (difflib.get_close_matches(key, missing, n=1, cutoff=0.3)
+                 or difflib.get_close_matches(key, _valid_keys(model, tuple(first["loc"])), n=1))
         hint = f" (did you mean {close[0]!r}?)" if close else ""
         problem = f"unknown key {key!r}{hint}"
     elif kind == "missing":
