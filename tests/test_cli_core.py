@@ -204,3 +204,22 @@ def test_unreadable_numbers_and_unflyable_climbs_are_one_line(tmp_path):
     check = run("check", "--json", "--set", "aircraft.wing_area_m2=0.01")
     assert check.exit_code == 1
     assert not any(r["passed"] for r in json.loads(check.stdout)["results"])
+
+
+def test_set_moves_the_envelope_bounds_of_one_case():
+    """SPEC 5: --set takes the case's numeric keys; the envelope's bounds were refused (they
+    fix a batch's grid, not one case's; outside audit). Both bounds may move together."""
+    narrow = json.loads(run("trim", "--json", "--set",
+                            "requirements.envelope.max_airspeed_m_s=30").stdout)
+    assert narrow["airspeed_m_s"][0] == 15.0 and narrow["airspeed_m_s"][-1] == 30.0
+    assert len(narrow["airspeed_m_s"]) == 31  # 0.5 m/s steps, both ends
+    shipped = json.loads(run("trim", "--json").stdout)
+    assert narrow["max_throttle"] < shipped["max_throttle"]
+    moved = run("trim", "--json", "--set", "requirements.envelope.min_airspeed_m_s=50",
+                "--set", "requirements.envelope.max_airspeed_m_s=60")
+    speeds = json.loads(moved.stdout)["airspeed_m_s"]
+    assert speeds[0] == 50.0 and speeds[-1] == 60.0
+    crossed = run("trim", "--set", "requirements.envelope.min_airspeed_m_s=50")
+    assert crossed.exit_code == 2 and "must be below max_airspeed_m_s" in crossed.stderr
+    batch = run("sweep", "--vary", "requirements.envelope.max_airspeed_m_s=40:45:2")
+    assert batch.exit_code == 2 and "--set takes them" in batch.stderr

@@ -11,9 +11,9 @@ import dataclasses
 import difflib
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Annotated, Any
 
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import AircraftSchema, Case, Requirements
@@ -112,18 +112,19 @@ def unset_optional_keys(case: Case) -> set[str]:
 def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
     """Raise :class:`InputError` naming ``where`` and the closest key if ``key`` is unknown.
 
-    With ``unset``, an optional numeric key the case leaves unset is known too (``--set``).
+    With ``unset`` (``--set``: one case, not a batch), an optional numeric key the case leaves
+    unset is known too, and so are the envelope's bounds (one case solves its own grid).
     """
     known = numeric_keys(case)
-    if key in known:
+    if key in known or (unset and key in _FIXED):
         return
     optional = unset_optional_keys(case) if unset else set()
     if key in optional:
         return
     if key in _FIXED:
         raise InputError(
-            f"{where}: {key}: the envelope's bounds cannot be varied (they fix the airspeed "
-            "grid every trim/OEI point is solved on)"
+            f"{where}: {key}: the envelope's bounds cannot be varied in a batch (they fix the "
+            "airspeed grid every trim/OEI point is solved on); --set takes them"
         )
     if key.startswith("propulsion."):
         raise InputError(
@@ -227,6 +228,7 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
     """
     aircraft = dataclasses.asdict(case.aircraft)
     atmosphere, requirements = case.atmosphere, case.requirements
+    changed: dict[str, tuple[list[str], float]] = {}  # requirement keys, validated together
     for key, value in values.items():
         check_key(case, key, where, unset=True)
         head, *rest = key.split(".")
@@ -244,9 +246,27 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
             elif head == "atmosphere":
                 atmosphere = _replace_pydantic(atmosphere, rest, float(value))
             else:
-                requirements = _replace_pydantic(requirements, rest, float(value))
+                # each value against its own field now; a rule across fields (the envelope's
+                # min below its max) once all are set, so both bounds may move together
+                field = _schema_field(case, key)
+                kind = Annotated[(field.annotation, *field.metadata)] if field.metadata \
+                    else field.annotation
+                TypeAdapter(kind).validate_python(float(value))
+                changed[key] = (rest, float(value))
         except ValidationError as exc:
             raise InputError(f"{where}: {key}={value:g}: {_problem(exc)}") from None
+    if changed:
+        data = requirements.model_dump()
+        for rest, value in changed.values():
+            node = data
+            for part in rest[:-1]:
+                node = node[part]
+            node[rest[-1]] = value
+        try:
+            requirements = type(requirements).model_validate(data)
+        except ValidationError as exc:
+            keys = ", ".join(f"{k}={v:g}" for k, (_, v) in changed.items())
+            raise InputError(f"{where}: {keys}: {_problem(exc)}") from None
     try:
         AircraftSchema.model_validate({k: v for k, v in aircraft.items()})
     except ValidationError as exc:
