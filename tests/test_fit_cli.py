@@ -335,3 +335,23 @@ def test_two_runs_of_one_engine_at_one_airspeed_are_said(tmp_path: Path) -> None
     warnings = json.loads(result.stdout)["warnings"]
     assert any("EDF1: 2 throttle-step runs at 30 m/s" in w and "edf2_v30p0.mat" in w
                for w in warnings), warnings
+
+
+def test_a_campaigns_endurance_runs_are_named_not_dropped(tmp_path: Path) -> None:
+    """SPEC 4 lists kind: endurance runs in a campaign; fit left them out with nothing said
+    but a JSON key (outside audit): now each is named with the fit that takes it."""
+    root = Path(__file__).resolve().parent.parent
+    campaign = tmp_path / "campaign"
+    shutil.copytree(root / "data/tuflex/campaign", campaign)
+    shutil.copy(root / "data/tuflex/endurance/edf1_endurance_50.csv", campaign / "runs")
+    manifest = campaign / "campaign.yaml"
+    manifest.write_text(manifest.read_text()
+                        + "  - {file: runs/edf1_endurance_50.csv, engine: EDF1, kind: endurance}\n")
+    result = runner.invoke(app, ["fit", str(manifest), "--out", str(tmp_path / "p.yaml"),
+                                 "--json"])
+    assert result.exit_code == 0, result.stderr
+    data = json.loads(result.stdout)
+    said = [w for w in data["warnings"] if "edf1_endurance_50.csv" in w]
+    assert said and "tuflexperf fit BATTERY.yaml" in said[0]
+    assert data["ignored_runs"] == [{"file": "runs/edf1_endurance_50.csv", "kind": "endurance",
+                                     "engine": "EDF1"}]

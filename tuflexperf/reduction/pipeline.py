@@ -626,6 +626,13 @@ def fit_campaign(
     )
     summary["warnings"].extend(electrical.warnings)
     summary["warnings"].extend(degenerate)
+    # SPEC 4: discharge runs are the pack model's, fitted from the battery file that lists
+    # them (it holds the cells and capacity the fit needs): said, not dropped in silence
+    summary["warnings"].extend(
+        f"{r.file}: endurance (discharge) run: not part of the thrust fit; the pack model is "
+        "fitted from the battery file that lists it (`tuflexperf fit BATTERY.yaml --out FILE`)"
+        for r in campaign.ignored
+    )
     for entry in summary["engines"]:
         name = entry["name"]
         if name in electrical.power:
