@@ -188,9 +188,44 @@ def test_cli_mission_not_attainable_names_the_segment(
     code, out, err = _run("mission", str(path), "--json")
     assert code == 1
     data = json.loads(out)  # one JSON object with the mission's keys on exit 1 too
-    assert data["passed"] is False and data["landing_charge_fraction"] is None
-    assert isinstance(data["segments"], list)
+    assert data["passed"] is False and data["attainable"] is False
     assert reason in data["reason"]
+    # the take-off before the failing segment is flown and reported (and the failing one as
+    # far as it was flown, when it fails in flight)
+    assert [s["type"] for s in data["segments"]][0] == "takeoff"
+    assert len(data["segments"]) <= 2
+    assert data["ended_at_s"] == pytest.approx(sum(s["time_s"] for s in data["segments"]))
+
+
+def test_a_segment_that_cannot_be_planned_ends_the_flight_there(tmp_path: Path) -> None:
+    """A cruise below stall after take-off and climb: the JSON had no segments at all; the
+    README promises the segment and the time (outside audit)."""
+    path = _mission(tmp_path, """\
+        name: slow cruise
+        segments:
+          - {type: takeoff}
+          - {type: climb, to_altitude_m: 100, airspeed_m_s: 20, throttle: 1.0}
+          - {type: cruise, airspeed_m_s: 12, time_min: 2}
+          - {type: loiter, airspeed_m_s: 20, time_min: 2}
+        """)
+    code, out, _ = _run("mission", str(path), "--json")
+    assert code == 1
+    data = json.loads(out)
+    assert data["passed"] is False and data["attainable"] is False
+    assert data["reason"].startswith("segment 3 (cruise)") and "below stall" in data["reason"]
+    assert [s["type"] for s in data["segments"]] == ["takeoff", "climb"]
+    assert data["segments"][-1]["altitude_m"] == pytest.approx(100.0)
+    assert data["ended_at_s"] == pytest.approx(sum(s["time_s"] for s in data["segments"]))
+    code, human, _ = _run("mission", str(path))
+    assert code == 1 and "climb" in human and "segment 3 (cruise)" in human and "FAIL" in human
+    # nothing before it: the one-line answer as before
+    first = _mission(tmp_path, """\
+        name: slow from the start
+        segments:
+          - {type: cruise, airspeed_m_s: 12, time_min: 2}
+        """)
+    code, out, _ = _run("mission", str(first), "--json")
+    assert code == 1 and json.loads(out)["segments"] == []
 
 
 def test_cli_mission_bad_key_is_exit_2(tmp_path: Path) -> None:

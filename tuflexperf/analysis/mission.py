@@ -258,86 +258,92 @@ class MissionModel:
         envelope = self.case.requirements.envelope
         margin = getattr(envelope, "stall_margin", 1.0) if envelope is not None else 1.0
         where = f"{self.mission.path}: segments"
-        for i, s in enumerate(segments):
-            label = f"segment {i + 1} ({s.type})"
-            if s.type == "engine_failure":
-                if s.engine not in self.engines:
-                    raise InputError(
-                        f"{where}[{i}].engine: {s.engine!r} is not an engine of the propulsion "
-                        f"file ({', '.join(self.engines)})"
-                    )
-                if dead is not None:  # SPEC 3: one engine inoperative, not two
-                    raise InputError(
-                        f"{where}[{i}]: a second engine_failure ({s.engine}): "
-                        f"{self.engines[dead]} has already failed and the SPEC's OEI rule "
-                        "flies on one engine inoperative"
-                    )
-                if self.n < 2:
-                    raise InputError(f"{where}[{i}]: engine_failure on a single-engine "
-                                     "aircraft leaves no engine to fly on")
-                dead = self.engines.index(s.engine)
-                plans.append(_Plan(i, s.type, "event", h, h, None, False, 0.0, 0.0, False, 0.0,
-                                   dead))
-                continue
-            if s.type == "takeoff":
-                if i != 0:
-                    raise InputError(f"{where}[{i}]: takeoff must be the first segment")
-                from tuflexperf.analysis.takeoff import obstacle_height_of
+        i = 0
+        try:
+            for i, s in enumerate(segments):
+                label = f"segment {i + 1} ({s.type})"
+                if s.type == "engine_failure":
+                    if s.engine not in self.engines:
+                        raise InputError(
+                            f"{where}[{i}].engine: {s.engine!r} is not an engine of the propulsion "
+                            f"file ({', '.join(self.engines)})"
+                        )
+                    if dead is not None:  # SPEC 3: one engine inoperative, not two
+                        raise InputError(
+                            f"{where}[{i}]: a second engine_failure ({s.engine}): "
+                            f"{self.engines[dead]} has already failed and the SPEC's OEI rule "
+                            "flies on one engine inoperative"
+                        )
+                    if self.n < 2:
+                        raise InputError(f"{where}[{i}]: engine_failure on a single-engine "
+                                         "aircraft leaves no engine to fly on")
+                    dead = self.engines.index(s.engine)
+                    plans.append(_Plan(i, s.type, "event", h, h, None, False, 0.0, 0.0, False, 0.0,
+                                       dead))
+                    continue
+                if s.type == "takeoff":
+                    if i != 0:
+                        raise InputError(f"{where}[{i}]: takeoff must be the first segment")
+                    from tuflexperf.analysis.takeoff import obstacle_height_of
 
-                if self.case.aircraft.launch == "catapult":  # airborne at release, 0 m
-                    from tuflexperf.analysis.takeoff import solve_takeoff
+                    if self.case.aircraft.launch == "catapult":  # airborne at release, 0 m
+                        from tuflexperf.analysis.takeoff import solve_takeoff
 
-                    try:  # the catapult must give the mass its release speed
-                        solve_takeoff(self.case)
-                    except NotAttainable as exc:
-                        raise NotAttainable(f"{label}: {exc}") from None
-                    plans.append(_Plan(i, s.type, "event", 0.0, 0.0, None, False, 0.0, 0.0,
+                        try:  # the catapult must give the mass its release speed
+                            solve_takeoff(self.case)
+                        except NotAttainable as exc:
+                            raise NotAttainable(f"{label}: {exc}") from None
+                        plans.append(_Plan(i, s.type, "event", 0.0, 0.0, None, False, 0.0, 0.0,
+                                           False, 0.0, dead))
+                        continue
+                    # the take-off ends over the obstacle (or, for the endurance launch, at
+                    # the lift-off: its climb starts from the runway)
+                    h = obstacle_height_of(self.case) if self.takeoff_to_obstacle else 0.0
+                    plans.append(_Plan(i, s.type, "takeoff", 0.0, h, None, False, 1.0, 0.0,
                                        False, 0.0, dead))
                     continue
-                # the take-off ends over the obstacle (or, for the endurance launch, at
-                # the lift-off: its climb starts from the runway)
-                h = obstacle_height_of(self.case) if self.takeoff_to_obstacle else 0.0
-                plans.append(_Plan(i, s.type, "takeoff", 0.0, h, None, False, 1.0, 0.0,
-                                   False, 0.0, dead))
-                continue
-            if s.type in ("cruise", "loiter") and s.throttle is not None:
-                # level at a fixed throttle: the airspeed follows (the fast root)
-                v_guess = self._level_speed_at_throttle(s.throttle, h, dead, label)
-                plans.append(_Plan(i, s.type, "time", h, h, None, False, s.throttle, 0.0,
-                                   False, 60.0 * float(s.time_min), dead,  # type: ignore[arg-type]
-                                   True, v_guess))
-                continue
-            eas = (s.airspeed_m_s if s.airspeed_m_s is not None
-                   else self._best_endurance_eas(h, dead))
-            if eas < margin * stall_eas * (1 - 1e-12):
-                raise NotAttainable(
-                    f"{label}: {eas:.1f} m/s EAS is below stall ({margin:g} x "
-                    f"{stall_eas:.1f} m/s EAS): not attainable, below stall"
-                )
-            if s.type in ("climb", "descent"):
-                target = float(s.to_altitude_m)  # type: ignore[arg-type]
-                if (s.type == "climb") != (target > h):
-                    raise InputError(
-                        f"{where}[{i}].to_altitude_m: a {s.type} from {h:g} m must go "
-                        f"{'up' if s.type == 'climb' else 'down'}, got {target:g} m"
+                if s.type in ("cruise", "loiter") and s.throttle is not None:
+                    # level at a fixed throttle: the airspeed follows (the fast root)
+                    v_guess = self._level_speed_at_throttle(s.throttle, h, dead, label)
+                    plans.append(_Plan(i, s.type, "time", h, h, None, False, s.throttle, 0.0,
+                                       False, 60.0 * float(s.time_min), dead,  # type: ignore[arg-type]
+                                       True, v_guess))
+                    continue
+                eas = (s.airspeed_m_s if s.airspeed_m_s is not None
+                       else self._best_endurance_eas(h, dead))
+                if eas < margin * stall_eas * (1 - 1e-12):
+                    raise NotAttainable(
+                        f"{label}: {eas:.1f} m/s EAS is below stall ({margin:g} x "
+                        f"{stall_eas:.1f} m/s EAS): not attainable, below stall"
                     )
-                if s.throttle is not None:
-                    plans.append(_Plan(i, s.type, "height", h, target, eas, False, s.throttle,
-                                       0.0, True, 0.0, dead))
+                if s.type in ("climb", "descent"):
+                    target = float(s.to_altitude_m)  # type: ignore[arg-type]
+                    if (s.type == "climb") != (target > h):
+                        raise InputError(
+                            f"{where}[{i}].to_altitude_m: a {s.type} from {h:g} m must go "
+                            f"{'up' if s.type == 'climb' else 'down'}, got {target:g} m"
+                        )
+                    if s.throttle is not None:
+                        plans.append(_Plan(i, s.type, "height", h, target, eas, False, s.throttle,
+                                           0.0, True, 0.0, dead))
+                    else:
+                        rate = s.climb_rate_m_s if s.type == "climb" else -s.descent_rate_m_s
+                        plans.append(_Plan(i, s.type, "height", h, target, eas, True, 0.0,
+                                           float(rate), False, 0.0, dead))
+                    h = target
+                    continue
+                # cruise / loiter: level at constant height
+                if s.time_min is not None:
+                    duration = 60.0 * s.time_min
                 else:
-                    rate = s.climb_rate_m_s if s.type == "climb" else -s.descent_rate_m_s
-                    plans.append(_Plan(i, s.type, "height", h, target, eas, True, 0.0,
-                                       float(rate), False, 0.0, dead))
-                h = target
-                continue
-            # cruise / loiter: level at constant height
-            if s.time_min is not None:
-                duration = 60.0 * s.time_min
-            else:
-                v_true = float(true_airspeed_m_s(eas, self._rho(h)))
-                duration = 1000.0 * s.distance_km / v_true  # type: ignore[operator]
-            plans.append(_Plan(i, s.type, "time", h, h, eas, True, 0.0, 0.0, False, duration,
-                               dead))
+                    v_true = float(true_airspeed_m_s(eas, self._rho(h)))
+                    duration = 1000.0 * s.distance_km / v_true  # type: ignore[operator]
+                plans.append(_Plan(i, s.type, "time", h, h, eas, True, 0.0, 0.0, False, duration,
+                                   dead))
+        except NotAttainable as exc:
+            # the segments before it can still be flown (solve_mission reports them)
+            exc.segment_index = i  # type: ignore[attr-defined]
+            raise
         return tuple(plans)
 
     def _rho(self, h: Any) -> Any:
@@ -1251,5 +1257,32 @@ def solve_mission(case: Case, mission: MissionFile,
     ----------
     SPEC 4 ("Mission file"), SPEC 5 (``mission`` command and JSON keys).
     """
-    model = MissionModel(case, mission, min_landing_fraction)
+    try:
+        model = MissionModel(case, mission, min_landing_fraction)
+    except NotAttainable as exc:
+        flown = _flown_up_to(case, mission, min_landing_fraction, exc)
+        if flown is None:
+            raise
+        return flown
     return model.solve_for() if mission.solve_for is not None else model.fly()
+
+
+def _flown_up_to(case: Case, mission: MissionFile, min_landing_fraction: float | None,
+                 exc: NotAttainable) -> MissionResult | None:
+    """The flight up to a segment that cannot be planned (below stall, a throttle with no
+    level flight), ended there as not attainable; None when nothing precedes it.
+
+    SPEC 5 ("the output says why") and README: a mission that is not attainable names the
+    segment and the time, with the segments flown before it (its JSON had none).
+    """
+    import dataclasses
+
+    k = getattr(exc, "segment_index", 0)
+    if k == 0 or mission.solve_for is not None:  # a solved segment needs the whole plan
+        return None
+    before = dataclasses.replace(mission, segments=mission.segments[:k])
+    flown = MissionModel(case, before, min_landing_fraction).fly()
+    if not flown.attainable:  # ended earlier (a cut-off): that is the answer
+        return flown
+    return dataclasses.replace(flown, attainable=False, reason=str(exc),
+                               ended_at_s=float(flown.history["time_s"][-1]))
