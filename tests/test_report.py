@@ -156,6 +156,35 @@ def test_last_page_names_every_input_by_sha256_first_page_version_and_date(shipp
     assert re.search(r"\d{4}-\d{2}-\d{2} \d{2}:\d{2} UTC", first)
 
 
+def test_report_takes_set_and_its_title_page_says_so(made_up, tmp_path):
+    """SPEC 5: --set on every analysis command; report had none (outside audit). The figures
+    are of the changed case, and its first page names the change."""
+    import dataclasses
+
+    from tuflexperf.io.case import load_case
+    from tuflexperf.io.dotted import with_values
+    from tuflexperf.report.build import title_lines
+    from tuflexperf.report.data import Measured
+
+    case, _, plain = made_up
+    out = tmp_path / "heavy"
+    result = runner.invoke(app, ["report", "--case", str(case), "--out", str(out), "--json",
+                                 "--set", "aircraft.mass_kg=500"])
+    assert result.exit_code == 0, result.output
+    assert plain["passed"] is True and json.loads(result.stdout)["passed"] is False
+    bad = runner.invoke(app, ["report", "--case", str(case), "--out", str(tmp_path / "x"),
+                              "--set", "aircraft.mas_kg=5"])
+    assert bad.exit_code == 2 and "aircraft.mass_kg" in bad.stderr
+    assert not (tmp_path / "x").exists()
+    changed = with_values(load_case(case), {"aircraft.mass_kg": 500.0})
+    empty = SimpleNamespace(verdicts=[], takeoff=None, takeoff_note="n/a", trim=None, oei=None,
+                            endurance_at_requirement=None)
+    first = "\n".join(title_lines(changed, Measured(), empty))
+    assert "with --set aircraft.mass_kg=500" in first
+    plain_case = dataclasses.replace(changed, overrides=())
+    assert "--set" not in "\n".join(title_lines(plain_case, Measured(), empty))
+
+
 # --- every figure: units on the axes, a title, limits ----------------------------------------
 @pytest.fixture(scope="module")
 def figures_of_shipped_case():

@@ -936,11 +936,13 @@ def report_command(
         "file's source, else campaign/campaign.yaml beside it).",
     ),
     as_json: bool = JsonOption,
+    sets: list[str] | None = SetOption,
 ) -> None:
     """Design-review figures (PNG, 150 dpi) and one multi-page PDF, review.pdf."""
     from tuflexperf.report import build_report  # lazy: matplotlib stays out of `check`
 
-    result = build_report(case_file, out, campaign=campaign)
+    case = load_case_with(case_file, sets) if sets else case_file
+    result = build_report(case, out, campaign=campaign)
     if as_json:
         emit_json(result.to_dict())
         return

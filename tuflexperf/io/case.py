@@ -318,6 +318,8 @@ class Case:
     uncertainty: UncertaintySchema | None = None
     # the validated file behind ``propulsion`` (fit statistics, provenance) for the exports
     propulsion_schema: PropulsionSchema | None = None
+    # keys changed for this run by ``--set`` (dotted key, value): the files say otherwise
+    overrides: tuple[tuple[str, float], ...] = ()
 
     @property
     def density_kg_m3(self) -> float:

@@ -277,5 +277,6 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
     new_aircraft = Aircraft(**{**aircraft, "takeoff": takeoff})
     assert isinstance(requirements, Requirements)
     return dataclasses.replace(
-        case, aircraft=new_aircraft, atmosphere=atmosphere, requirements=requirements
+        case, aircraft=new_aircraft, atmosphere=atmosphere, requirements=requirements,
+        overrides=(*case.overrides, *((k, float(v)) for k, v in values.items())),
     )

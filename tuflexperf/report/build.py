@@ -21,9 +21,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tuflexperf.errors import InputError
+
+if TYPE_CHECKING:
+    from tuflexperf.io.case import Case
 
 PDF_NAME = "review.pdf"
 PNG_DPI = 150
@@ -87,7 +90,7 @@ def _safe_name(text: str) -> str:
 
 
 def build_report(
-    case_file: Path | str | None,
+    case_file: Path | str | Case | None,
     out: Path | str,
     campaign: Path | str | None = None,
     progress: bool = True,
@@ -97,8 +100,8 @@ def build_report(
 
     Parameters
     ----------
-    case_file : path or None
-        Requirement file.
+    case_file : path, Case or None
+        Requirement file, or the case already loaded (with ``--set`` applied).
     out : path
         Directory to write; created, or replaced if it holds an earlier report.
     campaign : path or None
@@ -111,12 +114,13 @@ def build_report(
     -------
     ReportResult
     """
-    from tuflexperf.io.case import load_case
+    from tuflexperf.io.case import Case, load_case
     from tuflexperf.io.files import staged_directory
 
     started = time.perf_counter()
     out = Path(out).absolute()
-    case = load_case(case_file)  # bad input fails here, before anything is written
+    # bad input fails here, before anything is written; a Case is one already loaded (--set)
+    case = case_file if isinstance(case_file, Case) else load_case(case_file)
     campaign_path = Path(campaign) if campaign is not None else None
     if campaign_path is not None and not campaign_path.is_file():
         raise InputError(f"--campaign: file not found: {campaign_path}")
@@ -475,7 +479,10 @@ def title_lines(case: Any, measured: Any, analyses: Any) -> list[str]:
     lines.append(f"  atmosphere   ISA {case.atmosphere.altitude_m:g} m, "
                  f"dT {case.atmosphere.temperature_offset_k:+g} K, "
                  f"rho = {case.density_kg_m3:.4f} kg/m\u00b3")
-    lines += ["", f"case {case.path}", f"tuflexperf {__version__}, {now}; "
+    lines += ["", f"case {case.path}"]
+    if case.overrides:  # the figures are of the changed case, not of the files alone
+        lines.append("  with --set " + ", ".join(f"{k}={v:g}" for k, v in case.overrides))
+    lines += [f"tuflexperf {__version__}, {now}; "
               "every input file with its sha256 on the last page"]
     return lines
 
