@@ -335,9 +335,13 @@ MORE = [
     Case("capacity edited after the fit", ("check", "--case", "requirements/tuflex.yaml"), 2,
          "fit it again", lambda w: _edit(w / "data/tuflex/battery.yaml", "capacity_ah: 5.0",
                                          "capacity_ah: 500.0")),
-    Case("capacity 100x the runs, fitted on the fly", ("check", "--case",
-                                                      "requirements/tuflex.yaml"), 2,
+    # check never fits (SPEC 4): the fit that writes the pack model refuses the capacity
+    Case("capacity 100x the runs, refused by the fit", ("fit", "data/tuflex/battery.yaml",
+                                                        "--out", "b.yaml"), 2,
          "capacity_ah", _unfitted_capacity_500),
+    Case("a battery file without its pack model", ("check", "--case",
+                                                   "requirements/tuflex.yaml"), 2,
+         "no fitted pack model", _unfitted_capacity_500),
     Case("a step run listed twice", ("fit", "data/tuflex/campaign/campaign.yaml", "--out",
                                      "p.yaml"), 2, "listed twice",
          lambda w: _edit(w / "data/tuflex/campaign/campaign.yaml", _STEP_RUN, 2 * _STEP_RUN)),
@@ -498,6 +502,7 @@ def test_mat_discharge_run_with_a_text_column(workdir: Path) -> None:
     battery.pop("fit", None)
     battery["runs"] = [{"file": "endurance/bad.mat", "engine": "EDF1"}]
     path.write_text(yaml.safe_dump(battery))
-    result = _run(workdir, "endurance", "--throttle", "0.5", "--case", "requirements/tuflex.yaml")
+    result = _run(workdir, "fit", "data/tuflex/battery.yaml", "--out", "b.yaml")
     assert result.returncode == 2 and "Traceback" not in result.stderr
     assert "bad.mat: voltage_v" in result.stderr
+    assert not (workdir / "b.yaml").exists()
