@@ -220,3 +220,31 @@ def test_a_misspelt_required_key_is_matched_to_the_missing_one(tmp_path):
         propulsion.write_text(original.replace(f"      {meant}:", f"      {wrong}:", 1))
         with pytest.raises(InputError, match=rf"unknown key '{wrong}' \(did you mean '{meant}'"):
             load_case(tmp_path / "requirements" / "tuflex.yaml")
+
+
+@pytest.mark.parametrize(("args", "needle"), [
+    # --set met none of the files' cross checks: 1e-9 kg passed with 1e10 x thrust/weight
+    (["takeoff", "--set", "aircraft.mass_kg=1e-9"], "physically absurd"),
+    # the weight's square overflowed into a traceback
+    (["check", "--set", "aircraft.mass_kg=1e300"], "less than or equal to 1000000"),
+    # a 1e300 m^2 wing lifted off at 0 m/s; a 1e-300 m^2 one stalled at 1e151 m/s
+    (["check", "--set", "aircraft.wing_area_m2=1e300"], "aircraft.wing_area_m2"),
+    (["performance", "--set", "aircraft.wing_area_m2=1e-300"], "beyond the speed of sound"),
+])
+def test_absurd_values_set_on_the_command_line_are_bad_input(args, needle):
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert needle in result.stderr and len(result.stderr.strip().splitlines()) == 1
+
+
+def test_a_null_requirement_block_is_bad_input(tmp_path):
+    """`takeoff: null` dropped the requirement and check passed without it (outside audit)."""
+    for folder in ("requirements", "data"):
+        shutil.copytree(ROOT / folder, tmp_path / folder)
+    case = tmp_path / "requirements" / "tuflex.yaml"
+    text = case.read_text()
+    for empty in ("  takeoff: null\n", "  takeoff:\n"):
+        case.write_text(text.replace("  takeoff: {max_ground_roll_m: 60}\n", empty))
+        result = runner.invoke(app, ["check", str(case)])
+        assert result.exit_code == 2, result.output
+        assert "requirements.takeoff: the requirement block is empty (null)" in result.stderr

@@ -1030,6 +1030,12 @@ def _guarded(callback: Any) -> Any:
             raise typer.Exit(2) from None
         except BrokenPipeError:  # the reader went away (`| head`): nothing more to say
             raise typer.Exit(0) from None
+        except OverflowError:  # a number of the input far beyond any aircraft's
+            _unless_interrupted()
+            sys.stderr.write("tuflexperf: error: a number of the input is too large to compute "
+                             "with (floating-point overflow); check the magnitudes of the "
+                             "case's keys\n")
+            raise typer.Exit(2) from None
         except OSError as exc:  # a file the OS refuses (name too long, disk full, ...)
             _unless_interrupted()
             import errno

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.yamlio import StrictModel, load_model
@@ -56,10 +56,19 @@ class TakeoffSchema(StrictModel):
     k_ground: NonNegative | None = None
 
 
+# a thousand tonnes: beyond any aircraft a ducted fan flies (from ~1e154 kg the weight's
+# square overflows: a traceback, outside audit)
+MAX_MASS_KG = 1.0e6
+
+
+MAX_WING_AREA_M2 = 1.0e4  # ten times an A380's: a 1e300 m^2 wing lifted off at 0 m/s
+MAX_STALL_EAS_M_S = 340.0  # the subsonic polar's and the envelope's top airspeed
+
+
 class AircraftSchema(StrictModel):
     name: str
-    mass_kg: Positive
-    wing_area_m2: Positive
+    mass_kg: Annotated[float, Field(gt=0, le=MAX_MASS_KG)]
+    wing_area_m2: Annotated[float, Field(gt=0, le=MAX_WING_AREA_M2)]
     cd0: Positive
     k: Positive
     cl_max: Annotated[float, Field(gt=0, le=MAX_CL_MAX)]
@@ -74,6 +83,11 @@ class AircraftSchema(StrictModel):
             2.0 * self.mass_kg * G0_M_S2
             / (EAS_REFERENCE_DENSITY_KG_M3 * self.wing_area_m2 * self.cl_max)
         )
+        if stall_eas > MAX_STALL_EAS_M_S:  # a 1e-300 m^2 wing "flew" at 1e150 m/s (audit)
+            raise ValueError(
+                f"stall speed {stall_eas:.3g} m/s EAS is beyond the speed of sound: check "
+                "mass_kg, wing_area_m2 and cl_max"
+            )
         if self.launch == "catapult":
             if self.launch_speed_m_s is None:
                 raise ValueError("launch_speed_m_s: required with launch: catapult (EAS)")
@@ -242,6 +256,16 @@ class Requirements(StrictModel):
     oei: OeiRequirement | None = None
     endurance: EnduranceRequirement | None = None
     mission: MissionRequirement | None = None
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_null_block(cls, value: Any) -> Any:
+        # `takeoff: null` (or a bare `takeoff:`) dropped the requirement without a word, and
+        # check passed without it (outside audit): leave a block out, or give its keys
+        if value is None:
+            raise ValueError("the requirement block is empty (null): leave it out, or give "
+                             "its keys")
+        return value
 
 
 class DistributionSchema(StrictModel):

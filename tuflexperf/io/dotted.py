@@ -276,7 +276,17 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
     takeoff = dataclasses.replace(case.aircraft.takeoff, **aircraft.pop("takeoff"))
     new_aircraft = Aircraft(**{**aircraft, "takeoff": takeoff})
     assert isinstance(requirements, Requirements)
-    return dataclasses.replace(
+    changed_case = dataclasses.replace(
         case, aircraft=new_aircraft, atmosphere=atmosphere, requirements=requirements,
         overrides=(*case.overrides, *((k, float(v)) for k, v in values.items())),
     )
+    # the files' cross checks hold for the changed case too: a 1e-9 kg aircraft passed on
+    # --set what its file refuses (thrust 1e10 x its weight; outside audit)
+    from tuflexperf.io.case import _refuse_absurd_propulsion
+
+    try:
+        _refuse_absurd_propulsion(changed_case)
+    except InputError as exc:
+        keys = ", ".join(f"{k}={v:g}" for k, v in values.items())
+        raise InputError(f"{where} {keys}: {exc}") from None
+    return changed_case

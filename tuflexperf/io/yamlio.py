@@ -150,9 +150,11 @@ def validation_message(
     elif kind == "missing":
         problem = "required key is missing"
     else:
-        problem = str(first["msg"]).splitlines()[0]
+        problem = str(first["msg"]).splitlines()[0].removeprefix("Value error, ")
         value = first.get("input")
-        if not isinstance(value, (dict, list)):
+        if value is None and "null" not in problem:
+            problem += " (got null)"  # YAML's word for it
+        elif value is not None and not isinstance(value, (dict, list)):
             shown = value.item() if hasattr(value, "item") else value
             text = repr(shown)
             problem += f" (got {text[:60] + '...' if len(text) > 60 else text})"
