@@ -180,6 +180,41 @@ def test_obstacle_geometry_closed_form(radius, gradient, height):
         assert top == pytest.approx(h_tr, rel=1e-12)
 
 
+@pytest.mark.parametrize("gradient", [1.0, 3.544])
+def test_a_gradient_of_one_or_more_climbs_vertically(gradient):
+    """Thrust beyond drag plus weight: the path turns to 90 degrees and climbs straight up.
+    sin(gamma) = 3.544 gave an arc of 3.5 R and the obstacle "cleared in the arc" above the
+    arc's top (outside audit)."""
+    radius, height = 16.8, 50.0
+    arc, climb, top = obstacle_distances_m(radius, gradient, height)
+    assert float(arc) == pytest.approx(radius)  # a quarter circle covers R of ground
+    assert float(climb) == pytest.approx(0.0, abs=1e-12)  # straight up: no ground
+    assert float(top) == pytest.approx(radius)  # the arc tops out at R, below the obstacle
+    low_arc, low_climb, low_top = obstacle_distances_m(radius, gradient, 5.0)
+    assert float(low_climb) == 0.0 and float(low_top) == 5.0  # cleared inside the arc
+    assert float(low_arc) == pytest.approx(math.sqrt(5.0 * (2 * radius - 5.0)))
+
+
+def test_a_light_aircraft_over_a_high_obstacle_flies_its_mission(tmp_path):
+    """A 3 kg aircraft (gradient 3.5) to a 50 m obstacle: the mission raised a math domain
+    error (acos(1 - h/R) with h > 2R) and take-off said "cleared in the arc"."""
+    from tuflexperf.analysis.mission import solve_mission
+    from tuflexperf.io.dotted import with_values
+    from tuflexperf.io.mission import load_mission
+
+    shipped = load_case(None)
+    case = with_values(shipped, {"aircraft.mass_kg": 3.0,
+                                 "requirements.takeoff.obstacle_height_m": 50.0})
+    result = solve_takeoff(case)
+    assert result.climb_gradient > 1
+    assert result.obstacle_cleared_in_transition is False
+    assert result.transition_distance_m == pytest.approx(result.transition_radius_m)
+    mission = load_mission(shipped.path.parent.parent / "data/tuflex/missions/test_flight.yaml")
+    flown = solve_mission(case, mission)
+    assert flown.attainable, flown.reason
+    assert flown.segments[0].end_altitude_m == pytest.approx(50.0)
+
+
 def test_obstacle_never_cleared_without_climb_gradient():
     arc, climb, top = obstacle_distances_m(100.0, -0.02, 15.0)
     assert math.isinf(float(climb)) and float(top) == 0.0

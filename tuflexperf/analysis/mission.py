@@ -796,11 +796,12 @@ class MissionModel:
         """
         v_tr, radius = result.transition_speed_m_s, result.transition_radius_m
         height, gradient = result.obstacle_height_m, result.climb_gradient
+        sine = min(gradient, 1.0)  # a gradient of 1 or more climbs vertically (models.aircraft)
         if result.obstacle_cleared_in_transition:
             angle, straight_s = math.acos(1.0 - height / radius), 0.0
         else:
-            angle = math.asin(gradient)
-            straight_s = (height - radius * (1.0 - math.cos(angle))) / (v_tr * gradient)
+            angle = math.asin(sine)
+            straight_s = (height - radius * (1.0 - math.cos(angle))) / (v_tr * sine)
         arc_s = radius * angle / v_tr
         # each step climbs its chord at a constant rate: the height inside a step (and so the
         # density the fans see) is off by ~ (dt^2/8) V^2/R; 64 steps keep the charge to 1e-8
@@ -813,7 +814,7 @@ class MissionModel:
         if straight_s > 0:
             climb = np.zeros((8, _P_SIZE))
             climb[:, 1], climb[:, 5], climb[:, 6:9] = 1.0, 1.0, v_tr
-            climb[:, 2] = v_tr * gradient
+            climb[:, 2] = v_tr * sine
             phases.append(("time", straight_s / 8, climb))
         return phases
 

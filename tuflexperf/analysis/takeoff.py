@@ -107,9 +107,10 @@ class TakeoffResult:
     @property
     def climb_angle_deg(self) -> float | None:
         """Full-throttle climb angle after the arc [deg]; ``None`` if it cannot climb."""
-        if not (math.isfinite(self.climb_gradient) and -1.0 <= self.climb_gradient <= 1.0):
+        if not (math.isfinite(self.climb_gradient) and -1.0 <= self.climb_gradient):
             return None
-        return math.degrees(math.asin(self.climb_gradient))
+        # a gradient of 1 or more climbs vertically (models.aircraft.obstacle_distances_m)
+        return math.degrees(math.asin(min(self.climb_gradient, 1.0)))
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -217,7 +218,8 @@ class _Airborne:
             "airborne_distance_m": airborne,
             "distance_to_obstacle_m": None if airborne is None else ground_roll_m + airborne,
             "obstacle_height_m": height_m,
-            "obstacle_cleared_in_transition": self.climb_m == 0.0,
+            # a vertical climb (gradient >= 1) also covers no ground: the arc's top says it
+            "obstacle_cleared_in_transition": bool(self.arc_top_m >= height_m),
             "obstacle_reason": self.reason,
         }
 

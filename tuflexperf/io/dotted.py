@@ -256,7 +256,7 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
         except ValidationError as exc:
             raise InputError(f"{where}: {key}={value:g}: {_problem(exc)}") from None
     if changed:
-        data = requirements.model_dump()
+        data = requirements.model_dump(exclude_none=True)  # absent blocks stay absent
         for rest, value in changed.values():
             node = data
             for part in rest[:-1]:

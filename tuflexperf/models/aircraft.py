@@ -314,7 +314,8 @@ def obstacle_distances_m(
     distance is ``R sin(acos(1 - h/R)) = sqrt(h (2R - h))`` and the climb part is 0;
     otherwise the arc covers ``R sin(gamma)`` and the straight climb
     ``(h - h_TR) / tan(gamma)``. With no positive climb gradient an obstacle
-    above the arc is never cleared: the climb part is ``inf``.
+    above the arc is never cleared: the climb part is ``inf``; a gradient of 1 or more
+    (thrust beyond drag plus weight) climbs vertically, ``gamma = 90 deg``.
 
     References
     ----------
@@ -323,7 +324,9 @@ def obstacle_distances_m(
     """
     g = climb_gradient_
     positive = g > 0.0
-    sin_g = where(positive, g, 0.0)
+    # excess thrust beyond the weight (G >= 1) climbs vertically: the path angle ends at 90
+    # degrees (sin = G read past 1 gave arcs longer than their radius; outside audit)
+    sin_g = where(positive, _at_most_one(g), 0.0)
     cos_g = sqrt(1.0 - _at_most_one(sin_g * sin_g))
     arc_height = radius_m * (1.0 - cos_g)
     cleared_in_arc = arc_height >= obstacle_height_m
