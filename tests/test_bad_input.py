@@ -248,3 +248,29 @@ def test_a_null_requirement_block_is_bad_input(tmp_path):
         result = runner.invoke(app, ["check", str(case)])
         assert result.exit_code == 2, result.output
         assert "requirements.takeoff: the requirement block is empty (null)" in result.stderr
+
+
+def test_an_alias_bomb_in_the_propulsion_source_is_refused_at_once(tmp_path):
+    """Nine levels of nine aliases in `source:` cost check nothing but ran the exports out
+    of memory (outside audit): the expanded provenance is counted, and refused."""
+    for folder in ("requirements", "data"):
+        shutil.copytree(ROOT / folder, tmp_path / folder)
+    propulsion = tmp_path / "data" / "tuflex" / "propulsion.yaml"
+    levels = "".join(f"  {chr(98 + i)}: &{chr(98 + i)} [{','.join(['*' + chr(97 + i)] * 9)}]\n"
+                     for i in range(9))
+    propulsion.write_text(propulsion.read_text() + "source:\n  a: &a [x,x,x,x,x,x,x,x,x]\n"
+                          + levels)
+    out = tmp_path / "exp"
+    result = runner.invoke(app, ["export", "--case", str(tmp_path / "requirements/tuflex.yaml"),
+                                 "--format", "json", "--out", str(out)])
+    assert result.exit_code == 2 and "source: more than 10000 values" in result.stderr
+    assert not out.exists()
+
+
+def test_fits_own_provenance_is_far_below_the_source_bound(tmp_path):
+    from tuflexperf.io.case import MAX_SOURCE_VALUES, count_values
+    from tuflexperf.reduction.pipeline import fit_campaign
+
+    source = yaml.safe_load(fit_campaign(ROOT / "data/tuflex/campaign/campaign.yaml")
+                            .propulsion_text)["source"]
+    assert 10 < count_values(source, MAX_SOURCE_VALUES) < MAX_SOURCE_VALUES / 10

@@ -298,3 +298,19 @@ def test_jsbsim_lag_filter_follows_the_spool_lag(tmp_path: Path) -> None:
     rho = fdm["atmosphere/rho-slugs_ft3"] * SLUG_FT3
     full = _thrust(data["engines"][0], 1.0, 10.0, rho, data["reference_density_kg_m3"])
     assert after * LBF_N == pytest.approx(full, rel=1e-6)
+
+
+def test_jsbsim_xml_stays_xml_for_any_engine_name(tmp_path: Path) -> None:
+    """An engine named with a double quote wrote `<channel name="tfp-EDF"2">` (outside
+    audit); every JSBSim file must parse, whatever the names hold."""
+    import xml.etree.ElementTree as ElementTree
+
+    odd = copy.deepcopy(MADE_UP_PROPULSION)
+    odd["engines"][0]["name"] = 'EDF"1 <&> --x'
+    path = tmp_path / "odd.yaml"
+    path.write_text(yaml.safe_dump(odd))
+    out = _export(tmp_path, path, ("jsbsim",))
+    for name in ("tfp_thrust_system.xml", "tfp_thrust_reactions.xml"):
+        ElementTree.parse(out / name)  # raises on anything that is not well-formed
+    system = ElementTree.parse(out / "tfp_thrust_system.xml").getroot()
+    assert any(c.get("name", "").startswith('tfp-EDF"1 <&>') for c in system.iter("channel"))

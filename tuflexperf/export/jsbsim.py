@@ -79,6 +79,12 @@ def _comment(text: str) -> str:
     return re.sub(r"-{2,}", "-", ascii_text)
 
 
+def _attribute(text: str) -> str:
+    """A double-quoted XML attribute's text: ``&``, ``<``, ``>`` and ``"`` escaped (an engine
+    named with a quote wrote ``name="tfp-EDF"2"``, no XML; outside audit)."""
+    return escape(_comment(text), {'"': "&quot;"})
+
+
 def _header(model: ExportModel, what: str) -> str:
     from tuflexperf import __version__ as version
 
@@ -200,7 +206,7 @@ def system_text(model: ExportModel) -> str:
                 "    </pure_gain>"
             )
         channels.append(
-            f'  <channel name="tfp-{escape(_comment(engine.name))}">\n'
+            f'  <channel name="tfp-{_attribute(engine.name)}">\n'
             f"    <!-- {_comment(engine.name)}: dead time on the throttle command -->\n"
             f"{dead_time}\n"
             f"    <!-- static thrust in lbf at the delayed throttle, true airspeed, density -->\n"

@@ -165,6 +165,24 @@ class EngineSchema(StrictModel):
     power: PowerSurfaceSchema | None = None
 
 
+MAX_SOURCE_VALUES = 10_000  # fit's own provenance of a 19-run campaign holds ~150
+
+
+def count_values(value: Any, limit: int) -> int:
+    """Values in a nested mapping/list as written out (aliases counted each time), up to
+    just beyond ``limit`` (so a self-referencing or bomb-sized structure stops at once)."""
+    count, stack = 0, [value]
+    while stack and count <= limit:
+        item = stack.pop()
+        count += 1
+        if isinstance(item, dict):
+            stack.extend(item.keys())
+            stack.extend(item.values())
+        elif isinstance(item, (list, tuple)):
+            stack.extend(item)
+    return count
+
+
 class PropulsionSchema(StrictModel):
     name: str
     model: Literal["poly22"]
@@ -178,6 +196,16 @@ class PropulsionSchema(StrictModel):
     throttle_unit: Literal["fraction", "percent"] = "fraction"
     engines: Annotated[list[EngineSchema], Field(min_length=1)]
     source: dict[str, Any] | None = None  # free-form provenance written by `fit`
+
+    @field_validator("source", mode="before")
+    @classmethod
+    def _bounded_source(cls, value: Any) -> Any:
+        # YAML aliases share one object many times: nine levels of nine expand to 4e8 values
+        # that the exports wrote out until memory ran out (outside audit); count, then stop
+        if count_values(value, MAX_SOURCE_VALUES) > MAX_SOURCE_VALUES:
+            raise ValueError(f"more than {MAX_SOURCE_VALUES} values once its aliases are "
+                             "expanded: write the provenance out plainly")
+        return value
 
     @model_validator(mode="after")
     def _check(self) -> PropulsionSchema:
