@@ -234,3 +234,23 @@ def test_run_changed_since_the_fit_is_exit_2(tmp_path):
     result = run("endurance", "--throttle", "0.5", "--case", str(_case_with(tmp_path, path)))
     assert result.exit_code == 2, result.output
     assert run_file.name in result.stderr and "changed since" in result.stderr
+
+
+def test_a_power_model_far_below_momentum_theory_flies_no_endurance(tmp_path):
+    """A power surface at 1 mW: 'flight_endurance 22166939 min PASS' beside a figure-of-merit
+    warning of 644970 (outside audit). Far above 1 it is no fan's power: not attainable."""
+    import shutil
+
+    for folder in ("requirements", "data"):
+        shutil.copytree(ROOT / folder, tmp_path / folder)
+    path = tmp_path / "data" / "tuflex" / "propulsion.yaml"
+    data = yaml.safe_load(path.read_text())
+    for engine in data["engines"]:
+        engine["power"]["coefficients"] = dict(p00=1e-3, p10=0, p01=0, p20=0, p11=0, p02=0)
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    result = run("check", str(tmp_path / "requirements" / "tuflex.yaml"), "--json")
+    assert result.exit_code == 1
+    endurance = next(r for r in json.loads(result.stdout)["results"]
+                     if r["name"] == "flight_endurance")
+    assert endurance["passed"] is False and endurance["value"] is None
+    assert "momentum theory" in endurance["reason"] and "no fan flies on it" in endurance["reason"]

@@ -77,6 +77,9 @@ from tuflexperf.reduction.battery import (
 )
 
 # Level flight is searched between the stall speed and this multiple of it.
+# A figure of merit beyond this (ideal power over electrical) is no measurement error: the
+# power model gives less than half what momentum theory needs for the thrust
+IMPOSSIBLE_FIGURE_OF_MERIT = 2.0
 _MAX_SPEED_OVER_STALL = 8.0
 _SPEED_GRID_POINTS = 4001
 # Least airspeed for the --best NLPs: the usual 20 % margin over the 1-g stall speed.
@@ -774,6 +777,19 @@ class EnduranceModel:
             self.case.density_kg_m3, power_w,
         )
         warnings.extend(w for a in agreement for w in a.warnings)
+        impossible = [a for a in agreement if a.figure_of_merit is not None
+                      and a.figure_of_merit > IMPOSSIBLE_FIGURE_OF_MERIT]
+        if impossible:
+            # a figure of merit above 1 is a warning (SPEC 3: thrust the power cannot make);
+            # far above it the power model is no fan's, and an endurance flown on it is no
+            # answer (a surface at 1 mW "flew" 2e7 min; outside audit)
+            a = impossible[0]
+            raise NotAttainable(
+                f"throttle {throttle:g}: {a.engine}'s power model gives {a.electrical_power_w:.0f}"
+                f" W at {speed:.1f} m/s, under 1/{IMPOSSIBLE_FIGURE_OF_MERIT:g} of the "
+                f"{a.ideal_power_w:.0f} W that momentum theory needs for its {a.thrust_n:.1f} N "
+                f"(figure of merit {a.figure_of_merit:.3g}): no fan flies on it"
+            )
         warnings.extend(self.run_checks)
         u_ref = self.case.propulsion.reference_voltage_v
         if u_ref is not None:  # the flight's own airspeed and power, sagging with the pack
