@@ -900,6 +900,13 @@ class MissionModel:
         end, aux = (np.asarray(v_, dtype=float).ravel() for v_ in f(start, d, theta)[:2])
         return low, end, aux
 
+    def _pack_rating_a(self) -> float | None:
+        """The most current one pack may give [A]: ``max_discharge_c x capacity_ah`` (None
+        when the battery file gives no rating). A pack asked for 9 C against a 5 C rating
+        'flew' (outside audit): beyond it the flight is not attainable."""
+        c_rate = self.battery.max_discharge_c
+        return None if c_rate is None else float(c_rate) * float(self.battery.capacity_ah)
+
     def _result(self, states: np.ndarray, aux: np.ndarray, solved: dict[str, Any] | None,
                 theta: np.ndarray, durations: np.ndarray) -> MissionResult:
         n = self.n
@@ -936,6 +943,17 @@ class MissionModel:
             bad = np.flatnonzero(reached[sl] < 0.5)
             if bad.size:
                 problems.append((int(bad[0]), "needs more than full throttle"))
+            rating = self._pack_rating_a()
+            if rating is not None and live:
+                per_pack = np.max(current[live, sl], axis=0) / self.packs
+                over = np.flatnonzero(per_pack > rating * (1.0 + 1e-9))
+                if over.size:
+                    k0 = int(over[0])
+                    problems.append((k0, f"draws {per_pack[k0]:.1f} A per pack, beyond its "
+                                     f"rating {rating:.1f} A (max_discharge_c "
+                                     f"{self.battery.max_discharge_c:g} C x "
+                                     f"{self.battery.capacity_ah:g} Ah): not attainable, "
+                                     "beyond the battery"))
             segment_of[sl] = plan.index
             if plan.solve_v:
                 throttle = float(theta[3 * plan.index])
