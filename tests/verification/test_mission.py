@@ -707,13 +707,13 @@ def test_a_pack_asked_for_more_than_its_c_rating_ends_the_flight(tmp_path: Path)
         shutil.copytree(ROOT / folder, tmp_path / folder)
     battery = tmp_path / "data" / "tuflex" / "battery.yaml"
     shipped = load_case(tmp_path / "requirements" / "tuflex.yaml")
-    flown = MissionModel(shipped, load_mission(SHIPPED_MISSION)).fly()
+    flown = MissionModel(shipped, load_mission(SHIPPED_MISSION), None).fly()
     assert flown.attainable  # 40 C: the shipped flight stays within it
     peak = max(float(np.max(flown.history[f"current_a_{e}"])) for e in flown.engines) / 2
     battery.write_text(battery.read_text().replace("max_discharge_c: 40 ",
                                                    "max_discharge_c: 5  ", 1))
     case = load_case(tmp_path / "requirements" / "tuflex.yaml")
-    result = MissionModel(case, load_mission(SHIPPED_MISSION)).fly()
+    result = MissionModel(case, load_mission(SHIPPED_MISSION), None).fly()
     assert peak > 25.0 and not result.attainable and not result.passed
     assert result.reason.startswith("segment 1 (takeoff): draws")
     assert "beyond its rating 25.0 A" in result.reason and "beyond the battery" in result.reason
