@@ -274,3 +274,22 @@ def test_fits_own_provenance_is_far_below_the_source_bound(tmp_path):
     source = yaml.safe_load(fit_campaign(ROOT / "data/tuflex/campaign/campaign.yaml")
                             .propulsion_text)["source"]
     assert 10 < count_values(source, MAX_SOURCE_VALUES) < MAX_SOURCE_VALUES / 10
+
+
+def test_set_on_a_block_the_case_leaves_out_says_so(tmp_path):
+    for folder in ("requirements", "data"):
+        shutil.copytree(ROOT / folder, tmp_path / folder)
+    case = tmp_path / "requirements" / "tuflex.yaml"
+    case.write_text(case.read_text().replace("  takeoff: {max_ground_roll_m: 60}\n", ""))
+    result = runner.invoke(app, ["check", str(case), "--set",
+                                 "requirements.takeoff.max_ground_roll_m=0.1"])
+    assert result.exit_code == 2
+    assert "the case has no requirements.takeoff block" in result.stderr
+    assert "did you mean" not in result.stderr
+
+
+@pytest.mark.parametrize(("value", "hint"), [("1.0000001", False), ("1.5", False), ("50", True)])
+def test_a_percent_hint_only_for_what_looks_like_a_percent(value, hint):
+    result = runner.invoke(app, ["endurance", "--throttle", value])
+    assert result.exit_code == 2 and "must be a fraction in [0, 1]" in result.stderr
+    assert ("fraction, not percent" in result.stderr) is hint

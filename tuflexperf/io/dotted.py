@@ -137,6 +137,13 @@ def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
             f"{where}: {key}: cannot be varied (of the battery only "
             f"{', '.join(BATTERY_KEYS)}: the pack model is fitted to its discharge runs)"
         )
+    parts = key.split(".")
+    if (len(parts) == 3 and parts[0] == "requirements" and parts[1] in Requirements.model_fields
+            and getattr(case.requirements, parts[1]) is None):
+        # a real key of a block the case leaves out: "did you mean" another block's key
+        # misled (outside audit)
+        raise InputError(f"{where}: {key}: the case has no requirements.{parts[1]} block "
+                         "to change; add it to the case file")
     close = difflib.get_close_matches(key, [*known, *optional], n=1)
     hint = f" (did you mean {close[0]}?)" if close else ""
     raise InputError(f"{where}: unknown or non-numeric key {key!r}{hint}")
