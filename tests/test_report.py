@@ -428,3 +428,15 @@ def test_endurance_marks_the_best_endurance_and_has_an_airspeed_axis(figures_of_
     assert marks[0].get_ydata()[0] == pytest.approx(best.flight_endurance_min)
     (top,) = flight.child_axes
     assert "airspeed" in top.get_xlabel() and "(m/s)" in top.get_xlabel()
+
+
+def test_a_case_file_given_as_the_campaign_is_named_as_the_flags_error(tmp_path):
+    """It failed after the first progress line, naming the file but not --campaign (outside
+    audit): now one line, before anything is shown or written."""
+    case = Path(__file__).resolve().parent.parent / "requirements" / "tuflex.yaml"
+    out = tmp_path / "r"
+    result = runner.invoke(app, ["report", "--out", str(out), "--campaign", str(case)])
+    assert result.exit_code == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("tuflexperf: error: --campaign: ")
+    assert not out.exists()

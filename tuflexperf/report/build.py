@@ -124,6 +124,8 @@ def build_report(
     campaign_path = Path(campaign) if campaign is not None else None
     if campaign_path is not None and not campaign_path.is_file():
         raise InputError(f"--campaign: file not found: {campaign_path}")
+    if campaign_path is not None:
+        _check_campaign(campaign_path)  # before any step is shown or anything is written
     with (staged_directory(out, "report") as staging,
           tempfile.TemporaryDirectory(prefix="tuflexperf-report-") as kept):
         result = _render(case, staging, campaign_path, StepCounter(18, stream, progress),
@@ -138,6 +140,22 @@ def build_report(
         seconds=time.perf_counter() - started,
         notes=result.notes,
     )
+
+
+def _check_campaign(path: Path) -> None:
+    """A campaign manifest given to ``--campaign`` is validated here, its errors named as the
+    flag's: a case file given there failed after the first step, without the flag's name
+    (outside audit). Tables and propeller manifests are read where they are reduced."""
+    from tuflexperf.io.campaign import load_campaign
+    from tuflexperf.io.proptables import is_propeller_manifest
+    from tuflexperf.reduction.pipeline import is_thrust_table
+
+    if is_thrust_table(path) or is_propeller_manifest(path):
+        return
+    try:
+        load_campaign(path)
+    except InputError as exc:
+        raise InputError(f"--campaign: {exc}") from None
 
 
 def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
