@@ -169,6 +169,35 @@ def test_the_recognised_sweep_names_are_every_requirement_check_can_name() -> No
     assert names and names == set(files.REQUIREMENT_NAMES)
 
 
+def test_an_interrupt_during_the_renames_keeps_the_earlier_output(tmp_path, monkeypatch):
+    """SIGINT a few ms after report's last page landed while the folders were renamed: the
+    new output replaced the earlier one and the run still said "aborted" (outside audit).
+    Interrupted before the swap is done, the earlier output is put back."""
+    with files.staged_directory(tmp_path / "out", "probe") as staging:
+        (staging / "old.txt").write_text("earlier")
+    before = _tree(tmp_path / "out")
+    real_replace = os.replace
+    calls = []
+
+    def interrupted_replace(src, dst):
+        calls.append(Path(dst).name)
+        if len(calls) == 2:  # the new output moves in: the interrupt lands right there
+            os.kill(os.getpid(), signal.SIGINT)
+        real_replace(src, dst)
+
+    monkeypatch.setattr(files.os, "replace", interrupted_replace)
+    monkeypatch.setattr(files, "_signals_received", [])
+    previous = signal.signal(signal.SIGINT, files._raise_interrupt)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with files.staged_directory(tmp_path / "out", "probe") as staging:
+                (staging / "new.txt").write_text("new")
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert _tree(tmp_path / "out") == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no .old-*, no .tmp-*
+
+
 def test_an_interrupt_during_the_swap_leaves_the_new_output_whole_and_no_debris(
     tmp_path, monkeypatch
 ) -> None:

@@ -529,13 +529,22 @@ def staged_directory(out: Path, command: str) -> Iterator[Path]:
         # would leave `out` missing between the renames, or the earlier output behind as
         # a hidden folder; it is raised when they are done
         with interrupts_held():
+            seen = len(_signals_received)
             if out.exists():
                 old = out.parent / f".{out.name}.old-{secrets.token_hex(6)}"
                 os.replace(out, old)
                 os.replace(staging, out)
-                shutil.rmtree(old, ignore_errors=True)
+                if len(_signals_received) > seen:
+                    # interrupted before the swap was done: the earlier output stays (SPEC 5);
+                    # the new one goes back to the staging, which the unwinding removes
+                    os.replace(out, staging)
+                    os.replace(old, out)
+                else:
+                    shutil.rmtree(old, ignore_errors=True)
             else:
                 os.replace(staging, out)
+                if len(_signals_received) > seen:
+                    os.replace(out, staging)
     except BaseException as exc:
         shutil.rmtree(staging, ignore_errors=True)
         for folder in reversed(created):
