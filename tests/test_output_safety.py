@@ -169,6 +169,19 @@ def test_the_recognised_sweep_names_are_every_requirement_check_can_name() -> No
     assert names and names == set(files.REQUIREMENT_NAMES)
 
 
+def _stage_new_output_interrupted(tmp_path: Path, monkeypatch) -> None:
+    """Stage 'new.txt' over tmp_path/out with tuflexperf's own SIGINT handler installed; the
+    patched file operation sends the interrupt, which must come out as KeyboardInterrupt."""
+    monkeypatch.setattr(files, "_signals_received", [])
+    previous = signal.signal(signal.SIGINT, files._raise_interrupt)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with files.staged_directory(tmp_path / "out", "probe") as staging:
+                (staging / "new.txt").write_text("new")
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def test_an_interrupt_during_the_renames_keeps_the_earlier_output(tmp_path, monkeypatch):
     """SIGINT a few ms after report's last page landed while the folders were renamed: the
     new output replaced the earlier one and the run still said "aborted" (outside audit).
@@ -186,14 +199,7 @@ def test_an_interrupt_during_the_renames_keeps_the_earlier_output(tmp_path, monk
         real_replace(src, dst)
 
     monkeypatch.setattr(files.os, "replace", interrupted_replace)
-    monkeypatch.setattr(files, "_signals_received", [])
-    previous = signal.signal(signal.SIGINT, files._raise_interrupt)
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            with files.staged_directory(tmp_path / "out", "probe") as staging:
-                (staging / "new.txt").write_text("new")
-    finally:
-        signal.signal(signal.SIGINT, previous)
+    _stage_new_output_interrupted(tmp_path, monkeypatch)
     assert _tree(tmp_path / "out") == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no .old-*, no .tmp-*
 
@@ -212,14 +218,7 @@ def test_an_interrupt_during_the_swap_leaves_the_new_output_whole_and_no_debris(
         real_rmtree(path, ignore_errors=ignore_errors)
 
     monkeypatch.setattr("shutil.rmtree", interrupted_rmtree)
-    monkeypatch.setattr(files, "_signals_received", [])
-    previous = signal.signal(signal.SIGINT, files._raise_interrupt)
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            with files.staged_directory(tmp_path / "out", "probe") as staging:
-                (staging / "new.txt").write_text("new")
-    finally:
-        signal.signal(signal.SIGINT, previous)
+    _stage_new_output_interrupted(tmp_path, monkeypatch)
     assert removed and removed[0].startswith(".out.old-")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no .old-*, no .tmp-*
     assert _tree(tmp_path / "out").keys() == {"new.txt", files.MARKER}
