@@ -488,7 +488,7 @@ def trim(
         emit_json({**data, "max_trim_throttle": limit, "passed": met})
     else:
         v = data["airspeed_m_s"]
-        typer.echo(f"{case.name}: trim over {v[0]:g}-{v[-1]:g} m/s ({len(v)} airspeeds)")
+        typer.echo(f"{case.name}: trim over {v[0]:.4g}-{v[-1]:.4g} m/s ({len(v)} airspeeds)")
         if result.min_throttle is None:
             typer.echo("  least throttle   none: level flight attainable nowhere in the envelope")
         else:

@@ -48,6 +48,7 @@ from numpy.typing import NDArray
 from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.analysis.level_flight import airspeed_grid
 from tuflexperf.analysis.takeoff import obstacle_height_of
+from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     Aircraft,
@@ -263,9 +264,11 @@ class BatchEvaluator:
                                  obstacle_height_of(self.case), size)
                 out[requirement.name] = model.distance_to_obstacle(roll, height)
             elif requirement.block == "envelope":
+                self._one_grid_for_all(model)
                 out[requirement.name] = model.trim_max_throttle(
                     self._grid(), self._candidates()[0])
             elif requirement.block == "oei":
+                self._one_grid_for_all(model)
                 mode = self.case.requirements.oei.dead_engine
                 out[requirement.name] = model.oei_min_throttle(
                     self._grid(), mode, self._candidates()[1])
@@ -338,8 +341,23 @@ class BatchEvaluator:
             from tuflexperf.analysis.trim import envelope_of
 
             envelope_of(self.case)  # raises the InputError naming the case
-        self._grid_cache = airspeed_grid(envelope.min_airspeed_m_s, envelope.max_airspeed_m_s)
+        self._grid_cache = airspeed_grid(*envelope.bounds_m_s(self.case.density_kg_m3))
         return self._grid_cache
+
+    def _one_grid_for_all(self, model: Any) -> None:
+        """The batch solves every row on the case's one airspeed grid: equivalent-airspeed
+        envelope bounds give each density its own, so a varied atmosphere is refused there."""
+        envelope = self.case.requirements.envelope
+        if envelope is None or not envelope.in_eas:
+            return
+        density = np.asarray(model.density, dtype=float)
+        if np.any(np.abs(density - self.case.density_kg_m3) > 1e-12 * self.case.density_kg_m3):
+            raise InputError(
+                f"{self.case.path}: requirements.envelope: equivalent-airspeed bounds "
+                "(..._eas_m_s) give each density its own true-airspeed grid, which samples, "
+                "sweeps and margins over the atmosphere do not solve: give the bounds as true "
+                "airspeeds (min_airspeed_m_s, max_airspeed_m_s) to vary the atmosphere"
+            )
 
 
 @dataclass

@@ -759,12 +759,11 @@ class EnduranceModel:
                 f"range {low:g}-{high:g} m/s (extrapolated)"
             )
         envelope = self.case.requirements.envelope
-        if envelope is not None and not (
-            envelope.min_airspeed_m_s - 1e-9 <= speed <= envelope.max_airspeed_m_s + 1e-9
-        ):
+        bounds = envelope.bounds_m_s(self.case.density_kg_m3) if envelope is not None else None
+        if bounds is not None and not bounds[0] - 1e-9 <= speed <= bounds[1] + 1e-9:
             warnings.append(
                 f"level-flight airspeed {speed:.1f} m/s is outside the envelope "
-                f"{envelope.min_airspeed_m_s:g}-{envelope.max_airspeed_m_s:g} m/s"
+                f"{bounds[0]:g}-{bounds[1]:g} m/s"
             )
         density_note = unlapsed_density_warning(self.case.propulsion, self.case.density_kg_m3)
         if density_note:
@@ -883,8 +882,8 @@ class EnduranceModel:
         high = _MAX_SPEED_OVER_STALL * self.stall_m_s
         envelope = self.case.requirements.envelope
         if envelope is not None:
-            low = max(low, envelope.min_airspeed_m_s)
-            high = envelope.max_airspeed_m_s
+            least, greatest = envelope.bounds_m_s(self.case.density_kg_m3)
+            low, high = max(low, least), greatest
         if not low < high:
             raise NotAttainable(
                 f"no airspeed for --best: the envelope ends at {high:g} m/s, below 1.2 x stall "

@@ -151,7 +151,8 @@ def _trim(study: Study) -> Verdict:
 
 def trim_verdict(envelope: Any, result: Any) -> Verdict:
     """The trim requirement's verdict from a solved trim sweep (the CLI's ``trim`` too)."""
-    span = f"{envelope.min_airspeed_m_s:g}-{envelope.max_airspeed_m_s:g} m/s"
+    # the grid's ends are the envelope's true airspeeds (converted from EAS bounds)
+    span = f"{result.airspeed_m_s[0]:.4g}-{result.airspeed_m_s[-1]:.4g} m/s"
     if not result.all_feasible:
         from tuflexperf.analysis.attainable import describe_unattainable
 

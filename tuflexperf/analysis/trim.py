@@ -36,15 +36,31 @@ from tuflexperf.models.thrust import total_thrust_n, unlapsed_density_warning
 _cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
 
 
-def envelope_of(case: Case) -> tuple[float, float]:
-    """The case's envelope (min, max airspeed in m/s); trim and OEI need it."""
+def envelope_of(case: Case, density_kg_m3: float | None = None) -> tuple[float, float]:
+    """The case's envelope as true airspeeds [m/s] (min, max) at ``density_kg_m3`` (default:
+    the case's); trim and OEI need it. Equivalent-airspeed bounds (``_eas``) are converted."""
     envelope = case.requirements.envelope
     if envelope is None:
         raise InputError(
             f"{case.path}: requirements.envelope: missing; trim and OEI need "
             "min_airspeed_m_s and max_airspeed_m_s"
         )
-    return envelope.min_airspeed_m_s, envelope.max_airspeed_m_s
+    rho = case.density_kg_m3 if density_kg_m3 is None else density_kg_m3
+    low, high = envelope.bounds_m_s(rho)
+    if not low < high:  # one bound true, the other equivalent: ordered only at a density
+        raise InputError(
+            f"{case.path}: requirements.envelope: the least airspeed {low:.2f} m/s is not below "
+            f"the greatest {high:.2f} m/s (true airspeeds at {rho:.4f} kg/m^3)"
+        )
+    if high > MAX_ENVELOPE_TRUE_AIRSPEED_M_S:
+        raise InputError(
+            f"{case.path}: requirements.envelope: max_airspeed_eas_m_s is "
+            f"{high:.1f} m/s true at {rho:.4f} kg/m^3, beyond the speed of sound"
+        )
+    return low, high
+
+
+MAX_ENVELOPE_TRUE_AIRSPEED_M_S = 340.0  # as the schema's true bound (poly22 at low speed)
 
 
 def extrapolation_note(case: Case, airspeeds_m_s: np.ndarray) -> tuple[bool, list[str]]:

@@ -19,6 +19,7 @@ from tuflexperf.models.aircraft import (
     EAS_REFERENCE_DENSITY_KG_M3,
     Aircraft,
     TakeoffConfig,
+    true_airspeed_m_s,
 )
 from tuflexperf.models.atmosphere import G0_M_S2, isa_density_kg_m3
 from tuflexperf.models.thrust import (
@@ -245,20 +246,56 @@ class TakeoffRequirement(StrictModel):
         return self
 
 
+Airspeed = Annotated[float, Field(gt=0, le=340)]  # below Mach 1: poly22 at low speed
+
+
 class EnvelopeRequirement(StrictModel):
-    min_airspeed_m_s: Positive
-    max_airspeed_m_s: Annotated[float, Field(gt=0, le=340)]  # below Mach 1: poly22 at low speed
+    """The airspeeds trim and OEI are solved over: each bound a true airspeed (``..._m_s``)
+    or an equivalent one (``..._eas_m_s``, SPEC 3: true airspeed unless a key says ``_eas``)."""
+
+    min_airspeed_m_s: Positive | None = None
+    max_airspeed_m_s: Airspeed | None = None
+    min_airspeed_eas_m_s: Positive | None = None
+    max_airspeed_eas_m_s: Airspeed | None = None
     max_trim_throttle: Fraction = 1.0
     stall_margin: Annotated[float, Field(ge=1, le=3)] = 1.0  # level flight needs V >= this x stall
 
     @model_validator(mode="after")
     def _check(self) -> EnvelopeRequirement:
-        if not self.min_airspeed_m_s < self.max_airspeed_m_s:
-            raise ValueError(
-                f"min_airspeed_m_s ({self.min_airspeed_m_s}) must be below "
-                f"max_airspeed_m_s ({self.max_airspeed_m_s})"
-            )
+        for end in ("min", "max"):
+            true, equivalent = (getattr(self, f"{end}_airspeed_m_s"),
+                                getattr(self, f"{end}_airspeed_eas_m_s"))
+            if (true is None) == (equivalent is None):
+                raise ValueError(
+                    f"give {end}_airspeed_m_s (true airspeed) or {end}_airspeed_eas_m_s "
+                    f"(equivalent airspeed), {'not both' if true is not None else 'one of them'}"
+                )
+        for suffix in ("m_s", "eas_m_s"):  # bounds of one kind compare at any density
+            low = getattr(self, f"min_airspeed_{suffix}")
+            high = getattr(self, f"max_airspeed_{suffix}")
+            if low is not None and high is not None and not low < high:
+                raise ValueError(f"min_airspeed_{suffix} ({low}) must be below "
+                                 f"max_airspeed_{suffix} ({high})")
         return self
+
+    @property
+    def in_eas(self) -> bool:
+        """Whether a bound is an equivalent airspeed (its true airspeed follows the density)."""
+        return self.min_airspeed_eas_m_s is not None or self.max_airspeed_eas_m_s is not None
+
+    def bounds_m_s(self, density_kg_m3: float) -> tuple[float, float]:
+        """The envelope's (least, greatest) true airspeed [m/s] at ``density_kg_m3`` [kg/m^3].
+
+        References
+        ----------
+        SPEC 3 (airspeeds the pilot sets are EAS; envelope bounds true unless ``_eas``).
+        """
+        def true(tas: float | None, eas: float | None) -> float:
+            return float(tas) if tas is not None else float(
+                true_airspeed_m_s(eas, density_kg_m3))
+
+        return (true(self.min_airspeed_m_s, self.min_airspeed_eas_m_s),
+                true(self.max_airspeed_m_s, self.max_airspeed_eas_m_s))
 
 
 class OeiRequirement(StrictModel):

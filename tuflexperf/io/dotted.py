@@ -23,6 +23,8 @@ from tuflexperf.models.aircraft import Aircraft
 _FIXED = {
     "requirements.envelope.min_airspeed_m_s",
     "requirements.envelope.max_airspeed_m_s",
+    "requirements.envelope.min_airspeed_eas_m_s",
+    "requirements.envelope.max_airspeed_eas_m_s",
 }
 
 

@@ -239,7 +239,7 @@ def thrust_band(case: Case, analyses: Analyses, measured: Measured | None = None
         if right > high_t:
             ax.axvspan(high_t, right, color=EXTRAPOLATED_FILL, zorder=0, linewidth=0)
         if envelope is not None:
-            for edge in (envelope.min_airspeed_m_s, envelope.max_airspeed_m_s):
+            for edge in envelope.bounds_m_s(case.density_kg_m3):
                 ax.axvline(edge, **STYLE["envelope"])
         for band in mine:
             c = colour[band.throttle]
@@ -286,8 +286,8 @@ def thrust_band(case: Case, analyses: Analyses, measured: Measured | None = None
                          label=f"extrapolated: beyond the\ntested {low_t:g}-{high_t:g} m/s"))
     if envelope is not None:
         handles.append(Line2D([], [], **STYLE["envelope"],
-                              label=f"envelope {envelope.min_airspeed_m_s:g}-"
-                              f"{envelope.max_airspeed_m_s:g} m/s"))
+                              label="envelope {:.4g}-{:.4g} m/s".format(
+                                  *envelope.bounds_m_s(case.density_kg_m3))))
     legend_outside(axes[-1], handles=handles)
     fig.suptitle(f"Thrust model {case.propulsion.name}: 95 % confidence band over the "
                  "envelope (delta method, Montgomery & Runger 12-4)")

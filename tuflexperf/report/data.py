@@ -455,7 +455,7 @@ def _thrust_bands(study: Study, analyses: Analyses) -> None:
     case = study.case
     top = 1.5 * case.propulsion.tested_airspeed_m_s[1]
     if case.requirements.envelope is not None:
-        top = max(top, case.requirements.envelope.max_airspeed_m_s)
+        top = max(top, case.requirements.envelope.bounds_m_s(case.density_kg_m3)[1])
     airspeed = np.linspace(0.0, top, int(math.ceil(top / BAND_STEP_M_S)) + 1)
     for index in range(len(case.propulsion.engines)):
         for throttle in BAND_THROTTLES:

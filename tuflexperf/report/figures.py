@@ -150,15 +150,12 @@ def _envelope_lines(ax: Any, case: Case) -> None:
     envelope = case.requirements.envelope
     if envelope is None:
         return
-    for k, v in enumerate((envelope.min_airspeed_m_s, envelope.max_airspeed_m_s)):
+    low, high = envelope.bounds_m_s(case.density_kg_m3)
+    for k, v in enumerate((low, high)):
         ax.axvline(
             v,
             **STYLE["envelope"],
-            label=(
-                f"envelope {envelope.min_airspeed_m_s:g}-{envelope.max_airspeed_m_s:g} m/s"
-                if k == 0
-                else None
-            ),
+            label=f"envelope {low:.4g}-{high:.4g} m/s" if k == 0 else None,
         )
 
 
@@ -166,14 +163,14 @@ def _max_airspeed(case: Case) -> float:
     envelope = case.requirements.envelope
     top = case.propulsion.tested_airspeed_m_s[1]
     if envelope is not None:
-        top = max(top, envelope.max_airspeed_m_s)
+        top = max(top, envelope.bounds_m_s(case.density_kg_m3)[1])
     return 1.05 * top
 
 
 def _min_airspeed(case: Case, stall: float) -> float:
     """Left edge of an airspeed axis: just below the stall speed or the envelope, not 0."""
     envelope = case.requirements.envelope
-    low = stall if envelope is None else min(stall, envelope.min_airspeed_m_s)
+    low = stall if envelope is None else min(stall, envelope.bounds_m_s(case.density_kg_m3)[0])
     return max(0.0, 0.9 * low)
 
 
@@ -917,7 +914,7 @@ def endurance(case: Case, analyses: Analyses) -> Any:
         for limit, alpha, what in (
             (tested_high, 0.12, f"level flight faster than the tested {tested_high:g} m/s"),
             (
-                envelope.max_airspeed_m_s if envelope is not None else None,
+                envelope.bounds_m_s(case.density_kg_m3)[1] if envelope is not None else None,
                 0.22,
                 "... and beyond the envelope",
             ),

@@ -1,0 +1,96 @@
+"""Envelope bounds as equivalent airspeeds (SPEC 3: true airspeeds unless a key says _eas).
+
+Verification: an EAS bound is the true airspeed ``EAS sqrt(rho0 / rho)`` at the case's ISA
+density, so a case with EAS bounds solves exactly the case with those true bounds.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from tuflexperf.analysis.margins import margin_parameters
+from tuflexperf.analysis.requirements import check_case
+from tuflexperf.cli import app
+from tuflexperf.io.case import load_case
+from tuflexperf.models.aircraft import EAS_REFERENCE_DENSITY_KG_M3
+from tuflexperf.models.atmosphere import isa_density_kg_m3
+
+ROOT = Path(__file__).resolve().parents[2]
+SHIPPED_ENVELOPE = ("  envelope: {min_airspeed_m_s: 15, max_airspeed_m_s: 45, "
+                    "max_trim_throttle: 1.0}\n")
+runner = CliRunner()
+
+
+def _case(tmp_path: Path, envelope: str, altitude_m: float = 2000.0) -> Path:
+    for folder in ("requirements", "data"):
+        if not (tmp_path / folder).exists():
+            shutil.copytree(ROOT / folder, tmp_path / folder)
+    path = tmp_path / "requirements" / f"case_{abs(hash(envelope))}.yaml"
+    text = (ROOT / "requirements" / "tuflex.yaml").read_text()
+    text = text.replace(SHIPPED_ENVELOPE, f"  envelope: {envelope}\n")
+    text = text.replace("altitude_m: 0,", f"altitude_m: {altitude_m:g},")
+    path.write_text(text)
+    return path
+
+
+def test_eas_bounds_solve_the_case_with_those_true_bounds(tmp_path):
+    rho = float(isa_density_kg_m3(2000.0, 0.0))
+    factor = math.sqrt(EAS_REFERENCE_DENSITY_KG_M3 / rho)
+    eas = load_case(_case(tmp_path, "{min_airspeed_eas_m_s: 15, max_airspeed_eas_m_s: 40}"))
+    true = load_case(_case(tmp_path, f"{{min_airspeed_m_s: {15 * factor!r}, "
+                                     f"max_airspeed_m_s: {40 * factor!r}}}"))
+    assert eas.requirements.envelope.bounds_m_s(rho) == pytest.approx((15 * factor,
+                                                                       40 * factor), rel=1e-15)
+    for a, b in zip(check_case(eas), check_case(true), strict=True):
+        assert a.name == b.name and a.passed == b.passed
+        assert a.value == pytest.approx(b.value, rel=1e-12)
+    trim = json.loads(runner.invoke(app, ["trim", "--case", str(eas.path), "--json"]).stdout)
+    assert trim["airspeed_m_s"][0] == pytest.approx(15 * factor)
+    assert trim["airspeed_m_s"][-1] == pytest.approx(40 * factor)
+
+
+def test_at_sea_level_eas_and_true_bounds_agree(tmp_path):
+    eas = load_case(_case(tmp_path, "{min_airspeed_eas_m_s: 15, max_airspeed_eas_m_s: 45}", 0.0))
+    shipped = load_case(None)
+    for a, b in zip(check_case(eas), check_case(shipped), strict=True):
+        assert a.value == pytest.approx(b.value, rel=1e-12)
+
+
+@pytest.mark.parametrize(("envelope", "message"), [
+    ("{min_airspeed_m_s: 15, min_airspeed_eas_m_s: 15, max_airspeed_m_s: 45}", "not both"),
+    ("{max_airspeed_m_s: 45}", "give min_airspeed_m_s (true airspeed) or min_airspeed_eas_m_s"),
+    ("{min_airspeed_eas_m_s: 30, max_airspeed_eas_m_s: 20}", "must be below"),
+    ("{min_airspeed_m_s: 45, max_airspeed_eas_m_s: 40}", "is not below the greatest"),
+])
+def test_bounds_each_given_once_and_in_order(tmp_path, envelope, message):
+    result = runner.invoke(app, ["check", str(_case(tmp_path, envelope))])
+    assert result.exit_code == 2 and message in result.stderr, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_a_batch_over_the_atmosphere_refuses_eas_bounds_and_margins_leave_it(tmp_path):
+    path = _case(tmp_path, "{min_airspeed_eas_m_s: 15, max_airspeed_eas_m_s: 40}")
+    swept = runner.invoke(app, ["sweep", "--case", str(path), "--vary",
+                                "atmosphere.altitude_m=0:1000:2"])
+    assert swept.exit_code == 2 and "equivalent-airspeed bounds" in swept.stderr
+    mass = runner.invoke(app, ["sweep", "--case", str(path), "--vary",
+                               "aircraft.mass_kg=24:26:2", "--json"])
+    assert mass.exit_code in (0, 1), mass.stderr  # one density: one grid, solved as usual
+    keys = margin_parameters(load_case(path))
+    assert keys and not any(k.startswith("atmosphere.") for k in keys)
+    assert "atmosphere.altitude_m" in margin_parameters(load_case(None))
+
+
+def test_set_moves_an_eas_bound(tmp_path):
+    path = _case(tmp_path, "{min_airspeed_eas_m_s: 15, max_airspeed_eas_m_s: 40}")
+    result = runner.invoke(app, ["trim", "--case", str(path), "--json", "--set",
+                                 "requirements.envelope.max_airspeed_eas_m_s=30"])
+    rho = float(isa_density_kg_m3(2000.0, 0.0))
+    assert json.loads(result.stdout)["airspeed_m_s"][-1] == pytest.approx(
+        30 * math.sqrt(EAS_REFERENCE_DENSITY_KG_M3 / rho))
