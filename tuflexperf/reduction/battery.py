@@ -238,9 +238,6 @@ def fit_fan_power(
 
 
 # --- the battery file as a fitted artefact (issue 9) -------------------------------------------
-LABEL_OVER_FITTED_CAPACITY = 1.05
-"""Largest ``capacity_ah`` over the fitted pack's charge limit ``max_capacity_ah`` (the
-shipped pack: 5.0 Ah against 5.54 Ah)."""
 CUTOFF_TIME_TOLERANCE = 0.25
 """Largest relative miss of a run's own time to cut-off by the pack fitted to the runs
 (the shipped pack: < 1 %; a capacity 100x too large: 50x)."""
@@ -262,15 +259,6 @@ def refuse_unreproduced_runs(battery: Any, parameters: Any, runs: Sequence[Any])
     """
     from tuflexperf.models.battery import time_to_cutoff_s
 
-    held = float(parameters.max_capacity_ah)
-    if battery.capacity_ah > LABEL_OVER_FITTED_CAPACITY * held:
-        # the reserve and the charge left are fractions of capacity_ah: a label of twice the
-        # pack counted a cruise to the cut-off as landing with half the charge (audit)
-        raise InputError(
-            f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah is more than the pack "
-            f"fitted to the runs holds ({held:.2f} Ah at most); the landing reserve would be "
-            "counted on charge it does not have: give what the pack holds"
-        )
     for run in runs:
         observed = float(run.time_to_cutoff_s)
         if not observed > 0:
