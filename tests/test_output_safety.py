@@ -156,6 +156,7 @@ def test_written_by_reads_the_png_software_chunk() -> None:
 
     assert files.written_by(png("tuflexperf sweep")) == "sweep"
     assert files.written_by(png("tuflexperf 0.1.0")) == "report"
+    assert files.written_by(png("tuflexperf")) == "sweep"  # carpet plots of earlier versions
     assert files.written_by(png("tuflexperfX")) is None
     assert files.written_by(png("GIMP")) is None
     assert files.written_by(png(None)) is None

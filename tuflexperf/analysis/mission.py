@@ -82,6 +82,8 @@ from tuflexperf.models.thrust import (
     windmilling_thrust_n,
 )
 
+RATING_WINDOW_S = 30.0  # the continuous rating bounds the current averaged over half a minute
+BURST_OVER_CONTINUOUS = 2.0  # a LiPo's burst rating, the usual twice the continuous one
 SPEED_OF_SOUND_M_S = 340.0  # the schemas' top airspeed: no subsonic polar beyond it
 STEPS = 64  # RK4 steps per segment: the states are smooth, 64 steps give ~1e-9 relative
 SECONDS_PER_HOUR = 3600.0
@@ -900,12 +902,37 @@ class MissionModel:
         end, aux = (np.asarray(v_, dtype=float).ravel() for v_ in f(start, d, theta)[:2])
         return low, end, aux
 
-    def _pack_rating_a(self) -> float | None:
-        """The most current one pack may give [A]: ``max_discharge_c x capacity_ah`` (None
-        when the battery file gives no rating). A pack asked for 9 C against a 5 C rating
-        'flew' (outside audit): beyond it the flight is not attainable."""
+    def _beyond_rating(self, q: np.ndarray, t: np.ndarray, current: np.ndarray
+                       ) -> tuple[np.ndarray | None, list[str]]:
+        """Per node: whether a pack is drawn beyond its rating, and why (None: no rating).
+
+        ``max_discharge_c x capacity_ah`` is the pack's continuous rating: the current
+        averaged over the last :data:`RATING_WINDOW_S` (the charge drawn in that window, the
+        flight's start counting as rest) may not exceed it, nor the current itself
+        :data:`BURST_OVER_CONTINUOUS` times it (the usual burst rating). A pack asked for
+        9 C against a 5 C rating 'flew' (outside audit); a take-off a few per cent above the
+        continuous rating for half a minute is within the burst.
+        """
         c_rate = self.battery.max_discharge_c
-        return None if c_rate is None else float(c_rate) * float(self.battery.capacity_ah)
+        if c_rate is None or t.size == 0:
+            return None, []
+        rating = float(c_rate) * float(self.battery.capacity_ah)
+        drawn = q / self.packs  # [Ah] per pack
+        earlier = np.array([np.interp(t - RATING_WINDOW_S, t, row, left=0.0) for row in drawn])
+        mean_a = np.max((drawn - earlier) * SECONDS_PER_HOUR / RATING_WINDOW_S, axis=0)
+        peak_a = np.max(current, axis=0) / self.packs
+        continuous = mean_a > rating * (1.0 + 1e-9)
+        burst = peak_a > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9)
+        what = (f"(max_discharge_c {c_rate:g} C x {self.battery.capacity_ah:g} Ah): not "
+                "attainable, beyond the battery")
+        reasons = [
+            f"draws {peak_a[k]:.1f} A per pack, beyond its burst rating "
+            f"{BURST_OVER_CONTINUOUS * rating:.1f} A {what}" if burst[k] else
+            f"draws {mean_a[k]:.1f} A per pack over {RATING_WINDOW_S:g} s, beyond its "
+            f"continuous rating {rating:.1f} A {what}" if continuous[k] else ""
+            for k in range(t.size)
+        ]
+        return continuous | burst, reasons
 
     def _result(self, states: np.ndarray, aux: np.ndarray, solved: dict[str, Any] | None,
                 theta: np.ndarray, durations: np.ndarray) -> MissionResult:
@@ -917,6 +944,7 @@ class MissionModel:
         power = aux[6 + 2 * n:6 + 3 * n]
         segment_of = np.full(t.size, -1, dtype=int)
         stall_factor = self._stall_factor()
+        rating_excess, rating_reason = self._beyond_rating(q, t, current)
         reason = ""
         first_bad, ended_at = None, None
         segments: list[SegmentResult] = []
@@ -943,17 +971,11 @@ class MissionModel:
             bad = np.flatnonzero(reached[sl] < 0.5)
             if bad.size:
                 problems.append((int(bad[0]), "needs more than full throttle"))
-            rating = self._pack_rating_a()
-            if rating is not None and live:
-                per_pack = np.max(current[live, sl], axis=0) / self.packs
-                over = np.flatnonzero(per_pack > rating * (1.0 + 1e-9))
+            if rating_excess is not None and live:
+                over = np.flatnonzero(rating_excess[sl])
                 if over.size:
                     k0 = int(over[0])
-                    problems.append((k0, f"draws {per_pack[k0]:.1f} A per pack, beyond its "
-                                     f"rating {rating:.1f} A (max_discharge_c "
-                                     f"{self.battery.max_discharge_c:g} C x "
-                                     f"{self.battery.capacity_ah:g} Ah): not attainable, "
-                                     "beyond the battery"))
+                    problems.append((k0, rating_reason[a + k0]))
             segment_of[sl] = plan.index
             if plan.solve_v:
                 throttle = float(theta[3 * plan.index])
@@ -1300,8 +1322,13 @@ def _flown_up_to(case: Case, mission: MissionFile, min_landing_fraction: float |
     if k == 0 or mission.solve_for is not None:  # a solved segment needs the whole plan
         return None
     before = dataclasses.replace(mission, segments=mission.segments[:k])
-    flown = MissionModel(case, before, min_landing_fraction).fly()
+    model = MissionModel(case, before, min_landing_fraction)
+    if all(plan.kind == "event" for plan in model.plans):
+        return None  # a catapult release or an engine failure flies no time: nothing flown
+    flown = model.fly()
     if not flown.attainable:  # ended earlier (a cut-off): that is the answer
         return flown
+    # no landing: as a flight ended by its cut-off, the landing charge is not a number
     return dataclasses.replace(flown, attainable=False, reason=str(exc),
+                               landing_charge_fraction=math.nan,
                                ended_at_s=float(flown.history["time_s"][-1]))

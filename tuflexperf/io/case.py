@@ -166,7 +166,9 @@ class EngineSchema(StrictModel):
     power: PowerSurfaceSchema | None = None
 
 
-MAX_SOURCE_VALUES = 10_000  # fit's own provenance of a 19-run campaign holds ~150
+# fit's own provenance holds ~9 values per run (~150 for the shipped campaign): a million is
+# a campaign of 100,000 runs, and far below what an alias bomb expands to (9^10)
+MAX_SOURCE_VALUES = 1_000_000
 
 
 def count_values(value: Any, limit: int) -> int:

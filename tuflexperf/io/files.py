@@ -213,7 +213,7 @@ def written_by(head: bytes) -> str | None:
         return "fit"
     if head.startswith(b"\x89PNG"):
         software = _png_software(head) or ""
-        if software == SWEEP_PNG_SOFTWARE:
+        if software in (SWEEP_PNG_SOFTWARE, PNG_SOFTWARE):  # the bare name: earlier sweeps'
             return "sweep"
         return "report" if software.startswith(PNG_SOFTWARE + " ") else None
     if b"\n" not in head:  # a header is a whole first line
