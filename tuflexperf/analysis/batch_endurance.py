@@ -331,9 +331,6 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
         np.zeros(m.size),
         np.full(m.size, packs * params.max_capacity_ah * (1.0 - 1e-12)),
     )
-    # a cruise that meets the cut-off before the reserve keeps no reserve: not attainable, as
-    # requirements.endurance_verdict says for the single case
-    ok &= q_cut >= reserve_ah * (1.0 - 1e-9)
     start = np.where(ok, q_launch, 0.0)
     span = np.maximum(np.minimum(q_cut, reserve_ah) - start, 0.0)
     cruise_s = np.asarray(discharge_time_s(params, np.where(ok, power_w, 1.0), start,

@@ -229,22 +229,7 @@ def _endurance(study: Study) -> Verdict:
 
 
 def endurance_verdict(requirement: Any, result: Any) -> Verdict:
-    """The endurance verdict of a solved endurance at the requirement's throttle.
-
-    A cruise that ends on the pack's cut-off voltage, before the landing reserve, has flown
-    on the reserve: its time is no endurance with the reserve kept, so the requirement is
-    not attainable (a capacity_ah label twice the pack's turned a FAIL into a PASS so;
-    outside audit). The batch says the same (analysis.batch_endurance).
-    """
-    if result.cruise_ends_at != "landing reserve":
-        return Verdict(
-            "flight_endurance", None, requirement.min_flight_time_min, "min", "min",
-            f"at throttle {requirement.throttle:g} the cruise ends on the pack's cut-off "
-            f"voltage after {result.flight_endurance_min:.1f} min, before the landing reserve "
-            f"({result.landing_reserve_fraction:.0%} of capacity_ah): not attainable with the "
-            "reserve kept (is capacity_ah above what the pack delivers?)",
-            {"warnings": list(result.warnings)},
-        )
+    """The endurance verdict of a solved endurance at the requirement's throttle."""
     return Verdict(
         "flight_endurance",
         result.flight_endurance_min,
