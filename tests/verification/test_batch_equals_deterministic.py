@@ -307,3 +307,35 @@ def test_a_transition_arc_beyond_cl_max_reaches_no_obstacle_in_both() -> None:
             assert obstacle.value is None and "beyond cl_max" in obstacle.reason
         else:
             assert obstacle.passed
+
+
+@pytest.mark.parametrize(("c_rate", "packs", "pattern_m", "attainable"), [
+    (9, 1, 100, False),   # take-off 94 A per pack against a 90 A burst rating
+    (10, 1, 100, True),   # within the burst; no segment of 30 s beyond 50 A on average
+    (18, 1, 400, False),  # the 67 s climb at 99.5 A on average against 90 A continuous
+    (20, 1, 400, True),
+    (40, 2, 100, True),   # the shipped pack
+])
+def test_the_pack_rating_is_the_same_rule_in_the_batch(tmp_path, c_rate, packs, pattern_m,
+                                                       attainable) -> None:
+    """max_discharge_c ends a flight beyond the pack's rating (outside audit); the batch
+    (samples, sweeps, margins) applied none and passed what check failed (second review)."""
+    import shutil
+    from pathlib import Path
+
+    root = Path(SHIPPED_CASE).parent.parent
+    for folder in ("requirements", "data"):
+        shutil.copytree(root / folder, tmp_path / folder)
+    battery = tmp_path / "data" / "tuflex" / "battery.yaml"
+    battery.write_text(battery.read_text()
+                       .replace("max_discharge_c: 40 ", f"max_discharge_c: {c_rate} ")
+                       .replace("packs_in_parallel_per_engine: 2 ",
+                                f"packs_in_parallel_per_engine: {packs} ")
+                       .replace("  pattern_altitude_m: 100 ",
+                                f"  pattern_altitude_m: {pattern_m} "))
+    case = load_case(tmp_path / "requirements" / "tuflex.yaml")
+    endurance = next(v for v in check_case(case) if v.name == "flight_endurance")
+    assert (endurance.value is not None) is attainable, endurance.reason
+    if not attainable:
+        assert "beyond the battery" in endurance.reason
+    assert_equal_to_deterministic(case, BatchEvaluator(case).evaluate().values, 0)

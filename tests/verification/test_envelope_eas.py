@@ -94,3 +94,42 @@ def test_set_moves_an_eas_bound(tmp_path):
     rho = float(isa_density_kg_m3(2000.0, 0.0))
     assert json.loads(result.stdout)["airspeed_m_s"][-1] == pytest.approx(
         30 * math.sqrt(EAS_REFERENCE_DENSITY_KG_M3 / rho))
+
+
+def test_set_switches_a_bound_between_true_and_equivalent(tmp_path):
+    result = runner.invoke(app, ["trim", "--json", "--set", "atmosphere.altitude_m=2000",
+                                 "--set", "requirements.envelope.min_airspeed_eas_m_s=16"])
+    assert result.exit_code in (0, 1), result.stderr
+    rho = float(isa_density_kg_m3(2000.0, 0.0))
+    speeds = json.loads(result.stdout)["airspeed_m_s"]
+    assert speeds[0] == pytest.approx(16 * math.sqrt(EAS_REFERENCE_DENSITY_KG_M3 / rho))
+    assert speeds[-1] == 45.0  # the other bound stays true
+    both = runner.invoke(app, ["trim", "--set", "requirements.envelope.min_airspeed_eas_m_s=16",
+                               "--set", "requirements.envelope.min_airspeed_m_s=16"])
+    assert both.exit_code == 2 and "not both" in both.stderr
+
+
+def test_set_on_the_bounds_of_a_case_without_an_envelope_is_one_line(tmp_path):
+    """It raised an AttributeError traceback (second review)."""
+    for folder in ("requirements", "data"):
+        shutil.copytree(ROOT / folder, tmp_path / folder, dirs_exist_ok=True)
+    case = tmp_path / "requirements" / "tuflex.yaml"
+    case.write_text(case.read_text().replace(SHIPPED_ENVELOPE, ""))
+    for key in ("min_airspeed_m_s", "min_airspeed_eas_m_s"):
+        result = runner.invoke(app, ["check", str(case), "--set",
+                                     f"requirements.envelope.{key}=15"])
+        assert result.exit_code == 2 and "no requirements.envelope block" in result.stderr
+
+
+@pytest.mark.parametrize(("envelope", "altitude", "message"), [
+    ("{min_airspeed_eas_m_s: 40, max_airspeed_m_s: 42}", 1500.0, "is not below the greatest"),
+    ("{min_airspeed_eas_m_s: 30, max_airspeed_eas_m_s: 300}", 10000.0, "beyond the speed of"),
+])
+def test_a_batch_refuses_the_envelopes_a_single_case_refuses(tmp_path, envelope, altitude,
+                                                             message):
+    """sweep solved a reversed or supersonic grid that check refused (second review)."""
+    path = _case(tmp_path, envelope, altitude)
+    for args in (["check", str(path)],
+                 ["sweep", "--case", str(path), "--vary", "aircraft.mass_kg=25:27:2"]):
+        result = runner.invoke(app, args)
+        assert result.exit_code == 2 and message in result.stderr, (args, result.stderr)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -178,10 +179,22 @@ def _interp_rows(t: Array, t_hist: Array, v_hist: Array) -> Array:
     return np.where(t >= t_hist[:, -1:], v_hist[:, -1:], value)
 
 
+@dataclass(frozen=True)
+class _Launch:
+    """Per row: charge [Ah] per fan after the roll and after the climb (NaN: impossible),
+    their times [s] and the largest engine current [A] on the way (for the pack rating)."""
+
+    charge_ah: Array
+    climb_time_s: Array
+    roll_charge_ah: Array
+    roll_time_s: Array
+    peak_current_a: Array
+
+
 def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
-                   stall: Array, height: Array) -> tuple[Array, Array]:
-    """Charge [Ah] per fan drawn by roll + climb to ``height`` [m], and the climb time [s];
-    NaN if impossible."""
+                   stall: Array, height: Array) -> _Launch:
+    """Charge [Ah] per fan drawn by roll + climb to ``height`` [m], the climb time [s] and
+    the rest of :class:`_Launch`; NaN if impossible."""
     _, roll_time, v_lo, ok = roll
     packs = model.battery.packs_in_parallel_per_engine
     climb_speed, climb_rate = _best_climb(m, v_lo, stall)
@@ -196,12 +209,17 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     climb_power = _power_w(model, m, 1.0, climb_speed)
     t_hist = np.where(ok[:, None], t_hist, 0.0)
 
+    peak = np.zeros(m.size)
+
     def rk4(q: Array, h: Array, active: Array, powers: tuple[Array, Array, Array]) -> Array:
+        nonlocal peak
         p0, p_half, p1 = powers
         k1 = np.asarray(current_at_power_a(model.params, q, p0, packs)) / 3600.0
         k2 = np.asarray(current_at_power_a(model.params, q + h / 2 * k1, p_half, packs)) / 3600.0
         k3 = np.asarray(current_at_power_a(model.params, q + h / 2 * k2, p_half, packs)) / 3600.0
         k4 = np.asarray(current_at_power_a(model.params, q + h * k3, p1, packs)) / 3600.0
+        # the mission checks its nodes' currents (step ends): k1 and k4 are those here
+        peak = np.where(active, np.maximum(peak, 3600.0 * np.maximum(k1, k4)), peak)
         return np.where(active, q + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), q)
 
     # the roll (to the end of rotation) and the climb are integrated apart, as the single
@@ -218,6 +236,7 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     for k in range(n):
         q = rk4(q, h, k < strides, (rolling[:, 2 * k], rolling[:, 2 * k + 1],
                                     rolling[:, 2 * k + 2]))
+    q_roll = q.copy()
     # the climb at constant power, dq/dt = i(q, P)/3600, smooth and slow (the current
     # changes ~1 % over it): RK4 in strides of _CLIMB_STRIDE steps of _LAUNCH_STEP_S
     # (held to 1e-7 of single steps by tests/verification/test_batch_shortcuts.py)
@@ -226,7 +245,7 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     h = np.where(strides > 0, climb_time_safe / np.maximum(strides, 1), 0.0)
     for k in range(int(strides.max()) if strides.size else 0):
         q = rk4(q, h, k < strides, (climb_power,) * 3)
-    return np.where(ok, q, np.nan), climb_time
+    return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak)
 
 
 def _most_excess(m: Any, throttle: Array, stall: Array) -> tuple[Array, Array]:
@@ -298,8 +317,8 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     from tuflexperf.analysis.batch import stall_speed
 
     stall = stall_speed(m)
-    q_launch, climb_time = _launch_charge(m, model, roll, stall,
-                                          battery["battery.mission.pattern_altitude_m"])
+    launch = _launch_charge(m, model, roll, stall, battery["battery.mission.pattern_altitude_m"])
+    q_launch, climb_time = launch.charge_ah, launch.climb_time_s
     # the battery keys that vary without refitting the pack (dotted.BATTERY_KEYS)
     cutoff = model.battery.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"]
     reserve_ah = (model.packs * model.battery.capacity_ah
@@ -336,4 +355,31 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     cruise_s = np.asarray(discharge_time_s(params, np.where(ok, power_w, 1.0), start,
                                            start + span, packs), dtype=float)
     minutes = cruise_s / 60.0 + np.where(ok, climb_time, 0.0) / 60.0
+    ok &= _within_rating(model, launch, power_w, start, span, cruise_s)
     return np.where(ok & np.isfinite(minutes), minutes, np.nan)
+
+
+def _within_rating(model: Any, launch: _Launch, power_w: Array, start: Array, span: Array,
+                   cruise_s: Array) -> Array:
+    """Per row: the packs stay within their rating, by the mission's two rules
+    (``MissionModel._beyond_rating``): no current beyond the burst rating, and no segment of
+    30 s or more (roll, climb, cruise) beyond the continuous one on average."""
+    from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S
+
+    battery, packs = model.battery, model.packs
+    if battery.max_discharge_c is None:
+        return np.ones(np.shape(power_w), dtype=bool)
+    rating = float(battery.max_discharge_c) * float(battery.capacity_ah)
+    # the cruise at constant power draws most at its end (the pack sags)
+    cruise_end = np.asarray(current_at_power_a(model.params, start + span, power_w, packs),
+                            dtype=float)
+    peak = np.maximum(launch.peak_current_a, cruise_end) / packs
+    ok = ~(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9))
+    climb_s = np.nan_to_num(launch.climb_time_s)
+    climb_ah = launch.charge_ah - launch.roll_charge_ah
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for charge, seconds in ((launch.roll_charge_ah, launch.roll_time_s), (climb_ah, climb_s),
+                                (span, cruise_s)):
+            mean = charge * 3600.0 / seconds / packs
+            ok &= ~((seconds >= RATING_SEGMENT_S) & (mean > rating * (1.0 + 1e-9)))
+    return ok

@@ -82,7 +82,7 @@ from tuflexperf.models.thrust import (
     windmilling_thrust_n,
 )
 
-RATING_WINDOW_S = 30.0  # the continuous rating bounds the current averaged over half a minute
+RATING_SEGMENT_S = 30.0  # segments this long keep their mean current within the rating
 BURST_OVER_CONTINUOUS = 2.0  # a LiPo's burst rating, the usual twice the continuous one
 SPEED_OF_SOUND_M_S = 340.0  # the schemas' top airspeed: no subsonic polar beyond it
 STEPS = 64  # RK4 steps per segment: the states are smooth, 64 steps give ~1e-9 relative
@@ -902,37 +902,43 @@ class MissionModel:
         end, aux = (np.asarray(v_, dtype=float).ravel() for v_ in f(start, d, theta)[:2])
         return low, end, aux
 
-    def _beyond_rating(self, q: np.ndarray, t: np.ndarray, current: np.ndarray
-                       ) -> tuple[np.ndarray | None, list[str]]:
-        """Per node: whether a pack is drawn beyond its rating, and why (None: no rating).
-
-        ``max_discharge_c x capacity_ah`` is the pack's continuous rating: the current
-        averaged over the last :data:`RATING_WINDOW_S` (the charge drawn in that window, the
-        flight's start counting as rest) may not exceed it, nor the current itself
-        :data:`BURST_OVER_CONTINUOUS` times it (the usual burst rating). A pack asked for
-        9 C against a 5 C rating 'flew' (outside audit); a take-off a few per cent above the
-        continuous rating for half a minute is within the burst.
-        """
+    def _pack_rating_a(self) -> float | None:
+        """The pack's continuous rating [A]: ``max_discharge_c x capacity_ah`` (None without
+        a rating in the battery file)."""
         c_rate = self.battery.max_discharge_c
-        if c_rate is None or t.size == 0:
-            return None, []
-        rating = float(c_rate) * float(self.battery.capacity_ah)
-        drawn = q / self.packs  # [Ah] per pack
-        earlier = np.array([np.interp(t - RATING_WINDOW_S, t, row, left=0.0) for row in drawn])
-        mean_a = np.max((drawn - earlier) * SECONDS_PER_HOUR / RATING_WINDOW_S, axis=0)
-        peak_a = np.max(current, axis=0) / self.packs
-        continuous = mean_a > rating * (1.0 + 1e-9)
-        burst = peak_a > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9)
-        what = (f"(max_discharge_c {c_rate:g} C x {self.battery.capacity_ah:g} Ah): not "
-                "attainable, beyond the battery")
-        reasons = [
-            f"draws {peak_a[k]:.1f} A per pack, beyond its burst rating "
-            f"{BURST_OVER_CONTINUOUS * rating:.1f} A {what}" if burst[k] else
-            f"draws {mean_a[k]:.1f} A per pack over {RATING_WINDOW_S:g} s, beyond its "
-            f"continuous rating {rating:.1f} A {what}" if continuous[k] else ""
-            for k in range(t.size)
-        ]
-        return continuous | burst, reasons
+        return None if c_rate is None else float(c_rate) * float(self.battery.capacity_ah)
+
+    def _beyond_rating(self, rating: float | None, q: np.ndarray, t: np.ndarray,
+                       current: np.ndarray, a: int, b: int, live: list[int]
+                       ) -> tuple[int, str] | None:
+        """Where segment ``[a, b)`` draws a pack beyond its rating, and why (None: within).
+
+        The continuous rating (:meth:`_pack_rating_a`) bounds the mean current of every
+        segment of :data:`RATING_SEGMENT_S` or more; no current may exceed
+        :data:`BURST_OVER_CONTINUOUS` times it (the usual burst rating), whatever its length.
+        A pack asked for 9 C against a 5 C rating 'flew' (outside audit); a take-off a few per
+        cent above the continuous rating for seconds is within the burst. The batch applies
+        the same two rules (analysis.batch_endurance).
+        """
+        if rating is None or not live or b - a < 2:
+            return None
+        what = (f"(max_discharge_c {self.battery.max_discharge_c:g} C x "
+                f"{self.battery.capacity_ah:g} Ah): not attainable, beyond the battery")
+        peak = np.max(current[live, a:b], axis=0) / self.packs
+        burst = np.flatnonzero(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9))
+        if burst.size:
+            k = int(burst[0])
+            return k, (f"draws {peak[k]:.1f} A per pack, beyond its burst rating "
+                       f"{BURST_OVER_CONTINUOUS * rating:.1f} A {what}")
+        duration = float(t[b - 1] - t[a])
+        if duration >= RATING_SEGMENT_S:
+            mean = float(np.max(q[live, b - 1] - q[live, a])) / self.packs * SECONDS_PER_HOUR \
+                / duration
+            if mean > rating * (1.0 + 1e-9):
+                return b - 1 - a, (f"draws {mean:.1f} A per pack on average over its "
+                                   f"{duration:.0f} s, beyond its continuous rating "
+                                   f"{rating:.1f} A {what}")
+        return None
 
     def _result(self, states: np.ndarray, aux: np.ndarray, solved: dict[str, Any] | None,
                 theta: np.ndarray, durations: np.ndarray) -> MissionResult:
@@ -944,7 +950,7 @@ class MissionModel:
         power = aux[6 + 2 * n:6 + 3 * n]
         segment_of = np.full(t.size, -1, dtype=int)
         stall_factor = self._stall_factor()
-        rating_excess, rating_reason = self._beyond_rating(q, t, current)
+        rating = self._pack_rating_a()
         reason = ""
         first_bad, ended_at = None, None
         segments: list[SegmentResult] = []
@@ -971,11 +977,9 @@ class MissionModel:
             bad = np.flatnonzero(reached[sl] < 0.5)
             if bad.size:
                 problems.append((int(bad[0]), "needs more than full throttle"))
-            if rating_excess is not None and live:
-                over = np.flatnonzero(rating_excess[sl])
-                if over.size:
-                    k0 = int(over[0])
-                    problems.append((k0, rating_reason[a + k0]))
+            beyond = self._beyond_rating(rating, q, t, current, a, b, live)
+            if beyond is not None:
+                problems.append(beyond)
             segment_of[sl] = plan.index
             if plan.solve_v:
                 throttle = float(theta[3 * plan.index])

@@ -28,6 +28,12 @@ _FIXED = {
 }
 
 
+_OTHER_KIND_OF_BOUND = {
+    "min_airspeed_m_s": "min_airspeed_eas_m_s", "min_airspeed_eas_m_s": "min_airspeed_m_s",
+    "max_airspeed_m_s": "max_airspeed_eas_m_s", "max_airspeed_eas_m_s": "max_airspeed_m_s",
+}
+
+
 def _flatten(prefix: str, value: Any, out: dict[str, float]) -> None:
     if isinstance(value, Mapping):
         for key, item in value.items():
@@ -118,11 +124,18 @@ def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
     unset is known too, and so are the envelope's bounds (one case solves its own grid).
     """
     known = numeric_keys(case)
-    if key in known or (unset and key in _FIXED):
+    if key in known or (unset and key in _FIXED and case.requirements.envelope is not None):
         return
     optional = unset_optional_keys(case) if unset else set()
     if key in optional:
         return
+    parts = key.split(".")
+    if (len(parts) == 3 and parts[0] == "requirements" and parts[1] in Requirements.model_fields
+            and getattr(case.requirements, parts[1]) is None):
+        # a real key of a block the case leaves out: "did you mean" another block's key
+        # misled (outside audit)
+        raise InputError(f"{where}: {key}: the case has no requirements.{parts[1]} block "
+                         "to change; add it to the case file")
     if key in _FIXED:
         raise InputError(
             f"{where}: {key}: the envelope's bounds cannot be varied in a batch (they fix the "
@@ -139,13 +152,6 @@ def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
             f"{where}: {key}: cannot be varied (of the battery only "
             f"{', '.join(BATTERY_KEYS)}: the pack model is fitted to its discharge runs)"
         )
-    parts = key.split(".")
-    if (len(parts) == 3 and parts[0] == "requirements" and parts[1] in Requirements.model_fields
-            and getattr(case.requirements, parts[1]) is None):
-        # a real key of a block the case leaves out: "did you mean" another block's key
-        # misled (outside audit)
-        raise InputError(f"{where}: {key}: the case has no requirements.{parts[1]} block "
-                         "to change; add it to the case file")
     close = difflib.get_close_matches(key, [*known, *optional], n=1)
     hint = f" (did you mean {close[0]}?)" if close else ""
     raise InputError(f"{where}: unknown or non-numeric key {key!r}{hint}")
@@ -271,6 +277,10 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
             for part in rest[:-1]:
                 node = node[part]
             node[rest[-1]] = value
+            # an envelope bound set as true airspeed replaces its equivalent one, and back
+            other = _OTHER_KIND_OF_BOUND.get(rest[-1]) if rest[0] == "envelope" else None
+            if other is not None and not any(r[-1] == other for r, _ in changed.values()):
+                node.pop(other, None)
         try:
             requirements = type(requirements).model_validate(data)
         except ValidationError as exc:
