@@ -197,3 +197,32 @@ def test_console_script_exports_shipped_model_that_compiles(tmp_path: Path) -> N
     header = (out / "tfp_thrust.h").read_text()
     digest = hashlib.sha256((ROOT / "data" / "tuflex" / "propulsion.yaml").read_bytes()).hexdigest()
     assert digest in header and "WARNING" in header and "TFP_DELAY_S" in header
+
+
+def test_every_format_says_what_its_functions_leave_out(tmp_path: Path) -> None:
+    """The voltage effect and a dead engine's windmilling drag were in no C, CasADi, FMU or
+    JSBSim file (outside audit): each format now states both, the JSON with the numbers."""
+    import zipfile
+
+    propulsion = copy.deepcopy(MADE_UP_PROPULSION)
+    propulsion.update(reference_voltage_v=44.4, voltage_exponent=1.7, fan_area_m2=0.0068)
+    propulsion["engines"][0]["windmilling_drag_coefficient"] = 0.3
+    case = write_case(tmp_path / "case", propulsion=propulsion)
+    out = tmp_path / "exp"
+    result = runner.invoke(app, ["export", "--case", str(case), "--format",
+                                 "c,casadi,json,jsbsim,fmu", "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    notes = json.loads(result.stdout)["notes"]
+    assert any("(U / 44.4)^1.7" in n for n in notes)
+    assert any("-Cd_wm q A_fan" in n and "A_fan = 0.0068" in n for n in notes)
+    header = (out / "tfp_thrust.h").read_text()
+    system = (out / "tfp_thrust_system.xml").read_text()
+    fmu = next(out.glob("*.fmu"))
+    with zipfile.ZipFile(fmu) as archive:
+        description = archive.read("modelDescription.xml").decode()
+    for text in (header, system, description):
+        assert "44.4" in text and "windmilling drag" in text
+    data = json.loads((out / "tfp_thrust.json").read_text())
+    engine = propulsion["engines"][0]["name"]
+    assert data["dead_engine"]["windmilling_drag_coefficient"] == {engine: 0.3}
+    assert data["dead_engine"]["fan_area_m2"] == 0.0068

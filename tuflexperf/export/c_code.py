@@ -15,7 +15,12 @@ from __future__ import annotations
 
 import textwrap
 
-from tuflexperf.export.model import EXTRAPOLATION_WARNING, ExportModel, quadratic_coefficients
+from tuflexperf.export.model import (
+    EXTRAPOLATION_WARNING,
+    ExportModel,
+    model_notes,
+    quadratic_coefficients,
+)
 from tuflexperf.models.thrust import AIRSPEED_CAP_FACTOR, POLY22_TERMS, max_model_airspeed_m_s
 
 HEADER_NAME = "tfp_thrust.h"
@@ -110,6 +115,7 @@ def _provenance_comment(model: ExportModel) -> str:
         f"Validity: tested airspeed {low!r} .. {high!r} m/s, throttle 0 .. 1.",
         "WARNING: " + warning,
         "tfp_is_extrapolated(v) says when an airspeed is outside the tested range.",
+        *model_notes(prop),
         f"Throttle-to-thrust dead time {prop.delay_s!r} s (sine sweep, paper section 4): "
         "TFP_DELAY_S, applied by the tfp_delay_* ring buffer; then a first-order spool lag "
         f"{prop.lag_s!r} s (TFP_LAG_S, tfp_lag_*; 0 = pure delay). tfp_step runs both per "

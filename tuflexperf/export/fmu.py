@@ -34,7 +34,7 @@ from xml.sax.saxutils import escape, quoteattr
 from tuflexperf.errors import InputError
 from tuflexperf.export.c_code import HEADER_NAME, SOURCE_NAME, header_text, source_text
 from tuflexperf.export.cbuild import find_compiler
-from tuflexperf.export.model import EXTRAPOLATION_WARNING, ExportModel
+from tuflexperf.export.model import EXTRAPOLATION_WARNING, ExportModel, model_notes
 
 FMU_NAME = "tfp_thrust.fmu"
 MODEL_IDENTIFIER = "tfp_thrust"
@@ -132,7 +132,7 @@ def model_description(model: ExportModel) -> str:
     unknowns = "\n".join(f'      <Unknown index="{k}"/>' for k in outputs)
     description = (
         f"poly22 thrust model '{prop.name}' (tuflexperf): dead time {prop.delay_s!r} s, spool "
-        f"lag {prop.lag_s!r} s. {EXTRAPOLATION_WARNING}"
+        f"lag {prop.lag_s!r} s. {EXTRAPOLATION_WARNING} " + " ".join(model_notes(prop))
     )
     return (
         '<?xml version="1.0" encoding="UTF-8"?>\n'

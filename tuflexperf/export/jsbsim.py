@@ -34,7 +34,7 @@ from __future__ import annotations
 import re
 from xml.sax.saxutils import escape
 
-from tuflexperf.export.model import EXTRAPOLATION_WARNING, ExportModel
+from tuflexperf.export.model import EXTRAPOLATION_WARNING, ExportModel, model_notes
 from tuflexperf.models.thrust import POLY22_TERMS, max_model_airspeed_m_s
 
 SYSTEM_FILE = "tfp_thrust_system.xml"
@@ -98,6 +98,7 @@ def _header(model: ExportModel, what: str) -> str:
         "x delayed throttle fraction, v true airspeed m/s, s density ratio.",
         f"Dead time {prop.delay_s!r} s, spool lag {prop.lag_s!r} s. Tested airspeed "
         f"{low!r} .. {high!r} m/s.",
+        *model_notes(prop),
         "WARNING: " + EXTRAPOLATION_WARNING,
         "Engines: " + ", ".join(
             f"{property_base(i)} = {e.name}" for i, e in enumerate(prop.engines)

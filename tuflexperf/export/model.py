@@ -37,6 +37,35 @@ EXTRAPOLATION_WARNING = (
 )
 
 
+def model_notes(prop: Any) -> list[str]:
+    """What the exported functions leave to their user, said in every format (outside audit:
+    the voltage effect and a dead engine's drag were in no C, CasADi, FMU or JSBSim file).
+
+    The functions give the thrust at the reference pack voltage, and a throttle-0 engine's
+    ``T(0, v)``; the tool's own analyses scale by the pack voltage and give a dead engine its
+    windmilling drag (SPEC 3).
+    """
+    notes = []
+    if prop.reference_voltage_v is not None:
+        notes.append(
+            f"Pack voltage: the thrust here is at the reference pack voltage "
+            f"{prop.reference_voltage_v!r} V; at pack voltage U it is (U / "
+            f"{prop.reference_voltage_v!r})^{prop.voltage_exponent!r} times it (not applied)."
+        )
+    windmilling = [e for e in prop.engines if e.windmilling_drag_coefficient is not None]
+    if windmilling and prop.fan_area_m2 is not None:
+        notes.append(
+            "A dead engine: the tool gives it a windmilling drag -Cd_wm q A_fan [N] (q = rho "
+            f"v^2 / 2, A_fan = {prop.fan_area_m2!r} m^2; Cd_wm "
+            + ", ".join(f"{e.name} {e.windmilling_drag_coefficient!r}" for e in windmilling)
+            + "), not T(0, v) of these functions: add it for one engine out."
+        )
+    else:
+        notes.append("A dead engine: the tool gives it min(T(0, v), 0) of its own model (drag, "
+                     "never thrust).")
+    return notes
+
+
 @dataclass(frozen=True)
 class SourceFile:
     """A file the exported model was built from, with its sha256 (provenance).
@@ -349,6 +378,15 @@ def model_description(model: ExportModel) -> dict[str, Any]:
             "exported_at": "the reference voltage: thrust at pack voltage U is "
                            "(U / reference_voltage_v)^voltage_exponent times the equation's",
         },
+        "dead_engine": {
+            "windmilling_drag_coefficient": {
+                e.name: e.windmilling_drag_coefficient for e in prop.engines
+                if e.windmilling_drag_coefficient is not None} or None,
+            "fan_area_m2": prop.fan_area_m2,
+            "law": ("-windmilling_drag_coefficient * rho * v^2 / 2 * fan_area_m2 [N] where given, "
+                    "else min(T(0, v), 0)"),
+        },
+        "notes": model_notes(prop),
         "validity": {
             "tested_airspeed_m_s": [low, high],
             "max_model_airspeed_m_s": max_model_airspeed_m_s(prop),

@@ -18,6 +18,7 @@ from tuflexperf.export.model import (
     inverse_function,
     load_export_model,
     model_description,
+    model_notes,
     thrust_function,
     thrust_step_function,
 )
@@ -57,6 +58,8 @@ class ExportResult:
             "reference_density_kg_m3": prop.reference_density_kg_m3,
             "tested_airspeed_m_s": list(prop.tested_airspeed_m_s),
             "propulsion_sha256": self.model.propulsion_sha256,
+            "lag_s": prop.lag_s,
+            "notes": model_notes(prop),
         }
 
 
