@@ -202,3 +202,32 @@ def test_samples_outside_a_keys_bounds_count_as_not_met(tmp_path) -> None:
     result = data["results"][0]
     assert result["samples_met"] <= 4000 - outside
     assert result["samples_not_attainable"] >= outside
+
+
+def test_a_mission_requirement_is_not_sampled_and_so_not_shown_to_pass(tmp_path) -> None:
+    """A case whose mission lands on the reserve only nominally printed 'overall: PASS' with
+    an empty Monte Carlo table (outside audit; 200 replayed draws gave P = 0.60). The batch
+    does not fly missions: the requirement does not pass the probabilistic test, and sweep and
+    margins say it is left out."""
+    mission = SHIPPED_CASE.parent.parent / "data" / "tuflex" / "missions" / "test_flight.yaml"
+    path = shipped_with(tmp_path, {
+        "samples": 200, "seed": 1, "required_probability": 0.95,
+        "parameters": {"aircraft.mass_kg": {"normal": [26.7064, 1.5]}},
+    }, {"endurance": {"throttle": 0.5, "min_flight_time_min": 15},
+        "mission": {"file": str(mission), "min_landing_charge_fraction": 0.49}})
+    result = runner.invoke(app, ["check", str(path), "--json"])
+    assert result.exit_code == 1, result.stdout
+    data = json.loads(result.stdout)
+    endurance, row = data["results"]
+    assert endurance["passed"] is True and endurance["probability"] is not None
+    assert row["name"] == "mission_landing_charge" and row["nominal_passed"] is True
+    assert row["passed"] is False and row["probability"] is None
+    assert "not sampled" in row["probability_note"] and data["passed"] is False
+    human = runner.invoke(app, ["check", str(path)])
+    assert "not sampled" in human.stdout and "overall: FAIL" in human.stdout
+    swept = json.loads(runner.invoke(app, ["sweep", "--case", str(path), "--vary",
+                                           "aircraft.mass_kg=25:27:2", "--json"]).stdout)
+    assert any("mission_landing_charge is not in the batch" in n for n in swept["notes"])
+    both = runner.invoke(app, ["sweep", "--vary", "aircraft.mass_kg=24:26:2", "--set",
+                               "aircraft.mass_kg=25"])
+    assert "--set aircraft.mass_kg: the grid varies it" in both.stdout

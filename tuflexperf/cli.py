@@ -227,7 +227,8 @@ def check(
     if as_json:
         from tuflexperf.analysis.requirements import sampled_result
 
-        results = [sampled_result(v, probabilistic.get(v.name)) for v in verdicts]
+        results = [sampled_result(v, probabilistic.get(v.name)) if sampling else v.to_dict()
+                   for v in verdicts]
         payload: dict[str, Any] = {
             "case": case.name,
             "case_file": str(case.path),
@@ -254,6 +255,11 @@ def check(
             _print_warnings(v.details.get("warnings", []))
         if plan is not None:
             _print_probabilities(plan, probabilistic)
+            from tuflexperf.analysis.requirements import NOT_SAMPLED
+
+            for v in verdicts:
+                if v.name not in probabilistic:
+                    typer.echo(f"{v.name:<{_name_width(probabilistic)}}  FAIL  {NOT_SAMPLED}")
             for key, count in outside.items():
                 typer.echo(f"  note: {count} samples of {key} fall outside its valid range; "
                            "they count as not met")
@@ -307,9 +313,10 @@ def margins(
 
     case = load_case_with(case_file, sets)
     rows = solve_margins(case)
+    notes = _batch_notes(case, [], None)
     if as_json:
         emit_json({"case": case.name, "case_file": str(case.path),
-                   "margins": [m.to_dict() for m in rows]})
+                   "margins": [m.to_dict() for m in rows], "notes": notes})
         return
     typer.echo(f"{case.name}  ({case.path})")
     typer.echo("limit value: the parameter's value (others nominal) where the requirement "
@@ -333,6 +340,8 @@ def margins(
     typer.echo("")
     typer.echo("none: never binds in the searched range (0.5x-2x the nominal; altitude "
                "-500..5000 m, temperature offset -50..50 K); *: binds by becoming not attainable")
+    for note in notes:
+        typer.echo(f"note: {note}")
 
 
 @app.command()
@@ -364,6 +373,7 @@ def sweep(
         guard_outputs(outputs, [path for _, path in case_files(case)], "sweep")
     axes = [parse_vary(case, spec) for spec in vary]
     result = run_sweep(case, axes, workers, dask)
+    notes = _batch_notes(case, [key for key, _ in axes], sets)
     if plot is not None:
         from tuflexperf.report.sweep_plot import carpet_png
 
@@ -371,7 +381,8 @@ def sweep(
     if csv_out is not None:
         atomic_write_text(csv_out, result.to_csv())
     if as_json:
-        emit_json({"case": case.name, "case_file": str(case.path), **result.to_dict()})
+        emit_json({"case": case.name, "case_file": str(case.path), **result.to_dict(),
+                   "notes": notes})
         return
     names = list(result.values)
     header = "".join(f"{k.split('.')[-1]:>16}" for k in result.parameters) + "".join(
@@ -389,6 +400,23 @@ def sweep(
     for target in (csv_out, plot):
         if target is not None:
             typer.echo(f"wrote {target}")
+    for note in notes:
+        typer.echo(f"  note: {note}")
+
+
+def _batch_notes(case: Any, varied: list[str], sets: list[str] | None) -> list[str]:
+    """What a batch (sweep, margins) leaves out or overrides, said (outside audit): the
+    mission requirement is flown for the nominal case only, and a --set on a varied key is
+    replaced by the grid's values."""
+    notes = []
+    if case.requirements.mission is not None:
+        notes.append("mission_landing_charge is not in the batch: a mission is flown for the "
+                     "nominal case only (check gives its verdict)")
+    for item in sets or []:
+        key = item.split("=", 1)[0].strip()
+        if key in varied:
+            notes.append(f"--set {key}: the grid varies it (the --set value is not used)")
+    return notes
 
 
 @app.command()

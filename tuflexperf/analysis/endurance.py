@@ -693,7 +693,7 @@ class EnduranceModel:
             raise NotAttainable("no throttle up to full holds level flight at any airspeed")
         if throttle < self.min_throttle - 1e-9:
             raise NotAttainable(
-                f"throttle {throttle:.2f} is below {self.min_throttle:.3f}, the least throttle "
+                f"throttle {throttle:g} is below {self.min_throttle:.5g}, the least throttle "
                 f"that holds level flight (at {self.min_throttle_airspeed:.1f} m/s)"
             )
 

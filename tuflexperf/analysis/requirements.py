@@ -340,15 +340,22 @@ class ProbabilisticVerdict:
         }
 
 
+NOT_SAMPLED = ("not sampled: a mission is flown for the nominal case only, so its P(met) is "
+               "not shown and it does not pass the probabilistic test")
+
+
 def sampled_result(verdict: Verdict, probabilistic: ProbabilisticVerdict | None) -> dict[str, Any]:
     """One requirement's JSON with its samples: ``passed`` is the verdict the exit code
     follows (the nominal case met and P(met) shown), ``nominal_passed`` the nominal alone.
 
     A ``passed: true`` beside a failed probability read as "met" to any tool that reads
-    the results (outside audit): the overall verdict and each result's now agree.
+    the results (outside audit): the overall verdict and each result's now agree. A
+    requirement the samples do not evaluate (a mission) has no P(met) to show: it does not
+    pass (a case whose mission lands on the reserve only nominally passed; outside audit).
     """
     if probabilistic is None:
-        return verdict.to_dict()
+        return {**verdict.to_dict(), "probability": None, "probability_note": NOT_SAMPLED,
+                "nominal_passed": verdict.passed, "passed": False}
     return {**verdict.to_dict(), **probabilistic.to_dict(), "nominal_passed": verdict.passed,
             "passed": verdict.passed and probabilistic.passed}
 
