@@ -237,3 +237,32 @@ def test_cl_max_binds_trim_where_stall_reaches_the_envelope_foot(case, limits) -
                                          * (v_min / margin) ** 2)
     assert got == pytest.approx(cl_max, rel=1e-9)
     assert binds == "not attainable"
+
+
+def test_a_catapult_launch_has_no_runway_sensitivities(tmp_path) -> None:
+    """margins gave a catapult's ground roll (always 0) and its distance to the obstacle the
+    runway's sensitivities (outside audit): the roll is no term of a catapult launch."""
+    import shutil
+
+    root = SHIPPED_CASE.parent.parent
+    for folder in ("requirements", "data"):
+        shutil.copytree(root / folder, tmp_path / folder)
+    aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
+    aircraft.write_text(aircraft.read_text().replace(
+        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 6000\ntakeoff:", 1))
+    case_file = tmp_path / "requirements" / "tuflex.yaml"
+    case_file.write_text(case_file.read_text().replace(
+        "  takeoff: {max_ground_roll_m: 60}",
+        "  takeoff: {max_ground_roll_m: 60, max_distance_to_obstacle_m: 200}"))
+    catapult = load_case(case_file)
+    keys = ["aircraft.mass_kg", "aircraft.cd0", "aircraft.takeoff.rolling_friction"]
+    slopes = sensitivities(catapult, keys)
+    assert all(slopes["takeoff_ground_roll"][k] == 0.0 for k in keys)
+    assert slopes["takeoff_distance_to_obstacle"]["aircraft.takeoff.rolling_friction"] == 0.0
+    nominal = margin_parameters(catapult)
+    for key in keys[:2]:
+        step = 1e-5 * nominal[key]
+        up = deterministic(catapult, key, nominal[key] + step, "takeoff_distance_to_obstacle")
+        down = deterministic(catapult, key, nominal[key] - step, "takeoff_distance_to_obstacle")
+        central = (up - down) / (2 * step)
+        assert slopes["takeoff_distance_to_obstacle"][key] == pytest.approx(central, rel=1e-4)

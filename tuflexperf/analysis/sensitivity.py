@@ -293,6 +293,10 @@ def symbolic_values(case: Case, keys: list[str]) -> tuple[Any, dict[str, Any]]:
     for requirement in present_requirements(case):
         name = requirement.name
         if name in ("takeoff_ground_roll", "takeoff_distance_to_obstacle"):
+            if case.aircraft.launch == "catapult":
+                # released airborne: no roll, so none of the runway's terms (SPEC 4; margins
+                # gave a catapult the runway's sensitivities, outside audit)
+                roll = roll or (0.0 * s.ca.vertcat(*s.symbols.values())[0],)
             roll = roll or s.ground_roll()
             if name == "takeoff_ground_roll":
                 values[name] = roll[0]
