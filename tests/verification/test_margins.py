@@ -188,10 +188,8 @@ def test_tornado_bars_are_the_single_case_values(case) -> None:
             assert got == pytest.approx(expected, rel=1e-6)
 
 
-def test_catapult_endurance_sensitivities_and_limits(tmp_path) -> None:
-    """launch: catapult: the endurance does not depend on the runway's keys (there is no
-    roll), its sensitivities to the rest equal central differences of the deterministic
-    analysis, and the heaviest mass is where 0.5 throttle no longer holds level flight."""
+def _catapult_copy(tmp_path, energy_j: float):
+    """The shipped case copied into tmp_path with a catapult launch at 18 m/s EAS."""
     import shutil
 
     root = SHIPPED_CASE.parent.parent
@@ -199,8 +197,16 @@ def test_catapult_endurance_sensitivities_and_limits(tmp_path) -> None:
         shutil.copytree(root / folder, tmp_path / folder)
     aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
     aircraft.write_text(aircraft.read_text().replace(
-        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 12000\ntakeoff:", 1))
-    case_file = tmp_path / "requirements" / "tuflex.yaml"
+        "takeoff:", f"launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: {energy_j:g}\n"
+        "takeoff:", 1))
+    return tmp_path / "requirements" / "tuflex.yaml"
+
+
+def test_catapult_endurance_sensitivities_and_limits(tmp_path) -> None:
+    """launch: catapult: the endurance does not depend on the runway's keys (there is no
+    roll), its sensitivities to the rest equal central differences of the deterministic
+    analysis, and the heaviest mass is where 0.5 throttle no longer holds level flight."""
+    case_file = _catapult_copy(tmp_path, 12000)
     case_file.write_text(case_file.read_text().replace("  takeoff: {max_ground_roll_m: 60}\n",
                                                        ""))
     catapult = load_case(case_file)
@@ -242,15 +248,7 @@ def test_cl_max_binds_trim_where_stall_reaches_the_envelope_foot(case, limits) -
 def test_a_catapult_launch_has_no_runway_sensitivities(tmp_path) -> None:
     """margins gave a catapult's ground roll (always 0) and its distance to the obstacle the
     runway's sensitivities (outside audit): the roll is no term of a catapult launch."""
-    import shutil
-
-    root = SHIPPED_CASE.parent.parent
-    for folder in ("requirements", "data"):
-        shutil.copytree(root / folder, tmp_path / folder)
-    aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
-    aircraft.write_text(aircraft.read_text().replace(
-        "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 6000\ntakeoff:", 1))
-    case_file = tmp_path / "requirements" / "tuflex.yaml"
+    case_file = _catapult_copy(tmp_path, 6000)
     case_file.write_text(case_file.read_text().replace(
         "  takeoff: {max_ground_roll_m: 60}",
         "  takeoff: {max_ground_roll_m: 60, max_distance_to_obstacle_m: 200}"))
