@@ -180,7 +180,7 @@ def check(
     dask: str | None = DaskOption,
 ) -> None:
     """Verify every requirement in the case: value, limit, margin, PASS/FAIL."""
-    from tuflexperf.analysis.requirements import check_case
+    from tuflexperf.analysis.requirements import CHECKS, check_case, sampled_result
 
     if case_file is not None and case_option is not None and case_file != case_option:
         fail_input("--case: give the case once, as the argument or as --case, not both")
@@ -191,8 +191,6 @@ def check(
         fail_input(f"--workers: must be at least 1, got {workers}")
     if seed is not None and seed < 0:
         fail_input(f"--seed: must be >= 0, got {seed}")
-    from tuflexperf.analysis.requirements import CHECKS
-
     if all(getattr(case.requirements, name) is None for name in CHECKS):
         # a check of nothing is no PASS: the blocks may all have been commented out
         fail_input(f"{case.path}: requirements: none stated, nothing to verify (give at least "
@@ -203,32 +201,28 @@ def check(
             fail_input(f"{flag}: nothing is sampled (give --samples N, or an uncertainty: "
                        "block in the case)")
     verdicts = check_case(case)
-    passed = all(v.passed for v in verdicts)
     probabilistic: dict[str, Any] = {}
     outside: dict[str, int] = {}
     plan = None
     sample_notes: list[str] = []
     if sampling:
-        from tuflexperf.analysis.requirements import probabilistic_verdicts, sampled_result
+        from tuflexperf.analysis.requirements import probabilistic_verdicts
         from tuflexperf.analysis.uncertainty import plan_for, run_samples
 
         plan = plan_for(case, samples, seed)
         drawn = {key for key, _, _ in plan.parameters}
-        for item in sets or []:
-            key = item.split("=", 1)[0].strip()
-            if key in drawn:  # the deterministic row takes --set, the samples the block
-                sample_notes.append(f"--set {key}: the samples draw it from the uncertainty "
-                                    "block (the deterministic value uses --set)")
+        # the deterministic row takes --set, the samples the block
+        sample_notes += [f"--set {key}: the samples draw it from the uncertainty block "
+                         "(the deterministic value uses --set)"
+                         for key in _set_keys(sets) if key in drawn]
         sample_set = run_samples(case, plan, workers, dask)
         probabilistic = probabilistic_verdicts(sample_set)
         outside = {k: n for k, n in sample_set.outside_bounds.items() if n}
-        passed = all(sampled_result(v, probabilistic.get(v.name))["passed"]
-                     for v in verdicts)
+    # with samples, each result's verdict is the nominal one and P(met) shown together
+    results = [sampled_result(v, probabilistic.get(v.name)) if sampling else v.to_dict()
+               for v in verdicts]
+    passed = all(r["passed"] for r in results)
     if as_json:
-        from tuflexperf.analysis.requirements import sampled_result
-
-        results = [sampled_result(v, probabilistic.get(v.name)) if sampling else v.to_dict()
-                   for v in verdicts]
         payload: dict[str, Any] = {
             "case": case.name,
             "case_file": str(case.path),
@@ -255,11 +249,10 @@ def check(
             _print_warnings(v.details.get("warnings", []))
         if plan is not None:
             _print_probabilities(plan, probabilistic)
-            from tuflexperf.analysis.requirements import NOT_SAMPLED
-
-            for v in verdicts:
-                if v.name not in probabilistic:
-                    typer.echo(f"{v.name:<{_name_width(probabilistic)}}  FAIL  {NOT_SAMPLED}")
+            for r in results:
+                if "probability_note" in r:
+                    typer.echo(f"{r['name']:<{_name_width(probabilistic)}}  FAIL  "
+                               f"{r['probability_note']}")
             for key, count in outside.items():
                 typer.echo(f"  note: {count} samples of {key} fall outside its valid range; "
                            "they count as not met")
@@ -412,11 +405,14 @@ def _batch_notes(case: Any, varied: list[str], sets: list[str] | None) -> list[s
     if case.requirements.mission is not None:
         notes.append("mission_landing_charge is not in the batch: a mission is flown for the "
                      "nominal case only (check gives its verdict)")
-    for item in sets or []:
-        key = item.split("=", 1)[0].strip()
-        if key in varied:
-            notes.append(f"--set {key}: the grid varies it (the --set value is not used)")
+    notes += [f"--set {key}: the grid varies it (the --set value is not used)"
+              for key in _set_keys(sets) if key in varied]
     return notes
+
+
+def _set_keys(sets: list[str] | None) -> list[str]:
+    """The dotted keys of ``--set KEY=VALUE`` items (their values are load_case_with's)."""
+    return [item.split("=", 1)[0].strip() for item in sets or []]
 
 
 @app.command()

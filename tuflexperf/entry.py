@@ -50,7 +50,7 @@ def main() -> None:
     _exit_on_interrupt()
     from tuflexperf.cli import main as cli_main
 
-    status: int | None = None
+    status: int
     try:
         cli_main()
         status = 0

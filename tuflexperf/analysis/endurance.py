@@ -125,18 +125,13 @@ class BatteryCharacterisation:
     runs: tuple[Any, ...]  # DischargeRun, or the RunSummary a fitted battery file stores
     fit: DischargeFit
     power: PowerFit
-    stored_cross_validation: tuple[CrossValidation, ...] = ()
-    notes: tuple[str, ...] = ()
+    # each run's model predicting every other run's time to cut-off (stored by ``fit``)
+    cross_validation: tuple[CrossValidation, ...] = ()
 
     def discharge_runs(self) -> tuple[DischargeRun, ...]:
         """The runs themselves (read on demand: the report draws them, check does not)."""
         return tuple(r if isinstance(r, DischargeRun) else read_discharge_run(r.path)
                      for r in self.runs)
-
-    @property
-    def cross_validation(self) -> tuple[CrossValidation, ...]:
-        """Each run's model predicting every other run's time to cut-off (stored by ``fit``)."""
-        return self.stored_cross_validation or ()
 
 
 def _file_key(path: Path) -> tuple[str, float, int]:
@@ -189,7 +184,6 @@ def _stored_fit(battery: Battery) -> tuple[tuple[Any, ...], DischargeFit, tuple[
 
 
 def _characterise(battery: Battery, case: Case) -> BatteryCharacterisation:
-    notes: tuple[str, ...] = ()
     if battery.fitted is None:
         # SPEC 4: check, endurance and report read the pack model and never fit it
         raise InputError(
@@ -220,7 +214,7 @@ def _characterise(battery: Battery, case: Case) -> BatteryCharacterisation:
         static_n, battery.published_power_range_w, battery.published_static_thrust_range_n
     )
     power = fit_fan_power(runs, static_w, battery.jet_velocity_m_s)
-    return BatteryCharacterisation(battery, runs, fit, power, stored_checks, notes)
+    return BatteryCharacterisation(battery, runs, fit, power, stored_checks)
 
 
 # --- launch: ground roll + climb at full throttle -------------------------------------------
@@ -503,7 +497,7 @@ class EnduranceModel:
         # else the battery file's fan-power law fitted to the discharge runs
         surfaces = power_surfaces(case.propulsion, case.density_kg_m3)
         self.power: Any = surfaces if surfaces is not None else self.ch.power.model
-        self.run_checks = self.ch.notes + self._check_runs(battery)
+        self.run_checks = self._check_runs(battery)
         aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
         self.packs = battery.packs_in_parallel_per_engine
         self.cutoff_v = battery.cutoff_voltage_v

@@ -60,6 +60,7 @@ from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
 from tuflexperf.io.mission import MissionFile, SegmentSchema
 from tuflexperf.models.aircraft import (
+    MAX_AIRSPEED_M_S,
     ground_roll_resistance_n,
     level_flight_drag_n,
     stall_speed_eas_m_s,
@@ -84,7 +85,6 @@ from tuflexperf.models.thrust import (
 
 RATING_SEGMENT_S = 30.0  # segments this long keep their mean current within the rating
 BURST_OVER_CONTINUOUS = 2.0  # a LiPo's burst rating, the usual twice the continuous one
-SPEED_OF_SOUND_M_S = 340.0  # the schemas' top airspeed: no subsonic polar beyond it
 STEPS = 64  # RK4 steps per segment: the states are smooth, 64 steps give ~1e-9 relative
 SECONDS_PER_HOUR = 3600.0
 ARC_STEPS = 64  # the take-off's transition arc (see MissionModel._airborne_phases)
@@ -370,7 +370,7 @@ class MissionModel:
         # up to 8 x stall, further while the throttle still flies level at the top (a large
         # cl_max puts the stall far below the cruise), to the jet velocity or Mach 1 at most
         top = 8.0 * stall
-        limit = max(top, min(ceiling, SPEED_OF_SOUND_M_S))
+        limit = max(top, min(ceiling, MAX_AIRSPEED_M_S))
         while top < limit and float(excess(top)) >= 0.0:
             top = min(2.0 * top, limit)
         v = np.linspace(0.5 * stall, top, 4001)

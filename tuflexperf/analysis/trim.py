@@ -30,7 +30,7 @@ from tuflexperf.analysis.level_flight import (
 )
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
-from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
+from tuflexperf.models.aircraft import MAX_AIRSPEED_M_S, level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.thrust import total_thrust_n, unlapsed_density_warning
 
 _cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
@@ -52,15 +52,12 @@ def envelope_of(case: Case, density_kg_m3: float | None = None) -> tuple[float, 
             f"{case.path}: requirements.envelope: the least airspeed {low:.2f} m/s is not below "
             f"the greatest {high:.2f} m/s (true airspeeds at {rho:.4f} kg/m^3)"
         )
-    if high > MAX_ENVELOPE_TRUE_AIRSPEED_M_S:
+    if high > MAX_AIRSPEED_M_S:
         raise InputError(
             f"{case.path}: requirements.envelope: max_airspeed_eas_m_s is "
             f"{high:.1f} m/s true at {rho:.4f} kg/m^3, beyond the speed of sound"
         )
     return low, high
-
-
-MAX_ENVELOPE_TRUE_AIRSPEED_M_S = 340.0  # as the schema's true bound (poly22 at low speed)
 
 
 def extrapolation_note(case: Case, airspeeds_m_s: np.ndarray) -> tuple[bool, list[str]]:

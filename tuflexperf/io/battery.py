@@ -228,10 +228,14 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
 
 CAPACITY_TOLERANCE = 1.05
 """A run may draw up to 5 % more than the rated capacity (a fresh pack's spread) per pack."""
+LABEL_OVER_DRAWN = 1.5
+"""Largest ``capacity_ah`` over the most charge a discharge run drew to its cut-off (the
+shipped pack: 5.0 Ah against 4.77 Ah; a conservative cut-off draws ~25 % less, not half)."""
 
 
 def refuse_contradicted_capacity(battery: Battery, drawn: Sequence[tuple[str, float]]) -> None:
-    """Bad input when a discharge run drew more from one pack than the file says it holds.
+    """Bad input when a discharge run drew more from one pack than the file says it holds,
+    or the file says it holds more than 1.5 x what any run drew to its cut-off.
 
     Parameters
     ----------
@@ -252,4 +256,15 @@ def refuse_contradicted_capacity(battery: Battery, drawn: Sequence[tuple[str, fl
                 f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah, but the discharge "
                 f"run {name} drew {charge_ah:.2f} Ah from one pack; the runs contradict it"
             )
+    most = max((charge_ah for _, charge_ah in drawn), default=None)
+    if most is not None and battery.capacity_ah > LABEL_OVER_DRAWN * most:
+        # the landing reserve and the charge left are fractions of capacity_ah: a label twice
+        # what the runs drew to their cut-off let a cruise to the cut-off 'land with half the
+        # charge' and pass (outside audit)
+        raise InputError(
+            f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah is more than "
+            f"{LABEL_OVER_DRAWN:g} x the most any discharge run drew to its cut-off "
+            f"({most:.2f} Ah); the landing reserve would be counted on charge the pack "
+            "does not give: give what the pack holds"
+        )
 

@@ -17,6 +17,7 @@ from tuflexperf.models.aircraft import (
     DEFAULT_OBSTACLE_HEIGHT_M,
     DEFAULT_TRANSITION_LOAD_FACTOR,
     EAS_REFERENCE_DENSITY_KG_M3,
+    MAX_AIRSPEED_M_S,
     Aircraft,
     TakeoffConfig,
     true_airspeed_m_s,
@@ -63,7 +64,6 @@ MAX_MASS_KG = 1.0e6
 
 
 MAX_WING_AREA_M2 = 1.0e4  # ten times an A380's: a 1e300 m^2 wing lifted off at 0 m/s
-MAX_STALL_EAS_M_S = 340.0  # the subsonic polar's and the envelope's top airspeed
 
 
 class AircraftSchema(StrictModel):
@@ -84,7 +84,7 @@ class AircraftSchema(StrictModel):
             2.0 * self.mass_kg * G0_M_S2
             / (EAS_REFERENCE_DENSITY_KG_M3 * self.wing_area_m2 * self.cl_max)
         )
-        if stall_eas > MAX_STALL_EAS_M_S:  # a 1e-300 m^2 wing "flew" at 1e150 m/s (audit)
+        if stall_eas > MAX_AIRSPEED_M_S:  # a 1e-300 m^2 wing "flew" at 1e150 m/s (audit)
             raise ValueError(
                 f"stall speed {stall_eas:.3g} m/s EAS is beyond the speed of sound: check "
                 "mass_kg, wing_area_m2 and cl_max"
@@ -248,7 +248,7 @@ class TakeoffRequirement(StrictModel):
         return self
 
 
-Airspeed = Annotated[float, Field(gt=0, le=340)]  # below Mach 1: poly22 at low speed
+Airspeed = Annotated[float, Field(gt=0, le=MAX_AIRSPEED_M_S)]  # below Mach 1: poly22 at low speed
 
 
 class EnvelopeRequirement(StrictModel):
@@ -517,7 +517,7 @@ def shipped_case_path() -> Path:
 ABSURD_THRUST_TO_WEIGHT = 10.0
 
 
-def _refuse_absurd_propulsion(case: Case) -> None:
+def refuse_absurd_propulsion(case: Case) -> None:
     """Bad input: a model whose full-throttle static thrust is not positive or absurd."""
     from tuflexperf.models.thrust import engine_thrust_n
 
@@ -567,7 +567,7 @@ def load_case(path: Path | str | None = None) -> Case:
     )
     if not math.isfinite(case.density_kg_m3) or case.density_kg_m3 <= 0:
         raise InputError(f"{case_path}: atmosphere: gives no valid density")
-    _refuse_absurd_propulsion(case)
+    refuse_absurd_propulsion(case)
     if schema.uncertainty is not None:
         from tuflexperf.io.dotted import check_key  # dotted keys need the loaded case
 

@@ -16,7 +16,7 @@ from typing import Annotated, Any
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.case import AircraftSchema, Case, Requirements
+from tuflexperf.io.case import AircraftSchema, Case, Requirements, refuse_absurd_propulsion
 from tuflexperf.models.aircraft import Aircraft
 
 # Keys that are numbers but not parameters one may vary (the envelope's grid, labels).
@@ -199,17 +199,14 @@ def value_bounds(case: Case, key: str) -> tuple[float, bool, float, bool]:
     return low, low_in, high, high_in
 
 
-def check_value(case: Case, key: str, value: float, where: str) -> None:
+def check_value(case: Case, key: str, value: float, where: str, unset: bool = False) -> None:
     """Raise :class:`InputError` if ``value`` breaks the key's own bounds in its schema.
 
     Only the field itself is checked (e.g. a positive mass); cross-field rules (a lift-off
-    speed below a heavier aircraft's stall) are the analyses' to report per point.
+    speed below a heavier aircraft's stall) are the analyses' to report per point. ``unset``
+    as in :func:`check_key` (``--set``).
     """
-    from typing import Annotated
-
-    from pydantic import TypeAdapter
-
-    check_key(case, key, where)
+    check_key(case, key, where, unset)
     field = _schema_field(case, key)
     try:
         kind = Annotated[(field.annotation, *field.metadata)] if field.metadata \
@@ -263,10 +260,7 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
             else:
                 # each value against its own field now; a rule across fields (the envelope's
                 # min below its max) once all are set, so both bounds may move together
-                field = _schema_field(case, key)
-                kind = Annotated[(field.annotation, *field.metadata)] if field.metadata \
-                    else field.annotation
-                TypeAdapter(kind).validate_python(float(value))
+                check_value(case, key, float(value), where, unset=True)
                 changed[key] = (rest, float(value))
         except ValidationError as exc:
             raise InputError(f"{where}: {key}={value:g}: {_problem(exc)}") from None
@@ -301,10 +295,8 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
     )
     # the files' cross checks hold for the changed case too: a 1e-9 kg aircraft passed on
     # --set what its file refuses (thrust 1e10 x its weight; outside audit)
-    from tuflexperf.io.case import _refuse_absurd_propulsion
-
     try:
-        _refuse_absurd_propulsion(changed_case)
+        refuse_absurd_propulsion(changed_case)
     except InputError as exc:
         keys = ", ".join(f"{k}={v:g}" for k, v in values.items())
         raise InputError(f"{where} {keys}: {exc}") from None

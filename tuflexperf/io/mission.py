@@ -15,12 +15,13 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from tuflexperf.io.yamlio import StrictModel, load_model
+from tuflexperf.models.aircraft import MAX_AIRSPEED_M_S
 
 # upper bounds keep absurd numbers (1e300) out of the integrator as bad input (a cut-off inside
 # a 1e300-min segment cannot be located: 60 bisections of a 1e298 s step), yet far beyond any
 # flight of a battery aircraft, which the cut-off ends: below Mach 1 (as the envelope), about
 # two years, 1e7 km, 100 m/s
-Airspeed = Annotated[float, Field(gt=0, le=340)]
+Airspeed = Annotated[float, Field(gt=0, le=MAX_AIRSPEED_M_S)]
 Minutes = Annotated[float, Field(gt=0, le=1e6)]
 Kilometres = Annotated[float, Field(gt=0, le=1e7)]
 Rate = Annotated[float, Field(gt=0, le=100)]

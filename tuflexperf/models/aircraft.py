@@ -30,6 +30,9 @@ DEFAULT_LIFTOFF_SPEED_FACTOR = 1.1
 DEFAULT_TRANSITION_LOAD_FACTOR = 1.19
 TRANSITION_SPEED_OVER_STALL = 1.15
 DEFAULT_OBSTACLE_HEIGHT_M = 15.0
+# Mach 1 at sea level, rounded: the top of every airspeed the subsonic drag polar and the
+# fans' poly22 are used at (schemas' bounds, stall, envelope, mission speed searches)
+MAX_AIRSPEED_M_S = 340.0
 # rho0 of EAS: the ISA's own sea-level density (1.2250 kg/m^3 to 8 digits), so EAS = TAS there
 EAS_REFERENCE_DENSITY_KG_M3 = SEA_LEVEL_PRESSURE_PA / (
     GAS_CONSTANT_J_KG_K * SEA_LEVEL_TEMPERATURE_K

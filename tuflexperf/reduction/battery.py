@@ -238,9 +238,6 @@ def fit_fan_power(
 
 
 # --- the battery file as a fitted artefact (issue 9) -------------------------------------------
-LABEL_OVER_DRAWN = 1.5
-"""Largest ``capacity_ah`` over the most charge a discharge run drew to its cut-off (the
-shipped pack: 5.0 Ah against 4.77 Ah)."""
 CUTOFF_TIME_TOLERANCE = 0.25
 """Largest relative miss of a run's own time to cut-off by the pack fitted to the runs
 (the shipped pack: < 1 %; a capacity 100x too large: 50x)."""
@@ -262,18 +259,6 @@ def refuse_unreproduced_runs(battery: Any, parameters: Any, runs: Sequence[Any])
     """
     from tuflexperf.models.battery import time_to_cutoff_s
 
-    drawn = [float(run.charge_drawn_ah) if hasattr(run, "charge_drawn_ah")
-             else float(run.charge_ah[-1]) for run in runs]
-    if drawn and battery.capacity_ah > LABEL_OVER_DRAWN * max(drawn):
-        # the landing reserve and the charge left are fractions of capacity_ah: a label twice
-        # what the runs drew to their cut-off let a cruise to the cut-off 'land with half the
-        # charge' and pass (outside audit); a conservative cut-off draws ~25 % less, not half
-        raise InputError(
-            f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah is more than "
-            f"{LABEL_OVER_DRAWN:g} x the most any discharge run drew to its cut-off "
-            f"({max(drawn):.2f} Ah); the landing reserve would be counted on charge the pack "
-            "does not give: give what the pack holds"
-        )
     for run in runs:
         observed = float(run.time_to_cutoff_s)
         if not observed > 0:
