@@ -183,7 +183,7 @@ def test_check_with_samples_imports_no_scipy_pandas_or_matplotlib() -> None:
 
 def test_envelope_bounds_and_battery_keys_are_refused_with_the_reason(tmp_path) -> None:
     for key, reason in (("requirements.envelope.min_airspeed_m_s", "grid"),
-                        ("battery.capacity_ah", "battery")):
+                        ("battery.cells_in_series", "battery")):
         path = shipped_with(tmp_path, {"parameters": {key: {"normal": [1, 0.1]}}})
         result = runner.invoke(app, ["check", str(path)])
         assert result.exit_code == 2 and key in result.stderr and reason in result.stderr

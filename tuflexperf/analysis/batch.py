@@ -292,12 +292,9 @@ class BatchEvaluator:
         )
 
     def _battery_nominal(self) -> dict[str, float]:
-        battery = self._endurance.battery
-        return {
-            "battery.cutoff_voltage_per_cell_v": float(battery.cutoff_voltage_per_cell_v),
-            "battery.mission.pattern_altitude_m": float(battery.pattern_altitude_m),
-            "battery.mission.landing_reserve_fraction": float(battery.landing_reserve_fraction),
-        }
+        from tuflexperf.io.dotted import battery_key_values
+
+        return battery_key_values(self._endurance.battery)
 
     def _candidates(self) -> tuple[Array | None, dict[int, Array]]:
         """Grid indices beside the nominal case's highest trim throttle (and the envelope's

@@ -33,6 +33,7 @@ from tuflexperf.models.battery import (
     current_at_power_a,
     cutoff_residual_v,
     discharge_time_s,
+    equivalent_packs,
 )
 from tuflexperf.models.powertrain import (
     PowerSurfaces,
@@ -76,17 +77,17 @@ def battery_side(case: Any) -> Any:
     try:
         return single.endurance_model(case)
     except NotAttainable:
-        from tuflexperf.io.battery import load_battery
+        from tuflexperf.io.battery import case_battery
         from tuflexperf.models.powertrain import power_surfaces
 
-        battery = load_battery(case.battery_path)
+        battery = case_battery(case)
         characterised = single.characterise_battery(battery, case)
         # the same choice as EnduranceModel: the propulsion's power surfaces, else the
         # battery file's fan-power law
         surfaces = power_surfaces(case.propulsion, case.density_kg_m3)
         return SimpleNamespace(
             battery=battery, params=characterised.fit.parameters,
-            packs=battery.packs_in_parallel_per_engine,
+            packs=battery.circuit_packs,
             power=surfaces if surfaces is not None else characterised.power.model)
 
 
@@ -192,11 +193,11 @@ class _Launch:
 
 
 def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
-                   stall: Array, height: Array) -> _Launch:
-    """Charge [Ah] per fan drawn by roll + climb to ``height`` [m], the climb time [s] and
-    the rest of :class:`_Launch`; NaN if impossible."""
+                   stall: Array, height: Array, packs: Array) -> _Launch:
+    """Charge [Ah] per fan drawn by roll + climb to ``height`` [m] on ``packs`` measured packs
+    in parallel per fan, the climb time [s] and the rest of :class:`_Launch`; NaN if
+    impossible."""
     _, roll_time, v_lo, ok = roll
-    packs = model.battery.packs_in_parallel_per_engine
     climb_speed, climb_rate = _best_climb(m, v_lo, stall)
     ok = (ok > 0.5) & ~((height > 0) & (climb_rate <= 0))
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -317,11 +318,17 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     from tuflexperf.analysis.batch import stall_speed
 
     stall = stall_speed(m)
-    launch = _launch_charge(m, model, roll, stall, battery["battery.mission.pattern_altitude_m"])
+    # the battery keys that vary without refitting the pack (dotted.BATTERY_KEYS); a pack of
+    # another capacity flies as that many measured packs in parallel
+    per_engine = model.battery.packs_in_parallel_per_engine
+    capacity = battery["battery.capacity_ah"]
+    packs = np.asarray(equivalent_packs(per_engine, capacity,
+                                        model.battery.as_read.capacity_ah), dtype=float)
+    launch = _launch_charge(m, model, roll, stall, battery["battery.mission.pattern_altitude_m"],
+                            packs)
     q_launch, climb_time = launch.charge_ah, launch.climb_time_s
-    # the battery keys that vary without refitting the pack (dotted.BATTERY_KEYS)
     cutoff = model.battery.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"]
-    reserve_ah = (model.packs * model.battery.capacity_ah
+    reserve_ah = (per_engine * capacity
                   * (1.0 - battery["battery.mission.landing_reserve_fraction"]))
     # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
     most, least_speed = _most_excess(m, throttle, m.least_airspeed())
@@ -342,7 +349,7 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     density = np.asarray(m.density, dtype=float).reshape(-1, 1)
     ok &= ~beyond_jet_velocity(m.propulsion, speed[:, None], density)[:, 0]
     power_w = _power_w(model, m, throttle, speed)
-    params, packs = model.params, model.packs
+    params = model.params
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, 1) > 0.0)
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs) > 0.0)
     q_cut = _bracketed_root(
@@ -355,31 +362,33 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     cruise_s = np.asarray(discharge_time_s(params, np.where(ok, power_w, 1.0), start,
                                            start + span, packs), dtype=float)
     minutes = cruise_s / 60.0 + np.where(ok, climb_time, 0.0) / 60.0
-    ok &= _within_rating(model, launch, power_w, start, span, cruise_s)
+    ok &= _within_rating(model, launch, power_w, start, span, cruise_s, packs, capacity)
     return np.where(ok & np.isfinite(minutes), minutes, np.nan)
 
 
 def _within_rating(model: Any, launch: _Launch, power_w: Array, start: Array, span: Array,
-                   cruise_s: Array) -> Array:
-    """Per row: the packs stay within their rating, by the mission's two rules
+                   cruise_s: Array, packs: Array, capacity_ah: Array) -> Array:
+    """Per row: the battery's packs of ``capacity_ah`` [Ah] (flying as ``packs`` measured
+    ones) stay within their rating, by the mission's two rules
     (``MissionModel._beyond_rating``): no current beyond the burst rating, and no segment of
     30 s or more (roll, climb, cruise) beyond the continuous one on average."""
     from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S
 
-    battery, packs = model.battery, model.packs
+    battery = model.battery
     if battery.max_discharge_c is None:
         return np.ones(np.shape(power_w), dtype=bool)
-    rating = float(battery.max_discharge_c) * float(battery.capacity_ah)
+    rating = float(battery.max_discharge_c) * capacity_ah
+    per_pack = battery.packs_in_parallel_per_engine
     # the cruise at constant power draws most at its end (the pack sags)
     cruise_end = np.asarray(current_at_power_a(model.params, start + span, power_w, packs),
                             dtype=float)
-    peak = np.maximum(launch.peak_current_a, cruise_end) / packs
+    peak = np.maximum(launch.peak_current_a, cruise_end) / per_pack
     ok = ~(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9))
     climb_s = np.nan_to_num(launch.climb_time_s)
     climb_ah = launch.charge_ah - launch.roll_charge_ah
     with np.errstate(divide="ignore", invalid="ignore"):
         for charge, seconds in ((launch.roll_charge_ah, launch.roll_time_s), (climb_ah, climb_s),
                                 (span, cruise_s)):
-            mean = charge * 3600.0 / seconds / packs
+            mean = charge * 3600.0 / seconds / per_pack
             ok &= ~((seconds >= RATING_SEGMENT_S) & (mean > rating * (1.0 + 1e-9)))
     return ok

@@ -47,7 +47,12 @@ from tuflexperf.analysis.attainable import least_airspeed_m_s
 from tuflexperf.analysis.cache import BoundedCache, fingerprint
 from tuflexperf.analysis.powertrain import PowerAgreement, agreement_at
 from tuflexperf.errors import InputError, NotAttainable
-from tuflexperf.io.battery import Battery, load_battery, refuse_contradicted_capacity
+from tuflexperf.io.battery import (
+    Battery,
+    load_battery,
+    refuse_contradicted_capacity,
+    with_battery_values,
+)
 from tuflexperf.io.case import Case
 from tuflexperf.io.discharge import (
     DischargeRun,
@@ -144,8 +149,11 @@ def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisatio
 
     The full-throttle static power is the published range interpolated at the static
     thrust of the runs' engine (the first engine when the runs name none).
-    Cached on the battery file, the run files and the propulsion model.
+    Cached on the battery file, the run files and the propulsion model. A battery with keys
+    changed by ``--set`` is characterised as its file reads (:attr:`Battery.as_read`): the
+    runs are checked against the file, the what-if flies the pack they give.
     """
+    battery = battery.as_read
     key = fingerprint(
         _file_key(battery.path),
         [_file_key(r.path) for r in battery.runs],
@@ -499,14 +507,14 @@ class EnduranceModel:
         self.power: Any = surfaces if surfaces is not None else self.ch.power.model
         self.run_checks = self._check_runs(battery)
         aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
-        self.packs = battery.packs_in_parallel_per_engine
+        self.packs = battery.circuit_packs
         self.cutoff_v = battery.cutoff_voltage_v
         self.stall_m_s = float(stall_speed_m_s(aircraft, rho))
         # level flight only counts at or above stall x the envelope's margin (SPEC 3)
         self.least_m_s = least_airspeed_m_s(case)
         # Cruise ends when each pack has given (1 - reserve) of its rated capacity.
         usable = 1.0 - battery.landing_reserve_fraction
-        self.reserve_ah = self.packs * battery.capacity_ah * usable
+        self.reserve_ah = battery.packs_in_parallel_per_engine * battery.capacity_ah * usable
         self.min_throttle, self.min_throttle_airspeed = self._least_throttle()
         # the flight: take-off, climb, cruise at a throttle, flown by the mission integrator
         self.mission = self._planned_mission(case, battery)
@@ -599,6 +607,13 @@ class EnduranceModel:
                 self.case.propulsion.fan_area_m2,
             )
             warnings.extend(check.warnings)
+        measured_ah = battery.as_read.capacity_ah
+        if battery.capacity_ah != measured_ah:
+            warnings.append(
+                f"capacity_ah {battery.capacity_ah:g} Ah: the measured {measured_ah:g} Ah pack "
+                f"scaled (it flies as {battery.circuit_packs:.3g} measured packs per fan: charge "
+                "x, resistance / the ratio); no run measured a pack of this size"
+            )
         return tuple(warnings)
 
     def _planned_mission(self, case: Case, battery: Battery) -> Any:
@@ -809,7 +824,7 @@ class EnduranceModel:
             cruise_end_charge_ah=cruise_end,
             cruise_ends_at=ends_at,
             engines=len(self.case.propulsion.engines),
-            packs_in_parallel_per_engine=self.packs,
+            packs_in_parallel_per_engine=self.battery.packs_in_parallel_per_engine,
             landing_reserve_fraction=self.battery.landing_reserve_fraction,
             min_throttle=self.min_throttle,
             min_throttle_airspeed_m_s=self.min_throttle_airspeed,
@@ -910,7 +925,9 @@ def endurance_model(case: Case) -> EnduranceModel:
         )
     path = case.battery_path
     # parse the YAML once per file version, not per call
-    battery = _battery_cache.get(fingerprint(_file_key(path)), lambda: load_battery(path))
+    battery = with_battery_values(
+        _battery_cache.get(fingerprint(_file_key(path)), lambda: load_battery(path)),
+        dict(case.overrides))
     key = fingerprint(
         case.aircraft,
         case.propulsion,

@@ -217,19 +217,21 @@ class MissionModel:
                  *, fixed_density_kg_m3: float | None = None,
                  takeoff_to_obstacle: bool = True, battery: Any = None) -> None:
         from tuflexperf.analysis.endurance import characterise_battery
-        from tuflexperf.io.battery import load_battery
+        from tuflexperf.io.battery import case_battery
 
         if case.battery_path is None:
             raise InputError(f"{case.path}: battery: a mission needs the case's battery file")
         self.case, self.mission = case, mission
-        if battery is None:  # the caller may hand over the file it has already read
-            battery = load_battery(case.battery_path)
+        if battery is None:  # the caller may hand over the battery it flies already
+            battery = case_battery(case)
         self.battery = battery
         ch = characterise_battery(battery, case)
         self.params = ch.fit.parameters
         self.fan_power = ch.power.model
-        self.packs = battery.packs_in_parallel_per_engine
-        self.capacity_ah = battery.capacity_ah * self.packs  # per engine
+        # the circuit's packs: the file's, or as many measured packs as a changed capacity
+        # makes (models.battery.equivalent_packs); ratings and charge count the battery's own
+        self.packs = battery.circuit_packs
+        self.capacity_ah = battery.capacity_ah * battery.packs_in_parallel_per_engine
         self.cutoff_v = battery.cutoff_voltage_v
         self.reserve = (
             battery.landing_reserve_fraction if min_landing_fraction is None
@@ -924,7 +926,8 @@ class MissionModel:
             return None
         what = (f"(max_discharge_c {self.battery.max_discharge_c:g} C x "
                 f"{self.battery.capacity_ah:g} Ah): not attainable, beyond the battery")
-        peak = np.max(current[live, a:b], axis=0) / self.packs
+        per_pack = self.battery.packs_in_parallel_per_engine
+        peak = np.max(current[live, a:b], axis=0) / per_pack
         burst = np.flatnonzero(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9))
         if burst.size:
             k = int(burst[0])
@@ -932,7 +935,7 @@ class MissionModel:
                        f"{BURST_OVER_CONTINUOUS * rating:.1f} A {what}")
         duration = float(t[b - 1] - t[a])
         if duration >= RATING_SEGMENT_S:
-            mean = float(np.max(q[live, b - 1] - q[live, a])) / self.packs * SECONDS_PER_HOUR \
+            mean = float(np.max(q[live, b - 1] - q[live, a])) / per_pack * SECONDS_PER_HOUR \
                 / duration
             if mean > rating * (1.0 + 1e-9):
                 return b - 1 - a, (f"draws {mean:.1f} A per pack on average over its "

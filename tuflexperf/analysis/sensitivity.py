@@ -40,6 +40,7 @@ from tuflexperf.models.battery import (
     current_at_power_a,
     cutoff_residual_v,
     discharge_time_s,
+    equivalent_packs,
 )
 from tuflexperf.models.thrust import least_throttle_reaching, total_thrust_n
 
@@ -221,7 +222,10 @@ def _endurance_value(s: _Symbolic) -> Any:
                 / (t_hist[index + 1] - t_hist[index])
         return _power_w(s, model, 1.0, speed)
 
-    packs = battery.packs_in_parallel_per_engine
+    # a pack of another capacity flies as that many measured packs in parallel
+    capacity = s.symbols.get("battery.capacity_ah", battery.capacity_ah)
+    packs = equivalent_packs(battery.packs_in_parallel_per_engine, capacity,
+                             battery.as_read.capacity_ah)
 
     def rate_at(power: Any, charge: Any) -> Any:
         return current_at_power_a(model.params, charge, power, packs) / 3600.0
@@ -252,7 +256,7 @@ def _endurance_value(s: _Symbolic) -> Any:
     q_cut = s.newton_step(
         lambda c: cutoff_residual_v(model.params, c, power_w, cutoff, packs),
         _nominal_cutoff(model, result))
-    reserve_ah = packs * battery.capacity_ah * (1.0 - reserve)
+    reserve_ah = battery.packs_in_parallel_per_engine * capacity * (1.0 - reserve)
     end = reserve_ah if result.cruise_ends_at == "landing reserve" else q_cut
     cruise = discharge_time_s(model.params, power_w, q, end, packs)
     return cruise / 60.0 + climb_time / 60.0

@@ -26,10 +26,11 @@ the discharge model is fitted (:mod:`tuflexperf.models.battery`).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import dataclasses
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 from pydantic import Field, model_validator
 
@@ -158,11 +159,51 @@ class Battery:
     nominal_voltage_v: float | None = None
     max_discharge_c: float | None = None
     fitted: BatteryFitSchema | None = None
+    measured: Battery | None = None  # the file as read, when --set changed some keys
 
     @property
     def cutoff_voltage_v(self) -> float:
         """Pack cut-off voltage under load in V (cells x per-cell cut-off)."""
         return self.cells_in_series * self.cutoff_voltage_per_cell_v
+
+    @property
+    def as_read(self) -> Battery:
+        """The battery file as read: its runs and pack model are checked against this one."""
+        return self.measured if self.measured is not None else self
+
+    @property
+    def circuit_packs(self) -> float:
+        """Measured packs in parallel per engine that fly as this battery's packs [-]
+        (:func:`tuflexperf.models.battery.equivalent_packs`; the file's own count unless
+        the capacity was changed)."""
+        from tuflexperf.models.battery import equivalent_packs
+
+        return float(equivalent_packs(self.packs_in_parallel_per_engine, self.capacity_ah,
+                                      self.as_read.capacity_ah))
+
+
+# The battery keys that change without refitting the pack model (--set, samples, sweeps,
+# margins) and the Battery fields they set; a capacity other than the file's flies the
+# measured pack scaled (models.battery.equivalent_packs)
+BATTERY_FIELDS = {
+    "battery.capacity_ah": "capacity_ah",
+    "battery.cutoff_voltage_per_cell_v": "cutoff_voltage_per_cell_v",
+    "battery.mission.pattern_altitude_m": "pattern_altitude_m",
+    "battery.mission.landing_reserve_fraction": "landing_reserve_fraction",
+}
+
+
+def with_battery_values(battery: Battery, values: Mapping[str, float]) -> Battery:
+    """``battery`` with the keys of :data:`BATTERY_FIELDS` in ``values`` set (others ignored).
+
+    The result remembers the file as read (:attr:`Battery.as_read`): its runs contradict
+    neither a lower cut-off nor a larger pack that was asked for, only a misprinted file.
+    """
+    changed = {field: float(values[key]) for key, field in BATTERY_FIELDS.items()
+               if key in values}
+    if not changed:
+        return battery
+    return dataclasses.replace(battery, **changed, measured=battery.as_read)
 
 
 def load_battery(path: Path | str, refitting: bool = False) -> Battery:
@@ -224,6 +265,16 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
         max_discharge_c=schema.max_discharge_c,
         fitted=schema.fit,
     )
+
+
+def case_battery(case: Any) -> Battery:
+    """The battery a case flies: its battery file with the case's ``--set battery.*`` values.
+
+    Raises :class:`InputError` when the case names no battery file.
+    """
+    if case.battery_path is None:
+        raise InputError(f"{case.path}: battery: the case names no battery file")
+    return with_battery_values(load_battery(case.battery_path), dict(case.overrides))
 
 
 CAPACITY_TOLERANCE = 1.05

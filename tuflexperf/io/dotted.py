@@ -11,13 +11,20 @@ import dataclasses
 import difflib
 import math
 from collections.abc import Mapping
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from tuflexperf.errors import InputError
+from tuflexperf.io.battery import BATTERY_FIELDS
 from tuflexperf.io.case import AircraftSchema, Case, Requirements, refuse_absurd_propulsion
 from tuflexperf.models.aircraft import Aircraft
+
+if TYPE_CHECKING:
+    from tuflexperf.io.battery import Battery
+
+BATTERY_KEYS = tuple(BATTERY_FIELDS)
+"""Battery keys that vary without refitting the pack model (the others are refused)."""
 
 # Keys that are numbers but not parameters one may vary (the envelope's grid, labels).
 _FIXED = {
@@ -42,26 +49,18 @@ def _flatten(prefix: str, value: Any, out: dict[str, float]) -> None:
         out[prefix] = float(value)
 
 
-# Battery keys a batch may vary without refitting the pack model (used after the fit).
-BATTERY_KEYS = (
-    "battery.cutoff_voltage_per_cell_v",
-    "battery.mission.pattern_altitude_m",
-    "battery.mission.landing_reserve_fraction",
-)
+def battery_key_values(battery: Battery) -> dict[str, float]:
+    """A loaded battery's values of the keys in :data:`BATTERY_KEYS` [units of the keys]."""
+    return {key: float(getattr(battery, field)) for key, field in BATTERY_FIELDS.items()}
 
 
 def battery_values(case: Case) -> dict[str, float]:
     """The case's battery keys of :data:`BATTERY_KEYS` with their values (none: no battery)."""
     if case.battery_path is None:
         return {}
-    from tuflexperf.io.battery import load_battery
+    from tuflexperf.io.battery import case_battery
 
-    battery = load_battery(case.battery_path)
-    return {
-        "battery.cutoff_voltage_per_cell_v": float(battery.cutoff_voltage_per_cell_v),
-        "battery.mission.pattern_altitude_m": float(battery.pattern_altitude_m),
-        "battery.mission.landing_reserve_fraction": float(battery.landing_reserve_fraction),
-    }
+    return battery_key_values(case_battery(case))
 
 
 def numeric_keys(case: Case, battery: bool = True) -> dict[str, float]:
@@ -244,13 +243,12 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
     for key, value in values.items():
         check_key(case, key, where, unset=True)
         head, *rest = key.split(".")
-        if head == "battery":
-            raise InputError(
-                f"{where}: {key}: battery keys vary in batches only (samples, sweeps); for one "
-                "case edit the battery file"
-            )
         try:
-            if head == "aircraft":
+            if head == "battery":
+                # the battery file is read where it is flown (io.battery.case_battery), with
+                # the case's overrides: only the value's own bounds here
+                check_value(case, key, float(value), where, unset=True)
+            elif head == "aircraft":
                 node = aircraft
                 for part in rest[:-1]:
                     node = node[part]

@@ -89,6 +89,40 @@ class DischargeParameters:
         return asdict(self)
 
 
+def equivalent_packs(
+    packs: Vectorizable, capacity_ah: Vectorizable, measured_capacity_ah: float
+) -> Vectorizable:
+    """Parallel packs of the measured one that make a pack of another rated capacity [-].
+
+    A pack of the same cells at ``capacity_ah`` holds ``s = capacity_ah /
+    measured_capacity_ah`` times the charge at every state of charge and, its cells that
+    much larger (or more in parallel), ``1/s`` of the resistance: its circuit is
+    ``OCV(q/s) - (R/s) i``, which is ``s`` measured packs in parallel. So ``packs`` packs of
+    ``capacity_ah`` behave as ``packs * s`` measured packs, and the rating (C x capacity per
+    pack) and the landing reserve (a fraction of ``packs * capacity_ah``) follow alike.
+
+    Parameters
+    ----------
+    packs : float or array or CasADi expression
+        Packs in parallel per engine [-].
+    capacity_ah : float or array or CasADi expression
+        Rated capacity of the pack flown [Ah].
+    measured_capacity_ah : float
+        Rated capacity of the pack whose discharge runs the circuit was fitted to [Ah].
+
+    Returns
+    -------
+    float or array or CasADi expression
+        The equivalent number of measured packs in parallel [-].
+
+    References
+    ----------
+    Tremblay, O. and Dessaint, L.-A. (2009), section 2: the model's parameters for a
+    battery of ``Np`` cells in parallel (charge x ``Np``, resistance / ``Np``).
+    """
+    return packs * (capacity_ah / measured_capacity_ah)
+
+
 def open_circuit_voltage_v(
     p: Vectorizable, charge_ah: Vectorizable, packs: int = 1
 ) -> Vectorizable:

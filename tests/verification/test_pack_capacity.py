@@ -1,0 +1,104 @@
+"""A pack of another capacity (``battery.capacity_ah`` in --set, samples, sweeps, margins).
+
+The fitted circuit belongs to the measured pack; a pack of the same cells at ``s`` times
+the capacity is ``s`` measured packs in parallel (models.battery.equivalent_packs). So a
+case whose battery file holds one 5 Ah pack per fan, flown at 10 Ah, must give exactly
+what the same file with two 5 Ah packs per fan gives: endurance, mission landing charge
+and rating verdicts alike; and the batch must equal the single case at any capacity.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.conftest import SHIPPED_CASE
+from tests.verification.test_batch_equals_deterministic import assert_equal_to_deterministic
+from tuflexperf.analysis.batch import BatchEvaluator
+from tuflexperf.analysis.requirements import check_case
+from tuflexperf.analysis.study import Study
+from tuflexperf.io.case import load_case
+from tuflexperf.io.dotted import with_values
+from tuflexperf.models.battery import equivalent_packs
+
+
+def _shipped_with_packs(folder: Path, packs: int, c_rate: float = 40) -> Path:
+    root = Path(SHIPPED_CASE).parent.parent
+    for name in ("requirements", "data"):
+        shutil.copytree(root / name, folder / name)
+    battery = folder / "data" / "tuflex" / "battery.yaml"
+    battery.write_text(battery.read_text()
+                       .replace("packs_in_parallel_per_engine: 2 ",
+                                f"packs_in_parallel_per_engine: {packs} ")
+                       .replace("max_discharge_c: 40 ", f"max_discharge_c: {c_rate} "))
+    case = folder / "requirements" / "tuflex.yaml"
+    text = case.read_text()
+    case.write_text(text + "  mission: {file: ../data/tuflex/missions/test_flight.yaml, "
+                    "min_landing_charge_fraction: 0.2}\n")
+    return case
+
+
+def test_equivalent_packs_is_the_capacity_ratio() -> None:
+    assert equivalent_packs(2, 6.0, 5.0) == pytest.approx(2.4)
+    assert np.allclose(equivalent_packs(1, np.array([2.5, 5.0, 10.0]), 5.0), [0.5, 1.0, 2.0])
+
+
+@pytest.mark.parametrize("c_rate", [40, 9])
+def test_twice_the_capacity_flies_as_two_packs(tmp_path, c_rate) -> None:
+    """c_rate 9: one 5 Ah pack is beyond its burst rating on the take-off (94 A against
+    90 A); a 10 Ah pack, like two 5 Ah packs, is within it."""
+    one = load_case(_shipped_with_packs(tmp_path / "one", 1, c_rate))
+    two = load_case(_shipped_with_packs(tmp_path / "two", 2, c_rate))
+    doubled = with_values(one, {"battery.capacity_ah": 10.0})
+    got = {v.name: v for v in check_case(doubled)}
+    want = {v.name: v for v in check_case(two)}
+    assert set(got) == set(want)
+    for name, verdict in want.items():
+        if verdict.value is None:
+            assert got[name].value is None, name
+        else:
+            assert got[name].value == pytest.approx(verdict.value, rel=1e-9), name
+    assert got["flight_endurance"].value is not None
+    if c_rate == 9:  # the one small pack alone fails on its rating
+        alone = {v.name: v for v in check_case(one)}["flight_endurance"]
+        assert alone.value is None and "beyond the battery" in alone.reason
+    note = " ".join(Study(doubled).endurance(0.5).warnings)
+    assert "measured 5 Ah pack scaled" in note
+
+
+def test_the_batch_equals_the_single_case_at_any_capacity() -> None:
+    case = load_case(SHIPPED_CASE)
+    capacities = np.array([3.0, 4.2, 5.0, 6.5, 9.0])
+    result = BatchEvaluator(case).evaluate({"battery.capacity_ah": capacities})
+    for row, capacity in enumerate(capacities):
+        single = with_values(case, {"battery.capacity_ah": float(capacity)})
+        assert_equal_to_deterministic(single, result.values, row)
+    endurance = result.values["flight_endurance"]
+    assert np.all(np.diff(endurance) > 0)  # a larger pack flies longer
+
+
+def test_the_nominal_of_a_changed_case_is_its_own() -> None:
+    """--set battery.capacity_ah with samples: the batch's nominal row is the changed case
+    (the capacity is not scaled twice)."""
+    case = with_values(load_case(SHIPPED_CASE), {"battery.capacity_ah": 6.0})
+    assert_equal_to_deterministic(case, BatchEvaluator(case).evaluate().values, 0)
+    sampled = BatchEvaluator(case).evaluate({"battery.capacity_ah": np.array([6.0, 7.0])})
+    assert_equal_to_deterministic(case, sampled.values, 0)
+    assert_equal_to_deterministic(with_values(case, {"battery.capacity_ah": 7.0}),
+                                  sampled.values, 1)
+
+
+def test_the_sensitivity_to_capacity_is_the_batch_slope() -> None:
+    from tuflexperf.analysis.margins import solve_margins
+
+    case = load_case(SHIPPED_CASE)
+    rows = [m for m in solve_margins(case) if m.parameter == "battery.capacity_ah"
+            and m.requirement == "flight_endurance"]
+    assert len(rows) == 1
+    h = 1e-4
+    values = BatchEvaluator(case).evaluate(
+        {"battery.capacity_ah": np.array([5.0 - h, 5.0 + h])}).values["flight_endurance"]
+    assert rows[0].sensitivity == pytest.approx((values[1] - values[0]) / (2 * h), rel=1e-4)
