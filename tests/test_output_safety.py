@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pytest
 
+from tuflexperf.errors import InputError
 from tuflexperf.io import files
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -223,3 +224,40 @@ def test_an_interrupt_during_the_swap_leaves_the_new_output_whole_and_no_debris(
     assert removed and removed[0].startswith(".out.old-")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no .old-*, no .tmp-*
     assert _tree(tmp_path / "out").keys() == {"new.txt", files.MARKER}
+
+
+def test_an_interrupt_between_two_files_puts_both_earlier_files_back(tmp_path, monkeypatch):
+    """fit writes the propulsion file and its thrust table together: a SIGINT between the two
+    renames left the new file beside the earlier table, "aborted" (outside audit)."""
+    first, second = tmp_path / "p.yaml", tmp_path / "p_table.csv"
+    files.write_files_atomically({first: "earlier p\n", second: "earlier table\n"})
+    real_replace = os.replace
+    calls = []
+
+    def interrupted_replace(src, dst):
+        calls.append(Path(dst).name)
+        real_replace(src, dst)
+        if Path(dst) == first:  # the first new file is in place: the interrupt lands here
+            os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(files.os, "replace", interrupted_replace)
+    monkeypatch.setattr(files, "_signals_received", [])
+    previous = signal.signal(signal.SIGINT, files._raise_interrupt)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            files.write_files_atomically({first: "new p\n", second: "new table\n"})
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert first.read_text() == "earlier p\n" and second.read_text() == "earlier table\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p.yaml", "p_table.csv"]
+    assert any(name == first.name for name in calls)
+
+
+def test_a_failed_write_leaves_no_folder_it_made(tmp_path) -> None:
+    """--out new/sub/p.yaml with an unwritable table: new/ and new/sub/ stayed (audit)."""
+    blocker = tmp_path / "blocker"
+    blocker.write_text("a file where a folder is wanted")
+    with pytest.raises(InputError, match="blocker"):
+        files.write_files_atomically({tmp_path / "new" / "sub" / "p.yaml": "x",
+                                      blocker / "t.csv": "y"})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["blocker"]

@@ -83,16 +83,25 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
 
     Temporary files sit beside their targets (same filesystem, so ``os.replace`` is atomic)
     and get the user's umask (``mkstemp`` alone makes them 0600). On any failure, including
-    an interrupt, no temporary file is left and no target is touched.
+    an interrupt, no temporary file is left, no target is touched and no folder made for
+    them stays. The renames run as one step with the interrupts held: an interrupt that
+    comes meanwhile puts every earlier file back (a Ctrl-C between two renames left a new
+    output beside the earlier table; outside audit) and is then raised.
     """
+    import secrets  # lazy, with tempfile: `check` writes nothing
+
     staged: list[tuple[str, Path]] = []
+    created: list[Path] = []
     mode = 0o666 & ~user_umask()
     current: Path | None = None
     try:
         for path, data in files.items():
             current = Path(path)
-            current.parent.mkdir(parents=True, exist_ok=True)
-            import tempfile  # lazy: `check` writes nothing
+            for folder in [current.parent, *current.parent.parents][::-1]:
+                if not folder.exists():
+                    folder.mkdir()
+                    created.append(folder)
+            import tempfile
 
             fd, tmp = tempfile.mkstemp(prefix=f".{current.name}.", suffix=".tmp",
                                        dir=current.parent)
@@ -102,16 +111,41 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
                 handle.flush()
                 os.fsync(handle.fileno())
             os.chmod(tmp, mode)
-        for tmp, target in staged:
-            current = target
-            os.replace(tmp, target)
-    except OSError as exc:
+        with interrupts_held():
+            seen = len(_signals_received)
+            kept: list[tuple[Path, Path | None]] = []  # target, its earlier file moved aside
+            try:
+                for tmp, target in staged:
+                    current = target
+                    old = None
+                    if target.exists():
+                        old = target.parent / f".{target.name}.old-{secrets.token_hex(6)}"
+                        os.replace(target, old)
+                    kept.append((target, old))
+                    os.replace(tmp, target)
+                if len(_signals_received) > seen:
+                    raise _interrupt(_signals_received[-1])
+            except BaseException:
+                for target, old in reversed(kept):  # every earlier file back in place
+                    with contextlib.suppress(OSError):
+                        if old is not None:
+                            os.replace(old, target)
+                        else:
+                            target.unlink(missing_ok=True)
+                raise
+            for _, old in kept:
+                if old is not None:
+                    with contextlib.suppress(OSError):
+                        old.unlink()
+    except BaseException as exc:
         for tmp, _ in staged:
-            Path(tmp).unlink(missing_ok=True)
-        raise _os_error(current or Path("output"), exc) from None
-    except BaseException:
-        for tmp, _ in staged:
-            Path(tmp).unlink(missing_ok=True)
+            with contextlib.suppress(OSError):
+                Path(tmp).unlink(missing_ok=True)
+        for folder in reversed(created):
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+        if isinstance(exc, OSError):
+            raise _os_error(current or Path("output"), exc) from None
         raise
 
 
