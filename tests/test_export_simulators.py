@@ -199,7 +199,9 @@ def test_fmpy_validates_and_simulates_a_throttle_step(tmp_path: Path, key: str) 
             if k == 0:
                 expected[k] = t0
                 continue
-            sent_at = t[k] - dt * (steps + 1)  # the command set before the step ending at t[k]
+            # the command held from a communication point reaches the thrust N samples later
+            # (T_k = f(x_(k-N))); with no whole sample of delay, at the next point
+            sent_at = t[k] - dt * max(steps, 1)
             command = x1 if sent_at >= t_step - 1e-9 else x0
             target = _thrust(data["engines"][i], command, v, rho, rho_ref)
             state = a * state + (1 - a) * target
@@ -209,6 +211,34 @@ def test_fmpy_validates_and_simulates_a_throttle_step(tmp_path: Path, key: str) 
         assert y[-1] == pytest.approx(t1, rel=1e-6)  # settled (20+ lag time constants)
     np.testing.assert_allclose(result["total_thrust_n"],
                                result["thrust_1_n"] + result["thrust_2_n"], rtol=1e-12)
+
+
+@pytest.mark.skipif(find_compiler() is None, reason="no C compiler (gcc) to build the FMU")
+def test_fmu_takes_any_communication_step(tmp_path: Path) -> None:
+    """The FMU declares canHandleVariableCommunicationStepSize; a step of 2.5 internal
+    samples, an input at 0.5005 s and a stop at 1.0005 s each failed with status 3 (outside
+    audit). The samples due by each point run, on one grid: at the points both runs share,
+    a 2.5 ms communication step gives the 1 ms one's thrust exactly."""
+    fmpy = pytest.importorskip("fmpy", reason="fmpy not installed (pip install fmpy)")
+    propulsion, data = _variants(tmp_path)["lagged"]
+    out = _export(tmp_path, propulsion, ("fmu",))
+    names = ["time", "throttle_1", "throttle_2", "airspeed_m_s", "density_kg_m3"]
+    t_step, v, rho = 0.5005, 18.0, 1.1
+    signal = np.array([(0.0, 0.2, 0.3, v, rho), (t_step, 0.2, 0.3, v, rho),
+                       (t_step, 0.9, 0.7, v, rho), (2.0, 0.9, 0.7, v, rho)],
+                      dtype=[(n, float) for n in names])
+    runs = {h: fmpy.simulate_fmu(str(out / "tfp_thrust.fmu"), stop_time=stop, step_size=h,
+                                 output_interval=h, input=signal)
+            for h, stop in ((0.001, 2.0), (0.0025, 2.0005))}
+    fine, coarse = runs[0.001], runs[0.0025]
+    shared = np.round(np.arange(0.0, 2.0, 0.005), 6)
+    at = {name: np.searchsorted(np.round(r["time"], 6), shared) for name, r in runs.items()}
+    for key in ("thrust_1_n", "thrust_2_n"):
+        np.testing.assert_allclose(coarse[key][at[0.0025]], fine[key][at[0.001]], rtol=1e-12)
+    t1 = _thrust(data["engines"][0], 0.9, v, rho, data.get("reference_density_kg_m3"))
+    assert coarse["thrust_1_n"][-1] == pytest.approx(t1, rel=1e-6)
+    changed = coarse["time"][np.argmax(coarse["thrust_1_n"] != coarse["thrust_1_n"][0])]
+    assert changed >= t_step - 0.0025 + data["delay_s"] - 1e-9  # the dead time held
 
 
 @pytest.mark.skipif(find_compiler() is None, reason="no C compiler (gcc) to build the FMU")

@@ -7,12 +7,15 @@ Modelica Association's FMI 2.0 headers, 2-clause BSD) and the binary for this pl
 
 Variables: inputs ``throttle_<i>`` (fraction per engine), ``airspeed_m_s`` (true airspeed),
 ``density_kg_m3``; outputs ``thrust_<i>_n`` and ``total_thrust_n``; parameter
-``sample_time_s`` (the internal fixed step, default 1 ms). Each ``fmi2DoStep`` of size ``h``
-runs ``h / sample_time_s`` steps of the C ``tfp_step``: the dead time ``delay_s`` (ring buffer)
-and the spool lag ``lag_s`` (exact discretisation), so the outputs are the model's dynamic
-thrust. Initialisation starts every engine in steady state at its initial inputs. Inputs that
-the model refuses (negative or absurd airspeed, density <= 0) make the step fail with the
-reason in the log.
+``sample_time_s`` (the internal fixed step, default 1 ms). Each ``fmi2DoStep`` runs the C
+``tfp_step`` for every sample of the grid ``start + k sample_time_s`` that falls due by its
+end (any communication step size; the outputs hold between samples): the dead time
+``delay_s`` (ring buffer; the input held from the communication point is its first sample, so
+a step at ``t`` reaches the thrust at ``t + round(delay_s / sample_time_s) sample_time_s``, as
+the C code's ``T_k = f(x_(k-N))``) and the spool lag ``lag_s`` (exact discretisation), so the
+outputs are the model's dynamic thrust. Initialisation starts every engine in steady state
+at its initial inputs. Inputs that the model refuses (negative or absurd airspeed,
+density <= 0) make the step fail with the reason in the log.
 
 References
 ----------
@@ -124,8 +127,9 @@ def model_description(model: ExportModel) -> str:
                ' variability="continuous" initial="calculated"')
     scalar("total_thrust_n", "output", "total thrust in N", "",
            ' variability="continuous" initial="calculated"')
-    scalar("sample_time_s", "parameter", "internal fixed step in s (communication steps must "
-           "be whole multiples)", f' start="{DEFAULT_SAMPLE_TIME_S!r}"',
+    scalar("sample_time_s", "parameter", "internal fixed step in s (the samples due by each "
+           "communication point run; outputs hold between them)",
+           f' start="{DEFAULT_SAMPLE_TIME_S!r}"',
            ' variability="fixed" initial="exact"')
     # ModelStructure indices are 1-based positions in ModelVariables
     outputs = [refs[f"thrust_{i + 1}_n"] + 1 for i in range(n)] + [refs["total_thrust_n"] + 1]
@@ -189,6 +193,8 @@ typedef struct {{
     tfp_state_t state;
     double values[N_VARIABLES];
     double time;
+    double start_time;
+    long samples_done; /* internal samples run since the start (the sample clock) */
     int initialized;
     fmi2Boolean logging;
     const fmi2CallbackFunctions *callbacks;
@@ -277,6 +283,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
     (void)stopTimeDefined;
     (void)stopTime;
     ((instance_t *)c)->time = startTime;
+    ((instance_t *)c)->start_time = startTime;
     return fmi2OK;
 }}
 
@@ -285,13 +292,24 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {{ (void)c; return fmi2O
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {{
     instance_t *self = (instance_t *)c;
+    int i;
     const int code = tfp_state_init(&self->state, self->values[VR_SAMPLE_TIME], self->values,
                                     self->values[VR_AIRSPEED], self->values[VR_DENSITY]);
     if (code != TFP_OK) {{
         say(self, fmi2Error, why(code));
         return fmi2Error;
     }}
+    /* An input set at a communication point holds from that point on (FMI 2.0, 4.2.3): the
+       hold itself is the first sample of the dead time, so the ring holds one less, and a
+       throttle step at t reaches the thrust at t + round(delay / sample_time_s) samples, as
+       the C code's T_k = f(x_(k-N)) (it arrived one sample late; outside audit). */
+    for (i = 0; i < TFP_N_ENGINES; ++i) {{
+        if (self->state.delay[i].length > 1) {{
+            self->state.delay[i].length -= 1;
+        }}
+    }}
     static_outputs(self);
+    self->samples_done = 0;
     self->initialized = 1;
     return fmi2OK;
 }}
@@ -303,6 +321,8 @@ fmi2Status fmi2Reset(fmi2Component c)
     instance_t *self = (instance_t *)c;
     self->initialized = 0;
     self->time = 0.0;
+    self->start_time = 0.0;
+    self->samples_done = 0;
     return fmi2OK;
 }}
 
@@ -345,16 +365,18 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
 {{
     instance_t *self = (instance_t *)c;
     const double dt = self->values[VR_SAMPLE_TIME];
-    const double steps = floor(communicationStepSize / dt + 0.5);
+    /* the internal samples that fall due by the step's end (a sample clock from the start
+       time: any communication step, the samples on one grid; outputs hold between them) */
+    const double due = floor((currentCommunicationPoint + communicationStepSize
+                              - self->start_time) / dt * (1.0 + 1e-12) + 1e-9);
     double total;
-    long k;
     int i, code;
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (!(steps >= 1.0) || fabs(steps * dt - communicationStepSize) > 1e-9 * steps * dt) {{
-        say(self, fmi2Error, "the communication step must be a whole multiple of sample_time_s");
+    if (!(communicationStepSize >= 0.0) || !isfinite(due) || due > 1e15) {{
+        say(self, fmi2Error, "bad communication step");
         return fmi2Error;
     }}
-    for (k = 0; k < (long)steps; ++k) {{
+    for (; self->samples_done < (long)due; ++self->samples_done) {{
         code = tfp_step(&self->state, self->values, self->values[VR_AIRSPEED],
                         self->values[VR_DENSITY], self->values + VR_THRUST);
         if (code != TFP_OK) {{

@@ -18,8 +18,10 @@ Two XML files, both generated from the one physics code path's numbers
 
 JSBSim keeps ``N = floor(delay / dt)`` frames in its delay buffer and hands the command on
 ``N - 1`` frames after the frame it was set in (its ring buffer, FGFCSComponent::Delay), so
-its dead time is up to one frame (8.3 ms at its default 120 Hz) shorter than the model's
-``round(delay / dt)`` samples; the lag is discretised with Tustin's rule. Steady-state forces
+its dead time is ``floor(delay / dt) - 1`` frames: one or two frames short of the model's
+``round(delay / dt)`` samples (0.05 s: 5 frames = 42 ms at its default 120 Hz, 20 ms at
+50 Hz, none at 30 Hz or slower; outside audit). Run JSBSim at ``dt <= delay / 4`` for a dead
+time within a quarter of the model's. The lag is discretised with Tustin's rule. Steady-state forces
 are exact. Forces are in lbf (JSBSim's unit).
 
 References
