@@ -1059,7 +1059,7 @@ def _guarded(callback: Any) -> Any:
             _unless_interrupted()
             sys.stderr.write("tuflexperf: error: a number of the input is too large to compute "
                              "with (floating-point overflow); check the magnitudes of the "
-                             "case's keys\n")
+                             "input files' keys and of the flags\n")
             raise typer.Exit(2) from None
         except OSError as exc:  # a file the OS refuses (name too long, disk full, ...)
             _unless_interrupted()

@@ -35,13 +35,13 @@ from typing import Annotated, Any
 from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.yamlio import StrictModel, load_model
+from tuflexperf.io.yamlio import FileName, StrictModel, load_model
 
 Positive = Annotated[float, Field(gt=0)]
 
 
 class RunSchema(StrictModel):
-    file: Annotated[str, Field(min_length=1)]
+    file: FileName
     engine: str | None = None
 
 
@@ -77,7 +77,7 @@ class PackParametersSchema(StrictModel):
 
 
 class FittedRunSchema(StrictModel):
-    file: Annotated[str, Field(min_length=1)]
+    file: FileName
     sha256: Annotated[str, Field(min_length=64, max_length=64)]
     throttle: Annotated[float, Field(gt=0, le=1)]
     airspeed_m_s: Annotated[float, Field(ge=0)]

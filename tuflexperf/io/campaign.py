@@ -34,7 +34,7 @@ from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.vendor import VendorSettings
-from tuflexperf.io.yamlio import StrictModel, load_model
+from tuflexperf.io.yamlio import FileName, StrictModel, load_model
 
 Positive = Annotated[float, Field(gt=0)]
 RunKind = Literal["throttle_steps", "sine_sweep", "drag_sweep", "endurance"]
@@ -62,7 +62,7 @@ class ThrustStandKeys(StrictModel):
 
 
 class RunEntry(ThrustStandKeys):
-    file: Annotated[str, Field(min_length=1)]
+    file: FileName
     kind: RunKind
     engine: Annotated[str, Field(min_length=1)] | None = None
 
@@ -75,12 +75,18 @@ class RunEntry(ThrustStandKeys):
         return self
 
 
+MAX_FILTER_WINDOW_S = 10.0
+"""The longest filter window [s]: the paper's are 2 s and 0.1 s, its plateaus a few seconds."""
+
+
 class FilterSettings(StrictModel):
     """Filter windows in seconds (never samples) and the outlier threshold (paper section 4)."""
 
-    outlier_window_s: Positive = 2.0
-    outlier_threshold: Positive = 1.5
-    median_window_s: Positive = 0.1
+    # a window as long as a throttle plateau (seconds) averages across the steps; one of
+    # 1e6 s took a minute and 1e308 overflowed (outside audit)
+    outlier_window_s: Annotated[float, Field(gt=0, le=MAX_FILTER_WINDOW_S)] = 2.0
+    outlier_threshold: Annotated[float, Field(gt=0, le=100)] = 1.5
+    median_window_s: Annotated[float, Field(gt=0, le=MAX_FILTER_WINDOW_S)] = 0.1
 
 
 class CampaignSchema(ThrustStandKeys):
@@ -180,7 +186,8 @@ def load_campaign(path: Path | str) -> Campaign:
             ignored.append(run)  # battery runs belong to the endurance model, not the fit
             continue
         if not resolved.is_file():
-            raise InputError(f"{path}: runs[{index}].file: file not found: {entry.file}")
+            what = "not a regular file" if resolved.exists() else "file not found"
+            raise InputError(f"{path}: runs[{index}].file: {what}: {entry.file}")
         if any(earlier.path == resolved and earlier.kind == run.kind for earlier in used):
             # its points would count twice in the fit (and shrink the covariance)
             raise InputError(f"{path}: runs[{index}].file: {entry.file} is listed twice as "
@@ -188,6 +195,12 @@ def load_campaign(path: Path | str) -> Campaign:
         used.append(run)
     if not any(run.kind == "throttle_steps" for run in used):
         raise InputError(f"{path}: runs: no throttle_steps run, nothing to fit")
+    if not any(run.vendor is not None for run in (*used, *ignored)):
+        # a run's own such key is refused; the manifest's was ignored unsaid (outside audit)
+        for key in ("esc_pulse_us", "thrust_sign", "airspeed_m_s"):
+            if getattr(schema, key) is not None:
+                raise InputError(f"{path}: {key}: only for a thrust-stand format (format: "
+                                 "rcbenchmark), and no run of this manifest has one")
     return Campaign(
         path=path,
         name=schema.name,

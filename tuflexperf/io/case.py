@@ -11,7 +11,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.yamlio import StrictModel, load_model
+from tuflexperf.io.yamlio import FileName, StrictModel, load_model
 from tuflexperf.models.aircraft import (
     DEFAULT_LIFTOFF_SPEED_FACTOR,
     DEFAULT_OBSTACLE_HEIGHT_M,
@@ -313,7 +313,7 @@ class EnduranceRequirement(StrictModel):
 class MissionRequirement(StrictModel):
     """A mission file (path relative to the case) and the charge to land with (SPEC 4)."""
 
-    file: Annotated[str, Field(min_length=1)]
+    file: FileName
     min_landing_charge_fraction: Annotated[float, Field(ge=0, lt=1)] = 0.2
 
 
@@ -384,9 +384,9 @@ class UncertaintySchema(StrictModel):
 
 class CaseSchema(StrictModel):
     name: str
-    aircraft: str
-    propulsion: str
-    battery: str | None = None
+    aircraft: FileName
+    propulsion: FileName
+    battery: FileName | None = None
     atmosphere: AtmosphereSchema = AtmosphereSchema()
     requirements: Requirements = Requirements()
     uncertainty: UncertaintySchema | None = None

@@ -36,7 +36,7 @@ from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.runs import ThrustTable
-from tuflexperf.io.yamlio import StrictModel, load_model
+from tuflexperf.io.yamlio import FileName, StrictModel, load_model
 
 MPH_M_S = 0.44704  # exact (1609.344 m / 3600 s)
 LBF_N = 0.45359237 * 9.80665  # exact
@@ -46,7 +46,7 @@ _RPM = re.compile(r"PROP\s+RPM\s*=\s*([0-9.]+)", re.IGNORECASE)
 
 
 class TableEntry(StrictModel):
-    file: Annotated[str, Field(min_length=1)]
+    file: FileName
     format: Literal["uiuc", "apc_per3"]
     engine: Annotated[str, Field(min_length=1)]
     diameter_m: Positive | None = None

@@ -41,6 +41,11 @@ TABLE_EXTRA_COLUMNS: tuple[str, ...] = (
 # (also what tells that table from a user's own four-column one: the output guard)
 REFIT_TABLE_EXTRA_COLUMNS: tuple[str, ...] = ("fitted_thrust_n", "residual_n")
 MAX_MAGNITUDE = 1e9  # no force, airspeed, voltage or current of a thrust stand comes near it
+# A logged pack voltage outside this range is no pack's [V]: one cell is 3-4.2 V, the
+# largest electric-aircraft packs ~800 V
+MIN_PACK_VOLTAGE_V = 1.0
+MAX_PACK_VOLTAGE_V = 1000.0
+MAX_PACK_CURRENT_A = 2000.0  # a median current beyond this is no ducted fan's [A]
 STATIC_AIRSPEED_NOISE_M_S = 0.5  # a thrust table's airspeed may dip this far below 0 at rest
 # a run's median airspeed this far below 0 is a flipped sign, not a pitot's zero offset at rest
 # (a signed root of a slightly negative dynamic pressure reads -0.6 m/s on a real rig)
@@ -266,6 +271,25 @@ def read_run(
             raise InputError(
                 f"{path}: column throttle: values from {low:g} to {high:g}, "
                 f"expected a fraction in [0, 1]{hint}"
+            )
+    if "voltage_v" in arrays:
+        # a pack voltage logged in mV passed as a 24 kV pack and fitted a voltage effect
+        # giving 1e7 N (outside audit); one near zero broke the exponent's fit
+        volts = arrays["voltage_v"]
+        typical, least = float(np.median(volts)), float(volts.min())
+        if not (MIN_PACK_VOLTAGE_V <= typical <= MAX_PACK_VOLTAGE_V and least > 0):
+            hint = " (millivolts?)" if typical > MAX_PACK_VOLTAGE_V else ""
+            raise InputError(
+                f"{path}: column voltage_v: median {typical:.4g} V, least {least:.4g} V: no "
+                f"pack voltage (expected {MIN_PACK_VOLTAGE_V:g}-{MAX_PACK_VOLTAGE_V:g} V and "
+                f"above 0 throughout){hint}"
+            )
+    if "current_a" in arrays:
+        typical = float(np.median(np.abs(arrays["current_a"])))
+        if typical > MAX_PACK_CURRENT_A:
+            raise InputError(
+                f"{path}: column current_a: median {typical:.4g} A is no fan's current "
+                f"(beyond {MAX_PACK_CURRENT_A:g} A; milliamperes?)"
             )
     if "airspeed_m_s" in arrays:
         # a tunnel blows one way (as a thrust table's rows): noise dips below zero at rest,

@@ -6,14 +6,24 @@ import difflib
 import re
 import typing
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Annotated, Any, TypeVar
 
 import yaml
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError
 
 from tuflexperf.errors import InputError
 
 M = TypeVar("M", bound=BaseModel)
+
+
+def _no_nul(name: str) -> str:
+    if "\x00" in name:  # the OS refuses it, with a ValueError no one reports (outside audit)
+        raise ValueError("a file name cannot hold a NUL character")
+    return name
+
+
+FileName = Annotated[str, Field(min_length=1), AfterValidator(_no_nul)]
+"""A file named in a YAML file (relative to that file)."""
 
 
 class StrictModel(BaseModel):

@@ -77,8 +77,13 @@ MIN_SEGMENT_S = 0.5
 # response (noise alone fits R^2 ~0.01; very noisy real sweeps 0.26 still gave the delay
 # to 2 ms; the shipped ones 0.999)
 MIN_SWEEP_R2 = 0.1
-# Sweeps of one rig further apart than this in their delay say one of them is off
-MAX_DELAY_SPREAD_S = 0.05
+# A thrust surface that explains less of its points than this is no fan's (the paper's
+# 0.9968; a run with its force sign flipped gave 0.43 and was written: outside audit)
+MIN_POLY22_R2 = 0.9
+# Sweeps of one rig further apart than this in their delay say one of them is off (the
+# shipped campaign's agree to 0.2 ms; a sweep logged with a tenth of its time base came out
+# 45 ms off and passed the earlier 0.05 s unseen: outside audit)
+MAX_DELAY_SPREAD_S = 0.01
 ELECTRICAL_COLUMNS = ("voltage_v", "current_a")
 
 
@@ -244,10 +249,14 @@ def reduce_step_run(
     # into an intermediate segment of at least MIN_SEGMENT_S, whose first change may
     # come that long (plus the refinement's half segment) before the step.
     margin = window_samples(1.5 * MIN_SEGMENT_S, fs)
+    # the paper's outlier fill replaces samples by a moving mean whose window reaches half its
+    # length ahead of a step: a "change" up to that far before a step is the filter's (0.85-
+    # 0.94 s before the shipped runs' steps, each noted as a change without a step: audit)
+    ahead = max(margin, k_out // 2 + window_samples(0.25 * MIN_SEGMENT_S, fs))
     check = cross_check(
         [s for s, _ in steps],
         changes,
-        before=margin,
+        before=ahead,
         after=[delay + settle + margin for _, settle in steps],
         expected_lag=delay,
     )
@@ -472,6 +481,15 @@ def fit_campaign(
             run_reports.append({**_run_header(run, data), "wind": "one airspeed"})
             continue
         force, replaced = clean_run(campaign, data)
+        if float(np.ptp(data["force_n"])) <= DEAD_LOAD_CELL_N:
+            # the same force at every airspeed: "D = 0 (R^2 nan)" was added to every point
+            # unremarked (outside audit)
+            degenerate.append(
+                f"{run.file}: drag sweep whose force is {float(data['force_n'][0]):.4g} N "
+                "throughout (a dead load cell?): no structure drag measured, none added"
+            )
+            run_reports.append({**_run_header(run, data), "force": "constant"})
+            continue
         _, _, k_med = _windows(campaign, data.sample_rate_hz)
         sweeps.append((movmedian(data["airspeed_m_s"], k_med), force))
         run_reports.append({**_run_header(run, data), "outliers_replaced": replaced})
@@ -493,7 +511,8 @@ def fit_campaign(
         step_results.append(result)
     if progress is not None:
         progress(total, total, "fit")
-    degenerate.extend(_deaf_runs(step_results))
+    deaf_notes, deaf = _deaf_runs(step_results)
+    degenerate.extend(deaf_notes)
     degenerate.extend(_check_set_points(campaign, step_results))
     stepped = {str(r.engine) for r in campaign.of_kind("throttle_steps")}
     if delay_s is None and measured_delay is not None:
@@ -509,6 +528,9 @@ def fit_campaign(
     point_ratios: dict[int, list[float]] = {}
     for index, result in enumerate(step_results):
         ratios = [float("nan")] * len(result.segments)
+        if result.run.file in deaf:  # no fan's response: it would bend the surface
+            point_ratios[index] = ratios
+            continue
         for cell in merge_test_points(result.segments):
             d = float(drag.drag_n(cell.airspeed_m_s)) if drag is not None else 0.0
             thrust = cell.force_n + d
@@ -904,16 +926,20 @@ def _table_row(p: Point) -> dict[str, Any]:
 NEGATIVE_DRAG_SHARE = 0.01
 
 
+DEAD_LOAD_CELL_N = 1e-9  # a drag sweep's force spanning no more than this never moved [N]
 # A throttle-step run whose steady force moves by less than this share of the campaign's
 # largest while its throttle moves by at least DEAF_THROTTLE_SPAN measured no thrust
 DEAF_FORCE_SHARE = 0.02
 DEAF_THROTTLE_SPAN = 0.3
 
 
-def _deaf_runs(results: list[StepRunResult]) -> list[str]:
-    """A note per step run whose force does not follow its throttle (a dead load cell)."""
+def _deaf_runs(results: list[StepRunResult]) -> tuple[list[str], set[str]]:
+    """A note per step run whose force does not follow its throttle (a dead load cell), and
+    those runs' files: their points are left out of the fit (fitted, one stuck run brought
+    EDF1's surface to R^2 0.78)."""
     largest = max((abs(s.force_n) for r in results for s in r.segments), default=0.0)
     notes = []
+    deaf: set[str] = set()
     for result in results:
         if len(result.segments) < 2:
             continue
@@ -924,9 +950,10 @@ def _deaf_runs(results: list[StepRunResult]) -> list[str]:
             notes.append(
                 f"{result.run.file}: the force stays within {max(force) - min(force):.3g} N "
                 f"while the throttle moves {min(throttle):.2f}-{max(throttle):.2f}: a dead load "
-                "cell? its points are fitted as measured"
+                "cell? its points are left out of the fit"
             )
-    return notes
+            deaf.add(result.run.file)
+    return notes, deaf
 
 
 def refuse_unphysical_fit(
@@ -946,6 +973,25 @@ def refuse_unphysical_fit(
             raise InputError(f"{label}: engine {engine}: the fitted full-throttle static thrust "
                              f"is {static:.3g} N, not positive: is the force sign of its runs "
                              "flipped?")
+        throttle, airspeed, thrust = fit.points
+        if not math.isfinite(fit.r2):  # every point the same thrust
+            raise InputError(f"{label}: engine {engine}: every point has the thrust "
+                             f"{float(thrust[0]):.4g} N: it answers neither throttle nor airspeed")
+        if fit.r2 < MIN_POLY22_R2:
+            raise InputError(
+                f"{label}: engine {engine}: the poly22 surface explains only R^2 = "
+                f"{fit.r2:.3f} of its points (the paper's 0.997; at least {MIN_POLY22_R2:g}): "
+                "is a run's force sign, unit or engine label wrong?"
+            )
+        low, high = float(throttle.min()), float(throttle.max())
+        for v in (float(airspeed.min()), float(airspeed.max())):
+            rise = float(np.ravel(fit.predict(high, v))[0] - np.ravel(fit.predict(low, v))[0])
+            if not rise > 0:
+                raise InputError(
+                    f"{label}: engine {engine}: the fitted thrust at {v:.1f} m/s does not rise "
+                    f"from throttle {low:.2f} to {high:.2f} ({rise:+.3g} N): is a run's force "
+                    "sign or throttle column wrong?"
+                )
     if drag is None or not points:
         return
     top = max(p.airspeed_measured_m_s for p in points)
@@ -1193,8 +1239,10 @@ def _fit_inputs(input_path: Path) -> list[Path]:
         )
     if isinstance(data, dict) and isinstance(data.get("runs"), list):
         for entry in data["runs"]:
-            if isinstance(entry, dict) and isinstance(entry.get("file"), str):
-                inputs.append(input_path.parent / entry["file"])
+            name = entry.get("file") if isinstance(entry, dict) else None
+            # a name the OS cannot take is refused by the manifest's schema, naming it
+            if isinstance(name, str) and "\x00" not in name:
+                inputs.append(input_path.parent / name)
     return inputs
 
 
