@@ -215,6 +215,7 @@ def check(
         sample_notes += [f"--set {key}: the samples draw it from the uncertainty block "
                          "(the deterministic value uses --set)"
                          for key in _set_keys(sets) if key in drawn]
+        sample_notes += _scaled_pack_notes([*drawn, *_set_keys(sets)])
         sample_set = run_samples(case, plan, workers, dask)
         probabilistic = probabilistic_verdicts(sample_set)
         outside = {k: n for k, n in sample_set.outside_bounds.items() if n}
@@ -306,7 +307,7 @@ def margins(
 
     case = load_case_with(case_file, sets)
     rows = solve_margins(case)
-    notes = _batch_notes(case, [], None)
+    notes = _batch_notes(case, [], None) + _scaled_pack_notes({m.parameter for m in rows})
     if as_json:
         emit_json({"case": case.name, "case_file": str(case.path),
                    "margins": [m.to_dict() for m in rows], "notes": notes})
@@ -407,7 +408,19 @@ def _batch_notes(case: Any, varied: list[str], sets: list[str] | None) -> list[s
                      "nominal case only (check gives its verdict)")
     notes += [f"--set {key}: the grid varies it (the --set value is not used)"
               for key in _set_keys(sets) if key in varied]
-    return notes
+    return notes + _scaled_pack_notes([*varied, *_set_keys(sets)])
+
+
+SCALED_PACK_NOTE = (
+    "battery.capacity_ah: a capacity other than the battery file's flies the measured pack "
+    "scaled (as capacity/measured packs in parallel: charge x the ratio, resistance / the "
+    "ratio; no run measured such a pack), and the aircraft's mass is as given"
+)
+
+
+def _scaled_pack_notes(keys: Iterable[str]) -> list[str]:
+    """The scaled-pack note where ``keys`` (varied, drawn or set) hold the pack's capacity."""
+    return [SCALED_PACK_NOTE] if "battery.capacity_ah" in keys else []
 
 
 def _set_keys(sets: list[str] | None) -> list[str]:

@@ -102,3 +102,47 @@ def test_the_sensitivity_to_capacity_is_the_batch_slope() -> None:
     values = BatchEvaluator(case).evaluate(
         {"battery.capacity_ah": np.array([5.0 - h, 5.0 + h])}).values["flight_endurance"]
     assert rows[0].sensitivity == pytest.approx((values[1] - values[0]) / (2 * h), rel=1e-4)
+
+
+@pytest.mark.parametrize("key, value", [
+    ("battery.capacity_ah", 1.5),  # 1.5 Ah cuts off in the climb
+    ("battery.cutoff_voltage_per_cell_v", 3.95),  # so does a 3.95 V cut-off
+])
+def test_a_launch_that_reaches_the_cut_off_fails_in_the_batch_too(key, value) -> None:
+    """check said "cut-off voltage 40.8 V between 2.7 and 2.8 s", sweep 4.33 min PASS: the
+    batch looked at the pack's cut-off in the cruise only (outside audit)."""
+    case = with_values(load_case(SHIPPED_CASE), {"requirements.endurance.min_flight_time_min": 3.0})
+    single = with_values(case, {key: value})
+    endurance = {v.name: v for v in check_case(single)}["flight_endurance"]
+    assert endurance.value is None and "cut-off" in endurance.reason
+    result = BatchEvaluator(case).evaluate({key: np.array([value])})
+    assert np.isnan(result.values["flight_endurance"][0])
+    assert_equal_to_deterministic(single, result.values, 0)
+
+
+def test_one_pack_is_one_pack_of_the_capacity_flown() -> None:
+    """endurance at 10 Ah still gave the measured 5 Ah pack's 11.6 min 'one pack, full to
+    cut-off' (outside audit): one 10 Ah pack is two measured packs in parallel."""
+    from tuflexperf.models.battery import time_to_cutoff_s
+
+    case = load_case(SHIPPED_CASE)
+    nominal = Study(case).endurance(0.5)
+    doubled = Study(with_values(case, {"battery.capacity_ah": 10.0})).endurance(0.5)
+    model = Study(case).endurance_model()
+    expected = time_to_cutoff_s(model.params, doubled.electrical_power_w, model.cutoff_v, 2)
+    assert doubled.battery_endurance_min == pytest.approx(expected / 60.0, rel=1e-6)
+    assert doubled.battery_endurance_min > 2.0 * nominal.battery_endurance_min
+
+
+def test_battery_keys_without_a_battery_and_an_absurd_capacity_are_bad_input(tmp_path) -> None:
+    from typer.testing import CliRunner
+
+    from tests.conftest import write_case
+    from tuflexperf.cli import app
+
+    bare = write_case(tmp_path / "bare")
+    runner = CliRunner()
+    result = runner.invoke(app, ["check", str(bare), "--set", "battery.capacity_ah=6"])
+    assert result.exit_code == 2 and "names no battery file" in result.stderr
+    result = runner.invoke(app, ["check", "--set", "battery.capacity_ah=1e308"])
+    assert result.exit_code == 2 and "battery.capacity_ah" in result.stderr

@@ -193,10 +193,10 @@ class _Launch:
 
 
 def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
-                   stall: Array, height: Array, packs: Array) -> _Launch:
+                   stall: Array, height: Array, packs: Array, cutoff_v: Array) -> _Launch:
     """Charge [Ah] per fan drawn by roll + climb to ``height`` [m] on ``packs`` measured packs
     in parallel per fan, the climb time [s] and the rest of :class:`_Launch`; NaN if
-    impossible."""
+    impossible, the packs' cut-off ``cutoff_v`` [V] reached on the way included."""
     _, roll_time, v_lo, ok = roll
     climb_speed, climb_rate = _best_climb(m, v_lo, stall)
     ok = (ok > 0.5) & ~((height > 0) & (climb_rate <= 0))
@@ -211,9 +211,10 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     t_hist = np.where(ok[:, None], t_hist, 0.0)
 
     peak = np.zeros(m.size)
+    above = np.ones(m.size, dtype=bool)
 
     def rk4(q: Array, h: Array, active: Array, powers: tuple[Array, Array, Array]) -> Array:
-        nonlocal peak
+        nonlocal peak, above
         p0, p_half, p1 = powers
         k1 = np.asarray(current_at_power_a(model.params, q, p0, packs)) / 3600.0
         k2 = np.asarray(current_at_power_a(model.params, q + h / 2 * k1, p_half, packs)) / 3600.0
@@ -221,7 +222,14 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
         k4 = np.asarray(current_at_power_a(model.params, q + h * k3, p1, packs)) / 3600.0
         # the mission checks its nodes' currents (step ends): k1 and k4 are those here
         peak = np.where(active, np.maximum(peak, 3600.0 * np.maximum(k1, k4)), peak)
-        return np.where(active, q + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), q)
+        after = q + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        # the loaded packs stay above their cut-off at the nodes, as the single case's mission
+        # checks (a take-off that cut off passed here; outside audit)
+        held = ((np.asarray(cutoff_residual_v(model.params, q, p0, cutoff_v, packs)) > 0.0)
+                & (np.asarray(cutoff_residual_v(model.params, after, p1, cutoff_v, packs))
+                   > 0.0))
+        above = np.where(active, above & held, above)
+        return np.where(active, after, q)
 
     # the roll (to the end of rotation) and the climb are integrated apart, as the single
     # case's mission does (a step across the switch of power would be first-order only):
@@ -246,6 +254,7 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     h = np.where(strides > 0, climb_time_safe / np.maximum(strides, 1), 0.0)
     for k in range(int(strides.max()) if strides.size else 0):
         q = rk4(q, h, k < strides, (climb_power,) * 3)
+    ok &= above
     return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak)
 
 
@@ -324,10 +333,10 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     capacity = battery["battery.capacity_ah"]
     packs = np.asarray(equivalent_packs(per_engine, capacity,
                                         model.battery.as_read.capacity_ah), dtype=float)
-    launch = _launch_charge(m, model, roll, stall, battery["battery.mission.pattern_altitude_m"],
-                            packs)
-    q_launch, climb_time = launch.charge_ah, launch.climb_time_s
     cutoff = model.battery.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"]
+    launch = _launch_charge(m, model, roll, stall, battery["battery.mission.pattern_altitude_m"],
+                            packs, cutoff)
+    q_launch, climb_time = launch.charge_ah, launch.climb_time_s
     reserve_ah = (per_engine * capacity
                   * (1.0 - battery["battery.mission.landing_reserve_fraction"]))
     # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
@@ -350,7 +359,7 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     ok &= ~beyond_jet_velocity(m.propulsion, speed[:, None], density)[:, 0]
     power_w = _power_w(model, m, throttle, speed)
     params = model.params
-    ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, 1) > 0.0)
+    ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs / per_engine) > 0.0)
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs) > 0.0)
     q_cut = _bracketed_root(
         lambda q: np.asarray(cutoff_residual_v(params, q, power_w, cutoff, packs), dtype=float),

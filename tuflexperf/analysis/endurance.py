@@ -508,6 +508,9 @@ class EnduranceModel:
         self.run_checks = self._check_runs(battery)
         aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
         self.packs = battery.circuit_packs
+        # "one pack on one fan" is one pack of the battery's capacity (a scaled one flies as
+        # that share of the measured pack's circuit)
+        one = self.packs / battery.packs_in_parallel_per_engine
         self.cutoff_v = battery.cutoff_voltage_v
         self.stall_m_s = float(stall_speed_m_s(aircraft, rho))
         # level flight only counts at or above stall x the envelope's margin (SPEC 3)
@@ -531,7 +534,8 @@ class EnduranceModel:
         x, v, q, p = (ca.SX.sym(n) for n in ("x", "v", "q", "p"))
         sym = self.params
         level = ca.Function("level_excess", [v, x], [excess(x, v)])
-        cut_1 = ca.Function("cutoff_1", [q, p], [cutoff_residual_v(sym, q, p, self.cutoff_v, 1)])
+        cut_1 = ca.Function("cutoff_1", [q, p],
+                            [cutoff_residual_v(sym, q, p, self.cutoff_v, one)])
         cut_n = ca.Function(
             "cutoff_n", [q, p], [cutoff_residual_v(sym, q, p, self.cutoff_v, self.packs)]
         )
@@ -540,10 +544,10 @@ class EnduranceModel:
         rf_cut_1 = ca.rootfinder("cutoff_charge_1", "newton", cut_1, opts)
         rf_cut_n = ca.rootfinder("cutoff_charge_n", "newton", cut_n, opts)
         a, b = ca.SX.sym("a"), ca.SX.sym("b")
-        time_1 = ca.Function("time_1", [p, a, b], [discharge_time_s(sym, p, a, b, 1)])
+        time_1 = ca.Function("time_1", [p, a, b], [discharge_time_s(sym, p, a, b, one)])
         time_n = ca.Function("time_n", [p, a, b], [discharge_time_s(sym, p, a, b, self.packs)])
         self._power = ca.Function("power", [x, v], [self.power.electrical_power_w(x, v)])
-        self._current = ca.Function("current", [q, p], [current_at_power_a(sym, q, p, 1)])
+        self._current = ca.Function("current", [q, p], [current_at_power_a(sym, q, p, one)])
 
         xm, v0, q10, qn0 = (ca.MX.sym(n) for n in ("x", "v0", "q1_0", "qn_0"))
         speed = self._rf_level(v0, xm)
@@ -568,7 +572,7 @@ class EnduranceModel:
         # Pole of the knee term (charge per fan): Newton starts just left of it, where the
         # residual is concave and decreasing, so it converges monotonically from the right.
         pole = self.params.max_capacity_ah
-        self._q_guess = (pole * (1 - 1e-4), self.packs * pole * (1 - 1e-4))
+        self._q_guess = (one * pole * (1 - 1e-4), self.packs * pole * (1 - 1e-4))
         self._nlp: dict[str, Any] = {}
 
     # -- the discharge runs against the power and thrust models (SPEC 3) ---------------------
@@ -607,13 +611,7 @@ class EnduranceModel:
                 self.case.propulsion.fan_area_m2,
             )
             warnings.extend(check.warnings)
-        measured_ah = battery.as_read.capacity_ah
-        if battery.capacity_ah != measured_ah:
-            warnings.append(
-                f"capacity_ah {battery.capacity_ah:g} Ah: the measured {measured_ah:g} Ah pack "
-                f"scaled (it flies as {battery.circuit_packs:.3g} measured packs per fan: charge "
-                "x, resistance / the ratio); no run measured a pack of this size"
-            )
+        warnings.extend(battery.scaled_notes)
         return tuple(warnings)
 
     def _planned_mission(self, case: Case, battery: Battery) -> Any:

@@ -1103,6 +1103,7 @@ class MissionModel:
             reason=reason or (f"lands with {100 * landing:.1f} % charge (reserve "
                               f"{100 * self.reserve:g} %)"),
             engines=self.engines, history=history, solved=solved, ended_at_s=ended_at,
+            warnings=self.battery.scaled_notes,
         )
 
     def _stall_factor(self) -> float:

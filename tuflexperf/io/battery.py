@@ -106,10 +106,15 @@ class BatteryFitSchema(StrictModel):
     cross_validation: list[CrossValidationSchema] = []
 
 
+MAX_CAPACITY_AH = 1000.0
+"""The largest pack capacity [Ah] a battery file or a what-if may name."""
+
+
 class BatterySchema(StrictModel):
     name: str
     cells_in_series: Annotated[int, Field(ge=1, le=100)]
-    capacity_ah: Positive
+    # no aircraft pack holds more (a what-if of 1e308 Ah "flew" 4e20 min: outside audit)
+    capacity_ah: Annotated[float, Field(gt=0, le=MAX_CAPACITY_AH)]
     nominal_voltage_v: Positive | None = None
     max_discharge_c: Positive | None = None
     packs_in_parallel_per_engine: Annotated[int, Field(ge=1, le=20)] = 1
@@ -180,6 +185,17 @@ class Battery:
 
         return float(equivalent_packs(self.packs_in_parallel_per_engine, self.capacity_ah,
                                       self.as_read.capacity_ah))
+
+    @property
+    def scaled_notes(self) -> tuple[str, ...]:
+        """What a results' reader must know of a capacity other than the file's (or nothing)."""
+        measured = self.as_read.capacity_ah
+        if self.capacity_ah == measured:
+            return ()
+        return (f"capacity_ah {self.capacity_ah:g} Ah: the measured {measured:g} Ah pack "
+                f"scaled (it flies as {self.circuit_packs:.3g} measured packs per fan: charge "
+                "x the ratio, resistance / the ratio); no run measured a pack of this size, "
+                "and the aircraft's mass is as given",)
 
 
 # The battery keys that change without refitting the pack model (--set, samples, sweeps,

@@ -146,6 +146,8 @@ def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
             "thrust model: refit with `tuflexperf fit`; its uncertainty is "
             "`uncertainty.propulsion`)"
         )
+    if key.startswith("battery.") and case.battery_path is None:
+        raise InputError(f"{where}: {key}: the case names no battery file")
     if key.startswith("battery."):
         raise InputError(
             f"{where}: {key}: cannot be varied (of the battery only "
