@@ -441,3 +441,65 @@ def test_a_force_change_without_a_step_is_said_and_the_filters_own_are_not(
                                  str(tmp_path / "jumped.yaml"), "--json"])
     notes = [w for w in json.loads(jumped.stdout)["warnings"] if "without a throttle step" in w]
     assert any("edf1_v30p0.csv.gz: force changes at 7.4" in w for w in notes), notes
+
+
+def test_a_small_fan_beside_a_big_one_a_voltage_dropout_and_a_tiny_sweep_are_fitted(
+        tmp_path: Path) -> None:
+    """Outside review of the fit's new refusals: a fan of 1.5 % the other's thrust was taken
+    for a dead load cell and refused; one 0 V logger sample refused its run; a 12-sample
+    sine sweep crashed the delay grid."""
+    import pandas as pd
+
+    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
+    folder = tmp_path / "campaign"
+    shutil.copytree(shipped, folder)
+    manifest = folder / "campaign.yaml"
+    text = manifest.read_text()
+    extra = []
+    for run in sorted((folder / "runs").glob("edf1_v*.csv.gz")):
+        small = pd.read_csv(run)
+        small["force_n"] *= 0.015
+        name = run.name.replace("edf1", "small")
+        small.to_csv(run.with_name(name), index=False)
+        extra.append(f"  - {{file: runs/{name}, engine: SMALL, kind: throttle_steps}}")
+    dropout = pd.read_csv(folder / "runs" / "edf1_v15p0.csv.gz")
+    dropout.loc[100, "voltage_v"] = 0.0
+    dropout.to_csv(folder / "runs" / "edf1_v15p0.csv.gz", index=False)
+    sweep = pd.read_csv(folder / "runs" / "edf2_sweep_v30.csv.gz").head(12)
+    sweep.to_csv(folder / "runs" / "tiny_sweep.csv", index=False)
+    extra.append("  - {file: runs/tiny_sweep.csv, engine: EDF2, kind: sine_sweep}")
+    head, tail = text.split("runs:\n", 1)
+    manifest.write_text(head + "runs:\n" + "\n".join(extra) + "\n" + tail)
+    result = runner.invoke(app, ["fit", str(manifest), "--out", str(tmp_path / "p.yaml"),
+                                 "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    small = next(e for e in summary["engines"] if e["name"] == "SMALL")
+    assert small["full_throttle_thrust_n"]["0"] == pytest.approx(0.015 * 54.9, rel=0.03)
+    warnings = summary["warnings"]
+    assert any("edf1_v15p0.csv.gz" in w and "at or below 0 V taken as missing" in w
+               for w in warnings), warnings
+    assert any("tiny_sweep.csv" in w and "left out of the delay" in w for w in warnings)
+    assert not any("dead load cell" in w for w in warnings)
+
+
+def test_a_small_fans_noisy_table_is_fitted_with_a_note_not_refused(tmp_path: Path) -> None:
+    """R^2 0.89 from a 3 N fan measured with 0.3 N of noise was refused as a wrong sign
+    (outside review): between 0.5 and 0.9 the fit is written and the R^2 said."""
+    from tuflexperf.reduction.poly22fit import fit_poly22
+
+    grid = [(x, v) for x in (0.4, 0.7, 1.0) for v in (0.0, 15.0, 30.0)]
+    for seed in range(200):  # a noise draw whose surface explains 0.5 .. 0.9 of the points
+        rng = np.random.default_rng(seed)
+        thrust = [0.05 * poly22(x, v, COEFFICIENTS) + rng.normal(0, 0.3) for x, v in grid]
+        r2 = fit_poly22(*zip(*grid, strict=True), thrust).r2
+        if 0.5 < r2 < 0.9:
+            break
+    else:
+        pytest.fail("no noise draw in range")
+    table = tmp_path / "small.csv"
+    table.write_text("engine,throttle,airspeed_m_s,thrust_n\n" + "".join(
+        f"S,{x},{v},{t!r}\n" for (x, v), t in zip(grid, thrust, strict=True)))
+    result = runner.invoke(app, ["fit", str(table), "--out", str(tmp_path / "p.yaml"), "--json"])
+    assert result.exit_code == 0, result.output
+    assert any("explains only R^2" in w for w in json.loads(result.stdout)["warnings"])

@@ -261,3 +261,22 @@ def test_a_failed_write_leaves_no_folder_it_made(tmp_path) -> None:
         files.write_files_atomically({tmp_path / "new" / "sub" / "p.yaml": "x",
                                       blocker / "t.csv": "y"})
     assert sorted(p.name for p in tmp_path.iterdir()) == ["blocker"]
+
+
+def test_a_file_being_replaced_is_there_at_every_moment(tmp_path, monkeypatch) -> None:
+    """The earlier output moved aside before the new one moved in: a crash between the two
+    renames would have left no file at all (outside review). It keeps its name throughout."""
+    target = tmp_path / "p.yaml"
+    files.write_files_atomically({target: "earlier\n"})
+    real_replace = os.replace
+    seen = []
+
+    def watched_replace(src, dst):
+        seen.append(target.exists())
+        real_replace(src, dst)
+        seen.append(target.exists())
+
+    monkeypatch.setattr(files.os, "replace", watched_replace)
+    files.write_files_atomically({target: "new\n"})
+    assert seen and all(seen) and target.read_text() == "new\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p.yaml"]

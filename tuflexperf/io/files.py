@@ -119,8 +119,15 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
                     current = target
                     old = None
                     if target.exists():
+                        # a second name for the earlier file, which stays where it is until
+                        # the new one replaces it in one rename (no moment without it)
                         old = target.parent / f".{target.name}.old-{secrets.token_hex(6)}"
-                        os.replace(target, old)
+                        try:
+                            os.link(target, old)
+                        except OSError:  # a file system without hard links
+                            import shutil
+
+                            shutil.copy2(target, old)
                     kept.append((target, old))
                     os.replace(tmp, target)
                 if len(_signals_received) > seen:

@@ -254,6 +254,14 @@ def read_run(
             f"{path}: column time_s: not strictly increasing at sample {row} "
             f"({float(time_s[row - 1])!r} -> {float(time_s[row])!r})"
         )
+    if "voltage_v" in arrays:
+        # a logger's dropout reads 0 V: a missing sample, repaired as a NaN is (one such
+        # sample refused the whole run; outside review); a channel mostly at 0 is refused there
+        dropped = arrays["voltage_v"] <= 0.0
+        if dropped.any() and not dropped.all():
+            arrays["voltage_v"] = np.where(dropped, np.nan, arrays["voltage_v"])
+            warnings.append(f"{int(np.count_nonzero(dropped))} samples of voltage_v at or "
+                            "below 0 V taken as missing")
     for name in names[1:]:
         count = _repair_nans(path, name, time_s, arrays[name])
         if count:

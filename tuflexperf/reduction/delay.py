@@ -183,6 +183,8 @@ def _explained(grams: NDArray[np.float64], rhs: NDArray[np.float64]) -> NDArray[
     return np.einsum("mi,mi->m", coef, rhs)
 
 
+MIN_FIT_SAMPLES = 16
+"""Block means a sweep must give for a fit (a 12-sample sweep crashed the grid; review)."""
 TRUST = 4.0
 """The stencil's quadratic model is trusted this many stencil widths away."""
 MAX_REFINEMENTS = 60
@@ -237,12 +239,14 @@ def estimate_delay(
     y = block_mean(force, block)
     dt = block / sample_rate_hz
     sst = float(np.sum((y - y.mean()) ** 2))
+    if t.size < MIN_FIT_SAMPLES:  # too short to say anything: the caller leaves it out
+        return DelayEstimate(delay_s=0.0, lag_s=0.0, r2=float("nan"), xcorr_lag_s=0.0)
     sse_of_taus = _projected_sse(t, x, y, dt)
 
     max_lag = min(int(round(max_delay_s / dt)), t.size // 4)
     xcorr = _xcorr_lag(x, y, dt, max_lag)
     top = min(max_delay_s, xcorr + 0.1)
-    # every whole-sample dead time up to ``top`` against 25 lags: a coarser grid (20 ms on
+    # every whole-sample dead time up to ``top`` against 13 lags: a coarser grid (20 ms on
     # 20 ms block means) picked the wrong side of the valley d + tau = const, where a pure
     # 50 ms delay came out as 41 ms + a 12 ms lag (outside audit with a known truth)
     shifts = min(int(math.floor(top / dt + 1e-9)), t.size // 4)
