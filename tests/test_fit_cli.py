@@ -503,3 +503,24 @@ def test_a_small_fans_noisy_table_is_fitted_with_a_note_not_refused(tmp_path: Pa
     result = runner.invoke(app, ["fit", str(table), "--out", str(tmp_path / "p.yaml"), "--json"])
     assert result.exit_code == 0, result.output
     assert any("explains only R^2" in w for w in json.loads(result.stdout)["warnings"])
+
+
+def test_a_discharge_run_stopped_before_the_cut_off_is_bad_input(tmp_path: Path) -> None:
+    """A run stopped at 43.6 V of a 40.8 V cut-off was stored as the pack's time to the
+    cut-off, silently (outside audit with a known pack)."""
+    import pandas as pd
+
+    root = Path(__file__).resolve().parents[1] / "data" / "tuflex"
+    shutil.copytree(root / "endurance", tmp_path / "endurance")
+    shutil.copy(root / "battery.yaml", tmp_path / "battery.yaml")
+    run = tmp_path / "endurance" / "edf1_endurance_50.csv"
+    frame = pd.read_csv(run)
+    stop = frame["time_s"].iloc[0] + 0.7 * (frame["time_s"].iloc[-1] - frame["time_s"].iloc[0])
+    frame = frame[frame["time_s"] <= stop]
+    frame.to_csv(run, index=False)
+    result = runner.invoke(app, ["fit", str(tmp_path / "battery.yaml"), "--out",
+                                 str(tmp_path / "fitted.yaml")])
+    assert result.exit_code == 2, result.output
+    assert "edf1_endurance_50.csv" in result.stderr and "short of the cut-off" in result.stderr
+    assert result.stderr.count("\n") == 1
+    assert not (tmp_path / "fitted.yaml").exists()

@@ -292,6 +292,31 @@ def _cross_validation(runs: Sequence[DischargeRun], cells: int, capacity_ah: flo
     return checks
 
 
+CUTOFF_REACHED_TOLERANCE = 0.02
+"""A discharge run whose least loaded voltage stays more than this share above the file's
+cut-off never reached it (the shipped runs end within 0.01 V of it)."""
+
+
+def refuse_runs_short_of_the_cutoff(battery: Any, runs: Sequence[DischargeRun]) -> None:
+    """Bad input: a discharge run that stopped before the pack's cut-off voltage.
+
+    Its time under load is stored as the time to the cut-off and its charge as what the pack
+    gave there: a run stopped at 43.6 V of a 40.8 V cut-off was taken for a pack that lasts
+    17 % less, and one stopped earlier was refused as a capacity misprint (outside audit
+    with a known pack).
+    """
+    cutoff = battery.cutoff_voltage_v
+    for run in runs:
+        least = float(np.min(run.voltage_v[run.loaded]))
+        if least > cutoff * (1.0 + CUTOFF_REACHED_TOLERANCE):
+            raise InputError(
+                f"{battery.path}: runs: {run.path.name}: its loaded voltage stays at or above "
+                f"{least:.2f} V, short of the cut-off {cutoff:.2f} V (cells_in_series x "
+                "cutoff_voltage_per_cell_v): a discharge run measures the time to the cut-off; "
+                "run it there, or give the cut-off its ESC used"
+            )
+
+
 def fit_battery_block(battery: Any, relative_to: Any) -> dict[str, Any]:
     """The ``fit:`` block of a battery file: pack model, residual, runs (sha256), validation.
 
@@ -303,6 +328,7 @@ def fit_battery_block(battery: Any, relative_to: Any) -> dict[str, Any]:
     from tuflexperf.io.discharge import read_discharge_run, summarise_run
 
     runs = [read_discharge_run(r.path) for r in battery.runs]
+    refuse_runs_short_of_the_cutoff(battery, runs)
     refuse_contradicted_capacity(battery, [(r.path.name, float(r.charge_ah[-1])) for r in runs])
     fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
     refuse_unreproduced_runs(battery, fit.parameters, runs)
