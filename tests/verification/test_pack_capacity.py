@@ -146,3 +146,15 @@ def test_battery_keys_without_a_battery_and_an_absurd_capacity_are_bad_input(tmp
     assert result.exit_code == 2 and "names no battery file" in result.stderr
     result = runner.invoke(app, ["check", "--set", "battery.capacity_ah=1e308"])
     assert result.exit_code == 2 and "battery.capacity_ah" in result.stderr
+
+
+def test_a_pack_far_too_small_fails_with_its_reason_and_nothing_on_stderr() -> None:
+    """0.001 Ah: not attainable, said once in the verdict (CasADi's evaluation warnings
+    from the root that does not exist went to stderr)."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "tuflexperf", "check", "--set",
+                           "battery.capacity_ah=0.001"], capture_output=True, text=True)
+    assert done.returncode == 1 and done.stderr == "", done.stderr
+    assert "below its cut-off voltage" in done.stdout

@@ -539,7 +539,10 @@ class EnduranceModel:
         cut_n = ca.Function(
             "cutoff_n", [q, p], [cutoff_residual_v(sym, q, p, self.cutoff_v, self.packs)]
         )
-        opts = {"abstol": 1e-10, "max_iter": 200, "error_on_fail": False}
+        # a pack far too small for the power has no root: said as not attainable, not in
+        # CasADi's evaluation warnings on stderr
+        opts = {"abstol": 1e-10, "max_iter": 200, "error_on_fail": False,
+                "show_eval_warnings": False}
         self._rf_level = ca.rootfinder("level_speed", "newton", level, opts)
         rf_cut_1 = ca.rootfinder("cutoff_charge_1", "newton", cut_1, opts)
         rf_cut_n = ca.rootfinder("cutoff_charge_n", "newton", cut_n, opts)
