@@ -79,11 +79,8 @@ def _projected_sse(
 ) -> Callable[[float, NDArray[np.float64]], NDArray[np.float64]]:
     """``(delay, taus) -> residual sum of squares per tau`` of the variable-projection fit
     on one sampling ``t`` [s] of throttle ``x`` [-] and force ``y`` [N] (step ``dt`` [s])."""
-    tn = _trend(t.size)
     # constant and trend columns do not depend on (d, tau): project them out once
-    basis, _ = np.linalg.qr(np.column_stack([np.ones_like(t), tn]))
-    y_free = y - basis @ (basis.T @ y)
-    yy = float(y_free @ y_free)
+    _, basis, _, y_free, yy = _without_trend(y)
 
     def sse_of_taus(delay: float, taus: NDArray[np.float64]) -> NDArray[np.float64]:
         u = np.interp(t - delay, t, x)
@@ -108,9 +105,20 @@ def _projected_sse(
     return sse_of_taus
 
 
-def _trend(n: int) -> NDArray[np.float64]:
-    """The fit's trend column over ``n`` block means: 0 .. 1, linear in the sample."""
-    return np.linspace(0.0, 1.0, n) if n > 1 else np.zeros(n)
+Array = NDArray[np.float64]
+
+
+def _without_trend(y: Array) -> tuple[Array, Array, Array, Array, float]:
+    """The fit's constant and trend columns projected out of the force ``y`` [N].
+
+    Returns the trend ``tn`` (0 .. 1, linear in the sample), the orthonormal ``basis`` of
+    ``[1, tn]`` with ``r`` (``[1, tn] = basis r``), ``y_free`` (``y`` less its projection on
+    the basis) and ``yy = y_free . y_free`` [N^2].
+    """
+    tn = np.linspace(0.0, 1.0, y.size) if y.size > 1 else np.zeros(y.size)
+    basis, r = np.linalg.qr(np.column_stack([np.ones_like(tn), tn]))
+    y_free = y - basis @ (basis.T @ y)
+    return tn, basis, r, y_free, float(y_free @ y_free)
 
 
 def _shifted_grid_sse(
@@ -130,12 +138,9 @@ def _shifted_grid_sse(
     from numpy.lib.stride_tricks import sliding_window_view
 
     n = t.size
-    tn = _trend(n)
+    tn, _, r, y_free, yy = _without_trend(y)
     step = tn[1] - tn[0] if n > 1 else 0.0
-    basis, r = np.linalg.qr(np.column_stack([np.ones_like(t), tn]))
     to_basis = np.linalg.inv(r)  # [1, tn] @ to_basis = basis
-    y_free = y - basis @ (basis.T @ y)
-    yy = float(y_free @ y_free)
     k = np.arange(shifts + 1)
     # row k: y_free from sample k on, zero-padded to n (its products with a column shifted
     # by k samples); the trend's are prefix sums, the trend being linear in the sample
@@ -257,8 +262,8 @@ def estimate_delay(
     best = float(grid[i, j])
     delay, tau = float(delays[i]), float(taus[j])
 
-    # refine on a 3 x 3 stencil: jump to the minimum of the quadratic through it
-    # (within the stencil), else to its best point; the stencil shrinks only where its
+    # refine on a 3 x 3 stencil: try the minimum of the quadratic through it (trusted up to
+    # TRUST stencil widths) and its points, move to the best; the stencil shrinks only where its
     # centre stays best, so it can travel along the narrow valley d + tau ~ const (shrinking
     # every round stopped it a lag grid step from the optimum: 0.048 + 0.085 s for the
     # shipped campaign's 0.050 + 0.080 s)
