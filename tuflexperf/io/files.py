@@ -78,6 +78,28 @@ def _os_error(path: Path, exc: OSError) -> InputError:
     return InputError(f"{path}: cannot write: {why}")
 
 
+def _make_folders(folder: Path) -> list[Path]:
+    """Make ``folder`` and its missing parents; return those made, outermost first (a
+    failure part-way removes what it made and raises the ``OSError``)."""
+    made: list[Path] = []
+    try:
+        for step in [folder, *folder.parents][::-1]:
+            if not step.exists():
+                step.mkdir()
+                made.append(step)
+    except OSError:
+        _remove_folders(made)
+        raise
+    return made
+
+
+def _remove_folders(made: list[Path]) -> None:
+    """Remove folders :func:`_make_folders` made, innermost first (only while empty)."""
+    for folder in reversed(made):
+        with contextlib.suppress(OSError):
+            folder.rmdir()
+
+
 def write_files_atomically(files: dict[Path, bytes | str]) -> None:
     """Write several files all-or-nothing: every temporary file first, then the renames.
 
@@ -89,6 +111,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
     output beside the earlier table; outside audit) and is then raised.
     """
     import secrets  # lazy, with tempfile: `check` writes nothing
+    import tempfile
 
     staged: list[tuple[str, Path]] = []
     created: list[Path] = []
@@ -97,12 +120,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
     try:
         for path, data in files.items():
             current = Path(path)
-            for folder in [current.parent, *current.parent.parents][::-1]:
-                if not folder.exists():
-                    folder.mkdir()
-                    created.append(folder)
-            import tempfile
-
+            created += _make_folders(current.parent)
             fd, tmp = tempfile.mkstemp(prefix=f".{current.name}.", suffix=".tmp",
                                        dir=current.parent)
             staged.append((tmp, current))
@@ -113,7 +131,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
             os.chmod(tmp, mode)
         with interrupts_held():
             seen = len(_signals_received)
-            kept: list[tuple[Path, Path | None]] = []  # target, its earlier file moved aside
+            kept: list[tuple[Path, Path | None]] = []  # target, its earlier file's second name
             try:
                 for tmp, target in staged:
                     current = target
@@ -148,9 +166,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
         for tmp, _ in staged:
             with contextlib.suppress(OSError):
                 Path(tmp).unlink(missing_ok=True)
-        for folder in reversed(created):
-            with contextlib.suppress(OSError):
-                folder.rmdir()
+        _remove_folders(created)
         if isinstance(exc, OSError):
             raise _os_error(current or Path("output"), exc) from None
         raise
@@ -542,20 +558,15 @@ def staged_directory(out: Path, command: str) -> Iterator[Path]:
 
     out = Path(out).absolute()
     check_output_dir(out, command)
-    created: list[Path] = []
-    for folder in [out.parent, *out.parent.parents][::-1]:
-        if not folder.exists():
-            try:
-                folder.mkdir()
-            except OSError as exc:
-                raise InputError(f"--out: cannot create {folder}: {exc.strerror}") from None
-            created.append(folder)
+    try:
+        created = _make_folders(out.parent)
+    except OSError as exc:
+        raise InputError(f"--out: cannot create {exc.filename}: {exc.strerror}") from None
     staging = out.parent / f".{out.name}.tmp-{secrets.token_hex(6)}"
     try:
         staging.mkdir(mode=0o777 & ~user_umask())
     except OSError as exc:
-        for folder in reversed(created):
-            folder.rmdir()
+        _remove_folders(created)
         raise InputError(f"--out: cannot write in {out.parent}: {exc.strerror}") from None
     try:
         yield staging
@@ -588,9 +599,7 @@ def staged_directory(out: Path, command: str) -> Iterator[Path]:
                     os.replace(out, staging)
     except BaseException as exc:
         shutil.rmtree(staging, ignore_errors=True)
-        for folder in reversed(created):
-            with contextlib.suppress(OSError):
-                folder.rmdir()
+        _remove_folders(created)
         if isinstance(exc, OSError):
             raise _os_error(out, exc) from None
         raise
