@@ -483,7 +483,6 @@ def fit_campaign(
             )
             run_reports.append({**_run_header(run, data), "wind": "one airspeed"})
             continue
-        force, replaced = clean_run(campaign, data)
         if float(np.ptp(data["force_n"])) <= DEAD_LOAD_CELL_N:
             # the same force at every airspeed: "D = 0 (R^2 nan)" was added to every point
             # unremarked (outside audit)
@@ -493,6 +492,7 @@ def fit_campaign(
             )
             run_reports.append({**_run_header(run, data), "force": "constant"})
             continue
+        force, replaced = clean_run(campaign, data)
         _, _, k_med = _windows(campaign, data.sample_rate_hz)
         sweeps.append((movmedian(data["airspeed_m_s"], k_med), force))
         run_reports.append({**_run_header(run, data), "outliers_replaced": replaced})
