@@ -49,9 +49,9 @@ from tuflexperf.analysis.powertrain import PowerAgreement, agreement_at
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.battery import (
     Battery,
+    case_battery,
     load_battery,
     refuse_contradicted_capacity,
-    with_battery_values,
 )
 from tuflexperf.io.case import Case
 from tuflexperf.io.discharge import (
@@ -924,11 +924,9 @@ def endurance_model(case: Case) -> EnduranceModel:
         raise InputError(
             f"{case.path}: battery: the case names no battery file; endurance needs one"
         )
-    path = case.battery_path
     # parse the YAML once per file version, not per call
-    battery = with_battery_values(
-        _battery_cache.get(fingerprint(_file_key(path)), lambda: load_battery(path)),
-        dict(case.overrides))
+    battery = case_battery(case, lambda path: _battery_cache.get(
+        fingerprint(_file_key(path)), lambda: load_battery(path)))
     key = fingerprint(
         case.aircraft,
         case.propulsion,

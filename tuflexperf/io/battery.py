@@ -27,7 +27,7 @@ the discharge model is fitted (:mod:`tuflexperf.models.battery`).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
@@ -283,14 +283,16 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
     )
 
 
-def case_battery(case: Any) -> Battery:
+def case_battery(case: Any, load: Callable[[Path], Battery] | None = None) -> Battery:
     """The battery a case flies: its battery file with the case's ``--set battery.*`` values.
 
-    Raises :class:`InputError` when the case names no battery file.
+    ``load`` reads the file (default :func:`load_battery`; e.g. a cached reader). Raises
+    :class:`InputError` when the case names no battery file.
     """
     if case.battery_path is None:
         raise InputError(f"{case.path}: battery: the case names no battery file")
-    return with_battery_values(load_battery(case.battery_path), dict(case.overrides))
+    read = (load or load_battery)(case.battery_path)
+    return with_battery_values(read, dict(case.overrides))
 
 
 CAPACITY_TOLERANCE = 1.05
