@@ -19,6 +19,14 @@ from tuflexperf.io.case import load_propulsion
 from tuflexperf.models.thrust import poly22
 
 runner = CliRunner()
+SHIPPED_CAMPAIGN = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
+
+
+def campaign_copy(tmp_path: Path) -> Path:
+    """A copy of the shipped campaign (manifest and runs) in ``tmp_path / "campaign"``."""
+    folder = tmp_path / "campaign"
+    shutil.copytree(SHIPPED_CAMPAIGN, folder)
+    return folder
 COEFFICIENTS = {"p00": 0.2, "p10": 5.0, "p01": -0.12, "p20": 40.0, "p11": -0.3, "p02": 0.0007}
 
 
@@ -149,9 +157,7 @@ def test_one_run_without_voltage_fits_without_the_voltage_effect(tmp_path: Path)
     points whose voltage is unknown to NaN."""
     import pandas as pd
 
-    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
-    folder = tmp_path / "campaign"
-    shutil.copytree(shipped, folder)
+    folder = campaign_copy(tmp_path)
     run = folder / "runs" / "edf1_v20p0.csv.gz"
     pd.read_csv(run).drop(columns=["voltage_v", "current_a"]).to_csv(run, index=False)
     out = tmp_path / "fitted.yaml"
@@ -188,9 +194,7 @@ def test_a_fit_no_rig_gives_is_refused(tmp_path: Path, pattern: str, column: str
                                        factor: float, message: str) -> None:
     import pandas as pd
 
-    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
-    folder = tmp_path / "campaign"
-    shutil.copytree(shipped, folder)
+    folder = campaign_copy(tmp_path)
     for run in (folder / "runs").glob(pattern):
         frame = pd.read_csv(run)
         frame[column] *= factor
@@ -209,9 +213,7 @@ def test_a_run_that_gives_no_test_point_is_named_and_a_backwards_wind_refused(
     same values in a table are refused (outside audit)."""
     import pandas as pd
 
-    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
-    folder = tmp_path / "campaign"
-    shutil.copytree(shipped, folder)
+    folder = campaign_copy(tmp_path)
     runs = folder / "runs"
     pd.read_csv(runs / "edf1_v20p0.csv.gz").iloc[:50].to_csv(runs / "edf1_v20p0.csv.gz",
                                                              index=False)
@@ -246,9 +248,7 @@ def test_sweeps_without_response_or_shifted_and_a_dead_load_cell_are_said(
     a run of points with no word (outside audit)."""
     import pandas as pd
 
-    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
-    folder = tmp_path / "campaign"
-    shutil.copytree(shipped, folder)
+    folder = campaign_copy(tmp_path)
     runs = folder / "runs"
     rng = np.random.default_rng(0)
     for name in ("edf2_sweep_v00.csv.gz", "edf2_sweep_v30.csv.gz"):
@@ -272,15 +272,15 @@ def test_sweeps_without_response_or_shifted_and_a_dead_load_cell_are_said(
     assert any("EDF2: no sine sweep of its own" in w for w in warnings)
     assert any("edf1_v20p0.csv.gz" in w and "dead load cell" in w for w in warnings)
     assert summary["delay_s"] == pytest.approx(0.050, abs=0.002)  # EDF1's sweeps alone
-    shutil.copy(shipped / "runs" / "edf2_sweep_v30.csv.gz", runs / "edf2_sweep_v30.csv.gz")
-    shifted = pd.read_csv(shipped / "runs" / "edf2_sweep_v00.csv.gz")
+    shutil.copy(SHIPPED_CAMPAIGN / "runs" / "edf2_sweep_v30.csv.gz", runs / "edf2_sweep_v30.csv.gz")
+    shifted = pd.read_csv(SHIPPED_CAMPAIGN / "runs" / "edf2_sweep_v00.csv.gz")
     shifted["force_n"] = np.roll(shifted["force_n"].to_numpy(), 200)  # 0.2 s at 1 kHz
     shifted.to_csv(runs / "edf2_sweep_v00.csv.gz", index=False)
     warnings = fit("shifted.yaml")["warnings"]
     assert any("EDF2: its sine sweeps disagree on the delay" in w for w in warnings), warnings
     # a time base logged in tenths of its seconds: 45 ms off, under the old 0.05 s spread
-    shutil.copy(shipped / "runs" / "edf2_sweep_v00.csv.gz", runs / "edf2_sweep_v00.csv.gz")
-    scaled = pd.read_csv(shipped / "runs" / "edf2_sweep_v30.csv.gz")
+    shutil.copy(SHIPPED_CAMPAIGN / "runs" / "edf2_sweep_v00.csv.gz", runs / "edf2_sweep_v00.csv.gz")
+    scaled = pd.read_csv(SHIPPED_CAMPAIGN / "runs" / "edf2_sweep_v30.csv.gz")
     scaled["time_s"] = scaled["time_s"] * 0.1
     scaled.to_csv(runs / "edf2_sweep_v30.csv.gz", index=False)
     warnings = fit("scaled.yaml")["warnings"]
@@ -295,9 +295,7 @@ def test_one_engines_undetermined_voltage_exponent_leaves_the_other_engine_alone
     engines' exponent serves the file and EDF2 stays as fitted from clean runs."""
     import pandas as pd
 
-    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
-    folder = tmp_path / "campaign"
-    shutil.copytree(shipped, folder)
+    folder = campaign_copy(tmp_path)
     stuck = pd.read_csv(folder / "runs" / "edf1_v20p0.csv.gz")
     stuck["force_n"] = 1.0
     stuck.to_csv(folder / "runs" / "edf1_v20p0.csv.gz", index=False)
@@ -310,7 +308,7 @@ def test_one_engines_undetermined_voltage_exponent_leaves_the_other_engine_alone
         engine = next(e for e in summary["engines"] if e["name"] == "EDF2")
         return engine["coefficients"], summary["warnings"]
 
-    clean, _ = edf2(shipped / "campaign.yaml", "clean.yaml")
+    clean, _ = edf2(SHIPPED_CAMPAIGN / "campaign.yaml", "clean.yaml")
     corrupt, warnings = edf2(folder / "campaign.yaml", "corrupt.yaml")
     # the stuck run is now left out of the fit (a dead load cell), so EDF1's exponent is
     # determined from its clean runs; either way EDF2 keeps its clean fit
@@ -337,9 +335,7 @@ def test_a_misspelt_battery_key_is_named_with_the_closest_one(tmp_path: Path) ->
 def test_two_runs_of_one_engine_at_one_airspeed_are_said(tmp_path: Path) -> None:
     """An EDF2 run labelled EDF1 gave EDF1 two runs at 30 m/s (88 points) without a word
     (outside audit); repeats are legitimate, so it is a note naming both runs."""
-    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
-    folder = tmp_path / "campaign"
-    shutil.copytree(shipped, folder)
+    folder = campaign_copy(tmp_path)
     manifest = folder / "campaign.yaml"
     manifest.write_text(manifest.read_text().replace(
         "{file: runs/edf2_v30p0.mat, engine: EDF2", "{file: runs/edf2_v30p0.mat, engine: EDF1"))
@@ -383,9 +379,7 @@ def test_a_table_whose_thrust_never_changes_is_refused(tmp_path: Path) -> None:
 
 
 def test_a_nul_in_a_run_name_and_an_absurd_filter_window_are_bad_input(tmp_path: Path) -> None:
-    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
-    folder = tmp_path / "campaign"
-    shutil.copytree(shipped, folder)
+    folder = campaign_copy(tmp_path)
     manifest = folder / "campaign.yaml"
     text = manifest.read_text()
     for edited, key in (
@@ -404,9 +398,7 @@ def test_a_nul_in_a_run_name_and_an_absurd_filter_window_are_bad_input(tmp_path:
 def test_a_drag_sweep_of_constant_force_adds_no_drag_and_says_so(tmp_path: Path) -> None:
     import pandas as pd
 
-    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
-    folder = tmp_path / "campaign"
-    shutil.copytree(shipped, folder)
+    folder = campaign_copy(tmp_path)
     run = folder / "runs" / "structure_drag.csv"
     frame = pd.read_csv(run)
     frame["force_n"] = 0.0
@@ -426,13 +418,11 @@ def test_a_force_change_without_a_step_is_said_and_the_filters_own_are_not(
     audit). Those are gone; a real jump of the balance mid-plateau is still said."""
     import pandas as pd
 
-    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
-    clean = runner.invoke(app, ["fit", str(shipped / "campaign.yaml"), "--out",
+    clean = runner.invoke(app, ["fit", str(SHIPPED_CAMPAIGN / "campaign.yaml"), "--out",
                                 str(tmp_path / "clean.yaml"), "--json"])
     assert not any("without a throttle step" in w
                    for w in json.loads(clean.stdout)["warnings"])
-    folder = tmp_path / "campaign"
-    shutil.copytree(shipped, folder)
+    folder = campaign_copy(tmp_path)
     run = folder / "runs" / "edf1_v30p0.csv.gz"
     frame = pd.read_csv(run)
     frame.loc[frame["time_s"] >= 7.4, "force_n"] += 3.0  # mid-plateau (steps 5.35, 9.4 s)
@@ -450,9 +440,7 @@ def test_a_small_fan_beside_a_big_one_a_voltage_dropout_and_a_tiny_sweep_are_fit
     sine sweep crashed the delay grid."""
     import pandas as pd
 
-    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
-    folder = tmp_path / "campaign"
-    shutil.copytree(shipped, folder)
+    folder = campaign_copy(tmp_path)
     manifest = folder / "campaign.yaml"
     text = manifest.read_text()
     extra = []
