@@ -11,6 +11,16 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 SHIPPED_CASE = ROOT / "requirements" / "tuflex.yaml"
 
+
+def copy_shipped_case(folder: Path) -> Path:
+    """The shipped case (its requirements/ and data/ folders) copied into ``folder``;
+    returns the copy's case file."""
+    import shutil
+
+    for name in ("requirements", "data"):
+        shutil.copytree(ROOT / name, folder / name)
+    return folder / "requirements" / "tuflex.yaml"
+
 MADE_UP_AIRCRAFT: dict[str, Any] = {
     "name": "Made-up",
     "mass_kg": 18.0,

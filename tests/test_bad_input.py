@@ -12,7 +12,13 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from tests.conftest import MADE_UP_AIRCRAFT, MADE_UP_PROPULSION, MADE_UP_REQUIREMENTS, write_case
+from tests.conftest import (
+    MADE_UP_AIRCRAFT,
+    MADE_UP_PROPULSION,
+    MADE_UP_REQUIREMENTS,
+    copy_shipped_case,
+    write_case,
+)
 from tuflexperf.cli import app
 
 runner = CliRunner()
@@ -184,7 +190,6 @@ def test_symbolic_link_loops_are_one_line_not_a_traceback(tmp_path):
     """A link that points at itself, as a campaign's run and as a case's propulsion file:
     pathlib raised RuntimeError("Symlink loop ...") out of fit, report, check, mission and
     export as a traceback (found by an outside audit)."""
-    import shutil
     from pathlib import Path
 
     shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign"
@@ -212,8 +217,7 @@ def test_a_misspelt_required_key_is_matched_to_the_missing_one(tmp_path):
     from tuflexperf.errors import InputError
     from tuflexperf.io.case import load_case
 
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     propulsion = tmp_path / "data" / "tuflex" / "propulsion.yaml"
     original = propulsion.read_text()
     for wrong, meant in (("p12", "p11"), ("p2", "p02")):
@@ -239,8 +243,7 @@ def test_absurd_values_set_on_the_command_line_are_bad_input(args, needle):
 
 def test_a_null_requirement_block_is_bad_input(tmp_path):
     """`takeoff: null` dropped the requirement and check passed without it (outside audit)."""
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     case = tmp_path / "requirements" / "tuflex.yaml"
     text = case.read_text()
     for empty in ("  takeoff: null\n", "  takeoff:\n"):
@@ -253,8 +256,7 @@ def test_a_null_requirement_block_is_bad_input(tmp_path):
 def test_an_alias_bomb_in_the_propulsion_source_is_refused_at_once(tmp_path):
     """Nine levels of nine aliases in `source:` cost check nothing but ran the exports out
     of memory (outside audit): the expanded provenance is counted, and refused."""
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     propulsion = tmp_path / "data" / "tuflex" / "propulsion.yaml"
     levels = "".join(f"  {chr(98 + i)}: &{chr(98 + i)} [{','.join(['*' + chr(97 + i)] * 9)}]\n"
                      for i in range(9))
@@ -277,8 +279,7 @@ def test_fits_own_provenance_is_far_below_the_source_bound(tmp_path):
 
 
 def test_set_on_a_block_the_case_leaves_out_says_so(tmp_path):
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     case = tmp_path / "requirements" / "tuflex.yaml"
     case.write_text(case.read_text().replace("  takeoff: {max_ground_roll_m: 60}\n", ""))
     result = runner.invoke(app, ["check", str(case), "--set",

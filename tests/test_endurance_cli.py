@@ -13,6 +13,7 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
+from tests.conftest import copy_shipped_case
 from tests.validation.test_endurance_paper import shipped_with_battery
 from tuflexperf.cli import app
 from tuflexperf.errors import InputError
@@ -239,10 +240,8 @@ def test_run_changed_since_the_fit_is_exit_2(tmp_path):
 def test_a_power_model_far_below_momentum_theory_flies_no_endurance(tmp_path):
     """A power surface at 1 mW: 'flight_endurance 22166939 min PASS' beside a figure-of-merit
     warning of 644970 (outside audit). Far above 1 it is no fan's power: not attainable."""
-    import shutil
 
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     path = tmp_path / "data" / "tuflex" / "propulsion.yaml"
     data = yaml.safe_load(path.read_text())
     for engine in data["engines"]:

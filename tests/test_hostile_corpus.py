@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import hashlib
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -19,6 +18,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+
+from tests.conftest import copy_shipped_case
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -146,8 +147,7 @@ CASES = [
 
 @pytest.fixture()
 def workdir(tmp_path: Path) -> Path:
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     return tmp_path
 
 

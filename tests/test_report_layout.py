@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import json
 import re
-import shutil
 from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
+from tests.conftest import copy_shipped_case
 from tests.layout_checks import (
     legend_overlaps,
     missing_units,
@@ -106,8 +106,7 @@ def _all_figures(case_path: Path | None) -> dict[str, object]:
 
 def _failing_copy(folder: Path) -> Path:
     """The shipped case with a 200 kg aircraft: take-off, trim and endurance all fail."""
-    for name in ("requirements", "data"):
-        shutil.copytree(ROOT / name, folder / name)
+    copy_shipped_case(folder)
     aircraft = folder / "data" / "tuflex" / "aircraft.yaml"
     lines = [("mass_kg: 200" if line.startswith("mass_kg:") else line)
              for line in aircraft.read_text().splitlines()]

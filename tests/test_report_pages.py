@@ -9,12 +9,12 @@ a case with a mission; and every page for a failing made-up case (no traceback).
 from __future__ import annotations
 
 import re
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests.conftest import copy_shipped_case
 from tests.test_report_layout import _drawn_inputs, _report
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -32,8 +32,7 @@ def _shipped_copy(folder: Path, mission: str | None = MISSION_LINE, mass_kg: flo
                   cruise_min: float | None = None) -> Path:
     """The shipped case and data copied, optionally with the test-flight mission as a
     requirement, a changed mass, or a longer cruise."""
-    for name in ("requirements", "data"):
-        shutil.copytree(ROOT / name, folder / name)
+    copy_shipped_case(folder)
     case = folder / "requirements" / "tuflex.yaml"
     if mission is not None:
         case.write_text(case.read_text().rstrip("\n") + "\n" + mission + "\n")

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from tests.conftest import MADE_UP_AIRCRAFT, SHIPPED_CASE, write_case
+from tests.conftest import MADE_UP_AIRCRAFT, SHIPPED_CASE, copy_shipped_case, write_case
 from tuflexperf.analysis.batch import BatchEvaluator, nominal_engines
 from tuflexperf.analysis.requirements import check_case
 from tuflexperf.errors import InputError
@@ -162,11 +162,8 @@ def test_battery_keys_in_a_batch_equal_a_case_with_that_battery_file(tmp_path) -
 def _catapult_case(tmp_path, rolling_friction: float = 0.9):
     """The shipped case launched by a catapult at 18 m/s EAS, on a runway it could never
     roll on (friction 0.9): the endurance starts airborne (SPEC 4, aircraft file)."""
-    import shutil
 
-    root = SHIPPED_CASE.parent.parent
-    for folder in ("requirements", "data"):
-        shutil.copytree(root / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
     text = aircraft.read_text().replace(
         "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 12000\ntakeoff:", 1)
@@ -320,12 +317,8 @@ def test_the_pack_rating_is_the_same_rule_in_the_batch(tmp_path, c_rate, packs, 
                                                        attainable) -> None:
     """max_discharge_c ends a flight beyond the pack's rating (outside audit); the batch
     (samples, sweeps, margins) applied none and passed what check failed (second review)."""
-    import shutil
-    from pathlib import Path
 
-    root = Path(SHIPPED_CASE).parent.parent
-    for folder in ("requirements", "data"):
-        shutil.copytree(root / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     battery = tmp_path / "data" / "tuflex" / "battery.yaml"
     battery.write_text(battery.read_text()
                        .replace("max_discharge_c: 40 ", f"max_discharge_c: {c_rate} ")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -11,6 +10,7 @@ from pathlib import Path
 import pytest
 import yaml
 
+from tests.conftest import copy_shipped_case
 from tuflexperf.analysis.requirements import check_case
 from tuflexperf.io.battery import load_battery
 from tuflexperf.io.case import load_case
@@ -50,8 +50,7 @@ def test_an_unfitted_battery_is_bad_input_and_fit_makes_it_whole(tmp_path: Path)
     """SPEC 4: check reads the pack model and never fits. Without its fit block a battery
     file was fitted on the fly (outside audit); now check names the file and the command
     that fits it, and the file `fit` writes gives the shipped answer."""
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     path = tmp_path / "data" / "tuflex" / "battery.yaml"
     data = yaml.safe_load(path.read_text())
     data.pop("fit")
@@ -82,8 +81,7 @@ def test_a_capacity_label_far_above_what_the_runs_drew_is_bad_input(tmp_path: Pa
     """capacity_ah 10 on the pack whose runs drew 4.77 Ah to their cut-off: the cruise ran to
     the cut-off and 'landed with 50 % charge', turning a FAIL at 20 min into a PASS (outside
     audit). A conservative cut-off draws ~25 % less than the label, not half."""
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     path = tmp_path / "data" / "tuflex" / "battery.yaml"
     text = path.read_text()
     path.write_text(text.replace("capacity_ah: 5.0 ", "capacity_ah: 10.0", 1))

@@ -9,7 +9,6 @@ best-endurance / best-range answers against a fine throttle scan.
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +16,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
+from tests.conftest import copy_shipped_case
 from tuflexperf.analysis.endurance import endurance_model, solve_best, solve_endurance
 from tuflexperf.analysis.takeoff import solve_takeoff
 from tuflexperf.io.case import load_case
@@ -104,8 +104,7 @@ def test_endurance_cruise_equals_the_constant_power_closed_form(throttle: float)
 
 
 def _voltage_case(tmp_path: Path, exponent: float = 2.0):
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     prop = tmp_path / "data" / "tuflex" / "propulsion.yaml"
     text = prop.read_text()
     text = text.replace("fan_area_m2:", f"reference_voltage_v: 46.0\nvoltage_exponent: "

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 import yaml
 
-from tests.conftest import SHIPPED_CASE
+from tests.conftest import SHIPPED_CASE, copy_shipped_case
 from tests.verification.test_batch_equals_deterministic import assert_equal_to_deterministic
 from tuflexperf.analysis.attainable import BEYOND_JET_VELOCITY
 from tuflexperf.analysis.batch import BatchEvaluator
@@ -132,14 +132,11 @@ def test_an_idle_dive_past_the_jet_velocity_needs_no_thrust(tmp_path: Path) -> N
     """Only thrust the fans cannot make counts: a 5 kg jet whose fans' jet velocity is ~59
     m/s dives at idle at 62 m/s EAS; that needs no thrust, and it flew before the bound came
     (a review of the bound found it refused)."""
-    import shutil
 
     from tuflexperf.analysis.mission import MissionModel
     from tuflexperf.io.mission import load_mission
 
-    root = SHIPPED_CASE.parent.parent
-    for folder in ("requirements", "data"):
-        shutil.copytree(root / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     propulsion = tmp_path / "data" / "tuflex" / "propulsion.yaml"
     propulsion.write_text(propulsion.read_text().replace("fan_area_m2: 0.004342",
                                                          "fan_area_m2: 0.013"))

@@ -10,7 +10,7 @@ import pytest
 from scipy import optimize
 from typer.testing import CliRunner
 
-from tests.conftest import SHIPPED_CASE
+from tests.conftest import SHIPPED_CASE, copy_shipped_case
 from tuflexperf.analysis.margins import limit_values, margin_parameters, parameter_range
 from tuflexperf.analysis.requirements import check_case
 from tuflexperf.analysis.sensitivity import nominal_values, sensitivities
@@ -190,11 +190,8 @@ def test_tornado_bars_are_the_single_case_values(case) -> None:
 
 def _catapult_copy(tmp_path, energy_j: float):
     """The shipped case copied into tmp_path with a catapult launch at 18 m/s EAS."""
-    import shutil
 
-    root = SHIPPED_CASE.parent.parent
-    for folder in ("requirements", "data"):
-        shutil.copytree(root / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
     aircraft.write_text(aircraft.read_text().replace(
         "takeoff:", f"launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: {energy_j:g}\n"

@@ -11,6 +11,7 @@ import pytest
 from scipy.integrate import simpson, solve_ivp
 from scipy.optimize import brentq
 
+from tests.conftest import copy_shipped_case
 from tuflexperf.analysis.mission import MissionModel
 from tuflexperf.io.case import load_case
 from tuflexperf.io.mission import load_mission
@@ -242,12 +243,10 @@ def test_cli_mission_bad_key_is_exit_2(tmp_path: Path) -> None:
 def test_catapult_launch_starts_airborne_and_skips_the_runway(tmp_path: Path) -> None:
     """launch: catapult (SPEC 4): endurance and missions start airborne at the release speed;
     an aircraft that could never roll on a runway still flies its endurance and mission."""
-    import shutil
 
     from tuflexperf.analysis.endurance import solve_endurance
 
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
     text = aircraft.read_text().replace(
         "takeoff:", "launch: catapult\nlaunch_speed_m_s: 18\nlaunch_energy_j: 12000\ntakeoff:", 1)
@@ -268,10 +267,8 @@ def test_catapult_launch_starts_airborne_and_skips_the_runway(tmp_path: Path) ->
 
 # --- an independent integration of a whole mission, with the pack-voltage effect -----------
 def _voltage_case(tmp_path: Path, exponent: float = 2.0):
-    import shutil
 
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     prop = tmp_path / "data" / "tuflex" / "propulsion.yaml"
     prop.write_text(prop.read_text().replace(
         "fan_area_m2:", f"reference_voltage_v: 46.0\nvoltage_exponent: {exponent}\n"
@@ -702,10 +699,8 @@ def test_a_pack_asked_for_more_than_its_c_rating_ends_the_flight(tmp_path: Path)
     """max_discharge_c was read and never used: a pack drawn far beyond it passed (outside
     audit). It is the continuous rating of every segment of 30 s or more, on average, with
     twice it as the burst: a short take-off above it is no failure."""
-    import shutil
 
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     battery = tmp_path / "data" / "tuflex" / "battery.yaml"
     original = battery.read_text()
     case_path = tmp_path / "requirements" / "tuflex.yaml"
@@ -752,10 +747,8 @@ def test_nothing_flown_before_a_segment_that_cannot_be_planned(tmp_path: Path, f
     """A catapult release or an engine failure flies no time: the partial flight had no node
     and raised an IndexError traceback (outside regression review); the answer is the
     one-line not attainable, as before."""
-    import shutil
 
-    for folder in ("requirements", "data"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
+    copy_shipped_case(tmp_path)
     aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
     aircraft.write_text(aircraft.read_text().replace(
         "takeoff:", "launch: catapult\nlaunch_speed_m_s: 19\nlaunch_energy_j: 6000\ntakeoff:", 1))

@@ -9,13 +9,12 @@ and rating verdicts alike; and the batch must equal the single case at any capac
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tests.conftest import SHIPPED_CASE
+from tests.conftest import SHIPPED_CASE, copy_shipped_case
 from tests.verification.test_batch_equals_deterministic import assert_equal_to_deterministic
 from tuflexperf.analysis.batch import BatchEvaluator
 from tuflexperf.analysis.requirements import check_case
@@ -26,9 +25,7 @@ from tuflexperf.models.battery import equivalent_packs
 
 
 def _shipped_with_packs(folder: Path, packs: int, c_rate: float = 40) -> Path:
-    root = Path(SHIPPED_CASE).parent.parent
-    for name in ("requirements", "data"):
-        shutil.copytree(root / name, folder / name)
+    copy_shipped_case(folder)
     battery = folder / "data" / "tuflex" / "battery.yaml"
     battery.write_text(battery.read_text()
                        .replace("packs_in_parallel_per_engine: 2 ",
