@@ -440,3 +440,25 @@ def test_a_case_file_given_as_the_campaign_is_named_as_the_flags_error(tmp_path)
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("tuflexperf: error: --campaign: ")
     assert not out.exists()
+
+
+def test_the_endurance_figure_names_a_scaled_pack():
+    """A --set battery.capacity_ah showed on the title page alone: the endurance figure's
+    title named the file's pack, whose curves it no longer drew."""
+    from tuflexperf.io.case import load_case
+    from tuflexperf.io.dotted import with_values
+    from tuflexperf.report import figures as fg
+    from tuflexperf.report.data import run_analyses
+
+    fg.use_agg()
+    shipped = load_case(None)
+    case = with_values(shipped, {"battery.capacity_ah": 7.5,
+                                 "battery.cutoff_voltage_per_cell_v": 3.6})
+    figure = fg.endurance(case, run_analyses(case))
+    assert "scaled to 7.5 Ah (measured 5 Ah)" in figure._suptitle.get_text()
+    # the cut-off drawn is the one flown (12 cells x 3.6 V), the runs' said beside it
+    labels = [t.get_text() for t in figure.axes[0].get_legend().get_texts()]
+    assert "cut-off 43.2 V flown (the runs' 40.8 V)" in labels
+    analyses = run_analyses(shipped)
+    plain = fg.endurance(shipped, analyses)._suptitle.get_text()
+    assert plain.endswith(f" with {analyses.battery.name}")

@@ -187,6 +187,14 @@ class Battery:
                                       self.as_read.capacity_ah))
 
     @property
+    def title(self) -> str:
+        """The pack's name, with its capacity where that is not the file's (a what-if)."""
+        measured = self.as_read.capacity_ah
+        if self.capacity_ah == measured:
+            return self.name
+        return f"{self.name}, scaled to {self.capacity_ah:g} Ah (measured {measured:g} Ah)"
+
+    @property
     def scaled_notes(self) -> tuple[str, ...]:
         """What a results' reader must know of a capacity other than the file's (or nothing)."""
         measured = self.as_read.capacity_ah

@@ -377,6 +377,7 @@ class Analyses:
     endurance_at_requirement: Any | None = None
     best_endurance: Any | None = None  # Study.best_endurance(): the longest flight (BestResult)
     characterisation: Any | None = None
+    battery: Any | None = None  # the pack flown: the file's, with any --set battery.* values
     notes: list[str] = field(default_factory=list)
     study: Any | None = None  # the Study these came from: later pages ask it, never re-solve
     # point performance (Study.performance), or why there is none
@@ -495,6 +496,7 @@ def _mission(study: Study, analyses: Analyses) -> None:
 def _endurance(study: Study, analyses: Analyses) -> None:
     model = study.endurance_model()
     analyses.characterisation = model.ch
+    analyses.battery = model.battery
     least = model.min_throttle
     if not math.isfinite(least):
         analyses.notes.append("no throttle up to full holds level flight: no endurance curve")

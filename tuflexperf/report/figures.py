@@ -891,8 +891,11 @@ def endurance(case: Case, analyses: Analyses) -> Any:
         av.plot(m_t, data_v, color=colour, linewidth=3.0, alpha=0.35, label=f"data: {label}")
         av.plot(m_t, model_v, **_style("model", linestyle="--", linewidth=1.0),
                 label="model (fitted equivalent circuit)" if k == 0 else None)
-    av.axhline(ch.battery.cutoff_voltage_v, **STYLE["limit"],
-               label=f"cut-off {ch.battery.cutoff_voltage_v:.1f} V")
+    flown = analyses.battery if analyses.battery is not None else ch.battery
+    runs_to = ("" if flown.cutoff_voltage_v == ch.battery.cutoff_voltage_v
+               else f" flown (the runs' {ch.battery.cutoff_voltage_v:.1f} V)")
+    av.axhline(flown.cutoff_voltage_v, **STYLE["limit"],
+               label=f"cut-off {flown.cutoff_voltage_v:.1f} V{runs_to}")
     av.set_xlabel("time t (min)")
     av.set_ylabel("pack terminal voltage U (V)")
     av.set_title(f"discharge runs, one pack; model rms error {ch.fit.rms_v:.3f} V", fontsize=10)
@@ -963,7 +966,7 @@ def endurance(case: Case, analyses: Analyses) -> Any:
     af.set_ylim(bottom=0)
     af.grid(alpha=0.3)
     _legend(af)
-    fig.suptitle(f"Endurance of {case.name} with {ch.battery.name}")
+    fig.suptitle(f"Endurance of {case.name} with {flown.title}")
     return fig
 
 
