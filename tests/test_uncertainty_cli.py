@@ -181,8 +181,8 @@ def test_check_with_samples_imports_no_scipy_pandas_or_matplotlib() -> None:
     assert done.stderr == "", f"check --samples imported: {done.stderr}"
 
 
-def test_envelope_bounds_and_battery_keys_are_refused_with_the_reason(tmp_path) -> None:
-    for key, reason in (("requirements.envelope.min_airspeed_m_s", "grid"),
+def test_other_kind_of_bound_and_battery_keys_are_refused_with_the_reason(tmp_path) -> None:
+    for key, reason in (("requirements.envelope.min_airspeed_eas_m_s", "as a true airspeed"),
                         ("battery.cells_in_series", "battery")):
         path = shipped_with(tmp_path, {"parameters": {key: {"normal": [1, 0.1]}}})
         result = runner.invoke(app, ["check", str(path)])

@@ -207,7 +207,7 @@ def check(
     sample_notes: list[str] = []
     if sampling:
         from tuflexperf.analysis.requirements import probabilistic_verdicts
-        from tuflexperf.analysis.uncertainty import plan_for, run_samples
+        from tuflexperf.analysis.uncertainty import ENVELOPE_KEY, plan_for, run_samples
 
         plan = plan_for(case, samples, seed)
         drawn = {key for key, _, _ in plan.parameters}
@@ -255,8 +255,10 @@ def check(
                     typer.echo(f"{r['name']:<{_name_width(probabilistic)}}  FAIL  "
                                f"{r['probability_note']}")
             for key, count in outside.items():
-                typer.echo(f"  note: {count} samples of {key} fall outside its valid range; "
-                           "they count as not met")
+                what = ("have no envelope (the least airspeed not below the greatest, or the "
+                        "greatest beyond the speed of sound)" if key == ENVELOPE_KEY
+                        else f"of {key} fall outside its valid range")
+                typer.echo(f"  note: {count} samples {what}; they count as not met")
             for note in sample_notes:
                 typer.echo(f"  note: {note}")
         typer.echo(f"overall: {'PASS' if passed else 'FAIL'}")
@@ -379,13 +381,16 @@ def sweep(
                    "notes": notes})
         return
     names = list(result.values)
-    header = "".join(f"{k.split('.')[-1]:>16}" for k in result.parameters) + "".join(
+    # each parameter column as wide as its name and a space (max_airspeed_m_s ran into the next)
+    widths = [max(16, len(k.split(".")[-1]) + 2) for k in result.parameters]
+    header = "".join(f"{k.split('.')[-1]:>{w}}" for k, w in zip(result.parameters, widths,
+                                                                 strict=True)) + "".join(
         f"{n:>30}" for n in names)
     typer.echo(f"{case.name}  ({case.path}): {result.points.shape[0]} grid points")
     typer.echo(header)
     typer.echo("-" * len(header))
     for i in range(result.points.shape[0]):
-        cells = "".join(f"{v:>16.5g}" for v in result.points[i])
+        cells = "".join(f"{v:>{w}.5g}" for v, w in zip(result.points[i], widths, strict=True))
         for n in names:
             value = result.values[n][i]
             text = "not attainable" if not np.isfinite(value) else f"{value:.4g}"

@@ -49,12 +49,21 @@ def _model(evaluator: BatchEvaluator, values, coefficients, extrapolation) -> _M
     )
 
 
-@pytest.mark.parametrize("seed", [1, 2])
-def test_candidate_airspeeds_give_the_full_grid_answer(seed: int) -> None:
+@pytest.mark.parametrize(("seed", "own_bounds"), [(1, False), (2, False), (6, True)])
+def test_candidate_airspeeds_give_the_full_grid_answer(seed: int, own_bounds: bool) -> None:
+    """``own_bounds``: each row flies its own envelope (a grid per row, shorter or longer
+    than the nominal's, whose candidate indices are then only hints)."""
     case = load_case(SHIPPED_CASE)
     evaluator = BatchEvaluator(case)
     values, coefficients, extrapolation = _hostile_batch(seed)
-    grid = evaluator._grid()
+    grid = evaluator._nominal_grid()[None, :]
+    if own_bounds:
+        rng = np.random.default_rng(seed)
+        low = rng.uniform(12.0, 25.0, ROWS)
+        values["requirements.envelope.min_airspeed_m_s"] = low
+        values["requirements.envelope.max_airspeed_m_s"] = low + rng.uniform(2.0, 40.0, ROWS)
+        grid, none = evaluator._grids(values, evaluator._density(values, ROWS), ROWS)
+        assert grid.shape[0] == ROWS and not none.any()
     trim_candidates, oei_candidates = evaluator._candidates()
     fast = _model(evaluator, values, coefficients, extrapolation)
     full = _model(evaluator, values, coefficients, extrapolation)
@@ -72,7 +81,7 @@ def test_candidate_airspeeds_give_the_full_grid_answer(seed: int) -> None:
     # least OEI throttle sits away from the nominal's candidate airspeeds there
     terms = full._grid_terms(grid)
     above = full._flyable(grid)
-    throttle = full.least_throttle(grid[None, :], 0, "windmilling", terms)
+    throttle = full.least_throttle(grid, 0, "windmilling", terms)
     lowest = np.argmin(np.where(above & np.isfinite(throttle), throttle, np.inf), axis=1)
     assert not np.isin(lowest[np.isfinite(want_oei)], oei_candidates[0]).all()
 

@@ -18,6 +18,7 @@ from tuflexperf.analysis.margins import margin_parameters
 from tuflexperf.analysis.requirements import check_case
 from tuflexperf.cli import app
 from tuflexperf.io.case import load_case
+from tuflexperf.io.dotted import with_values
 from tuflexperf.models.aircraft import EAS_REFERENCE_DENSITY_KG_M3
 from tuflexperf.models.atmosphere import isa_density_kg_m3
 
@@ -74,17 +75,23 @@ def test_bounds_each_given_once_and_in_order(tmp_path, envelope, message):
     assert len(result.stderr.strip().splitlines()) == 1
 
 
-def test_a_batch_over_the_atmosphere_refuses_eas_bounds_and_margins_leave_it(tmp_path):
+def test_a_batch_over_the_atmosphere_flies_each_densitys_eas_bounds(tmp_path):
+    """The batch refused EAS bounds with a varied atmosphere (one grid for all rows) and
+    margins left the atmosphere out; each row now flies its own density's true bounds."""
     path = _case(tmp_path, "{min_airspeed_eas_m_s: 15, max_airspeed_eas_m_s: 40}")
-    swept = runner.invoke(app, ["sweep", "--case", str(path), "--vary",
+    swept = runner.invoke(app, ["sweep", "--case", str(path), "--json", "--vary",
                                 "atmosphere.altitude_m=0:1000:2"])
-    assert swept.exit_code == 2 and "equivalent-airspeed bounds" in swept.stderr
-    mass = runner.invoke(app, ["sweep", "--case", str(path), "--vary",
-                               "aircraft.mass_kg=24:26:2", "--json"])
-    assert mass.exit_code in (0, 1), mass.stderr  # one density: one grid, solved as usual
-    keys = margin_parameters(load_case(path))
-    assert keys and not any(k.startswith("atmosphere.") for k in keys)
-    assert "atmosphere.altitude_m" in margin_parameters(load_case(None))
+    assert swept.exit_code in (0, 1), swept.stderr
+    case = load_case(path)
+    for row in json.loads(swept.stdout)["rows"]:
+        single = check_case(with_values(case, {"atmosphere.altitude_m":
+                                               row["atmosphere.altitude_m"]}))
+        for verdict in single:
+            value = row[verdict.name]["value"]
+            assert (value is None) == (verdict.value is None)
+            if value is not None:
+                assert value == pytest.approx(verdict.value, rel=1e-6)
+    assert "atmosphere.altitude_m" in margin_parameters(case)
 
 
 def test_set_moves_an_eas_bound(tmp_path):

@@ -46,11 +46,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis.attainable import stall_margin_of
-from tuflexperf.analysis.level_flight import airspeed_grid
+from tuflexperf.analysis.level_flight import airspeed_grid, airspeed_grids
 from tuflexperf.analysis.takeoff import obstacle_height_of
-from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
+    MAX_AIRSPEED_M_S,
     Aircraft,
     catapult_energy_shortfall,
     climb_gradient,
@@ -134,6 +134,14 @@ class BatchResult:
         from tuflexperf.analysis.requirements import requirement_met
 
         return requirement_met(self.values[name], self.limits[name], self.kinds[name])
+
+
+def _within(candidates: Array | None, grid: Array) -> Array | None:
+    """The nominal grid's candidate indices that exist on ``grid`` (rows of its own bounds
+    may be shorter); only where to look first, so any index is as exact as another."""
+    if candidates is None:
+        return None
+    return np.unique(np.minimum(candidates, grid.shape[1] - 1))
 
 
 def _column(values: Mapping[str, Array], key: str, nominal: Any, size: int) -> Any:
@@ -251,6 +259,7 @@ class BatchEvaluator:
         out: dict[str, Array] = {}
         limits: dict[str, Array] = {}
         roll: tuple[Array, Array, Array, Array] | None = None
+        grids: tuple[Array, NDArray[np.bool_]] | None = None  # trim's and OEI's airspeeds
         catapult = self.case.aircraft.launch == "catapult"
         for requirement in self.requirements:
             limits[requirement.name] = self._limit(values, requirement, size)
@@ -264,14 +273,16 @@ class BatchEvaluator:
                                  obstacle_height_of(self.case), size)
                 out[requirement.name] = model.distance_to_obstacle(roll, height)
             elif requirement.block == "envelope":
-                self._one_grid_for_all(model)
-                out[requirement.name] = model.trim_max_throttle(
-                    self._grid(), self._candidates()[0])
+                grid, unflown = grids or self._grids(values, model.density, size)
+                grids = (grid, unflown)
+                out[requirement.name] = np.where(unflown, np.nan, model.trim_max_throttle(
+                    grid, self._candidates()[0]))
             elif requirement.block == "oei":
-                self._one_grid_for_all(model)
+                grid, unflown = grids or self._grids(values, model.density, size)
+                grids = (grid, unflown)
                 mode = self.case.requirements.oei.dead_engine
-                out[requirement.name] = model.oei_min_throttle(
-                    self._grid(), mode, self._candidates()[1])
+                out[requirement.name] = np.where(unflown, np.nan, model.oei_min_throttle(
+                    grid, mode, self._candidates()[1]))
             else:
                 # a catapult launch starts airborne at its release speed (no runway)
                 launch = roll or (model.catapult_release() if catapult else model.ground_roll())
@@ -305,8 +316,8 @@ class BatchEvaluator:
         """
         if getattr(self, "_candidate_cache", None) is not None:
             return self._candidate_cache
-        grid = self._grid()
-        last = grid.size - 1
+        grid = self._nominal_grid()[None, :]
+        last = grid.shape[1] - 1
         model = _Model(aircraft=self._aircraft({}, 1), propulsion=self._propulsion(None),
                        density=self._density({}, 1), extrapolation_n=None, size=1,
                        stall_margin=stall_margin_of(self.case))
@@ -317,20 +328,20 @@ class BatchEvaluator:
 
         terms = model._grid_terms(grid)
         above = model._flyable(grid)[0]
-        throttle = np.where(above, model.least_throttle(grid[None, :], terms=terms)[0], np.nan)
+        throttle = np.where(above, model.least_throttle(grid, terms=terms)[0], np.nan)
         trim = beside(int(np.nanargmax(throttle))) if np.any(np.isfinite(throttle)) else None
         oei: dict[int, Array] = {}
         mode = self.case.requirements.oei.dead_engine if self.case.requirements.oei else \
             "windmilling"
         for dead in range(len(self.case.propulsion.engines)):
             throttle = np.where(
-                above, model.least_throttle(grid[None, :], dead, mode, terms)[0], np.nan)
+                above, model.least_throttle(grid, dead, mode, terms)[0], np.nan)
             if np.any(np.isfinite(throttle)):
                 oei[dead] = beside(int(np.nanargmin(throttle)))
         self._candidate_cache = (trim, oei)
         return self._candidate_cache
 
-    def _grid(self) -> Array:
+    def _nominal_grid(self) -> Array:
         if getattr(self, "_grid_cache", None) is not None:
             return self._grid_cache
         from tuflexperf.analysis.trim import envelope_of
@@ -339,20 +350,56 @@ class BatchEvaluator:
         self._grid_cache = airspeed_grid(*envelope_of(self.case))
         return self._grid_cache
 
-    def _one_grid_for_all(self, model: Any) -> None:
-        """The batch solves every row on the case's one airspeed grid: equivalent-airspeed
-        envelope bounds give each density its own, so a varied atmosphere is refused there."""
+    def envelope_bounds(self, values: Mapping[str, Array], density: Any,
+                        size: int) -> tuple[Array, Array, NDArray[np.bool_]]:
+        """Each row's envelope as true airspeeds [m/s] (least, greatest), and where it is none.
+
+        A row's bounds are the case's unless ``values`` varies them; an equivalent-airspeed
+        bound follows the row's density [kg/m^3] (SPEC 3). A row has no envelope where its
+        least airspeed is not below its greatest or the greatest is beyond the speed of sound
+        (the single case's bad input, :func:`tuflexperf.analysis.trim.envelope_of`).
+        """
         envelope = self.case.requirements.envelope
-        if envelope is None or not envelope.in_eas:
-            return
-        density = np.asarray(model.density, dtype=float)
-        if np.any(np.abs(density - self.case.density_kg_m3) > 1e-12 * self.case.density_kg_m3):
-            raise InputError(
-                f"{self.case.path}: requirements.envelope: equivalent-airspeed bounds "
-                "(..._eas_m_s) give each density its own true-airspeed grid, which samples, "
-                "sweeps and margins over the atmosphere do not solve: give the bounds as true "
-                "airspeeds (min_airspeed_m_s, max_airspeed_m_s) to vary the atmosphere"
-            )
+        bounds = []
+        for end in ("min", "max"):
+            true_key = f"requirements.envelope.{end}_airspeed_m_s"
+            eas_key = f"requirements.envelope.{end}_airspeed_eas_m_s"
+            true = getattr(envelope, f"{end}_airspeed_m_s")
+            if true is not None:
+                bound = _column(values, true_key, float(true), size)
+            else:
+                eas = _column(values, eas_key, float(getattr(envelope, f"{end}_airspeed_eas_m_s")),
+                              size)
+                bound = true_airspeed_m_s(eas, density)
+            bounds.append(np.asarray(bound, dtype=float).reshape(-1) * np.ones(size))
+        low, high = bounds
+        with np.errstate(invalid="ignore"):
+            none = ~((low < high) & (high <= MAX_AIRSPEED_M_S) & np.isfinite(low))
+        return low, high, none
+
+    def rows_without_envelope(self, values: Mapping[str, Array],
+                              size: int) -> NDArray[np.bool_]:
+        """Rows of ``values`` whose envelope is none (:meth:`envelope_bounds`); none without
+        trim or OEI requirements, which alone fly the envelope."""
+        if not any(r.block in ("envelope", "oei") for r in self.requirements):
+            return np.zeros(size, dtype=bool)
+        return self.envelope_bounds(values, self._density(values, size), size)[2]
+
+    def _grids(self, values: Mapping[str, Array], density: Any,
+               size: int) -> tuple[Array, NDArray[np.bool_]]:
+        """Trim's and OEI's airspeeds: ``(1, K)``, the case's grid, when every row shares it,
+        else one row each (:func:`airspeed_grids`); and the rows that have no envelope."""
+        envelope = self.case.requirements.envelope
+        grid = self._nominal_grid()[None, :]  # the case's own envelope is checked first
+        varied = any(key.startswith("requirements.envelope.") and "airspeed" in key
+                     for key in values)
+        if not varied and not (envelope.in_eas and np.ndim(density) > 0):
+            return grid, np.zeros(size, dtype=bool)
+        low, high, none = self.envelope_bounds(values, density, size)
+        # a row without an envelope is solved on the case's own bounds, then left out (NaN)
+        low = np.where(none, grid[0, 0], low)
+        high = np.where(none, grid[0, -1], high)
+        return airspeed_grids(low, high), none
 
 
 @dataclass
@@ -376,10 +423,11 @@ class _Model:
 
     def _flyable(self, grid: Array) -> Array:
         """Where level flight may be attainable per row: at or above the least airspeed and
-        short of the fans' jet velocity (the single-case ``stall_bounded``)."""
-        above = grid[None, :] >= self.least_airspeed()[:, None] * (1.0 - 1e-12)
+        short of the fans' jet velocity (the single-case ``stall_bounded``); ``grid`` is
+        ``(1, K)`` or one row of airspeeds [m/s] per row of the batch."""
+        above = grid >= self.least_airspeed()[:, None] * (1.0 - 1e-12)
         density = np.asarray(self.density, dtype=float).reshape(-1, 1)
-        return above & ~beyond_jet_velocity(self.propulsion, grid[None, :], density)
+        return above & ~beyond_jet_velocity(self.propulsion, grid, density)
 
     def thrust(self, throttle: Any, speed: Array, dead: int | None = None,
                mode: str = "windmilling") -> Array:
@@ -676,7 +724,8 @@ class _Model:
         return self._roots(*self._excess_quadratic(speed, dead, mode, terms))
 
     def trim_max_throttle(self, grid: Array, candidates: Array | None = None) -> Array:
-        """Highest least throttle over the envelope grid; NaN if any airspeed is not attainable.
+        """Highest least throttle over the envelope grid ``(1, K)`` or ``(B, K)`` [m/s]; NaN if
+        any airspeed is not attainable.
 
         ``candidates`` (grid indices where the highest least throttle is expected, from the
         nominal case) make it cheap and leave it exact: the largest least throttle ``m`` over
@@ -685,8 +734,8 @@ class _Model:
         every airspeed. Each row's answer depends on that row alone.
         """
         above = self._flyable(grid)
-        a, b, c = self._excess_quadratic(self._grid_row(grid), None, "windmilling",
-                                         self._grid_terms(grid))
+        a, b, c = self._excess_quadratic(grid, None, "windmilling", self._grid_terms(grid))
+        candidates = _within(candidates, grid)
         everywhere = np.all(above, axis=1)  # below stall somewhere: not attainable there
         if candidates is None:
             rows = np.arange(self.size)
@@ -720,8 +769,8 @@ class _Model:
         terms = self._grid_terms(grid)
         above = self._flyable(grid)
         for dead in range(len(self.propulsion.engines)):
-            a, b, c = self._excess_quadratic(self._grid_row(grid), dead, mode, terms)
-            picked = None if candidates is None else candidates.get(dead)
+            a, b, c = self._excess_quadratic(grid, dead, mode, terms)
+            picked = None if candidates is None else _within(candidates.get(dead), grid)
             if picked is None:
                 rows = np.arange(self.size)
                 best = np.full(self.size, np.inf)
@@ -745,16 +794,10 @@ class _Model:
             worst = np.maximum(worst, best)
         return np.where(np.isfinite(worst), worst, np.nan)
 
-    def _grid_row(self, grid: Array) -> Array:
-        """The grid as one row ``(1, K)``, the same object each time (memo keys on it)."""
-        if self._terms is None or self._terms[0] is not grid:
-            self._grid_terms(grid)
-        return self._terms[2]
-
     def _grid_terms(self, grid: Array) -> tuple[list[tuple[Array, Array, Array]], list[Array]]:
+        """:meth:`_engine_thrusts` on the grid, shared by trim and OEI (keyed on the object)."""
         if self._terms is None or self._terms[0] is not grid:
-            row = grid[None, :]
-            self._terms = (grid, self._engine_thrusts(row), row)
+            self._terms = (grid, self._engine_thrusts(grid))
         return self._terms[1]
 
     # -- endurance ----------------------------------------------------------------------------

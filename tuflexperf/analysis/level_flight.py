@@ -8,7 +8,6 @@ the whole grid at once (:func:`tuflexperf.models.thrust.least_throttle_of`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -24,8 +23,33 @@ ExcessFunction = Callable[[Any, Any], Any]
 
 def airspeed_grid(min_airspeed_m_s: float, max_airspeed_m_s: float) -> np.ndarray:
     """Airspeeds from min to max, both included, at most 0.5 m/s apart (SPEC 3)."""
-    steps = max(1, math.ceil((max_airspeed_m_s - min_airspeed_m_s) / MAX_GRID_STEP_M_S - 1e-9))
-    return np.linspace(min_airspeed_m_s, max_airspeed_m_s, steps + 1)
+    return airspeed_grids(np.array([min_airspeed_m_s]), np.array([max_airspeed_m_s]))[0]
+
+
+def airspeed_grids(min_airspeed_m_s: np.ndarray, max_airspeed_m_s: np.ndarray) -> np.ndarray:
+    """One :func:`airspeed_grid` per pair of bounds, as rows of one array.
+
+    Parameters
+    ----------
+    min_airspeed_m_s, max_airspeed_m_s : ndarray of shape ``(R,)``
+        Each row's bounds [m/s], the least below the greatest.
+
+    Returns
+    -------
+    ndarray of shape ``(R, K)``
+        Row ``i`` holds the ``n_i + 1`` airspeeds of its own grid, numbers identical to
+        ``numpy.linspace(min_i, max_i, n_i + 1)``, then its greatest airspeed repeated up
+        to the longest row's ``K``: a repeated airspeed changes no highest or least value
+        over the row, so a batch whose bounds vary per row answers as each case alone.
+    """
+    low = np.asarray(min_airspeed_m_s, dtype=float).reshape(-1)
+    high = np.asarray(max_airspeed_m_s, dtype=float).reshape(-1)
+    steps = np.maximum(1, np.ceil((high - low) / MAX_GRID_STEP_M_S - 1e-9)).astype(np.intp)
+    index = np.arange(int(steps.max()) + 1, dtype=float)[None, :]
+    # numpy.linspace's own arithmetic (j * step + start, the end set exactly), so one case's
+    # grid and its row of a batch are the same numbers
+    grids = index * ((high - low) / steps)[:, None] + low[:, None]
+    return np.where(index >= steps[:, None], high[:, None], grids)
 
 
 @dataclass(frozen=True)

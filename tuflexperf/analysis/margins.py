@@ -68,13 +68,8 @@ _EXTRA_KEYS = ("requirements.endurance.throttle", "requirements.takeoff.obstacle
 def margin_parameters(case: Case) -> dict[str, float]:
     """The parameters ``margins`` varies, with their nominal values (SI units of their keys)."""
     keys = numeric_keys(case)
-    envelope = case.requirements.envelope
-    # equivalent-airspeed envelope bounds move with the density: the batch's one airspeed
-    # grid cannot follow the atmosphere there (analysis.batch), so it is not varied
-    fixed_air = envelope is not None and envelope.in_eas
     return {k: v for k, v in keys.items()
-            if (k.startswith(("aircraft.", "battery."))
-                or (k.startswith("atmosphere.") and not fixed_air) or k in _EXTRA_KEYS)}
+            if k.startswith(("aircraft.", "atmosphere.", "battery.")) or k in _EXTRA_KEYS}
 
 
 def parameter_range(key: str, nominal: float) -> tuple[float, float]:

@@ -108,7 +108,7 @@ class _Symbolic:
             time = time + ca.dot(weights, ac.mass_kg / force)
         return distance + v_lo * to.rotation_time_s, time + to.rotation_time_s
 
-    def least_throttle(self, speed: float, dead: int | None = None,
+    def least_throttle(self, speed: Any, dead: int | None = None,
                        mode: str = "windmilling") -> Any:
         t0 = self.thrust(0.0, speed, dead, mode)
         th = self.thrust(0.5, speed, dead, mode)
@@ -133,8 +133,7 @@ def _trim_value(s: _Symbolic) -> Any:
     result = solve_trim(s.case)
     if not result.all_feasible:
         return None
-    speed = float(result.airspeed_m_s[int(np.argmax(result.throttle))])
-    return s.least_throttle(speed)
+    return s.least_throttle(_grid_airspeed(s, int(np.argmax(result.throttle))))
 
 
 def _oei_value(s: _Symbolic) -> Any:
@@ -146,7 +145,28 @@ def _oei_value(s: _Symbolic) -> Any:
     if worst.min_throttle is None:
         return None
     dead = [c.dead_engine for c in result.cases].index(worst.dead_engine)
-    return s.least_throttle(worst.airspeed_at_min_throttle_m_s, dead, mode)
+    index = int(np.argmin(np.abs(worst.airspeed_m_s - worst.airspeed_at_min_throttle_m_s)))
+    return s.least_throttle(_grid_airspeed(s, index), dead, mode)
+
+
+def _grid_airspeed(s: _Symbolic, index: int) -> Any:
+    """The envelope grid's airspeed ``index`` [m/s] as it moves with the symbols: a bound
+    given as an equivalent airspeed follows the density, and the grid between the bounds
+    with it (``numpy.linspace``'s own arithmetic, so the nominal value is the grid's)."""
+    from tuflexperf.analysis.level_flight import airspeed_grid
+    from tuflexperf.analysis.trim import envelope_of
+    from tuflexperf.models.aircraft import true_airspeed_m_s
+
+    envelope = s.case.requirements.envelope
+    grid = airspeed_grid(*envelope_of(s.case))
+    if not envelope.in_eas:
+        return float(grid[index])
+    low, high = (
+        float(true) if true is not None else true_airspeed_m_s(float(eas), s.density)
+        for true, eas in ((envelope.min_airspeed_m_s, envelope.min_airspeed_eas_m_s),
+                          (envelope.max_airspeed_m_s, envelope.max_airspeed_eas_m_s)))
+    steps = grid.size - 1
+    return high if index == steps else index * ((high - low) / steps) + low
 
 
 def _endurance_value(s: _Symbolic) -> Any:

@@ -26,8 +26,9 @@ if TYPE_CHECKING:
 BATTERY_KEYS = tuple(BATTERY_FIELDS)
 """Battery keys that vary without refitting the pack model (the others are refused)."""
 
-# Keys that are numbers but not parameters one may vary (the envelope's grid, labels).
-_FIXED = {
+# The envelope's bounds, each a true or an equivalent airspeed: a batch varies the kind the
+# case gives; --set may also switch a bound to the other kind (then an unset key).
+_BOUND_KEYS = {
     "requirements.envelope.min_airspeed_m_s",
     "requirements.envelope.max_airspeed_m_s",
     "requirements.envelope.min_airspeed_eas_m_s",
@@ -69,8 +70,6 @@ def numeric_keys(case: Case, battery: bool = True) -> dict[str, float]:
     _flatten("aircraft", dataclasses.asdict(case.aircraft), out)
     _flatten("atmosphere", case.atmosphere.model_dump(), out)
     _flatten("requirements", case.requirements.model_dump(exclude_none=True), out)
-    for key in _FIXED:
-        out.pop(key, None)
     if battery:
         out.update(battery_values(case))
     return out
@@ -120,10 +119,10 @@ def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
     """Raise :class:`InputError` naming ``where`` and the closest key if ``key`` is unknown.
 
     With ``unset`` (``--set``: one case, not a batch), an optional numeric key the case leaves
-    unset is known too, and so are the envelope's bounds (one case solves its own grid).
+    unset is known too, and so is either kind of envelope bound (true or equivalent).
     """
     known = numeric_keys(case)
-    if key in known or (unset and key in _FIXED and case.requirements.envelope is not None):
+    if key in known or (unset and key in _BOUND_KEYS and case.requirements.envelope is not None):
         return
     optional = unset_optional_keys(case) if unset else set()
     if key in optional:
@@ -135,11 +134,11 @@ def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
         # misled (outside audit)
         raise InputError(f"{where}: {key}: the case has no requirements.{parts[1]} block "
                          "to change; add it to the case file")
-    if key in _FIXED:
-        raise InputError(
-            f"{where}: {key}: the envelope's bounds cannot be varied in a batch (they fix the "
-            "airspeed grid every trim/OEI point is solved on); --set takes them"
-        )
+    if key in _BOUND_KEYS:
+        other = f"requirements.envelope.{_OTHER_KIND_OF_BOUND[parts[-1]]}"
+        kind = "an equivalent" if other.endswith("_eas_m_s") else "a true"
+        raise InputError(f"{where}: {key}: the case gives this bound as {kind} airspeed; vary "
+                         f"{other}, or --set this one for a single case")
     if key.startswith("propulsion."):
         raise InputError(
             f"{where}: {key}: the propulsion file's keys cannot be varied (they are the fitted "

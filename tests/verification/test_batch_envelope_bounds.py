@@ -1,0 +1,185 @@
+"""Envelope bounds that vary per row of a batch (SPEC 4: "any numeric key of the case").
+
+Verification: each row flies its own airspeed grid, the same numbers as the single case's
+(:func:`airspeed_grid`), so a batch row equals ``check`` with ``--set`` on those bounds; an
+equivalent-airspeed bound follows each row's density. Rows whose bounds cross are bad input
+for a sweep (as the single case is) and not met, counted, for samples.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from tests.conftest import SHIPPED_CASE, copy_shipped_case
+from tests.verification.test_batch_equals_deterministic import assert_equal_to_deterministic
+from tests.verification.test_margins import deterministic
+from tuflexperf.analysis.batch import BatchEvaluator
+from tuflexperf.analysis.level_flight import MAX_GRID_STEP_M_S, airspeed_grid, airspeed_grids
+from tuflexperf.analysis.margins import margin_parameters
+from tuflexperf.analysis.requirements import check_case
+from tuflexperf.analysis.sensitivity import nominal_values, sensitivities
+from tuflexperf.cli import app
+from tuflexperf.io.case import load_case
+from tuflexperf.io.dotted import with_values
+
+runner = CliRunner()
+SHIPPED_ENVELOPE = "envelope: {min_airspeed_m_s: 15, max_airspeed_m_s: 45, max_trim_throttle: 1.0}"
+MAX = "requirements.envelope.max_airspeed_m_s"
+MIN = "requirements.envelope.min_airspeed_m_s"
+
+
+def _eas_case(tmp_path, altitude_m: float = 2000.0,
+              bounds: str = "min_airspeed_eas_m_s: 30, max_airspeed_m_s: 42"):
+    """The shipped case at ``altitude_m`` with its least airspeed an EAS of 30 m/s."""
+    path = copy_shipped_case(tmp_path)
+    text = path.read_text().replace(
+        SHIPPED_ENVELOPE, f"envelope: {{{bounds}, max_trim_throttle: 1.0}}")
+    path.write_text(text.replace("altitude_m: 0,", f"altitude_m: {altitude_m:g},"))
+    return path
+
+
+def test_each_row_of_the_grids_is_the_single_grid_to_the_bit() -> None:
+    rng = np.random.default_rng(7)
+    low = rng.uniform(0.0, 100.0, 3000)
+    high = low + np.concatenate([MAX_GRID_STEP_M_S * rng.integers(1, 80, 100),  # exact steps
+                                 rng.uniform(1e-6, 240.0, 2900)])
+    grids = airspeed_grids(low, high)
+    for i in range(low.size):
+        single = airspeed_grid(low[i], high[i])
+        assert np.array_equal(grids[i, :single.size], single)
+        assert np.all(grids[i, single.size:] == high[i])  # padded with its greatest airspeed
+        assert np.array_equal(single, np.linspace(low[i], high[i], single.size))
+        assert np.max(np.diff(single)) <= MAX_GRID_STEP_M_S + 1e-12
+
+
+def test_varied_bounds_equal_single_cases_with_those_bounds() -> None:
+    case = load_case(SHIPPED_CASE)
+    sets = [
+        {MIN: 15.0, MAX: 45.0},  # the nominal
+        {MIN: 15.0, MAX: 40.0},
+        {MIN: 18.3, MAX: 45.0},  # OEI's least throttle moves with the foot
+        {MIN: 20.0, MAX: 21.0},  # a narrow envelope: few grid points, the rest padded
+        {MIN: 10.0, MAX: 45.0},  # below stall at the foot: not attainable in both
+        {MIN: 15.0, MAX: 55.0},  # beyond full throttle: not attainable in both
+        {MIN: 16.0, MAX: 30.0, "aircraft.mass_kg": 30.0},
+    ]
+    keys = sorted({k for s in sets for k in s})
+    nominal = {MIN: 15.0, MAX: 45.0, "aircraft.mass_kg": case.aircraft.mass_kg}
+    values = {k: np.array([s.get(k, nominal[k]) for s in sets]) for k in keys}
+    result = BatchEvaluator(case).evaluate(values)
+    for row, s in enumerate(sets):
+        assert_equal_to_deterministic(with_values(case, s), result.values, row)
+    assert math.isnan(result.values["trim_throttle_max"][4])
+    assert math.isnan(result.values["trim_throttle_max"][5])
+    assert result.values["oei_min_throttle"][2] > result.values["oei_min_throttle"][0]
+
+
+def test_equivalent_airspeed_bounds_follow_each_rows_density(tmp_path) -> None:
+    case = load_case(_eas_case(tmp_path))
+    sets = [{"atmosphere.altitude_m": h, "atmosphere.temperature_offset_k": dt}
+            for h, dt in ((0.0, 0.0), (1000.0, 10.0), (2000.0, 0.0), (3000.0, -15.0))]
+    values = {k: np.array([s[k] for s in sets]) for k in sets[0]}
+    result = BatchEvaluator(case).evaluate(values)
+    for row, s in enumerate(sets):
+        assert_equal_to_deterministic(with_values(case, s), result.values, row)
+    # the least throttle's airspeed moves with the density: one shared grid would not
+    trims = result.values["trim_throttle_max"]
+    assert len(set(np.round(trims, 9))) == len(sets)
+
+
+def test_crossed_bounds_have_no_envelope_and_the_other_rows_solve() -> None:
+    case = load_case(SHIPPED_CASE)
+    evaluator = BatchEvaluator(case)
+    values = {MAX: np.array([45.0, 14.0, 15.0, 400.0, 40.0])}
+    none = evaluator.rows_without_envelope(values, 5)
+    assert none.tolist() == [False, True, True, True, False]
+    result = evaluator.evaluate(values)
+    for name in ("trim_throttle_max", "oei_min_throttle"):
+        assert np.isnan(result.values[name][none]).all()
+        assert np.isfinite(result.values[name][~none]).all()
+    assert np.isfinite(result.values["takeoff_ground_roll"]).all()  # no envelope in a roll
+
+
+def test_a_sweep_over_the_bounds_is_the_single_case_at_each_point() -> None:
+    result = runner.invoke(app, ["sweep", "--json", "--vary", f"{MAX}=40:44:3",
+                                 "--vary", f"{MIN}=15:19:2"])
+    assert result.exit_code == 0, result.stderr
+    rows = json.loads(result.stdout)["rows"]
+    case = load_case(SHIPPED_CASE)
+    assert len(rows) == 6
+    for row in rows:
+        single = {v.name: v.value for v in check_case(
+            with_values(case, {MAX: row[MAX], MIN: row[MIN]}))}
+        for name in ("trim_throttle_max", "oei_min_throttle"):
+            assert row[name]["value"] == pytest.approx(single[name], rel=1e-9)
+
+
+@pytest.mark.parametrize(("vary", "message"), [
+    (f"{MAX}=10:45:8", f"--vary: {MAX}=10: min_airspeed_m_s (15.0) must be below"),
+    ("atmosphere.altitude_m=0:8000:3",
+     "--vary: at atmosphere.altitude_m=8000: requirements.envelope: the least airspeed "
+     "45.82 m/s is not below the greatest 42.00 m/s"),
+])
+def test_a_sweep_point_without_an_envelope_is_bad_input(tmp_path, vary, message) -> None:
+    result = runner.invoke(app, ["sweep", "--case", str(_eas_case(tmp_path) if "altitude"
+                                                        in vary else SHIPPED_CASE),
+                                 "--vary", vary])
+    assert result.exit_code == 2 and message in result.stderr, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_samples_of_crossed_bounds_count_as_not_met_and_are_said(tmp_path) -> None:
+    path = copy_shipped_case(tmp_path)
+    path.write_text(path.read_text() + (
+        "uncertainty:\n  samples: 400\n  seed: 3\n  parameters:\n"
+        f"    {MAX}: {{uniform: [10, 45]}}\n"))
+    result = runner.invoke(app, ["check", str(path), "--json"])
+    assert result.exit_code == 1, result.stderr
+    data = json.loads(result.stdout)
+    crossed = data["uncertainty"]["samples_outside_bounds"]["requirements.envelope"]
+    # max drawn uniform on [10, 45] against a least airspeed of 15: 5/35 of the samples
+    assert crossed == pytest.approx(400 * 5 / 35, abs=4 * math.sqrt(400 * 5 / 35))
+    trim = next(r for r in data["results"] if r["name"] == "trim_throttle_max")
+    assert trim["probability"] <= 1.0 - crossed / 400  # the crossed samples are not met
+    text = runner.invoke(app, ["check", str(path)]).stdout
+    assert f"note: {crossed} samples have no envelope" in text
+
+
+def test_a_bound_of_the_other_kind_is_named_in_a_batch() -> None:
+    result = runner.invoke(app, ["sweep", "--vary",
+                                 "requirements.envelope.max_airspeed_eas_m_s=40:44:2"])
+    assert result.exit_code == 2
+    assert "gives this bound as a true airspeed; vary requirements.envelope.max_airspeed_m_s" \
+        in result.stderr
+
+
+def test_margins_over_the_atmosphere_follow_an_equivalent_airspeed_bound(tmp_path) -> None:
+    """margins left the atmosphere out of a case with EAS bounds (one grid for all rows):
+    the sensitivities are those of the grid that moves with the density."""
+    # both bounds equivalent airspeeds, so trim's highest throttle (at the greatest) and OEI's
+    # least (inside the envelope) sit at airspeeds that move with the density
+    case = load_case(_eas_case(tmp_path, 1000.0,
+                               "min_airspeed_eas_m_s: 22, max_airspeed_eas_m_s: 38"))
+    keys = ["atmosphere.altitude_m", "atmosphere.temperature_offset_k"]
+    assert set(keys) <= set(margin_parameters(case))
+    values = nominal_values(case, keys)
+    slopes = sensitivities(case, keys)
+    verdicts = check_case(case)
+    assert all(v.value is not None for v in verdicts)
+    for verdict in verdicts:
+        assert values[verdict.name] == pytest.approx(verdict.value, rel=1e-7)
+        for key in keys:
+            nominal = getattr(case.atmosphere, key.split(".")[1])
+            # as test_margins: the endurance's climb-speed grid needs the finer step
+            scale = 1e-6 if verdict.name == "flight_endurance" else 1e-5
+            step = scale * max(abs(nominal), 1.0)
+            central = (deterministic(case, key, nominal + step, verdict.name)
+                       - deterministic(case, key, nominal - step, verdict.name)) / (2 * step)
+            noise = 1e-9 * abs(verdict.value) / step
+            assert slopes[verdict.name][key] == pytest.approx(central, rel=1e-3, abs=noise), (
+                verdict.name, key)
