@@ -256,9 +256,10 @@ def check(
                                f"{r['probability_note']}")
             for key, count in outside.items():
                 what = ("have no envelope (the least airspeed not below the greatest, or the "
-                        "greatest beyond the speed of sound)" if key == ENVELOPE_KEY
-                        else f"of {key} fall outside its valid range")
-                typer.echo(f"  note: {count} samples {what}; they count as not met")
+                        "greatest beyond the speed of sound); trim and OEI count them as not met"
+                        if key == ENVELOPE_KEY else
+                        f"of {key} fall outside its valid range; they count as not met")
+                typer.echo(f"  note: {count} samples {what}")
             for note in sample_notes:
                 typer.echo(f"  note: {note}")
         typer.echo(f"overall: {'PASS' if passed else 'FAIL'}")
@@ -329,13 +330,17 @@ def margins(
         if m.limit_value is None:
             limit = "none"
         else:
-            limit = f"{m.limit_value:.5g}" + ("*" if m.binds == "not attainable" else "")
+            limit = f"{m.limit_value:.5g}" + {"not attainable": "*", "envelope ends": "^"}.get(
+                m.binds, "")
         slope = "n/a" if m.sensitivity is None else f"{m.sensitivity:.4g}"
         typer.echo(f"{m.requirement:<30}{m.parameter:<40}{m.value:>11.5g}{limit:>13}"
                    f"{slope:>13}")
     typer.echo("")
     typer.echo("none: never binds in the searched range (0.5x-2x the nominal; altitude "
                "-500..5000 m, temperature offset -50..50 K); *: binds by becoming not attainable")
+    if any(m.binds == "envelope ends" for m in rows):
+        typer.echo("^: where the envelope's bounds cross (an equivalent-airspeed bound at that "
+                   "density): beyond it the case has no envelope to fly")
     for note in notes:
         typer.echo(f"note: {note}")
 

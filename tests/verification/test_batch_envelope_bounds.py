@@ -20,7 +20,7 @@ from tests.verification.test_batch_equals_deterministic import assert_equal_to_d
 from tests.verification.test_margins import deterministic
 from tuflexperf.analysis.batch import BatchEvaluator
 from tuflexperf.analysis.level_flight import MAX_GRID_STEP_M_S, airspeed_grid, airspeed_grids
-from tuflexperf.analysis.margins import margin_parameters
+from tuflexperf.analysis.margins import limit_values, margin_parameters
 from tuflexperf.analysis.requirements import check_case
 from tuflexperf.analysis.sensitivity import nominal_values, sensitivities
 from tuflexperf.cli import app
@@ -144,10 +144,58 @@ def test_samples_of_crossed_bounds_count_as_not_met_and_are_said(tmp_path) -> No
     crossed = data["uncertainty"]["samples_outside_bounds"]["requirements.envelope"]
     # max drawn uniform on [10, 45] against a least airspeed of 15: 5/35 of the samples
     assert crossed == pytest.approx(400 * 5 / 35, abs=4 * math.sqrt(400 * 5 / 35))
-    trim = next(r for r in data["results"] if r["name"] == "trim_throttle_max")
-    assert trim["probability"] <= 1.0 - crossed / 400  # the crossed samples are not met
+    results = {r["name"]: r for r in data["results"]}
+    assert results["trim_throttle_max"]["probability"] <= 1.0 - crossed / 400  # not met there
+    # the aircraft still takes off and flies its endurance: those are the sample's own
+    assert results["takeoff_ground_roll"]["probability"] == 1.0
+    assert results["flight_endurance"]["probability"] == 1.0
     text = runner.invoke(app, ["check", str(path)]).stdout
     assert f"note: {crossed} samples have no envelope" in text
+    assert "trim and OEI count them as not met" in text
+
+
+def test_bounds_outside_their_range_build_no_long_grid() -> None:
+    """A least airspeed drawn at -3000 m/s (counted outside its range) built a 6000-point
+    grid per row: 3.7 GB for 2500 samples (outside audit). It has no envelope now."""
+    case = load_case(SHIPPED_CASE)
+    evaluator = BatchEvaluator(case)
+    values = {MIN: np.array([-3000.0, 0.0, -1e6, 15.0])}
+    assert evaluator.rows_without_envelope(values, 4).tolist() == [True, True, True, False]
+    grid, none = evaluator._grids(values, case.density_kg_m3, 4)
+    assert grid.shape[1] == airspeed_grid(15.0, 45.0).size and none[:3].all()
+
+
+def test_a_batch_of_a_case_without_an_envelope_says_so() -> None:
+    """sweep printed an AttributeError traceback for a case with an OEI requirement and no
+    envelope block (outside audit); check says the envelope is missing, and so does it."""
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = copy_shipped_case(Path(folder))
+        path.write_text(path.read_text().replace(f"  {SHIPPED_ENVELOPE}\n", ""))
+        for args in (["check", str(path)],
+                     ["sweep", "--case", str(path), "--vary", "aircraft.mass_kg=20:25:3"]):
+            result = runner.invoke(app, args)
+            assert result.exit_code == 2, (args, result.output)
+            assert "requirements.envelope: missing" in result.stderr
+
+
+def test_margins_say_where_an_envelope_ends(tmp_path) -> None:
+    """An EAS least airspeed passes the true greatest at some altitude: trim's margin there
+    is the envelope ending (the single case is bad input beyond), not trim failing."""
+    case = load_case(_eas_case(tmp_path, 0.0, "min_airspeed_eas_m_s: 40, max_airspeed_m_s: 45"))
+    limits = limit_values(case, {"atmosphere.altitude_m": 0.0})
+    value, binds, _ = limits[("trim_throttle_max", "atmosphere.altitude_m")]
+    assert binds == "envelope ends"
+    below = with_values(case, {"atmosphere.altitude_m": value - 1.0})
+    trim = {v.name: v for v in check_case(below)}["trim_throttle_max"]
+    assert trim.passed and trim.margin > 0.01  # trim holds with room right up to the end
+    beyond = runner.invoke(app, ["check", str(case.path), "--set",
+                                 f"atmosphere.altitude_m={value + 1.0}"])
+    assert beyond.exit_code == 2 and "is not below the greatest" in beyond.stderr
+    shown = runner.invoke(app, ["margins", "--case", str(case.path)])
+    assert "^: where the envelope's bounds cross" in shown.stdout
 
 
 def test_a_bound_of_the_other_kind_is_named_in_a_batch() -> None:

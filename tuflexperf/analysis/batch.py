@@ -356,9 +356,11 @@ class BatchEvaluator:
 
         A row's bounds are the case's unless ``values`` varies them; an equivalent-airspeed
         bound follows the row's density [kg/m^3] (SPEC 3). A row has no envelope where its
-        least airspeed is not below its greatest or the greatest is beyond the speed of sound
-        (the single case's bad input, :func:`tuflexperf.analysis.trim.envelope_of`).
+        least airspeed is not above 0 and below its greatest, or the greatest is beyond the
+        speed of sound (the single case's bad input, :func:`tuflexperf.analysis.trim.envelope_of`
+        and the schema), so no row builds a grid longer than the speed of sound allows.
         """
+        self._nominal_grid()  # the case's own envelope first: missing or crossed, bad input
         envelope = self.case.requirements.envelope
         bounds = []
         for end in ("min", "max"):
@@ -374,7 +376,7 @@ class BatchEvaluator:
             bounds.append(np.asarray(bound, dtype=float).reshape(-1) * np.ones(size))
         low, high = bounds
         with np.errstate(invalid="ignore"):
-            none = ~((low < high) & (high <= MAX_AIRSPEED_M_S) & np.isfinite(low))
+            none = ~((low > 0.0) & (low < high) & (high <= MAX_AIRSPEED_M_S))
         return low, high, none
 
     def rows_without_envelope(self, values: Mapping[str, Array],

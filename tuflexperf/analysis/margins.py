@@ -9,8 +9,9 @@ endurance throttle and the obstacle height):
   crossing nearest the nominal bracketed, and all brackets refined together, each batch
   call cutting every bracket into 16 (15 points in each: a batch call costs about the same
   for one row as for hundreds), to below 1e-15 of the range (a rootfinder on the met / not
-  met boundary, so a requirement that becomes not attainable binds too). "none in range"
-  when it never binds.
+  met boundary, so a requirement that becomes not attainable binds too; trim and OEI bind
+  "where the envelope ends" when their bounds cross there). "none in range" when it never
+  binds.
 - **sensitivity** d(value)/d(parameter) at the nominal case by CasADi's automatic
   differentiation of the requirement's value written with the model functions on CasADi
   symbols -- not finite differences. Where the deterministic value is a discrete choice
@@ -96,7 +97,7 @@ class Margin:
     sensitivity: float | None  # d(requirement value)/d(parameter) at the nominal
     unit: str  # the requirement's unit
     search_range: tuple[float, float]
-    binds: str  # "limit", "not attainable" or "none in range"
+    binds: str  # "limit", "not attainable", "envelope ends" or "none in range"
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -177,10 +178,17 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
         # how it binds is judged at the bracket's failing end, the first value past the
         # limit (a midpoint of a bracket a float wide would land on either side)
         failing = np.where(met_low, high, low)
-        edge = evaluator.evaluate(_rows_pairs(nominal, brackets, failing))
+        edge_values = _rows_pairs(nominal, brackets, failing)
+        edge = evaluator.evaluate(edge_values)
+        # past the bracket the envelope's bounds may cross (an EAS bound at altitude): trim
+        # and OEI end there with the envelope, as the single case does (bad input), not fail
+        unflown = evaluator.rows_without_envelope(edge_values, len(brackets))
+        flies = {r.name for r in evaluator.requirements if r.block in ("envelope", "oei")}
         for i, (name, key, _, _, _) in enumerate(brackets):
             root = 0.5 * (low[i] + high[i])
             binds = "limit" if np.isfinite(edge.values[name][i]) else "not attainable"
+            if name in flies and unflown[i]:
+                binds = "envelope ends"
             out[(name, key)] = (float(root), binds, ranges[key])
     return out
 

@@ -194,10 +194,10 @@ def evaluate_chunk(case: Case, plan: SamplingPlan, index: int) -> dict[str, Arra
                 & ((values <= high) if high_in else (values < high)))
         out[f"outside:{key}"] = np.array([np.count_nonzero(bad)])
         outside |= bad
-    # bounds that cross (a least airspeed drawn above the greatest) leave no envelope to fly
+    # bounds that cross (a least airspeed drawn above the greatest) leave no envelope to fly:
+    # trim and OEI are not met there (the batch's NaN); the aircraft's other requirements are
     crossed = evaluator_for(case).rows_without_envelope(draw.values, draw.size) & ~outside
     out[f"outside:{ENVELOPE_KEY}"] = np.array([np.count_nonzero(crossed)])
-    outside |= crossed
     out.update({f"value:{k}": np.where(outside, np.nan, v) for k, v in result.values.items()})
     out.update({f"limit:{k}": v for k, v in result.limits.items()})
     return out
