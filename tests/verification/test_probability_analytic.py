@@ -123,7 +123,8 @@ def test_distributions_draw_what_they_say(tmp_path) -> None:
 
 
 @pytest.mark.parametrize("window", [(8.0, 9.0), (9.0, 10.0), (-10.0, -9.0), (-1.0, 2.0),
-                                    (9.25, 11.5)])
+                                    (9.25, 11.5), (38.6, 40.0), (-40.0, -39.0),
+                                    (-103.4, -39.66), (60.0, 61.0)])
 def test_truncated_normal_far_in_a_tail_draws_its_quantiles(window) -> None:
     """A window 9-10 sd above the mean put every sample on its upper end: Phi rounds to 1
     there (an outside audit found cd0 in [0.08, 0.09] around 0.043 +- 0.004 all at 0.09).
@@ -136,3 +137,34 @@ def test_truncated_normal_far_in_a_tail_draws_its_quantiles(window) -> None:
     got = np.quantile(x, [0.05, 0.5, 0.95])
     want = stats.truncnorm.ppf([0.05, 0.5, 0.95], low, high)
     np.testing.assert_allclose(got, want, atol=0.01 * (high - low))
+
+
+def test_log_cdf_and_its_inverse_hold_where_phi_underflows() -> None:
+    """Beyond ~38.5 sd Phi is 0 in doubles: a truncated normal there fell on its far bound."""
+    from tuflexperf.analysis.probability import normal_logcdf, normal_ppf_of_log
+
+    x = np.array([-300.0, -100.0, -40.0, -38.6, -30.0001, -30.0, -29.999, -10.0, -1.0, 0.0, 3.0])
+    np.testing.assert_allclose(normal_logcdf(x), stats.norm.logcdf(x), rtol=1e-13)
+    log_p = np.array([-45000.0, -5000.0, -700.0, -690.1, -689.9, -100.0, -1.0, -1e-3])
+    np.testing.assert_allclose(stats.norm.logcdf(normal_ppf_of_log(log_p)), log_p, rtol=1e-12)
+
+
+def test_a_mass_window_far_below_its_mean_draws_at_its_near_end(tmp_path) -> None:
+    """Outside audit: mass ~ N(40, 0.29) kept to [10, 28.5] kg drew every sample at 10 kg
+    (P(take-off met) 1.0, PASS); its draws lie just under 28.5 kg, where the roll fails."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from tests.conftest import copy_shipped_case
+    from tuflexperf.cli import app
+
+    path = copy_shipped_case(tmp_path)
+    path.write_text(path.read_text() + (
+        "uncertainty:\n  samples: 2000\n  seed: 1\n  parameters:\n"
+        "    aircraft.mass_kg: {truncated_normal: [40, 0.29, 10, 28.5]}\n"))
+    result = CliRunner().invoke(app, ["check", str(path), "--json"])
+    assert result.exit_code == 1, result.stderr
+    roll = next(r for r in json.loads(result.stdout)["results"]
+                if r["name"] == "takeoff_ground_roll")
+    assert roll["probability"] == 0.0 and not roll["passed"]

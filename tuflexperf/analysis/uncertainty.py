@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis.batch import BatchEvaluator, BatchResult, nominal_engines
-from tuflexperf.analysis.probability import normal_cdf, normal_ppf
+from tuflexperf.analysis.probability import normal_logcdf, normal_ppf_of_log
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import MAX_SAMPLES, Case, UncertaintySchema
 from tuflexperf.io.dotted import value_bounds
@@ -103,16 +103,20 @@ def _draw(rng: np.random.Generator, kind: str, args: Sequence[float], size: int)
     mean, sd, low, high = args
     a, b = (low - mean) / sd, (high - mean) / sd
     u = rng.uniform(0.0, 1.0, size)
-    if a + b > 0.0:
-        # a window in the upper tail: Phi rounds to 1 beyond ~8.3 sd (every sample fell on
-        # `high`); its mirror image in the lower tail has full precision. With 1 - u the
-        # mirrored draw is the same sample, in exact arithmetic, as the direct one
-        lo, hi = normal_cdf(-b), normal_cdf(-a)
-        z = -normal_ppf(lo + (hi - lo) * (1.0 - u))
-    else:
-        lo, hi = normal_cdf(a), normal_cdf(b)
-        z = normal_ppf(lo + (hi - lo) * u)
-    return np.clip(mean + sd * z, low, high)
+    # a window in the upper tail: Phi rounds to 1 beyond ~8.3 sd (every sample fell on
+    # `high`); its mirror image in the lower tail has full precision. With 1 - u the
+    # mirrored draw is the same sample, in exact arithmetic, as the direct one
+    mirrored = a + b > 0.0
+    first, last = (-b, -a) if mirrored else (a, b)
+    # Phi(first) + (Phi(last) - Phi(first)) u in logs: beyond ~38.5 sd Phi underflows to 0
+    # and every sample fell on the far bound, the wrong one (outside audit: a mass window
+    # 40-100 sd below its mean drew every sample at its least value, a false PASS)
+    log_last = normal_logcdf(last)
+    ratio = np.exp(normal_logcdf(first) - log_last)
+    with np.errstate(divide="ignore"):
+        z = normal_ppf_of_log(log_last + np.log(ratio + (1.0 - ratio) * (1.0 - u if mirrored
+                                                                           else u)))
+    return np.clip(mean + sd * (-z if mirrored else z), low, high)
 
 
 def _square_root(covariance: Array) -> Array:
