@@ -207,7 +207,12 @@ def check(
     sample_notes: list[str] = []
     if sampling:
         from tuflexperf.analysis.requirements import probabilistic_verdicts
-        from tuflexperf.analysis.uncertainty import ENVELOPE_KEY, plan_for, run_samples
+        from tuflexperf.analysis.uncertainty import (
+            ENVELOPE_KEY,
+            THRUST_TO_WEIGHT_KEY,
+            plan_for,
+            run_samples,
+        )
 
         plan = plan_for(case, samples, seed)
         drawn = {key for key, _, _ in plan.parameters}
@@ -255,10 +260,14 @@ def check(
                     typer.echo(f"{r['name']:<{_name_width(probabilistic)}}  FAIL  "
                                f"{r['probability_note']}")
             for key, count in outside.items():
-                what = ("have no envelope (the least airspeed not below the greatest, or the "
-                        "greatest beyond the speed of sound); trim and OEI count them as not met"
-                        if key == ENVELOPE_KEY else
-                        f"of {key} fall outside its valid range; they count as not met")
+                what = {
+                    ENVELOPE_KEY: "have no envelope (the least airspeed not below the greatest, "
+                    "or the greatest beyond the speed of sound); trim and OEI count them as "
+                    "not met",
+                    THRUST_TO_WEIGHT_KEY: "have a full-throttle static thrust not positive or "
+                    "above 10 x their weight (physically absurd, as check refuses); they count "
+                    "as not met",
+                }.get(key, f"of {key} fall outside its valid range; they count as not met")
                 typer.echo(f"  note: {count} samples {what}")
             for note in sample_notes:
                 typer.echo(f"  note: {note}")

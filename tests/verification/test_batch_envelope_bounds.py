@@ -231,3 +231,28 @@ def test_margins_over_the_atmosphere_follow_an_equivalent_airspeed_bound(tmp_pat
             noise = 1e-9 * abs(verdict.value) / step
             assert slopes[verdict.name][key] == pytest.approx(central, rel=1e-3, abs=noise), (
                 verdict.name, key)
+
+
+def test_a_batch_refuses_the_aircraft_a_single_case_refuses(tmp_path) -> None:
+    """A 0.01 kg draw of the 26.7 kg aircraft (static thrust 562 x its weight) passed every
+    requirement in a sweep, where check refuses it as physically absurd (outside audit)."""
+    swept = runner.invoke(app, ["sweep", "--vary", "aircraft.mass_kg=0.01:1000:7"])
+    assert swept.exit_code == 2 and len(swept.stderr.strip().splitlines()) == 1
+    assert "--vary aircraft.mass_kg=0.01" in swept.stderr and "physically absurd" in \
+        swept.stderr and "562 x the aircraft's weight (0.0981 N)" in swept.stderr
+    single = runner.invoke(app, ["check", "--set", "aircraft.mass_kg=0.01"])
+    assert single.exit_code == 2 and "physically absurd" in single.stderr
+    path = copy_shipped_case(tmp_path)
+    path.write_text(path.read_text() + (
+        "uncertainty:\n  samples: 400\n  seed: 2\n  parameters:\n"
+        "    aircraft.mass_kg: {uniform: [0.01, 1.1]}\n"))
+    result = runner.invoke(app, ["check", str(path), "--json"])
+    data = json.loads(result.stdout)
+    absurd = data["uncertainty"]["samples_outside_bounds"]["static_thrust_to_weight"]
+    # each fan's 55.1 N static thrust is 10 x the weight of 0.562 kg
+    share = (0.5618 - 0.01) / (1.1 - 0.01)
+    assert absurd == pytest.approx(400 * share, abs=4 * math.sqrt(400 * share))
+    roll = next(r for r in data["results"] if r["name"] == "takeoff_ground_roll")
+    assert roll["probability"] <= 1.0 - absurd / 400 and result.exit_code == 1
+    assert "physically absurd, as check refuses" in runner.invoke(app, ["check",
+                                                                      str(path)]).stdout

@@ -379,6 +379,22 @@ class BatchEvaluator:
             none = ~((low > 0.0) & (low < high) & (high <= MAX_AIRSPEED_M_S))
         return low, high, none
 
+    def rows_refused(self, values: Mapping[str, Array], size: int,
+                     coefficients: Array | None = None) -> NDArray[np.bool_]:
+        """Rows whose aircraft the single case refuses as bad input
+        (:func:`tuflexperf.io.case.refuse_absurd_propulsion`): an engine's full-throttle
+        static thrust [N] not positive, or above ``ABSURD_THRUST_TO_WEIGHT`` x the row's
+        weight (a 0.01 kg draw of a 26 kg aircraft passed everything; outside audit)."""
+        from tuflexperf.io.case import ABSURD_THRUST_TO_WEIGHT
+
+        weight = np.asarray(self._aircraft(values, size).weight_n, dtype=float).reshape(-1)
+        refused = np.zeros(size, dtype=bool)
+        for engine in self._propulsion(coefficients).engines:
+            static = np.asarray(engine_thrust_n(engine, 1.0, 0.0), dtype=float).reshape(-1)
+            with np.errstate(invalid="ignore", over="ignore"):
+                refused |= ~((static > 0.0) & (static <= ABSURD_THRUST_TO_WEIGHT * weight))
+        return refused
+
     def rows_without_envelope(self, values: Mapping[str, Array],
                               size: int) -> NDArray[np.bool_]:
         """Rows of ``values`` whose envelope is none (:meth:`envelope_bounds`); none without

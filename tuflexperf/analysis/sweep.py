@@ -105,20 +105,23 @@ def evaluate_rows(case: Case, keys: tuple[str, ...], points: Array) -> dict[str,
     return out
 
 
-def _refuse_crossed_envelopes(case: Case, keys: tuple[str, ...], points: Array) -> None:
-    """A point whose envelope bounds cross (or pass the speed of sound) is bad input, as the
-    single case at that point is: the message names the point and the single case's fault."""
+def _refuse_what_check_refuses(case: Case, keys: tuple[str, ...], points: Array) -> None:
+    """A point the single case refuses is bad input: an aircraft whose static thrust is
+    absurd for its weight, or envelope bounds that cross (or pass the speed of sound). The
+    message names the point and the single case's fault."""
     from tuflexperf.analysis.trim import envelope_of
     from tuflexperf.analysis.uncertainty import evaluator_for
     from tuflexperf.io.dotted import with_values
 
     values = {k: points[:, j] for j, k in enumerate(keys)}
-    crossed = np.flatnonzero(evaluator_for(case).rows_without_envelope(values, len(points)))
-    if crossed.size == 0:
+    evaluator = evaluator_for(case)
+    refused = (evaluator.rows_refused(values, len(points))
+               | evaluator.rows_without_envelope(values, len(points)))
+    if not refused.any():
         return
-    point = {k: float(v[crossed[0]]) for k, v in values.items()}
+    point = {k: float(v[np.argmax(refused)]) for k, v in values.items()}
     where = ", ".join(f"{k}={v:g}" for k, v in point.items())
-    single = with_values(case, point, "--vary")  # bounds out of order: its own message
+    single = with_values(case, point, "--vary")  # thrust, bounds out of order: its message
     try:
         envelope_of(single)
     except InputError as exc:
@@ -147,7 +150,7 @@ def run_sweep(case: Case, axes: list[tuple[str, Array]], workers: int | None = N
     if not present_requirements(case):
         raise InputError(f"{case.path}: requirements: the case states none; nothing to sweep")
     points = np.array(list(itertools.product(*[a for _, a in axes])), dtype=float)
-    _refuse_crossed_envelopes(case, keys, points)
+    _refuse_what_check_refuses(case, keys, points)
     chunks = [points[i:i + CHUNK_ROWS] for i in range(0, count, CHUNK_ROWS)]
     parts = run_chunks(evaluate_rows, [(case, keys, c) for c in chunks], workers, dask_address)
     names = [k.split(":", 1)[1] for k in parts[0] if k.startswith("value:")]

@@ -40,6 +40,8 @@ CHUNK_SIZE = 2500
 _evaluators: dict[str, BatchEvaluator] = {}
 ENVELOPE_KEY = "requirements.envelope"
 """The count key of samples whose envelope bounds cross (``samples_outside_bounds``)."""
+THRUST_TO_WEIGHT_KEY = "static_thrust_to_weight"
+"""The count key of samples whose static thrust is not positive or above 10x their weight."""
 
 
 @dataclass(frozen=True)
@@ -198,9 +200,14 @@ def evaluate_chunk(case: Case, plan: SamplingPlan, index: int) -> dict[str, Arra
                 & ((values <= high) if high_in else (values < high)))
         out[f"outside:{key}"] = np.array([np.count_nonzero(bad)])
         outside |= bad
+    # a draw the single case refuses as no aircraft (static thrust beyond 10x its weight)
+    evaluator = evaluator_for(case)
+    absurd = evaluator.rows_refused(draw.values, draw.size, draw.coefficients) & ~outside
+    out[f"outside:{THRUST_TO_WEIGHT_KEY}"] = np.array([np.count_nonzero(absurd)])
+    outside |= absurd
     # bounds that cross (a least airspeed drawn above the greatest) leave no envelope to fly:
     # trim and OEI are not met there (the batch's NaN); the aircraft's other requirements are
-    crossed = evaluator_for(case).rows_without_envelope(draw.values, draw.size) & ~outside
+    crossed = evaluator.rows_without_envelope(draw.values, draw.size) & ~outside
     out[f"outside:{ENVELOPE_KEY}"] = np.array([np.count_nonzero(crossed)])
     out.update({f"value:{k}": np.where(outside, np.nan, v) for k, v in result.values.items()})
     out.update({f"limit:{k}": v for k, v in result.limits.items()})

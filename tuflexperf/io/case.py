@@ -530,8 +530,8 @@ def refuse_absurd_propulsion(case: Case) -> None:
                              "positive; check the coefficients and throttle_unit")
         if static > ABSURD_THRUST_TO_WEIGHT * weight:
             raise InputError(
-                f"{where}: full-throttle static thrust {static:.4g} N is {static / weight:.0f} "
-                f"x the aircraft's weight ({weight:.0f} N): physically absurd; is throttle_unit "
+                f"{where}: full-throttle static thrust {static:.4g} N is {static / weight:.3g} "
+                f"x the aircraft's weight ({weight:.3g} N): physically absurd; is throttle_unit "
                 "right (fraction vs percent)?"
             )
 
