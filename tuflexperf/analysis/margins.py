@@ -131,8 +131,9 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
     keys = list(nominal)
     evaluator = BatchEvaluator(case)
     ranges = {k: parameter_range(k, nominal[k]) for k in keys}
-    grids = [np.unique(np.concatenate([np.linspace(*ranges[k], _SCAN_POINTS), [nominal[k]]]))
-             for k in keys]
+    with np.errstate(over="ignore", invalid="ignore"):  # 2 x 1e308 is inf: not attainable
+        grids = [np.unique(np.concatenate([np.linspace(*ranges[k], _SCAN_POINTS),
+                                           [nominal[k]]])) for k in keys]
     scan = evaluator.evaluate(_rows(nominal, keys, grids))
     names = list(scan.values)
     out: dict[tuple[str, str], tuple[float | None, str, tuple[float, float]]] = {}

@@ -975,16 +975,27 @@ def text_page(
     title: str, lines: list[str], size: tuple[float, float] = LANDSCAPE_IN,
     font_size: float = 7.5,
 ) -> Any:
-    """A page of text (title page, notes)."""
+    """A page of text (title page, notes); a line longer than the page is wrapped."""
+    import textwrap
+
     fig = new_figure(size)
     _page_margins(fig)
     ax = fig.add_subplot()
     ax.axis("off")
     fig.suptitle(title, fontsize=15, weight="bold")
+    # monospace glyphs are 0.6 em wide: a 240-character note ran off the page, its reason
+    # cut mid-sentence (outside audit)
+    usable_in = fig.get_figwidth() - 2.0 * TEXT_PAGE_MARGIN_IN  # the layout's margins
+    width = max(40, int(usable_in * 72 / (0.6 * font_size)))
+    wrapped = []
+    for line in lines:
+        indent = " " * (len(line) - len(line.lstrip(" -")))
+        wrapped += textwrap.wrap(line, width, subsequent_indent=indent,
+                                 break_on_hyphens=False) or [""]
     ax.text(
         0.0,
         1.0,
-        "\n".join(lines),
+        "\n".join(wrapped),
         transform=ax.transAxes,
         va="top",
         ha="left",
