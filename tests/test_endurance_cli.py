@@ -253,3 +253,14 @@ def test_a_power_model_far_below_momentum_theory_flies_no_endurance(tmp_path):
                      if r["name"] == "flight_endurance")
     assert endurance["passed"] is False and endurance["value"] is None
     assert "momentum theory" in endurance["reason"] and "no fan flies on it" in endurance["reason"]
+
+
+def test_best_with_a_pack_too_small_names_the_throttle_asked_for_then_the_search():
+    """--best named a throttle from its own search (0.679179) as if the user had asked it."""
+    pack = "battery.capacity_ah=0.5"  # below its cut-off from the start at any cruise power
+    asked = CliRunner().invoke(app, ["endurance", "--throttle", "0.5", "--best", "--set", pack])
+    assert asked.exit_code == 1 and "throttle 0.5: the pack is below its cut-off" in asked.stderr
+    best = CliRunner().invoke(app, ["endurance", "--best", "--set", pack])
+    assert best.exit_code == 1
+    assert "no best endurance: its search starts halfway from the least level-flight " \
+        "throttle 0.358 to full, and there throttle 0.679" in best.stderr

@@ -783,10 +783,10 @@ def endurance(
                 if math.isfinite(throttle) and 2.0 <= throttle <= 100.0 else "")
         fail_input(f"--throttle: must be a fraction in [0, 1], got {throttle!r}{hint}")
     case = load_case_with(case_file, sets)
+    # the throttle asked for first: its own reason, not one of the best search's throttles
+    asked = solve_endurance(case, throttle) if throttle is not None else None
     best_result = solve_best(case) if best else None
-    result = (
-        solve_endurance(case, throttle) if throttle is not None else best_result.endurance
-    )
+    result = asked if asked is not None else best_result.endurance
     data = result.to_dict()
     requirement = case.requirements.endurance
     judged = requirement is not None and abs(requirement.throttle - result.throttle) < 1e-12

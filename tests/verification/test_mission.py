@@ -240,6 +240,22 @@ def test_cli_mission_bad_key_is_exit_2(tmp_path: Path) -> None:
     assert str(path) in err and "time_mins" in err
 
 
+@pytest.mark.parametrize(("segment", "direction"), [
+    ("{type: climb, to_altitude_m: 0, airspeed_m_s: 20, throttle: 1.0}", "up"),
+    ("{type: descent, to_altitude_m: 0, airspeed_m_s: 20, throttle: 0.1}", "down"),
+])
+def test_a_climb_or_descent_to_its_own_height_is_bad_input(tmp_path: Path, segment,
+                                                            direction) -> None:
+    """A descent from 0 m to 0 m was flown (exit 0) where the like climb is refused."""
+    path = _mission(tmp_path, f"""\
+        name: level
+        segments:
+          - {segment}
+        """)
+    code, _, err = _run("mission", str(path))
+    assert code == 2 and f"must go {direction}, got 0 m" in err, err
+
+
 def test_catapult_launch_starts_airborne_and_skips_the_runway(tmp_path: Path) -> None:
     """launch: catapult (SPEC 4): endurance and missions start airborne at the release speed;
     an aircraft that could never roll on a runway still flies its endurance and mission."""

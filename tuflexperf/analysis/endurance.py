@@ -904,7 +904,13 @@ class EnduranceModel:
     def best(self) -> BestResult:
         """Throttle/airspeed of the longest flight, and of the longest cruise distance."""
         self.check_throttle(1.0)
-        start = self.solve(min(1.0, self.min_throttle + 0.5 * (1.0 - self.min_throttle)))
+        middle = min(1.0, self.min_throttle + 0.5 * (1.0 - self.min_throttle))
+        try:
+            start = self.solve(middle)
+        except NotAttainable as exc:  # it named a throttle no one asked for (outside audit)
+            raise NotAttainable(
+                f"no best endurance: its search starts halfway from the least level-flight "
+                f"throttle {self.min_throttle:.3f} to full, and there {exc}") from None
         x_e, _, _ = self._solve_best("endurance", start)
         endurance = self.solve(min(max(x_e, self.min_throttle), 1.0))
         x_r, _, range_km = self._solve_best("range", start)

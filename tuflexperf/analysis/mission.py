@@ -322,7 +322,8 @@ class MissionModel:
                     )
                 if s.type in ("climb", "descent"):
                     target = float(s.to_altitude_m)  # type: ignore[arg-type]
-                    if (s.type == "climb") != (target > h):
+                    # a descent to its own height is no descent, as a climb to it is no climb
+                    if not (target > h if s.type == "climb" else target < h):
                         raise InputError(
                             f"{where}[{i}].to_altitude_m: a {s.type} from {h:g} m must go "
                             f"{'up' if s.type == 'climb' else 'down'}, got {target:g} m"
@@ -353,7 +354,11 @@ class MissionModel:
     def _rho(self, h: Any) -> Any:
         if self.fixed_density is not None:
             return self.fixed_density + 0.0 * h
-        return isa_density_kg_m3(self.field_m + h, self.dt_k)
+        # the nodes of a segment after its failure hold no flight (a climb that cannot climb
+        # integrates to -4.5e6 m there): the ISA's stratosphere branch overflows on them,
+        # harmlessly, as only the nodes before the failure are reported
+        with np.errstate(over="ignore"):
+            return isa_density_kg_m3(self.field_m + h, self.dt_k)
 
     def _level_speed_at_throttle(self, throttle: float, h: float, dead: int | None,
                                  label: str) -> float:
