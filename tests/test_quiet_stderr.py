@@ -53,3 +53,11 @@ def test_a_report_of_a_case_that_cannot_cruise_is_quiet(tmp_path) -> None:
                 "--set", "battery.mission.pattern_altitude_m=5000")
     assert done.returncode in (0, 1), done.stderr
     assert "Warning" not in done.stderr, done.stderr
+    # the title page says the inputs' sha256 are on the last page: after the notes
+    import pypdfium2 as pdfium
+
+    pdf = pdfium.PdfDocument(str(tmp_path / "review" / "review.pdf"))
+    pages = [pdf[i].get_textpage().get_text_range() for i in range(len(pdf))]
+    assert "on the last page" in pages[0]
+    assert "What this report leaves out" in pages[-2] and "no best endurance" in pages[-2]
+    assert "sha256" in pages[-1] and "tuflex.yaml" in pages[-1]

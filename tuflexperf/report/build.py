@@ -245,9 +245,10 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     )
     step("title page")
     _draw_pages(named, folder, kept, step)  # what the writers have not claimed yet
-    end = [_hash_page(case, measured)]
-    if notes:
-        end.append(fg.text_page("What this report leaves out, and why", [f"- {n}" for n in notes]))
+    # the inputs' sha256 last, as the title page says, after what the report leaves out
+    end = [fg.text_page("What this report leaves out, and why", [f"- {n}" for n in notes])
+           ] if notes else []
+    end.append(_hash_page(case, measured))
     _save_pdf_pages(end, kept / "_end.pdf")
     for writer in writers:
         writer.join()
