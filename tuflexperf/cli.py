@@ -209,7 +209,7 @@ def check(
         from tuflexperf.analysis.requirements import probabilistic_verdicts
         from tuflexperf.analysis.uncertainty import (
             ENVELOPE_KEY,
-            THRUST_TO_WEIGHT_KEY,
+            REFUSED_AIRCRAFT_KEY,
             plan_for,
             run_samples,
         )
@@ -264,9 +264,10 @@ def check(
                     ENVELOPE_KEY: "have no envelope (the least airspeed not below the greatest, "
                     "or the greatest beyond the speed of sound); trim and OEI count them as "
                     "not met",
-                    THRUST_TO_WEIGHT_KEY: "have a full-throttle static thrust not positive or "
-                    "above 10 x their weight (physically absurd, as check refuses); they count "
-                    "as not met",
+                    REFUSED_AIRCRAFT_KEY: "are aircraft check refuses (a full-throttle static "
+                    "thrust not positive or above 10 x the weight: physically absurd; a stall "
+                    "beyond the speed of sound; a release or lift-off speed below stall); they "
+                    "count as not met",
                 }.get(key, f"of {key} fall outside its valid range; they count as not met")
                 typer.echo(f"  note: {count} samples {what}")
             for note in sample_notes:

@@ -50,6 +50,7 @@ from tuflexperf.analysis.level_flight import airspeed_grid, airspeed_grids
 from tuflexperf.analysis.takeoff import obstacle_height_of
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
+    EAS_REFERENCE_DENSITY_KG_M3,
     MAX_AIRSPEED_M_S,
     Aircraft,
     catapult_energy_shortfall,
@@ -86,7 +87,10 @@ _ROLL_U_NODES = ((np.arange(_PANELS)[:, None] + 0.5 * (_GL_NODES + 1.0)) / _PANE
 _ROLL_U_WEIGHTS = np.tile(_GL_WEIGHTS, _PANELS)[None, :] * 0.5 / _PANELS
 _ROLL_PROBES = np.array([0.25, 0.5, 0.75, 0.9])  # three fix a piece's quadratic, one checks it
 _UNIT = {t: {u: float(u == t) for u in POLY22_TERMS} for t in POLY22_TERMS}  # basis picks
-_HISTORY_POINTS = 101  # as analysis.takeoff.HISTORY_POINTS: check grid and time history
+_HISTORY_POINTS = 101  # as analysis.takeoff.HISTORY_POINTS: the time history
+_CHECK_POINTS = 2001  # as analysis.takeoff._CHECK_POINTS: where the net force must be > 0
+_STEEP_FORCE_SHARE = 0.05  # a least net force below this share of the greatest: fine panels
+_FINE_PANELS = 256
 
 
 @dataclass(frozen=True)
@@ -382,13 +386,23 @@ class BatchEvaluator:
     def rows_refused(self, values: Mapping[str, Array], size: int,
                      coefficients: Array | None = None) -> NDArray[np.bool_]:
         """Rows whose aircraft the single case refuses as bad input
-        (:func:`tuflexperf.io.case.refuse_absurd_propulsion`): an engine's full-throttle
-        static thrust [N] not positive, or above ``ABSURD_THRUST_TO_WEIGHT`` x the row's
-        weight (a 0.01 kg draw of a 26 kg aircraft passed everything; outside audit)."""
+        (:func:`tuflexperf.io.case.refuse_absurd_propulsion`, the aircraft schema's rules
+        across its keys): an engine's full-throttle static thrust [N] not positive, or above
+        ``ABSURD_THRUST_TO_WEIGHT`` x the row's weight (a 0.01 kg draw of a 26 kg aircraft
+        passed everything; outside audit); a stall speed beyond the speed of sound; a
+        catapult's release or a given lift-off speed below the row's stall (EAS)."""
         from tuflexperf.io.case import ABSURD_THRUST_TO_WEIGHT
 
-        weight = np.asarray(self._aircraft(values, size).weight_n, dtype=float).reshape(-1)
-        refused = np.zeros(size, dtype=bool)
+        aircraft = self._aircraft(values, size)
+        weight = np.asarray(aircraft.weight_n, dtype=float).reshape(-1) * np.ones(size)
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            stall_eas = np.asarray(stall_speed_m_s(aircraft, EAS_REFERENCE_DENSITY_KG_M3),
+                                   dtype=float).reshape(-1) * np.ones(size)
+        refused = ~(stall_eas <= MAX_AIRSPEED_M_S)
+        for speed in (aircraft.launch_speed_m_s if aircraft.launch == "catapult" else None,
+                      aircraft.takeoff.liftoff_speed_m_s):
+            if speed is not None:
+                refused |= np.asarray(speed, dtype=float).reshape(-1) < stall_eas
         for engine in self._propulsion(coefficients).engines:
             static = np.asarray(engine_thrust_n(engine, 1.0, 0.0), dtype=float).reshape(-1)
             with np.errstate(invalid="ignore", over="ignore"):
@@ -535,18 +549,52 @@ class _Model:
         self._pieces = (breaks, fits) if ok else False
         return self._pieces or None
 
-    def _integrate_piece(self, piece: tuple[Array, ...]) -> tuple[Array, Array]:
+    def _integrate_piece(self, piece: tuple[Array, ...],
+                         panels: int = _PANELS) -> tuple[Array, Array]:
         """:meth:`_integrate` on one piece of :meth:`_roll_pieces`: the same nodes, the force
         from the piece's quadratic."""
         low, width, c0, c1, c2 = piece
-        s = _ROLL_U_NODES - 0.5
+        if panels == _PANELS:
+            u, w = _ROLL_U_NODES, _ROLL_U_WEIGHTS
+        else:
+            u = ((np.arange(panels)[:, None] + 0.5 * (_GL_NODES + 1.0)) / panels).reshape(1, -1)
+            w = np.tile(_GL_WEIGHTS, panels)[None, :] * 0.5 / panels
+        s = u - 0.5
         force = c0 + s * (c1 + s * c2)
-        speed = low + width * _ROLL_U_NODES
-        weights = _ROLL_U_WEIGHTS * width
+        speed = low + width * u
+        weights = w * width
         mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
         with np.errstate(divide="ignore", invalid="ignore"):
             over = weights * mass / force
             return np.sum(over * speed, axis=1), np.sum(over, axis=1)
+
+    def _force_range(self) -> tuple[Array, Array]:
+        """Least and greatest full-throttle net force [N] per row from rest to lift-off.
+
+        On the quadratic pieces of :meth:`_roll_pieces` both are exact (each piece's ends and
+        vertex), so a dip between any check points counts; node by node, the single case's
+        2001 equally spaced airspeeds (``analysis.takeoff``).
+        """
+        pieces = self._roll_pieces()
+        if pieces is None:
+            speeds = self.liftoff_speed() * np.linspace(0.0, 1.0, _CHECK_POINTS)[None, :]
+            force = self.net_force(speeds)
+            return np.min(force, axis=1), np.max(force, axis=1)
+        least = np.full(self.size, np.inf)
+        most = np.full(self.size, -np.inf)
+        for _, width, c0, c1, c2 in pieces[1]:
+            # s in [-1/2, 1/2]: the ends, and the vertex where it lies inside
+            ends = (c0 - 0.5 * c1 + 0.25 * c2, c0 + 0.5 * c1 + 0.25 * c2)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                vertex = -c1 / (2.0 * c2)
+                inside = (np.abs(vertex) <= 0.5) & (c2 != 0.0)
+                top = c0 - c1 * c1 / (4.0 * c2)
+            used = (np.asarray(width) > 0.0).reshape(-1)
+            low = np.minimum(np.minimum(*ends), np.where(inside, top, np.inf)).reshape(-1)
+            high = np.maximum(np.maximum(*ends), np.where(inside, top, -np.inf)).reshape(-1)
+            least = np.where(used, np.minimum(least, low), least)
+            most = np.where(used, np.maximum(most, high), most)
+        return least, most
 
     def uniform_force(self) -> Array:
         """Net force [N] at 101 equally spaced airspeeds from rest to V_LO (memoised)."""
@@ -589,8 +637,8 @@ class _Model:
         v_lo = self.liftoff_speed()
         # a sampled lift-off speed below stall cannot lift off (bad input for one case)
         stall = stall_speed(self)[:, None]
-        attainable = np.all(self.uniform_force() > 0.0, axis=1) & (
-            v_lo >= stall * (1.0 - 1e-12))[:, 0]
+        least, most = self._force_range()
+        attainable = (least > 0.0) & (v_lo >= stall * (1.0 - 1e-12))[:, 0]
         # beyond the fans' jet velocity an extrapolated thrust model is not physics (as
         # solve_takeoff says); v_lo is a column, as the jet velocity of sampled rows is
         attainable &= ~beyond_jet_velocity(self.propulsion, v_lo, self.density)[:, 0]
@@ -598,13 +646,24 @@ class _Model:
         breaks = self._breaks(v_lo) if pieces is None else pieces[0]
         distance = np.zeros(self.size)
         time = np.zeros(self.size)
+        # 1/F peaks where the force all but vanishes: 64 nodes a piece missed it by 17 % (a
+        # roll of 812 m for 976; outside audit); such rows take 64 times the panels
+        with np.errstate(divide="ignore", invalid="ignore"):
+            steep = attainable & (least < _STEEP_FORCE_SHARE * most)
         for k, (low, high) in enumerate(zip(breaks[:-1], breaks[1:], strict=True)):
             if np.all(high <= low):
                 continue  # this kink lies beyond lift-off for every row
             d, t = (self._integrate(low, high, _PANELS) if pieces is None
                     else self._integrate_piece(pieces[1][k]))
+            if steep.any():
+                fine = (self._integrate(low, high, _FINE_PANELS) if pieces is None
+                        else self._integrate_piece(pieces[1][k], _FINE_PANELS))
+                d, t = np.where(steep, fine[0], d), np.where(steep, fine[1], t)
             distance, time = distance + d, time + t
-        ok = attainable & np.isfinite(distance) & np.isfinite(time)
+        # a sum over 1/F is no roll unless it is positive (a force negative between check
+        # points summed to -796 m and passed; outside audit)
+        ok = attainable & (distance > 0.0) & (time > 0.0) & np.isfinite(distance) \
+            & np.isfinite(time)
         # rotation on the ground at the lift-off speed (Raymer 17.8.2: S_R = V_LO t_R)
         rotation = np.asarray(self.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
             * np.ones(self.size)

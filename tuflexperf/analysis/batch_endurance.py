@@ -38,11 +38,14 @@ from tuflexperf.models.battery import (
 from tuflexperf.models.powertrain import (
     PowerSurfaces,
     beyond_jet_velocity,
+    engine_power_w,
+    figure_of_merit,
     jet_velocity_ceiling_m_s,
 )
-from tuflexperf.models.thrust import density_ratio
+from tuflexperf.models.thrust import density_ratio, engine_thrust_n
 
 Array = NDArray[np.float64]
+_ROLL_BLOCK = 256  # roll strides whose powers are looked up together
 
 
 def _power_w(model: Any, m: Any, throttle: Any, speed: Any) -> Array:
@@ -200,6 +203,9 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     _, roll_time, v_lo, ok = roll
     climb_speed, climb_rate = _best_climb(m, v_lo, stall)
     ok = (ok > 0.5) & ~((height > 0) & (climb_rate <= 0))
+    # the mission flies no climb below the envelope's stall margin (its segment is not
+    # attainable there): the batch flew it (outside audit, a false PASS)
+    ok &= ~((height > 0) & (climb_speed < m.least_airspeed() * (1.0 - 1e-12)))
     with np.errstate(divide="ignore", invalid="ignore"):
         climb_time = np.where(ok, np.where(height > 0, height / climb_rate, 0.0), np.nan)
     roll_time = np.where(ok, roll_time, 0.0)
@@ -239,12 +245,16 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     strides = np.ceil(roll_steps / _ROLL_STRIDE).astype(int)
     h = np.where(strides > 0, roll_time / np.maximum(strides, 1), 0.0)
     n = int(strides.max()) if strides.size else 0
-    stride_t = 0.5 * h[:, None] * np.arange(2 * n + 1)[None, :]
-    rolling = _power_w(model, m, 1.0, _interp_rows(stride_t, t_hist, v_hist))
     q = np.zeros(m.size)
-    for k in range(n):
-        q = rk4(q, h, k < strides, (rolling[:, 2 * k], rolling[:, 2 * k + 1],
-                                    rolling[:, 2 * k + 2]))
+    # the powers a block of strides at a time: one roll of hours (a force that all but
+    # vanishes) asked rows x 134,281 of them at once, 2.5 GB (outside audit)
+    for first in range(0, n, _ROLL_BLOCK):
+        last = min(first + _ROLL_BLOCK, n)
+        stride_t = 0.5 * h[:, None] * np.arange(2 * first, 2 * last + 1)[None, :]
+        rolling = _power_w(model, m, 1.0, _interp_rows(stride_t, t_hist, v_hist))
+        for k in range(first, last):
+            j = 2 * (k - first)
+            q = rk4(q, h, k < strides, (rolling[:, j], rolling[:, j + 1], rolling[:, j + 2]))
     q_roll = q.copy()
     # the climb at constant power, dq/dt = i(q, P)/3600, smooth and slow (the current
     # changes ~1 % over it): RK4 in strides of _CLIMB_STRIDE steps of _LAUNCH_STEP_S
@@ -358,6 +368,7 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     density = np.asarray(m.density, dtype=float).reshape(-1, 1)
     ok &= ~beyond_jet_velocity(m.propulsion, speed[:, None], density)[:, 0]
     power_w = _power_w(model, m, throttle, speed)
+    ok &= ~_impossible_merit(m, throttle, speed, power_w)
     params = model.params
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs / per_engine) > 0.0)
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs) > 0.0)
@@ -367,12 +378,37 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
         np.full(m.size, packs * params.max_capacity_ah * (1.0 - 1e-12)),
     )
     start = np.where(ok, q_launch, 0.0)
+    # a launch that leaves no cruise before the reserve or the cut-off is not attainable
+    # (the single case's mission): the batch counted the climb alone (outside audit)
+    ok &= np.minimum(q_cut, reserve_ah) > start
     span = np.maximum(np.minimum(q_cut, reserve_ah) - start, 0.0)
     cruise_s = np.asarray(discharge_time_s(params, np.where(ok, power_w, 1.0), start,
                                            start + span, packs), dtype=float)
     minutes = cruise_s / 60.0 + np.where(ok, climb_time, 0.0) / 60.0
     ok &= _within_rating(model, launch, power_w, start, span, cruise_s, packs, capacity)
     return np.where(ok & np.isfinite(minutes), minutes, np.nan)
+
+
+def _impossible_merit(m: Any, throttle: Array, speed: Array, power_w: Array) -> Array:
+    """Rows where an engine's power model gives under 1/``IMPOSSIBLE_FIGURE_OF_MERIT`` of
+    momentum theory's ideal power for its thrust at the cruise (``EnduranceModel.solve``'s
+    rule: no fan flies on it); each engine's own power surface where it has one, else the
+    per-fan ``power_w`` [W], as ``analysis.powertrain.agreement_at``."""
+    area = m.propulsion.fan_area_m2
+    impossible = np.zeros(m.size, dtype=bool)
+    if area is None:
+        return impossible
+    scale = density_ratio(m.propulsion, m.density)
+    x, v = throttle.reshape(-1, 1) * np.ones((m.size, 1)), speed.reshape(-1, 1)
+    density = np.asarray(m.density, dtype=float).reshape(-1, 1)
+    for engine in m.propulsion.engines:
+        surface = engine_power_w(engine, x, v)
+        power = scale * surface if surface is not None else power_w.reshape(-1, 1)
+        thrust = engine_thrust_n(engine, x, v, scale)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            merit = np.asarray(figure_of_merit(thrust, v, density, area, power), dtype=float)
+        impossible |= (merit > single.IMPOSSIBLE_FIGURE_OF_MERIT).reshape(-1)
+    return impossible
 
 
 def _within_rating(model: Any, launch: _Launch, power_w: Array, start: Array, span: Array,

@@ -40,8 +40,8 @@ CHUNK_SIZE = 2500
 _evaluators: dict[str, BatchEvaluator] = {}
 ENVELOPE_KEY = "requirements.envelope"
 """The count key of samples whose envelope bounds cross (``samples_outside_bounds``)."""
-THRUST_TO_WEIGHT_KEY = "static_thrust_to_weight"
-"""The count key of samples whose static thrust is not positive or above 10x their weight."""
+REFUSED_AIRCRAFT_KEY = "aircraft"
+"""The count key of samples whose aircraft ``check`` refuses (``BatchEvaluator.rows_refused``)."""
 
 
 @dataclass(frozen=True)
@@ -200,10 +200,11 @@ def evaluate_chunk(case: Case, plan: SamplingPlan, index: int) -> dict[str, Arra
                 & ((values <= high) if high_in else (values < high)))
         out[f"outside:{key}"] = np.array([np.count_nonzero(bad)])
         outside |= bad
-    # a draw the single case refuses as no aircraft (static thrust beyond 10x its weight)
+    # a draw the single case refuses as no aircraft (static thrust beyond 10x its weight, a
+    # release or lift-off below its stall, ...): not met, and counted
     evaluator = evaluator_for(case)
     absurd = evaluator.rows_refused(draw.values, draw.size, draw.coefficients) & ~outside
-    out[f"outside:{THRUST_TO_WEIGHT_KEY}"] = np.array([np.count_nonzero(absurd)])
+    out[f"outside:{REFUSED_AIRCRAFT_KEY}"] = np.array([np.count_nonzero(absurd)])
     outside |= absurd
     # bounds that cross (a least airspeed drawn above the greatest) leave no envelope to fly:
     # trim and OEI are not met there (the batch's NaN); the aircraft's other requirements are

@@ -1,0 +1,82 @@
+"""Batch rows that an outside fuzz of batch-against-check found to differ (26,400 rows).
+
+Each row here passed in the batch (samples, sweeps) where ``check`` at those values fails,
+is not attainable or is bad input; each must now equal the single case.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from tests.conftest import SHIPPED_CASE, copy_shipped_case
+from tests.verification.test_batch_equals_deterministic import assert_equal_to_deterministic
+from tuflexperf.analysis import batch_endurance
+from tuflexperf.analysis.batch import BatchEvaluator
+from tuflexperf.analysis.requirements import check_case
+from tuflexperf.cli import app
+from tuflexperf.io.case import load_case
+from tuflexperf.io.dotted import with_values
+
+runner = CliRunner()
+GRASS = {"aircraft.takeoff.cl_ground": 2.0, "aircraft.takeoff.rolling_friction": 1.0}
+
+ROWS = [
+    # the net force dips below 0 between the batch's 101 check points: -796 m "passed"
+    pytest.param({**GRASS, "aircraft.mass_kg": 11.447}, "takeoff_ground_roll",
+                 id="force-negative-between-check-points"),
+    # positive but all but vanishing: 64 Gauss nodes gave 812 m for 976 m
+    pytest.param({**GRASS, "aircraft.mass_kg": 11.4468}, None, id="force-all-but-vanishing"),
+    # the best-rate climb below stall_margin x stall: the mission refuses it
+    pytest.param({"requirements.envelope.stall_margin": 1.15, "aircraft.cl_max": 0.65},
+                 "flight_endurance", id="climb-below-the-stall-margin"),
+    # the launch uses the charge down to the reserve: no cruise is left
+    pytest.param({"battery.mission.pattern_altitude_m": 1800.0,
+                  "requirements.endurance.min_flight_time_min": 5.0}, "flight_endurance",
+                 id="launch-leaves-no-cruise"),
+    # a power model under half the momentum-theory power (figure of merit 2.05)
+    pytest.param({"aircraft.cd0": 1e-9, "aircraft.k": 0.052}, "flight_endurance",
+                 id="impossible-figure-of-merit"),
+]
+
+
+@pytest.mark.parametrize(("row", "not_attainable"), ROWS)
+def test_the_row_equals_the_single_case(row, not_attainable) -> None:
+    case = load_case(SHIPPED_CASE)
+    values = {k: np.array([v]) for k, v in row.items()}
+    result = BatchEvaluator(case).evaluate(values)
+    single = with_values(case, row)
+    assert_equal_to_deterministic(single, result.values, 0)
+    if not_attainable is not None:
+        assert {v.name: v.value for v in check_case(single)}[not_attainable] is None
+        assert np.isnan(result.values[not_attainable][0])
+
+
+def test_the_batch_refuses_aircraft_the_schema_refuses(tmp_path) -> None:
+    """A stall beyond the speed of sound and a lift-off speed below stall are bad input for
+    check; the sweep solved them (trim and OEI cells met)."""
+    swept = runner.invoke(app, ["sweep", "--vary", "aircraft.wing_area_m2=0.0012:0.0012:1"])
+    assert swept.exit_code == 2 and "beyond the speed of sound" in swept.stderr
+    path = copy_shipped_case(tmp_path)
+    aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
+    aircraft.write_text(aircraft.read_text().replace(
+        "liftoff_speed_factor: 1.1410", "liftoff_speed_m_s: 17.0"))
+    swept = runner.invoke(app, ["sweep", "--case", str(path), "--vary",
+                                "aircraft.mass_kg=30:40:3"])
+    assert swept.exit_code == 2 and "is below the stall speed" in swept.stderr
+    single = runner.invoke(app, ["check", str(path), "--set", "aircraft.mass_kg=40"])
+    assert single.exit_code == 2 and "is below the stall speed" in single.stderr
+
+
+def test_the_roll_powers_in_blocks_equal_all_at_once(monkeypatch) -> None:
+    """The roll's powers are looked up a block of strides at a time (one roll of hours
+    asked for 2.5 GB at once): the same numbers as one block."""
+    case = load_case(SHIPPED_CASE)
+    values = {"aircraft.mass_kg": np.linspace(20.0, 32.0, 7),
+              "aircraft.takeoff.rolling_friction": np.linspace(0.05, 0.3, 7)}
+    blocks = BatchEvaluator(case).evaluate(values).values["flight_endurance"]
+    monkeypatch.setattr(batch_endurance, "_ROLL_BLOCK", 1)
+    single_strides = BatchEvaluator(case).evaluate(values).values["flight_endurance"]
+    assert np.isfinite(blocks).sum() >= 5
+    np.testing.assert_array_equal(blocks, single_strides)
