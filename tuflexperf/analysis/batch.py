@@ -243,6 +243,14 @@ class BatchEvaluator:
         BatchResult
             NaN where a requirement is not attainable for that parameter set.
         """
+        # a row far outside the models (a pack drained far below its cut-off, a 1e300 kg
+        # mass) may overflow on its way to NaN, "not attainable": numpy's warnings about it
+        # would only clutter stderr (margins and sweeps; samples said so already)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return self._evaluate(values, size, coefficients, extrapolation_n)
+
+    def _evaluate(self, values: Mapping[str, Array] | None, size: int | None,
+                  coefficients: Array | None, extrapolation_n: Array | None) -> BatchResult:
         values = dict(values or {})
         if size is None:
             if values:
