@@ -340,14 +340,18 @@ def margins(
         if m.limit_value is None:
             limit = "none"
         else:
-            limit = f"{m.limit_value:.5g}" + {"not attainable": "*", "envelope ends": "^"}.get(
-                m.binds, "")
+            limit = f"{m.limit_value:.5g}" + {"not attainable": "*", "envelope ends": "^",
+                                               "aircraft refused": "#"}.get(m.binds, "")
         slope = "n/a" if m.sensitivity is None else f"{m.sensitivity:.4g}"
         typer.echo(f"{m.requirement:<30}{m.parameter:<40}{m.value:>11.5g}{limit:>13}"
                    f"{slope:>13}")
     typer.echo("")
     typer.echo("none: never binds in the searched range (0.5x-2x the nominal; altitude "
                "-500..5000 m, temperature offset -50..50 K); *: binds by becoming not attainable")
+    if any(m.binds == "aircraft refused" for m in rows):
+        typer.echo("#: where check refuses the aircraft as bad input (a lift-off or catapult "
+                   "release below stall, a stall beyond the speed of sound, thrust above 10 x "
+                   "the weight): the search ends there")
     if any(m.binds == "envelope ends" for m in rows):
         typer.echo("^: where the envelope's bounds cross (an equivalent-airspeed bound at that "
                    "density): beyond it the case has no envelope to fly")

@@ -80,3 +80,25 @@ def test_the_roll_powers_in_blocks_equal_all_at_once(monkeypatch) -> None:
     single_strides = BatchEvaluator(case).evaluate(values).values["flight_endurance"]
     assert np.isfinite(blocks).sum() >= 5
     np.testing.assert_array_equal(blocks, single_strides)
+
+
+def test_margins_end_where_check_refuses_the_aircraft(tmp_path) -> None:
+    """With a lift-off speed of 17 m/s EAS given, check refuses any mass whose stall is
+    above it; margins said OEI held up to 51 kg, far inside that refusal."""
+    from tuflexperf.analysis.margins import limit_values
+
+    path = copy_shipped_case(tmp_path)
+    aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
+    aircraft.write_text(aircraft.read_text().replace(
+        "liftoff_speed_factor: 1.1410", "liftoff_speed_m_s: 17.0"))
+    case = load_case(path)
+    limits = limit_values(case, {"aircraft.mass_kg": case.aircraft.mass_kg})
+    value, binds, _ = limits[("oei_min_throttle", "aircraft.mass_kg")]
+    assert binds == "aircraft refused"
+    assert {v.name: v for v in check_case(with_values(case, {"aircraft.mass_kg": value - 1e-6}))
+            }["oei_min_throttle"].passed
+    refused = runner.invoke(app, ["check", str(path), "--set",
+                                  f"aircraft.mass_kg={value + 1e-6!r}"])
+    assert refused.exit_code == 2 and "is below the stall speed" in refused.stderr
+    shown = runner.invoke(app, ["margins", "--case", str(path)])
+    assert shown.exit_code in (0, 1) and "#: where check refuses the aircraft" in shown.stdout

@@ -10,8 +10,9 @@ endurance throttle and the obstacle height):
   call cutting every bracket into 16 (15 points in each: a batch call costs about the same
   for one row as for hundreds), to below 1e-15 of the range (a rootfinder on the met / not
   met boundary, so a requirement that becomes not attainable binds too; trim and OEI bind
-  "where the envelope ends" when their bounds cross there). "none in range" when it never
-  binds.
+  "where the envelope ends" when their bounds cross there, and every requirement where
+  ``check`` refuses the aircraft, e.g. a lift-off speed below stall). "none in range" when it
+  never binds.
 - **sensitivity** d(value)/d(parameter) at the nominal case by CasADi's automatic
   differentiation of the requirement's value written with the model functions on CasADi
   symbols -- not finite differences. Where the deterministic value is a discrete choice
@@ -97,7 +98,7 @@ class Margin:
     sensitivity: float | None  # d(requirement value)/d(parameter) at the nominal
     unit: str  # the requirement's unit
     search_range: tuple[float, float]
-    binds: str  # "limit", "not attainable", "envelope ends" or "none in range"
+    binds: str  # "limit", "not attainable", "envelope ends", "aircraft refused", "none in range"
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -134,7 +135,12 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
     with np.errstate(over="ignore", invalid="ignore"):  # 2 x 1e308 is inf: not attainable
         grids = [np.unique(np.concatenate([np.linspace(*ranges[k], _SCAN_POINTS),
                                            [nominal[k]]])) for k in keys]
-    scan = evaluator.evaluate(_rows(nominal, keys, grids))
+    scan_values = _rows(nominal, keys, grids)
+    scan = evaluator.evaluate(scan_values)
+    # an aircraft check refuses (a lift-off speed below a heavier aircraft's stall) is where
+    # the search ends: no requirement holds there (OEI "held" up to 51 kg where check refuses
+    # the case beyond 36.6 kg)
+    refused = evaluator.rows_refused(scan_values, sum(g.size for g in grids))
     names = list(scan.values)
     out: dict[tuple[str, str], tuple[float | None, str, tuple[float, float]]] = {}
     brackets: list[tuple[str, str, float, float, bool]] = []  # (req, key, lo, hi, met_at_lo)
@@ -143,7 +149,7 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
         part = slice(start, start + grid.size)
         start += grid.size
         for name in names:
-            met = scan.met(name)[part]
+            met = scan.met(name)[part] & ~refused[part]
             changes = np.nonzero(met[1:] != met[:-1])[0]
             if changes.size == 0:
                 out[(name, key)] = (None, "none in range", ranges[key])
@@ -165,11 +171,13 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
         at = np.arange(len(brackets))
         for _ in range(_REFINEMENTS):
             points = low[:, None] + (high - low)[:, None] * inside[None, :]
-            result = evaluator.evaluate(_rows_pairs(nominal, row_brackets, points.ravel()))
+            inner = _rows_pairs(nominal, row_brackets, points.ravel())
+            result = evaluator.evaluate(inner)
+            refused_inner = evaluator.rows_refused(inner, rows.size)
             met = np.zeros(rows.size, dtype=bool)
             for name in set(row_names):  # each requirement's verdicts once, not once a row
                 mine = row_names == name
-                met[mine] = result.met(name)[mine]
+                met[mine] = result.met(name)[mine] & ~refused_inner[mine]
             changed = met.reshape(points.shape) != met_low[:, None]
             # the first point past the crossing (the high end when none is): the crossing
             # lies between it and the point before it, as a bisection would keep it
@@ -184,12 +192,15 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
         # past the bracket the envelope's bounds may cross (an EAS bound at altitude): trim
         # and OEI end there with the envelope, as the single case does (bad input), not fail
         unflown = evaluator.rows_without_envelope(edge_values, len(brackets))
+        refused_edge = evaluator.rows_refused(edge_values, len(brackets))
         flies = {r.name for r in evaluator.requirements if r.block in ("envelope", "oei")}
         for i, (name, key, _, _, _) in enumerate(brackets):
             root = 0.5 * (low[i] + high[i])
             binds = "limit" if np.isfinite(edge.values[name][i]) else "not attainable"
             if name in flies and unflown[i]:
                 binds = "envelope ends"
+            if refused_edge[i]:
+                binds = "aircraft refused"
             out[(name, key)] = (float(root), binds, ranges[key])
     return out
 

@@ -322,7 +322,8 @@ def _limit_label(key: str, limit: tuple[Any, str, Any] | None) -> str:
     if limit is None or limit[0] is None:
         return "none in range"
     u = _key_unit(key)
-    how = {"limit": "", "envelope ends": ", where the envelope ends"}.get(
+    how = {"limit": "", "envelope ends": ", where the envelope ends",
+           "aircraft refused": ", where check refuses the aircraft"}.get(
         limit[1], ", then not attainable")
     return f"{limit[0]:.4g}{(' ' + u) if u else ''}{how}"
 
