@@ -102,3 +102,21 @@ def test_margins_end_where_check_refuses_the_aircraft(tmp_path) -> None:
     assert refused.exit_code == 2 and "is below the stall speed" in refused.stderr
     shown = runner.invoke(app, ["margins", "--case", str(path)])
     assert shown.exit_code in (0, 1) and "#: where check refuses the aircraft" in shown.stdout
+
+
+def test_a_roll_whose_force_all_but_vanishes_costs_the_same_charge_in_both() -> None:
+    """At lift-off 2.7 x stall (1500 m, ISA+10) the net force all but vanishes before
+    lift-off: the single case's 64 roll steps of equal airspeed stepped over the peak of 1/F
+    and flew 13.56 min where the batch (and an independent solve_ivp of the launch charge)
+    gave 14.07. Its steps are now of equal time."""
+    case = with_values(load_case(SHIPPED_CASE), {
+        "atmosphere.altitude_m": 1500.0, "atmosphere.temperature_offset_k": 10.0,
+        "requirements.endurance.throttle": 0.55})
+    factor = {"aircraft.takeoff.liftoff_speed_factor": 2.7054}
+    single = {v.name: v.value for v in check_case(with_values(case, factor))}
+    batch = BatchEvaluator(case).evaluate({k: np.array([v]) for k, v in factor.items()})
+    roll = single["takeoff_ground_roll"]
+    assert roll > 2000.0  # the force does all but vanish: 2 km of roll
+    assert batch.values["takeoff_ground_roll"][0] == pytest.approx(roll, rel=1e-6)
+    assert batch.values["flight_endurance"][0] == pytest.approx(single["flight_endurance"],
+                                                                rel=1e-4)
