@@ -83,14 +83,22 @@ _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(16)
 _PANELS = 4  # composite rule: 4 panels x 16 nodes per smooth piece
 _CANDIDATE_HALF_WIDTH = 3  # grid points each side of the nominal's extreme tried first
 # the roll's quadrature nodes and weights on [0, 1] (composite, as _integrate places them)
-_ROLL_U_NODES = ((np.arange(_PANELS)[:, None] + 0.5 * (_GL_NODES + 1.0)) / _PANELS).reshape(1, -1)
-_ROLL_U_WEIGHTS = np.tile(_GL_WEIGHTS, _PANELS)[None, :] * 0.5 / _PANELS
+
+
+def _unit_rule(panels: int) -> tuple[Array, Array]:
+    """Composite Gauss-Legendre nodes and weights on [0, 1], ``(1, panels x 16)`` each."""
+    nodes = ((np.arange(panels)[:, None] + 0.5 * (_GL_NODES + 1.0)) / panels).reshape(1, -1)
+    return nodes, np.tile(_GL_WEIGHTS, panels)[None, :] * 0.5 / panels
+
+
 _ROLL_PROBES = np.array([0.25, 0.5, 0.75, 0.9])  # three fix a piece's quadratic, one checks it
 _UNIT = {t: {u: float(u == t) for u in POLY22_TERMS} for t in POLY22_TERMS}  # basis picks
 _HISTORY_POINTS = 101  # as analysis.takeoff.HISTORY_POINTS: the time history
 _CHECK_POINTS = 2001  # as analysis.takeoff._CHECK_POINTS: where the net force must be > 0
 _STEEP_FORCE_SHARE = 0.05  # a least net force below this share of the greatest: fine panels
 _FINE_PANELS = 256
+# the roll's quadrature on each piece's own coordinate (as _integrate places its nodes)
+_ROLL_RULE, _FINE_ROLL_RULE = _unit_rule(_PANELS), _unit_rule(_FINE_PANELS)
 
 
 @dataclass(frozen=True)
@@ -557,21 +565,19 @@ class _Model:
         self._pieces = (breaks, fits) if ok else False
         return self._pieces or None
 
-    def _integrate_piece(self, piece: tuple[Array, ...],
-                         panels: int = _PANELS) -> tuple[Array, Array]:
+    def _integrate_piece(self, piece: tuple[Array, ...], rule: tuple[Array, Array] = _ROLL_RULE,
+                         rows: Array | None = None) -> tuple[Array, Array]:
         """:meth:`_integrate` on one piece of :meth:`_roll_pieces`: the same nodes, the force
-        from the piece's quadratic."""
+        from the piece's quadratic; only ``rows`` (indices) when given."""
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
+        if rows is not None:
+            piece, mass = tuple(a[rows] for a in piece), mass[rows]
         low, width, c0, c1, c2 = piece
-        if panels == _PANELS:
-            u, w = _ROLL_U_NODES, _ROLL_U_WEIGHTS
-        else:
-            u = ((np.arange(panels)[:, None] + 0.5 * (_GL_NODES + 1.0)) / panels).reshape(1, -1)
-            w = np.tile(_GL_WEIGHTS, panels)[None, :] * 0.5 / panels
+        u, w = rule
         s = u - 0.5
         force = c0 + s * (c1 + s * c2)
         speed = low + width * u
         weights = w * width
-        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
         with np.errstate(divide="ignore", invalid="ignore"):
             over = weights * mass / force
             return np.sum(over * speed, axis=1), np.sum(over, axis=1)
@@ -663,10 +669,13 @@ class _Model:
                 continue  # this kink lies beyond lift-off for every row
             d, t = (self._integrate(low, high, _PANELS) if pieces is None
                     else self._integrate_piece(pieces[1][k]))
-            if steep.any():
-                fine = (self._integrate(low, high, _FINE_PANELS) if pieces is None
-                        else self._integrate_piece(pieces[1][k], _FINE_PANELS))
+            if steep.any() and pieces is None:
+                fine = self._integrate(low, high, _FINE_PANELS)
                 d, t = np.where(steep, fine[0], d), np.where(steep, fine[1], t)
+            elif steep.any():  # the fine rule on those rows alone (4,096 nodes a row)
+                rows = np.flatnonzero(steep)
+                d, t = d.copy(), t.copy()
+                d[rows], t[rows] = self._integrate_piece(pieces[1][k], _FINE_ROLL_RULE, rows)
             distance, time = distance + d, time + t
         # a sum over 1/F is no roll unless it is positive (a force negative between check
         # points summed to -796 m and passed; outside audit)
