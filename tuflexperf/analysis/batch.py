@@ -140,6 +140,10 @@ class BatchResult:
     limits: dict[str, Array]
     kinds: dict[str, str] = field(default_factory=dict)
     units: dict[str, str] = field(default_factory=dict)
+    # rows the single case refuses as bad input (BatchEvaluator.rows_refused), and rows whose
+    # envelope bounds cross (trim and OEI are NaN there): each consumer says what they mean
+    refused: NDArray[np.bool_] | None = None
+    without_envelope: NDArray[np.bool_] | None = None
 
     def met(self, name: str) -> NDArray[np.bool_]:
         """Met per sample, by the verdict rule of :mod:`tuflexperf.analysis.requirements`."""
@@ -279,7 +283,9 @@ class BatchEvaluator:
         out: dict[str, Array] = {}
         limits: dict[str, Array] = {}
         roll: tuple[Array, Array, Array, Array] | None = None
-        grids: tuple[Array, NDArray[np.bool_]] | None = None  # trim's and OEI's airspeeds
+        unflown = np.zeros(size, dtype=bool)
+        if any(r.block in ("envelope", "oei") for r in self.requirements):
+            grid, unflown = self._grids(values, model.density, size)  # trim's and OEI's
         catapult = self.case.aircraft.launch == "catapult"
         for requirement in self.requirements:
             limits[requirement.name] = self._limit(values, requirement, size)
@@ -293,13 +299,9 @@ class BatchEvaluator:
                                  obstacle_height_of(self.case), size)
                 out[requirement.name] = model.distance_to_obstacle(roll, height)
             elif requirement.block == "envelope":
-                grid, unflown = grids or self._grids(values, model.density, size)
-                grids = (grid, unflown)
                 out[requirement.name] = np.where(unflown, np.nan, model.trim_max_throttle(
                     grid, self._candidates()[0]))
             elif requirement.block == "oei":
-                grid, unflown = grids or self._grids(values, model.density, size)
-                grids = (grid, unflown)
                 mode = self.case.requirements.oei.dead_engine
                 out[requirement.name] = np.where(unflown, np.nan, model.oei_min_throttle(
                     grid, mode, self._candidates()[1]))
@@ -320,6 +322,8 @@ class BatchEvaluator:
             limits=limits,
             kinds={r.name: r.kind for r in self.requirements},
             units={r.name: r.unit for r in self.requirements},
+            refused=self.rows_refused(values, size, coefficients),
+            without_envelope=unflown,
         )
 
     def _battery_nominal(self) -> dict[str, float]:

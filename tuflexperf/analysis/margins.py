@@ -135,12 +135,11 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
     with np.errstate(over="ignore", invalid="ignore"):  # 2 x 1e308 is inf: not attainable
         grids = [np.unique(np.concatenate([np.linspace(*ranges[k], _SCAN_POINTS),
                                            [nominal[k]]])) for k in keys]
-    scan_values = _rows(nominal, keys, grids)
-    scan = evaluator.evaluate(scan_values)
+    scan = evaluator.evaluate(_rows(nominal, keys, grids))
     # an aircraft check refuses (a lift-off speed below a heavier aircraft's stall) is where
     # the search ends: no requirement holds there (OEI "held" up to 51 kg where check refuses
     # the case beyond 36.6 kg)
-    refused = evaluator.rows_refused(scan_values, sum(g.size for g in grids))
+    refused = scan.refused
     names = list(scan.values)
     out: dict[tuple[str, str], tuple[float | None, str, tuple[float, float]]] = {}
     brackets: list[tuple[str, str, float, float, bool]] = []  # (req, key, lo, hi, met_at_lo)
@@ -171,13 +170,11 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
         at = np.arange(len(brackets))
         for _ in range(_REFINEMENTS):
             points = low[:, None] + (high - low)[:, None] * inside[None, :]
-            inner = _rows_pairs(nominal, row_brackets, points.ravel())
-            result = evaluator.evaluate(inner)
-            refused_inner = evaluator.rows_refused(inner, rows.size)
+            result = evaluator.evaluate(_rows_pairs(nominal, row_brackets, points.ravel()))
             met = np.zeros(rows.size, dtype=bool)
             for name in set(row_names):  # each requirement's verdicts once, not once a row
                 mine = row_names == name
-                met[mine] = result.met(name)[mine] & ~refused_inner[mine]
+                met[mine] = result.met(name)[mine] & ~result.refused[mine]
             changed = met.reshape(points.shape) != met_low[:, None]
             # the first point past the crossing (the high end when none is): the crossing
             # lies between it and the point before it, as a bisection would keep it
@@ -187,19 +184,16 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
         # how it binds is judged at the bracket's failing end, the first value past the
         # limit (a midpoint of a bracket a float wide would land on either side)
         failing = np.where(met_low, high, low)
-        edge_values = _rows_pairs(nominal, brackets, failing)
-        edge = evaluator.evaluate(edge_values)
+        edge = evaluator.evaluate(_rows_pairs(nominal, brackets, failing))
         # past the bracket the envelope's bounds may cross (an EAS bound at altitude): trim
         # and OEI end there with the envelope, as the single case does (bad input), not fail
-        unflown = evaluator.rows_without_envelope(edge_values, len(brackets))
-        refused_edge = evaluator.rows_refused(edge_values, len(brackets))
         flies = {r.name for r in evaluator.requirements if r.block in ("envelope", "oei")}
         for i, (name, key, _, _, _) in enumerate(brackets):
             root = 0.5 * (low[i] + high[i])
             binds = "limit" if np.isfinite(edge.values[name][i]) else "not attainable"
-            if name in flies and unflown[i]:
+            if name in flies and edge.without_envelope[i]:
                 binds = "envelope ends"
-            if refused_edge[i]:
+            if edge.refused[i]:
                 binds = "aircraft refused"
             out[(name, key)] = (float(root), binds, ranges[key])
     return out

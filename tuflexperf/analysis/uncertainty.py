@@ -199,13 +199,12 @@ def evaluate_chunk(case: Case, plan: SamplingPlan, index: int) -> dict[str, Arra
         outside |= bad
     # a draw the single case refuses as no aircraft (static thrust beyond 10x its weight, a
     # release or lift-off below its stall, ...): not met, and counted
-    evaluator = evaluator_for(case)
-    absurd = evaluator.rows_refused(draw.values, draw.size, draw.coefficients) & ~outside
+    absurd = result.refused & ~outside
     out[f"outside:{REFUSED_AIRCRAFT_KEY}"] = np.array([np.count_nonzero(absurd)])
     outside |= absurd
     # bounds that cross (a least airspeed drawn above the greatest) leave no envelope to fly:
     # trim and OEI are not met there (the batch's NaN); the aircraft's other requirements are
-    crossed = evaluator.rows_without_envelope(draw.values, draw.size) & ~outside
+    crossed = result.without_envelope & ~outside
     out[f"outside:{ENVELOPE_KEY}"] = np.array([np.count_nonzero(crossed)])
     out.update({f"value:{k}": np.where(outside, np.nan, v) for k, v in result.values.items()})
     out.update({f"limit:{k}": v for k, v in result.limits.items()})
