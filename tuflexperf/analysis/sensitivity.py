@@ -155,16 +155,12 @@ def _grid_airspeed(s: _Symbolic, index: int) -> Any:
     with it (``numpy.linspace``'s own arithmetic, so the nominal value is the grid's)."""
     from tuflexperf.analysis.level_flight import airspeed_grid
     from tuflexperf.analysis.trim import envelope_of
-    from tuflexperf.models.aircraft import true_airspeed_m_s
 
     envelope = s.case.requirements.envelope
     grid = airspeed_grid(*envelope_of(s.case))
     if not envelope.in_eas:
         return float(grid[index])
-    low, high = (
-        float(true) if true is not None else true_airspeed_m_s(float(eas), s.density)
-        for true, eas in ((envelope.min_airspeed_m_s, envelope.min_airspeed_eas_m_s),
-                          (envelope.max_airspeed_m_s, envelope.max_airspeed_eas_m_s)))
+    low, high = envelope.bounds_m_s(s.density)  # an EAS bound as the density moves it
     steps = grid.size - 1
     return high if index == steps else index * ((high - low) / steps) + low
 

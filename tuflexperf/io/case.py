@@ -12,6 +12,7 @@ from pydantic import Field, field_validator, model_validator
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.yamlio import FileName, StrictModel, load_model
+from tuflexperf.models._math import Vectorizable, is_symbolic
 from tuflexperf.models.aircraft import (
     DEFAULT_LIFTOFF_SPEED_FACTOR,
     DEFAULT_OBSTACLE_HEIGHT_M,
@@ -285,16 +286,21 @@ class EnvelopeRequirement(StrictModel):
         """Whether a bound is an equivalent airspeed (its true airspeed follows the density)."""
         return self.min_airspeed_eas_m_s is not None or self.max_airspeed_eas_m_s is not None
 
-    def bounds_m_s(self, density_kg_m3: float) -> tuple[float, float]:
+    def bounds_m_s(self, density_kg_m3: Vectorizable) -> tuple[Any, Any]:
         """The envelope's (least, greatest) true airspeed [m/s] at ``density_kg_m3`` [kg/m^3].
+
+        Floats for a float density; a symbolic density (CasADi, the sensitivities) gives an
+        equivalent-airspeed bound as the expression that moves with it.
 
         References
         ----------
         SPEC 3 (airspeeds the pilot sets are EAS; envelope bounds true unless ``_eas``).
         """
-        def true(tas: float | None, eas: float | None) -> float:
-            return float(tas) if tas is not None else float(
-                true_airspeed_m_s(eas, density_kg_m3))
+        def true(tas: float | None, eas: float | None) -> Any:
+            if tas is not None:
+                return float(tas)
+            speed = true_airspeed_m_s(float(eas), density_kg_m3)  # type: ignore[arg-type]
+            return speed if is_symbolic(speed) else float(speed)
 
         return (true(self.min_airspeed_m_s, self.min_airspeed_eas_m_s),
                 true(self.max_airspeed_m_s, self.max_airspeed_eas_m_s))
