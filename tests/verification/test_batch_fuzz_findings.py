@@ -38,6 +38,14 @@ ROWS = [
     # a power model under half the momentum-theory power (figure of merit 2.05)
     pytest.param({"aircraft.cd0": 1e-9, "aircraft.k": 0.052}, "flight_endurance",
                  id="impossible-figure-of-merit"),
+    # a near-zero cd0: the batch cruised at 99 m/s on EDF1 at -3.6 N and -448 W (66.9 min,
+    # PASS); the single case's planned cruise had taken the polynomial's rise past the jet
+    # velocity for the fast root
+    pytest.param({"aircraft.wing_area_m2": 0.36, "aircraft.cd0": 4.307e-05},
+                 "flight_endurance", id="cruise-on-a-braking-fan"),
+    # the batch searched the excess to 8 x margin x stall, the single case to 8 x stall
+    pytest.param({"aircraft.cd0": 4.307e-05, "requirements.envelope.stall_margin": 2.4},
+                 "flight_endurance", id="excess-searched-to-the-single-case-range"),
 ]
 
 
@@ -120,3 +128,28 @@ def test_a_roll_whose_force_all_but_vanishes_costs_the_same_charge_in_both() -> 
     assert batch.values["takeoff_ground_roll"][0] == pytest.approx(roll, rel=1e-6)
     assert batch.values["flight_endurance"][0] == pytest.approx(single["flight_endurance"],
                                                                 rel=1e-4)
+
+
+def test_a_cruise_on_a_fan_that_brakes_is_not_attainable() -> None:
+    """cd0 1e-3 cruises at throttle 0.5 at 83 m/s, where EDF1's extrapolated thrust is
+    -0.3 N: both paths passed it at 36.6 min; the other fan's thrust balancing the drag
+    there is the extrapolation, not a flight."""
+    case = with_values(load_case(SHIPPED_CASE), {"aircraft.cd0": 1e-3})
+    verdict = {v.name: v for v in check_case(case)}["flight_endurance"]
+    assert verdict.value is None and not verdict.passed
+    assert "EDF1's models give -0.3 N" in verdict.reason
+    result = BatchEvaluator(load_case(SHIPPED_CASE)).evaluate(
+        {"aircraft.cd0": np.array([1e-3, 0.043])})
+    assert np.isnan(result.values["flight_endurance"][0])
+    assert result.values["flight_endurance"][1] > 15.0
+
+
+def test_the_planned_cruise_takes_the_fast_root_short_of_the_jet_velocity() -> None:
+    """Past the jet velocity the fans make no thrust: the polynomial's rise there (near-zero
+    cd0, beyond 210 m/s) is no fast root, so the cruise is planned at 99 m/s and refused for
+    what happens there, not "flies level only beyond the jet velocity"."""
+    case = with_values(load_case(SHIPPED_CASE),
+                       {"aircraft.wing_area_m2": 0.36, "aircraft.cd0": 4.307e-05})
+    verdict = {v.name: v for v in check_case(case)}["flight_endurance"]
+    assert "jet velocity" not in verdict.reason
+    assert "EDF1's models give -3.5 N" in verdict.reason and "98.9 m/s" in verdict.reason

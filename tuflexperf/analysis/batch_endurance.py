@@ -268,23 +268,36 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak)
 
 
-def _most_excess(m: Any, throttle: Array, stall: Array) -> tuple[Array, Array]:
-    """Largest level-flight thrust excess [N] at ``throttle`` between stall and 8 x stall,
-    and its airspeed: the throttle holds level flight somewhere iff it is >= 0 (the same
-    test as ``throttle >= least level-flight throttle`` of ``EnduranceModel.check_throttle``).
+def _most_excess(m: Any, throttle: Array, least: Array, stall: Array) -> tuple[Array, Array]:
+    """Largest level-flight thrust excess [N] at ``throttle`` between the least level-flight
+    airspeed ``least`` (stall x the envelope's margin) and 8 x ``stall``, and its airspeed:
+    the throttle holds level flight somewhere iff it is >= 0 (the same range and test as
+    ``throttle >= least level-flight throttle`` of ``EnduranceModel.check_throttle``).
     Coarse grid, then golden-section search (one evaluation per step)."""
-    low = stall
+    low = least
+    # 8 x the stall, not 8 x the margin's speed: a margin of 2.4 searched to 19 x stall, into
+    # an extrapolated rise of thrust the single case never reaches (outside audit)
     high = single._MAX_SPEED_OVER_STALL * stall
+    # short of the fans' jet velocity, as the single case: beyond it a fan makes no thrust,
+    # whatever the extrapolated polynomial gives
+    ceiling = np.asarray(jet_velocity_ceiling_m_s(m.propulsion, m.density),
+                         dtype=float).reshape(-1) * np.ones(m.size)
+
+    def short_of_jet(values: Array, speed: Array) -> Array:
+        return np.where(speed < (ceiling if speed.ndim == 1 else ceiling[:, None]), values,
+                        -np.inf)
+
     grid = low[:, None] + (high - low)[:, None] * np.linspace(0.0, 1.0, 21)[None, :]
-    values = _excess_grid(m, throttle, grid)
+    values = short_of_jet(_excess_grid(m, throttle, grid), grid)
     k = np.argmax(values, axis=1)
     rows = np.arange(m.size)
     a = grid[rows, np.maximum(k - 1, 0)]
     b = grid[rows, np.minimum(k + 1, grid.shape[1] - 1)]
-    a, b = _golden_section_max(lambda speed: _excess(m, throttle, speed), a, b,
-                               lambda _a, _b, steps: steps >= _GOLDEN_STEPS)
+    a, b = _golden_section_max(
+        lambda speed: short_of_jet(_excess(m, throttle, speed), speed), a, b,
+        lambda _a, _b, steps: steps >= _GOLDEN_STEPS)
     speed = 0.5 * (a + b)
-    return _excess(m, throttle, speed), speed
+    return short_of_jet(_excess(m, throttle, speed), speed), speed
 
 
 def _bracketed_root(f: Any, low: Array, high: Array) -> Array:
@@ -350,7 +363,7 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     reserve_ah = (per_engine * capacity
                   * (1.0 - battery["battery.mission.landing_reserve_fraction"]))
     # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
-    most, least_speed = _most_excess(m, throttle, m.least_airspeed())
+    most, least_speed = _most_excess(m, throttle, m.least_airspeed(), stall)
     ok = np.isfinite(q_launch) & (most >= 0.0)
     # an airspeed above the fast level-flight root, as EnduranceModel._speed_guess
     guess = np.maximum(least_speed, stall) * 1.25
@@ -368,7 +381,7 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     density = np.asarray(m.density, dtype=float).reshape(-1, 1)
     ok &= ~beyond_jet_velocity(m.propulsion, speed[:, None], density)[:, 0]
     power_w = _power_w(model, m, throttle, speed)
-    ok &= ~_impossible_merit(m, throttle, speed, power_w)
+    ok &= ~_impossible_cruise(m, throttle, speed, power_w)
     params = model.params
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs / per_engine) > 0.0)
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs) > 0.0)
@@ -389,15 +402,14 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     return np.where(ok & np.isfinite(minutes), minutes, np.nan)
 
 
-def _impossible_merit(m: Any, throttle: Array, speed: Array, power_w: Array) -> Array:
-    """Rows where an engine's power model gives under 1/``IMPOSSIBLE_FIGURE_OF_MERIT`` of
-    momentum theory's ideal power for its thrust at the cruise (``EnduranceModel.solve``'s
-    rule: no fan flies on it); each engine's own power surface where it has one, else the
-    per-fan ``power_w`` [W], as ``analysis.powertrain.agreement_at``."""
+def _impossible_cruise(m: Any, throttle: Array, speed: Array, power_w: Array) -> Array:
+    """Rows where ``EnduranceModel`` refuses the cruise for an engine's models: a fan whose
+    thrust or electrical power is not positive there, or whose power is under
+    1/``IMPOSSIBLE_FIGURE_OF_MERIT`` of momentum theory's ideal power for its thrust (no fan
+    flies on it); each engine's own power surface where it has one, else the per-fan
+    ``power_w`` [W], as ``analysis.powertrain.agreement_at``."""
     area = m.propulsion.fan_area_m2
     impossible = np.zeros(m.size, dtype=bool)
-    if area is None:
-        return impossible
     scale = density_ratio(m.propulsion, m.density)
     x, v = throttle.reshape(-1, 1) * np.ones((m.size, 1)), speed.reshape(-1, 1)
     density = np.asarray(m.density, dtype=float).reshape(-1, 1)
@@ -405,6 +417,9 @@ def _impossible_merit(m: Any, throttle: Array, speed: Array, power_w: Array) -> 
         surface = engine_power_w(engine, x, v)
         power = scale * surface if surface is not None else power_w.reshape(-1, 1)
         thrust = engine_thrust_n(engine, x, v, scale)
+        impossible |= ~((thrust > 0.0) & (power > 0.0)).reshape(-1)
+        if area is None:
+            continue
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             merit = np.asarray(figure_of_merit(thrust, v, density, area, power), dtype=float)
         impossible |= (merit > single.IMPOSSIBLE_FIGURE_OF_MERIT).reshape(-1)

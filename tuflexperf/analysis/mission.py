@@ -381,12 +381,9 @@ class MissionModel:
         while top < limit and float(excess(top)) >= 0.0:
             top = min(2.0 * top, limit)
         v = np.linspace(0.5 * stall, top, 4001)
-        ok = np.flatnonzero(excess(v) >= 0)
-        if ok.size and v[ok[-1]] >= ceiling:
-            raise NotAttainable(
-                f"{label}: throttle {throttle:g} flies level only at or beyond the fans' static "
-                f"jet velocity {ceiling:.1f} m/s, where they make no thrust (the thrust model "
-                "is extrapolated there): not attainable")
+        # the fast root short of the jet velocity: past it a fan makes no thrust, so the
+        # extrapolated polynomial's rise there (a near-zero cd0) is no level flight
+        ok = np.flatnonzero((excess(v) >= 0) & (v < ceiling))
         if not ok.size or ok[-1] == v.size - 1:
             raise NotAttainable(f"{label}: throttle {throttle:g} holds level flight at no "
                                 "airspeed")
@@ -394,6 +391,11 @@ class MissionModel:
         for _ in range(60):
             mid = 0.5 * (low + high)
             low, high = (mid, high) if excess(mid) >= 0 else (low, mid)
+        if high >= ceiling:
+            raise NotAttainable(
+                f"{label}: throttle {throttle:g} flies level only at or beyond the fans' static "
+                f"jet velocity {ceiling:.1f} m/s, where they make no thrust (the thrust model "
+                "is extrapolated there): not attainable")
         return 0.5 * (low + high)
 
     def _best_endurance_eas(self, h: float, dead: int | None = None) -> float:
@@ -458,19 +460,22 @@ class MissionModel:
         return np.asarray(total, dtype=float)
 
     # -- physics at one instant (backend-neutral) -----------------------------------------
-    def _engine_power(self, i: int, x: Any, v: Any, rho: Any) -> Any:
-        from tuflexperf.models._math import fmax
+    def _modelled_power(self, i: int, x: Any, v: Any, rho: Any) -> Any:
+        """Engine ``i``'s electrical power [W] as its model gives it (may be negative)."""
         from tuflexperf.models.powertrain import engine_power_w
 
         prop = self.case.propulsion
         if self.own_power:
-            power = density_ratio(prop, rho) * engine_power_w(prop.engines[i], x, v)
-        else:
-            power = self.fan_power.electrical_power_w(x, v)
+            return density_ratio(prop, rho) * engine_power_w(prop.engines[i], x, v)
+        return self.fan_power.electrical_power_w(x, v)
+
+    def _engine_power(self, i: int, x: Any, v: Any, rho: Any) -> Any:
+        from tuflexperf.models._math import fmax
+
         # an ESC draws, it does not charge: the power surface extrapolated to idle at high
         # airspeed dips below zero, which "charged" the pack past its circuit (a dive failed
         # on a cut-off it never reached)
-        return fmax(power, 0.0)
+        return fmax(self._modelled_power(i, x, v, rho), 0.0)
 
     def _algebra(self, u: list[Any], v: Any, q: Any, rho: Any, plan_p: Any,
                  dead: int | None) -> dict[str, Any]:
@@ -1015,6 +1020,9 @@ class MissionModel:
                     problems.append((k0, f"throttle {throttle:g} flies level at "
                                      f"{v[a + k0]:.1f} m/s, below stall ({stall_v[k0]:.1f} m/s):"
                                      " not attainable, below stall"))
+                braking = self._braking_engine(throttle, v[sl], h[sl], live)
+                if braking is not None:
+                    problems.append(braking)
             if plan.kind != "takeoff":  # the take-off analysis holds its own lift-off to it
                 rho_sl = np.asarray(self._rho(h[sl]), dtype=float)
                 # only thrust the fans cannot make counts: an idle dive past the jet velocity
@@ -1121,6 +1129,31 @@ class MissionModel:
             engines=self.engines, history=history, solved=solved, ended_at_s=ended_at,
             warnings=self.battery.scaled_notes,
         )
+
+    def _braking_engine(self, throttle: float, v: np.ndarray, h: np.ndarray,
+                        live: list[int]) -> tuple[int, str] | None:
+        """The first node of a level flight at a fixed ``throttle`` where a live engine's
+        models give no thrust, or thrust on no power, and why (``None`` if none does).
+
+        The other fan's extrapolated thrust can still balance the drag there, and the ESC
+        clamp hides the power the pack would be "given back": a cruise at 99 m/s on one fan
+        at -3.6 N and -448 W flew 66.9 min (outside audit). Unflown (NaN) nodes are skipped.
+        """
+        prop = self.case.propulsion
+        rho = np.asarray(self._rho(h), dtype=float) * np.ones_like(v)
+        sigma = density_ratio(prop, rho)
+        for i in live:
+            thrust = np.asarray(engine_thrust_n(prop.engines[i], throttle, v, sigma), dtype=float)
+            power = np.asarray(self._modelled_power(i, throttle, v, rho), dtype=float)
+            power = power * np.ones_like(v)
+            bad = np.flatnonzero((thrust <= 0.0) | (power <= 0.0))
+            if bad.size:
+                k = int(bad[0])
+                return k, (f"{self.engines[i]}'s models give {thrust[k]:.1f} N on "
+                           f"{power[k]:.0f} W at throttle {throttle:g}, {v[k]:.1f} m/s "
+                           "(extrapolated): a fan that makes no thrust, or thrust on no power, "
+                           "flies no cruise")
+        return None
 
     def _stall_factor(self) -> float:
         """Least EAS [m/s] of level flight: the stall speed (EAS) x the envelope's margin."""
