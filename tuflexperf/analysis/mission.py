@@ -362,7 +362,8 @@ class MissionModel:
 
     def _level_speed_at_throttle(self, throttle: float, h: float, dead: int | None,
                                  label: str) -> float:
-        """Fastest true airspeed [m/s] of level flight at ``throttle`` (full packs, no sag)."""
+        """Fastest true airspeed [m/s] of level flight at ``throttle`` short of the fans' jet
+        velocity (full packs, no sag)."""
         from tuflexperf.models.thrust import total_thrust_n
 
         aircraft, prop = self.case.aircraft, self.case.propulsion
