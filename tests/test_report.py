@@ -369,6 +369,11 @@ def test_console_script_keeps_stdout_for_json_and_progress_on_stderr(made_up, tm
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["pdf"] == str(out / "review.pdf")
     assert re.search(r"report \[\d+/\d+\]", proc.stderr)
+    # one total, given once it is known, and reached by the last step ([1/18] then [3/17])
+    steps = [(int(k), n) for k, n in re.findall(r"report \[(\d+)(?:/(\d+))?\]", proc.stderr)]
+    assert [k for k, _ in steps] == list(range(1, len(steps) + 1))
+    totals = {n for _, n in steps if n}
+    assert totals == {str(len(steps))}
 
 
 def test_a_failing_case_is_still_reported_with_its_reasons(tmp_path):

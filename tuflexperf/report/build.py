@@ -59,28 +59,34 @@ class ReportResult:
 
 
 class StepCounter:
-    """``report [k/n] label`` lines on stderr (never stdout: ``--json`` keeps it clean)."""
+    """``report [k/n] label`` lines on stderr (never stdout: ``--json`` keeps it clean).
 
-    def __init__(self, total: int, stream: Any = None, enabled: bool = True) -> None:
-        self.total, self.done, self.enabled = total, 0, enabled
+    The number of steps is known once the measured data are reduced (which pages they
+    give): until then a step is ``[k]``, never a guessed total that later changes.
+    """
+
+    def __init__(self, stream: Any = None, enabled: bool = True) -> None:
+        self.total: int | None = None
+        self.done, self.enabled = 0, enabled
         self.stream = stream if stream is not None else sys.stderr
         self.started = time.perf_counter()
 
     def __call__(self, label: str) -> None:
         self.done += 1
-        self.total = max(self.total, self.done)
         if self.enabled:
             elapsed = time.perf_counter() - self.started
-            self.stream.write(f"report [{self.done}/{self.total}] {label} ({elapsed:.1f} s)\n")
+            of = f"/{self.total}" if self.total is not None else ""
+            self.stream.write(f"report [{self.done}{of}] {label} ({elapsed:.1f} s)\n")
             self.stream.flush()
 
     def detail(self, done: int, total: int, label: str) -> None:
-        """A sub-step of the next step (``fit_campaign``'s progress callback signature)."""
+        """Progress of the campaign's reduction (``fit_campaign``'s progress callback
+        signature); it runs beside the steps, in a helper process, so it carries no step
+        number of its own."""
         if self.enabled and done < total:
             elapsed = time.perf_counter() - self.started
             self.stream.write(
-                f"report [{self.done + 1}/{self.total}]   reducing {done + 1}/{total} {label} "
-                f"({elapsed:.1f} s)\n"
+                f"report   reducing {done + 1}/{total} {label} ({elapsed:.1f} s)\n"
             )
             self.stream.flush()
 
@@ -128,7 +134,7 @@ def build_report(
         _check_campaign(campaign_path)  # before any step is shown or anything is written
     with (staged_directory(out, "report") as staging,
           tempfile.TemporaryDirectory(prefix="tuflexperf-report-") as kept):
-        result = _render(case, staging, campaign_path, StepCounter(18, stream, progress),
+        result = _render(case, staging, campaign_path, StepCounter(stream, progress),
                          Path(kept))
     files = [out / p.name for p in result.files]
     return ReportResult(
