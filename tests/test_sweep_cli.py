@@ -78,3 +78,33 @@ def test_an_input_file_is_never_overwritten(tmp_path) -> None:
                                  str(target)])
     assert result.exit_code == 2 and "input" in result.stderr
     assert target.read_bytes() == before
+
+
+def test_a_set_the_grid_replaces_does_not_refuse_a_valid_grid() -> None:
+    """A --set value of a varied key is not used (a note says so), so it cannot make the
+    sweep bad input; nor can a --set that only the grid's own key crosses. Both were
+    refused though every grid point was valid."""
+    own = runner.invoke(app, ["sweep", "--set", "aircraft.mass_kg=0.001", "--vary",
+                              "aircraft.mass_kg=20:30:3", "--json"])
+    assert own.exit_code == 0, own.stderr
+    plain = runner.invoke(app, ["sweep", "--vary", "aircraft.mass_kg=20:30:3", "--json"])
+    assert json.loads(own.stdout)["rows"] == json.loads(plain.stdout)["rows"]
+    crossed = runner.invoke(app, [
+        "sweep", "--set", "requirements.envelope.max_airspeed_m_s=40", "--set",
+        "requirements.envelope.min_airspeed_m_s=41", "--vary",
+        "requirements.envelope.min_airspeed_m_s=16:20:2", "--json"])
+    assert crossed.exit_code == 0, crossed.stderr
+    single = check_case(with_values(load_case(SHIPPED_CASE), {
+        "requirements.envelope.max_airspeed_m_s": 40.0,
+        "requirements.envelope.min_airspeed_m_s": 20.0}))
+    row = json.loads(crossed.stdout)["rows"][1]
+    for verdict in single:
+        value = row[verdict.name]["value"]
+        assert (value is None) == (verdict.value is None)
+        if value is not None:
+            assert value == pytest.approx(verdict.value, rel=1e-6)
+    # a --set that is bad input whatever the grid still is, naming the flag
+    bad = runner.invoke(app, ["sweep", "--set", "aircraft.mass_kg=-1", "--vary",
+                              "aircraft.cd0=0.03:0.04:2"])
+    assert bad.exit_code == 2
+    assert bad.stderr.startswith("tuflexperf: error: --set: aircraft.mass_kg")

@@ -54,19 +54,12 @@ SetOption = typer.Option(
 )
 
 
-def load_case_with(case_file: Path | None, sets: list[str] | None) -> Any:
-    """The case, with every ``--set KEY=VALUE`` applied and validated by the schemas."""
-    from tuflexperf.io.case import load_case
-
-    case = load_case(case_file)
-    if not sets:
-        return case
+def parse_sets(sets: list[str] | None) -> dict[str, float]:
+    """Every ``--set KEY=VALUE`` as ``{key: number}`` (bad input names the flag)."""
     import yaml
 
-    from tuflexperf.io.dotted import with_values
-
     values: dict[str, float] = {}
-    for item in sets:
+    for item in sets or []:
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
             fail_input(f"--set: expected KEY=VALUE, got {item!r}")
@@ -79,7 +72,19 @@ def load_case_with(case_file: Path | None, sets: list[str] | None) -> Any:
                 or not math.isfinite(value):
             fail_input(f"--set: {key}: not a finite number: {text!r}")
         values[key.strip()] = float(value)
-    return with_values(case, values, "--set")
+    return values
+
+
+def load_case_with(case_file: Path | None, sets: list[str] | None) -> Any:
+    """The case, with every ``--set KEY=VALUE`` applied and validated by the schemas."""
+    from tuflexperf.io.case import load_case
+
+    case = load_case(case_file)
+    if not sets:
+        return case
+    from tuflexperf.io.dotted import with_values
+
+    return with_values(case, parse_sets(sets), "--set")
 
 
 def _json_default(value: Any) -> Any:
@@ -371,12 +376,12 @@ def sweep(
     dask: str | None = DaskOption,
 ) -> None:
     """Every requirement over a grid of parameter values."""
-    from tuflexperf.analysis.sweep import parse_vary, run_sweep
+    from tuflexperf.analysis.sweep import run_sweep
     from tuflexperf.io.files import atomic_write_bytes, atomic_write_text
 
-    case = load_case_with(case_file, sets)
     if workers is not None and workers < 1:
         fail_input(f"--workers: must be at least 1, got {workers}")
+    case, axes = _sweep_case(case_file, sets, vary)
     outputs = {flag: target for flag, target in (("--csv", csv_out), ("--plot", plot))
                if target is not None}
     if plot is not None and plot.suffix.lower() != ".png":
@@ -386,7 +391,6 @@ def sweep(
         from tuflexperf.io.files import guard_outputs
 
         guard_outputs(outputs, [path for _, path in case_files(case)], "sweep")
-    axes = [parse_vary(case, spec) for spec in vary]
     result = run_sweep(case, axes, workers, dask)
     notes = _batch_notes(case, [key for key, _ in axes], sets)
     if plot is not None:
@@ -420,6 +424,35 @@ def sweep(
             typer.echo(f"wrote {target}")
     for note in notes:
         typer.echo(f"  note: {note}")
+
+
+def _sweep_case(case_file: Path | None, sets: list[str] | None, vary: list[str]
+                ) -> tuple[Any, list[tuple[str, Any]]]:
+    """The sweep's nominal case and its axes.
+
+    The grid gives a varied key its values: a ``--set`` of that key is not used (a note says
+    so), so a nominal that only such a value, or a ``--set`` crossing the grid's own key
+    (a maximum below the file's minimum, where the minimum is varied), makes bad input is
+    taken at the grid's first point instead; it was refused though every point was valid.
+    """
+    from tuflexperf.analysis.sweep import parse_vary
+    from tuflexperf.io.case import load_case
+    from tuflexperf.io.dotted import with_values
+
+    values = parse_sets(sets)
+    base = load_case(case_file)
+    axes = [parse_vary(base, spec) for spec in vary]
+    if not values:
+        return base, axes
+    try:
+        return with_values(base, values, "--set"), axes
+    except InputError as refused:
+        first = {key: float(grid[0]) for key, grid in axes}
+        kept = {key: value for key, value in values.items() if key not in first}
+        try:
+            return with_values(base, {**kept, **first}, "--set"), axes
+        except InputError:
+            raise refused from None
 
 
 def _batch_notes(case: Any, varied: list[str], sets: list[str] | None) -> list[str]:
