@@ -14,7 +14,12 @@ import pytest
 
 from tests.conftest import SHIPPED_CASE
 from tuflexperf.analysis import batch_endurance
-from tuflexperf.analysis.batch import BatchEvaluator, _Model, nominal_engines
+from tuflexperf.analysis.batch import (
+    _STEEP_FORCE_SHARE,
+    BatchEvaluator,
+    _Model,
+    nominal_engines,
+)
 from tuflexperf.analysis.batch_endurance import _interp_rows
 from tuflexperf.io.case import load_case
 
@@ -96,9 +101,16 @@ def test_piecewise_quadratic_roll_equals_node_by_node(seed: int) -> None:
     slow._pieces = False  # evaluate the force at every node
     got, want = fast.ground_roll(), slow.ground_roll()
     assert fast._pieces  # the quadratic form held for every row
+    # where the force all but vanishes the pieces' stretched rule is exact and node by node
+    # is 256 panels' approximation (5.8e-10 off scipy's quad where the pieces' is 1e-12):
+    # those rows agree to the fine rule's accuracy
+    least, most = fast._force_range()
+    steep = least < _STEEP_FORCE_SHARE * most
+    assert steep[np.isfinite(got[0])].any()
     for a, b in zip(got, want, strict=True):
         assert np.array_equal(np.isnan(a), np.isnan(b))
-        assert np.allclose(a, b, rtol=1e-10, atol=0.0, equal_nan=True)
+        assert np.allclose(a[~steep], b[~steep], rtol=1e-10, atol=0.0, equal_nan=True)
+        assert np.allclose(a[steep], b[steep], rtol=1e-8, atol=0.0, equal_nan=True)
     assert np.allclose(fast.uniform_force(), slow.uniform_force(), rtol=1e-9, atol=1e-9)
     assert np.allclose(fast.roll_history(), slow.roll_history(), rtol=1e-9, equal_nan=True)
     v_lo = fast.liftoff_speed()[:, 0]

@@ -24,12 +24,14 @@ case's temperature offset):
   A cruise or loiter at a fixed ``throttle`` flies the fast root of ``T(x, V) = D(V)``
   (Newton with the loaded voltages from the full-pack airspeed): its airspeed falls as
   the packs sag, and below stall it is not attainable.
-- take-off: the ground roll from rest at full throttle, ``m dV/dt = T - D_g - mu max(W - L_g,
-  0)`` with the thrust at the packs' loaded voltage (integrated over airspeed, so it ends at
-  ``V_LO`` exactly), the rotation at ``V_LO``, then the landed take-off analysis's airborne
-  part flown along the path at the transition speed: the arc ``h = R (1 - cos(V t / R))``
-  and the straight climb at the full-throttle gradient to the obstacle height (that path's
-  geometry is the analysis's, at the reference voltage).
+- take-off: the ground roll from rest at full throttle along the take-off analysis's own
+  airspeed history (``m dV/dt = T - D_g - mu max(W - L_g, 0)``, solved by CVODES there:
+  flown in time, the charge's rate is smooth where the net force all but vanishes), the
+  rotation at ``V_LO``, then the landed take-off analysis's airborne part flown along the
+  path at the transition speed: the arc ``h = R (1 - cos(V t / R))`` and the straight climb
+  at the full-throttle gradient to the obstacle height (the path's airspeeds are the
+  analysis's; with a reference voltage the roll's time stretches by ``F_ref / F(U)``, the
+  net force at the reference over that at the packs' loaded voltage).
 
 Each segment is integrated by classic RK4 with :data:`STEPS` fixed steps (over time for
 level segments and the take-off, over height for climbs and descents, so their end is
@@ -80,6 +82,7 @@ from tuflexperf.models.thrust import (
     density_ratio,
     engine_thrust_n,
     least_throttle_reaching,
+    total_thrust_n,
     windmilling_thrust_n,
 )
 
@@ -364,8 +367,6 @@ class MissionModel:
                                  label: str) -> float:
         """Fastest true airspeed [m/s] of level flight at ``throttle`` short of the fans' jet
         velocity (full packs, no sag)."""
-        from tuflexperf.models.thrust import total_thrust_n
-
         aircraft, prop = self.case.aircraft, self.case.propulsion
         rho = float(self._rho(h))
         stall = float(stall_speed_eas_m_s(aircraft)) * math.sqrt(1.225 / rho)
@@ -442,8 +443,6 @@ class MissionModel:
 
     def _level_throttle_numpy(self, v: np.ndarray, rho: float, dead: int | None = None
                               ) -> tuple[np.ndarray, np.ndarray]:
-        from tuflexperf.models.thrust import total_thrust_n
-
         prop = self.case.propulsion
         t = [np.asarray(total_thrust_n(prop, x, v, rho, dead, self.dead_mode), dtype=float)
              for x in (0.0, 0.5, 1.0)]
@@ -607,11 +606,11 @@ class MissionModel:
         return self._steps[key]
 
     def _step_functions(self, dead: int | None, solve_v: bool, kind: str) -> Any:
-        """RK4 step ``(state, step, p) -> state`` over ``kind`` (time, height, speed), or the aux.
+        """RK4 step ``(state, step, p) -> state`` over ``kind`` (time, height), or the aux.
 
-        Over airspeed (the take-off's ground roll): ``dstate/dV = rates / (dV/dt)`` with
-        ``m dV/dt = T - D_g - mu max(W - L_g, 0)`` and the thrust at the packs' loaded
-        voltage (SPEC 3), so a roll ends exactly at the lift-off speed.
+        A forced phase (the take-off's roll, rotation and path to the obstacle) is flown in
+        time at the airspeeds the take-off analysis gives (``p[6:9]``: at the step's start,
+        middle and end); the packs' state, current and power follow at their loaded voltage.
         """
         import casadi as ca
 
@@ -655,19 +654,25 @@ class MissionModel:
             safe = ca.if_else(step > 0, ca.fmax(rate, 1e-6), ca.fmin(rate, -1e-6))
             return d / safe
 
-        aircraft = self.case.aircraft
+        aircraft, prop = self.case.aircraft, self.case.propulsion
 
-        def in_speed(state: Any, v_given: Any) -> Any:
+        def in_roll(state: Any, v_given: Any) -> Any:
+            # over the take-off analysis's time tau, at its airspeed V(tau): dstate/dtau =
+            # dstate/dt x F_ref(V) / F(V, U), the pack's sag slowing the roll (SPEC 3); at
+            # the reference voltage (or without one) the analysis's time is the roll's
             d, a = rates(state, v_given)
+            if prop.reference_voltage_v is None:
+                return d
             drag, friction = ground_roll_resistance_n(aircraft, v_given, self._rho(state[2 * n]))
-            # the take-off analysis has refused a roll whose net force vanishes at the
-            # reference voltage; the floor only keeps the arithmetic finite
-            accel = ca.fmax((a[6 + 3 * n] - drag - friction) / aircraft.mass_kg, 1e-9)
-            return d / accel
+            reference = total_thrust_n(prop, 1.0, v_given, self._rho(state[2 * n])) \
+                - drag - friction
+            loaded = a[6 + 3 * n] - drag - friction
+            # a sag that stops the roll is slow beyond any mission; the floor keeps it finite
+            return d * reference / ca.fmax(loaded, 1e-9 * aircraft.mass_kg)
 
         if kind == "aux":
             return ca.Function("aux", [s, p], [evaluate(s, p[6])])
-        derivative = {"time": in_time, "height": in_height, "speed": in_speed}[kind]
+        derivative = {"time": in_time, "height": in_height, "roll": in_roll}[kind]
         return ca.Function(f"step_{kind}", [s, step, p], [rk4(derivative)])
 
     def _segment_graph(self, plan: _Plan, state: Any, durations: Any, theta: Any,
@@ -776,7 +781,8 @@ class MissionModel:
                               dtype=float).ravel()
 
     def _takeoff_phases(self, plan: _Plan) -> list[tuple[str, Any, np.ndarray]]:
-        """Ground roll (over airspeed), rotation and the airborne part to the obstacle."""
+        """Ground roll (over the take-off analysis's time), rotation and the airborne part to
+        the obstacle."""
         from tuflexperf.analysis.takeoff import solve_takeoff
 
         result = solve_takeoff(self.case)
@@ -784,23 +790,20 @@ class MissionModel:
             raise NotAttainable(f"segment {plan.index + 1} (takeoff): {result.obstacle_reason}")
         self.takeoff = result
         v_lo = result.liftoff_speed_m_s
-        # the ground roll is integrated over airspeed from rest to the lift-off speed, with
-        # the thrust at the packs' voltage (the take-off analysis knows no pack state), in
-        # steps of equal time: where the net force all but vanishes, steps of equal airspeed
-        # stepped over the peak of 1/F (3.7 % of an endurance; outside audit)
+        # the ground roll in time along the take-off analysis's own airspeed history, in
+        # steps of equal time: the charge's rate is smooth in time. Over airspeed, dt/dV =
+        # m/F peaks where the net force all but vanishes, and a node on the peak made a
+        # 40 s roll 264 s (steps of equal airspeed had stepped over it: 3.7 %; outside audits)
         time = np.asarray(result.history_time_s, dtype=float)
-        if time.size > 1 and time[-1] > 0.0:
-            grid = np.interp(np.linspace(0.0, time[-1], STEPS + 1), time,
-                             np.asarray(result.history_airspeed_m_s, dtype=float))
-        else:  # no roll history (a catapult's release): equal airspeeds
-            grid = np.linspace(0.0, v_lo, STEPS + 1)
-        grid[0], grid[-1] = 0.0, v_lo
-        dv = np.diff(grid)
+        speed = np.asarray(result.history_airspeed_m_s, dtype=float)
+        roll_s = float(time[-1]) if time.size > 1 else 0.0
+        stage = np.linspace(0.0, roll_s, 2 * STEPS + 1)  # each step's start, middle and end
+        at = np.interp(stage, time, speed) if roll_s > 0.0 else np.full(stage.size, v_lo)
         rows = np.zeros((STEPS, _P_SIZE))
         rows[:, 1] = 1.0  # full throttle
         rows[:, 5] = 1.0  # airspeed given, height rate forced (0 on the runway)
-        rows[:, 6], rows[:, 7], rows[:, 8] = grid[:-1], 0.5 * (grid[:-1] + grid[1:]), grid[1:]
-        phases: list[tuple[str, Any, np.ndarray]] = [("speed", dv, rows)]
+        rows[:, 6], rows[:, 7], rows[:, 8] = at[0:-1:2], at[1::2], at[2::2]
+        phases: list[tuple[str, Any, np.ndarray]] = [("roll", roll_s / STEPS, rows)]
         if result.rotation_time_s > 0:
             rot = np.zeros((8, _P_SIZE))
             rot[:, 1], rot[:, 5], rot[:, 6:9] = 1.0, 1.0, v_lo
