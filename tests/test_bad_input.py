@@ -294,3 +294,18 @@ def test_a_percent_hint_only_for_what_looks_like_a_percent(value, hint):
     result = runner.invoke(app, ["endurance", "--throttle", value])
     assert result.exit_code == 2 and "must be a fraction in [0, 1]" in result.stderr
     assert ("fraction, not percent" in result.stderr) is hint
+
+
+@pytest.mark.parametrize("density", ["1e-9", "50.0"])
+def test_a_reference_density_no_test_day_has_is_bad_input(tmp_path, density) -> None:
+    """1e-9 kg/m^3 scaled every thrust 1e9-fold: take-off, trim and OEI PASSed, a climb of
+    1.6e10 m/s (outside audit)."""
+    case = copy_shipped_case(tmp_path)
+    propulsion = tmp_path / "data" / "tuflex" / "propulsion.yaml"
+    text = propulsion.read_text()
+    assert "reference_density_kg_m3:" in text
+    propulsion.write_text("\n".join(
+        f"reference_density_kg_m3: {density}" if line.startswith("reference_density_kg_m3:")
+        else line for line in text.splitlines()) + "\n")
+    _assert_bad(runner.invoke(app, ["check", str(case)]), "propulsion.yaml",
+                "reference_density_kg_m3")

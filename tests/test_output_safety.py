@@ -175,6 +175,7 @@ def _stage_new_output_interrupted(tmp_path: Path, monkeypatch) -> None:
     """Stage 'new.txt' over tmp_path/out with tuflexperf's own SIGINT handler installed; the
     patched file operation sends the interrupt, which must come out as KeyboardInterrupt."""
     monkeypatch.setattr(files, "_signals_received", [])
+    monkeypatch.setattr(files, "_committed", [False])
     previous = signal.signal(signal.SIGINT, files._raise_interrupt)
     try:
         with pytest.raises(KeyboardInterrupt):
@@ -206,9 +207,12 @@ def test_an_interrupt_during_the_renames_keeps_the_earlier_output(tmp_path, monk
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no .old-*, no .tmp-*
 
 
-def test_an_interrupt_during_the_swap_leaves_the_new_output_whole_and_no_debris(
+def test_an_interrupt_after_the_swap_leaves_the_new_output_whole_and_the_run_done(
     tmp_path, monkeypatch
 ) -> None:
+    """Once the new output has replaced the earlier one the run is done: an interrupt while
+    the earlier output is removed is not the run's (it said "aborted", exit 130, with the
+    earlier output gone; outside audit), and leaves no debris."""
     with files.staged_directory(tmp_path / "out", "probe") as staging:
         (staging / "old.txt").write_text("earlier")
     removed = []
@@ -220,10 +224,64 @@ def test_an_interrupt_during_the_swap_leaves_the_new_output_whole_and_no_debris(
         real_rmtree(path, ignore_errors=ignore_errors)
 
     monkeypatch.setattr("shutil.rmtree", interrupted_rmtree)
-    _stage_new_output_interrupted(tmp_path, monkeypatch)
+    monkeypatch.setattr(files, "_signals_received", [])
+    monkeypatch.setattr(files, "_committed", [False])
+    previous = signal.signal(signal.SIGINT, files._raise_interrupt)
+    try:
+        with files.staged_directory(tmp_path / "out", "probe") as staging:
+            (staging / "new.txt").write_text("new")
+        assert files.output_committed() and not files.interrupted()
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert removed and removed[0].startswith(".out.old-")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no .old-*, no .tmp-*
     assert _tree(tmp_path / "out").keys() == {"new.txt", files.MARKER}
+
+
+def test_an_interrupt_a_library_dropped_earlier_keeps_the_earlier_output(
+    tmp_path, monkeypatch
+) -> None:
+    """An interrupt noted before the swap (raised inside a library, which dropped it) means
+    the run was interrupted: its output does not replace the earlier one."""
+    with files.staged_directory(tmp_path / "out", "probe") as staging:
+        (staging / "old.txt").write_text("earlier")
+    before = _tree(tmp_path / "out")
+    monkeypatch.setattr(files, "_signals_received", [signal.SIGINT])
+    monkeypatch.setattr(files, "_committed", [False])
+    with pytest.raises(KeyboardInterrupt):
+        with files.staged_directory(tmp_path / "out", "probe") as staging:
+            (staging / "new.txt").write_text("new")
+    assert _tree(tmp_path / "out") == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+    with pytest.raises(KeyboardInterrupt):
+        files.write_files_atomically({tmp_path / "a.csv": "new"})
+    assert not (tmp_path / "a.csv").exists()
+
+
+def test_an_output_folder_that_holds_an_input_is_not_replaced(tmp_path) -> None:
+    """A case saved in an earlier export's folder under a name export writes was replaced
+    by export's JSON (outside audit); the report's folder likewise."""
+    assert _run(tmp_path, "export", "--format", "json", "--out", "ex").returncode == 0
+    case = tmp_path / "ex" / "tfp_thrust.json"
+    shipped = ROOT / "requirements" / "tuflex.yaml"
+    text = shipped.read_text().replace("../data/", str(ROOT / "data") + "/")
+    case.write_text(text)
+    done = _run(tmp_path, "export", "--case", str(case), "--format", "json", "--out", "ex")
+    assert done.returncode == 2, done.stderr
+    assert "an input of this command" in done.stderr and len(done.stderr.splitlines()) == 1
+    assert case.read_text() == text
+    with pytest.raises(InputError, match="an input of this command"):
+        files.check_output_dir(tmp_path / "ex", "export", [case])
+
+
+def test_a_fifo_as_an_output_is_refused_not_waited_on(tmp_path) -> None:
+    """Opening a FIFO to see who wrote it blocked for ever (outside audit)."""
+    fifo = tmp_path / "out.fifo"
+    os.mkfifo(fifo)
+    done = subprocess.run([*TUFLEXPERF, "sweep", "--vary", "aircraft.mass_kg=20:30:2",
+                           "--csv", str(fifo)], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == 2 and "not a regular file" in done.stderr
 
 
 def test_an_interrupt_between_two_files_puts_both_earlier_files_back(tmp_path, monkeypatch):
@@ -242,6 +300,7 @@ def test_an_interrupt_between_two_files_puts_both_earlier_files_back(tmp_path, m
 
     monkeypatch.setattr(files.os, "replace", interrupted_replace)
     monkeypatch.setattr(files, "_signals_received", [])
+    monkeypatch.setattr(files, "_committed", [False])
     previous = signal.signal(signal.SIGINT, files._raise_interrupt)
     try:
         with pytest.raises(KeyboardInterrupt):

@@ -377,7 +377,7 @@ def sweep(
 ) -> None:
     """Every requirement over a grid of parameter values."""
     from tuflexperf.analysis.sweep import run_sweep
-    from tuflexperf.io.files import atomic_write_bytes, atomic_write_text
+    from tuflexperf.io.files import write_files_atomically
 
     if workers is not None and workers < 1:
         fail_input(f"--workers: must be at least 1, got {workers}")
@@ -393,12 +393,15 @@ def sweep(
         guard_outputs(outputs, [path for _, path in case_files(case)], "sweep")
     result = run_sweep(case, axes, workers, dask)
     notes = _batch_notes(case, [key for key, _ in axes], sets)
+    written: dict[Path, bytes | str] = {}
     if plot is not None:
         from tuflexperf.report.sweep_plot import carpet_png
 
-        atomic_write_bytes(plot, carpet_png(result, f"{case.name}: sweep"))
+        written[plot] = carpet_png(result, f"{case.name}: sweep")
     if csv_out is not None:
-        atomic_write_text(csv_out, result.to_csv())
+        written[csv_out] = result.to_csv()
+    if written:  # both or neither: an interrupt between them left a new plot by an old CSV
+        write_files_atomically(written)
     if as_json:
         emit_json({"case": case.name, "case_file": str(case.path), **result.to_dict(),
                    "notes": notes})
@@ -1171,7 +1174,7 @@ def main(argv: list[str] | None = None) -> None:
     """Console entry point: usage errors become one line on stderr and exit 2."""
     from typer.exceptions import Abort, TyperException
 
-    from tuflexperf.io.files import install_interrupt_handlers, interrupted
+    from tuflexperf.io.files import hold_interrupts, install_interrupt_handlers, interrupted
 
     install_interrupt_handlers()  # SIGTERM unwinds like Ctrl-C: no staging left behind
     # pydantic otherwise scans every installed package's entry points for plugins on the
@@ -1184,6 +1187,7 @@ def main(argv: list[str] | None = None) -> None:
 
     warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"tuflexperf(\.|$)")
     def aborted() -> None:
+        hold_interrupts()  # a second Ctrl-C here printed a traceback (outside audit)
         sys.stderr.write("tuflexperf: aborted\n")
         sys.exit(130)
 
@@ -1203,5 +1207,5 @@ def main(argv: list[str] | None = None) -> None:
             raise
         aborted()
     if interrupted():  # one a library dropped (printed as "ignored"): still no success
-        aborted()
+        aborted()  # (after the output replaced the earlier one, an interrupt is not noted)
     sys.exit(code if isinstance(code, int) else 0)

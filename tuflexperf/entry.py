@@ -49,18 +49,27 @@ def main() -> None:
     """
     _exit_on_interrupt()
     from tuflexperf.cli import main as cli_main
+    from tuflexperf.io.files import output_committed
 
-    status: int
+    status = INTERRUPTED_EXIT
     try:
         cli_main()
         status = 0
     except SystemExit as done:
         status = exit_status(done.code)
+    except KeyboardInterrupt:
+        # a second Ctrl-C on the way out of an interrupted run: no traceback, still 130
+        status = INTERRUPTED_EXIT
     finally:
         # the command is done, only the interpreter's teardown is left: an interrupt there
-        # would be raised where nothing reports it (the process died of the signal)
+        # would be raised where nothing reports it (the process died of the signal). Once
+        # the output has replaced the earlier one the run is done whatever comes now
+        if output_committed():
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                signal.signal(signum, signal.SIG_IGN)
+        else:
+            _exit_on_interrupt()
         for stream in (sys.stdout, sys.stderr):
             with contextlib.suppress(OSError, ValueError):
                 stream.flush()
-        _exit_on_interrupt()
     os._exit(status)

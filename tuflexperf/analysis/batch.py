@@ -476,8 +476,12 @@ class BatchEvaluator:
                       aircraft.takeoff.liftoff_speed_m_s):
             if speed is not None:
                 refused |= np.asarray(speed, dtype=float).reshape(-1) < stall_eas
-        for engine in self._propulsion(coefficients).engines:
-            static = np.asarray(engine_thrust_n(engine, 1.0, 0.0), dtype=float).reshape(-1)
+        propulsion = self._propulsion(coefficients)
+        # at the row's air density, as the single case's analyses scale the thrust
+        scale = density_ratio(propulsion, self._density(values, size))
+        for engine in propulsion.engines:
+            static = np.asarray(engine_thrust_n(engine, 1.0, 0.0, scale),
+                                dtype=float).reshape(-1) * np.ones(size)
             with np.errstate(invalid="ignore", over="ignore"):
                 refused |= ~((static > 0.0) & (static <= ABSURD_THRUST_TO_WEIGHT * weight))
         return refused

@@ -193,7 +193,9 @@ class PropulsionSchema(StrictModel):
     tested_airspeed_m_s: Annotated[list[float], Field(min_length=2, max_length=2)]
     delay_s: NonNegative = 0.0
     lag_s: NonNegative = 0.0  # first-order spool lag after delay_s (0 = pure delay)
-    reference_density_kg_m3: Positive | None = None
+    # the test day's air: a test stand or tunnel is on the ground (ISA 11 km is 0.36; the
+    # coldest sea-level air ~1.5); 1e-9 scaled the thrust 1e9-fold into a PASS (outside audit)
+    reference_density_kg_m3: Annotated[float, Field(ge=0.3, le=2.0)] | None = None
     reference_voltage_v: Positive | None = None
     voltage_exponent: float = DEFAULT_VOLTAGE_EXPONENT
     fan_area_m2: Positive | None = None
@@ -524,12 +526,14 @@ ABSURD_THRUST_TO_WEIGHT = 10.0
 
 
 def refuse_absurd_propulsion(case: Case) -> None:
-    """Bad input: a model whose full-throttle static thrust is not positive or absurd."""
-    from tuflexperf.models.thrust import engine_thrust_n
+    """Bad input: a model whose full-throttle static thrust, at the case's air density (as
+    every analysis scales it), is not positive or absurd."""
+    from tuflexperf.models.thrust import density_ratio, engine_thrust_n
 
     weight = case.aircraft.weight_n
+    scale = density_ratio(case.propulsion, case.density_kg_m3)
     for index, engine in enumerate(case.propulsion.engines):
-        static = float(engine_thrust_n(engine, 1.0, 0.0))
+        static = float(engine_thrust_n(engine, 1.0, 0.0, scale))
         where = f"{case.propulsion_path}: engines[{index}] ({engine.name})"
         if not static > 0:
             raise InputError(f"{where}: full-throttle static thrust {static:.3g} N is not "

@@ -130,7 +130,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
                 os.fsync(handle.fileno())
             os.chmod(tmp, mode)
         with interrupts_held():
-            seen = len(_signals_received)
+            raise_if_interrupted()  # one a library dropped earlier: the run was interrupted
             kept: list[tuple[Path, Path | None]] = []  # target, its earlier file's second name
             try:
                 for tmp, target in staged:
@@ -148,8 +148,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
                             shutil.copy2(target, old)
                     kept.append((target, old))
                     os.replace(tmp, target)
-                if len(_signals_received) > seen:
-                    raise _interrupt(_signals_received[-1])
+                raise_if_interrupted()
             except BaseException:
                 for target, old in reversed(kept):  # every earlier file back in place
                     with contextlib.suppress(OSError):
@@ -158,15 +157,17 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
                         else:
                             target.unlink(missing_ok=True)
                 raise
+            _committed[0] = True
             for _, old in kept:
                 if old is not None:
                     with contextlib.suppress(OSError):
                         old.unlink()
     except BaseException as exc:
-        for tmp, _ in staged:
-            with contextlib.suppress(OSError):
-                Path(tmp).unlink(missing_ok=True)
-        _remove_folders(created)
+        with _cleanup():
+            for tmp, _ in staged:
+                with contextlib.suppress(OSError):
+                    Path(tmp).unlink(missing_ok=True)
+            _remove_folders(created)
         if isinstance(exc, OSError):
             raise _os_error(current or Path("output"), exc) from None
         raise
@@ -297,6 +298,9 @@ def refuse_foreign_files(outputs: dict[str, Path], command: str) -> None:
                              "or another path")
         if not os.path.lexists(out) or out.is_dir():
             continue
+        if not out.is_file():  # a FIFO blocked the read below for ever (outside audit)
+            raise InputError(f"{flag}: {out} is not a regular file; refusing to replace it, "
+                             "choose another path")
         try:
             with open(out, "rb") as handle:
                 head = handle.read(4096)
@@ -341,15 +345,24 @@ def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str
     refuse_foreign_files(outputs, command)
 
 
-def check_output_dir(out: Path, command: str) -> None:
+def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> None:
     """``out`` may be new, empty, or an earlier output of ``command`` holding only what that
-    command wrote (the marker lists it).
+    command wrote (the marker lists it), and none of the command's ``inputs``.
 
     Anything else — a file, a symbolic link, a folder of the user's, an earlier output the
-    user has added files to — is bad input: replacing it would delete what the command did
-    not write.
+    user has added files to or that holds an input (a case saved there under a name the
+    command writes was replaced by its output; outside audit) — is bad input: replacing it
+    would delete what the command did not write.
     """
     out = Path(out)
+    inside = out.resolve()
+    for source in inputs:
+        found = Path(source).resolve()
+        if found == inside or inside in found.parents:
+            raise InputError(
+                f"--out: {out} holds {source}, an input of this command; refusing to replace "
+                "the folder, choose another folder"
+            )
     if out.is_symlink():  # the swap would replace the user's link, not write through it
         raise InputError(f"--out: {out} is a symbolic link; give the folder it points to, or "
                          "another path")
@@ -423,6 +436,9 @@ _signals_received: list[int] = []
 
 
 _holding = [False]  # inside interrupts_held(): an interrupt is noted, raised at its end
+# the command's output has replaced the earlier one: an interrupt after that is noted, not
+# raised, and the run ends as done (its earlier output is gone, so "aborted" would be false)
+_committed = [False]
 
 
 def _interrupt(signum: int) -> KeyboardInterrupt:
@@ -430,9 +446,33 @@ def _interrupt(signum: int) -> KeyboardInterrupt:
 
 
 def _raise_interrupt(signum: int, frame: object) -> None:
+    if _committed[0]:
+        return
     _signals_received.append(signum)
     if not _holding[0]:
         raise _interrupt(signum)
+
+
+@contextlib.contextmanager
+def _cleanup() -> Iterator[None]:
+    """Hold interrupts while staging is removed on the way out: a second Ctrl-C landing in
+    the removal left staging folders behind (outside audit); the run is unwinding already."""
+    holding = _holding[0]
+    _holding[0] = True
+    try:
+        yield
+    finally:
+        _holding[0] = holding
+
+
+def hold_interrupts() -> None:
+    """From here on an interrupt is noted, not raised: the process is on its way out."""
+    _holding[0] = True
+
+
+def output_committed() -> bool:
+    """True once the command's output has replaced the earlier one (SPEC 5)."""
+    return _committed[0]
 
 
 def install_interrupt_handlers() -> None:
@@ -445,6 +485,10 @@ def install_interrupt_handlers() -> None:
     """
     import sys
 
+    # a new run (the CLI's main may run many times in one process, as in tests)
+    _signals_received.clear()
+    _committed[0] = False
+    _holding[0] = False
     default_hook = sys.unraisablehook
 
     def quiet_interrupts(unraisable: Any) -> None:
@@ -544,20 +588,21 @@ def interrupted() -> bool:
 
 
 @contextlib.contextmanager
-def staged_directory(out: Path, command: str) -> Iterator[Path]:
+def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> Iterator[Path]:
     """Stage a folder beside ``out``, yield it, then move it into place whole.
 
     The staging folder gets the user's umask and, on success, the marker naming
     ``command`` and the files written. An earlier output at ``out`` (checked by
-    :func:`check_output_dir`) is swapped out and removed only after the new one is in
-    place. On any failure or interrupt the staging folder is removed and ``out`` is
-    untouched.
+    :func:`check_output_dir` against the command's ``inputs``) is swapped out and removed
+    only after the new one is in place. On any failure or interrupt (one that came at any
+    time before the swap) the staging folder is removed and ``out`` is untouched; after
+    the swap the run is done, and an interrupt is no longer noted.
     """
     import secrets  # lazy, with shutil: only the commands that write a folder need them
     import shutil
 
     out = Path(out).absolute()
-    check_output_dir(out, command)
+    check_output_dir(out, command, inputs)
     try:
         created = _make_folders(out.parent)
     except OSError as exc:
@@ -581,25 +626,29 @@ def staged_directory(out: Path, command: str) -> Iterator[Path]:
         # would leave `out` missing between the renames, or the earlier output behind as
         # a hidden folder; it is raised when they are done
         with interrupts_held():
-            seen = len(_signals_received)
+            raise_if_interrupted()  # one a library dropped earlier: the run was interrupted
             if out.exists():
                 old = out.parent / f".{out.name}.old-{secrets.token_hex(6)}"
                 os.replace(out, old)
                 os.replace(staging, out)
-                if len(_signals_received) > seen:
+                if _signals_received:
                     # interrupted before the swap was done: the earlier output stays (SPEC 5);
                     # the new one goes back to the staging, which the unwinding removes
                     os.replace(out, staging)
                     os.replace(old, out)
                 else:
+                    _committed[0] = True
                     shutil.rmtree(old, ignore_errors=True)
             else:
                 os.replace(staging, out)
-                if len(_signals_received) > seen:
+                if _signals_received:
                     os.replace(out, staging)
+                else:
+                    _committed[0] = True
     except BaseException as exc:
-        shutil.rmtree(staging, ignore_errors=True)
-        _remove_folders(created)
+        with _cleanup():
+            shutil.rmtree(staging, ignore_errors=True)
+            _remove_folders(created)
         if isinstance(exc, OSError):
             raise _os_error(out, exc) from None
         raise

@@ -132,7 +132,7 @@ def build_report(
         raise InputError(f"--campaign: file not found: {campaign_path}")
     if campaign_path is not None:
         _check_campaign(campaign_path)  # before any step is shown or anything is written
-    with (staged_directory(out, "report") as staging,
+    with (staged_directory(out, "report", _report_inputs(case, campaign_path)) as staging,
           tempfile.TemporaryDirectory(prefix="tuflexperf-report-") as kept):
         result = _render(case, staging, campaign_path, StepCounter(stream, progress),
                          Path(kept))
@@ -146,6 +146,28 @@ def build_report(
         seconds=time.perf_counter() - started,
         notes=result.notes,
     )
+
+
+def _report_inputs(case: Any, campaign: Path | None) -> list[Path]:
+    """Every file the report reads: the case's, and the measured data's (the campaign
+    manifest or thrust table and the manifest's runs); the output folder may hold none."""
+    from tuflexperf.io.campaign import load_campaign
+    from tuflexperf.io.case import case_files
+    from tuflexperf.report.data import find_measured_source
+
+    inputs = [path for _, path in case_files(case)]
+    try:
+        source = find_measured_source(case, campaign)
+    except InputError:
+        return inputs  # said where the measured data are read
+    if source is None:
+        return inputs
+    inputs.append(source)
+    try:
+        inputs.extend(run.path for run in load_campaign(source).runs)
+    except InputError:
+        pass  # a thrust table, a propeller manifest, or a manifest reported where it is read
+    return inputs
 
 
 def _check_campaign(path: Path) -> None:
