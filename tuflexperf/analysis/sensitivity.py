@@ -187,7 +187,6 @@ def _endurance_value(s: _Symbolic) -> Any:
 
         v_lo = true_airspeed_m_s(ac.launch_speed_m_s, rho)
         t_hist = v_hist = None
-        roll_time: Any = 0.0
     else:
         # the roll's time history on 101 airspeeds (the launch interpolates power along it)
         v_lo = s.liftoff()
@@ -199,7 +198,6 @@ def _endurance_value(s: _Symbolic) -> Any:
         pieces = h / 24.0 * (-left + 13.0 * g[0:count - 1] + 13.0 * g[1:count] - right)
         t_hist = ca.vertcat(0.0, ca.cumsum(pieces))
         v_hist = nodes
-        roll_time = t_hist[count - 1] + ac.takeoff.rotation_time_s
     # best climb on the same grid point as the nominal
     stall = stall_speed_m_s(ac, rho)
     n = single._SPEED_GRID_POINTS
@@ -212,18 +210,19 @@ def _endurance_value(s: _Symbolic) -> Any:
         / ac.weight_n
     height = s.symbols.get("battery.mission.pattern_altitude_m", battery.pattern_altitude_m)
     climb_time = height / rate if battery.pattern_altitude_m > 0 else 0.0
-    # the launch's RK4 with the nominal step counts, the roll and the climb apart (as the
-    # single case's mission integrates them); power looked up as the nominal does; a
-    # catapult launch has no roll
-    roll_steps = 0 if catapult else max(
-        1, math.ceil(launch.ground_roll_time_s / single._LAUNCH_STEP_S))
-    climb_steps = max(1, math.ceil(launch.climb_time_s / single._LAUNCH_STEP_S))
-    dt0 = launch.ground_roll_time_s / roll_steps if roll_steps else 0.0
-    dt = roll_time / roll_steps if roll_steps else 0.0
+    # the launch's RK4 in the single case's mission's steps: STEPS of equal time along the
+    # roll's history, ROTATION_STEPS at the lift-off speed, STEPS of the climb; power looked
+    # up as the nominal does; a catapult launch has no roll
+    from tuflexperf.analysis.mission import ROTATION_STEPS, STEPS
+
+    rotation: Any = 0.0 if catapult else ac.takeoff.rotation_time_s
+    roll_only = 0.0 if catapult else t_hist[count - 1]
     t_hist0 = None if catapult else (
         np.asarray(ca.evalf(ca.substitute(t_hist, ca.vertcat(*s.symbols.values()),
                                           _nominal_vector(s)))).ravel()
         if s.symbols else np.asarray(ca.evalf(t_hist)).ravel())
+    dt0 = 0.0 if catapult else float(t_hist0[-1]) / STEPS
+    dt = roll_only / STEPS
     climb_power = _power_w(s, model, 1.0, v_climb)
 
     def stage_power(j: int) -> Any:
@@ -246,20 +245,23 @@ def _endurance_value(s: _Symbolic) -> Any:
     def rate_at(power: Any, charge: Any) -> Any:
         return current_at_power_a(model.params, charge, power, packs) / 3600.0
 
+    def rk4(q: Any, h: Any, powers: tuple[Any, Any, Any]) -> Any:
+        k1 = rate_at(powers[0], q)
+        k2 = rate_at(powers[1], q + h / 2 * k1)
+        k3 = rate_at(powers[1], q + h / 2 * k2)
+        k4 = rate_at(powers[2], q + h * k3)
+        return q + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
     q: Any = 0.0
-    for step in range(roll_steps):
-        k1 = rate_at(stage_power(2 * step), q)
-        k2 = rate_at(stage_power(2 * step + 1), q + dt / 2 * k1)
-        k3 = rate_at(stage_power(2 * step + 1), q + dt / 2 * k2)
-        k4 = rate_at(stage_power(2 * step + 2), q + dt * k3)
-        q = q + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    dt = climb_time / climb_steps
-    for _ in range(climb_steps):
-        k1 = rate_at(climb_power, q)
-        k2 = rate_at(climb_power, q + dt / 2 * k1)
-        k3 = rate_at(climb_power, q + dt / 2 * k2)
-        k4 = rate_at(climb_power, q + dt * k3)
-        q = q + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    for step in range(0 if catapult else STEPS):
+        q = rk4(q, dt, (stage_power(2 * step), stage_power(2 * step + 1),
+                        stage_power(2 * step + 2)))
+    if not catapult and s.case.aircraft.takeoff.rotation_time_s > 0.0:  # the nominal's steps
+        at_liftoff = _power_w(s, model, 1.0, v_lo)
+        for _ in range(ROTATION_STEPS):
+            q = rk4(q, rotation / ROTATION_STEPS, (at_liftoff,) * 3)
+    for _ in range(STEPS):
+        q = rk4(q, climb_time / STEPS, (climb_power,) * 3)
     # level flight at the throttle (fast root) and the pack's cut-off charge
     x = s.throttle
     speed = s.newton_step(
