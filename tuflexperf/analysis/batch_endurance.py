@@ -48,12 +48,17 @@ from tuflexperf.models.thrust import density_ratio, engine_thrust_n
 Array = NDArray[np.float64]
 
 
-def _power_w(model: Any, m: Any, throttle: Any, speed: Any) -> Array:
-    """Per-fan electrical power [W] per row: the nominal model's power, a propulsion power
-    surface rescaled to the row's density (``rho / rho_ref``, as the single case does)."""
-    power = np.asarray(model.power.electrical_power_w(throttle, speed), dtype=float)
+def _power_w(model: Any, m: Any, throttle: Any, speed: Any, engine: Any = None) -> Array:
+    """Per-fan electrical power [W] per row: the nominal model's power (the largest fan's),
+    or ``engine``'s own surface, a propulsion power surface rescaled to the row's density
+    (``rho / rho_ref``, as the single case does)."""
     if not isinstance(model.power, PowerSurfaces):
-        return power
+        return np.asarray(model.power.electrical_power_w(throttle, speed), dtype=float)
+    if engine is None:
+        power = np.asarray(model.power.electrical_power_w(throttle, speed), dtype=float)
+    else:
+        power = model.power.density_scale * np.asarray(engine_power_w(engine, throttle, speed),
+                                                       dtype=float)
     ratio = np.asarray(density_ratio(m.propulsion, m.density), dtype=float)
     ratio = ratio / model.power.density_scale
     if ratio.size == 1 or power.ndim == 0:
@@ -194,10 +199,12 @@ class _Launch:
 
 
 def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
-                   stall: Array, height: Array, packs: Array, cutoff_v: Array) -> _Launch:
-    """Charge [Ah] per fan drawn by roll + climb to ``height`` [m] on ``packs`` measured packs
-    in parallel per fan, the climb time [s] and the rest of :class:`_Launch`; NaN if
-    impossible, the packs' cut-off ``cutoff_v`` [V] reached on the way included."""
+                   stall: Array, height: Array, packs: Array, cutoff_v: Array,
+                   engine: Any = None) -> _Launch:
+    """Charge [Ah] per fan (``engine``'s, with its own power surface; else the largest fan's)
+    drawn by roll + climb to ``height`` [m] on ``packs`` measured packs in parallel per fan,
+    the climb time [s] and the rest of :class:`_Launch`; NaN if impossible, the packs'
+    cut-off ``cutoff_v`` [V] reached on the way included."""
     _, roll_time, v_lo, ok = roll
     climb_speed, climb_rate = _best_climb(m, v_lo, stall)
     ok = (ok > 0.5) & ~((height > 0) & (climb_rate <= 0))
@@ -211,7 +218,7 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     # a catapult launch has no roll: its history is never looked up (the roll time is 0)
     t_hist = (np.zeros((m.size, 2)) if m.aircraft.launch == "catapult" else m.roll_history())
     v_hist = v_lo[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
-    climb_power = _power_w(model, m, 1.0, climb_speed)
+    climb_power = _power_w(model, m, 1.0, climb_speed, engine)
     t_hist = np.where(ok[:, None], t_hist, 0.0)
 
     peak = np.zeros(m.size)
@@ -245,14 +252,14 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     roll_only = np.where(ok, np.maximum(roll_time - rotation, 0.0), 0.0)
     h = roll_only / STEPS
     stage_t = 0.5 * h[:, None] * np.arange(2 * STEPS + 1)[None, :]
-    rolling = _power_w(model, m, 1.0, _interp_rows(stage_t, t_hist, v_hist))
+    rolling = _power_w(model, m, 1.0, _interp_rows(stage_t, t_hist, v_hist), engine)
     q = np.zeros(m.size)
     active = roll_only > 0.0
     for k in range(STEPS):
         j = 2 * k
         q = rk4(q, h, active, (rolling[:, j], rolling[:, j + 1], rolling[:, j + 2]))
     h = rotation / ROTATION_STEPS
-    at_liftoff = (_power_w(model, m, 1.0, v_lo),) * 3
+    at_liftoff = (_power_w(model, m, 1.0, v_lo, engine),) * 3
     for _ in range(ROTATION_STEPS):
         q = rk4(q, h, rotation > 0.0, at_liftoff)
     q_roll = q.copy()
@@ -357,16 +364,21 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     packs = np.asarray(equivalent_packs(per_engine, capacity,
                                         model.battery.as_read.capacity_ah), dtype=float)
     cutoff = model.battery.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"]
-    launch = _launch_charge(m, model, roll, stall, battery["battery.mission.pattern_altitude_m"],
-                            packs, cutoff)
-    q_launch, climb_time = launch.charge_ah, launch.climb_time_s
+    # each fan on its own packs, with its own power surface, as the mission flies them: the
+    # flight ends when the first fan's packs do (the largest launch charge with the largest
+    # cruise power, of different fans at low throttle, was 2 % short; outside audit)
+    engines = m.propulsion.engines if isinstance(model.power, PowerSurfaces) else (None,)
+    launches = [_launch_charge(m, model, roll, stall,
+                               battery["battery.mission.pattern_altitude_m"], packs, cutoff,
+                               engine) for engine in engines]
+    climb_time = launches[0].climb_time_s
     reserve_ah = (per_engine * capacity
                   * (1.0 - battery["battery.mission.landing_reserve_fraction"]))
     # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
     most, least_speed = _most_excess(m, throttle, m.least_airspeed(), stall)
     # EnduranceModel.check_throttle accepts a throttle down to the least one less 1e-9
     holds = (most >= 0.0) | (_excess(m, throttle + 1e-9, least_speed) >= 0.0)
-    ok = np.isfinite(q_launch) & holds
+    ok = np.logical_and.reduce([np.isfinite(launch.charge_ah) for launch in launches]) & holds
     # an airspeed above the fast level-flight root, as EnduranceModel._speed_guess
     guess = np.maximum(least_speed, stall) * 1.25
     found = np.zeros(m.size, dtype=bool)
@@ -387,20 +399,25 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     params = model.params
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs / per_engine) > 0.0)
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs) > 0.0)
-    q_cut = _bracketed_root(
-        lambda q: np.asarray(cutoff_residual_v(params, q, power_w, cutoff, packs), dtype=float),
-        np.zeros(m.size),
-        np.full(m.size, packs * params.max_capacity_ah * (1.0 - 1e-12)),
-    )
-    start = np.where(ok, q_launch, 0.0)
-    # a launch that leaves no cruise before the reserve or the cut-off is not attainable
-    # (the single case's mission): the batch counted the climb alone (outside audit)
-    ok &= np.minimum(q_cut, reserve_ah) > start
-    span = np.maximum(np.minimum(q_cut, reserve_ah) - start, 0.0)
-    cruise_s = np.asarray(discharge_time_s(params, np.where(ok, power_w, 1.0), start,
-                                           start + span, packs), dtype=float)
+    cruise_s = np.full(m.size, np.inf)
+    for engine, launch in zip(engines, launches, strict=True):
+        own = _power_w(model, m, throttle, speed, engine)
+        q_cut = _bracketed_root(
+            lambda q, own=own: np.asarray(cutoff_residual_v(params, q, own, cutoff, packs),
+                                          dtype=float),
+            np.zeros(m.size),
+            np.full(m.size, packs * params.max_capacity_ah * (1.0 - 1e-12)),
+        )
+        start = np.where(ok, launch.charge_ah, 0.0)
+        # a launch that leaves no cruise before the reserve or the cut-off is not attainable
+        # (the single case's mission): the batch counted the climb alone (outside audit)
+        ok &= np.minimum(q_cut, reserve_ah) > start
+        span = np.maximum(np.minimum(q_cut, reserve_ah) - start, 0.0)
+        seconds = np.asarray(discharge_time_s(params, np.where(ok, own, 1.0), start,
+                                              start + span, packs), dtype=float)
+        ok &= _within_rating(model, launch, own, start, span, seconds, packs, capacity)
+        cruise_s = np.minimum(cruise_s, seconds)
     minutes = cruise_s / 60.0 + np.where(ok, climb_time, 0.0) / 60.0
-    ok &= _within_rating(model, launch, power_w, start, span, cruise_s, packs, capacity)
     return np.where(ok & np.isfinite(minutes), minutes, np.nan)
 
 
