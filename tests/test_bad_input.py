@@ -309,3 +309,14 @@ def test_a_reference_density_no_test_day_has_is_bad_input(tmp_path, density) -> 
         else line for line in text.splitlines()) + "\n")
     _assert_bad(runner.invoke(app, ["check", str(case)]), "propulsion.yaml",
                 "reference_density_kg_m3")
+
+
+def test_a_newline_in_a_path_or_a_files_garbage_stays_one_line(tmp_path) -> None:
+    """A path with a newline made the message two lines, and a binary run file's quoted
+    garbage one line of 5,091 characters (outside audit)."""
+    _assert_bad(runner.invoke(app, ["check", str(tmp_path / "no\nsuch.yaml")]), "no\\nsuch.yaml")
+    junk = tmp_path / "junk.csv"
+    junk.write_bytes(bytes(range(256)) * 80)
+    result = runner.invoke(app, ["fit", str(junk), "--out", str(tmp_path / "o.yaml")])
+    _assert_bad(result)
+    assert len(result.stderr) < 1200

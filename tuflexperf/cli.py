@@ -110,9 +110,22 @@ def emit_json(payload: dict[str, Any]) -> None:
     sys.stdout.write(json.dumps(_clean(payload), default=_json_default, indent=2) + "\n")
 
 
+_MAX_MESSAGE = 1000  # characters of one error message (a file's garbage quoted is cut)
+
+
+def one_line(text: str, limit: int | None = _MAX_MESSAGE) -> str:
+    """``text`` as one line of at most ``limit`` characters (SPEC 5: one line):
+    a newline in a path is shown escaped (it made two lines), and a message quoting a
+    binary file's garbage is cut (one was 5,091 characters; outside audit)."""
+    text = text.replace("\r", "\\r").replace("\n", "\\n")
+    if limit is None or len(text) <= limit:
+        return text
+    return f"{text[:limit]}... ({len(text) - limit} more characters)"
+
+
 def fail_input(message: str) -> None:
     """Bad input: one line on stderr, exit 2."""
-    sys.stderr.write(f"tuflexperf: error: {message}\n")
+    sys.stderr.write(f"tuflexperf: error: {one_line(message)}\n")
     raise typer.Exit(2)
 
 
@@ -1124,7 +1137,7 @@ def _guarded(callback: Any) -> Any:
             return callback(*args, **kwargs)
         except InputError as exc:
             _unless_interrupted()
-            sys.stderr.write(f"tuflexperf: error: {exc}\n")
+            sys.stderr.write(f"tuflexperf: error: {one_line(str(exc))}\n")
             raise typer.Exit(2) from None
         except BrokenPipeError:  # the reader went away (`| head`): nothing more to say
             raise typer.Exit(0) from None
@@ -1140,7 +1153,7 @@ def _guarded(callback: Any) -> Any:
 
             where = exc.filename or "stdout"
             why = "disk full" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
-            sys.stderr.write(f"tuflexperf: error: {where}: {why}\n")
+            sys.stderr.write(f"tuflexperf: error: {one_line(f'{where}: {why}')}\n")
             raise typer.Exit(2) from None
         except RuntimeError as exc:
             # pathlib's resolve() of a symbolic link that leads back to itself (Python < 3.13;
@@ -1149,7 +1162,7 @@ def _guarded(callback: Any) -> Any:
                 raise
             _unless_interrupted()
             where = str(exc).removeprefix(_SYMLINK_LOOP).strip("'\"")
-            sys.stderr.write(f"tuflexperf: error: {where}: symbolic link loop\n")
+            sys.stderr.write(f"tuflexperf: error: {one_line(where)}: symbolic link loop\n")
             raise typer.Exit(2) from None
         except NotAttainable as exc:
             if kwargs.get("as_json"):  # SPEC 5: one JSON object on exit 1 as well
@@ -1160,7 +1173,7 @@ def _guarded(callback: Any) -> Any:
                     results["throttle"] = kwargs["throttle"]
                 emit_json({"command": command, "passed": False, "attainable": False,
                            "reason": str(exc), **results, **exc.known})
-            sys.stderr.write(f"tuflexperf: not attainable: {exc}\n")
+            sys.stderr.write(f"tuflexperf: not attainable: {one_line(str(exc), None)}\n")
             raise typer.Exit(1) from None
 
     return run
@@ -1198,7 +1211,7 @@ def main(argv: list[str] | None = None) -> None:
     except TyperException as exc:
         if type(exc).__name__ == "NoArgsIsHelpError":
             app(args=["--help"], prog_name="tuflexperf")
-        sys.stderr.write(f"tuflexperf: error: {exc.format_message()}\n")
+        sys.stderr.write(f"tuflexperf: error: {one_line(exc.format_message())}\n")
         sys.exit(getattr(exc, "exit_code", 2) or 2)
     except Exception:
         # an interrupt raised inside an import or a C extension comes out as its error
