@@ -8,6 +8,18 @@ from typing import Any
 import pytest
 import yaml
 
+
+@pytest.fixture(autouse=True)
+def _a_new_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each test starts as a new process would: no interrupt noted, no output committed
+    (tuflexperf.io.files keeps both per run; a test that wrote an output in-process left
+    the next one's Ctrl-C "after the commit", not raised)."""
+    from tuflexperf.io import files
+
+    monkeypatch.setattr(files, "_signals_received", [])
+    monkeypatch.setattr(files, "_committed", [False])
+    monkeypatch.setattr(files, "_holding", [False])
+
 ROOT = Path(__file__).resolve().parent.parent
 SHIPPED_CASE = ROOT / "requirements" / "tuflex.yaml"
 

@@ -234,12 +234,13 @@ def test_margins_over_the_atmosphere_follow_an_equivalent_airspeed_bound(tmp_pat
 
 
 def test_a_batch_refuses_the_aircraft_a_single_case_refuses(tmp_path) -> None:
-    """A 0.01 kg draw of the 26.7 kg aircraft (static thrust 562 x its weight) passed every
-    requirement in a sweep, where check refuses it as physically absurd (outside audit)."""
+    """A 0.01 kg draw of the 26.7 kg aircraft (static thrust 572 x its weight at the case's
+    air) passed every requirement in a sweep, where check refuses it as physically absurd
+    (outside audit)."""
     swept = runner.invoke(app, ["sweep", "--vary", "aircraft.mass_kg=0.01:1000:7"])
     assert swept.exit_code == 2 and len(swept.stderr.strip().splitlines()) == 1
     assert "--vary aircraft.mass_kg=0.01" in swept.stderr and "physically absurd" in \
-        swept.stderr and "562 x the aircraft's weight (0.0981 N)" in swept.stderr
+        swept.stderr and "572 x the aircraft's weight (0.0981 N)" in swept.stderr
     single = runner.invoke(app, ["check", "--set", "aircraft.mass_kg=0.01"])
     assert single.exit_code == 2 and "physically absurd" in single.stderr
     path = copy_shipped_case(tmp_path)
