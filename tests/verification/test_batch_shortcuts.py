@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import SHIPPED_CASE
+from tuflexperf.analysis import batch_endurance
 from tuflexperf.analysis.batch import (
     _STEEP_FORCE_SHARE,
     BatchEvaluator,
@@ -120,6 +121,25 @@ def test_piecewise_quadratic_roll_equals_node_by_node(seed: int) -> None:
     assert (v_lo > 30.0).any()  # lift-off beyond the tested range: the jump is crossed
     assert (clamp < v_lo).any()  # the friction clamp's kink inside the roll
     assert np.isnan(want[0]).any() and np.isfinite(want[0]).any()
+
+
+def test_launch_in_fewer_steps_equals_the_mission_steps(monkeypatch) -> None:
+    """The batch's launch flies the roll in 16 RK4 steps and the constant-power rotation
+    and climb in 2 and 8: the mission's 64, 8 and 64 give the same endurance to 1e-7 on a
+    hostile batch."""
+    case = load_case(SHIPPED_CASE)
+    evaluator = BatchEvaluator(case)
+    values, coefficients, extrapolation = _hostile_batch(5)
+    values = {k: v for k, v in values.items() if k != "atmosphere.altitude_m"}
+    got = evaluator.evaluate(values, ROWS, coefficients, extrapolation).values
+    monkeypatch.setattr(batch_endurance, "_ROLL_STEPS", 64)
+    monkeypatch.setattr(batch_endurance, "_ROTATION_STEPS", 8)
+    monkeypatch.setattr(batch_endurance, "_CLIMB_STEPS", 64)
+    want = evaluator.evaluate(values, ROWS, coefficients, extrapolation).values
+    endurance = got["flight_endurance"]
+    assert np.array_equal(np.isnan(endurance), np.isnan(want["flight_endurance"]))
+    assert np.isfinite(endurance).sum() > ROWS // 4
+    assert np.allclose(endurance, want["flight_endurance"], rtol=1e-7, equal_nan=True)
 
 
 def test_row_wise_interpolation_equals_numpy_interp() -> None:

@@ -28,7 +28,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis import endurance as single
-from tuflexperf.analysis.mission import ROTATION_STEPS, STEPS
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import (
     current_at_power_a,
@@ -101,6 +100,9 @@ def battery_side(case: Any) -> Any:
 
 _GOLDEN_STEPS = 25
 _BISECTIONS = 60
+_ROLL_STEPS = 16  # RK4 steps of the roll along its history: 1e-8 of the mission's 64
+_CLIMB_STEPS = 8  # RK4 steps of the launch's constant-power phases (the mission flies 64, 8)
+_ROTATION_STEPS = 2
 
 
 def _golden_section_max(
@@ -165,20 +167,23 @@ def _best_climb(m: Any, v_lo: Array, stall: Array) -> tuple[Array, Array]:
 def _interp_rows(t: Array, t_hist: Array, v_hist: Array) -> Array:
     """``np.interp(t[i, j], t_hist[i], v_hist[i])`` for every row ``i`` and column ``j``.
 
-    A binary search of every query at once (each row's history increasing): the last
-    history time at or before the query, in ``ceil(log2(width))`` vectorised halvings.
+    One ``np.searchsorted`` over all rows at once: each row's history (non-decreasing) and
+    queries are shifted by the row's index times a span longer than any history, so the
+    rows follow one another in one sorted array (seven vectorised halvings of a binary
+    search per query took as long as the rest of the launch).
     """
     rows, width = t_hist.shape
+    finite = np.isfinite(t_hist)
+    low_t = np.where(finite, t_hist, np.inf).min(initial=0.0)
+    high_t = max(float(np.where(finite, t_hist, -np.inf).max(initial=0.0)),
+                 float(np.where(np.isfinite(t), t, -np.inf).max(initial=0.0)))
+    span = (high_t - min(low_t, float(np.where(np.isfinite(t), t, np.inf).min(initial=0.0))))
+    offset = (np.arange(rows, dtype=float) * (span + 1.0))[:, None]
+    flat = (np.clip(np.where(finite, t_hist, high_t), low_t, high_t) + offset).ravel()
+    at = np.searchsorted(flat, (t + offset).ravel(), side="right").reshape(t.shape) - 1
+    at = np.clip(at - width * np.arange(rows)[:, None], 0, width - 2) \
+        + width * np.arange(rows)[:, None]
     flat_t, flat_v = t_hist.ravel(), v_hist.ravel()
-    base = width * np.arange(rows)[:, None]  # row offsets into the flattened histories
-    low = np.zeros(t.shape, dtype=np.intp)
-    high = np.full(t.shape, width, dtype=np.intp)  # one past the end: "later than all"
-    for _ in range(max(1, math.ceil(math.log2(width)))):
-        mid = (low + high) >> 1
-        reached = (mid < width) & (np.take(flat_t, base + np.minimum(mid, width - 1)) <= t)
-        low = np.where(reached, mid, low)
-        high = np.where(reached, high, mid)
-    at = base + np.clip(low, 0, width - 2)
     t0, t1 = np.take(flat_t, at), np.take(flat_t, at + 1)
     v0, v1 = np.take(flat_v, at), np.take(flat_v, at + 1)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -188,8 +193,9 @@ def _interp_rows(t: Array, t_hist: Array, v_hist: Array) -> Array:
 
 @dataclass(frozen=True)
 class _Launch:
-    """Per row: charge [Ah] per fan after the roll and after the climb (NaN: impossible),
-    their times [s] and the largest engine current [A] on the way (for the pack rating)."""
+    """Per fan and row ``(fans, rows)``: charge [Ah] per fan after the roll and after the
+    climb (NaN: impossible), and the largest current [A] on the way (for the pack rating);
+    per row: the climb's and the roll's times [s]."""
 
     charge_ah: Array
     climb_time_s: Array
@@ -200,11 +206,12 @@ class _Launch:
 
 def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
                    stall: Array, height: Array, packs: Array, cutoff_v: Array,
-                   engine: Any = None) -> _Launch:
-    """Charge [Ah] per fan (``engine``'s, with its own power surface; else the largest fan's)
-    drawn by roll + climb to ``height`` [m] on ``packs`` measured packs in parallel per fan,
-    the climb time [s] and the rest of :class:`_Launch`; NaN if impossible, the packs'
-    cut-off ``cutoff_v`` [V] reached on the way included."""
+                   engines: tuple[Any, ...] = (None,)) -> _Launch:
+    """Charge [Ah] per fan drawn by roll + climb to ``height`` [m] on ``packs`` measured packs
+    in parallel per fan, one row per fan of ``engines`` (each with its own power surface;
+    ``None``: the largest fan's power), the climb time [s] and the rest of
+    :class:`_Launch`; NaN if impossible, the packs' cut-off ``cutoff_v`` [V] reached on the
+    way included. The fans are integrated together, as ``(fans, rows)`` arrays."""
     _, roll_time, v_lo, ok = roll
     climb_speed, climb_rate = _best_climb(m, v_lo, stall)
     ok = (ok > 0.5) & ~((height > 0) & (climb_rate <= 0))
@@ -218,11 +225,13 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     # a catapult launch has no roll: its history is never looked up (the roll time is 0)
     t_hist = (np.zeros((m.size, 2)) if m.aircraft.launch == "catapult" else m.roll_history())
     v_hist = v_lo[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
-    climb_power = _power_w(model, m, 1.0, climb_speed, engine)
     t_hist = np.where(ok[:, None], t_hist, 0.0)
 
-    peak = np.zeros(m.size)
-    above = np.ones(m.size, dtype=bool)
+    def power(throttle: float, speed: Array) -> Array:
+        return np.stack([_power_w(model, m, throttle, speed, engine) for engine in engines])
+
+    peak = np.zeros((len(engines), m.size))
+    above = np.ones((len(engines), m.size), dtype=bool)
 
     def rk4(q: Array, h: Array, active: Array, powers: tuple[Array, Array, Array]) -> Array:
         nonlocal peak, above
@@ -234,39 +243,49 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
         # the mission checks its nodes' currents (step ends): k1 and k4 are those here
         peak = np.where(active, np.maximum(peak, 3600.0 * np.maximum(k1, k4)), peak)
         after = q + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        # the loaded packs stay above their cut-off at the nodes, as the single case's mission
-        # checks (a take-off that cut off passed here; outside audit)
-        held = ((np.asarray(cutoff_residual_v(model.params, q, p0, cutoff_v, packs)) > 0.0)
-                & (np.asarray(cutoff_residual_v(model.params, after, p1, cutoff_v, packs))
-                   > 0.0))
+        held = np.asarray(cutoff_residual_v(model.params, after, p1, cutoff_v, packs)) > 0.0
         above = np.where(active, above & held, above)
         return np.where(active, after, q)
 
-    # the roll, the rotation and the climb in the single case's mission's steps (RK4, its
-    # STEPS of equal time along the roll's airspeed history, ROTATION_STEPS at the lift-off
-    # speed, STEPS of the steady climb): as many steps for a roll of hours as of seconds
-    # (steps of 0.5 s made one such row stall a whole chunk; outside audit)
+    def phase_starts(q: Array, active: Array, p0: Array) -> None:
+        # the loaded packs stay above their cut-off at the nodes, as the single case's
+        # mission checks (a take-off that cut off passed here; outside audit): a phase's
+        # first node here, each step's end in rk4
+        nonlocal above
+        held = np.asarray(cutoff_residual_v(model.params, q, p0, cutoff_v, packs)) > 0.0
+        above = np.where(active, above & held, above)
+
+    # the roll in the single case's mission's steps (RK4, its STEPS of equal time along the
+    # roll's airspeed history), then the rotation at the lift-off speed and the steady climb:
+    # as many steps for a roll of hours as of seconds (steps of 0.5 s made one such row
+    # stall a whole chunk; outside audit)
     catapult = m.aircraft.launch == "catapult"  # released airborne: no roll, no rotation
     rotation = np.where(ok & (not catapult), np.asarray(
         m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) * np.ones(m.size), 0.0)
     roll_only = np.where(ok, np.maximum(roll_time - rotation, 0.0), 0.0)
-    h = roll_only / STEPS
-    stage_t = 0.5 * h[:, None] * np.arange(2 * STEPS + 1)[None, :]
-    rolling = _power_w(model, m, 1.0, _interp_rows(stage_t, t_hist, v_hist), engine)
-    q = np.zeros(m.size)
+    h = roll_only / _ROLL_STEPS
+    stage_t = 0.5 * h[:, None] * np.arange(2 * _ROLL_STEPS + 1)[None, :]
+    rolling = power(1.0, _interp_rows(stage_t, t_hist, v_hist))
+    q = np.zeros((len(engines), m.size))
     active = roll_only > 0.0
-    for k in range(STEPS):
+    phase_starts(q, active, rolling[..., 0])
+    for k in range(_ROLL_STEPS):
         j = 2 * k
-        q = rk4(q, h, active, (rolling[:, j], rolling[:, j + 1], rolling[:, j + 2]))
-    h = rotation / ROTATION_STEPS
-    at_liftoff = (_power_w(model, m, 1.0, v_lo, engine),) * 3
-    for _ in range(ROTATION_STEPS):
+        q = rk4(q, h, active, (rolling[..., j], rolling[..., j + 1], rolling[..., j + 2]))
+    # at constant power the charge's rate changes ~1 % over a climb: fewer RK4 steps than
+    # the mission's give its charge to ~1e-12 (tests/verification/test_batch_shortcuts.py)
+    h = rotation / _ROTATION_STEPS
+    at_liftoff = (power(1.0, v_lo),) * 3
+    phase_starts(q, rotation > 0.0, at_liftoff[0])
+    for _ in range(_ROTATION_STEPS):
         q = rk4(q, h, rotation > 0.0, at_liftoff)
     q_roll = q.copy()
-    h = climb_time_safe / STEPS
-    for _ in range(STEPS):
-        q = rk4(q, h, climb_time_safe > 0.0, (climb_power,) * 3)
-    ok &= above
+    h = climb_time_safe / _CLIMB_STEPS
+    climbing = (power(1.0, climb_speed),) * 3
+    phase_starts(q, climb_time_safe > 0.0, climbing[0])
+    for _ in range(_CLIMB_STEPS):
+        q = rk4(q, h, climb_time_safe > 0.0, climbing)
+    ok = ok & above
     return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak)
 
 
@@ -368,17 +387,16 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     # flight ends when the first fan's packs do (the largest launch charge with the largest
     # cruise power, of different fans at low throttle, was 2 % short; outside audit)
     engines = m.propulsion.engines if isinstance(model.power, PowerSurfaces) else (None,)
-    launches = [_launch_charge(m, model, roll, stall,
-                               battery["battery.mission.pattern_altitude_m"], packs, cutoff,
-                               engine) for engine in engines]
-    climb_time = launches[0].climb_time_s
+    launch = _launch_charge(m, model, roll, stall, battery["battery.mission.pattern_altitude_m"],
+                            packs, cutoff, engines)
+    climb_time = launch.climb_time_s
     reserve_ah = (per_engine * capacity
                   * (1.0 - battery["battery.mission.landing_reserve_fraction"]))
     # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
     most, least_speed = _most_excess(m, throttle, m.least_airspeed(), stall)
     # EnduranceModel.check_throttle accepts a throttle down to the least one less 1e-9
     holds = (most >= 0.0) | (_excess(m, throttle + 1e-9, least_speed) >= 0.0)
-    ok = np.logical_and.reduce([np.isfinite(launch.charge_ah) for launch in launches]) & holds
+    ok = np.all(np.isfinite(launch.charge_ah), axis=0) & holds
     # an airspeed above the fast level-flight root, as EnduranceModel._speed_guess
     guess = np.maximum(least_speed, stall) * 1.25
     found = np.zeros(m.size, dtype=bool)
@@ -400,7 +418,7 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs / per_engine) > 0.0)
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs) > 0.0)
     cruise_s = np.full(m.size, np.inf)
-    for engine, launch in zip(engines, launches, strict=True):
+    for e, engine in enumerate(engines):
         own = _power_w(model, m, throttle, speed, engine)
         q_cut = _bracketed_root(
             lambda q, own=own: np.asarray(cutoff_residual_v(params, q, own, cutoff, packs),
@@ -408,14 +426,14 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
             np.zeros(m.size),
             np.full(m.size, packs * params.max_capacity_ah * (1.0 - 1e-12)),
         )
-        start = np.where(ok, launch.charge_ah, 0.0)
+        start = np.where(ok, launch.charge_ah[e], 0.0)
         # a launch that leaves no cruise before the reserve or the cut-off is not attainable
         # (the single case's mission): the batch counted the climb alone (outside audit)
         ok &= np.minimum(q_cut, reserve_ah) > start
         span = np.maximum(np.minimum(q_cut, reserve_ah) - start, 0.0)
         seconds = np.asarray(discharge_time_s(params, np.where(ok, own, 1.0), start,
                                               start + span, packs), dtype=float)
-        ok &= _within_rating(model, launch, own, start, span, seconds, packs, capacity)
+        ok &= _within_rating(model, launch, e, own, start, span, seconds, packs, capacity)
         cruise_s = np.minimum(cruise_s, seconds)
     minutes = cruise_s / 60.0 + np.where(ok, climb_time, 0.0) / 60.0
     return np.where(ok & np.isfinite(minutes), minutes, np.nan)
@@ -445,9 +463,9 @@ def _impossible_cruise(m: Any, throttle: Array, speed: Array, power_w: Array) ->
     return impossible
 
 
-def _within_rating(model: Any, launch: _Launch, power_w: Array, start: Array, span: Array,
-                   cruise_s: Array, packs: Array, capacity_ah: Array) -> Array:
-    """Per row: the battery's packs of ``capacity_ah`` [Ah] (flying as ``packs`` measured
+def _within_rating(model: Any, launch: _Launch, fan: int, power_w: Array, start: Array,
+                   span: Array, cruise_s: Array, packs: Array, capacity_ah: Array) -> Array:
+    """Per row: fan ``fan``'s packs of ``capacity_ah`` [Ah] (flying as ``packs`` measured
     ones) stay within their rating, by the mission's two rules
     (``MissionModel._beyond_rating``): no current beyond the burst rating, and no segment of
     30 s or more (roll, climb, cruise) beyond the continuous one on average."""
@@ -461,12 +479,13 @@ def _within_rating(model: Any, launch: _Launch, power_w: Array, start: Array, sp
     # the cruise at constant power draws most at its end (the pack sags)
     cruise_end = np.asarray(current_at_power_a(model.params, start + span, power_w, packs),
                             dtype=float)
-    peak = np.maximum(launch.peak_current_a, cruise_end) / per_pack
+    peak = np.maximum(launch.peak_current_a[fan], cruise_end) / per_pack
     ok = ~(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9))
     climb_s = np.nan_to_num(launch.climb_time_s)
-    climb_ah = launch.charge_ah - launch.roll_charge_ah
+    climb_ah = launch.charge_ah[fan] - launch.roll_charge_ah[fan]
     with np.errstate(divide="ignore", invalid="ignore"):
-        for charge, seconds in ((launch.roll_charge_ah, launch.roll_time_s), (climb_ah, climb_s),
+        for charge, seconds in ((launch.roll_charge_ah[fan], launch.roll_time_s),
+                                (climb_ah, climb_s),
                                 (span, cruise_s)):
             mean = charge * 3600.0 / seconds / per_pack
             ok &= ~((seconds >= RATING_SEGMENT_S) & (mean > rating * (1.0 + 1e-9)))
