@@ -95,7 +95,7 @@ _ROLL_PROBES = np.array([0.25, 0.5, 0.75, 0.9])  # three fix a piece's quadratic
 _UNIT = {t: {u: float(u == t) for u in POLY22_TERMS} for t in POLY22_TERMS}  # basis picks
 _HISTORY_POINTS = 101  # as analysis.takeoff.HISTORY_POINTS: the time history
 _CHECK_POINTS = 2001  # as analysis.takeoff._CHECK_POINTS: where the net force must be > 0
-_STEEP_FORCE_SHARE = 0.05  # a least net force below this share of the greatest: fine panels
+_STEEP_FORCE_SHARE = 0.05  # a least net force below this share of the greatest: a peak
 _FINE_PANELS = 256
 _PEAK_PANELS = 16  # Gauss panels on each monotone half of a piece, in the stretched variable
 # the roll's quadrature on each piece's own coordinate (as _integrate places its nodes)
@@ -627,15 +627,12 @@ class _Model:
         self._pieces = (breaks, fits) if ok else False
         return self._pieces or None
 
-    def _integrate_piece(self, piece: tuple[Array, ...], rule: tuple[Array, Array] = _ROLL_RULE,
-                         rows: Array | None = None) -> tuple[Array, Array]:
+    def _integrate_piece(self, piece: tuple[Array, ...]) -> tuple[Array, Array]:
         """:meth:`_integrate` on one piece of :meth:`_roll_pieces`: the same nodes, the force
-        from the piece's quadratic; only ``rows`` (indices) when given."""
+        from the piece's quadratic."""
         mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
-        if rows is not None:
-            piece, mass = tuple(a[rows] for a in piece), mass[rows]
         low, width, c0, c1, c2 = piece
-        u, w = rule
+        u, w = _ROLL_RULE
         s = u - 0.5
         force = c0 + s * (c1 + s * c2)
         speed = low + width * u
