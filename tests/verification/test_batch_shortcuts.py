@@ -104,7 +104,7 @@ def test_piecewise_quadratic_roll_equals_node_by_node(seed: int) -> None:
     # where the force all but vanishes the pieces' stretched rule is exact and node by node
     # is 256 panels' approximation (5.8e-10 off scipy's quad where the pieces' is 1e-12):
     # those rows agree to the fine rule's accuracy
-    least, most = fast._force_range()
+    least, most = fast.force_range()
     steep = least < _STEEP_FORCE_SHARE * most
     assert steep[np.isfinite(got[0])].any()
     for a, b in zip(got, want, strict=True):
@@ -124,22 +124,27 @@ def test_piecewise_quadratic_roll_equals_node_by_node(seed: int) -> None:
 
 
 def test_launch_in_fewer_steps_equals_the_mission_steps(monkeypatch) -> None:
-    """The batch's launch flies the roll in 16 RK4 steps and the constant-power rotation
-    and climb in 2 and 8: the mission's 64, 8 and 64 give the same endurance to 1e-7 on a
-    hostile batch."""
+    """The batch's launch flies a roll whose force does not all but vanish in 16 RK4 steps
+    and the constant-power climb exactly: the mission's 64 steps of each give the same
+    endurance to 1e-8 on a hostile batch."""
     case = load_case(SHIPPED_CASE)
     evaluator = BatchEvaluator(case)
     values, coefficients, extrapolation = _hostile_batch(5)
     values = {k: v for k, v in values.items() if k != "atmosphere.altitude_m"}
     got = evaluator.evaluate(values, ROWS, coefficients, extrapolation).values
     monkeypatch.setattr(batch_endurance, "_ROLL_STEPS", 64)
-    monkeypatch.setattr(batch_endurance, "_ROTATION_STEPS", 8)
-    monkeypatch.setattr(batch_endurance, "_CLIMB_STEPS", 64)
+
+    def climb_in_64_steps(params, q, power, seconds, packs):
+        h = seconds / 64
+        return batch_endurance._rk4_phase(params, q, h, seconds > 0.0, [(power,) * 3] * 64,
+                                          packs, np.zeros_like(packs))[0]
+
+    monkeypatch.setattr(batch_endurance, "_charge_after", climb_in_64_steps)
     want = evaluator.evaluate(values, ROWS, coefficients, extrapolation).values
     endurance = got["flight_endurance"]
     assert np.array_equal(np.isnan(endurance), np.isnan(want["flight_endurance"]))
     assert np.isfinite(endurance).sum() > ROWS // 4
-    assert np.allclose(endurance, want["flight_endurance"], rtol=1e-7, equal_nan=True)
+    assert np.allclose(endurance, want["flight_endurance"], rtol=1e-8, equal_nan=True)
 
 
 def test_row_wise_interpolation_equals_numpy_interp() -> None:

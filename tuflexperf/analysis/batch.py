@@ -526,6 +526,7 @@ class _Model:
     _drag: Any = None  # (airspeeds, level-flight drag there) of the last grid
     _pieces: Any = None  # memo of _roll_pieces (False: evaluate node by node)
     _terms: Any = None
+    _force_range: tuple[Array, Array] | None = None  # memo of force_range
 
     def least_airspeed(self) -> Array:
         """Least level-flight airspeed [m/s] per row: stall x the envelope's margin (SPEC 3)."""
@@ -649,13 +650,19 @@ class _Model:
         low, width, c0, c1, c2 = (a[rows] for a in piece)
         return roll_integrals_near_a_peak(low, width, c0, c1, c2, mass[rows])
 
-    def _force_range(self) -> tuple[Array, Array]:
+    def force_range(self) -> tuple[Array, Array]:
         """Least and greatest full-throttle net force [N] per row from rest to lift-off.
 
         On the quadratic pieces of :meth:`_roll_pieces` both are exact (each piece's ends and
         vertex), so a dip between any check points counts; node by node, the single case's
-        2001 equally spaced airspeeds (``analysis.takeoff``).
+        2001 equally spaced airspeeds (``analysis.takeoff``). Memoised: the roll, its
+        history and the launch ask for it.
         """
+        if self._force_range is None:
+            self._force_range = self._least_and_greatest_force()
+        return self._force_range
+
+    def _least_and_greatest_force(self) -> tuple[Array, Array]:
         pieces = self._roll_pieces()
         if pieces is None:
             speeds = self.liftoff_speed() * np.linspace(0.0, 1.0, _CHECK_POINTS)[None, :]
@@ -718,7 +725,7 @@ class _Model:
         v_lo = self.liftoff_speed()
         # a sampled lift-off speed below stall cannot lift off (bad input for one case)
         stall = stall_speed(self)[:, None]
-        least, most = self._force_range()
+        least, most = self.force_range()
         attainable = (least > 0.0) & (v_lo >= stall * (1.0 - 1e-12))[:, 0]
         # beyond the fans' jet velocity an extrapolated thrust model is not physics (as
         # solve_takeoff says); v_lo is a column, as the jet velocity of sampled rows is
@@ -790,8 +797,10 @@ class _Model:
             self.aircraft.takeoff.transition_load_factor, dtype=float)), dtype=bool).reshape(-1)
         return np.where(np.isfinite(total) & (roll[3] > 0.5) & flown, total, np.nan)
 
-    def roll_history(self) -> Array:
-        """Time [s] at 101 equally spaced airspeeds from rest to V_LO (as the CVODES history).
+    def roll_history(self, wanted: NDArray[np.bool_] | None = None) -> Array:
+        """Time [s] at 101 equally spaced airspeeds from rest to V_LO (as the CVODES history);
+        only the ``wanted`` rows exactly where the force all but vanishes (the others are
+        not flown: a chunk of them cost 2.5 s; outside audit).
 
         Cumulative integral of ``m / F`` on the uniform nodes by the four-point rule
         ``h/24 (-g_{i-1} + 13 g_i + 13 g_{i+1} - g_{i+2})`` (trapezoid-corrected, O(h^5) per
@@ -806,9 +815,10 @@ class _Model:
         right = np.concatenate([g[:, 2:], 2 * g[:, -1:] - g[:, -2:-1]], axis=1)
         pieces = h / 24.0 * (-left + 13.0 * g[:, :-1] + 13.0 * g[:, 1:] - right)
         history = np.concatenate([np.zeros((self.size, 1)), np.cumsum(pieces, axis=1)], axis=1)
-        least, most = self._force_range()
+        least, most = self.force_range()
         with np.errstate(invalid="ignore"):
-            steep = np.flatnonzero((least > 0.0) & (least < _STEEP_FORCE_SHARE * most))
+            steep = (least > 0.0) & (least < _STEEP_FORCE_SHARE * most)
+        steep = np.flatnonzero(steep if wanted is None else steep & wanted)
         if steep.size and self._roll_pieces() is not None:
             # where the force all but vanishes the four-point rule misses the peak of 1/F
             # (and the launch's airspeed follows this history): each interval exactly

@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis import endurance as single
+from tuflexperf.analysis.mission import STEPS
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import (
     current_at_power_a,
@@ -100,9 +101,12 @@ def battery_side(case: Any) -> Any:
 
 _GOLDEN_STEPS = 25
 _BISECTIONS = 60
-_ROLL_STEPS = 16  # RK4 steps of the roll along its history: 1e-8 of the mission's 64
-_CLIMB_STEPS = 8  # RK4 steps of the launch's constant-power phases (the mission flies 64, 8)
+_ROLL_STEPS = 16  # RK4 steps of a roll along its history: 1e-8 of the mission's 64 ...
+_DWELL_ROLL_STEPS = STEPS  # ... where the force all but vanishes and 16 were 5e-5 off
+_DWELL_FORCE_SHARE = 0.2  # a least net force below this share of the greatest: dwelling
 _ROTATION_STEPS = 2
+_CHARGE_NODES, _CHARGE_WEIGHTS = np.polynomial.legendre.leggauss(8)
+_CHARGE_NEWTON_STEPS = 4
 
 
 def _golden_section_max(
@@ -202,6 +206,51 @@ class _Launch:
     roll_charge_ah: Array
     roll_time_s: Array
     peak_current_a: Array
+    full_throttle_speeds_m_s: Array  # (rows, points): every airspeed its power was taken at
+
+
+def _rk4_phase(params: Any, q: Array, h: Array, active: Array,
+               powers: list[tuple[Array, Array, Array]], packs: Array,
+               cutoff_v: Array) -> tuple[Array, Array, Array]:
+    """RK4 of ``dq/dt = i(q, P)/3600`` [Ah/s] from ``q`` in steps of ``h`` [s] where
+    ``active``, each step's power [W] at its start, middle and end in ``powers``; with the
+    largest current [A] at the nodes and whether the loaded packs stay above their cut-off
+    ``cutoff_v`` [V] at every node (the mission's checks; a take-off that cut off passed
+    here; outside audit)."""
+    peak = np.zeros(np.shape(q))
+    above = np.asarray(cutoff_residual_v(params, q, powers[0][0], cutoff_v, packs)) > 0.0
+    above |= ~active
+    for p0, p_half, p1 in powers:
+        k1 = np.asarray(current_at_power_a(params, q, p0, packs)) / 3600.0
+        k2 = np.asarray(current_at_power_a(params, q + h / 2 * k1, p_half, packs)) / 3600.0
+        k3 = np.asarray(current_at_power_a(params, q + h / 2 * k2, p_half, packs)) / 3600.0
+        k4 = np.asarray(current_at_power_a(params, q + h * k3, p1, packs)) / 3600.0
+        # the mission checks its nodes' currents (step ends): k1 and k4 are those here
+        peak = np.where(active, np.maximum(peak, 3600.0 * np.maximum(k1, k4)), peak)
+        after = q + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        held = np.asarray(cutoff_residual_v(params, after, p1, cutoff_v, packs)) > 0.0
+        above = np.where(active, above & held, above)
+        q = np.where(active, after, q)
+    return q, peak, above
+
+
+def _charge_after(params: Any, q: Array, power: Array, seconds: Array, packs: Array) -> Array:
+    """Charge [Ah] after ``seconds`` [s] at the constant ``power`` [W] from ``q`` [Ah]: the
+    root of ``3600 integral_q^Q dq / i(q, P) = seconds`` (Gauss-Legendre on the interval,
+    Newton with ``dt/dQ = 3600 / i(Q, P)``, from below: the time is concave in ``Q``).
+    Exact where the mission's 64 RK4 steps are to ~1e-9, at a sixth of their work."""
+    pole = packs * params.max_capacity_ah * (1.0 - 1e-12)
+    end = q + seconds * np.asarray(current_at_power_a(params, q, power, packs)) / 3600.0
+    for _ in range(_CHARGE_NEWTON_STEPS):
+        end = np.minimum(end, pole)
+        half, middle = 0.5 * (end - q), 0.5 * (end + q)
+        inverse = sum(weight / np.asarray(current_at_power_a(params, middle + half * node,
+                                                             power, packs))
+                      for node, weight in zip(_CHARGE_NODES, _CHARGE_WEIGHTS, strict=True))
+        elapsed = 3600.0 * half * inverse
+        end = end - (elapsed - seconds) * np.asarray(
+            current_at_power_a(params, end, power, packs)) / 3600.0
+    return np.minimum(end, pole)
 
 
 def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
@@ -223,70 +272,80 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     roll_time = np.where(ok, roll_time, 0.0)
     climb_time_safe = np.where(ok, climb_time, 0.0)
     # a catapult launch has no roll: its history is never looked up (the roll time is 0)
-    t_hist = (np.zeros((m.size, 2)) if m.aircraft.launch == "catapult" else m.roll_history())
+    t_hist = (np.zeros((m.size, 2)) if m.aircraft.launch == "catapult"
+              else m.roll_history(ok))
     v_hist = v_lo[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
     t_hist = np.where(ok[:, None], t_hist, 0.0)
+    params = model.params
 
     def power(throttle: float, speed: Array) -> Array:
         return np.stack([_power_w(model, m, throttle, speed, engine) for engine in engines])
 
-    peak = np.zeros((len(engines), m.size))
-    above = np.ones((len(engines), m.size), dtype=bool)
-
-    def rk4(q: Array, h: Array, active: Array, powers: tuple[Array, Array, Array]) -> Array:
-        nonlocal peak, above
-        p0, p_half, p1 = powers
-        k1 = np.asarray(current_at_power_a(model.params, q, p0, packs)) / 3600.0
-        k2 = np.asarray(current_at_power_a(model.params, q + h / 2 * k1, p_half, packs)) / 3600.0
-        k3 = np.asarray(current_at_power_a(model.params, q + h / 2 * k2, p_half, packs)) / 3600.0
-        k4 = np.asarray(current_at_power_a(model.params, q + h * k3, p1, packs)) / 3600.0
-        # the mission checks its nodes' currents (step ends): k1 and k4 are those here
-        peak = np.where(active, np.maximum(peak, 3600.0 * np.maximum(k1, k4)), peak)
-        after = q + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        held = np.asarray(cutoff_residual_v(model.params, after, p1, cutoff_v, packs)) > 0.0
-        above = np.where(active, above & held, above)
-        return np.where(active, after, q)
-
-    def phase_starts(q: Array, active: Array, p0: Array) -> None:
-        # the loaded packs stay above their cut-off at the nodes, as the single case's
-        # mission checks (a take-off that cut off passed here; outside audit): a phase's
-        # first node here, each step's end in rk4
-        nonlocal above
-        held = np.asarray(cutoff_residual_v(model.params, q, p0, cutoff_v, packs)) > 0.0
-        above = np.where(active, above & held, above)
-
-    # the roll in the single case's mission's steps (RK4, its STEPS of equal time along the
-    # roll's airspeed history), then the rotation at the lift-off speed and the steady climb:
-    # as many steps for a roll of hours as of seconds (steps of 0.5 s made one such row
-    # stall a whole chunk; outside audit)
+    # the roll along its airspeed history, as many steps for a roll of hours as of seconds
+    # (steps of 0.5 s made one such row stall a whole chunk; outside audit): the mission's 64
+    # where the net force all but vanishes (the airspeed dwells, 16 were 5e-5 off), else 16
     catapult = m.aircraft.launch == "catapult"  # released airborne: no roll, no rotation
     rotation = np.where(ok & (not catapult), np.asarray(
         m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) * np.ones(m.size), 0.0)
     roll_only = np.where(ok, np.maximum(roll_time - rotation, 0.0), 0.0)
-    h = roll_only / _ROLL_STEPS
-    stage_t = 0.5 * h[:, None] * np.arange(2 * _ROLL_STEPS + 1)[None, :]
-    rolling = power(1.0, _interp_rows(stage_t, t_hist, v_hist))
-    q = np.zeros((len(engines), m.size))
-    active = roll_only > 0.0
-    phase_starts(q, active, rolling[..., 0])
-    for k in range(_ROLL_STEPS):
-        j = 2 * k
-        q = rk4(q, h, active, (rolling[..., j], rolling[..., j + 1], rolling[..., j + 2]))
-    # at constant power the charge's rate changes ~1 % over a climb: fewer RK4 steps than
-    # the mission's give its charge to ~1e-12 (tests/verification/test_batch_shortcuts.py)
-    h = rotation / _ROTATION_STEPS
-    at_liftoff = (power(1.0, v_lo),) * 3
-    phase_starts(q, rotation > 0.0, at_liftoff[0])
-    for _ in range(_ROTATION_STEPS):
-        q = rk4(q, h, rotation > 0.0, at_liftoff)
+    least, most = m.force_range() if not catapult else (np.ones(m.size), np.ones(m.size))
+    with np.errstate(invalid="ignore"):
+        dwelling = least < _DWELL_FORCE_SHARE * most
+    fans = len(engines)
+    q, peak = np.zeros((fans, m.size)), np.zeros((fans, m.size))
+    above = np.ones((fans, m.size), dtype=bool)
+    widest = 2 * (_DWELL_ROLL_STEPS if dwelling.any() else _ROLL_STEPS) + 1
+    used = np.repeat(v_lo[:, None], widest + 1, axis=1)  # the roll's stages, V_LO, the climb
+    used[:, -1] = climb_speed
+    for rows, steps in ((np.flatnonzero(~dwelling), _ROLL_STEPS),
+                        (np.flatnonzero(dwelling), _DWELL_ROLL_STEPS)):
+        if not rows.size:
+            continue
+        h = roll_only[rows] / steps
+        stage_t = 0.5 * h[:, None] * np.arange(2 * steps + 1)[None, :]
+        speed = _interp_rows(stage_t, t_hist[rows], v_hist[rows])
+        full = np.zeros((m.size, speed.shape[1]))
+        full[rows] = speed
+        used[rows, :speed.shape[1]] = speed
+        rolling = power(1.0, full)[:, rows]
+        q[:, rows], peak[:, rows], above[:, rows] = _rk4_phase(
+            params, q[:, rows], h, roll_only[rows] > 0.0,
+            [(rolling[..., j], rolling[..., j + 1], rolling[..., j + 2])
+             for j in range(0, 2 * steps, 2)], packs[rows], cutoff_v[rows])
+    # the rotation at the lift-off speed: constant power for a second or two (the mission's
+    # 8 steps give its charge to ~1e-15 of these)
+    at_liftoff = power(1.0, v_lo)
+    q, rotation_peak, held = _rk4_phase(params, q, rotation / _ROTATION_STEPS, rotation > 0.0,
+                                        [(at_liftoff,) * 3] * _ROTATION_STEPS, packs, cutoff_v)
+    peak, above = np.maximum(peak, rotation_peak), above & held
     q_roll = q.copy()
-    h = climb_time_safe / _CLIMB_STEPS
-    climbing = (power(1.0, climb_speed),) * 3
-    phase_starts(q, climb_time_safe > 0.0, climbing[0])
-    for _ in range(_CLIMB_STEPS):
-        q = rk4(q, h, climb_time_safe > 0.0, climbing)
-    ok = ok & above
-    return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak)
+    # the steady climb at constant power, exactly: its current rises with the charge, so
+    # its end is its largest current and lowest voltage (the mission's nodes' extremes)
+    climbing = power(1.0, climb_speed)
+    climbed = climb_time_safe > 0.0
+    above &= ~climbed | (np.asarray(cutoff_residual_v(params, q, climbing, cutoff_v, packs))
+                         > 0.0)
+    q = np.where(climbed, _charge_after(params, q, climbing, climb_time_safe, packs), q)
+    top = np.asarray(current_at_power_a(params, q, climbing, packs))
+    peak = np.where(climbed, np.maximum(peak, top), peak)
+    above &= ~climbed | (np.asarray(cutoff_residual_v(params, q, climbing, cutoff_v, packs))
+                         > 0.0)
+    ok = ok & np.all(above, axis=0)
+    return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak, used)
+
+
+def _one_fan_draws_most(model: Any, m: Any, launch: _Launch, throttle: Array,
+                        speed: Array, rows: NDArray[np.bool_]) -> bool:
+    """True when in every row of ``rows`` one fan's power surface gives the most power at
+    every point the launch and the cruise took power at: that fan's packs end the flight,
+    and the largest fan's power (one integration) is exactly its own."""
+    def top(x: Any, v: Array) -> Array:
+        return np.argmax(np.stack([_power_w(model, m, x, v, e) for e in m.propulsion.engines]),
+                         axis=0)
+
+    at_full = top(1.0, launch.full_throttle_speeds_m_s)
+    cruising = top(throttle, speed)
+    return bool(np.all((at_full == cruising[:, None]) | ~rows[:, None]))
 
 
 def _most_excess(m: Any, throttle: Array, least: Array, stall: Array) -> tuple[Array, Array]:
@@ -383,20 +442,12 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     packs = np.asarray(equivalent_packs(per_engine, capacity,
                                         model.battery.as_read.capacity_ah), dtype=float)
     cutoff = model.battery.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"]
-    # each fan on its own packs, with its own power surface, as the mission flies them: the
-    # flight ends when the first fan's packs do (the largest launch charge with the largest
-    # cruise power, of different fans at low throttle, was 2 % short; outside audit)
-    engines = m.propulsion.engines if isinstance(model.power, PowerSurfaces) else (None,)
-    launch = _launch_charge(m, model, roll, stall, battery["battery.mission.pattern_altitude_m"],
-                            packs, cutoff, engines)
-    climb_time = launch.climb_time_s
     reserve_ah = (per_engine * capacity
                   * (1.0 - battery["battery.mission.landing_reserve_fraction"]))
     # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
     most, least_speed = _most_excess(m, throttle, m.least_airspeed(), stall)
     # EnduranceModel.check_throttle accepts a throttle down to the least one less 1e-9
-    holds = (most >= 0.0) | (_excess(m, throttle + 1e-9, least_speed) >= 0.0)
-    ok = np.all(np.isfinite(launch.charge_ah), axis=0) & holds
+    ok = (most >= 0.0) | (_excess(m, throttle + 1e-9, least_speed) >= 0.0)
     # an airspeed above the fast level-flight root, as EnduranceModel._speed_guess
     guess = np.maximum(least_speed, stall) * 1.25
     found = np.zeros(m.size, dtype=bool)
@@ -417,24 +468,37 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     params = model.params
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs / per_engine) > 0.0)
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs) > 0.0)
-    cruise_s = np.full(m.size, np.inf)
-    for e, engine in enumerate(engines):
-        own = _power_w(model, m, throttle, speed, engine)
-        q_cut = _bracketed_root(
-            lambda q, own=own: np.asarray(cutoff_residual_v(params, q, own, cutoff, packs),
-                                          dtype=float),
-            np.zeros(m.size),
-            np.full(m.size, packs * params.max_capacity_ah * (1.0 - 1e-12)),
-        )
-        start = np.where(ok, launch.charge_ah[e], 0.0)
-        # a launch that leaves no cruise before the reserve or the cut-off is not attainable
-        # (the single case's mission): the batch counted the climb alone (outside audit)
-        ok &= np.minimum(q_cut, reserve_ah) > start
-        span = np.maximum(np.minimum(q_cut, reserve_ah) - start, 0.0)
-        seconds = np.asarray(discharge_time_s(params, np.where(ok, own, 1.0), start,
-                                              start + span, packs), dtype=float)
-        ok &= _within_rating(model, launch, e, own, start, span, seconds, packs, capacity)
-        cruise_s = np.minimum(cruise_s, seconds)
+    # each fan on its own packs, with its own power surface, as the mission flies them: the
+    # flight ends when the first fan's packs do (the largest launch charge with the largest
+    # cruise power, of different fans at low throttle, was 2 % short; outside audit). Where
+    # one fan draws the most throughout, the largest fan's power is exactly its own
+    height = battery["battery.mission.pattern_altitude_m"]
+    engines: tuple[Any, ...] = (None,)
+    launch = _launch_charge(m, model, roll, stall, height, packs, cutoff, engines)
+    if isinstance(model.power, PowerSurfaces) and len(m.propulsion.engines) > 1 \
+            and not _one_fan_draws_most(model, m, launch, throttle, speed,
+                                        ok & np.all(np.isfinite(launch.charge_ah), axis=0)):
+        engines = m.propulsion.engines
+        launch = _launch_charge(m, model, roll, stall, height, packs, cutoff, engines)
+    climb_time = launch.climb_time_s
+    ok &= np.all(np.isfinite(launch.charge_ah), axis=0)
+    # every fan at once, as (fans, rows)
+    own = np.stack([_power_w(model, m, throttle, speed, engine) for engine in engines])
+    q_cut = _bracketed_root(
+        lambda q: np.asarray(cutoff_residual_v(params, q, own, cutoff, packs), dtype=float),
+        np.zeros(own.shape),
+        np.broadcast_to(packs * params.max_capacity_ah * (1.0 - 1e-12), own.shape).copy(),
+    )
+    start = np.where(ok, launch.charge_ah, 0.0)
+    # a launch that leaves no cruise before the reserve or the cut-off is not attainable
+    # (the single case's mission): the batch counted the climb alone (outside audit)
+    ok &= np.all(np.minimum(q_cut, reserve_ah) > start, axis=0)
+    span = np.maximum(np.minimum(q_cut, reserve_ah) - start, 0.0)
+    seconds = np.asarray(discharge_time_s(params, np.where(ok, own, 1.0), start, start + span,
+                                          packs), dtype=float)
+    ok &= np.all(_within_rating(model, launch, own, start, span, seconds, packs, capacity),
+                 axis=0)
+    cruise_s = np.min(seconds, axis=0)
     minutes = cruise_s / 60.0 + np.where(ok, climb_time, 0.0) / 60.0
     return np.where(ok & np.isfinite(minutes), minutes, np.nan)
 
@@ -463,10 +527,10 @@ def _impossible_cruise(m: Any, throttle: Array, speed: Array, power_w: Array) ->
     return impossible
 
 
-def _within_rating(model: Any, launch: _Launch, fan: int, power_w: Array, start: Array,
+def _within_rating(model: Any, launch: _Launch, power_w: Array, start: Array,
                    span: Array, cruise_s: Array, packs: Array, capacity_ah: Array) -> Array:
-    """Per row: fan ``fan``'s packs of ``capacity_ah`` [Ah] (flying as ``packs`` measured
-    ones) stay within their rating, by the mission's two rules
+    """Per fan and row ``(fans, rows)``: the packs of ``capacity_ah`` [Ah] (flying as
+    ``packs`` measured ones) stay within their rating, by the mission's two rules
     (``MissionModel._beyond_rating``): no current beyond the burst rating, and no segment of
     30 s or more (roll, climb, cruise) beyond the continuous one on average."""
     from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S
@@ -479,12 +543,12 @@ def _within_rating(model: Any, launch: _Launch, fan: int, power_w: Array, start:
     # the cruise at constant power draws most at its end (the pack sags)
     cruise_end = np.asarray(current_at_power_a(model.params, start + span, power_w, packs),
                             dtype=float)
-    peak = np.maximum(launch.peak_current_a[fan], cruise_end) / per_pack
+    peak = np.maximum(launch.peak_current_a, cruise_end) / per_pack
     ok = ~(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9))
     climb_s = np.nan_to_num(launch.climb_time_s)
-    climb_ah = launch.charge_ah[fan] - launch.roll_charge_ah[fan]
+    climb_ah = launch.charge_ah - launch.roll_charge_ah
     with np.errstate(divide="ignore", invalid="ignore"):
-        for charge, seconds in ((launch.roll_charge_ah[fan], launch.roll_time_s),
+        for charge, seconds in ((launch.roll_charge_ah, launch.roll_time_s),
                                 (climb_ah, climb_s),
                                 (span, cruise_s)):
             mean = charge * 3600.0 / seconds / per_pack
