@@ -68,6 +68,12 @@ ROWS = [
     pytest.param({"requirements.endurance.throttle": 0.6,
                   "battery.mission.pattern_altitude_m": 1761.845}, "flight_endurance",
                  id="long-climb-to-the-reserve"),
+    # a climb the pack cannot finish (a 2,607 m pattern altitude): an exact constant-power
+    # climb's Newton left the pack's domain and "flew" 2.5e6 min (re-fuzz of this session)
+    pytest.param({"battery.mission.pattern_altitude_m": 2606.708033205211,
+                  "battery.mission.landing_reserve_fraction": 0.6416691447700174,
+                  "aircraft.takeoff.cl_ground": 0.06552137979611028}, "flight_endurance",
+                 id="climb-the-pack-cannot-finish"),
     # the most excess lies at the least airspeed itself: golden section stopped 1e-5 m/s
     # short of it, 6e-6 N below, and called the throttle too low (check: 17.49 min)
     pytest.param({"aircraft.cd0": 0.11909765828394686,

@@ -125,21 +125,15 @@ def test_piecewise_quadratic_roll_equals_node_by_node(seed: int) -> None:
 
 def test_launch_in_fewer_steps_equals_the_mission_steps(monkeypatch) -> None:
     """The batch's launch flies a roll whose force does not all but vanish in 16 RK4 steps
-    and the constant-power climb exactly: the mission's 64 steps of each give the same
-    endurance to 1e-8 on a hostile batch."""
+    and the rotation in 2: the mission's 64 and 8 give the same endurance to 1e-8 on a
+    hostile batch."""
     case = load_case(SHIPPED_CASE)
     evaluator = BatchEvaluator(case)
     values, coefficients, extrapolation = _hostile_batch(5)
     values = {k: v for k, v in values.items() if k != "atmosphere.altitude_m"}
     got = evaluator.evaluate(values, ROWS, coefficients, extrapolation).values
     monkeypatch.setattr(batch_endurance, "_ROLL_STEPS", 64)
-
-    def climb_in_64_steps(params, q, power, seconds, packs):
-        h = seconds / 64
-        return batch_endurance._rk4_phase(params, q, h, seconds > 0.0, [(power,) * 3] * 64,
-                                          packs, np.zeros_like(packs))[0]
-
-    monkeypatch.setattr(batch_endurance, "_charge_after", climb_in_64_steps)
+    monkeypatch.setattr(batch_endurance, "_ROTATION_STEPS", 8)
     want = evaluator.evaluate(values, ROWS, coefficients, extrapolation).values
     endurance = got["flight_endurance"]
     assert np.array_equal(np.isnan(endurance), np.isnan(want["flight_endurance"]))

@@ -105,8 +105,6 @@ _ROLL_STEPS = 16  # RK4 steps of a roll along its history: 1e-8 of the mission's
 _DWELL_ROLL_STEPS = STEPS  # ... where the force all but vanishes and 16 were 5e-5 off
 _DWELL_FORCE_SHARE = 0.2  # a least net force below this share of the greatest: dwelling
 _ROTATION_STEPS = 2
-_CHARGE_NODES, _CHARGE_WEIGHTS = np.polynomial.legendre.leggauss(8)
-_CHARGE_NEWTON_STEPS = 4
 
 
 def _golden_section_max(
@@ -234,25 +232,6 @@ def _rk4_phase(params: Any, q: Array, h: Array, active: Array,
     return q, peak, above
 
 
-def _charge_after(params: Any, q: Array, power: Array, seconds: Array, packs: Array) -> Array:
-    """Charge [Ah] after ``seconds`` [s] at the constant ``power`` [W] from ``q`` [Ah]: the
-    root of ``3600 integral_q^Q dq / i(q, P) = seconds`` (Gauss-Legendre on the interval,
-    Newton with ``dt/dQ = 3600 / i(Q, P)``, from below: the time is concave in ``Q``).
-    Exact where the mission's 64 RK4 steps are to ~1e-9, at a sixth of their work."""
-    pole = packs * params.max_capacity_ah * (1.0 - 1e-12)
-    end = q + seconds * np.asarray(current_at_power_a(params, q, power, packs)) / 3600.0
-    for _ in range(_CHARGE_NEWTON_STEPS):
-        end = np.minimum(end, pole)
-        half, middle = 0.5 * (end - q), 0.5 * (end + q)
-        inverse = sum(weight / np.asarray(current_at_power_a(params, middle + half * node,
-                                                             power, packs))
-                      for node, weight in zip(_CHARGE_NODES, _CHARGE_WEIGHTS, strict=True))
-        elapsed = 3600.0 * half * inverse
-        end = end - (elapsed - seconds) * np.asarray(
-            current_at_power_a(params, end, power, packs)) / 3600.0
-    return np.minimum(end, pole)
-
-
 def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
                    stall: Array, height: Array, packs: Array, cutoff_v: Array,
                    engines: tuple[Any, ...] = (None,)) -> _Launch:
@@ -319,17 +298,12 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
                                         [(at_liftoff,) * 3] * _ROTATION_STEPS, packs, cutoff_v)
     peak, above = np.maximum(peak, rotation_peak), above & held
     q_roll = q.copy()
-    # the steady climb at constant power, exactly: its current rises with the charge, so
-    # its end is its largest current and lowest voltage (the mission's nodes' extremes)
+    # the steady climb in the mission's steps (8 were 5e-6 off on a long climb and PASSed at
+    # a reserve's edge; its exact Newton left the pack's domain where a climb cuts off)
     climbing = power(1.0, climb_speed)
-    climbed = climb_time_safe > 0.0
-    above &= ~climbed | (np.asarray(cutoff_residual_v(params, q, climbing, cutoff_v, packs))
-                         > 0.0)
-    q = np.where(climbed, _charge_after(params, q, climbing, climb_time_safe, packs), q)
-    top = np.asarray(current_at_power_a(params, q, climbing, packs))
-    peak = np.where(climbed, np.maximum(peak, top), peak)
-    above &= ~climbed | (np.asarray(cutoff_residual_v(params, q, climbing, cutoff_v, packs))
-                         > 0.0)
+    q, climb_peak, held = _rk4_phase(params, q, climb_time_safe / STEPS, climb_time_safe > 0.0,
+                                     [(climbing,) * 3] * STEPS, packs, cutoff_v)
+    peak, above = np.maximum(peak, climb_peak), above & held
     ok = ok & np.all(above, axis=0)
     return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak, used)
 
