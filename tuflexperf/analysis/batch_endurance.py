@@ -291,8 +291,8 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
             params, q[:, rows], h, roll_only[rows] > 0.0,
             [(rolling[..., j], rolling[..., j + 1], rolling[..., j + 2])
              for j in range(0, 2 * steps, 2)], packs[rows], cutoff_v[rows])
-    # the rotation at the lift-off speed: constant power for a second or two (the mission's
-    # 8 steps give its charge to ~1e-15 of these)
+    # the rotation at the lift-off speed: constant power for a second or two, where 2 steps
+    # agree with the mission's 8 to ~1e-15
     at_liftoff = power(1.0, v_lo)
     q, rotation_peak, held = _rk4_phase(params, q, rotation / _ROTATION_STEPS, rotation > 0.0,
                                         [(at_liftoff,) * 3] * _ROTATION_STEPS, packs, cutoff_v)
