@@ -99,10 +99,11 @@ def main() -> None:
     print("  steps (time since start, s):")
     previous = 0.0
     for line in stream.getvalue().splitlines():
-        match = re.match(r"report \[(\d+)/(\d+)\] (.*) \(([\d.]+) s\)", line)
-        if match and "reducing" not in match.group(3):
-            elapsed = float(match.group(4))
-            print(f"    {match.group(3):<52} +{elapsed - previous:5.2f}  ({elapsed:5.2f})")
+        # a step is "[k/n]", or "[k]" before the number of steps is known
+        match = re.match(r"report \[(\d+)(?:/\d+)?\] (.*) \(([\d.]+) s\)", line)
+        if match:
+            elapsed = float(match.group(3))
+            print(f"    {match.group(2):<52} +{elapsed - previous:5.2f}  ({elapsed:5.2f})")
             previous = elapsed
 
 
