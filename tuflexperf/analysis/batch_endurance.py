@@ -105,6 +105,8 @@ _ROLL_STEPS = 16  # RK4 steps of a roll along its history: 1e-8 of the mission's
 _DWELL_ROLL_STEPS = STEPS  # ... where the force all but vanishes and 16 were 5e-5 off
 _DWELL_FORCE_SHARE = 0.2  # a least net force below this share of the greatest: dwelling
 _ROTATION_STEPS = 2
+_CLIMB_STEPS = 8  # RK4 steps of a climb drawing at most _LONG_CLIMB_SHARE of the packs
+_LONG_CLIMB_SHARE = 0.1  # 8 steps are ~1e-9 of the 64 up to it (a 300 m climb here)
 
 
 def _golden_section_max(
@@ -175,13 +177,19 @@ def _interp_rows(t: Array, t_hist: Array, v_hist: Array) -> Array:
     search per query took as long as the rest of the launch).
     """
     rows, width = t_hist.shape
-    finite = np.isfinite(t_hist)
-    low_t = np.where(finite, t_hist, np.inf).min(initial=0.0)
-    high_t = max(float(np.where(finite, t_hist, -np.inf).max(initial=0.0)),
-                 float(np.where(np.isfinite(t), t, -np.inf).max(initial=0.0)))
-    span = (high_t - min(low_t, float(np.where(np.isfinite(t), t, np.inf).min(initial=0.0))))
-    offset = (np.arange(rows, dtype=float) * (span + 1.0))[:, None]
-    flat = (np.clip(np.where(finite, t_hist, high_t), low_t, high_t) + offset).ravel()
+    if np.isfinite(t_hist).all() and np.isfinite(t).all():  # the launch's: no pass to mend
+        clean = t_hist
+        low_t, high_t = min(float(t_hist.min()), float(t.min())), \
+            max(float(t_hist.max()), float(t.max()))
+    else:
+        finite = np.isfinite(t_hist)
+        low_t = min(float(np.where(finite, t_hist, np.inf).min(initial=0.0)),
+                    float(np.where(np.isfinite(t), t, np.inf).min(initial=0.0)))
+        high_t = max(float(np.where(finite, t_hist, -np.inf).max(initial=0.0)),
+                     float(np.where(np.isfinite(t), t, -np.inf).max(initial=0.0)))
+        clean = np.clip(np.where(finite, t_hist, high_t), low_t, high_t)
+    offset = (np.arange(rows, dtype=float) * (high_t - low_t + 1.0))[:, None]
+    flat = (clean + offset).ravel()
     at = np.searchsorted(flat, (t + offset).ravel(), side="right").reshape(t.shape) - 1
     at = np.clip(at - width * np.arange(rows)[:, None], 0, width - 2) \
         + width * np.arange(rows)[:, None]
@@ -298,12 +306,22 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
                                         [(at_liftoff,) * 3] * _ROTATION_STEPS, packs, cutoff_v)
     peak, above = np.maximum(peak, rotation_peak), above & held
     q_roll = q.copy()
-    # the steady climb in the mission's steps (8 were 5e-6 off on a long climb and PASSed at
-    # a reserve's edge; its exact Newton left the pack's domain where a climb cuts off)
+    # the steady climb at constant power: the mission's 64 steps where it draws more than
+    # _LONG_CLIMB_SHARE of the packs (8 were 5e-6 off on a long climb and PASSed at a
+    # reserve's edge), 8 where the current hardly changes over it (~1e-9 of the 64)
     climbing = power(1.0, climb_speed)
-    q, climb_peak, held = _rk4_phase(params, q, climb_time_safe / STEPS, climb_time_safe > 0.0,
-                                     [(climbing,) * 3] * STEPS, packs, cutoff_v)
-    peak, above = np.maximum(peak, climb_peak), above & held
+    drawn = climb_time_safe * np.asarray(current_at_power_a(params, q, climbing, packs)) / 3600.0
+    with np.errstate(invalid="ignore"):
+        long = np.any(~(drawn <= _LONG_CLIMB_SHARE * packs * params.max_capacity_ah), axis=0)
+    for rows, steps in ((np.flatnonzero(~long), _CLIMB_STEPS), (np.flatnonzero(long), STEPS)):
+        if not rows.size:
+            continue
+        h = climb_time_safe[rows] / steps
+        q[:, rows], climb_peak, held = _rk4_phase(
+            params, q[:, rows], h, climb_time_safe[rows] > 0.0,
+            [(climbing[:, rows],) * 3] * steps, packs[rows], cutoff_v[rows])
+        peak[:, rows] = np.maximum(peak[:, rows], climb_peak)
+        above[:, rows] &= held
     ok = ok & np.all(above, axis=0)
     return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak, used)
 
