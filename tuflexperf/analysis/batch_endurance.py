@@ -281,30 +281,35 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     fans = len(engines)
     q, peak = np.zeros((fans, m.size)), np.zeros((fans, m.size))
     above = np.ones((fans, m.size), dtype=bool)
-    widest = 2 * (_DWELL_ROLL_STEPS if dwelling.any() else _ROLL_STEPS) + 1
-    used = np.repeat(v_lo[:, None], widest + 1, axis=1)  # the roll's stages, V_LO, the climb
+
+    def rk4_rows(rows: Array, h: Array, active: Array,
+                 powers: list[tuple[Array, Array, Array]]) -> None:
+        # _rk4_phase on these rows of q, peak and above (each a group of its own step count)
+        q[:, rows], group_peak, held = _rk4_phase(params, q[:, rows], h, active, powers,
+                                                  packs[rows], cutoff_v[rows])
+        peak[:, rows] = np.maximum(peak[:, rows], group_peak)
+        above[:, rows] &= held
+
+    groups = [(rows, steps) for rows, steps in ((np.flatnonzero(~dwelling), _ROLL_STEPS),
+                                                (np.flatnonzero(dwelling), _DWELL_ROLL_STEPS))
+              if rows.size]
+    widest = 2 * max((steps for _, steps in groups), default=_ROLL_STEPS) + 1
+    # every airspeed of the roll's stages (padded with V_LO), then V_LO and the climb's
+    used = np.repeat(v_lo[:, None], widest + 1, axis=1)
     used[:, -1] = climb_speed
-    for rows, steps in ((np.flatnonzero(~dwelling), _ROLL_STEPS),
-                        (np.flatnonzero(dwelling), _DWELL_ROLL_STEPS)):
-        if not rows.size:
-            continue
-        h = roll_only[rows] / steps
-        stage_t = 0.5 * h[:, None] * np.arange(2 * steps + 1)[None, :]
-        speed = _interp_rows(stage_t, t_hist[rows], v_hist[rows])
-        full = np.zeros((m.size, speed.shape[1]))
-        full[rows] = speed
-        used[rows, :speed.shape[1]] = speed
-        rolling = power(1.0, full)[:, rows]
-        q[:, rows], peak[:, rows], above[:, rows] = _rk4_phase(
-            params, q[:, rows], h, roll_only[rows] > 0.0,
-            [(rolling[..., j], rolling[..., j + 1], rolling[..., j + 2])
-             for j in range(0, 2 * steps, 2)], packs[rows], cutoff_v[rows])
+    for rows, steps in groups:
+        stage_t = 0.5 * (roll_only[rows] / steps)[:, None] * np.arange(2 * steps + 1)[None, :]
+        used[rows, :2 * steps + 1] = _interp_rows(stage_t, t_hist[rows], v_hist[rows])
+    rolling = power(1.0, used[:, :widest])
+    for rows, steps in groups:
+        rk4_rows(rows, roll_only[rows] / steps, roll_only[rows] > 0.0,
+                 [(rolling[:, rows, j], rolling[:, rows, j + 1], rolling[:, rows, j + 2])
+                  for j in range(0, 2 * steps, 2)])
     # the rotation at the lift-off speed: constant power for a second or two, where 2 steps
     # agree with the mission's 8 to ~1e-15
-    at_liftoff = power(1.0, v_lo)
-    q, rotation_peak, held = _rk4_phase(params, q, rotation / _ROTATION_STEPS, rotation > 0.0,
-                                        [(at_liftoff,) * 3] * _ROTATION_STEPS, packs, cutoff_v)
-    peak, above = np.maximum(peak, rotation_peak), above & held
+    every = np.arange(m.size)
+    rk4_rows(every, rotation / _ROTATION_STEPS, rotation > 0.0,
+             [(power(1.0, v_lo),) * 3] * _ROTATION_STEPS)
     q_roll = q.copy()
     # the steady climb at constant power: the mission's 64 steps where it draws more than
     # _LONG_CLIMB_SHARE of the packs (8 were 5e-6 off on a long climb and PASSed at a
@@ -314,14 +319,9 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     with np.errstate(invalid="ignore"):
         long = np.any(~(drawn <= _LONG_CLIMB_SHARE * packs * params.max_capacity_ah), axis=0)
     for rows, steps in ((np.flatnonzero(~long), _CLIMB_STEPS), (np.flatnonzero(long), STEPS)):
-        if not rows.size:
-            continue
-        h = climb_time_safe[rows] / steps
-        q[:, rows], climb_peak, held = _rk4_phase(
-            params, q[:, rows], h, climb_time_safe[rows] > 0.0,
-            [(climbing[:, rows],) * 3] * steps, packs[rows], cutoff_v[rows])
-        peak[:, rows] = np.maximum(peak[:, rows], climb_peak)
-        above[:, rows] &= held
+        if rows.size:
+            rk4_rows(rows, climb_time_safe[rows] / steps, climb_time_safe[rows] > 0.0,
+                     [(climbing[:, rows],) * 3] * steps)
     ok = ok & np.all(above, axis=0)
     return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak, used)
 
