@@ -171,25 +171,17 @@ def _best_climb(m: Any, v_lo: Array, stall: Array) -> tuple[Array, Array]:
 def _interp_rows(t: Array, t_hist: Array, v_hist: Array) -> Array:
     """``np.interp(t[i, j], t_hist[i], v_hist[i])`` for every row ``i`` and column ``j``.
 
-    One ``np.searchsorted`` over all rows at once: each row's history (non-decreasing) and
-    queries are shifted by the row's index times a span longer than any history, so the
-    rows follow one another in one sorted array (seven vectorised halvings of a binary
-    search per query took as long as the rest of the launch).
+    One ``np.searchsorted`` over all rows at once: each row's history (finite,
+    non-decreasing; the launch zeroes the rows it does not fly) and queries are shifted by
+    the row's index times a span longer than any history, so the rows follow one another in
+    one sorted array (seven vectorised halvings of a binary search per query took as long
+    as the rest of the launch).
     """
     rows, width = t_hist.shape
-    if np.isfinite(t_hist).all() and np.isfinite(t).all():  # the launch's: no pass to mend
-        clean = t_hist
-        low_t, high_t = min(float(t_hist.min()), float(t.min())), \
-            max(float(t_hist.max()), float(t.max()))
-    else:
-        finite = np.isfinite(t_hist)
-        low_t = min(float(np.where(finite, t_hist, np.inf).min(initial=0.0)),
-                    float(np.where(np.isfinite(t), t, np.inf).min(initial=0.0)))
-        high_t = max(float(np.where(finite, t_hist, -np.inf).max(initial=0.0)),
-                     float(np.where(np.isfinite(t), t, -np.inf).max(initial=0.0)))
-        clean = np.clip(np.where(finite, t_hist, high_t), low_t, high_t)
+    low_t = min(float(t_hist.min()), float(t.min()))
+    high_t = max(float(t_hist.max()), float(t.max()))
     offset = (np.arange(rows, dtype=float) * (high_t - low_t + 1.0))[:, None]
-    flat = (clean + offset).ravel()
+    flat = (t_hist + offset).ravel()
     at = np.searchsorted(flat, (t + offset).ravel(), side="right").reshape(t.shape) - 1
     at = np.clip(at - width * np.arange(rows)[:, None], 0, width - 2) \
         + width * np.arange(rows)[:, None]
