@@ -10,7 +10,14 @@ import yaml
 from typer.testing import CliRunner
 
 from tests.conftest import SHIPPED_CASE, write_case
-from tuflexperf.analysis.uncertainty import plan_for, run_samples
+from tuflexperf.analysis.uncertainty import (
+    batches,
+    draw_chunk,
+    evaluate_batch,
+    evaluate_chunk,
+    plan_for,
+    run_samples,
+)
 from tuflexperf.cli import app
 from tuflexperf.io.case import load_case
 
@@ -125,7 +132,7 @@ def test_set_on_a_sampled_key_says_the_samples_follow_the_block(tmp_path) -> Non
 
 def _uncertain_made_up(tmp_path):
     path = write_case(tmp_path / "m", uncertainty={
-        "samples": 6000, "seed": 11,
+        "samples": 12000, "seed": 11,
         "parameters": {"aircraft.mass_kg": {"normal": [18.0, 1.5]},
                        "aircraft.cd0": {"truncated_normal": [0.03, 0.005, 0.02, 0.05]},
                        "atmosphere.temperature_offset_k": {"uniform": [-10, 25]}},
@@ -138,7 +145,7 @@ def test_workers_give_the_same_numbers(tmp_path) -> None:
     plan = plan_for(case)
     here = run_samples(case, plan)
     there = run_samples(case, plan, workers=2)
-    assert len(plan.chunks) > 1
+    assert len(batches(plan)) > 1  # each worker has a batch of its own
     for name in here.values:
         np.testing.assert_array_equal(here.values[name], there.values[name])
 
@@ -231,3 +238,21 @@ def test_a_mission_requirement_is_not_sampled_and_so_not_shown_to_pass(tmp_path)
     both = runner.invoke(app, ["sweep", "--vary", "aircraft.mass_kg=24:26:2", "--set",
                                "aircraft.mass_kg=25"])
     assert "--set aircraft.mass_kg: the grid varies it" in both.stdout
+
+
+def test_a_batch_gives_each_chunk_the_numbers_it_gives_alone(tmp_path) -> None:
+    """Rows do not talk to each other: a sample's values are the same in a batch of four
+    chunks as in its chunk alone (so how many chunks make a batch changes no number)."""
+    case = _uncertain_made_up(tmp_path)
+    plan = plan_for(case)
+    first = batches(plan)[0]
+    together = evaluate_batch(case, plan, first)
+    alone = [evaluate_chunk(case, plan, i) for i in first]
+    sizes = [draw_chunk(case, plan, i).size for i in first]
+    assert len(first) > 1 and sum(sizes) == together["value:takeoff_ground_roll"].size
+    for key, values in together.items():
+        if key.startswith("value:"):
+            np.testing.assert_array_equal(values, np.concatenate([a[key] for a in alone]),
+                                          err_msg=key)
+        elif key.startswith("outside:"):
+            assert int(values[0]) == sum(int(a[key][0]) for a in alone), key

@@ -383,19 +383,23 @@ def _bracketed_root(f: Any, low: Array, high: Array) -> Array:
         up = f_mid >= 0.0
         low, f_low = np.where(up, mid, low), np.where(up, f_mid, f_low)
         high, f_high = np.where(up, high, mid), np.where(up, f_high, f_mid)
+    # a row stops at its own convergence: its root is the same whatever rows share its batch
+    going = np.ones(np.shape(low), dtype=bool)
     for _ in range(_BISECTIONS):
         with np.errstate(invalid="ignore", divide="ignore"):
             trial = high - f_high * (high - low) / (f_high - f_low)
         trial = np.where(np.isfinite(trial) & (trial > low) & (trial < high), trial,
                          0.5 * (low + high))
         f_trial = f(trial)
-        up = f_trial >= 0.0
+        up = going & (f_trial >= 0.0)
+        down = going & ~(f_trial >= 0.0)
         # Illinois: halve the value kept at the end that did not move
         f_high = np.where(up, 0.5 * f_high, f_high)
-        f_low = np.where(up, f_low, 0.5 * f_low)
+        f_low = np.where(down, 0.5 * f_low, f_low)
         low, f_low = np.where(up, trial, low), np.where(up, f_trial, f_low)
-        high, f_high = np.where(up, high, trial), np.where(up, f_high, f_trial)
-        if np.all((high - low) <= 1e-13 * np.maximum(np.abs(high), 1.0)) or np.all(f_trial == 0):
+        high, f_high = np.where(down, trial, high), np.where(down, f_trial, f_high)
+        going &= ~((high - low) <= 1e-13 * np.maximum(np.abs(high), 1.0)) & (f_trial != 0)
+        if not going.any():
             break
     return np.where(np.abs(f_low) <= np.abs(f_high), low, high)
 

@@ -13,17 +13,23 @@ import hashlib
 import json
 from collections import OrderedDict
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, Generic, TypeVar
 
 T = TypeVar("T")
 MAX_ENTRIES = 16
+_PROVENANCE = ("metadata", "source")  # free-form: what the user wrote, not what is flown
 
 
 def _physics(obj: Any) -> Any:
     """The numbers of a model object (dataclass / mapping / sequence), provenance left out."""
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         return {f.name: _physics(getattr(obj, f.name)) for f in dataclasses.fields(obj)
-                if f.name != "metadata"}
+                if f.name not in _PROVENANCE}
+    fields = getattr(type(obj), "model_fields", None)  # a validated schema (pydantic)
+    if isinstance(fields, dict):
+        return {name: _physics(getattr(obj, name)) for name in fields
+                if name not in _PROVENANCE}
     if isinstance(obj, dict):
         return {str(k): _physics(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
@@ -37,6 +43,12 @@ def fingerprint(*parts: Any) -> str:
     """sha256 of the physics content of ``parts`` (aircraft, propulsion, numbers)."""
     text = json.dumps([_physics(p) for p in parts], sort_keys=True, default=str)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def file_key(path: Path) -> tuple[str, float, int]:
+    """Which version of a file [path, mtime s, size B]: a file rewritten is a new key."""
+    stat = path.stat()
+    return (str(path), stat.st_mtime, stat.st_size)
 
 
 class BoundedCache(Generic[T]):

@@ -38,13 +38,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from tuflexperf.analysis.attainable import least_airspeed_m_s
-from tuflexperf.analysis.cache import BoundedCache, fingerprint
+from tuflexperf.analysis.cache import BoundedCache, file_key, fingerprint
 from tuflexperf.analysis.powertrain import PowerAgreement, agreement_at
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.battery import (
@@ -139,11 +138,6 @@ class BatteryCharacterisation:
                      for r in self.runs)
 
 
-def _file_key(path: Path) -> tuple[str, float, int]:
-    stat = path.stat()
-    return (str(path), stat.st_mtime, stat.st_size)
-
-
 def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisation:
     """Fit the pack model to all runs and fit the fan power (cross-validation on demand).
 
@@ -155,8 +149,8 @@ def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisatio
     """
     battery = battery.as_read
     key = fingerprint(
-        _file_key(battery.path),
-        [_file_key(r.path) for r in battery.runs],
+        file_key(battery.path),
+        [file_key(r.path) for r in battery.runs],
         battery,
         case.propulsion,
     )
@@ -932,14 +926,14 @@ def endurance_model(case: Case) -> EnduranceModel:
         )
     # parse the YAML once per file version, not per call
     battery = case_battery(case, lambda path: _battery_cache.get(
-        fingerprint(_file_key(path)), lambda: load_battery(path)))
+        fingerprint(file_key(path)), lambda: load_battery(path)))
     key = fingerprint(
         case.aircraft,
         case.propulsion,
         case.density_kg_m3,
         least_airspeed_m_s(case),  # the stall margin bounds level flight
         battery,
-        [_file_key(r.path) for r in battery.runs],
+        [file_key(r.path) for r in battery.runs],
     )
     return _model_cache.get(key, lambda: EnduranceModel(case, battery))
 
