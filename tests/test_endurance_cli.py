@@ -197,7 +197,8 @@ def test_duplicate_key_in_battery_file(tmp_path):
          + "".join(f"{t % 5},0,30,0.5,48,20\n" for t in range(20)), "time_s"),
         ("time_s,force_n,airspeed_m_s,throttle,voltage_v,current_a\n"
          + "".join(f"{t},0,30,50,48,20\n" for t in range(20)), "throttle"),
-        ("time_s,force_n,airspeed_m_s,throttle,voltage_v,current_a\n0,0,x,0,1,1\n", "cannot read"),
+        ("time_s,force_n,airspeed_m_s,throttle,voltage_v,current_a\n0,0,x,0,1,1\n",
+         "column airspeed_m_s: non-numeric value 'x' (line 2)"),
     ],
 )
 def test_bad_run_file_is_exit_2_naming_the_run(tmp_path, content, problem):

@@ -86,6 +86,32 @@ def test_broken_csv_is_input_error(tmp_path: Path, mutate, message: str) -> None
     assert "bad.csv" in str(err.value)
 
 
+@pytest.mark.parametrize("gz", [False, True])
+@pytest.mark.parametrize("name", ["throttle", "force_n", "voltage_v"])
+def test_a_column_named_twice_is_refused(tmp_path: Path, name: str, gz: bool) -> None:
+    """pandas renamed the second ``throttle`` to ``throttle.1`` and the first was fitted,
+    silently; which one is the measurement only the user can tell."""
+    data = columns()
+    data["voltage_v"] = np.full(N, 22.0)
+    path = write_csv(tmp_path / ("twice.csv.gz" if gz else "twice.csv"), data, gz=gz)
+    text = gzip.decompress(path.read_bytes()).decode() if gz else path.read_text()
+    header, *rows = text.splitlines()
+    # the repeat with a leading space: stripped, as every header cell is
+    header += f", {name}"
+    rows = [f"{row},{row.split(',')[list(data).index(name)]}" for row in rows]
+    text = "\n".join([header, *rows]) + "\n"
+    path.write_bytes(gzip.compress(text.encode())) if gz else path.write_text(text)
+    with pytest.raises(InputError, match=f"column '{name}' appears more than once") as err:
+        read_run(path)
+    assert path.name in str(err.value)
+    # a repeated column the run does not read is no ambiguity
+    data = columns()
+    plain = write_csv(tmp_path / "notes.csv", {**data, "note": np.zeros(N)})
+    lines = plain.read_text().splitlines()
+    plain.write_text("\n".join([lines[0] + ",note", *[r + ",1" for r in lines[1:]]]) + "\n")
+    assert read_run(plain).n_samples == N
+
+
 def test_empty_and_unreadable_files(tmp_path: Path) -> None:
     (tmp_path / "empty.csv").write_text("")
     (tmp_path / "header.csv").write_text("time_s,force_n,airspeed_m_s,throttle\n")
@@ -179,3 +205,29 @@ def test_bad_manifest(tmp_path: Path, changes: dict, message: str) -> None:
     with pytest.raises(InputError, match=message) as err:
         load_campaign(manifest(tmp_path, **changes))
     assert "campaign.yaml" in str(err.value)
+
+
+def test_discharge_runs_are_read_by_the_one_run_reader(tmp_path: Path) -> None:
+    """An endurance run reads as any run does: .csv, .csv.gz and .mat alike, a few NaN
+    samples repaired (its own reader refused a NaN and could not read .csv.gz)."""
+    from tuflexperf.io.discharge import read_discharge_run
+
+    n = 400
+    t = np.arange(n) * 0.5
+    on = t >= 10.0
+    data = {"time_s": t, "force_n": np.where(on, 20.0, 0.0), "airspeed_m_s": np.full(n, 30.0),
+            "throttle": np.where(on, 0.5, 0.0), "voltage_v": 50.0 - 0.01 * t,
+            "current_a": np.where(on, 25.0, 0.1)}
+    plain = read_discharge_run(write_csv(tmp_path / "d.csv", data))
+    packed = read_discharge_run(write_csv(tmp_path / "d.csv.gz", data, gz=True))
+    scipy.io.savemat(tmp_path / "d.mat", data)
+    matlab = read_discharge_run(tmp_path / "d.mat")
+    for run in (packed, matlab):
+        np.testing.assert_array_equal(run.charge_ah, plain.charge_ah)
+    # 25 A for 190 s, trapezoid over the step from 0.1 A
+    assert plain.charge_ah[-1] == pytest.approx((25.0 * 189.5 + 0.5 * 0.5 * 25.1
+                                                 + 0.1 * 9.5) / 3600.0)
+    data["voltage_v"] = data["voltage_v"].copy()
+    data["voltage_v"][200] = np.nan
+    repaired = read_discharge_run(write_csv(tmp_path / "nan.csv", data))
+    assert repaired.voltage_v[200] == pytest.approx(50.0 - 0.01 * t[200])

@@ -161,6 +161,9 @@ def test_airspeed_column_units(tmp_path: Path) -> None:
          "unknown airspeed unit"),
         ("Time (s),ESC signal (µs),Thrust (kgf),Airspeed (m/s)", "{t},1500,abc,3", {},
          "non-numeric value"),
+        # the second thrust column was dropped and the first fitted, unremarked
+        ("Time (s),ESC signal (µs),Thrust (kgf),Airspeed (m/s),Thrust (kgf)",
+         "{t},1500,0.1,3,0.2", {}, r"'Thrust \(kgf\)' appears more than once"),
     ],
 )
 def test_bad_vendor_files_name_file_and_column(tmp_path: Path, header: str, row: str,

@@ -6,18 +6,17 @@ The one reader of endurance runs; the pack model they feed lives in
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from tuflexperf.errors import InputError
-from tuflexperf.models.battery import (
-    RUN_COLUMNS,
-    SECONDS_PER_HOUR,
-    SETTLE_S,
-)
+from tuflexperf.io.runs import RUN_COLUMNS, read_run
+from tuflexperf.models.battery import SECONDS_PER_HOUR, SETTLE_S
+
+DISCHARGE_COLUMNS: tuple[str, ...] = (*RUN_COLUMNS, "voltage_v", "current_a")
+"""An endurance run is a run (SPEC 4) that logs the pack's voltage and current too."""
 
 
 # --- discharge runs -------------------------------------------------------------------------
@@ -83,71 +82,18 @@ class DischargeRun:
         return float(np.interp(start, self.time_s, self.charge_ah))
 
 
-def _read_columns(path: Path) -> dict[str, np.ndarray]:
-    if path.suffix.lower() == ".mat":
-        from scipy.io import loadmat  # lazy: only .mat runs need SciPy
-
-        try:
-            raw = loadmat(path, squeeze_me=True)
-        except Exception as exc:  # noqa: BLE001 - any reader failure is bad input
-            raise InputError(f"{path}: cannot read MATLAB file: {exc}") from None
-        columns: dict[str, np.ndarray] = {}
-        for key, value in raw.items():
-            if key.startswith("__") or key not in RUN_COLUMNS:
-                continue
-            try:
-                columns[key] = np.atleast_1d(np.asarray(value, dtype=float))
-            except (TypeError, ValueError):
-                raise InputError(f"{path}: {key}: not numbers (a text column?)") from None
-        return columns
-    try:
-        with path.open(newline="", encoding="utf-8-sig") as handle:
-            header = next(csv.reader(handle), None)
-            if header is None:
-                raise InputError(f"{path}: empty file, expected a header row")
-            data = np.loadtxt(handle, delimiter=",", ndmin=2)
-    except InputError:
-        raise
-    except (OSError, ValueError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: cannot read run data: {str(exc).splitlines()[0]}") from None
-    names = [h.strip() for h in header]
-    if data.shape[1] != len(names):
-        raise InputError(f"{path}: {data.shape[1]} columns of data for {len(names)} header names")
-    return {name: data[:, j] for j, name in enumerate(names)}
-
-
 def read_discharge_run(path: Path | str) -> DischargeRun:
-    """Read an endurance run (CSV or MATLAB v5) and integrate the charge drawn (trapezoid).
+    """Read an endurance run (.csv, .csv.gz or .mat) and integrate the charge drawn (trapezoid).
 
     Raises :class:`InputError` naming the file and column on missing columns, non-finite
     values, a time that does not increase, or a run with no loaded segment.
     """
-    from tuflexperf.io.files import MAX_RUN_BYTES, check_input_file
-
-    path = check_input_file(path, "run file", MAX_RUN_BYTES)
-    columns = _read_columns(path)
-    missing = [c for c in RUN_COLUMNS if c not in columns]
-    if missing:
-        raise InputError(f"{path}: missing column(s) {', '.join(missing)} (endurance run)")
-    n = columns["time_s"].size
-    for name in RUN_COLUMNS:
-        values = columns[name]
-        if values.size != n:
-            raise InputError(f"{path}: {name}: {values.size} values for {n} times")
-        if not np.all(np.isfinite(values)):
-            raise InputError(f"{path}: {name}: contains NaN or infinite values")
-    if n < 10:
-        raise InputError(f"{path}: only {n} samples; an endurance run needs more")
-    t = columns["time_s"]
-    if np.any(np.diff(t) <= 0):
-        raise InputError(f"{path}: time_s: must increase strictly")
+    # the one run reader: .csv, .csv.gz and .mat alike, a few NaN samples repaired (noted)
+    run = read_run(path, required=DISCHARGE_COLUMNS, optional=())
+    columns, t, path = run.columns, run.time_s, run.path
     throttle = columns["throttle"]
-    if np.any((throttle < 0) | (throttle > 1)):
-        raise InputError(f"{path}: throttle: values outside [0, 1] (fractions expected)")
     if not np.any(throttle > 1e-6):
         raise InputError(f"{path}: throttle: never above zero, no discharge under load")
-    if np.any(columns["voltage_v"] <= 0):
-        raise InputError(f"{path}: voltage_v: must be positive")
     current = columns["current_a"]
     loaded = float(np.mean(current[throttle > 1e-6]))
     if not loaded > 0:  # a discharge draws current out of the pack

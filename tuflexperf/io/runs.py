@@ -27,9 +27,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.vendor import VendorSettings, read_vendor_columns
+from tuflexperf.io.vendor import (
+    VendorSettings,
+    read_vendor_columns,
+    repeated_header_error,
+    repeated_headers,
+)
 
 RUN_COLUMNS: tuple[str, ...] = ("time_s", "force_n", "airspeed_m_s", "throttle")
+KNOWN_OPTIONAL: tuple[str, ...] = ("voltage_v", "current_a", "rpm")
+"""Columns any run may carry (SPEC 4), read and repaired like the required ones."""
 TABLE_COLUMNS: tuple[str, ...] = ("engine", "throttle", "airspeed_m_s", "thrust_n")
 # what fit's thrust table from a campaign adds after them (the reduction's diagnostics)
 TABLE_EXTRA_COLUMNS: tuple[str, ...] = (
@@ -99,6 +106,10 @@ def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
     except (pd.errors.ParserError, UnicodeDecodeError, OSError, EOFError, ValueError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"{path}: cannot read as CSV: {first}") from None
+    repeated = repeated_headers(path)
+    for name in (*RUN_COLUMNS, *KNOWN_OPTIONAL):
+        if name in repeated:
+            raise repeated_header_error(path, name)
     frame.columns = [str(c).strip() for c in frame.columns]
     columns: dict[str, np.ndarray] = {}
     bad_cells: dict[str, tuple[int, str]] = {}
@@ -183,7 +194,7 @@ def _repair_nans(path: Path, name: str, time_s: np.ndarray, values: np.ndarray) 
 def read_run(
     path: Path | str,
     required: Sequence[str] = RUN_COLUMNS,
-    optional: Sequence[str] = ("voltage_v", "current_a", "rpm"),
+    optional: Sequence[str] = KNOWN_OPTIONAL,
     vendor: VendorSettings | None = None,
 ) -> Run:
     """Read one run file (``.csv``, ``.csv.gz`` or ``.mat``) and validate its columns.
@@ -364,6 +375,9 @@ def read_thrust_table(path: Path | str) -> ThrustTable:
         raise InputError(
             f"{path}: missing column {missing[0]!r} (header must include {','.join(TABLE_COLUMNS)})"
         )
+    for name in TABLE_COLUMNS:
+        if header.count(name) > 1:
+            raise repeated_header_error(path, name)
     index = {name: header.index(name) for name in TABLE_COLUMNS}
     engines: list[str] = []
     values: dict[str, list[float]] = {c: [] for c in TABLE_COLUMNS[1:]}

@@ -96,6 +96,30 @@ def _split_header(cell: str) -> tuple[str, str]:
     return match.group("name").strip().lower(), match.group("unit").strip().lower()
 
 
+def repeated_headers(path: Path, encoding: str = "utf-8") -> set[str]:
+    """Header cells of a CSV (run or vendor export) that appear more than once, stripped.
+
+    pandas renames a repeated ``throttle`` to ``throttle.1`` and the first one was read as
+    the measurement, silently: which of the two is meant only the user can tell.
+    """
+    import pandas as pd
+
+    try:
+        first = pd.read_csv(path, header=None, nrows=1, dtype=str, compression="infer",
+                            encoding=encoding, skipinitialspace=True, keep_default_na=False)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError,
+            EOFError, ValueError):
+        return set()  # the full read says what is wrong with the file
+    cells = [str(c).strip() for c in first.iloc[0]] if len(first) else []
+    return {c for c in cells if c and cells.count(c) > 1}
+
+
+def repeated_header_error(path: Path, name: str) -> InputError:
+    """Bad input: a column the run needs appears twice in the header."""
+    return InputError(f"{path}: column {name!r} appears more than once in the header: which "
+                      "one is the measurement? (rename or drop the other)")
+
+
 def _read_table(path: Path) -> object:
     """The CSV as a pandas DataFrame; the vendor software writes UTF-8 (older versions Latin-1)."""
     import pandas as pd
@@ -103,7 +127,9 @@ def _read_table(path: Path) -> object:
     last: Exception | None = None
     for encoding in ("utf-8-sig", "latin-1"):
         try:
-            return pd.read_csv(path, encoding=encoding, skipinitialspace=True, dtype=str)
+            frame = pd.read_csv(path, encoding=encoding, skipinitialspace=True, dtype=str)
+            frame.attrs["repeated"] = repeated_headers(path, encoding)
+            return frame
         except UnicodeDecodeError as exc:
             last = exc
         except pd.errors.EmptyDataError:
@@ -145,8 +171,13 @@ def read_rcbenchmark(
     headers = {str(c): _split_header(str(c)) for c in frame.columns}
     where = f" ({settings.where})" if settings.where else ""
 
+    repeated = frame.attrs.get("repeated", set())
+
     def find(test: Callable[[str, str], bool]) -> str | None:
-        return next((raw for raw, (name, unit) in headers.items() if test(name, unit)), None)
+        raw = next((raw for raw, (name, unit) in headers.items() if test(name, unit)), None)
+        if raw is not None and raw.strip() in repeated:
+            raise repeated_header_error(path, raw.strip())
+        return raw
 
     columns: dict[str, np.ndarray] = {}
     bad_cells: dict[str, tuple[int, str]] = {}

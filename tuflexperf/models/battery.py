@@ -41,14 +41,6 @@ import numpy as np
 from tuflexperf.models._math import Vectorizable, exp, fmin, is_symbolic, sqrt
 
 SECONDS_PER_HOUR = 3600.0
-RUN_COLUMNS: tuple[str, ...] = (
-    "time_s",
-    "force_n",
-    "airspeed_m_s",
-    "throttle",
-    "voltage_v",
-    "current_a",
-)
 PARAMETER_NAMES: tuple[str, ...] = (
     "e0_v",
     "slope_v_per_ah",
