@@ -805,6 +805,8 @@ def mission(
                        f"{result.solved['time_min']:.2f} min "
                        + ("that lands on the reserve" if ends == "landing reserve"
                           else "before the pack's cut-off voltage"))
+        for note in result.warnings:  # the JSON's "warnings": said in the text too
+            typer.echo(f"  note: {note}")
         verdict = "PASS" if result.passed else "FAIL"
         typer.echo(f"  {result.reason}  {verdict}")
         if csv is not None:

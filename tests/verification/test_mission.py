@@ -160,6 +160,20 @@ def test_cli_mission_passes_and_writes_history(tmp_path: Path) -> None:
     assert "voltage_v_EDF1" in header and "charge_ah_EDF2" in header
 
 
+def test_a_mission_without_a_takeoff_says_it_starts_airborne(tmp_path: Path) -> None:
+    """It flies (a plan may start in the air), but the launch's charge is not in it: said in
+    the text and the JSON, and not said of a mission that takes off."""
+    path = tmp_path / "airborne.yaml"
+    path.write_text("name: airborne\nsegments:\n"
+                    "  - {type: cruise, airspeed_m_s: 26, time_min: 8}\n")
+    code, out, _ = _run("mission", str(path))
+    assert code == 0 and "note: mission 'airborne' has no takeoff segment" in out, out
+    code, out, _ = _run("mission", str(path), "--json")
+    assert any("starts airborne" in w for w in json.loads(out)["warnings"])
+    code, out, _ = _run("mission", str(SHIPPED_MISSION), "--json")
+    assert not any("airborne" in w for w in json.loads(out)["warnings"])
+
+
 @pytest.mark.parametrize(
     ("segment", "reason"),
     [

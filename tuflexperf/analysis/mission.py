@@ -255,6 +255,13 @@ class MissionModel:
         self._instants: dict[Any, Any] = {}
         self._suffixes: dict[int, Any] = {}
         self.plans = self._plan(mission.segments)
+        # a plan may well start in the air (a segment flown on its own), but the launch's
+        # charge is then not counted and the engineer should know it
+        starts_airborne = not mission.segments or mission.segments[0].type != "takeoff"
+        self.start_notes: tuple[str, ...] = (
+            (f"mission {mission.name!r} has no takeoff segment: it starts airborne over the "
+             "field with full packs, the take-off's charge not counted (add {type: takeoff} "
+             "first to fly it)",) if starts_airborne else ())
         self._takeoff_speeds: dict[int, np.ndarray] = {}
         self._build()
 
@@ -1132,7 +1139,7 @@ class MissionModel:
             reason=reason or (f"lands with {100 * landing:.1f} % charge (reserve "
                               f"{100 * self.reserve:g} %)"),
             engines=self.engines, history=history, solved=solved, ended_at_s=ended_at,
-            warnings=self.battery.scaled_notes,
+            warnings=(*self.start_notes, *self.battery.scaled_notes),
         )
 
     def _braking_engine(self, throttle: float, v: np.ndarray, h: np.ndarray,
