@@ -505,5 +505,5 @@ def test_mat_discharge_run_with_a_text_column(workdir: Path) -> None:
     path.write_text(yaml.safe_dump(battery))
     result = _run(workdir, "fit", "data/tuflex/battery.yaml", "--out", "b.yaml")
     assert result.returncode == 2 and "Traceback" not in result.stderr
-    assert "bad.mat: voltage_v" in result.stderr
+    assert "bad.mat: column voltage_v: not numbers (text)" in result.stderr
     assert not (workdir / "b.yaml").exists()

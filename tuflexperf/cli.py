@@ -869,7 +869,8 @@ def endurance(
             ("  launch charge per fan", data["launch"]["charge_ah"], "Ah"),
         ]
         for label, value, unit in rows:
-            typer.echo(f"  {label:<28}{value:10.2f} {unit}")
+            shown = f"{value:10.2f}" if math.isfinite(value) else f"{'n/a':>10}"
+            typer.echo(f"  {label:<28}{shown} {unit}")
         typer.echo(
             f"  cruise ends at the {data['cruise_ends_at']} "
             f"({data['packs_in_parallel_per_engine']} packs per fan, "

@@ -82,7 +82,30 @@ ROWS = [
     # the batch searched the excess to 8 x margin x stall, the single case to 8 x stall
     pytest.param({"aircraft.cd0": 4.307e-05, "requirements.envelope.stall_margin": 2.4},
                  "flight_endurance", id="excess-searched-to-the-single-case-range"),
+    # a false FAIL: one 2.5 Ah pack alone is below its cut-off at full throttle's 4172 W,
+    # the two in parallel per fan hold it; both paths said "not attainable"
+    pytest.param({"battery.capacity_ah": 2.5, "requirements.endurance.throttle": 1.0,
+                  "requirements.endurance.min_flight_time_min": 1.0}, None,
+                 id="packs-in-parallel-hold-what-one-cannot"),
 ]
+
+
+def test_the_packs_in_parallel_fly_a_power_one_pack_cannot_hold() -> None:
+    """The flight is the packs' in parallel: one pack's figures are 0 (said in a note), the
+    flight is flown (an outside integration of the same flight gave 1.75 min)."""
+    case = load_case(SHIPPED_CASE)
+    times = {}
+    for capacity in (2.5, 3.0):
+        single = with_values(case, {"battery.capacity_ah": capacity,
+                                    "requirements.endurance.throttle": 1.0,
+                                    "requirements.endurance.min_flight_time_min": 1.0})
+        verdict = {v.name: v for v in check_case(single)}["flight_endurance"]
+        times[capacity] = verdict.value
+        assert verdict.passed, verdict.reason
+        notes = " ".join(verdict.details.get("warnings", []))
+        assert ("one pack alone is below its cut-off" in notes) == (capacity == 2.5), notes
+    assert times[2.5] == pytest.approx(1.75, abs=0.01)
+    assert 0 < times[2.5] < times[3.0]
 
 
 @pytest.mark.parametrize(("row", "not_attainable"), ROWS)

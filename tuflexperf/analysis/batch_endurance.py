@@ -454,7 +454,7 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     power_w = _power_w(model, m, throttle, speed)
     ok &= ~_impossible_cruise(m, throttle, speed, power_w)
     params = model.params
-    ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs / per_engine) > 0.0)
+    # the packs in parallel per fan fly, not one of them alone (EnduranceModel.solve)
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs) > 0.0)
     # each fan on its own packs, with its own power surface, as the mission flies them: the
     # flight ends when the first fan's packs do (the largest launch charge with the largest

@@ -717,13 +717,18 @@ class EnduranceModel:
                 f"throttle {throttle:g}: level flight at {speed:.1f} m/s is below stall "
                 f"({self.stall_m_s:.1f} m/s x {self.least_m_s / self.stall_m_s:g})"
             )
-        if not (abs(res_1) < 1e-6 and abs(res_n) < 1e-6 and 0 < q1 and 0 < qn):
+        if not (abs(res_n) < 1e-6 and 0 < qn):
             raise NotAttainable(
                 f"throttle {throttle:g}: the pack is below its cut-off voltage at "
                 f"{power_w:.0f} W per fan from the start"
             )
+        # one pack alone is the figure of the battery, not of the flight: a fan flies on its
+        # packs in parallel, which may hold a power one of them cannot (a full-throttle
+        # flight on two 2.5 Ah packs per fan was "not attainable"; outside audit)
+        alone = abs(res_1) < 1e-6 and 0 < q1
         flight, cruise_s, ends_at = self._fly(throttle, speed, tn)
-        return self._result(throttle, speed, power_w, q1, t1, flight, cruise_s, ends_at)
+        return self._result(throttle, speed, power_w, q1 if alone else 0.0,
+                            t1 if alone else 0.0, flight, cruise_s, ends_at)
 
     def _fly(self, throttle: float, speed: float, guess_s: float) -> tuple[Any, float, str]:
         """The endurance mission at ``throttle``: the cruise runs to the reserve (or cut-off).
@@ -794,6 +799,12 @@ class EnduranceModel:
                 f"(figure of merit {a.figure_of_merit:.3g}): no fan flies on it"
             )
         warnings.extend(self.run_checks)
+        if q1 <= 0.0:
+            warnings.append(
+                f"one pack alone is below its cut-off voltage at {power_w:.0f} W from the "
+                f"start (its figures are 0); the {self.battery.packs_in_parallel_per_engine} "
+                "packs in parallel per fan hold it"
+            )
         u_ref = self.case.propulsion.reference_voltage_v
         if u_ref is not None:  # the flight's own airspeed and power, sagging with the pack
             a, b = self.mission.bounds[self._cruise]
@@ -813,7 +824,8 @@ class EnduranceModel:
             battery_endurance_min=t1 / 60.0,
             flight_endurance_min=cruise_min + self.launch.climb_time_s / 60.0,
             cruise_time_min=cruise_min,
-            pack_current_a=float(self._current(0.0, power_w)),
+            # NaN (null in JSON) where one pack cannot give the power at all
+            pack_current_a=float(self._current(0.0, power_w)) if q1 > 0.0 else math.nan,
             pack_energy_wh=power_w * t1 / 3600.0,
             cutoff_charge_ah=q1,
             cruise_end_charge_ah=cruise_end,

@@ -128,7 +128,7 @@ def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
     return columns, bad_cells
 
 
-def _read_mat_columns(path: Path) -> dict[str, np.ndarray]:
+def _read_mat_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tuple[int, str]]]:
     import scipy.io
 
     try:
@@ -149,12 +149,16 @@ def _read_mat_columns(path: Path) -> dict[str, np.ndarray]:
         if len(structs) == 1:
             variables = {name: getattr(structs[0], name) for name in structs[0]._fieldnames}
     columns: dict[str, np.ndarray] = {}
+    not_numbers: dict[str, tuple[int, str]] = {}
     for name, value in variables.items():
         array = np.asarray(value)
         if array.dtype.kind not in "biuf":
-            continue  # strings, cells and structs are metadata, not columns
+            # strings, cells and structs are metadata, not columns, unless named as one
+            what = "text" if array.dtype.kind in "US" else "cells or a struct"
+            not_numbers[name] = (0, f"not numbers ({what})")
+            continue
         columns[name] = np.atleast_1d(array)
-    return columns
+    return columns, not_numbers
 
 
 def _numeric_column(
@@ -165,6 +169,8 @@ def _numeric_column(
 ) -> np.ndarray:
     if name in bad_cells:
         line, text = bad_cells[name]
+        if line == 0:  # a whole variable of a .mat file: no line to name
+            raise InputError(f"{path}: column {name}: {text}")
         raise InputError(f"{path}: column {name}: non-numeric value {text!r} (line {line})")
     if name not in columns:
         present = sorted(columns)
@@ -227,7 +233,7 @@ def read_run(
     elif suffix in (".csv", ".csv.gz"):
         raw, bad_cells = _read_csv_columns(path)
     elif suffix == ".mat":
-        raw, bad_cells = _read_mat_columns(path), {}
+        raw, bad_cells = _read_mat_columns(path)
     else:
         raise InputError(f"{path}: unsupported run file type {suffix!r} (use .csv, .csv.gz, .mat)")
 
