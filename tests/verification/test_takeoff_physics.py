@@ -355,3 +355,17 @@ def test_history_forces_are_the_written_out_ground_run_forces():
     net = result.history_thrust_n - result.history_drag_n - result.history_friction_n
     slope = np.gradient(v, result.history_time_s)  # dV/dt of the integrated history
     np.testing.assert_allclose(a.mass_kg * slope[1:-1], net[1:-1], rtol=2e-3)
+
+
+def test_an_arc_below_the_envelope_stall_margin_is_said() -> None:
+    """SPEC 3 flies the arc at 1.15 V_stall whatever the envelope's margin; a margin above
+    that (level flight and climb from 1.3 x stall) is said, not silently passed over."""
+    from tests.conftest import SHIPPED_CASE
+    from tuflexperf.io.dotted import with_values
+
+    case = load_case(SHIPPED_CASE)
+    for margin, said in ((1.0, False), (1.15, False), (1.3, True)):
+        single = with_values(case, {"requirements.envelope.stall_margin": margin,
+                                    "requirements.envelope.min_airspeed_m_s": 19.0})
+        notes = " ".join(solve_takeoff(single).warnings)
+        assert ("below the envelope's" in notes) == said, (margin, notes)

@@ -11,12 +11,15 @@ Performance and Design*, 6.7.2).
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.analysis.cache import BoundedCache, fingerprint
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
@@ -165,7 +168,8 @@ def build_ground_roll_integrator(
         {"x": state, "p": v_lo, "t": u, "ode": rhs},
         0.0,
         grid[1:],
-        {"abstol": 1e-12, "reltol": 1e-11, "max_num_steps": 100000},
+        {"abstol": 1e-12, "reltol": 1e-11, "max_num_steps": 100000,
+         "disable_internal_warnings": True},
     )
     v_lo_in = ca.MX.sym("v_lo_in")
     states = integrator(x0=ca.DM.zeros(2), p=v_lo_in)["xf"]
@@ -338,7 +342,10 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
             known,
         )
     try:
-        states = np.asarray(_integrator_for(case)(v_lo))
+        # CasADi prints the failed call's inputs (8 lines per try) through Python's stderr:
+        # the reason below says what failed, in one line
+        with contextlib.redirect_stderr(io.StringIO()):
+            states = np.asarray(_integrator_for(case)(v_lo))
     except RuntimeError:  # CVODES failed: the net force nearly vanishes between check points
         states = np.full((2, HISTORY_POINTS - 1), np.nan)
     if not np.all(np.isfinite(states)):
@@ -371,6 +378,15 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
     density_note = unlapsed_density_warning(propulsion, rho)
     if density_note:
         warnings.append(density_note)
+    margin = stall_margin_of(case)
+    if air.speed_m_s < margin * stall * (1.0 - 1e-12):
+        # SPEC 3 fixes the take-off's arc at 1.15 V_stall; the envelope's margin bounds the
+        # other climbs (an engineer comparing them should not have to find this out)
+        warnings.append(
+            f"the transition arc and the climb to the obstacle are flown at {air.speed_m_s:.1f}"
+            f" m/s (1.15 x stall, the take-off's convention), below the envelope's "
+            f"{margin:g} x stall = {margin * stall:.1f} m/s that bounds level flight and climb"
+        )
     if to.cl_ground > 0.0:
         # ground lift equal to the weight before lift-off: the wheels carry nothing from there
         unloaded = math.sqrt(2.0 * aircraft.weight_n / (rho * aircraft.wing_area_m2 * to.cl_ground))
