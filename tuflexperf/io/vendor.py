@@ -25,6 +25,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -97,20 +98,23 @@ def _split_header(cell: str) -> tuple[str, str]:
 
 
 def repeated_headers(path: Path, encoding: str = "utf-8") -> set[str]:
-    """Header cells of a CSV (run or vendor export) that appear more than once, stripped.
+    """Header cells of a CSV (run or vendor export, plain or gzip) that appear more than once,
+    stripped.
 
     pandas renames a repeated ``throttle`` to ``throttle.1`` and the first one was read as
-    the measurement, silently: which of the two is meant only the user can tell.
+    the measurement, silently: which of the two is meant only the user can tell. Only the
+    first line is read (1 ms through pandas was 6 % of a run's whole read).
     """
-    import pandas as pd
+    import csv
+    import gzip
 
+    opener: Any = gzip.open if path.name.lower().endswith(".gz") else open
     try:
-        first = pd.read_csv(path, header=None, nrows=1, dtype=str, compression="infer",
-                            encoding=encoding, skipinitialspace=True, keep_default_na=False)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError,
-            EOFError, ValueError):
+        with opener(path, "rt", encoding=encoding, newline="") as handle:
+            line = handle.readline(1 << 20)
+    except (OSError, EOFError, UnicodeDecodeError, ValueError):
         return set()  # the full read says what is wrong with the file
-    cells = [str(c).strip() for c in first.iloc[0]] if len(first) else []
+    cells = [c.strip() for c in next(csv.reader([line]), [])]
     return {c for c in cells if c and cells.count(c) > 1}
 
 
