@@ -339,3 +339,38 @@ def test_a_file_being_replaced_is_there_at_every_moment(tmp_path, monkeypatch) -
     files.write_files_atomically({target: "new\n"})
     assert seen and all(seen) and target.read_text() == "new\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["p.yaml"]
+
+
+_MISSION = str(ROOT / "data" / "tuflex" / "missions" / "test_flight.yaml")
+_CAMPAIGN = str(ROOT / "data" / "tuflex" / "campaign" / "campaign.yaml")
+
+
+@pytest.mark.parametrize(("args", "target"), [
+    (("export", "--out", "missing/../mine"), "mine"),
+    (("report", "--out", "missing/../mine"), "mine"),
+    (("fit", _CAMPAIGN, "--out", "missing/../notes.yaml"), "notes.yaml"),
+    (("mission", _MISSION, "--csv", "missing/../notes.csv"), "notes.csv"),
+    (("sweep", "--vary", "aircraft.mass_kg=20:22:2", "--csv", "missing/../notes.csv"),
+     "notes.csv"),
+], ids=["export", "report", "fit", "mission", "sweep"])
+def test_a_path_through_a_missing_folder_and_back_is_checked_where_it_lands(
+        tmp_path, args, target) -> None:
+    """``missing/../mine`` is ``mine``: checked as written nothing was there, the missing
+    folder was made, and the user's folder deleted or file replaced, exit 0 (outside audit)."""
+    if "." in target:
+        (tmp_path / target).write_text("the user's own\n")
+    else:
+        (tmp_path / target).mkdir()
+        (tmp_path / target / "thesis.txt").write_text("the user's own\n")
+    before = _tree(tmp_path)
+    done = _run(tmp_path, *args)
+    assert done.returncode == 2, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and "refusing" in done.stderr
+    assert _tree(tmp_path) == before
+    assert not (tmp_path / "missing").exists()  # no folder made on the way
+
+
+def test_a_new_output_through_a_missing_folder_and_back_makes_no_folder(tmp_path) -> None:
+    assert _run(tmp_path, "export", "--out", "missing/../fresh").returncode == 0
+    assert (tmp_path / "fresh" / files.MARKER).is_file()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fresh"]

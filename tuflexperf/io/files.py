@@ -78,6 +78,19 @@ def _os_error(path: Path, exc: OSError) -> InputError:
     return InputError(f"{path}: cannot write: {why}")
 
 
+def output_path(out: Path | str) -> Path:
+    """Where an output named ``out`` lands: its folder resolved as the OS resolves it once the
+    missing folders exist, its own name kept (a symbolic link there is still seen as one).
+
+    ``missing/../folder`` is ``folder``: checked as written, nothing was there, the missing
+    folder was made and the write replaced the user's folder (outside audit).
+    """
+    out = Path(out)
+    if out.name in ("", ".", ".."):
+        return Path(os.path.realpath(out))
+    return Path(os.path.realpath(out.parent)) / out.name
+
+
 def _make_folders(folder: Path) -> list[Path]:
     """Make ``folder`` and its missing parents; return those made, outermost first (a
     failure part-way removes what it made and raises the ``OSError``)."""
@@ -119,7 +132,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
     current: Path | None = None
     try:
         for path, data in files.items():
-            current = Path(path)
+            current = output_path(path)
             created += _make_folders(current.parent)
             fd, tmp = tempfile.mkstemp(prefix=f".{current.name}.", suffix=".tmp",
                                        dir=current.parent)
@@ -292,17 +305,17 @@ def refuse_foreign_files(outputs: dict[str, Path], command: str) -> None:
     """Refuse (exit 2) to replace an existing file that ``command`` did not write (SPEC 5:
     a fitted model is not a mission's to overwrite, nor a report page a sweep's)."""
     for flag, out in outputs.items():
-        out = Path(out)
-        if out.is_symlink():  # replacing it would replace the user's link, not write through
+        out, target = Path(out), output_path(out)
+        if target.is_symlink():  # replacing it would replace the user's link, not write through
             raise InputError(f"{flag}: {out} is a symbolic link; give the file it points to, "
                              "or another path")
-        if not os.path.lexists(out) or out.is_dir():
+        if not os.path.lexists(target) or target.is_dir():
             continue
-        if not out.is_file():  # a FIFO blocked the read below for ever (outside audit)
+        if not target.is_file():  # a FIFO blocked the read below for ever (outside audit)
             raise InputError(f"{flag}: {out} is not a regular file; refusing to replace it, "
                              "choose another path")
         try:
-            with open(out, "rb") as handle:
+            with open(target, "rb") as handle:
                 head = handle.read(4096)
         except OSError:
             head = None
@@ -329,18 +342,18 @@ def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str
     inputs = [Path(p) for p in inputs]
     seen: dict[Path, str] = {}
     for flag, out in outputs.items():
-        out = Path(out)
-        resolved = out.resolve()
+        out, target = Path(out), output_path(out)
+        resolved = target.resolve()
         if resolved in seen:
             raise InputError(f"{flag}: {out} is also {seen[resolved]}; give different files")
         seen[resolved] = flag
         for source in inputs:
-            if resolved == source.resolve() or _same_file(out, source):
+            if resolved == source.resolve() or _same_file(target, source):
                 raise InputError(
                     f"{flag}: {out} is an input of this command ({source}); refusing to "
                     "overwrite it, choose another path"
                 )
-        if out.is_dir():
+        if target.is_dir():
             raise InputError(f"{flag}: {out} is a directory, expected a file")
     refuse_foreign_files(outputs, command)
 
@@ -354,20 +367,20 @@ def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> No
     command writes was replaced by its output; outside audit) — is bad input: replacing it
     would delete what the command did not write.
     """
-    out = Path(out)
+    shown, out = Path(out), output_path(out)
     inside = out.resolve()
     for source in inputs:
         found = Path(source).resolve()
         if found == inside or inside in found.parents:
             raise InputError(
-                f"--out: {out} holds {source}, an input of this command; refusing to replace "
+                f"--out: {shown} holds {source}, an input of this command; refusing to replace "
                 "the folder, choose another folder"
             )
     if out.is_symlink():  # the swap would replace the user's link, not write through it
-        raise InputError(f"--out: {out} is a symbolic link; give the folder it points to, or "
+        raise InputError(f"--out: {shown} is a symbolic link; give the folder it points to, or "
                          "another path")
     if out.exists() and not out.is_dir():
-        raise InputError(f"--out: {out} exists and is not a directory")
+        raise InputError(f"--out: {shown} exists and is not a directory")
     # the nearest existing ancestor is where the staging folder will be made
     existing = next(p for p in (out.parent, *out.parent.parents) if p.exists())
     if not existing.is_dir():
@@ -378,20 +391,20 @@ def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> No
         try:
             entries = _relative_files(out)
         except OSError as exc:
-            raise InputError(f"--out: cannot read {out}: {exc.strerror}") from None
+            raise InputError(f"--out: cannot read {shown}: {exc.strerror}") from None
         if not entries:
             return
         marker = _read_marker_data(out)
         if marker.get("command") != command:
             raise InputError(
-                f"--out: {out} is a non-empty folder that an earlier `tuflexperf {command}` did "
+                f"--out: {shown} is a non-empty folder that an earlier `tuflexperf {command}` did "
                 "not write; refusing to replace it, choose a new or empty folder"
             )
         written = {str(name) for name in marker.get("files") or []}
         foreign = [name for name in entries if name != MARKER and not _listed(name, written)]
         if foreign:
             raise InputError(
-                f"--out: {out} holds {foreign[0]}"
+                f"--out: {shown} holds {foreign[0]}"
                 + (f" (and {len(foreign) - 1} more)" if len(foreign) > 1 else "")
                 + f", which the earlier `tuflexperf {command}` did not write; refusing to "
                 "replace the folder, move that out or choose another folder"
@@ -601,8 +614,8 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
     import secrets  # lazy, with shutil: only the commands that write a folder need them
     import shutil
 
-    out = Path(out).absolute()
     check_output_dir(out, command, inputs)
+    out = output_path(out)
     try:
         created = _make_folders(out.parent)
     except OSError as exc:
