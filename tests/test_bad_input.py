@@ -320,3 +320,38 @@ def test_a_newline_in_a_path_or_a_files_garbage_stays_one_line(tmp_path) -> None
     result = runner.invoke(app, ["fit", str(junk), "--out", str(tmp_path / "o.yaml")])
     _assert_bad(result)
     assert len(result.stderr) < 1200
+
+
+@pytest.mark.parametrize(("written", "reading"), [
+    ("020", "octal 16"), ("-05", "octal -5"), ("1:00", "base 60 60"), ("0x40", "hex 64"),
+    ("0b11", "binary 3"), ("0815", "text"),
+])
+def test_a_number_yaml_reads_other_than_in_decimal_is_bad_input(tmp_path, written,
+                                                                 reading) -> None:
+    """``min_flight_time_min: 020`` was a limit of 16 min (octal) and passed 18.5 min; the
+    same in ``--set`` and in a mission's ``time_min: 8:30`` (510 min). Outside audit."""
+    path = copy_shipped_case(tmp_path)
+    text = path.read_text()
+    assert "min_flight_time_min: 15" in text
+    path.write_text(text.replace("min_flight_time_min: 15", f"min_flight_time_min: {written}"))
+    _assert_bad(runner.invoke(app, ["check", str(path)]), "min_flight_time_min",
+                f"'{written}' is no plain decimal number (YAML 1.1 reads it as {reading})")
+    path.write_text(text)
+    _assert_bad(runner.invoke(app, ["check", str(path), "--set",
+                                    f"requirements.endurance.min_flight_time_min={written}"]),
+                "--set: requirements.endurance.min_flight_time_min", reading)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(f"name: m\nsegments:\n  - {{type: cruise, airspeed_m_s: 26, "
+                       f"time_min: {written}}}\n")
+    _assert_bad(runner.invoke(app, ["mission", str(mission), "--case", str(path)]),
+                "m.yaml", "time_min", reading)
+
+
+def test_text_that_looks_like_such_a_number_stays_text_where_text_is_meant(tmp_path) -> None:
+    path = copy_shipped_case(tmp_path)
+    aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
+    lines = aircraft.read_text().splitlines()
+    lines = ["name: 0123" if line.startswith("name:") else line for line in lines]
+    aircraft.write_text("\n".join(lines) + "\n")
+    result = runner.invoke(app, ["check", str(path), "--json"])
+    assert result.exit_code in (0, 1), result.stderr

@@ -58,11 +58,17 @@ def parse_sets(sets: list[str] | None) -> dict[str, float]:
     """Every ``--set KEY=VALUE`` as ``{key: number}`` (bad input names the flag)."""
     import yaml
 
+    from tuflexperf.io.yamlio import ambiguous_number
+
     values: dict[str, float] = {}
     for item in sets or []:
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
             fail_input(f"--set: expected KEY=VALUE, got {item!r}")
+        odd = ambiguous_number(text)
+        if odd is not None:  # as in the files: 020 was a limit of 16 (outside audit)
+            fail_input(f"--set: {key}: {text!r} is no plain decimal number (YAML 1.1 reads it "
+                       f"as {odd.reading}): write it in decimal")
         try:
             value = yaml.safe_load(text)
             value = float(text) if isinstance(value, str) else value

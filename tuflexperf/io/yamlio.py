@@ -70,6 +70,65 @@ _UniqueKeyLoader.add_constructor(
 )
 
 
+class AmbiguousNumber(str):
+    """A number YAML 1.1 reads other than as plain decimal: ``020`` (octal, 16), ``1:00``
+    (base 60, 60), ``0x40`` (hex, 64), ``0b11`` (binary, 3). It stays text: a free-form field
+    keeps it as written, and a key that needs a number refuses it, naming the key and the
+    reading (``min_flight_time_min: 020`` was a 16 min limit, a false PASS; outside audit).
+    """
+
+    reading: str
+
+
+_AMBIGUOUS_NUMBER = re.compile(
+    r"^[-+]?(?:0[0-9_]+|0[xX][0-9a-fA-F_]+|0[bB][01_]+|0[oO][0-7_]+"
+    r"|[0-9][0-9_]*(?::[0-5]?[0-9])+(?:\.[0-9_]*)?)$"
+)
+_AMBIGUOUS_TAG = "tag:tuflexperf,2026:ambiguous-number"
+
+
+def ambiguous_number(text: str) -> AmbiguousNumber | None:
+    """``text`` as an :class:`AmbiguousNumber` if YAML 1.1 would read it as a non-decimal
+    number, else ``None``."""
+    text = text.strip()
+    if not _AMBIGUOUS_NUMBER.match(text):
+        return None
+    try:
+        value: Any = yaml.safe_load(text)
+    except yaml.YAMLError:
+        value = None
+    number = AmbiguousNumber(text)
+    base = ("hex" if "x" in text.lower() else "binary" if "b" in text.lower()
+            else "base 60" if ":" in text else "octal")
+    number.reading = (f"{base} {value:g}" if isinstance(value, (int, float))
+                      and not isinstance(value, bool) else "text")
+    return number
+
+
+def _construct_ambiguous(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> AmbiguousNumber:
+    return ambiguous_number(str(node.value)) or AmbiguousNumber(str(node.value))
+
+
+def _first(resolver_class: Any, characters: str) -> None:
+    """The last implicit resolver added for ``characters`` tried before the others."""
+    for character in characters:
+        entries = resolver_class.yaml_implicit_resolvers[character]
+        entries.insert(0, entries.pop())
+
+
+_UniqueKeyLoader.add_implicit_resolver(_AMBIGUOUS_TAG, _AMBIGUOUS_NUMBER,
+                                       list("-+0123456789"))
+_first(_UniqueKeyLoader, "-+0123456789")  # before YAML 1.1's int and float
+_UniqueKeyLoader.add_constructor(_AMBIGUOUS_TAG, _construct_ambiguous)
+# written back (a file `fit` rewrites) as the text it was, quoted
+def _represent_ambiguous(dumper: yaml.SafeDumper, data: AmbiguousNumber) -> yaml.ScalarNode:
+    return dumper.represent_str(str(data))  # libyaml's emitter takes a str, not a subclass
+
+
+for _dumper in {yaml.SafeDumper, getattr(yaml, "CSafeDumper", yaml.SafeDumper)}:
+    _dumper.add_representer(AmbiguousNumber, _represent_ambiguous)
+
+
 def read_yaml(path: Path) -> Any:
     """Parse a YAML file; any problem becomes an :class:`InputError` naming the file."""
     from tuflexperf.io.files import check_input_file
@@ -159,6 +218,10 @@ def validation_message(
         problem = f"unknown key {key!r}{hint}"
     elif kind == "missing":
         problem = "required key is missing"
+    elif isinstance(first.get("input"), AmbiguousNumber):
+        value = first["input"]
+        problem = (f"{str(value)!r} is no plain decimal number (YAML 1.1 reads it as "
+                   f"{value.reading}): write it in decimal, e.g. {_decimal_hint(value)}")
     else:
         problem = str(first["msg"]).splitlines()[0].removeprefix("Value error, ")
         value = first.get("input")
@@ -171,6 +234,15 @@ def validation_message(
     more = len(errors) - 1
     tail = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
     return f"{path}: {loc}: {problem}{tail}"
+
+
+def _decimal_hint(value: str) -> str:
+    """What a number written with a leading zero most likely meant (``020`` -> ``20``)."""
+    sign = value[0] if value[:1] in "+-" else ""
+    digits = value.lstrip("+-")
+    if digits.isdigit():
+        return sign + (digits.lstrip("0") or "0")
+    return "12.5"
 
 
 def load_model(path: Path, model: type[M]) -> M:
