@@ -355,3 +355,24 @@ def test_text_that_looks_like_such_a_number_stays_text_where_text_is_meant(tmp_p
     aircraft.write_text("\n".join(lines) + "\n")
     result = runner.invoke(app, ["check", str(path), "--json"])
     assert result.exit_code in (0, 1), result.stderr
+
+
+def test_a_thrust_table_is_checked_like_every_input(tmp_path) -> None:
+    """``fit TABLE.csv`` read the file whatever it was: a FIFO hung, /dev/zero filled the
+    memory, a 140 kB field and a 3 GB file ended in tracebacks (outside audit)."""
+    import os
+
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    zero = tmp_path / "zero.csv"
+    zero.symlink_to("/dev/zero")
+    long = tmp_path / "long.csv"
+    long.write_text("engine,throttle,airspeed_m_s,thrust_n\n" + "x" * 140_000 + ",0,0,0\n")
+    big = tmp_path / "big.csv"
+    with big.open("wb") as handle:
+        handle.truncate(65 << 20)  # sparse: no disk used
+    for path, needle in ((fifo, "not a regular file"), (zero, "not a regular file"),
+                         (long, "cannot read as CSV"), (big, "larger than a thrust table")):
+        _assert_bad(runner.invoke(app, ["fit", str(path), "--out", str(tmp_path / "p.yaml")]),
+                    path.name, needle)
+    assert not (tmp_path / "p.yaml").exists()

@@ -35,6 +35,7 @@ def sha256_of(path: Path | str) -> str:
 
 MAX_YAML_BYTES = 16 << 20  # a case, aircraft, propulsion, battery or mission file
 MAX_RUN_BYTES = 2 << 30  # one run file (the paper's rig: 1 kHz for minutes, a few MB)
+MAX_TABLE_BYTES = 64 << 20  # a thrust table: one row per test point (~1 M rows)
 
 
 def check_input_file(path: Path | str, what: str = "file", max_bytes: int = MAX_YAML_BYTES) -> Path:

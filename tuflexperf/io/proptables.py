@@ -73,10 +73,13 @@ def is_propeller_manifest(path: Path) -> bool:
     ----------
     SPEC 4 (inputs of ``fit``); this module's docstring (the manifest).
     """
+    from tuflexperf.io.files import MAX_YAML_BYTES
+
     if path.suffix.lower() not in (".yaml", ".yml") or not path.is_file():
         return False
     try:
-        text = path.read_text(encoding="utf-8")
+        with path.open(encoding="utf-8") as handle:  # no more than a YAML file may hold
+            text = handle.read(MAX_YAML_BYTES + 1)
     except (OSError, UnicodeDecodeError):
         return False
     return re.search(r"^tables\s*:", text, re.MULTILINE) is not None
@@ -139,8 +142,9 @@ def read_apc_per3(path: Path) -> list[tuple[float, np.ndarray]]:
 
 
 def _lines(path: Path) -> list[str]:
-    if not path.is_file():
-        raise InputError(f"{path}: file not found")
+    from tuflexperf.io.files import MAX_TABLE_BYTES, check_input_file
+
+    check_input_file(path, "propeller table", MAX_TABLE_BYTES)
     try:
         text = path.read_text(encoding="latin-1")
     except OSError as exc:

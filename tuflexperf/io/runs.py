@@ -363,16 +363,18 @@ def read_thrust_table(path: Path | str) -> ThrustTable:
     table sees exactly the numbers in the file. Extra columns (the reduction writes
     a few diagnostics) are ignored; the four SPEC columns are required.
     """
-    path = Path(path)
-    if not path.exists():
-        raise InputError(f"{path}: file not found")
-    if path.is_dir():
-        raise InputError(f"{path}: is a directory, expected a thrust table (.csv)")
+    from tuflexperf.io.files import MAX_TABLE_BYTES, check_input_file
+
+    # a FIFO hung it, /dev/zero filled the memory, 3 GB gave a traceback (outside audit)
+    path = check_input_file(path, "thrust table (.csv)", MAX_TABLE_BYTES)
     try:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: cannot read: {exc}") from None
-    rows = [r for r in csv.reader(io.StringIO(text)) if any(cell.strip() for cell in r)]
+    try:
+        rows = [r for r in csv.reader(io.StringIO(text)) if any(cell.strip() for cell in r)]
+    except csv.Error as exc:  # e.g. a field beyond the csv module's 128 kB
+        raise InputError(f"{path}: cannot read as CSV: {exc}") from None
     if not rows:
         raise InputError(f"{path}: empty file (expected the header {','.join(TABLE_COLUMNS)})")
     header = [cell.strip() for cell in rows[0]]
