@@ -265,12 +265,27 @@ def test_an_alias_bomb_in_the_propulsion_source_is_refused_at_once(tmp_path):
     out = tmp_path / "exp"
     result = runner.invoke(app, ["export", "--case", str(tmp_path / "requirements/tuflex.yaml"),
                                  "--format", "json", "--out", str(out)])
-    assert result.exit_code == 2 and "source: more than 1000000 values" in result.stderr
+    assert result.exit_code == 2 and "propulsion.yaml: more than 2,000,000 values once its " \
+        "anchors and aliases are expanded" in result.stderr
     assert not out.exists()
 
 
+def test_an_alias_bomb_anywhere_is_refused_before_the_schemas_see_it(tmp_path):
+    """A covariance of 2,000 rows, each an alias of one 2,000-value row (40 kB), was expanded
+    by the schema before its 6 x 6 check: 20,000 rows took 3.2 GB (outside audit)."""
+    copy_shipped_case(tmp_path)
+    propulsion = tmp_path / "data" / "tuflex" / "propulsion.yaml"
+    text = propulsion.read_text()
+    start, end = text.index("    covariance:\n"), text.index("    residual_sd_n")
+    rows = "[&r [" + ",".join(["1.0"] * 2000) + "]," + ",".join(["*r"] * 2000) + "]"
+    propulsion.write_text(text[:start] + "    covariance: " + rows + "\n" + text[end:])
+    _assert_bad(runner.invoke(app, ["check", str(tmp_path / "requirements/tuflex.yaml")]),
+                "propulsion.yaml: more than 2,000,000 values")
+
+
 def test_fits_own_provenance_is_far_below_the_source_bound(tmp_path):
-    from tuflexperf.io.case import MAX_SOURCE_VALUES, count_values
+    from tuflexperf.io.case import MAX_SOURCE_VALUES
+    from tuflexperf.io.yamlio import count_values
     from tuflexperf.reduction.pipeline import fit_campaign
 
     source = yaml.safe_load(fit_campaign(ROOT / "data/tuflex/campaign/campaign.yaml")

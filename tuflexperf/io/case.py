@@ -11,7 +11,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.yamlio import FileName, StrictModel, load_model
+from tuflexperf.io.yamlio import FileName, StrictModel, count_values, load_model
 from tuflexperf.models._math import Vectorizable, is_symbolic
 from tuflexperf.models.aircraft import (
     DEFAULT_LIFTOFF_SPEED_FACTOR,
@@ -170,21 +170,6 @@ class EngineSchema(StrictModel):
 # fit's own provenance holds ~9 values per run (~150 for the shipped campaign): a million is
 # a campaign of 100,000 runs, and far below what an alias bomb expands to (9^10)
 MAX_SOURCE_VALUES = 1_000_000
-
-
-def count_values(value: Any, limit: int) -> int:
-    """Values in a nested mapping/list as written out (aliases counted each time), up to
-    just beyond ``limit`` (so a self-referencing or bomb-sized structure stops at once)."""
-    count, stack = 0, [value]
-    while stack and count <= limit:
-        item = stack.pop()
-        count += 1
-        if isinstance(item, dict):
-            stack.extend(item.keys())
-            stack.extend(item.values())
-        elif isinstance(item, (list, tuple)):
-            stack.extend(item)
-    return count
 
 
 class PropulsionSchema(StrictModel):

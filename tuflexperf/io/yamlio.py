@@ -129,6 +129,26 @@ for _dumper in {yaml.SafeDumper, getattr(yaml, "CSafeDumper", yaml.SafeDumper)}:
     _dumper.add_representer(AmbiguousNumber, _represent_ambiguous)
 
 
+MAX_DOCUMENT_VALUES = 2_000_000
+"""Values one YAML file may hold once its aliases are expanded: twice the largest
+provenance block (``io.case.MAX_SOURCE_VALUES``), far below an alias bomb (9^10)."""
+
+
+def count_values(value: Any, limit: int) -> int:
+    """Values in a nested mapping/list as written out (aliases counted each time), up to
+    just beyond ``limit`` (so a self-referencing or bomb-sized structure stops at once)."""
+    count, stack = 0, [value]
+    while stack and count <= limit:
+        item = stack.pop()
+        count += 1
+        if isinstance(item, dict):
+            stack.extend(item.keys())
+            stack.extend(item.values())
+        elif isinstance(item, (list, tuple)):
+            stack.extend(item)
+    return count
+
+
 def read_yaml(path: Path) -> Any:
     """Parse a YAML file; any problem becomes an :class:`InputError` naming the file."""
     from tuflexperf.io.files import check_input_file
@@ -143,7 +163,7 @@ def read_yaml(path: Path) -> Any:
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: cannot read: {exc}") from None
     try:
-        return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - SafeLoader subclass
+        data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - SafeLoader subclass
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" (line {mark.line + 1})" if mark is not None else ""
@@ -157,6 +177,12 @@ def read_yaml(path: Path) -> Any:
                          f"{str(exc).split(';')[0][:120]}") from None
     except RecursionError:
         raise InputError(f"{path}: invalid YAML: nested too deeply") from None
+    # aliases share one object: a 143 kB covariance of 20,000 aliased rows became 4e8 floats
+    # (3.2 GB) in the schema's hands before its 6 x 6 check (outside audit); count first
+    if count_values(data, MAX_DOCUMENT_VALUES) > MAX_DOCUMENT_VALUES:
+        raise InputError(f"{path}: more than {MAX_DOCUMENT_VALUES:,} values once its anchors "
+                         "and aliases are expanded: write the file out plainly")
+    return data
 
 
 def format_location(loc: tuple[Any, ...]) -> str:
