@@ -110,11 +110,13 @@ def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
     for name in (*RUN_COLUMNS, *KNOWN_OPTIONAL):
         if name in repeated:
             raise repeated_header_error(path, name)
-    frame.columns = [str(c).strip() for c in frame.columns]
+    names = [str(c).strip() for c in frame.columns]
     columns: dict[str, np.ndarray] = {}
     bad_cells: dict[str, tuple[int, str]] = {}
-    for name in frame.columns:
-        raw = frame[name]
+    # by position: 'note' and 'note ' are two columns of one name once stripped (by name,
+    # a frame of both came back and broke the read; outside audit)
+    for index, name in enumerate(names):
+        raw = frame.iloc[:, index]
         if raw.dtype.kind in "biuf":
             columns[name] = raw.to_numpy(dtype=float)
             continue
