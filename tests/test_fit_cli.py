@@ -512,3 +512,34 @@ def test_a_discharge_run_stopped_before_the_cut_off_is_bad_input(tmp_path: Path)
     assert "edf1_endurance_50.csv" in result.stderr and "short of the cut-off" in result.stderr
     assert result.stderr.count("\n") == 1
     assert not (tmp_path / "fitted.yaml").exists()
+
+
+def test_a_run_in_another_unit_is_refused_and_deaf_runs_give_no_set_point(
+        tmp_path: Path) -> None:
+    """One EDF1 run logged in mN made the six good ones look "deaf" (by the largest force of
+    all), and the fit took its 11 points at one airspeed alone: a 1.5 MN fan, R^2 1, exit 0
+    (outside audit). The run is now refused by name; and runs left out as deaf give no set
+    point to the three a surface needs."""
+    import pandas as pd
+
+    folder = campaign_copy(tmp_path)
+    runs = folder / "runs"
+    original = pd.read_csv(runs / "edf1_v15p0.csv.gz")
+    milli = original.copy()
+    milli["force_n"] = milli["force_n"] * 1000.0
+    milli.to_csv(runs / "edf1_v15p0.csv.gz", index=False)
+    out = tmp_path / "p.yaml"
+    result = CliRunner().invoke(app, ["fit", str(folder / "campaign.yaml"), "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    assert "edf1_v15p0.csv.gz: its force reaches" in result.stderr and "mN" in result.stderr
+    assert result.stderr.count("\n") == 1 and not out.exists()
+    # five of EDF1's seven step runs on a stuck cell: two set points are left
+    original.to_csv(runs / "edf1_v15p0.csv.gz", index=False)
+    for name in ("edf1_v00p0", "edf1_v15p0", "edf1_v20p0", "edf1_v22p5", "edf1_v25p0"):
+        stuck = pd.read_csv(runs / f"{name}.csv.gz")
+        stuck["force_n"] = 1.0
+        stuck.to_csv(runs / f"{name}.csv.gz", index=False)
+    result = CliRunner().invoke(app, ["fit", str(folder / "campaign.yaml"), "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    assert "EDF1: the throttle-step runs cover only 2 airspeed set point" in result.stderr
+    assert not out.exists()

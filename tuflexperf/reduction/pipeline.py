@@ -514,9 +514,12 @@ def fit_campaign(
         step_results.append(result)
     if progress is not None:
         progress(total, total, "fit")
+    refuse_force_scale_outliers(campaign, step_results)
     deaf_notes, deaf = _deaf_runs(step_results)
     degenerate.extend(deaf_notes)
-    degenerate.extend(_check_set_points(campaign, step_results))
+    # the set points the fit is given: a run left out as deaf gives none
+    degenerate.extend(_check_set_points(
+        campaign, [r for r in step_results if r.run.file not in deaf]))
     stepped = {str(r.engine) for r in campaign.of_kind("throttle_steps")}
     if delay_s is None and measured_delay is not None:
         swept = {str(d["engine"]) for d in delay_runs}
@@ -937,15 +940,69 @@ DEAF_FORCE_SHARE = 0.02
 DEAF_THROTTLE_SPAN = 0.3
 
 
+FORCE_SCALE_RATIO = 20.0
+"""A run whose largest force is this many times its engine's typical run's is in another
+unit (mN, kgf), or another engine's: bad input."""
+
+
+def _largest_force(result: StepRunResult) -> float:
+    return max((abs(s.force_n) for s in result.segments), default=0.0)
+
+
+def _follows_its_throttle(result: StepRunResult) -> bool:
+    """The run's force moves with its throttle (by a tenth of its largest, or more)."""
+    force = [s.force_n for s in result.segments]
+    return len(force) >= 2 and max(force) - min(force) > 0.1 * _largest_force(result)
+
+
+def _typical_largest_force(results: list[StepRunResult]) -> dict[str, float]:
+    """Per engine, the median over its step runs whose force follows the throttle (all of
+    them if none does) of each run's largest segment force [N]: stuck runs, however many,
+    do not make a good run look like one in another unit."""
+    live: dict[str, list[float]] = {}
+    every: dict[str, list[float]] = {}
+    for r in results:
+        if r.segments:
+            engine = str(r.run.engine)
+            every.setdefault(engine, []).append(_largest_force(r))
+            if _follows_its_throttle(r):
+                live.setdefault(engine, []).append(_largest_force(r))
+    return {engine: float(np.median(live.get(engine) or values))
+            for engine, values in every.items()}
+
+
+def refuse_force_scale_outliers(campaign: Any, results: list[StepRunResult]) -> None:
+    """Bad input: a step run whose force is more than :data:`FORCE_SCALE_RATIO` times its
+    engine's typical run's, with three runs or more to tell which is typical (one run in mN
+    wrote a 1.5 MN fan with exit 0; outside audit)."""
+    typical = _typical_largest_force(results)
+    counts: dict[str, int] = {}
+    for r in results:
+        if _follows_its_throttle(r):
+            counts[str(r.run.engine)] = counts.get(str(r.run.engine), 0) + 1
+    for r in results:
+        engine = str(r.run.engine)
+        reference, largest = typical.get(engine, 0.0), _largest_force(r)
+        if counts.get(engine, 0) < 3 or not reference > 0 or not largest > 0:
+            continue
+        ratio = largest / reference
+        # the low side is the deaf runs' (a dead cell or kN): left out, with a note
+        if ratio > FORCE_SCALE_RATIO:
+            raise InputError(
+                f"{campaign.path}: {r.run.file}: its force reaches {largest:.4g} N, {ratio:.3g}"
+                f" x what {engine}'s other runs typically reach ({reference:.4g} N): logged in "
+                "another unit (mN, kgf), or another engine's run?"
+            )
+
+
 def _deaf_runs(results: list[StepRunResult]) -> tuple[list[str], set[str]]:
     """A note per step run whose force does not follow its throttle (a dead load cell), and
     those runs' files: their points are left out of the fit (fitted, one stuck run brought
     EDF1's surface to R^2 0.78)."""
-    largest: dict[str, float] = {}  # per engine: a small fan beside a big one is no deaf one
-    for r in results:
-        for segment in r.segments:
-            engine = str(r.run.engine)
-            largest[engine] = max(largest.get(engine, 0.0), abs(segment.force_n))
+    # per engine (a small fan beside a big one is no deaf one), the median run's largest
+    # force: by the largest of all, one run logged in mN made six good ones "deaf" and the
+    # fit took the bad run's 11 points alone (outside audit)
+    largest = _typical_largest_force(results)
     notes = []
     deaf: set[str] = set()
     for result in results:
