@@ -56,7 +56,9 @@ def test_the_marker_lists_every_file_written_nested_ones_too(tmp_path) -> None:
     import json
 
     marker = json.loads((tmp_path / "out" / files.MARKER).read_text())
-    assert marker == {"command": "probe", "files": ["a.txt", "kept/b.pdf"]}
+    assert marker == {"command": "probe", "files": ["a.txt", "kept/b.pdf"],
+                      "sha256": {"a.txt": files.sha256_of(tmp_path / "out" / "a.txt"),
+                                 "kept/b.pdf": files.sha256_of(tmp_path / "out" / "kept/b.pdf")}}
 
 
 def test_a_symbolic_link_as_the_output_is_refused_and_left_alone(tmp_path) -> None:
@@ -268,7 +270,9 @@ def test_an_output_folder_that_holds_an_input_is_not_replaced(tmp_path) -> None:
     case.write_text(text)
     done = _run(tmp_path, "export", "--case", str(case), "--format", "json", "--out", "ex")
     assert done.returncode == 2, done.stderr
-    assert "an input of this command" in done.stderr and len(done.stderr.splitlines()) == 1
+    # refused as the input it is, or as a file changed since export wrote it
+    assert ("an input of this command" in done.stderr or "tfp_thrust.json, changed since"
+            in done.stderr) and len(done.stderr.splitlines()) == 1
     assert case.read_text() == text
     with pytest.raises(InputError, match="an input of this command"):
         files.check_output_dir(tmp_path / "ex", "export", [case])
@@ -374,3 +378,21 @@ def test_a_new_output_through_a_missing_folder_and_back_makes_no_folder(tmp_path
     assert _run(tmp_path, "export", "--out", "missing/../fresh").returncode == 0
     assert (tmp_path / "fresh" / files.MARKER).is_file()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fresh"]
+
+
+def test_an_earlier_output_the_user_edited_is_not_replaced(tmp_path) -> None:
+    """The marker keeps each file's sha256: an edited tfp_thrust.c, or a folder of notes made
+    where a written file was, went with the folder on the next export (outside audit)."""
+    assert _run(tmp_path, "export", "--out", "exp").returncode == 0
+    source = tmp_path / "exp" / "tfp_thrust.c"
+    source.write_text(source.read_text() + "/* the user's fix */\n")
+    before = _tree(tmp_path / "exp")
+    again = _run(tmp_path, "export", "--out", "exp")
+    assert again.returncode == 2 and "tfp_thrust.c, changed since" in again.stderr
+    assert _tree(tmp_path / "exp") == before
+    source.unlink()
+    source.mkdir()
+    (source / "notes.txt").write_text("the user's own\n")
+    again = _run(tmp_path, "export", "--out", "exp")
+    assert again.returncode == 2 and "tfp_thrust.c/notes.txt" in again.stderr
+    assert (source / "notes.txt").read_text() == "the user's own\n"

@@ -286,6 +286,7 @@ def test_made_up_case_draws_the_model_alone_and_says_so(made_up):
 
 
 def test_rerun_replaces_an_earlier_report_without_leftovers(made_up):
+    import hashlib
     import json
 
     from tuflexperf.io.files import MARKER
@@ -296,6 +297,7 @@ def test_rerun_replaces_an_earlier_report_without_leftovers(made_up):
     stale.write_bytes(b"old")
     marker = json.loads((out / MARKER).read_text())
     marker["files"].append("stale.png")
+    marker["sha256"]["stale.png"] = hashlib.sha256(b"old").hexdigest()
     (out / MARKER).write_text(json.dumps(marker))
     result = runner.invoke(app, ["report", "--case", str(case), "--out", str(out), "--json"])
     assert result.exit_code == 0, result.output

@@ -402,7 +402,23 @@ def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> No
                 "not write; refusing to replace it, choose a new or empty folder"
             )
         written = {str(name) for name in marker.get("files") or []}
-        foreign = [name for name in entries if name != MARKER and not _listed(name, written)]
+        hashes = marker.get("sha256")
+        if isinstance(hashes, dict):
+            # each file as the command wrote it: an edit since is the user's work (an edited
+            # tfp_thrust.c, or a folder of notes where a written file was, went with the
+            # folder; outside audit)
+            foreign = [name for name in entries if name != MARKER and name not in hashes]
+            changed = [name for name in entries if name in hashes
+                       and _sha256_or_none(out / name) != hashes[name]]
+            if changed:
+                raise InputError(
+                    f"--out: {shown} holds {changed[0]}"
+                    + (f" (and {len(changed) - 1} more)" if len(changed) > 1 else "")
+                    + f", changed since `tuflexperf {command}` wrote it; refusing to replace "
+                    "the folder, move that out or choose another folder"
+                )
+        else:  # a marker of an earlier version: names only
+            foreign = [name for name in entries if name != MARKER and not _listed(name, written)]
         if foreign:
             raise InputError(
                 f"--out: {shown} holds {foreign[0]}"
@@ -410,6 +426,16 @@ def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> No
                 + f", which the earlier `tuflexperf {command}` did not write; refusing to "
                 "replace the folder, move that out or choose another folder"
             )
+
+
+def _sha256_or_none(path: Path) -> str | None:
+    """sha256 of a regular file, ``None`` for anything else (a folder, a link, unreadable)."""
+    try:
+        if path.is_symlink() or not path.is_file():
+            return None
+        return sha256_of(path)
+    except OSError:
+        return None
 
 
 def _relative_files(folder: Path) -> list[str]:
@@ -631,7 +657,10 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
         yield staging
         # every file written (relative paths): a later run replaces the folder only while
         # it holds nothing else
-        marker = json.dumps({"command": command, "files": _relative_files(staging)}, indent=1)
+        names = _relative_files(staging)
+        marker = json.dumps({"command": command, "files": names,
+                             "sha256": {name: _sha256_or_none(staging / name) for name in names
+                                        if (staging / name).is_file()}}, indent=1)
         try:
             (staging / MARKER).write_text(marker + "\n", encoding="utf-8")
         except OSError as exc:
