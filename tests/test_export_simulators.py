@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import copy
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -344,3 +345,16 @@ def test_jsbsim_xml_stays_xml_for_any_engine_name(tmp_path: Path) -> None:
         ElementTree.parse(out / name)  # raises on anything that is not well-formed
     system = ElementTree.parse(out / "tfp_thrust_system.xml").getroot()
     assert any(c.get("name", "").startswith('tfp-EDF"1 <&>') for c in system.iter("channel"))
+
+
+def test_a_compiler_that_fails_is_one_line_naming_it(tmp_path: Path) -> None:
+    """CC=/bin/false ended the FMU export in a traceback (outside audit)."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "tuflexperf", "export", "--format", "fmu",
+                           "--out", str(tmp_path / "fmu")], capture_output=True, text=True,
+                          env={**os.environ, "CC": "/bin/false"}, cwd=tmp_path)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "the C compiler /bin/false failed" in done.stderr
+    assert len(done.stderr.splitlines()) == 1 and not (tmp_path / "fmu").exists()
