@@ -234,6 +234,9 @@ def test_a_misspelt_required_key_is_matched_to_the_missing_one(tmp_path):
     # a 1e300 m^2 wing lifted off at 0 m/s; a 1e-300 m^2 one stalled at 1e151 m/s
     (["check", "--set", "aircraft.wing_area_m2=1e300"], "aircraft.wing_area_m2"),
     (["performance", "--set", "aircraft.wing_area_m2=1e-300"], "beyond the speed of sound"),
+    # the last one won, silently (outside audit)
+    (["check", "--set", "aircraft.mass_kg=20", "--set", "aircraft.mass_kg=40"],
+     "--set: aircraft.mass_kg given twice (20 and 40)"),
 ])
 def test_absurd_values_set_on_the_command_line_are_bad_input(args, needle):
     result = runner.invoke(app, args)
@@ -391,3 +394,32 @@ def test_a_thrust_table_is_checked_like_every_input(tmp_path) -> None:
         _assert_bad(runner.invoke(app, ["fit", str(path), "--out", str(tmp_path / "p.yaml")]),
                     path.name, needle)
     assert not (tmp_path / "p.yaml").exists()
+
+
+@pytest.mark.parametrize(("line", "value", "needle"), [
+    ("delay_s: 0.05", "delay_s: 1e9", "delay_s"),
+    ("fan_area_m2: 0.004342", "fan_area_m2: 4342", "fan_area_m2"),
+])
+def test_a_propulsion_value_no_fan_has_is_bad_input(tmp_path, line, value, needle) -> None:
+    """A 1e9 s delay ran (fit refuses beyond 1 s); an area in mm^2 gave misleading
+    jet-velocity notes and exit 1 (outside audit)."""
+    path = copy_shipped_case(tmp_path)
+    propulsion = tmp_path / "data" / "tuflex" / "propulsion.yaml"
+    text = propulsion.read_text()
+    assert line in text
+    propulsion.write_text(text.replace(line, value))
+    _assert_bad(runner.invoke(app, ["check", str(path)]), "propulsion.yaml", needle)
+
+
+def test_a_folder_or_device_named_as_an_input_is_said_as_such(tmp_path) -> None:
+    """A directory or /dev/zero given as the aircraft file was "file not found" (audit)."""
+    path = copy_shipped_case(tmp_path)
+    aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
+    aircraft.unlink()
+    aircraft.mkdir()
+    _assert_bad(runner.invoke(app, ["check", str(path)]), "aircraft: a directory, not a file")
+    aircraft.rmdir()
+    aircraft.symlink_to("/dev/zero")
+    _assert_bad(runner.invoke(app, ["check", str(path)]), "aircraft: not a regular file")
+    aircraft.unlink()
+    _assert_bad(runner.invoke(app, ["check", str(path)]), "aircraft: file not found")

@@ -77,6 +77,9 @@ def parse_sets(sets: list[str] | None) -> dict[str, float]:
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
                 or not math.isfinite(value):
             fail_input(f"--set: {key}: not a finite number: {text!r}")
+        if key.strip() in values:  # the last one won, silently (outside audit)
+            fail_input(f"--set: {key.strip()} given twice ({values[key.strip()]:g} and "
+                       f"{float(value):g}); give each key once")
         values[key.strip()] = float(value)
     return values
 

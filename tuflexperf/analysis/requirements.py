@@ -263,7 +263,9 @@ def mission_path(case: Case) -> Any:
 
     target = (Path(case.path).parent / case.requirements.mission.file).resolve()
     if not target.is_file():
-        raise InputError(f"{case.path}: requirements.mission.file: file not found: "
+        from tuflexperf.io.files import why_not_a_file
+
+        raise InputError(f"{case.path}: requirements.mission.file: {why_not_a_file(target)}: "
                          f"{case.requirements.mission.file}")
     return target
 

@@ -245,7 +245,9 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
     for index, run in enumerate(schema.runs):
         target = (path.parent / run.file).resolve()
         if not target.is_file():
-            raise InputError(f"{path}: runs[{index}].file: file not found: {run.file}")
+            from tuflexperf.io.files import why_not_a_file
+
+            raise InputError(f"{path}: runs[{index}].file: {why_not_a_file(target)}: {run.file}")
         if target.suffix.lower() not in (".csv", ".mat"):
             raise InputError(
                 f"{path}: runs[{index}].file: expected a .csv or .mat run file, got {run.file}"

@@ -26,6 +26,7 @@ Paths are relative to the manifest. Unknown keys are errors.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Literal
@@ -188,7 +189,10 @@ def load_campaign(path: Path | str) -> Campaign:
         if not resolved.is_file():
             what = "not a regular file" if resolved.exists() else "file not found"
             raise InputError(f"{path}: runs[{index}].file: {what}: {entry.file}")
-        if any(earlier.path == resolved and earlier.kind == run.kind for earlier in used):
+        # one file under two names (a hard link) is the same run too (outside audit)
+        if any(earlier.kind == run.kind and (earlier.path == resolved
+                                             or os.path.samefile(earlier.path, resolved))
+               for earlier in used):
             # its points would count twice in the fit (and shrink the covariance)
             raise InputError(f"{path}: runs[{index}].file: {entry.file} is listed twice as "
                              f"{entry.kind}")

@@ -26,6 +26,8 @@ from tuflexperf.models.aircraft import (
 from tuflexperf.models.atmosphere import G0_M_S2, isa_density_kg_m3
 from tuflexperf.models.thrust import (
     DEFAULT_VOLTAGE_EXPONENT,
+    MAX_DELAY_S,
+    MAX_FAN_AREA_M2,
     POLY22_TERMS,
     Engine,
     Propulsion,
@@ -176,14 +178,15 @@ class PropulsionSchema(StrictModel):
     name: str
     model: Literal["poly22"]
     tested_airspeed_m_s: Annotated[list[float], Field(min_length=2, max_length=2)]
-    delay_s: NonNegative = 0.0
-    lag_s: NonNegative = 0.0  # first-order spool lag after delay_s (0 = pure delay)
+    # a dead time or lag beyond MAX_DELAY_S is no fan's (1e9 s was taken; outside audit)
+    delay_s: Annotated[float, Field(ge=0.0, le=MAX_DELAY_S)] = 0.0
+    lag_s: Annotated[float, Field(ge=0.0, le=MAX_DELAY_S)] = 0.0  # spool lag after delay_s
     # the test day's air: a test stand or tunnel is on the ground (ISA 11 km is 0.36; the
     # coldest sea-level air ~1.5); 1e-9 scaled the thrust 1e9-fold into a PASS (outside audit)
     reference_density_kg_m3: Annotated[float, Field(ge=0.3, le=2.0)] | None = None
     reference_voltage_v: Positive | None = None
     voltage_exponent: float = DEFAULT_VOLTAGE_EXPONENT
-    fan_area_m2: Positive | None = None
+    fan_area_m2: Annotated[float, Field(gt=0.0, le=MAX_FAN_AREA_M2)] | None = None
     throttle_unit: Literal["fraction", "percent"] = "fraction"
     engines: Annotated[list[EngineSchema], Field(min_length=1)]
     source: dict[str, Any] | None = None  # free-form provenance written by `fit`
@@ -489,7 +492,10 @@ def load_propulsion(path: Path) -> Propulsion:
 def _resolve(case_path: Path, key: str, value: str) -> Path:
     target = (case_path.parent / value).resolve()
     if not target.is_file():
-        raise InputError(f"{case_path}: {key}: file not found: {value} (resolved to {target})")
+        from tuflexperf.io.files import why_not_a_file
+
+        raise InputError(f"{case_path}: {key}: {why_not_a_file(target)}: {value} (resolved to "
+                         f"{target})")
     return target
 
 

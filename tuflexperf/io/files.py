@@ -66,6 +66,18 @@ def check_input_file(path: Path | str, what: str = "file", max_bytes: int = MAX_
     return path
 
 
+def why_not_a_file(path: Path | str) -> str:
+    """Why ``path`` is no input file: ``file not found``, or what it is instead (a directory,
+    a pipe or device) — "file not found" of a folder sent the user looking for a missing file
+    (outside audit)."""
+    path = Path(path)
+    if path.is_dir():
+        return "a directory, not a file"
+    if os.path.lexists(path) and path.exists():
+        return "not a regular file (a pipe or device?)"
+    return "file not found"
+
+
 def user_umask() -> int:
     """The process's umask (read without changing it for longer than a call)."""
     mask = os.umask(0o022)

@@ -175,7 +175,10 @@ def read_propeller_tables(path: Path | str) -> ThrustTable:
     for index, entry in enumerate(schema.tables):
         file = (path.parent / entry.file).resolve()
         if not file.is_file():
-            raise InputError(f"{path}: tables[{index}].file: file not found: {entry.file}")
+            from tuflexperf.io.files import why_not_a_file
+
+            raise InputError(f"{path}: tables[{index}].file: {why_not_a_file(file)}: "
+                             f"{entry.file}")
         if entry.format == "uiuc":
             assert entry.diameter_m is not None and entry.rpm is not None  # validated
             rows = read_uiuc(file, entry.diameter_m, entry.rpm, schema.air_density_kg_m3)

@@ -16,6 +16,12 @@ from tuflexperf.models._math import Vectorizable, fmin, sqrt, where
 from tuflexperf.models.atmosphere import SEA_LEVEL_DENSITY_KG_M3
 
 POLY22_TERMS: tuple[str, ...] = ("p00", "p10", "p01", "p20", "p11", "p02")
+MAX_DELAY_S = 1.0
+"""The longest dead time (and spool lag) a fan's model holds [s]: an EDF answers within tens
+of ms (the paper's 0.05 s), and the shortest throttle plateau a run may hold is half a second."""
+MAX_FAN_AREA_M2 = 10.0
+"""The largest fan (or rotor disc) area [m^2] a model may name: a 3.5 m rotor; 4342 was an
+area in mm^2 (outside audit)."""
 DeadEngineMode = Literal["windmilling", "zero"]
 
 

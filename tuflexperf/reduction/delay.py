@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from tuflexperf.models.thrust import MAX_DELAY_S
 from tuflexperf.reduction.filters import block_mean, movmedian, window_samples
 
 FIT_RATE_HZ = 200.0
@@ -195,9 +196,6 @@ TRUST = 4.0
 MAX_REFINEMENTS = 60
 """Stencil rounds at most (a round either moves the stencil or shrinks it fourfold)."""
 
-#: The longest dead time the reduction looks for [s]: an EDF answers within tens of ms (the
-#: paper's 0.05 s), and the shortest throttle plateau a run may hold is half a second.
-MAX_DELAY_S = 1.0
 
 
 def estimate_delay(

@@ -129,7 +129,9 @@ def build_report(
     case = case_file if isinstance(case_file, Case) else load_case(case_file)
     campaign_path = Path(campaign) if campaign is not None else None
     if campaign_path is not None and not campaign_path.is_file():
-        raise InputError(f"--campaign: file not found: {campaign_path}")
+        from tuflexperf.io.files import why_not_a_file
+
+        raise InputError(f"--campaign: {why_not_a_file(campaign_path)}: {campaign_path}")
     if campaign_path is not None:
         _check_campaign(campaign_path)  # before any step is shown or anything is written
     with (staged_directory(out, "report", _report_inputs(case, campaign_path)) as staging,

@@ -115,7 +115,9 @@ def find_measured_source(case: Case, explicit: Path | None) -> Path | None:
     """Where the measured data for ``case``'s propulsion model are (module docstring)."""
     if explicit is not None:
         if not explicit.is_file():
-            raise InputError(f"--campaign: file not found: {explicit}")
+            from tuflexperf.io.files import why_not_a_file
+
+            raise InputError(f"--campaign: {why_not_a_file(explicit)}: {explicit}")
         return explicit
     source = case.propulsion.metadata.get("source") or {}
     given = source.get("input") if isinstance(source, dict) else None
