@@ -419,25 +419,24 @@ def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> No
             # each file as the command wrote it: an edit since is the user's work (an edited
             # tfp_thrust.c, or a folder of notes where a written file was, went with the
             # folder; outside audit)
-            foreign = [name for name in entries if name != MARKER and name not in hashes]
-            changed = [name for name in entries if name in hashes
-                       and _sha256_or_none(out / name) != hashes[name]]
-            if changed:
-                raise InputError(
-                    f"--out: {shown} holds {changed[0]}"
-                    + (f" (and {len(changed) - 1} more)" if len(changed) > 1 else "")
-                    + f", changed since `tuflexperf {command}` wrote it; refusing to replace "
-                    "the folder, move that out or choose another folder"
-                )
+            _refuse_held(shown, [name for name in entries if name in hashes
+                                 and _sha256_or_none(out / name) != hashes[name]],
+                         f"changed since `tuflexperf {command}` wrote it")
+            foreign = [name for name in entries
+                       if name != MARKER and name not in hashes and name not in written]
         else:  # a marker of an earlier version: names only
             foreign = [name for name in entries if name != MARKER and not _listed(name, written)]
-        if foreign:
-            raise InputError(
-                f"--out: {shown} holds {foreign[0]}"
-                + (f" (and {len(foreign) - 1} more)" if len(foreign) > 1 else "")
-                + f", which the earlier `tuflexperf {command}` did not write; refusing to "
-                "replace the folder, move that out or choose another folder"
-            )
+        _refuse_held(shown, foreign, f"which the earlier `tuflexperf {command}` did not write")
+
+
+def _refuse_held(folder: Path, names: list[str], why: str) -> None:
+    """Bad input: ``folder`` holds ``names`` (``why``), which replacing it would delete."""
+    if names:
+        raise InputError(
+            f"--out: {folder} holds {names[0]}"
+            + (f" (and {len(names) - 1} more)" if len(names) > 1 else "")
+            + f", {why}; refusing to replace the folder, move that out or choose another folder"
+        )
 
 
 def _sha256_or_none(path: Path) -> str | None:
