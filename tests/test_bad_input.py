@@ -237,6 +237,11 @@ def test_a_misspelt_required_key_is_matched_to_the_missing_one(tmp_path):
     # the last one won, silently (outside audit)
     (["check", "--set", "aircraft.mass_kg=20", "--set", "aircraft.mass_kg=40"],
      "--set: aircraft.mass_kg given twice (20 and 40)"),
+    # read as YAML, a comment or a tag took 020 past the octal check (outside re-audit)
+    (["check", "--set", "requirements.endurance.min_flight_time_min=020 # twenty"],
+     "not a number"),
+    (["check", "--set", "requirements.endurance.min_flight_time_min=!!int 020"],
+     "not a number"),
 ])
 def test_absurd_values_set_on_the_command_line_are_bad_input(args, needle):
     result = runner.invoke(app, args)
@@ -351,9 +356,11 @@ def test_a_number_yaml_reads_other_than_in_decimal_is_bad_input(tmp_path, writte
     path = copy_shipped_case(tmp_path)
     text = path.read_text()
     assert "min_flight_time_min: 15" in text
-    path.write_text(text.replace("min_flight_time_min: 15", f"min_flight_time_min: {written}"))
-    _assert_bad(runner.invoke(app, ["check", str(path)]), "min_flight_time_min",
-                f"'{written}' is no plain decimal number (YAML 1.1 reads it as {reading})")
+    for tag in ("", "!!int ", "!!float "):  # a tag took it past (outside re-audit)
+        path.write_text(text.replace("min_flight_time_min: 15",
+                                     f"min_flight_time_min: {tag}{written}"))
+        _assert_bad(runner.invoke(app, ["check", str(path)]), "min_flight_time_min",
+                    f"'{written}' is no plain decimal number (YAML 1.1 reads it as {reading})")
     path.write_text(text)
     _assert_bad(runner.invoke(app, ["check", str(path), "--set",
                                     f"requirements.endurance.min_flight_time_min={written}"]),

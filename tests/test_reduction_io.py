@@ -232,3 +232,22 @@ def test_discharge_runs_are_read_by_the_one_run_reader(tmp_path: Path) -> None:
     data["voltage_v"][200] = np.nan
     repaired = read_discharge_run(write_csv(tmp_path / "nan.csv", data))
     assert repaired.voltage_v[200] == pytest.approx(50.0 - 0.01 * t[200])
+
+
+@pytest.mark.parametrize(("head", "extra"), [
+    ("\n{h},throttle", "0.6"),            # a blank first line
+    ("{h}, \"throttle\"", "0.6"),         # a space, then the name quoted
+    ("\ufeff{h},time_s", "0.0"),          # a BOM before a repeated first column
+    ("{h},\"a\nb\",throttle", "1,0.6"),   # a newline quoted in an earlier cell
+])
+def test_a_repeated_column_is_seen_however_the_header_is_written(tmp_path: Path, head: str,
+                                                                 extra: str) -> None:
+    """A second reading of the header line missed each of these (outside re-audit): the
+    names are the ones pandas read."""
+    data = columns()
+    lines = write_csv(tmp_path / "plain.csv", data).read_text().splitlines()
+    path = tmp_path / "twice.csv"
+    path.write_text(head.format(h=lines[0]) + "\n"
+                    + "\n".join(f"{row},{extra}" for row in lines[1:]) + "\n")
+    with pytest.raises(InputError, match="appears more than once"):
+        read_run(path)

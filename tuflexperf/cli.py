@@ -55,9 +55,12 @@ SetOption = typer.Option(
 
 
 def parse_sets(sets: list[str] | None) -> dict[str, float]:
-    """Every ``--set KEY=VALUE`` as ``{key: number}`` (bad input names the flag)."""
-    import yaml
+    """Every ``--set KEY=VALUE`` as ``{key: number}`` (bad input names the flag).
 
+    The value is a plain decimal number as Python reads it (``20``, ``0.5``, ``1e3``): read
+    as YAML, a comment, an anchor or a tag after it (``020 # twenty``, ``!!int 020``) took
+    ``020`` as octal 16 past the check below (outside audit).
+    """
     from tuflexperf.io.yamlio import ambiguous_number
 
     values: dict[str, float] = {}
@@ -70,17 +73,15 @@ def parse_sets(sets: list[str] | None) -> dict[str, float]:
             fail_input(f"--set: {key}: {text!r} is no plain decimal number (YAML 1.1 reads it "
                        f"as {odd.reading}): write it in decimal")
         try:
-            value = yaml.safe_load(text)
-            value = float(text) if isinstance(value, str) else value
-        except (yaml.YAMLError, ValueError):
+            value = float(text)
+        except ValueError:
             fail_input(f"--set: {key}: not a number: {text!r}")
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not math.isfinite(value):
+        if not math.isfinite(value):
             fail_input(f"--set: {key}: not a finite number: {text!r}")
         if key.strip() in values:  # the last one won, silently (outside audit)
             fail_input(f"--set: {key.strip()} given twice ({values[key.strip()]:g} and "
-                       f"{float(value):g}); give each key once")
-        values[key.strip()] = float(value)
+                       f"{value:g}); give each key once")
+        values[key.strip()] = value
     return values
 
 

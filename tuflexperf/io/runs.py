@@ -30,8 +30,8 @@ from tuflexperf.errors import InputError
 from tuflexperf.io.vendor import (
     VendorSettings,
     read_vendor_columns,
+    repeated_columns,
     repeated_header_error,
-    repeated_headers,
 )
 
 RUN_COLUMNS: tuple[str, ...] = ("time_s", "force_n", "airspeed_m_s", "throttle")
@@ -106,7 +106,7 @@ def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
     except (pd.errors.ParserError, UnicodeDecodeError, OSError, EOFError, ValueError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"{path}: cannot read as CSV: {first}") from None
-    repeated = repeated_headers(path)
+    repeated = repeated_columns(frame.columns)
     for name in (*RUN_COLUMNS, *KNOWN_OPTIONAL):
         if name in repeated:
             raise repeated_header_error(path, name)

@@ -22,10 +22,9 @@ manifest's ``esc_pulse_us: [idle, full]``; the force is ``thrust_sign`` times th
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -97,25 +96,23 @@ def _split_header(cell: str) -> tuple[str, str]:
     return match.group("name").strip().lower(), match.group("unit").strip().lower()
 
 
-def repeated_headers(path: Path, encoding: str = "utf-8") -> set[str]:
-    """Header cells of a CSV (run or vendor export, plain or gzip) that appear more than once,
-    stripped.
+def repeated_columns(names: Sequence[object]) -> set[str]:
+    """Header names, stripped, that a CSV repeats, from the names pandas read: one it renamed
+    ``X.1`` beside ``X``, or two that are equal once stripped.
 
     pandas renames a repeated ``throttle`` to ``throttle.1`` and the first one was read as
-    the measurement, silently: which of the two is meant only the user can tell. Only the
-    first line is read (1 ms through pandas was 6 % of a run's whole read).
+    the measurement, silently: which of the two is meant only the user can tell. The names
+    pandas itself read, not a second reading of the header line, which a blank first line,
+    a BOM or a quoted newline led astray (outside audit).
     """
-    import csv
-    import gzip
-
-    opener: Any = gzip.open if path.name.lower().endswith(".gz") else open
-    try:
-        with opener(path, "rt", encoding=encoding, newline="") as handle:
-            line = handle.readline(1 << 20)
-    except (OSError, EOFError, UnicodeDecodeError, ValueError):
-        return set()  # the full read says what is wrong with the file
-    cells = [c.strip() for c in next(csv.reader([line]), [])]
-    return {c for c in cells if c and cells.count(c) > 1}
+    stripped = [str(name).strip() for name in names]
+    present = set(stripped)
+    repeated = {name for name in stripped if stripped.count(name) > 1}
+    for name in stripped:
+        base, dot, count = name.rpartition(".")
+        if dot and count.isdigit() and base in present:
+            repeated.add(base)
+    return repeated
 
 
 def repeated_header_error(path: Path, name: str) -> InputError:
@@ -131,9 +128,7 @@ def _read_table(path: Path) -> object:
     last: Exception | None = None
     for encoding in ("utf-8-sig", "latin-1"):
         try:
-            frame = pd.read_csv(path, encoding=encoding, skipinitialspace=True, dtype=str)
-            frame.attrs["repeated"] = repeated_headers(path, encoding)
-            return frame
+            return pd.read_csv(path, encoding=encoding, skipinitialspace=True, dtype=str)
         except UnicodeDecodeError as exc:
             last = exc
         except pd.errors.EmptyDataError:
@@ -175,7 +170,7 @@ def read_rcbenchmark(
     headers = {str(c): _split_header(str(c)) for c in frame.columns}
     where = f" ({settings.where})" if settings.where else ""
 
-    repeated = frame.attrs.get("repeated", set())
+    repeated = repeated_columns(frame.columns)
 
     def find(test: Callable[[str, str], bool]) -> str | None:
         raw = next((raw for raw, (name, unit) in headers.items() if test(name, unit)), None)

@@ -120,6 +120,25 @@ _UniqueKeyLoader.add_implicit_resolver(_AMBIGUOUS_TAG, _AMBIGUOUS_NUMBER,
                                        list("-+0123456789"))
 _first(_UniqueKeyLoader, "-+0123456789")  # before YAML 1.1's int and float
 _UniqueKeyLoader.add_constructor(_AMBIGUOUS_TAG, _construct_ambiguous)
+
+
+def _explicit(tag: str) -> Any:
+    """The constructor of an explicitly tagged number (``!!int 020``): a non-decimal form is
+    an :class:`AmbiguousNumber` as when untagged (the tag took it past; outside audit)."""
+    standard = _UniqueKeyLoader.yaml_constructors[tag]
+
+    def construct(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> Any:
+        if isinstance(node.value, str):
+            odd = ambiguous_number(node.value)
+            if odd is not None:
+                return odd
+        return standard(loader, node)
+
+    return construct
+
+
+for _tag in ("tag:yaml.org,2002:int", "tag:yaml.org,2002:float"):
+    _UniqueKeyLoader.add_constructor(_tag, _explicit(_tag))
 # written back (a file `fit` rewrites) as the text it was, quoted
 def _represent_ambiguous(dumper: yaml.SafeDumper, data: AmbiguousNumber) -> yaml.ScalarNode:
     return dumper.represent_str(str(data))  # libyaml's emitter takes a str, not a subclass
