@@ -396,3 +396,35 @@ def test_an_earlier_output_the_user_edited_is_not_replaced(tmp_path) -> None:
     again = _run(tmp_path, "export", "--out", "exp")
     assert again.returncode == 2 and "tfp_thrust.c/notes.txt" in again.stderr
     assert (source / "notes.txt").read_text() == "the user's own\n"
+
+
+@pytest.mark.parametrize("spoil", ["no hashes", "files a number", "deep", "fifo", "zero"])
+def test_a_marker_that_cannot_be_trusted_keeps_the_folder(tmp_path, spoil) -> None:
+    """A marker without its hashes let an edited file go; "files": 5 and deep nesting gave
+    tracebacks; a FIFO there hung; /dev/zero ran out of memory (outside re-audit)."""
+    import json
+
+    assert _run(tmp_path, "export", "--out", "exp").returncode == 0
+    marker = tmp_path / "exp" / files.MARKER
+    data = json.loads(marker.read_text())
+    if spoil == "no hashes":
+        del data["sha256"]
+        marker.write_text(json.dumps(data))
+    elif spoil == "files a number":
+        data["files"] = 5
+        marker.write_text(json.dumps(data))
+    elif spoil == "deep":
+        marker.write_text('{"command": "export", "x": ' + "[" * 100_000 + "]" * 100_000 + "}")
+    else:
+        marker.unlink()
+        if spoil == "fifo":
+            os.mkfifo(marker)
+        else:
+            marker.symlink_to("/dev/zero")
+    (tmp_path / "exp" / "tfp_thrust.c").write_text("/* the user's edit */\n")
+    before = {p.name for p in (tmp_path / "exp").iterdir()}
+    done = _run(tmp_path, "export", "--out", "exp")
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and "refusing" in done.stderr
+    assert {p.name for p in (tmp_path / "exp").iterdir()} == before
+    assert (tmp_path / "exp" / "tfp_thrust.c").read_text() == "/* the user's edit */\n"

@@ -413,20 +413,27 @@ def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> No
                 f"--out: {shown} is a non-empty folder that an earlier `tuflexperf {command}` did "
                 "not write; refusing to replace it, choose a new or empty folder"
             )
-        written = {str(name) for name in marker.get("files") or []}
-        hashes = marker.get("sha256")
-        if isinstance(hashes, dict):
-            # each file as the command wrote it: an edit since is the user's work (an edited
-            # tfp_thrust.c, or a folder of notes where a written file was, went with the
-            # folder; outside audit)
-            _refuse_held(shown, [name for name in entries if name in hashes
-                                 and _sha256_or_none(out / name) != hashes[name]],
-                         f"changed since `tuflexperf {command}` wrote it")
-            foreign = [name for name in entries
-                       if name != MARKER and name not in hashes and name not in written]
-        else:  # a marker of an earlier version: names only
-            foreign = [name for name in entries if name != MARKER and not _listed(name, written)]
-        _refuse_held(shown, foreign, f"which the earlier `tuflexperf {command}` did not write")
+        written, hashes = marker.get("files"), marker.get("sha256")
+        if not (isinstance(written, list) and all(isinstance(n, str) for n in written)
+                and isinstance(hashes, dict)
+                and all(isinstance(k, str) and isinstance(v, str) for k, v in hashes.items())):
+            # an earlier version's marker (names only) or one edited by hand: which files the
+            # user changed cannot be told (a marker without its hashes let edits go; audit)
+            raise InputError(
+                f"--out: {shown} was written by `tuflexperf {command}` without the files' "
+                "sha256 (an earlier version, or its marker edited): whether you changed them "
+                "cannot be told; refusing to replace it, remove it or choose another folder"
+            )
+        # each file as the command wrote it: an edit since is the user's work (an edited
+        # tfp_thrust.c, or a folder of notes where a written file was, went with the folder;
+        # outside audit)
+        _refuse_held(shown, [name for name in entries if name in hashes
+                             and _sha256_or_none(out / name) != hashes[name]],
+                     f"changed since `tuflexperf {command}` wrote it")
+        listed = set(written)
+        _refuse_held(shown, [name for name in entries if name != MARKER and name not in hashes
+                             and name not in listed],
+                     f"which the earlier `tuflexperf {command}` did not write")
 
 
 def _refuse_held(folder: Path, names: list[str], why: str) -> None:
@@ -458,17 +465,21 @@ def _relative_files(folder: Path) -> list[str]:
     return found
 
 
-def _listed(name: str, written: set[str]) -> bool:
-    # a marker of an earlier version lists only top-level names: a folder listed there
-    # covers what is in it
-    parts = name.split("/")
-    return any("/".join(parts[:i]) in written for i in range(1, len(parts) + 1))
+MAX_MARKER_BYTES = 16 << 20  # a marker lists files and their sha256: far below this
 
 
 def _read_marker_data(folder: Path) -> dict[str, Any]:
+    """The folder's marker, or ``{}`` when there is none that can be read as one: a FIFO
+    there hung, /dev/zero ran out of memory, deep nesting raised (outside re-audit)."""
+    import stat
+
+    path = Path(folder) / MARKER
     try:
-        data = json.loads((Path(folder) / MARKER).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        info = path.lstat()
+        if not stat.S_ISREG(info.st_mode) or info.st_size > MAX_MARKER_BYTES:
+            return {}
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
         return {}
     return data if isinstance(data, dict) else {}
 
