@@ -226,3 +226,20 @@ def test_every_format_says_what_its_functions_leave_out(tmp_path: Path) -> None:
     engine = propulsion["engines"][0]["name"]
     assert data["dead_engine"]["windmilling_drag_coefficient"] == {engine: 0.3}
     assert data["dead_engine"]["fan_area_m2"] == 0.0068
+
+
+def test_provenance_json_cannot_hold_is_written_as_text(tmp_path: Path) -> None:
+    """A date, a timestamp, bytes, a set or a NaN in the propulsion's free-form `source:`
+    ended the export in a traceback (outside re-audit)."""
+    from tests.conftest import copy_shipped_case
+
+    case = copy_shipped_case(tmp_path)
+    propulsion = tmp_path / "data" / "tuflex" / "propulsion.yaml"
+    propulsion.write_text(propulsion.read_text() + "source:\n  date: 2024-05-01\n"
+                          "  blob: !!binary aGVsbG8=\n  tags: !!set {a, b}\n  n: .nan\n")
+    result = runner.invoke(app, ["export", "--case", str(case), "--format", "json",
+                                 "--out", str(tmp_path / "ex")])
+    assert result.exit_code == 0, result.output
+    model = json.loads((tmp_path / "ex" / "tfp_thrust.json").read_text())
+    assert model["provenance"]["source"] == {"date": "2024-05-01", "blob": "68656c6c6f",
+                                             "tags": ["a", "b"], "n": "nan"}

@@ -7,6 +7,7 @@ Everything the exporters write (CasADi, C, JSON) is derived here from the one ph
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -397,6 +398,26 @@ def model_description(model: ExportModel) -> dict[str, Any]:
             "files": [
                 {"role": f.role, "path": f.label, "sha256": f.sha256} for f in model.files
             ],
-            "source": dict(source) if source else None,
+            "source": _json_plain(dict(source)) if source else None,
         },
     }
+
+
+def _json_plain(value: Any) -> Any:
+    """Free-form provenance as JSON can hold it: what YAML read as a date, a timestamp,
+    bytes, a set or a NaN as text (each ended the export in a traceback; outside re-audit)."""
+    if isinstance(value, dict):
+        return {str(key): _json_plain(item) for key, item in value.items()}
+    if isinstance(value, (set, frozenset)):
+        return sorted((_json_plain(item) for item in value), key=str)
+    if isinstance(value, (list, tuple)):
+        return [_json_plain(item) for item in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)
+    if isinstance(value, (str, int, float, bool)) or value is None:
+        return value
+    if isinstance(value, bytes):
+        return value.hex()
+    if hasattr(value, "isoformat"):
+        return value.isoformat()
+    return str(value)
