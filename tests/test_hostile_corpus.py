@@ -66,6 +66,16 @@ def _step_run_twice_by_a_hard_link(w: Path) -> None:
           _STEP_RUN + _STEP_RUN.replace("edf1_v15p0", "edf1_v15p0_again"))
 
 
+def _discharge_run_twice_by_a_hard_link(w: Path) -> None:
+    battery = w / "data/tuflex/battery.yaml"
+    folder = battery.parent / "endurance"
+    os.link(folder / "edf1_endurance_50.csv", folder / "again_50.csv")
+    text = battery.read_text()
+    text = text[: text.index("\nfit:")] + "\n"  # unfitted: fit reads the runs
+    run = "  - {file: endurance/edf1_endurance_50.csv, engine: EDF1}\n"
+    battery.write_text(text.replace(run, run + run.replace("edf1_endurance_50", "again_50")))
+
+
 def _drop_battery_run(w: Path) -> None:
     # the fit block still lists both runs: `fit` replaces it (it said "fit it again" of itself)
     battery = w / "data/tuflex/battery.yaml"
@@ -359,6 +369,9 @@ MORE = [
     Case("a step run listed twice by a hard link", ("fit", "data/tuflex/campaign/campaign.yaml",
                                                     "--out", "p.yaml"), 2, "listed twice",
          _step_run_twice_by_a_hard_link),
+    Case("a discharge run listed twice by a hard link", ("fit", "data/tuflex/battery.yaml",
+                                                        "--out", "b.yaml"), 2, "listed twice",
+         _discharge_run_twice_by_a_hard_link),
     Case("battery refit after a run was dropped", ("fit", "data/tuflex/battery.yaml", "--out",
                                                    "b.yaml"), 0, "wrote", _drop_battery_run),
     Case("an engine with sweeps but no steps", ("fit", "data/tuflex/campaign/campaign.yaml",

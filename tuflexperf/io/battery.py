@@ -27,6 +27,7 @@ the discharge model is fitted (:mod:`tuflexperf.models.battery`).
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -248,11 +249,12 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
             from tuflexperf.io.files import why_not_a_file
 
             raise InputError(f"{path}: runs[{index}].file: {why_not_a_file(target)}: {run.file}")
-        if target.suffix.lower() not in (".csv", ".mat"):
-            raise InputError(
-                f"{path}: runs[{index}].file: expected a .csv or .mat run file, got {run.file}"
-            )
-        if any(target == earlier.path for earlier in runs):  # it would count twice
+        if not target.name.lower().endswith((".csv", ".csv.gz", ".mat")):
+            raise InputError(f"{path}: runs[{index}].file: expected a .csv, .csv.gz or .mat "
+                             f"run file, got {run.file}")
+        # it would count twice, under a second name (a hard link) too (outside re-audit)
+        if any(target == earlier.path or os.path.samefile(target, earlier.path)
+               for earlier in runs):
             raise InputError(f"{path}: runs[{index}].file: {run.file} is listed twice")
         runs.append(DischargeRunRef(path=target, engine=run.engine))
     if schema.fit is not None and not refitting:
