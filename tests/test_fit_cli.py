@@ -524,17 +524,24 @@ def test_a_run_in_another_unit_is_refused_and_deaf_runs_give_no_set_point(
 
     folder = campaign_copy(tmp_path)
     runs = folder / "runs"
-    original = pd.read_csv(runs / "edf1_v15p0.csv.gz")
-    milli = original.copy()
-    milli["force_n"] = milli["force_n"] * 1000.0
-    milli.to_csv(runs / "edf1_v15p0.csv.gz", index=False)
     out = tmp_path / "p.yaml"
-    result = CliRunner().invoke(app, ["fit", str(folder / "campaign.yaml"), "--out", str(out)])
-    assert result.exit_code == 2, result.output
-    assert "edf1_v15p0.csv.gz: its force reaches" in result.stderr and "mN" in result.stderr
-    assert result.stderr.count("\n") == 1 and not out.exists()
+    # one run in mN, then four of seven (by a median, the typical run was in mN: a 55 kN fan
+    # was written; outside re-audit)
+    milli_runs = ["edf1_v15p0", "edf1_v00p0", "edf1_v20p0", "edf1_v22p5"]
+    kept = {name: pd.read_csv(runs / f"{name}.csv.gz") for name in milli_runs}
+    for count in (1, 4):
+        for name in milli_runs[:count]:
+            milli = kept[name].copy()
+            milli["force_n"] = milli["force_n"] * 1000.0
+            milli.to_csv(runs / f"{name}.csv.gz", index=False)
+        result = CliRunner().invoke(app, ["fit", str(folder / "campaign.yaml"), "--out",
+                                          str(out)])
+        assert result.exit_code == 2, result.output
+        assert "EDF1: runs/edf1_v" in result.stderr and "mN" in result.stderr, result.stderr
+        assert result.stderr.count("\n") == 1 and not out.exists()
+    for name, frame in kept.items():
+        frame.to_csv(runs / f"{name}.csv.gz", index=False)
     # five of EDF1's seven step runs on a stuck cell: two set points are left
-    original.to_csv(runs / "edf1_v15p0.csv.gz", index=False)
     for name in ("edf1_v00p0", "edf1_v15p0", "edf1_v20p0", "edf1_v22p5", "edf1_v25p0"):
         stuck = pd.read_csv(runs / f"{name}.csv.gz")
         stuck["force_n"] = 1.0
