@@ -352,9 +352,13 @@ def test_a_compiler_that_fails_is_one_line_naming_it(tmp_path: Path) -> None:
     import subprocess
     import sys
 
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", "export", "--format", "fmu",
-                           "--out", str(tmp_path / "fmu")], capture_output=True, text=True,
-                          env={**os.environ, "CC": "/bin/false"}, cwd=tmp_path)
-    assert done.returncode == 2 and "Traceback" not in done.stderr
-    assert "the C compiler /bin/false failed" in done.stderr
-    assert len(done.stderr.splitlines()) == 1 and not (tmp_path / "fmu").exists()
+    for compiler, said in (("/bin/false", "the C compiler /bin/false failed"),
+                           # gcc was taken instead, unsaid; "cannot write" named --out
+                           ("/nonexistent/cc", "CC='/nonexistent/cc' is no compiler"),
+                           ("/bin/true", "the C compiler /bin/true wrote no library")):
+        done = subprocess.run([sys.executable, "-m", "tuflexperf", "export", "--format", "fmu",
+                               "--out", str(tmp_path / "fmu")], capture_output=True, text=True,
+                              env={**os.environ, "CC": compiler}, cwd=tmp_path)
+        assert done.returncode == 2 and "Traceback" not in done.stderr
+        assert said in done.stderr, done.stderr
+        assert len(done.stderr.splitlines()) == 1 and not (tmp_path / "fmu").exists()

@@ -27,7 +27,9 @@ from __future__ import annotations
 
 import hashlib
 import io
+import os
 import platform
+import shutil
 import subprocess
 import tempfile
 import zipfile
@@ -472,6 +474,10 @@ def build_fmu(model: ExportModel, target: Path) -> Path:
     ----------
     FMI 2.0.1 standard, section 2.3 (the zip layout: modelDescription.xml, sources/, binaries/).
     """
+    wanted = os.environ.get("CC", "").strip()
+    if wanted and shutil.which(wanted) is None:  # gcc was taken instead, unsaid (re-audit)
+        raise InputError(f"--format fmu: CC={wanted!r} is no compiler on this machine (one "
+                         "program, no arguments; unset CC to use gcc)")
     compiler = find_compiler()
     if compiler is None:
         raise InputError("--format fmu: needs a C compiler to build the binary (set CC or "
@@ -505,6 +511,9 @@ def build_fmu(model: ExportModel, target: Path) -> Path:
             raise InputError(f"--format fmu: the C compiler {compiler} failed (exit "
                              f"{done.returncode}): {said[0] if said else 'no message'}; set CC "
                              "to a working one")
+        if not library.is_file():  # a "compiler" that exits 0 and writes nothing
+            raise InputError(f"--format fmu: the C compiler {compiler} wrote no library; set "
+                             "CC to a working one")
         suffix = ".dylib" if platform.system() == "Darwin" else ".so"
         files[f"binaries/{platform_folder()}/{MODEL_IDENTIFIER}{suffix}"] = library.read_bytes()
     buffer = io.BytesIO()
