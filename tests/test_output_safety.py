@@ -428,3 +428,17 @@ def test_a_marker_that_cannot_be_trusted_keeps_the_folder(tmp_path, spoil) -> No
     assert len(done.stderr.strip().splitlines()) == 1 and "refusing" in done.stderr
     assert {p.name for p in (tmp_path / "exp").iterdir()} == before
     assert (tmp_path / "exp" / "tfp_thrust.c").read_text() == "/* the user's edit */\n"
+
+
+def test_an_output_with_a_long_name_is_replaced_like_any(tmp_path) -> None:
+    """A 240-character output name was written once and then never replaced: the earlier
+    file's hidden second name went past 255 bytes (outside re-audit)."""
+    name = "p" * 240 + ".csv"
+    for _ in range(2):
+        done = _run(tmp_path, "sweep", "--vary", "aircraft.mass_kg=20:22:2", "--csv", name)
+        assert done.returncode in (0, 1), done.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+    folder = "d" * 250
+    for _ in range(2):
+        assert _run(tmp_path, "export", "--format", "json", "--out", folder).returncode == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([name, folder])

@@ -104,6 +104,13 @@ def output_path(out: Path | str) -> Path:
     return Path(os.path.realpath(out.parent)) / out.name
 
 
+def _short(name: str) -> str:
+    """An output's name as its hidden helpers' names begin with: cut so that they stay within
+    the 255 bytes a name may have (an output named with 240 characters was written once,
+    then never replaced: its ``.old-`` name was too long; outside re-audit)."""
+    return name.encode("utf-8")[:200].decode("utf-8", errors="ignore")
+
+
 def _make_folders(folder: Path) -> list[Path]:
     """Make ``folder`` and its missing parents; return those made, outermost first (a
     failure part-way removes what it made and raises the ``OSError``)."""
@@ -147,7 +154,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
         for path, data in files.items():
             current = output_path(path)
             created += _make_folders(current.parent)
-            fd, tmp = tempfile.mkstemp(prefix=f".{current.name}.", suffix=".tmp",
+            fd, tmp = tempfile.mkstemp(prefix=f".{_short(current.name)}.", suffix=".tmp",
                                        dir=current.parent)
             staged.append((tmp, current))
             with os.fdopen(fd, "wb") as handle:
@@ -165,7 +172,8 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
                     if target.exists():
                         # a second name for the earlier file, which stays where it is until
                         # the new one replaces it in one rename (no moment without it)
-                        old = target.parent / f".{target.name}.old-{secrets.token_hex(6)}"
+                        old = target.parent / (f".{_short(target.name)}.old-"
+                                               f"{secrets.token_hex(6)}")
                         try:
                             os.link(target, old)
                         except OSError:  # a file system without hard links
@@ -669,7 +677,7 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
         created = _make_folders(out.parent)
     except OSError as exc:
         raise InputError(f"--out: cannot create {exc.filename}: {exc.strerror}") from None
-    staging = out.parent / f".{out.name}.tmp-{secrets.token_hex(6)}"
+    staging = out.parent / f".{_short(out.name)}.tmp-{secrets.token_hex(6)}"
     try:
         staging.mkdir(mode=0o777 & ~user_umask())
     except OSError as exc:
@@ -693,7 +701,7 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
         with interrupts_held():
             raise_if_interrupted()  # one a library dropped earlier: the run was interrupted
             if out.exists():
-                old = out.parent / f".{out.name}.old-{secrets.token_hex(6)}"
+                old = out.parent / f".{_short(out.name)}.old-{secrets.token_hex(6)}"
                 os.replace(out, old)
                 os.replace(staging, out)
                 if _signals_received:
