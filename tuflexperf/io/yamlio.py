@@ -139,6 +139,8 @@ def _explicit(tag: str) -> Any:
 
 for _tag in ("tag:yaml.org,2002:int", "tag:yaml.org,2002:float"):
     _UniqueKeyLoader.add_constructor(_tag, _explicit(_tag))
+
+
 # written back (a file `fit` rewrites) as the text it was, quoted
 def _represent_ambiguous(dumper: yaml.SafeDumper, data: AmbiguousNumber) -> yaml.ScalarNode:
     return dumper.represent_str(str(data))  # libyaml's emitter takes a str, not a subclass
