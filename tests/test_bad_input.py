@@ -365,6 +365,10 @@ def test_a_number_yaml_reads_other_than_in_decimal_is_bad_input(tmp_path, writte
     _assert_bad(runner.invoke(app, ["check", str(path), "--set",
                                     f"requirements.endurance.min_flight_time_min={written}"]),
                 "--set: requirements.endurance.min_flight_time_min", reading)
+    if ":" not in written:  # --vary's own separator
+        _assert_bad(runner.invoke(app, [
+            "sweep", "--case", str(path), "--vary",
+            f"requirements.endurance.min_flight_time_min={written}:30:2"]), "--vary", reading)
     mission = tmp_path / "m.yaml"
     mission.write_text(f"name: m\nsegments:\n  - {{type: cruise, airspeed_m_s: 26, "
                        f"time_min: {written}}}\n")

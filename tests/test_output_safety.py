@@ -442,3 +442,18 @@ def test_an_output_with_a_long_name_is_replaced_like_any(tmp_path) -> None:
     for _ in range(2):
         assert _run(tmp_path, "export", "--format", "json", "--out", folder).returncode == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([name, folder])
+
+
+@pytest.mark.parametrize("args", [
+    ("sweep", "--vary", "aircraft.mass_kg=20:22:2", "--csv", "newdir/"),
+    ("sweep", "--vary", "aircraft.mass_kg=20:22:2", "--plot", "newdir/"),
+    ("mission", _MISSION, "--csv", "newdir/"),
+    ("fit", _CAMPAIGN, "--out", "newdir/"),
+    ("fit", _CAMPAIGN, "--out", "p.yaml", "--table", "newdir/"),
+], ids=["sweep csv", "sweep plot", "mission", "fit out", "fit table"])
+def test_a_file_output_named_as_a_folder_is_refused(tmp_path, args) -> None:
+    """``--csv newdir/`` wrote a file named ``newdir``: as a Path the slash was lost
+    (outside re-audit)."""
+    done = _run(tmp_path, *args)
+    assert done.returncode == 2 and "names a folder; give a file name" in done.stderr
+    assert list(tmp_path.iterdir()) == []

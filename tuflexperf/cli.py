@@ -85,6 +85,16 @@ def parse_sets(sets: list[str] | None) -> dict[str, float]:
     return values
 
 
+def output_file(value: str | None, flag: str) -> Path | None:
+    """A file output's path as given; one that ends in a separator names a folder (as a
+    ``Path`` it lost the slash, and ``--csv newdir/`` wrote a file named ``newdir``)."""
+    if value is None:
+        return None
+    if value.endswith(("/", "\\")) or value in ("", ".", ".."):
+        fail_input(f"{flag}: {value!r} names a folder; give a file name")
+    return Path(value)
+
+
 def load_case_with(case_file: Path | None, sets: list[str] | None) -> Any:
     """The case, with every ``--set KEY=VALUE`` applied and validated by the schemas."""
     from tuflexperf.io.case import load_case
@@ -393,8 +403,10 @@ def sweep(
     case_file: Path | None = CaseOption,
     as_json: bool = JsonOption,
     sets: list[str] | None = SetOption,
-    csv_out: Path | None = typer.Option(None, "--csv", help="Write the grid as CSV here."),
-    plot: Path | None = typer.Option(None, "--plot", help="Write a carpet plot (PNG) here."),
+    csv_text: str | None = typer.Option(None, "--csv", metavar="<path>",
+                                        help="Write the grid as CSV here."),
+    plot_text: str | None = typer.Option(None, "--plot", metavar="<path>",
+                                         help="Write a carpet plot (PNG) here."),
     workers: int | None = WorkersOption,
     dask: str | None = DaskOption,
 ) -> None:
@@ -404,6 +416,7 @@ def sweep(
 
     if workers is not None and workers < 1:
         fail_input(f"--workers: must be at least 1, got {workers}")
+    csv_out, plot = output_file(csv_text, "--csv"), output_file(plot_text, "--plot")
     case, axes = _sweep_case(case_file, sets, vary)
     outputs = {flag: target for flag, target in (("--csv", csv_out), ("--plot", plot))
                if target is not None}
@@ -750,7 +763,8 @@ def mission(
         None, help="Mission file (default: the case's mission requirement)."
     ),
     case_file: Path | None = CaseOption,
-    csv: Path | None = typer.Option(None, "--csv", help="Write the time history to this CSV."),
+    csv_text: str | None = typer.Option(None, "--csv", metavar="<path>",
+                                        help="Write the time history to this CSV."),
     as_json: bool = JsonOption,
     sets: list[str] | None = SetOption,
 ) -> None:
@@ -759,6 +773,7 @@ def mission(
     from tuflexperf.analysis.requirements import mission_path
     from tuflexperf.io.mission import load_mission
 
+    csv = output_file(csv_text, "--csv")
     case = load_case_with(case_file, sets)
     requirement = case.requirements.mission
     if mission_file is None:
@@ -1006,14 +1021,14 @@ def fit_command(
     input_file: Path = typer.Argument(
         ..., help="Campaign manifest (campaign.yaml) or thrust table (.csv)."
     ),
-    out: Path | None = typer.Option(
-        None, "--out",
+    out_text: str | None = typer.Option(
+        None, "--out", metavar="<path>",
         help="File to write (default: propulsion_fit.yaml, or battery_fit.yaml for a battery "
         "file).",
     ),
-    table: Path | None = typer.Option(
+    table_text: str | None = typer.Option(
         None,
-        "--table",
+        "--table", metavar="<path>",
         help="Thrust table to write (campaign default: <out>_thrust_table.csv beside --out).",
     ),
     glauert: bool = typer.Option(
@@ -1028,6 +1043,7 @@ def fit_command(
     """Reduce raw runs (or a thrust table) to the poly22 propulsion file."""
     from tuflexperf.reduction.pipeline import is_battery_file, run_fit
 
+    out, table = output_file(out_text, "--out"), output_file(table_text, "--table")
     if out is None:
         battery = input_file.is_file() and is_battery_file(input_file)
         out = Path("battery_fit.yaml" if battery else "propulsion_fit.yaml")

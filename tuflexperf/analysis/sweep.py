@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.io.dotted import check_value
+from tuflexperf.io.yamlio import ambiguous_number
 
 Array = NDArray[np.float64]
 CHUNK_ROWS = 2500
@@ -35,6 +36,11 @@ def parse_vary(case: Case, spec: str) -> tuple[str, Array]:
     key, _, grid = spec.partition("=")
     key = key.strip()
     parts = grid.split(":")
+    for part in parts[:2]:  # as in the files and --set: 020 is no plain decimal
+        odd = ambiguous_number(part)
+        if odd is not None:
+            raise InputError(f"--vary {spec!r}: {part.strip()!r} is no plain decimal number "
+                             f"(YAML 1.1 reads it as {odd.reading}): write it in decimal")
     try:
         if len(parts) != 3:
             raise ValueError
