@@ -70,8 +70,7 @@ def parse_sets(sets: list[str] | None) -> dict[str, float]:
             fail_input(f"--set: expected KEY=VALUE, got {item!r}")
         odd = ambiguous_number(text)
         if odd is not None:  # as in the files: 020 was a limit of 16 (outside audit)
-            fail_input(f"--set: {key}: {text!r} is no plain decimal number (YAML 1.1 reads it "
-                       f"as {odd.reading}): write it in decimal")
+            fail_input(f"--set: {key}: {odd.problem()}")
         try:
             value = float(text)
         except ValueError:

@@ -39,8 +39,7 @@ def parse_vary(case: Case, spec: str) -> tuple[str, Array]:
     for part in parts[:2]:  # as in the files and --set: 020 is no plain decimal
         odd = ambiguous_number(part)
         if odd is not None:
-            raise InputError(f"--vary {spec!r}: {part.strip()!r} is no plain decimal number "
-                             f"(YAML 1.1 reads it as {odd.reading}): write it in decimal")
+            raise InputError(f"--vary {spec!r}: {odd.problem()}")
     try:
         if len(parts) != 3:
             raise ValueError

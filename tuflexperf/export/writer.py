@@ -124,10 +124,8 @@ def export_model(
     check_output_dir(out_dir, "export")
     names = [name for fmt in formats for name in FILES[fmt]]
     model = load_export_model(case_path)
-    inputs = [f.path for f in model.files]
-    check_output_dir(out_dir, "export", inputs)
-
-    with staged_directory(out_dir, "export", inputs) as staging:
+    # the staging checks the folder again, against the model's files
+    with staged_directory(out_dir, "export", [f.path for f in model.files]) as staging:
         for fmt in formats:
             _write_format(model, fmt, staging)
     return ExportResult(

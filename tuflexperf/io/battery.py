@@ -27,7 +27,6 @@ the discharge model is fitted (:mod:`tuflexperf.models.battery`).
 from __future__ import annotations
 
 import dataclasses
-import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,6 +35,7 @@ from typing import Annotated, Any
 from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
+from tuflexperf.io.files import same_file, why_not_a_file
 from tuflexperf.io.yamlio import FileName, StrictModel, load_model
 
 Positive = Annotated[float, Field(gt=0)]
@@ -246,15 +246,12 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
     for index, run in enumerate(schema.runs):
         target = (path.parent / run.file).resolve()
         if not target.is_file():
-            from tuflexperf.io.files import why_not_a_file
-
             raise InputError(f"{path}: runs[{index}].file: {why_not_a_file(target)}: {run.file}")
         if not target.name.lower().endswith((".csv", ".csv.gz", ".mat")):
             raise InputError(f"{path}: runs[{index}].file: expected a .csv, .csv.gz or .mat "
                              f"run file, got {run.file}")
         # it would count twice, under a second name (a hard link) too (outside re-audit)
-        if any(target == earlier.path or os.path.samefile(target, earlier.path)
-               for earlier in runs):
+        if any(target == earlier.path or same_file(target, earlier.path) for earlier in runs):
             raise InputError(f"{path}: runs[{index}].file: {run.file} is listed twice")
         runs.append(DischargeRunRef(path=target, engine=run.engine))
     if schema.fit is not None and not refitting:

@@ -26,7 +26,6 @@ Paths are relative to the manifest. Unknown keys are errors.
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Literal
@@ -34,6 +33,7 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
+from tuflexperf.io.files import same_file, why_not_a_file
 from tuflexperf.io.vendor import VendorSettings
 from tuflexperf.io.yamlio import FileName, StrictModel, load_model
 
@@ -187,11 +187,11 @@ def load_campaign(path: Path | str) -> Campaign:
             ignored.append(run)  # battery runs belong to the endurance model, not the fit
             continue
         if not resolved.is_file():
-            what = "not a regular file" if resolved.exists() else "file not found"
-            raise InputError(f"{path}: runs[{index}].file: {what}: {entry.file}")
+            raise InputError(f"{path}: runs[{index}].file: {why_not_a_file(resolved)}: "
+                             f"{entry.file}")
         # one file under two names (a hard link) is the same run too (outside audit)
         if any(earlier.kind == run.kind and (earlier.path == resolved
-                                             or os.path.samefile(earlier.path, resolved))
+                                             or same_file(earlier.path, resolved))
                for earlier in used):
             # its points would count twice in the fit (and shrink the covariance)
             raise InputError(f"{path}: runs[{index}].file: {entry.file} is listed twice as "

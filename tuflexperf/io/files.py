@@ -73,7 +73,7 @@ def why_not_a_file(path: Path | str) -> str:
     path = Path(path)
     if path.is_dir():
         return "a directory, not a file"
-    if os.path.lexists(path) and path.exists():
+    if path.exists():
         return "not a regular file (a pipe or device?)"
     return "file not found"
 
@@ -217,7 +217,8 @@ def atomic_write_text(path: Path | str, text: str) -> None:
     write_files_atomically({Path(path): text})
 
 
-def _same_file(a: Path, b: Path) -> bool:
+def same_file(a: Path, b: Path) -> bool:
+    """True if ``a`` and ``b`` are one file on disk (a hard link or symlink included)."""
     try:
         return a.exists() and b.exists() and os.path.samefile(a, b)
     except OSError:
@@ -369,7 +370,7 @@ def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str
             raise InputError(f"{flag}: {out} is also {seen[resolved]}; give different files")
         seen[resolved] = flag
         for source in inputs:
-            if resolved == source.resolve() or _same_file(target, source):
+            if resolved == source.resolve() or same_file(target, source):
                 raise InputError(
                     f"{flag}: {out} is an input of this command ({source}); refusing to "
                     "overwrite it, choose another path"
@@ -688,9 +689,10 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
         # every file written (relative paths): a later run replaces the folder only while
         # it holds nothing else
         names = _relative_files(staging)
+        hashes = {name: _sha256_or_none(staging / name) for name in names}
         marker = json.dumps({"command": command, "files": names,
-                             "sha256": {name: _sha256_or_none(staging / name) for name in names
-                                        if (staging / name).is_file()}}, indent=1)
+                             "sha256": {name: h for name, h in hashes.items() if h is not None}},
+                            indent=1)
         try:
             (staging / MARKER).write_text(marker + "\n", encoding="utf-8")
         except OSError as exc:

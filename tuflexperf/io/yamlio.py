@@ -79,6 +79,11 @@ class AmbiguousNumber(str):
 
     reading: str
 
+    def problem(self) -> str:
+        """What is wrong with it, in the words every refusal of it uses."""
+        return (f"{str(self)!r} is no plain decimal number (YAML 1.1 reads it as "
+                f"{self.reading}): write it in decimal")
+
 
 _AMBIGUOUS_NUMBER = re.compile(
     r"^[-+]?(?:0[0-9_]+|0[xX][0-9a-fA-F_]+|0[bB][01_]+|0[oO][0-7_]+"
@@ -267,8 +272,7 @@ def validation_message(
         problem = "required key is missing"
     elif isinstance(first.get("input"), AmbiguousNumber):
         value = first["input"]
-        problem = (f"{str(value)!r} is no plain decimal number (YAML 1.1 reads it as "
-                   f"{value.reading}): write it in decimal, e.g. {_decimal_hint(value)}")
+        problem = f"{value.problem()}, e.g. {_decimal_hint(value)}"
     else:
         problem = str(first["msg"]).splitlines()[0].removeprefix("Value error, ")
         value = first.get("input")
