@@ -457,3 +457,60 @@ def test_a_file_output_named_as_a_folder_is_refused(tmp_path, args) -> None:
     done = _run(tmp_path, *args)
     assert done.returncode == 2 and "names a folder; give a file name" in done.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("edit", ["coefficient", "note", "seal dropped", "earlier version"])
+def test_a_fitted_yaml_the_user_edited_is_not_replaced(tmp_path, edit) -> None:
+    """fit's YAML ends with the sha256 of what precedes it. A propulsion file the user had
+    tuned by hand below its first line was replaced by the next fit into the same path: only
+    the first line was looked at."""
+    from tests.test_fit_cli import write_table
+
+    table = write_table(tmp_path / "table.csv")
+    assert _run(tmp_path, "fit", str(table), "--out", "p.yaml").returncode == 0
+    path = tmp_path / "p.yaml"
+    assert files.seal_intact(path.read_bytes())
+    assert _run(tmp_path, "fit", str(table), "--out", "p.yaml").returncode == 0  # its own
+    text = path.read_text()
+    lines = text.splitlines(keepends=True)
+    edited = {
+        "coefficient": text.replace("p00: ", "p00: -", 1),
+        "note": "".join(lines[:-1]) + "# the user's note\n" + lines[-1],
+        "seal dropped": "".join(lines[:-1]),
+        # an earlier version's output: the same first line, no seal; edits cannot be told
+        "earlier version": "".join(lines[:-1]).replace("delay_s", "delay_s", 1),
+    }[edit]
+    assert edited != text
+    path.write_text(edited)
+    again = _run(tmp_path, "fit", str(table), "--out", "p.yaml")
+    assert again.returncode == 2, again.stderr
+    assert "written by `tuflexperf fit` and changed since" in again.stderr
+    assert len(again.stderr.strip().splitlines()) == 1
+    assert path.read_text() == edited
+
+
+def test_a_fitted_battery_file_is_sealed_and_refit_beside_its_input(tmp_path) -> None:
+    """A battery file fit wrote is an input to a later fit (it keeps the text, drops the
+    earlier seal) and is replaced by the same fit while unedited."""
+    from tests.conftest import copy_shipped_case
+
+    copy_shipped_case(tmp_path)
+    folder = tmp_path / "data" / "tuflex"
+    assert _run(folder, "fit", "battery.yaml", "--out", "b1.yaml").returncode == 0
+    assert _run(folder, "fit", "b1.yaml", "--out", "b2.yaml").returncode == 0
+    assert _run(folder, "fit", "b1.yaml", "--out", "b2.yaml").returncode == 0
+    first, second = (folder / "b1.yaml").read_text(), (folder / "b2.yaml").read_text()
+    assert second.count(files.SEAL) == 1 and files.seal_intact(second.encode())
+    def body(text: str) -> str:
+        return text[: text.index(files.SEAL)]
+
+    assert body(second).replace("from b1.yaml", "from battery.yaml") == body(first)
+
+
+def test_seal_intact_needs_the_whole_text_as_sealed() -> None:
+    text = files.sealed("a: 1\n# comment\n")
+    assert files.seal_intact(text.encode())
+    assert files.sealed("a: 1") == files.sealed("a: 1\n")
+    for spoiled in (text[:-1], text.replace("a: 1", "a: 2"), text + "\n", "a: 1\n",
+                    text.replace(files.SEAL, files.SEAL + " ")):
+        assert not files.seal_intact(spoiled.encode()), spoiled

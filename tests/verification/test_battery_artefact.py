@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -29,6 +30,21 @@ def test_shipped_fit_block_is_a_refit_of_the_shipped_runs() -> None:
         assert stored["parameters"][key] == pytest.approx(value, rel=1e-9, abs=1e-12)
     assert stored["rms_v"] == pytest.approx(refit["rms_v"], rel=1e-9)
     assert [r["sha256"] for r in stored["runs"]] == [r["sha256"] for r in refit["runs"]]
+
+
+def test_the_shipped_battery_file_is_what_its_script_writes(tmp_path: Path) -> None:
+    """Issue 9: the shipped battery file carries fitted parameters, reproducible by a script
+    (scripts/fit_battery.py wrote a first line the shipped file does not have)."""
+    import shutil
+
+    shutil.copytree(ROOT / "data" / "tuflex", tmp_path / "data" / "tuflex")
+    (tmp_path / "scripts").mkdir()
+    shutil.copy(ROOT / "scripts" / "fit_battery.py", tmp_path / "scripts")
+    done = subprocess.run([sys.executable, str(tmp_path / "scripts" / "fit_battery.py")],
+                          capture_output=True, text=True, env={**os.environ,
+                                                               "PYTHONPATH": str(ROOT)})
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "data" / "tuflex" / "battery.yaml").read_bytes() == BATTERY.read_bytes()
 
 
 def test_check_neither_reads_nor_fits_the_discharge_runs(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -33,6 +33,26 @@ def sha256_of(path: Path | str) -> str:
     return digest.hexdigest()
 
 
+# fit's YAML ends with this comment and the sha256 of every byte before it, so a later fit
+# replaces it only as written: a hand edit (a tweaked coefficient, a note) is the user's work
+SEAL = "# sha256 of the lines above: "
+
+
+def sealed(text: str) -> str:
+    """``text`` (YAML) with a last comment line holding the sha256 of the text before it."""
+    body = text if text.endswith("\n") else text + "\n"
+    return f"{body}{SEAL}{hashlib.sha256(body.encode('utf-8')).hexdigest()}\n"
+
+
+def seal_intact(data: bytes) -> bool:
+    """Whether ``data`` ends with a seal (see :func:`sealed`) matching what precedes it."""
+    if not data.endswith(b"\n"):
+        return False
+    cut = data.rfind(b"\n", 0, len(data) - 1) + 1
+    digest = hashlib.sha256(data[:cut]).hexdigest()
+    return data[cut:-1] == f"{SEAL}{digest}".encode()
+
+
 MAX_YAML_BYTES = 16 << 20  # a case, aircraft, propulsion, battery or mission file
 MAX_RUN_BYTES = 2 << 30  # one run file (the paper's rig: 1 kHz for minutes, a few MB)
 MAX_TABLE_BYTES = 64 << 20  # a thrust table: one row per test point (~1 M rows)
@@ -342,6 +362,8 @@ def refuse_foreign_files(outputs: dict[str, Path], command: str) -> None:
         except OSError:
             head = None
         writer = written_by(head) if head is not None else None
+        if writer == "fit" and head is not None and head.startswith(b"#"):
+            _refuse_unsealed(flag, out, target)
         if writer is None:
             raise InputError(
                 f"{flag}: {out} exists and is not an earlier output of tuflexperf; refusing "
@@ -352,6 +374,22 @@ def refuse_foreign_files(outputs: dict[str, Path], command: str) -> None:
                 f"{flag}: {out} was written by `tuflexperf {writer}`, not by `tuflexperf "
                 f"{command}`; refusing to replace it, choose another path"
             )
+
+
+def _refuse_unsealed(flag: str, shown: Path, target: Path) -> None:
+    """Refuse to replace fit's YAML at ``target`` unless it is byte for byte as fit wrote it."""
+    try:
+        with open(target, "rb") as handle:
+            data = handle.read(MAX_YAML_BYTES + 1)
+    except OSError:
+        data = b""
+    if len(data) <= MAX_YAML_BYTES and seal_intact(data):
+        return
+    raise InputError(
+        f"{flag}: {shown} was written by `tuflexperf fit` and changed since (or by a version "
+        "that did not seal it): whether you edited it cannot be told; refusing to replace it, "
+        "move it away or choose another path"
+    )
 
 
 def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str) -> None:

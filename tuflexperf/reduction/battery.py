@@ -357,6 +357,7 @@ def fitted_battery_text(battery_path: Any, out_path: Any) -> tuple[str, dict[str
     import yaml
 
     from tuflexperf.io.battery import load_battery
+    from tuflexperf.io.files import SEAL
     from tuflexperf.io.yamlio import read_yaml
 
     battery_path, out_path = Path(battery_path), Path(out_path)
@@ -371,6 +372,8 @@ def fitted_battery_text(battery_path: Any, out_path: Any) -> tuple[str, dict[str
         kept: list[str] = []
         skipping = False
         for line in lines:
+            if line.startswith(SEAL):  # an earlier fit's seal: this text gets its own
+                continue
             if line.startswith("fit:") or line.startswith("# fit: written by"):
                 skipping = True
                 continue

@@ -36,7 +36,7 @@ import yaml
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.campaign import Campaign, CampaignRun, load_campaign
-from tuflexperf.io.files import sha256_of
+from tuflexperf.io.files import sealed, sha256_of
 from tuflexperf.io.runs import (
     REFIT_TABLE_EXTRA_COLUMNS,
     TABLE_EXTRA_COLUMNS,
@@ -1346,7 +1346,7 @@ def _fit_battery(path: Path, out: Path, table: Path | None, glauert: bool) -> di
         raise InputError(f"{'--table' if table is not None else '--glauert'}: not for a "
                          "battery file (it fits the pack model alone)")
     text, block = fitted_battery_text(path, out)
-    write_files({out: text})
+    write_files({out: sealed(text)})
     return {"kind": "battery", "input": str(path), "out": str(out), "table": None,
             "battery_fit": block}
 
@@ -1410,7 +1410,7 @@ def run_fit(
         result = fit_campaign(input_path, glauert=glauert, delay_s=delay_s, progress=progress)
         if table is None:
             table = default_table_path(out)
-    files = {out: result.propulsion_text}
+    files = {out: sealed(result.propulsion_text)}
     if table is not None:
         table = Path(table)
         _check_output(table, "--table")
