@@ -308,9 +308,12 @@ def test_a_transition_arc_beyond_cl_max_reaches_no_obstacle_in_both() -> None:
 
 @pytest.mark.parametrize(("c_rate", "packs", "pattern_m", "attainable"), [
     (9, 1, 100, False),   # take-off 94 A per pack against a 90 A burst rating
-    (10, 1, 100, True),   # within the burst; no segment of 30 s beyond 50 A on average
+    (10, 1, 100, False),  # within the burst, but 78.7 A over the flight's first 30 s
+    (15, 1, 100, False),  # (take-off, climb and the cruise's start) against 75 A continuous
+    (16, 1, 100, True),   # ... and 80 A: the pack sees the flight, not its segments
     (18, 1, 400, False),  # the 67 s climb at 99.5 A on average against 90 A continuous
-    (20, 1, 400, True),
+    (20, 1, 400, False),  # the climb's last 30 s at 100.05 A against 100 A continuous
+    (21, 1, 400, True),
     (40, 2, 100, True),   # the shipped pack
 ])
 def test_the_pack_rating_is_the_same_rule_in_the_batch(tmp_path, c_rate, packs, pattern_m,

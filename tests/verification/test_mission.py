@@ -747,7 +747,13 @@ def test_a_pack_asked_for_more_than_its_c_rating_ends_the_flight(tmp_path: Path)
     assert not slow.attainable and not slow.passed
     assert "beyond its burst rating 40.0 A" in slow.reason
     assert "beyond the battery" in slow.reason
-    assert fly("5", "2", SHIPPED_MISSION).attainable  # 9 C for 26 s: within 2 x 5 C
+    # 9 C for the 26 s of take-off and climb: within a 2 x 5 C burst, but 8.1 C over the
+    # flight's first 30 s, beyond 5 C continuous (the pack does not see where the take-off,
+    # the climb and the cruise begin and end)
+    first = fly("5", "2", SHIPPED_MISSION)
+    assert not first.attainable and "on average over 30 s (0-30 s into the mission)" in \
+        first.reason and "beyond its continuous rating 25.0 A" in first.reason
+    assert fly("9", "2", SHIPPED_MISSION).attainable
     high = _mission(tmp_path, """\
         name: a long climb
         segments:
@@ -794,3 +800,29 @@ def test_nothing_flown_before_a_segment_that_cannot_be_planned(tmp_path: Path, f
     data = json.loads(out)
     assert data["segments"] == [] and data["landing_charge_fraction"] is None
     assert data["reason"].startswith("segment 2 (cruise): throttle 0.3")
+
+
+@pytest.mark.parametrize("pieces", [1, 8])
+def test_the_continuous_rating_holds_over_any_30_s_not_per_segment(tmp_path: Path,
+                                                                     pieces: int) -> None:
+    """A 3.6 min cruise at 45 m/s (~43 A per pack) against a 6 C (30 A) rating failed as
+    one segment and passed as eight of 27 s each: the mean was bounded per segment of 30 s
+    or more (outside audit). The pack sees the flight, not its segments."""
+    copy_shipped_case(tmp_path)
+    battery = tmp_path / "data" / "tuflex" / "battery.yaml"
+    battery.write_text(battery.read_text().replace("max_discharge_c: 40 ",
+                                                   "max_discharge_c: 6 "))
+    case = load_case(tmp_path / "requirements" / "tuflex.yaml")
+    minutes = 3.6 / pieces
+
+    def fly(airspeed: float) -> object:
+        cruise = f"  - {{type: cruise, airspeed_m_s: {airspeed}, time_min: {minutes!r}}}\n"
+        path = _mission(tmp_path, "name: split\nsegments:\n" + cruise * pieces)
+        return MissionModel(case, load_mission(path), None).fly()
+
+    fast = fly(45.0)
+    assert not fast.attainable and not fast.passed
+    assert "beyond its continuous rating 30.0 A" in fast.reason
+    assert "on average over 30 s (0-30 s into the mission)" in fast.reason
+    slow = fly(26.0)  # ~11 A per pack: the same segments, within the rating
+    assert slow.attainable

@@ -31,10 +31,12 @@ from tuflexperf.analysis import endurance as single
 from tuflexperf.analysis.mission import STEPS
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import (
+    SECONDS_PER_HOUR,
     current_at_power_a,
     cutoff_residual_v,
     discharge_time_s,
     equivalent_packs,
+    first_window_beyond,
 )
 from tuflexperf.models.powertrain import (
     PowerSurfaces,
@@ -205,6 +207,7 @@ class _Launch:
     roll_time_s: Array
     peak_current_a: Array
     full_throttle_speeds_m_s: Array  # (rows, points): every airspeed its power was taken at
+    climb_power_w: Array  # (fans, rows): the climb's constant electrical power
 
 
 def _rk4_phase(params: Any, q: Array, h: Array, active: Array,
@@ -315,7 +318,8 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
             rk4_rows(rows, climb_time_safe[rows] / steps, climb_time_safe[rows] > 0.0,
                      [(climbing[:, rows],) * 3] * steps)
     ok = ok & np.all(above, axis=0)
-    return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak, used)
+    return _Launch(np.where(ok, q, np.nan), climb_time, q_roll, roll_time, peak, used,
+                   climbing)
 
 
 def _one_fan_draws_most(model: Any, m: Any, launch: _Launch, throttle: Array,
@@ -519,8 +523,14 @@ def _within_rating(model: Any, launch: _Launch, power_w: Array, start: Array,
                    span: Array, cruise_s: Array, packs: Array, capacity_ah: Array) -> Array:
     """Per fan and row ``(fans, rows)``: the packs of ``capacity_ah`` [Ah] (flying as
     ``packs`` measured ones) stay within their rating, by the mission's two rules
-    (``MissionModel._beyond_rating``): no current beyond the burst rating, and no segment of
-    30 s or more (roll, climb, cruise) beyond the continuous one on average."""
+    (``MissionModel._beyond_rating``): no current beyond the burst rating, and no stretch of
+    30 s or more of the flight beyond the continuous one on average.
+
+    The flight's charge is taken where the phases meet, the roll at its mean current, and
+    ``w = min(30 s, phase / 2)`` into and before the end of the climb and of the cruise: each
+    at constant power, its current rising as the pack sags (its heaviest 30 s are its last),
+    the current over such a stretch the one at the charge halfway through it (midpoint rule).
+    """
     from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S
 
     battery = model.battery
@@ -528,17 +538,41 @@ def _within_rating(model: Any, launch: _Launch, power_w: Array, start: Array,
         return np.ones(np.shape(power_w), dtype=bool)
     rating = float(battery.max_discharge_c) * capacity_ah
     per_pack = battery.packs_in_parallel_per_engine
+    params = model.params
     # the cruise at constant power draws most at its end (the pack sags)
-    cruise_end = np.asarray(current_at_power_a(model.params, start + span, power_w, packs),
+    cruise_end = np.asarray(current_at_power_a(params, start + span, power_w, packs),
                             dtype=float)
     peak = np.maximum(launch.peak_current_a, cruise_end) / per_pack
     ok = ~(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9))
-    climb_s = np.nan_to_num(launch.climb_time_s)
-    climb_ah = launch.charge_ah - launch.roll_charge_ah
-    with np.errstate(divide="ignore", invalid="ignore"):
-        for charge, seconds in ((launch.roll_charge_ah, launch.roll_time_s),
-                                (climb_ah, climb_s),
-                                (span, cruise_s)):
-            mean = charge * 3600.0 / seconds / per_pack
-            ok &= ~((seconds >= RATING_SEGMENT_S) & (mean > rating * (1.0 + 1e-9)))
-    return ok
+    shape = np.shape(start)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+
+        def stretch(q0: Array, q1: Array, seconds: Array, power: Array) -> list[Array]:
+            # a constant-power phase from charge q0 to q1 [Ah] in ``seconds``: its times
+            # and charges w after its start and w before its end
+            w = np.minimum(RATING_SEGMENT_S, 0.5 * seconds)
+
+            def mean_current(q: Array, toward: float) -> Array:
+                i = np.asarray(current_at_power_a(params, q, power, packs), dtype=float)
+                mid = q + toward * i * w / 2.0 / SECONDS_PER_HOUR
+                return np.asarray(current_at_power_a(params, mid, power, packs), dtype=float)
+
+            return [w, seconds - w, q0 + mean_current(q0, 1.0) * w / SECONDS_PER_HOUR,
+                    q1 - mean_current(q1, -1.0) * w / SECONDS_PER_HOUR]
+
+        roll_s = np.broadcast_to(launch.roll_time_s, shape)
+        climb_s = np.broadcast_to(np.nan_to_num(launch.climb_time_s), shape)
+        launch_s = roll_s + climb_s
+        c_in, c_out, cq_in, cq_out = stretch(launch.roll_charge_ah, start, climb_s,
+                                             launch.climb_power_w)
+        k_in, k_out, kq_in, kq_out = stretch(start, start + span, cruise_s, power_w)
+        zero = np.zeros(shape)
+        times = np.stack([zero, roll_s, roll_s + c_in, roll_s + c_out, launch_s,
+                          launch_s + k_in, launch_s + k_out, launch_s + cruise_s], axis=-1)
+        charges = np.stack([zero, launch.roll_charge_ah, cq_in, cq_out, start, kq_in, kq_out,
+                            start + span], axis=-1) / per_pack
+        nodes = times.shape[-1]
+        end, _, _ = first_window_beyond(
+            times.reshape(-1, nodes), charges.reshape(-1, 1, nodes),
+            np.broadcast_to(rating, shape).reshape(-1), RATING_SEGMENT_S)
+    return ok & (end == np.inf).reshape(shape)

@@ -71,6 +71,7 @@ from tuflexperf.models.aircraft import (
 from tuflexperf.models.atmosphere import isa_density_kg_m3
 from tuflexperf.models.battery import (
     current_at_power_a,
+    first_window_beyond,
     open_circuit_voltage_v,
 )
 from tuflexperf.models.powertrain import (
@@ -86,7 +87,7 @@ from tuflexperf.models.thrust import (
     windmilling_thrust_n,
 )
 
-RATING_SEGMENT_S = 30.0  # segments this long keep their mean current within the rating
+RATING_SEGMENT_S = 30.0  # any stretch of the flight this long keeps its mean current within it
 BURST_OVER_CONTINUOUS = 2.0  # a LiPo's burst rating, the usual twice the continuous one
 STEPS = 64  # RK4 steps per segment: the states are smooth, 64 steps give ~1e-9 relative
 ROTATION_STEPS = 8  # the rotation at the lift-off speed: constant power
@@ -943,38 +944,41 @@ class MissionModel:
         c_rate = self.battery.max_discharge_c
         return None if c_rate is None else float(c_rate) * float(self.battery.capacity_ah)
 
-    def _beyond_rating(self, rating: float | None, q: np.ndarray, t: np.ndarray,
-                       current: np.ndarray, a: int, b: int, live: list[int]
+    def _beyond_rating(self, rating: float | None, t: np.ndarray, current: np.ndarray,
+                       a: int, b: int, live: list[int], heavy: tuple[float, float, float]
                        ) -> tuple[int, str] | None:
         """Where segment ``[a, b)`` draws a pack beyond its rating, and why (None: within).
 
-        The continuous rating (:meth:`_pack_rating_a`) bounds the mean current of every
-        segment of :data:`RATING_SEGMENT_S` or more; no current may exceed
-        :data:`BURST_OVER_CONTINUOUS` times it (the usual burst rating), whatever its length.
-        A pack asked for 9 C against a 5 C rating 'flew' (outside audit); a take-off a few per
-        cent above the continuous rating for seconds is within the burst. The batch applies
-        the same two rules (analysis.batch_endurance).
+        No current may exceed :data:`BURST_OVER_CONTINUOUS` times the continuous rating
+        (:meth:`_pack_rating_a`; the usual burst rating), and the mean current over any
+        :data:`RATING_SEGMENT_S` or more of the flight, ``heavy`` = (end, start [s], mean
+        [A]) of the earliest such stretch beyond it (:func:`first_window_beyond`), stays
+        within the rating: when that stretch ends in this segment the flight ends there. A
+        pack asked for 9 C against a 5 C rating 'flew' (outside audit); a take-off a few per
+        cent above the continuous rating for seconds is within the burst; a long cruise cut
+        into segments under 30 s each passed when the mean was bounded per segment (outside
+        audit). The batch applies the same two rules (analysis.batch_endurance).
         """
-        if rating is None or not live or b - a < 2:
+        if rating is None or not live or b - a < 1:
             return None
         what = (f"(max_discharge_c {self.battery.max_discharge_c:g} C x "
                 f"{self.battery.capacity_ah:g} Ah): not attainable, beyond the battery")
         per_pack = self.battery.packs_in_parallel_per_engine
         peak = np.max(current[live, a:b], axis=0) / per_pack
         burst = np.flatnonzero(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9))
+        found: list[tuple[int, str]] = []
         if burst.size:
             k = int(burst[0])
-            return k, (f"draws {peak[k]:.1f} A per pack, beyond its burst rating "
-                       f"{BURST_OVER_CONTINUOUS * rating:.1f} A {what}")
-        duration = float(t[b - 1] - t[a])
-        if duration >= RATING_SEGMENT_S:
-            mean = float(np.max(q[live, b - 1] - q[live, a])) / per_pack * SECONDS_PER_HOUR \
-                / duration
-            if mean > rating * (1.0 + 1e-9):
-                return b - 1 - a, (f"draws {mean:.1f} A per pack on average over its "
-                                   f"{duration:.0f} s, beyond its continuous rating "
-                                   f"{rating:.1f} A {what}")
-        return None
+            found.append((k, f"draws {peak[k]:.1f} A per pack, beyond its burst rating "
+                          f"{BURST_OVER_CONTINUOUS * rating:.1f} A {what}"))
+        end, begin, mean = heavy
+        if t[a] - 1e-9 <= end <= t[b - 1] + 1e-9:
+            k = int(np.searchsorted(t[a:b], end - 1e-9))
+            found.append((min(k, b - 1 - a), (
+                f"draws {mean:.1f} A per pack on average over {end - begin:.0f} s "
+                f"({begin:.0f}-{end:.0f} s into the mission), beyond its continuous rating "
+                f"{rating:.1f} A {what}")))
+        return min(found) if found else None
 
     def _result(self, states: np.ndarray, aux: np.ndarray, solved: dict[str, Any] | None,
                 theta: np.ndarray, durations: np.ndarray) -> MissionResult:
@@ -987,6 +991,12 @@ class MissionModel:
         segment_of = np.full(t.size, -1, dtype=int)
         stall_factor = self._stall_factor()
         rating = self._pack_rating_a()
+        heavy = (math.inf, math.nan, math.nan)
+        if rating is not None and t.size > 1:
+            per_pack = self.battery.packs_in_parallel_per_engine
+            # the pack does not see the segments: the rating holds over any 30 s or more
+            heavy = tuple(float(v[0]) for v in first_window_beyond(  # type: ignore[assignment]
+                t[None, :], q[None, :, :] / per_pack, rating, RATING_SEGMENT_S))
         reason = ""
         first_bad, ended_at = None, None
         segments: list[SegmentResult] = []
@@ -1013,7 +1023,7 @@ class MissionModel:
             bad = np.flatnonzero(reached[sl] < 0.5)
             if bad.size:
                 problems.append((int(bad[0]), "needs more than full throttle"))
-            beyond = self._beyond_rating(rating, q, t, current, a, b, live)
+            beyond = self._beyond_rating(rating, t, current, a, b, live, heavy)
             if beyond is not None:
                 problems.append(beyond)
             segment_of[sl] = plan.index

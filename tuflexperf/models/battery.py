@@ -232,6 +232,97 @@ def time_to_cutoff_s(
     return float(discharge_time_s(p, power_w, start_ah, end, packs))
 
 
+# --- the pack's continuous rating over a flight ----------------------------------------
+def _rows_interp(x: np.ndarray, t: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Piecewise-linear ``y`` (rows, packs, nodes) over ``t`` (rows, nodes) at ``x`` (rows, m)."""
+    n = t.shape[-1]
+    # the node at or before each x, per row (t rises along each row)
+    right = np.clip(np.sum(t[:, None, :] <= x[:, :, None], axis=-1), 1, n - 1)
+    left = right - 1
+    t0, t1 = (np.take_along_axis(t, k, axis=-1) for k in (left, right))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = np.where(t1 > t0, (x - t0) / (t1 - t0), 0.0)[:, None, :]
+    y0, y1 = (np.take_along_axis(y, np.broadcast_to(k[:, None, :], y.shape[:2] + k.shape[-1:]),
+                                 axis=-1) for k in (left, right))
+    return y0 + w * (y1 - y0)
+
+
+def first_window_beyond(
+    time_s: np.ndarray, charge_ah: np.ndarray, limit_a: np.ndarray | float, window_s: float,
+    block: int = 256,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The earliest-ending stretch of ``window_s`` or longer whose mean current exceeds a limit.
+
+    The pack does not see where a mission's segments begin and end: a continuous rating
+    holds over any stretch of the flight (eight 27 s cruises at 1.85 x the rating passed
+    when only each segment's mean was bounded; outside audit).
+
+    Parameters
+    ----------
+    time_s : ndarray
+        Node times [s], ``(rows, nodes)``, non-decreasing along each row.
+    charge_ah : ndarray
+        Charge drawn from each pack [Ah] at the nodes, ``(rows, packs, nodes)``; linear in
+        time between nodes (the current constant there).
+    limit_a : float or ndarray
+        The current [A] no stretch may exceed on average, per row.
+    window_s : float
+        The shortest stretch [s] the limit applies to.
+    block : int
+        Start nodes handled at once (bounds the memory to ``rows x block x nodes``).
+
+    Returns
+    -------
+    end_s, start_s, mean_a : ndarray
+        Per row: the end and start [s] of the earliest-ending stretch beyond the limit and its
+        mean current [A] (the largest pack's); ``end_s`` is +inf where none exceeds it.
+
+    Notes
+    -----
+    With the charge piecewise linear in time the mean over ``[s, e]`` is a ratio of
+    linear functions on each pair of node intervals, largest on their edges: a stretch
+    from node to node, or one of exactly ``window_s`` from or to a node. Every such
+    stretch is a candidate (all, not only the heaviest, so the earliest end is found).
+    """
+    t = np.asarray(time_s, dtype=float)
+    q = np.asarray(charge_ah, dtype=float)
+    rows, nodes = t.shape
+    limit = np.broadcast_to(np.asarray(limit_a, dtype=float), (rows,))
+    end = np.full(rows, np.inf)
+    start, mean = np.full(rows, np.nan), np.full(rows, np.nan)
+
+    def take(s: np.ndarray, e: np.ndarray, qs: np.ndarray, qe: np.ndarray) -> None:
+        # s, e (rows, m); qs, qe (rows, packs, m): keep each row's earliest violating end
+        with np.errstate(invalid="ignore", divide="ignore"):
+            drawn = np.max(qe - qs, axis=1) * SECONDS_PER_HOUR / (e - s)
+        over = (e - s >= window_s * (1.0 - 1e-12)) & (drawn > limit[:, None] * (1.0 + 1e-9))
+        e_over = np.where(over, e, np.inf)
+        k = np.argmin(e_over, axis=1)
+        at = np.arange(rows)
+        better = e_over[at, k] < end
+        end[better] = e_over[at, k][better]
+        start[better] = s[at, k][better]
+        mean[better] = drawn[at, k][better]
+
+    if nodes < 2:
+        return end, start, mean
+    first, last = t[:, :1], t[:, -1:]
+    # exactly window_s from each node, and to each node (inside the flight)
+    ahead = np.minimum(t + window_s, last)
+    take(t, ahead, q, _rows_interp(ahead, t, q))
+    behind = np.maximum(t - window_s, first)
+    take(behind, t, _rows_interp(behind, t, q), q)
+    # node to node
+    for i0 in range(0, nodes, block):
+        i1 = min(i0 + block, nodes)
+        s = np.broadcast_to(t[:, i0:i1, None], (rows, i1 - i0, nodes)).reshape(rows, -1)
+        e = np.broadcast_to(t[:, None, :], (rows, i1 - i0, nodes)).reshape(rows, -1)
+        qs = np.broadcast_to(q[:, :, i0:i1, None], q.shape[:2] + (i1 - i0, nodes))
+        qe = np.broadcast_to(q[:, :, None, :], q.shape[:2] + (i1 - i0, nodes))
+        take(s, e, qs.reshape(rows, q.shape[1], -1), qe.reshape(rows, q.shape[1], -1))
+    return end, start, mean
+
+
 # --- electrical power of a fan --------------------------------------------------------------
 @dataclass(frozen=True)
 class FanPowerModel:
