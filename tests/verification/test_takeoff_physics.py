@@ -369,3 +369,18 @@ def test_an_arc_below_the_envelope_stall_margin_is_said() -> None:
                                     "requirements.envelope.min_airspeed_m_s": 19.0})
         notes = " ".join(solve_takeoff(single).warnings)
         assert ("below the envelope's" in notes) == said, (margin, notes)
+
+
+def test_a_lift_off_that_cannot_climb_away_is_said() -> None:
+    """With k = 0.3 the shipped aircraft lifts off in 60 m but its full-throttle climb
+    gradient at 1.15 x stall is negative: the ground roll passed and nothing said that it
+    cannot fly away (outside audit)."""
+    from tuflexperf.io.dotted import with_values
+
+    case = load_case(None)
+    assert not any("cannot climb away" in w for w in solve_takeoff(case).warnings)
+    poor = with_values(case, {"aircraft.k": 0.3})
+    result = solve_takeoff(poor)
+    assert result.climb_gradient < 0
+    assert any("cannot climb away" in w and f"{result.climb_gradient:.3f}" in w
+               for w in result.warnings)

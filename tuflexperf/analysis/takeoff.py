@@ -387,6 +387,13 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
             f" m/s (1.15 x stall, the take-off's convention), below the envelope's "
             f"{margin:g} x stall = {margin * stall:.1f} m/s that bounds level flight and climb"
         )
+    if not air.gradient > 0.0:
+        # the roll's distance is reached, but nothing flies away from it (outside audit: a
+        # poor polar lifted off below its least level-flight speed and said nothing)
+        warnings.append(
+            f"after lift-off the full-throttle climb gradient at {air.speed_m_s:.1f} m/s "
+            f"(1.15 x stall) is {air.gradient:.3f}: the aircraft cannot climb away"
+        )
     if to.cl_ground > 0.0:
         # ground lift equal to the weight before lift-off: the wheels carry nothing from there
         unloaded = math.sqrt(2.0 * aircraft.weight_n / (rho * aircraft.wing_area_m2 * to.cl_ground))
