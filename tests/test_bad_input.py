@@ -92,6 +92,15 @@ CASES = [
         "engines[1].coefficients.p02",
     ),
     ("propulsion", ["delay_s"], -0.1, "propulsion.yaml", "delay_s"),
+    # names go into comments, CSV headers and XML: a newline in one injected YAML keys into
+    # fit's output, an escape made the export's XML malformed, a comma split the mission's
+    # CSV columns (outside audit)
+    ("aircraft", ["name"], "TU-Flex\ncapacity_ah: 99", "aircraft.yaml", "name"),
+    ("propulsion", ["engines", 0, "name"], "E\x1b[31m1", "propulsion.yaml",
+     "engines[0].name"),
+    ("propulsion", ["engines", 0, "name"], "E\x001", "propulsion.yaml", "engines[0].name"),
+    ("propulsion", ["engines", 1, "name"], "EDF,2", "propulsion.yaml", "engines[1].name"),
+    ("propulsion", ["name"], "x" * 201, "propulsion.yaml", "name"),
     ("requirements", ["takeof"], {"max_ground_roll_m": 60}, "case.yaml", "requirements.takeof"),
     ("requirements", ["envelope", "max_airspeed_m_s"], 10, "case.yaml", "envelope"),
     ("requirements", ["oei", "max_throttle"], 1.5, "case.yaml", "requirements.oei.max_throttle"),

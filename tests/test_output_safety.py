@@ -514,3 +514,66 @@ def test_seal_intact_needs_the_whole_text_as_sealed() -> None:
     for spoiled in (text[:-1], text.replace("a: 1", "a: 2"), text + "\n", "a: 1\n",
                     text.replace(files.SEAL, files.SEAL + " ")):
         assert not files.seal_intact(spoiled.encode()), spoiled
+
+
+def test_a_file_put_into_the_earlier_output_during_a_run_is_not_deleted(tmp_path) -> None:
+    """The folder was checked when the run began and swapped out at its end: a note the
+    user saved into the earlier report meanwhile was deleted with it (outside audit)."""
+    out = tmp_path / "out"
+    with files.staged_directory(out, "probe") as staging:
+        (staging / "page.txt").write_text("first\n")
+    for late in ("notes.txt", "page.txt"):
+        before = _tree(out)
+        with pytest.raises(InputError, match=late.replace(".", r"\.")):
+            with files.staged_directory(out, "probe") as staging:
+                (staging / "page.txt").write_text("second\n")
+                (out / late).write_text("the user's, written while the run worked\n")
+        assert (out / late).read_text() == "the user's, written while the run worked\n"
+        assert set(_tree(out)) == set(before) | {late}
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no staging left
+        (out / late).unlink() if late == "notes.txt" else (out / late).write_text("first\n")
+    # a folder made where nothing was when the run began is not replaced either
+    fresh = tmp_path / "fresh"
+    with pytest.raises(InputError, match="did not write"):
+        with files.staged_directory(fresh, "probe") as staging:
+            (staging / "page.txt").write_text("new\n")
+            fresh.mkdir()
+            (fresh / "mine.txt").write_text("the user's\n")
+    assert (fresh / "mine.txt").read_text() == "the user's\n"
+
+
+def test_a_replaced_output_keeps_the_mode_the_user_gave_it(tmp_path) -> None:
+    """Replacing a 0700 folder (or an earlier output the user had made private) left it
+    0755, its files readable by all (outside audit); a 0600 file stays 0600 too."""
+    out = tmp_path / "private"
+    out.mkdir(mode=0o700)
+    for _ in range(2):
+        with files.staged_directory(out, "probe") as staging:
+            (staging / "page.txt").write_text("x\n")
+        assert (out.stat().st_mode & 0o777) == 0o700
+    single = tmp_path / "table.csv"
+    files.atomic_write_text(single, "a\n")
+    single.chmod(0o600)
+    files.atomic_write_text(single, "b\n")
+    assert (single.stat().st_mode & 0o777) == 0o600 and single.read_text() == "b\n"
+
+
+def test_a_fitted_battery_file_and_a_propulsion_file_never_replace_each_other(
+        tmp_path) -> None:
+    """Both begin 'written by `tuflexperf fit`': a campaign's fit replaced a fitted battery
+    file (its runs and fit block) with a propulsion model, exit 0 (outside audit)."""
+    from tests.conftest import copy_shipped_case
+    from tests.test_fit_cli import write_table
+
+    copy_shipped_case(tmp_path)
+    folder = tmp_path / "data" / "tuflex"
+    table = write_table(tmp_path / "table.csv")
+    assert _run(folder, "fit", "battery.yaml", "--out", "b.yaml").returncode == 0
+    assert _run(folder, "fit", str(table), "--out", "p.yaml").returncode == 0
+    written = {n: (folder / n).read_bytes() for n in ("b.yaml", "p.yaml")}
+    for args, found in (((str(table), "--out", "b.yaml"), "battery"),
+                        (("battery.yaml", "--out", "p.yaml"), "propulsion")):
+        out = _run(folder, "fit", *args)
+        assert out.returncode == 2, out.stderr
+        assert f"is a {found} file written by `tuflexperf fit`" in out.stderr
+    assert {n: (folder / n).read_bytes() for n in written} == written

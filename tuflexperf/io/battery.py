@@ -36,7 +36,7 @@ from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.files import same_file, why_not_a_file
-from tuflexperf.io.yamlio import FileName, StrictModel, load_model
+from tuflexperf.io.yamlio import FileName, Name, StrictModel, load_model
 
 Positive = Annotated[float, Field(gt=0)]
 
@@ -112,7 +112,7 @@ MAX_CAPACITY_AH = 1000.0
 
 
 class BatterySchema(StrictModel):
-    name: str
+    name: Name
     cells_in_series: Annotated[int, Field(ge=1, le=100)]
     # no aircraft pack holds more (a what-if of 1e308 Ah "flew" 4e20 min: outside audit)
     capacity_ah: Annotated[float, Field(gt=0, le=MAX_CAPACITY_AH)]

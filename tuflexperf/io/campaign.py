@@ -35,7 +35,7 @@ from pydantic import Field, model_validator
 from tuflexperf.errors import InputError
 from tuflexperf.io.files import same_file, why_not_a_file
 from tuflexperf.io.vendor import VendorSettings
-from tuflexperf.io.yamlio import FileName, StrictModel, load_model
+from tuflexperf.io.yamlio import FileName, Name, StrictModel, load_model
 
 Positive = Annotated[float, Field(gt=0)]
 RunKind = Literal["throttle_steps", "sine_sweep", "drag_sweep", "endurance"]
@@ -91,7 +91,7 @@ class FilterSettings(StrictModel):
 
 
 class CampaignSchema(ThrustStandKeys):
-    name: Annotated[str, Field(min_length=1)]
+    name: Annotated[Name, Field(min_length=1)]
     fan_area_m2: Positive
     tunnel_area_m2: Positive
     # a tunnel's air: from a hot day at altitude to a cold pressurised one (0.01 scaled

@@ -11,7 +11,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.yamlio import FileName, StrictModel, count_values, load_model
+from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, count_values, load_model
 from tuflexperf.models._math import Vectorizable, is_symbolic
 from tuflexperf.models.aircraft import (
     DEFAULT_LIFTOFF_SPEED_FACTOR,
@@ -70,7 +70,7 @@ MAX_WING_AREA_M2 = 1.0e4  # ten times an A380's: a 1e300 m^2 wing lifted off at 
 
 
 class AircraftSchema(StrictModel):
-    name: str
+    name: Name
     mass_kg: Annotated[float, Field(gt=0, le=MAX_MASS_KG)]
     wing_area_m2: Annotated[float, Field(gt=0, le=MAX_WING_AREA_M2)]
     cd0: Positive
@@ -138,7 +138,7 @@ class PowerSurfaceSchema(StrictModel):
 
 
 class EngineSchema(StrictModel):
-    name: Annotated[str, Field(min_length=1)]
+    name: EngineName
     coefficients: Poly22Schema
     r2: float | None = None
     rmse_n: NonNegative | None = None
@@ -175,7 +175,7 @@ MAX_SOURCE_VALUES = 1_000_000
 
 
 class PropulsionSchema(StrictModel):
-    name: str
+    name: Name
     model: Literal["poly22"]
     tested_airspeed_m_s: Annotated[list[float], Field(min_length=2, max_length=2)]
     # a dead time or lag beyond MAX_DELAY_S is no fan's (1e9 s was taken; outside audit)
@@ -379,7 +379,7 @@ class UncertaintySchema(StrictModel):
 
 
 class CaseSchema(StrictModel):
-    name: str
+    name: Name
     aircraft: FileName
     propulsion: FileName
     battery: FileName | None = None

@@ -15,6 +15,7 @@ import hashlib
 import json
 import os
 import signal
+import stat
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -181,7 +182,11 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
                 handle.write(data.encode("utf-8") if isinstance(data, str) else data)
                 handle.flush()
                 os.fsync(handle.fileno())
-            os.chmod(tmp, mode)
+            try:  # an earlier file keeps the mode the user gave it (a 0600 file stays so)
+                keep = stat.S_IMODE(current.stat().st_mode) if current.is_file() else mode
+            except OSError:
+                keep = mode
+            os.chmod(tmp, keep)
         with interrupts_held():
             raise_if_interrupted()  # one a library dropped earlier: the run was interrupted
             kept: list[tuple[Path, Path | None]] = []  # target, its earlier file's second name
@@ -343,7 +348,17 @@ def written_by(head: bytes) -> str | None:
     return "sweep" if _is_sweep_grid(columns) else None
 
 
-def refuse_foreign_files(outputs: dict[str, Path], command: str) -> None:
+FIT_PROPULSION_HEADER = "# Written by `tuflexperf fit` (poly22"  # the propulsion file's
+
+
+def fit_yaml_kind(head: bytes) -> str:
+    """Which YAML ``fit`` wrote, by its first line: ``"propulsion"`` or ``"battery"``."""
+    first = head.split(b"\n", 1)[0]
+    return "propulsion" if first.startswith(FIT_PROPULSION_HEADER.encode()) else "battery"
+
+
+def refuse_foreign_files(outputs: dict[str, Path], command: str,
+                         yaml_kind: str | None = None) -> None:
     """Refuse (exit 2) to replace an existing file that ``command`` did not write (SPEC 5:
     a fitted model is not a mission's to overwrite, nor a report page a sweep's)."""
     for flag, out in outputs.items():
@@ -363,6 +378,13 @@ def refuse_foreign_files(outputs: dict[str, Path], command: str) -> None:
             head = None
         writer = written_by(head) if head is not None else None
         if writer == "fit" and head is not None and head.startswith(b"#"):
+            found = fit_yaml_kind(head)
+            if yaml_kind is not None and found != yaml_kind:
+                # a fitted battery file (its runs, its fit block) replaced by a propulsion
+                # model, or the reverse, with exit 0 (outside audit)
+                raise InputError(
+                    f"{flag}: {out} is a {found} file written by `tuflexperf fit`, not a "
+                    f"{yaml_kind} file; refusing to replace it, choose another path")
             _refuse_unsealed(flag, out, target)
         if writer is None:
             raise InputError(
@@ -392,7 +414,8 @@ def _refuse_unsealed(flag: str, shown: Path, target: Path) -> None:
     )
 
 
-def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str) -> None:
+def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str,
+                  yaml_kind: str | None = None) -> None:
     """Refuse an output that is, or would overwrite, one of the command's inputs, or an
     existing file that is not an earlier output of ``command`` (exit 2).
 
@@ -415,7 +438,7 @@ def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str
                 )
         if target.is_dir():
             raise InputError(f"{flag}: {out} is a directory, expected a file")
-    refuse_foreign_files(outputs, command)
+    refuse_foreign_files(outputs, command, yaml_kind)
 
 
 def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> None:
@@ -448,39 +471,45 @@ def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> No
     if not os.access(existing, os.W_OK | os.X_OK):
         raise InputError(f"--out: cannot write in {existing}")
     if out.is_dir():
-        try:
-            entries = _relative_files(out)
-        except OSError as exc:
-            raise InputError(f"--out: cannot read {shown}: {exc.strerror}") from None
-        if not entries:
-            return
-        marker = _read_marker_data(out)
-        if marker.get("command") != command:
-            raise InputError(
-                f"--out: {shown} is a non-empty folder that an earlier `tuflexperf {command}` did "
-                "not write; refusing to replace it, choose a new or empty folder"
-            )
-        written, hashes = marker.get("files"), marker.get("sha256")
-        if not (isinstance(written, list) and all(isinstance(n, str) for n in written)
-                and isinstance(hashes, dict)
-                and all(isinstance(k, str) and isinstance(v, str) for k, v in hashes.items())):
-            # an earlier version's marker (names only) or one edited by hand: which files the
-            # user changed cannot be told (a marker without its hashes let edits go; audit)
-            raise InputError(
-                f"--out: {shown} was written by `tuflexperf {command}` without the files' "
-                "sha256 (an earlier version, or its marker edited): whether you changed them "
-                "cannot be told; refusing to replace it, remove it or choose another folder"
-            )
-        # each file as the command wrote it: an edit since is the user's work (an edited
-        # tfp_thrust.c, or a folder of notes where a written file was, went with the folder;
-        # outside audit)
-        _refuse_held(shown, [name for name in entries if name in hashes
-                             and _sha256_or_none(out / name) != hashes[name]],
-                     f"changed since `tuflexperf {command}` wrote it")
-        listed = set(written)
-        _refuse_held(shown, [name for name in entries if name != MARKER and name not in hashes
-                             and name not in listed],
-                     f"which the earlier `tuflexperf {command}` did not write")
+        _refuse_unless_earlier_output(out, shown, command)
+
+
+def _refuse_unless_earlier_output(out: Path, shown: Path, command: str) -> None:
+    """``out`` (a folder) is empty, or holds exactly what an earlier ``command`` wrote there,
+    each file as written (its marker's sha256); else bad input naming what it holds."""
+    try:
+        entries = _relative_files(out)
+    except OSError as exc:
+        raise InputError(f"--out: cannot read {shown}: {exc.strerror}") from None
+    if not entries:
+        return
+    marker = _read_marker_data(out)
+    if marker.get("command") != command:
+        raise InputError(
+            f"--out: {shown} is a non-empty folder that an earlier `tuflexperf {command}` did "
+            "not write; refusing to replace it, choose a new or empty folder"
+        )
+    written, hashes = marker.get("files"), marker.get("sha256")
+    if not (isinstance(written, list) and all(isinstance(n, str) for n in written)
+            and isinstance(hashes, dict)
+            and all(isinstance(k, str) and isinstance(v, str) for k, v in hashes.items())):
+        # an earlier version's marker (names only) or one edited by hand: which files the
+        # user changed cannot be told (a marker without its hashes let edits go; audit)
+        raise InputError(
+            f"--out: {shown} was written by `tuflexperf {command}` without the files' "
+            "sha256 (an earlier version, or its marker edited): whether you changed them "
+            "cannot be told; refusing to replace it, remove it or choose another folder"
+        )
+    # each file as the command wrote it: an edit since is the user's work (an edited
+    # tfp_thrust.c, or a folder of notes where a written file was, went with the folder;
+    # outside audit)
+    _refuse_held(shown, [name for name in entries if name in hashes
+                         and _sha256_or_none(out / name) != hashes[name]],
+                 f"changed since `tuflexperf {command}` wrote it")
+    listed = set(written)
+    _refuse_held(shown, [name for name in entries if name != MARKER and name not in hashes
+                         and name not in listed],
+                 f"which the earlier `tuflexperf {command}` did not write")
 
 
 def _refuse_held(folder: Path, names: list[str], why: str) -> None:
@@ -711,7 +740,7 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
     import shutil
 
     check_output_dir(out, command, inputs)
-    out = output_path(out)
+    shown, out = Path(out), output_path(out)
     try:
         created = _make_folders(out.parent)
     except OSError as exc:
@@ -740,9 +769,21 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
         # a hidden folder; it is raised when they are done
         with interrupts_held():
             raise_if_interrupted()  # one a library dropped earlier: the run was interrupted
-            if out.exists():
+            if out.exists() or out.is_symlink():
                 old = out.parent / f".{_short(out.name)}.old-{secrets.token_hex(6)}"
                 os.replace(out, old)
+                # checked again where nothing reaches it by its name: a note the user put
+                # into the earlier output while this run worked was deleted with it (audit)
+                try:
+                    if old.is_symlink() or not old.is_dir():
+                        raise InputError(f"--out: {shown} became a file or a link while "
+                                         "this run worked; refusing to replace it")
+                    _refuse_unless_earlier_output(old, shown, command)
+                except BaseException:
+                    os.replace(old, out)
+                    raise
+                with contextlib.suppress(OSError):  # the folder's mode stays the user's
+                    os.chmod(staging, stat.S_IMODE(old.stat().st_mode))
                 os.replace(staging, out)
                 if _signals_received:
                     # interrupted before the swap was done: the earlier output stays (SPEC 5);

@@ -14,7 +14,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from tuflexperf.io.yamlio import StrictModel, load_model
+from tuflexperf.io.yamlio import Name, StrictModel, load_model
 from tuflexperf.models.aircraft import MAX_AIRSPEED_M_S
 
 # upper bounds keep absurd numbers (1e300) out of the integrator as bad input (a cut-off inside
@@ -96,7 +96,7 @@ class SegmentSchema(StrictModel):
 class MissionFileSchema(StrictModel):
     """A mission: its name, the segments and optionally the segment to solve for."""
 
-    name: str
+    name: Name
     segments: Annotated[list[SegmentSchema], Field(min_length=1, max_length=200)]
     solve_for: str | None = None
 

@@ -36,7 +36,7 @@ from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.runs import ThrustTable
-from tuflexperf.io.yamlio import FileName, StrictModel, load_model
+from tuflexperf.io.yamlio import FileName, Name, StrictModel, load_model
 
 MPH_M_S = 0.44704  # exact (1609.344 m / 3600 s)
 LBF_N = 0.45359237 * 9.80665  # exact
@@ -60,7 +60,7 @@ class TableEntry(StrictModel):
 
 
 class PropellerTablesSchema(StrictModel):
-    name: Annotated[str, Field(min_length=1)]
+    name: Annotated[Name, Field(min_length=1)]
     air_density_kg_m3: Positive = ISA_SEA_LEVEL_DENSITY_KG_M3
     max_rpm: dict[str, Positive] = {}
     tables: Annotated[list[TableEntry], Field(min_length=1)]

@@ -25,6 +25,39 @@ def _no_nul(name: str) -> str:
 FileName = Annotated[str, Field(min_length=1), AfterValidator(_no_nul)]
 """A file named in a YAML file (relative to that file)."""
 
+MAX_NAME_CHARS = 200
+
+
+def _one_printable_line(name: str) -> str:
+    import unicodedata
+
+    # names go into comments, CSV headers, XML and C sources: a newline in a battery's
+    # name injected YAML keys into fit's output, an escape in an engine's made the JSBSim
+    # and FMU XML malformed (outside audit)
+    if any(unicodedata.category(c) in ("Cc", "Zl", "Zp") for c in name):
+        raise ValueError("a name is one line of printable characters (no newline, tab or "
+                         "control character)")
+    if len(name) > MAX_NAME_CHARS:
+        raise ValueError(f"a name is at most {MAX_NAME_CHARS} characters, got {len(name)}")
+    return name
+
+
+Name = Annotated[str, AfterValidator(_one_printable_line)]
+"""The name of an aircraft, a fan, a battery, a case, a campaign or a mission."""
+
+
+def _column_safe(name: str) -> str:
+    # an engine's name heads columns of the mission's CSV (current_a_<engine>, ...): a comma
+    # split them, and the file was then no longer recognised as the mission's own output
+    if any(c in name for c in ',"'):
+        raise ValueError("an engine's name heads CSV columns: no comma or double quote")
+    return name
+
+
+EngineName = Annotated[str, Field(min_length=1), AfterValidator(_one_printable_line),
+                       AfterValidator(_column_safe)]
+"""The name of an engine (fan): one printable line that can head a CSV column."""
+
 
 class StrictModel(BaseModel):
     """Base schema: unknown keys, wrong types, NaN and infinities are all errors."""

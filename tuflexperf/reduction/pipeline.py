@@ -1240,8 +1240,10 @@ def _propulsion_text(
                 entry["power"]["rmse_w"] = power.rmse_n
         document["engines"].append(entry)
     document["source"] = source
+    from tuflexperf.io.files import FIT_PROPULSION_HEADER
+
     header = (
-        "# Written by `tuflexperf fit` (poly22 by ordinary least squares, paper section 4).\n"
+        f"{FIT_PROPULSION_HEADER} by ordinary least squares, paper section 4).\n"
         "# T = p00 + p10 x + p01 v + p20 x^2 + p11 x v + p02 v^2, x throttle fraction, v m/s.\n"
     )
     # libyaml's emitter and parser where PyYAML has them (same text, ~10x faster)
@@ -1398,8 +1400,9 @@ def run_fit(
     from tuflexperf.io.proptables import is_propeller_manifest
 
     inputs = _fit_inputs(input_path)
-    guard_outputs({"--out": out}, inputs, "fit")
-    if is_battery_file(input_path):
+    battery = is_battery_file(input_path)
+    guard_outputs({"--out": out}, inputs, "fit", "battery" if battery else "propulsion")
+    if battery:
         return _fit_battery(input_path, out, table, glauert)
 
     if is_thrust_table(input_path) or is_propeller_manifest(input_path):
@@ -1416,7 +1419,7 @@ def run_fit(
         _check_output(table, "--table")
         if table.resolve() == out.resolve():
             raise InputError("--table: must differ from --out")
-        guard_outputs({"--out": out, "--table": table}, inputs, "fit")
+        guard_outputs({"--out": out, "--table": table}, inputs, "fit", "propulsion")
         if result.table_text is not None:
             files[table] = result.table_text
     write_files(files)
