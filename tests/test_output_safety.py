@@ -577,3 +577,21 @@ def test_a_fitted_battery_file_and_a_propulsion_file_never_replace_each_other(
         assert out.returncode == 2, out.stderr
         assert f"is a {found} file written by `tuflexperf fit`" in out.stderr
     assert {n: (folder / n).read_bytes() for n in written} == written
+
+
+def test_an_output_named_with_bytes_that_are_no_utf8_is_written(tmp_path) -> None:
+    """Every writer raised UnicodeEncodeError on such a name (outside audit); CasADi's own
+    save got '' for it."""
+    mission = next((ROOT / "data/tuflex/missions").glob("*.yaml"))
+    csv = os.fsdecode(b"h\xfe.csv")
+    def run(*args: str) -> subprocess.CompletedProcess[bytes]:  # it prints the name's bytes
+        return subprocess.run([*TUFLEXPERF, *args], cwd=tmp_path, capture_output=True,
+                              timeout=300)
+
+    for _ in range(2):  # written, then replaced as its own
+        done = run("mission", str(mission), "--csv", csv)
+        assert done.returncode == 0, done.stderr
+    folder = os.fsdecode(b"e\xfe")
+    done = run("export", "--out", folder, "--format", "casadi,json")
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / folder / "tfp_thrust.casadi").stat().st_size > 0

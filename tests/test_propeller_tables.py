@@ -158,3 +158,15 @@ def test_bad_propeller_manifests(tmp_path: Path, change: dict, message: str) -> 
         read_propeller_tables(manifest)
     result = runner.invoke(app, ["fit", str(manifest), "--out", str(tmp_path / "o.yaml")])
     assert result.exit_code == 2 and message.split()[0] in result.stderr
+
+
+@pytest.mark.parametrize("rpm", [".", "0", "1.2.3", "-5", "nan", ""])
+def test_an_rpm_line_that_is_no_speed_is_bad_input(tmp_path: Path, rpm: str) -> None:
+    """'PROP RPM = .' gave a ValueError traceback and '= 0' a ZeroDivisionError (outside
+    audit)."""
+    from tuflexperf.errors import InputError
+
+    path = tmp_path / "PER3_10x7E.dat"
+    path.write_text(APC_10X7E.replace("PROP RPM =       2000", f"PROP RPM = {rpm}"))
+    with pytest.raises(InputError, match="is no speed"):
+        read_apc_per3(path)

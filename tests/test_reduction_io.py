@@ -251,3 +251,33 @@ def test_a_repeated_column_is_seen_however_the_header_is_written(tmp_path: Path,
                     + "\n".join(f"{row},{extra}" for row in lines[1:]) + "\n")
     with pytest.raises(InputError, match="appears more than once"):
         read_run(path)
+
+
+def test_a_compressed_run_that_unpacks_beyond_the_cap_is_refused(tmp_path, monkeypatch) -> None:
+    """The 2 GiB cap held for the .gz file only: a 9 MB bomb unpacked to 6 GB of text and
+    exhausted the memory (outside audit). Here the cap is lowered so the bomb stays small."""
+    import gzip
+
+    from tuflexperf.errors import InputError
+    from tuflexperf.io import files
+    from tuflexperf.io.runs import read_run
+
+    path = tmp_path / "bomb.csv.gz"
+    with gzip.open(path, "wb") as handle:
+        handle.write(b"time_s,throttle,airspeed_m_s,force_n\n")
+        handle.write(b"".join(b"%d,1,1,1\n" % i for i in range(200_000)))
+    assert read_run(path).n_samples == 200_000  # within the cap: read as before
+    monkeypatch.setattr(files, "MAX_RUN_BYTES", 1 << 20)
+    with pytest.raises(InputError, match="unpacks to more than"):
+        read_run(path)
+
+
+def test_a_semicolon_separated_run_is_said_as_such(tmp_path) -> None:
+    """It said "missing column 'time_s' (found: none)" (outside audit)."""
+    from tuflexperf.errors import InputError
+    from tuflexperf.io.runs import read_run
+
+    path = tmp_path / "run.csv"
+    path.write_text("time_s;throttle;airspeed_m_s;force_n\n0;0;0;0\n0,1;0;0;0\n")
+    with pytest.raises(InputError, match="separated by ';'"):
+        read_run(path)

@@ -76,6 +76,18 @@ def parse_formats(text: str) -> tuple[str, ...]:
     return tuple(f for f in FORMATS if f in requested)
 
 
+def _save_function(function: Any, path: Path) -> None:
+    """``function.save`` to ``path``, by way of a plain temporary name: CasADi opens the file
+    itself, and a path of bytes that are no UTF-8 reached it as '' (a traceback; outside
+    audit)."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as scratch:
+        plain = Path(scratch) / "function.casadi"
+        function.save(str(plain))
+        path.write_bytes(plain.read_bytes())
+
+
 def _write_format(model: ExportModel, fmt: str, directory: Path) -> None:
     """Write one format's files into ``directory``."""
     if fmt == "c":
@@ -86,10 +98,11 @@ def _write_format(model: ExportModel, fmt: str, directory: Path) -> None:
         (directory / source).write_text(source_text(model), encoding="ascii")
     elif fmt == "casadi":
         thrust_file, inverse_file, step_file = FILES["casadi"]
-        thrust_function(model.propulsion).save(str(directory / thrust_file))
-        inverse_function(model.propulsion).save(str(directory / inverse_file))
         step = thrust_step_function(model.propulsion, STEP_SAMPLE_TIME_S)
-        step.save(str(directory / step_file))
+        for function, name in ((thrust_function(model.propulsion), thrust_file),
+                               (inverse_function(model.propulsion), inverse_file),
+                               (step, step_file)):
+            _save_function(function, directory / name)
     elif fmt == "json":
         text = json.dumps(model_description(model), indent=2, allow_nan=False) + "\n"
         (directory / FILES["json"][0]).write_text(text, encoding="utf-8")

@@ -129,7 +129,9 @@ def _short(name: str) -> str:
     """An output's name as its hidden helpers' names begin with: cut so that they stay within
     the 255 bytes a name may have (an output named with 240 characters was written once,
     then never replaced: its ``.old-`` name was too long; outside re-audit)."""
-    return name.encode("utf-8")[:200].decode("utf-8", errors="ignore")
+    # as the file system has it: a name of bytes that are no UTF-8 (surrogate escapes)
+    # made every writer raise (outside audit); a character cut in two stays an escape
+    return os.fsdecode(os.fsencode(name)[:200])
 
 
 def _make_folders(folder: Path) -> list[Path]:

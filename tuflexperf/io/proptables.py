@@ -42,7 +42,7 @@ MPH_M_S = 0.44704  # exact (1609.344 m / 3600 s)
 LBF_N = 0.45359237 * 9.80665  # exact
 ISA_SEA_LEVEL_DENSITY_KG_M3 = 1.225
 Positive = Annotated[float, Field(gt=0)]
-_RPM = re.compile(r"PROP\s+RPM\s*=\s*([0-9.]+)", re.IGNORECASE)
+_RPM = re.compile(r"PROP\s+RPM\s*=\s*(\S*)", re.IGNORECASE)
 
 
 class TableEntry(StrictModel):
@@ -128,7 +128,15 @@ def read_apc_per3(path: Path) -> list[tuple[float, np.ndarray]]:
     for line in _lines(path):
         found = _RPM.search(line)
         if found:
-            blocks.append((float(found.group(1)), []))
+            try:
+                rpm = float(found.group(1))
+            except ValueError:
+                rpm = math.nan
+            # 'PROP RPM = .' gave a traceback, '= 0' a division by zero (outside audit)
+            if not (math.isfinite(rpm) and rpm > 0):
+                raise InputError(f"{path}: 'PROP RPM = {found.group(1)}' is no speed (a "
+                                 "positive number of rpm)")
+            blocks.append((rpm, []))
             continue
         values = _numbers(line)
         if not blocks or values is None or len(values) < 8:

@@ -22,6 +22,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -95,17 +96,80 @@ def _suffix(path: Path) -> str:
     return path.suffix.lower()
 
 
+class _TooLarge(Exception):
+    """A compressed run that unpacks to more than the run size cap."""
+
+
+class _BoundedReader:
+    """A gzip stream that stops at ``limit`` unpacked bytes (a 9 MB bomb unpacked to 6 GB
+    of text and exhausted the memory; outside audit): the cap of a plain run file holds for
+    what the compressed one holds."""
+
+    def __init__(self, path: Path, limit: int) -> None:
+        import gzip
+
+        self._stream = gzip.open(path, "rb")
+        self._left = limit
+
+    def read(self, size: int = -1) -> bytes:
+        data = self._stream.read(size if size is not None and size >= 0 else self._left + 1)
+        self._left -= len(data)
+        if self._left < 0:
+            raise _TooLarge
+        return data
+
+    def __iter__(self) -> Any:  # pandas asks whether it may iterate
+        raise io.UnsupportedOperation
+
+    def close(self) -> None:
+        self._stream.close()
+
+
+def _first_line(path: Path) -> str:
+    """The first line of a (possibly gzipped) text file, at most 64 KiB of it ('' if none)."""
+    import gzip
+
+    try:
+        opener: Any = gzip.open if path.name.lower().endswith(".gz") else open
+        with opener(path, "rb") as handle:
+            return handle.readline(1 << 16).decode("utf-8", errors="replace")
+    except (OSError, EOFError):
+        return ""
+
+
+def _refuse_semicolons(path: Path, semicolons: bool) -> None:
+    # a continental-European export (and its decimal commas): it said "missing column
+    # 'time_s' (found: none)" or a tokenizer's error (outside audit)
+    if semicolons:
+        raise InputError(f"{path}: the header's columns are separated by ';'; a run file is "
+                         "comma-separated (CSV), with decimal points")
+
+
 def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tuple[int, str]]]:
     """Numeric columns, and for each column with a non-numeric cell its (line, text)."""
     import pandas as pd
 
+    from tuflexperf.io.files import MAX_RUN_BYTES
+
+    source: Any = path
+    if path.name.lower().endswith(".gz"):
+        source = _BoundedReader(path, MAX_RUN_BYTES)
     try:
-        frame = pd.read_csv(path, compression="infer", skipinitialspace=True)
+        frame = pd.read_csv(source, compression=None if source is not path else "infer",
+                            skipinitialspace=True)
+    except _TooLarge:
+        raise InputError(f"{path}: unpacks to more than {MAX_RUN_BYTES >> 30} GiB, the "
+                         "largest run file read") from None
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: empty file (expected a header row and data)") from None
     except (pd.errors.ParserError, UnicodeDecodeError, OSError, EOFError, ValueError) as exc:
+        _refuse_semicolons(path, ";" in _first_line(path))
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"{path}: cannot read as CSV: {first}") from None
+    finally:
+        if source is not path:
+            source.close()
+    _refuse_semicolons(path, frame.shape[1] == 1 and ";" in str(frame.columns[0]))
     repeated = repeated_columns(frame.columns)
     for name in (*RUN_COLUMNS, *KNOWN_OPTIONAL):
         if name in repeated:
@@ -133,12 +197,21 @@ def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
 def _read_mat_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tuple[int, str]]]:
     import scipy.io
 
+    from tuflexperf.io.files import MAX_RUN_BYTES
+
     try:
+        # a compressed variable unpacks whole: its declared size is checked first
+        declared = sum(8 * math.prod(shape) for _, shape, _ in scipy.io.whosmat(path))
+        if declared > MAX_RUN_BYTES:
+            raise InputError(f"{path}: its variables hold {declared / (1 << 30):.1f} GiB, more "
+                             f"than the {MAX_RUN_BYTES >> 30} GiB of the largest run file read")
         content = scipy.io.loadmat(path, squeeze_me=True, struct_as_record=False)
     except NotImplementedError:
         raise InputError(
             f"{path}: MATLAB v7.3 (HDF5) files are not supported; save with save(..., '-v7')"
         ) from None
+    except InputError:
+        raise
     except Exception as exc:  # noqa: BLE001 - scipy raises many types for a corrupt file
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"{path}: cannot read as a MATLAB .mat file: {first}") from None
