@@ -595,3 +595,22 @@ def test_an_output_named_with_bytes_that_are_no_utf8_is_written(tmp_path) -> Non
     done = run("export", "--out", folder, "--format", "casadi,json")
     assert done.returncode == 0, done.stderr
     assert (tmp_path / folder / "tfp_thrust.casadi").stat().st_size > 0
+
+
+def test_a_helper_that_fails_leaves_the_report_to_say_it_once(tmp_path) -> None:
+    """On a full disk the report's forked page writer printed its 35-line traceback before
+    the report's own one-line error (outside audit); the parent draws what a helper left
+    undone and reports the error there."""
+    script = (
+        "import errno\n"
+        "from tuflexperf.io.files import start_helper\n"
+        "def fail():\n"
+        "    raise OSError(errno.ENOSPC, 'No space left on device')\n"
+        "helpers = []\n"
+        "process = start_helper(fail, (), helpers)\n"
+        "process.join()\n"
+        "print(process.exitcode)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60, cwd=tmp_path)
+    assert done.stdout.strip() == "1" and done.stderr == ""

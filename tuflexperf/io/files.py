@@ -695,7 +695,12 @@ def start_helper(target: Callable[..., None], args: tuple[Any, ...],
 
 def _helper_body(target: Callable[..., None], args: tuple[Any, ...]) -> None:
     release_interrupts()
-    target(*args)
+    try:
+        target(*args)
+    except Exception:  # noqa: BLE001 - said once, by the parent
+        # the parent does again what a helper left undone, and reports an error there in
+        # one line (a full disk printed the helper's 35-line traceback as well; audit)
+        os._exit(1)
 
 
 def stop_helpers(helpers: list[Any]) -> None:
