@@ -614,3 +614,14 @@ def test_a_helper_that_fails_leaves_the_report_to_say_it_once(tmp_path) -> None:
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                           timeout=60, cwd=tmp_path)
     assert done.stdout.strip() == "1" and done.stderr == ""
+
+
+@pytest.mark.parametrize("out", [".", "..", "sub/.."])
+def test_the_working_directory_is_no_output_folder(tmp_path, out) -> None:
+    """`export --out .` in an empty folder replaced it and left the shell in a deleted one
+    (outside audit)."""
+    here = tmp_path / "empty"
+    here.mkdir()
+    done = _run(here, "export", "--out", out)
+    assert done.returncode == 2 and "is the working directory or holds it" in done.stderr
+    assert here.is_dir() and not list(here.iterdir())

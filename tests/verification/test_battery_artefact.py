@@ -111,3 +111,22 @@ def test_a_capacity_label_far_above_what_the_runs_drew_is_bad_input(tmp_path: Pa
     done = subprocess.run([sys.executable, "-m", "tuflexperf", *args], capture_output=True,
                           text=True)
     assert done.returncode in (0, 1), done.stderr
+
+
+def test_a_discharge_run_whose_voltage_rises_is_bad_input(tmp_path: Path) -> None:
+    """A run that starts below the cut-off and rises under load (40 -> 46 V) was fitted with a
+    2.7 V residual and no word (outside audit)."""
+    import numpy as np
+    import pandas as pd
+
+    copy_shipped_case(tmp_path)
+    folder = tmp_path / "data" / "tuflex"
+    run = folder / "endurance" / "edf1_endurance_50.csv"
+    frame = pd.read_csv(run)
+    frame["voltage_v"] = np.linspace(40.0, 46.0, len(frame))
+    frame.to_csv(run, index=False)
+    done = subprocess.run([sys.executable, "-m", "tuflexperf", "fit", "battery.yaml", "--out",
+                           "refit.yaml"], cwd=folder, capture_output=True, text=True)
+    assert done.returncode == 2, done.stderr
+    assert "edf1_endurance_50.csv: its loaded voltage goes from" in done.stderr
+    assert done.stderr.count("\n") == 1 and not (folder / "refit.yaml").exists()

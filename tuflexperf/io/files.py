@@ -454,6 +454,12 @@ def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> No
     """
     shown, out = Path(out), output_path(out)
     inside = out.resolve()
+    with contextlib.suppress(OSError):  # a working directory that is gone holds nothing
+        here = Path.cwd().resolve()
+        if inside == here or inside in here.parents:
+            # replacing it left the shell in a deleted folder (outside audit)
+            raise InputError(f"--out: {shown} is the working directory or holds it; "
+                             "choose a folder inside or beside it")
     for source in inputs:
         found = Path(source).resolve()
         if found == inside or inside in found.parents:
