@@ -384,3 +384,21 @@ def test_a_lift_off_that_cannot_climb_away_is_said() -> None:
     assert result.climb_gradient < 0
     assert any("cannot climb away" in w and f"{result.climb_gradient:.3f}" in w
                for w in result.warnings)
+
+
+def test_the_point_analyses_say_they_take_the_reference_voltage(tmp_path) -> None:
+    """Trim, OEI and take-off take the thrust at reference_voltage_v while the pack sags in
+    flight (outside audit: a trim PASS that held for the flight's first minutes only)."""
+    from tests.conftest import copy_shipped_case
+    from tuflexperf.analysis.oei import solve_oei
+    from tuflexperf.analysis.trim import solve_trim
+
+    case = load_case(None)
+    assert not any("reference voltage" in w for w in solve_trim(case).warnings)
+    copy_shipped_case(tmp_path)
+    prop = tmp_path / "data" / "tuflex" / "propulsion.yaml"
+    prop.write_text(prop.read_text().replace("fan_area_m2:", "reference_voltage_v: 47.3\n"
+                                             "fan_area_m2:", 1))
+    sagging = load_case(tmp_path / "requirements" / "tuflex.yaml")
+    for result in (solve_trim(sagging), solve_oei(sagging), solve_takeoff(sagging)):
+        assert any("at the reference voltage 47.3 V" in w for w in result.warnings)

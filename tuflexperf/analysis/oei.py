@@ -33,7 +33,12 @@ from tuflexperf.analysis.trim import envelope_of, extrapolation_note
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
-from tuflexperf.models.thrust import DeadEngineMode, total_thrust_n, unlapsed_density_warning
+from tuflexperf.models.thrust import (
+    DeadEngineMode,
+    reference_voltage_note,
+    total_thrust_n,
+    unlapsed_density_warning,
+)
 
 _cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
 
@@ -138,6 +143,9 @@ def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
         cases.append(DeadEngineCase(speeds, throttle, engine.name, reasons, attainable))
     extrapolated, warnings = extrapolation_note(case, speeds)
     warnings.extend(jet_ceiling_note(case, speeds))
+    voltage_note = reference_voltage_note(propulsion, "OEI")
+    if voltage_note:
+        warnings.append(voltage_note)
     density_note = unlapsed_density_warning(propulsion, rho)
     if density_note:
         warnings.append(density_note)

@@ -45,6 +45,7 @@ from tuflexperf.models.powertrain import beyond_jet_velocity, static_jet_velocit
 from tuflexperf.models.thrust import (
     Propulsion,
     is_extrapolated,
+    reference_voltage_note,
     total_thrust_n,
     unlapsed_density_warning,
 )
@@ -375,6 +376,9 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
             f"take-off airspeed {max(beyond):.1f} m/s is outside the thrust model's tested "
             f"airspeed range {low:g}-{high:g} m/s (extrapolated)"
         )
+    voltage_note = reference_voltage_note(propulsion, "the take-off")
+    if voltage_note:
+        warnings.append(voltage_note)
     density_note = unlapsed_density_warning(propulsion, rho)
     if density_note:
         warnings.append(density_note)

@@ -117,6 +117,17 @@ def unlapsed_density_warning(propulsion: Propulsion, density_kg_m3: float) -> st
     )
 
 
+def reference_voltage_note(propulsion: Propulsion, what: str) -> str | None:
+    """Say that ``what`` (take-off, trim, OEI) takes the thrust at the file's reference
+    voltage: the pack sags below it in flight, and thrust with it (SPEC 3); the mission and
+    the endurance fly the loaded voltage, these point analyses do not (outside audit)."""
+    if propulsion.reference_voltage_v is None:
+        return None
+    return (f"{what} takes the thrust at the reference voltage {propulsion.reference_voltage_v:g}"
+            f" V (x (U/U_ref)^{propulsion.voltage_exponent:g}); the pack's loaded voltage falls "
+            "below it as it discharges: the mission flies it")
+
+
 def engine_thrust_n(
     engine: Engine,
     throttle: Vectorizable,
