@@ -333,18 +333,19 @@ def test_jsbsim_lag_filter_follows_the_spool_lag(tmp_path: Path) -> None:
 
 def test_jsbsim_xml_stays_xml_for_any_engine_name(tmp_path: Path) -> None:
     """An engine named with a double quote wrote `<channel name="tfp-EDF"2">` (outside
-    audit); every JSBSim file must parse, whatever the names hold."""
+    audit); every JSBSim file must parse, whatever the names hold (a double quote, or a
+    comma, is now refused in an engine's name: it heads the mission's CSV columns)."""
     import xml.etree.ElementTree as ElementTree
 
     odd = copy.deepcopy(MADE_UP_PROPULSION)
-    odd["engines"][0]["name"] = 'EDF"1 <&> --x'
+    odd["engines"][0]["name"] = "EDF'1 <&> --x"
     path = tmp_path / "odd.yaml"
     path.write_text(yaml.safe_dump(odd))
     out = _export(tmp_path, path, ("jsbsim",))
     for name in ("tfp_thrust_system.xml", "tfp_thrust_reactions.xml"):
         ElementTree.parse(out / name)  # raises on anything that is not well-formed
     system = ElementTree.parse(out / "tfp_thrust_system.xml").getroot()
-    assert any(c.get("name", "").startswith('tfp-EDF"1 <&>') for c in system.iter("channel"))
+    assert any(c.get("name", "").startswith("tfp-EDF'1 <&>") for c in system.iter("channel"))
 
 
 def test_a_compiler_that_fails_is_one_line_naming_it(tmp_path: Path) -> None:

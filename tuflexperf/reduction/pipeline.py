@@ -1392,7 +1392,7 @@ def run_fit(
         raise InputError(f"--delay-s: must be a finite number >= 0, got {delay_s}")
     if delay_s is not None and delay_s > MAX_DELAY_S:
         # a dead time past every throttle plateau would leave no steady data to fit
-        raise InputError(f"--delay-s: {delay_s!r} s is beyond {MAX_DELAY_S:g} s, the longest "
+        raise InputError(f"--delay-s: {delay_s:.10g} s is beyond {MAX_DELAY_S:g} s, the longest "
                          "delay the reduction knows (an EDF answers within tens of ms)")
     out = Path(out)
     _check_output(out, "--out")
