@@ -193,3 +193,35 @@ def test_power_fit_recovers_an_exact_power_law(tmp_path: Path) -> None:
     assert fit.model.exponent == pytest.approx(1.4, rel=1e-9)
     assert fit.model.static_full_throttle_w == pytest.approx(3700.0, rel=1e-9)
     assert fit.rms_log_error < 1e-9
+
+
+def test_the_first_stretch_beyond_a_rating_is_found_as_a_fine_scan_finds_it() -> None:
+    """first_window_beyond (the pack's continuous rating over any 30 s of a flight) against a
+    brute-force scan of every stretch between the points of a 0.05 s grid, on random
+    histories of uneven nodes: the stretch it reports exceeds the limit, and no stretch of
+    the scan does so ending more than one node interval earlier."""
+    from tuflexperf.models.battery import first_window_beyond
+
+    rng = np.random.default_rng(7)
+    for _ in range(25):
+        t = np.cumsum(np.r_[0.0, rng.uniform(0.2, 9.0, 40)])
+        current = rng.uniform(5.0, 60.0, t.size - 1)  # A, constant between nodes
+        q = np.r_[0.0, np.cumsum(current * np.diff(t))] / 3600.0
+        limit = float(rng.uniform(25.0, 45.0))
+        end, start, mean = (float(v[0]) for v in first_window_beyond(
+            t[None, :], q[None, None, :], limit, 30.0))
+        grid = np.arange(0.0, t[-1] + 1e-9, 0.05)
+        qg = np.interp(grid, t, q)
+        s, e = np.meshgrid(grid, grid, indexing="ij")
+        with np.errstate(divide="ignore", invalid="ignore"):
+            means = (qg[None, :] - qg[:, None]) * 3600.0 / (e - s)
+        over = (e - s >= 30.0 - 1e-9) & (means > limit * (1 + 1e-9))
+        if not over.any():
+            assert end == np.inf
+            continue
+        scan_end = float(np.min(e[over]))
+        assert end - start >= 30.0 - 1e-9
+        exact = (np.interp(end, t, q) - np.interp(start, t, q)) * 3600.0 / (end - start)
+        assert exact == pytest.approx(mean, rel=1e-9) and mean > limit
+        gap = float(np.max(np.diff(t)))
+        assert scan_end - 0.05 - 1e-9 <= end <= scan_end + gap + 1e-9

@@ -236,8 +236,11 @@ def time_to_cutoff_s(
 def _rows_interp(x: np.ndarray, t: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Piecewise-linear ``y`` (rows, packs, nodes) over ``t`` (rows, nodes) at ``x`` (rows, m)."""
     n = t.shape[-1]
-    # the node at or before each x, per row (t rises along each row)
-    right = np.clip(np.sum(t[:, None, :] <= x[:, :, None], axis=-1), 1, n - 1)
+    # the node at or before each x, per row (t rises along each row): one search for one row
+    # (a flight's history), a comparison with every node for many short rows (a batch)
+    found = (np.searchsorted(t[0], x[0], side="right")[None, :] if t.shape[0] == 1
+             else np.sum(t[:, None, :] <= x[:, :, None], axis=-1))
+    right = np.clip(found, 1, n - 1)
     left = right - 1
     t0, t1 = (np.take_along_axis(t, k, axis=-1) for k in (left, right))
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -281,8 +284,11 @@ def first_window_beyond(
     -----
     With the charge piecewise linear in time the mean over ``[s, e]`` is a ratio of
     linear functions on each pair of node intervals, largest on their edges: a stretch
-    from node to node, or one of exactly ``window_s`` from or to a node. Every such
-    stretch is a candidate (all, not only the heaviest, so the earliest end is found).
+    from node to node, or one of exactly ``window_s`` from or to a node. A stretch beyond
+    the limit longer than twice ``window_s`` holds a shorter one that is (one of its
+    halves), ending no later, so node-to-node stretches of up to twice ``window_s`` do for
+    one history. Every such stretch is a candidate (all, not only the heaviest, so the
+    earliest end is found, to the node).
     """
     t = np.asarray(time_s, dtype=float)
     q = np.asarray(charge_ah, dtype=float)
@@ -312,14 +318,23 @@ def first_window_beyond(
     take(t, ahead, q, _rows_interp(ahead, t, q))
     behind = np.maximum(t - window_s, first)
     take(behind, t, _rows_interp(behind, t, q), q)
-    # node to node
+    # node to node, of window_s to twice it for one history (see Notes); all pairs for a
+    # batch of short rows
+    packs = q.shape[1]
     for i0 in range(0, nodes, block):
         i1 = min(i0 + block, nodes)
-        s = np.broadcast_to(t[:, i0:i1, None], (rows, i1 - i0, nodes)).reshape(rows, -1)
-        e = np.broadcast_to(t[:, None, :], (rows, i1 - i0, nodes)).reshape(rows, -1)
-        qs = np.broadcast_to(q[:, :, i0:i1, None], q.shape[:2] + (i1 - i0, nodes))
-        qe = np.broadcast_to(q[:, :, None, :], q.shape[:2] + (i1 - i0, nodes))
-        take(s, e, qs.reshape(rows, q.shape[1], -1), qe.reshape(rows, q.shape[1], -1))
+        j0, j1 = 0, nodes
+        if rows == 1:
+            j0 = int(np.searchsorted(t[0], t[0, i0] + window_s * (1 - 1e-12)))
+            j1 = int(np.searchsorted(t[0], t[0, i1 - 1] + 2.0 * window_s, side="right"))
+        if j1 <= j0:
+            continue
+        width = j1 - j0
+        s = np.broadcast_to(t[:, i0:i1, None], (rows, i1 - i0, width)).reshape(rows, -1)
+        e = np.broadcast_to(t[:, None, j0:j1], (rows, i1 - i0, width)).reshape(rows, -1)
+        qs = np.broadcast_to(q[:, :, i0:i1, None], (rows, packs, i1 - i0, width))
+        qe = np.broadcast_to(q[:, :, None, j0:j1], (rows, packs, i1 - i0, width))
+        take(s, e, qs.reshape(rows, packs, -1), qe.reshape(rows, packs, -1))
     return end, start, mean
 
 
