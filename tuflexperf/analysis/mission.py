@@ -1074,6 +1074,8 @@ class MissionModel:
             if problems and first_bad is None:
                 k, why = min(problems)
                 at = float(t[a + k])
+                if why.startswith("draws") and "on average over" in why:
+                    at = min(at, heavy[0])  # the stretch's end, not the node after it
                 b = a + max(k, 1)  # the flight ends there: nothing after the event is flown
                 if why.startswith("the pack reaches") and plan.kind == "time" and k > 0:
                     # the event between two nodes, exactly (the nodes are 1/64 segment apart),
