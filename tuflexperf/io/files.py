@@ -555,8 +555,6 @@ MAX_MARKER_BYTES = 16 << 20  # a marker lists files and their sha256: far below 
 def _read_marker_data(folder: Path) -> dict[str, Any]:
     """The folder's marker, or ``{}`` when there is none that can be read as one: a FIFO
     there hung, /dev/zero ran out of memory, deep nesting raised (outside re-audit)."""
-    import stat
-
     path = Path(folder) / MARKER
     try:
         info = path.lstat()

@@ -36,7 +36,7 @@ import yaml
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.campaign import Campaign, CampaignRun, load_campaign
-from tuflexperf.io.files import sealed, sha256_of
+from tuflexperf.io.files import FIT_PROPULSION_HEADER, sealed, sha256_of
 from tuflexperf.io.runs import (
     REFIT_TABLE_EXTRA_COLUMNS,
     TABLE_EXTRA_COLUMNS,
@@ -1240,8 +1240,6 @@ def _propulsion_text(
                 entry["power"]["rmse_w"] = power.rmse_n
         document["engines"].append(entry)
     document["source"] = source
-    from tuflexperf.io.files import FIT_PROPULSION_HEADER
-
     header = (
         f"{FIT_PROPULSION_HEADER} by ordinary least squares, paper section 4).\n"
         "# T = p00 + p10 x + p01 v + p20 x^2 + p11 x v + p02 v^2, x throttle fraction, v m/s.\n"
