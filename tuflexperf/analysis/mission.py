@@ -946,8 +946,9 @@ class MissionModel:
 
     def _beyond_rating(self, rating: float | None, t: np.ndarray, current: np.ndarray,
                        a: int, b: int, live: list[int], heavy: tuple[float, float, float]
-                       ) -> tuple[int, str] | None:
-        """Where segment ``[a, b)`` draws a pack beyond its rating, and why (None: within).
+                       ) -> tuple[int, str, float] | None:
+        """Where segment ``[a, b)`` draws a pack beyond its rating: the node, why, and the
+        time [s] it happens (None: within).
 
         No current may exceed :data:`BURST_OVER_CONTINUOUS` times the continuous rating
         (:meth:`_pack_rating_a`; the usual burst rating), and the mean current over any
@@ -966,19 +967,20 @@ class MissionModel:
         per_pack = self.battery.packs_in_parallel_per_engine
         peak = np.max(current[live, a:b], axis=0) / per_pack
         burst = np.flatnonzero(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9))
-        found: list[tuple[int, str]] = []
+        found: list[tuple[int, str, float]] = []
         if burst.size:
             k = int(burst[0])
             found.append((k, f"draws {peak[k]:.1f} A per pack, beyond its burst rating "
-                          f"{BURST_OVER_CONTINUOUS * rating:.1f} A {what}"))
+                          f"{BURST_OVER_CONTINUOUS * rating:.1f} A {what}", float(t[a + k])))
         end, begin, mean = heavy
         if t[a] - 1e-9 <= end <= t[b - 1] + 1e-9:
-            k = int(np.searchsorted(t[a:b], end - 1e-9))
-            found.append((min(k, b - 1 - a), (
+            k = min(int(np.searchsorted(t[a:b], end - 1e-9)), b - 1 - a)
+            # the flight ends where the stretch ends, not at the node after it
+            found.append((k, (
                 f"draws {mean:.1f} A per pack on average over {end - begin:.0f} s "
                 f"({begin:.0f}-{end:.0f} s into the mission), beyond its continuous rating "
-                f"{rating:.1f} A {what}")))
-        return min(found) if found else None
+                f"{rating:.1f} A {what}"), min(float(t[a + k]), end)))
+        return min(found, key=lambda item: item[:2]) if found else None
 
     def _result(self, states: np.ndarray, aux: np.ndarray, solved: dict[str, Any] | None,
                 theta: np.ndarray, durations: np.ndarray) -> MissionResult:
@@ -1015,6 +1017,7 @@ class MissionModel:
             live = [i for i in range(n) if i != plan.dead]
             volt_live = voltage[live, sl]
             problems: list[tuple[int, str]] = []
+            exact_at: dict[str, float] = {}  # a problem's time where it is not its node's
             cut = np.flatnonzero(~(np.min(volt_live, axis=0) >= self.cutoff_v - 1e-9)
                                  | ~self._charge_valid(q[:, sl], current[:, sl]))
             if cut.size:
@@ -1025,7 +1028,8 @@ class MissionModel:
                 problems.append((int(bad[0]), "needs more than full throttle"))
             beyond = self._beyond_rating(rating, t, current, a, b, live, heavy)
             if beyond is not None:
-                problems.append(beyond)
+                problems.append(beyond[:2])
+                exact_at[beyond[1]] = beyond[2]
             segment_of[sl] = plan.index
             if plan.solve_v:
                 throttle = float(theta[3 * plan.index])
@@ -1073,9 +1077,7 @@ class MissionModel:
                                          f"at {-plan.rate:g} m/s"))
             if problems and first_bad is None:
                 k, why = min(problems)
-                at = float(t[a + k])
-                if why.startswith("draws") and "on average over" in why:
-                    at = min(at, heavy[0])  # the stretch's end, not the node after it
+                at = exact_at.get(why, float(t[a + k]))
                 b = a + max(k, 1)  # the flight ends there: nothing after the event is flown
                 if why.startswith("the pack reaches") and plan.kind == "time" and k > 0:
                     # the event between two nodes, exactly (the nodes are 1/64 segment apart),
