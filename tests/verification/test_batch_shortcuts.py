@@ -20,8 +20,8 @@ from tuflexperf.analysis.batch import (
     _Model,
     nominal_engines,
 )
-from tuflexperf.analysis.batch_endurance import _interp_rows
 from tuflexperf.io.case import load_case
+from tuflexperf.models._math import interp_rows
 
 ROWS = 400
 
@@ -152,6 +152,6 @@ def test_row_wise_interpolation_equals_numpy_interp() -> None:
     step[:7] = 0.05
     t = step[:, None] * np.arange(90)[None, :]  # reaches beyond the last history time
     t[7:, 5] = t_hist[7:, 40]  # exactly on a history time
-    got = _interp_rows(t, t_hist, v_hist)
+    got = interp_rows(t, t_hist, v_hist)
     want = np.array([np.interp(t[i], t_hist[i], v_hist[i]) for i in range(60)])
     assert np.allclose(got, want, rtol=0.0, atol=1e-12)

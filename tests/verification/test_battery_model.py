@@ -225,3 +225,21 @@ def test_the_first_stretch_beyond_a_rating_is_found_as_a_fine_scan_finds_it() ->
         assert exact == pytest.approx(mean, rel=1e-9) and mean > limit
         gap = float(np.max(np.diff(t)))
         assert scan_end - 0.05 - 1e-9 <= end <= scan_end + gap + 1e-9
+
+
+def test_a_row_of_times_that_are_not_finite_leaves_the_other_rows_as_they_are() -> None:
+    """The rows are searched as one sorted array (models._math.interp_rows): a row holding a
+    NaN time (a batch row the flight refuses) must not change another row's answer."""
+    from tuflexperf.models.battery import first_window_beyond
+
+    rng = np.random.default_rng(3)
+    t = np.cumsum(rng.uniform(1.0, 20.0, (6, 8)), axis=1)
+    q = np.cumsum(rng.uniform(0.0, 0.3, (6, 1, 8)), axis=2)
+    alone = [first_window_beyond(t[i:i + 1], q[i:i + 1], 40.0, 30.0) for i in range(6)]
+    spoiled = t.copy()
+    spoiled[2, 4] = np.nan
+    together = first_window_beyond(spoiled, q, 40.0, 30.0)
+    for i in (0, 1, 3, 4, 5):
+        for got, want in zip(together, alone[i], strict=True):
+            assert got[i] == want[0] or (np.isnan(got[i]) and np.isnan(want[0]))
+    assert np.isfinite(together[0][[0, 1, 3, 4, 5]]).any()  # some row is beyond the limit

@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from tuflexperf.analysis import endurance as single
 from tuflexperf.analysis.mission import STEPS
+from tuflexperf.models._math import interp_rows
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import (
     SECONDS_PER_HOUR,
@@ -170,31 +171,6 @@ def _best_climb(m: Any, v_lo: Array, stall: Array) -> tuple[Array, Array]:
     return speed[rows, best], rate[rows, best]
 
 
-def _interp_rows(t: Array, t_hist: Array, v_hist: Array) -> Array:
-    """``np.interp(t[i, j], t_hist[i], v_hist[i])`` for every row ``i`` and column ``j``.
-
-    One ``np.searchsorted`` over all rows at once: each row's history (finite,
-    non-decreasing; the launch zeroes the rows it does not fly) and queries are shifted by
-    the row's index times a span longer than any history, so the rows follow one another in
-    one sorted array (seven vectorised halvings of a binary search per query took as long
-    as the rest of the launch).
-    """
-    rows, width = t_hist.shape
-    low_t = min(float(t_hist.min()), float(t.min()))
-    high_t = max(float(t_hist.max()), float(t.max()))
-    offset = (np.arange(rows, dtype=float) * (high_t - low_t + 1.0))[:, None]
-    flat = (t_hist + offset).ravel()
-    at = np.searchsorted(flat, (t + offset).ravel(), side="right").reshape(t.shape) - 1
-    at = np.clip(at - width * np.arange(rows)[:, None], 0, width - 2) \
-        + width * np.arange(rows)[:, None]
-    flat_t, flat_v = t_hist.ravel(), v_hist.ravel()
-    t0, t1 = np.take(flat_t, at), np.take(flat_t, at + 1)
-    v0, v1 = np.take(flat_v, at), np.take(flat_v, at + 1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        value = v0 + (t - t0) * (v1 - v0) / (t1 - t0)
-    return np.where(t >= t_hist[:, -1:], v_hist[:, -1:], value)
-
-
 @dataclass(frozen=True)
 class _Launch:
     """Per fan and row ``(fans, rows)``: charge [Ah] per fan after the roll and after the
@@ -294,7 +270,7 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     used[:, -1] = climb_speed
     for rows, steps in groups:
         stage_t = 0.5 * (roll_only[rows] / steps)[:, None] * np.arange(2 * steps + 1)[None, :]
-        used[rows, :2 * steps + 1] = _interp_rows(stage_t, t_hist[rows], v_hist[rows])
+        used[rows, :2 * steps + 1] = interp_rows(stage_t, t_hist[rows], v_hist[rows])
     rolling = power(1.0, used[:, :widest])
     for rows, steps in groups:
         rk4_rows(rows, roll_only[rows] / steps, roll_only[rows] > 0.0,

@@ -38,7 +38,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from tuflexperf.models._math import Vectorizable, exp, fmin, is_symbolic, sqrt
+from tuflexperf.models._math import Vectorizable, exp, fmin, interp_rows, is_symbolic, sqrt
 
 SECONDS_PER_HOUR = 3600.0
 PARAMETER_NAMES: tuple[str, ...] = (
@@ -233,23 +233,6 @@ def time_to_cutoff_s(
 
 
 # --- the pack's continuous rating over a flight ----------------------------------------
-def _rows_interp(x: np.ndarray, t: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Piecewise-linear ``y`` (rows, packs, nodes) over ``t`` (rows, nodes) at ``x`` (rows, m)."""
-    n = t.shape[-1]
-    # the node at or before each x, per row (t rises along each row): one search for one row
-    # (a flight's history), a comparison with every node for many short rows (a batch)
-    found = (np.searchsorted(t[0], x[0], side="right")[None, :] if t.shape[0] == 1
-             else np.sum(t[:, None, :] <= x[:, :, None], axis=-1))
-    right = np.clip(found, 1, n - 1)
-    left = right - 1
-    t0, t1 = (np.take_along_axis(t, k, axis=-1) for k in (left, right))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        w = np.where(t1 > t0, (x - t0) / (t1 - t0), 0.0)[:, None, :]
-    y0, y1 = (np.take_along_axis(y, np.broadcast_to(k[:, None, :], y.shape[:2] + k.shape[-1:]),
-                                 axis=-1) for k in (left, right))
-    return y0 + w * (y1 - y0)
-
-
 def first_window_beyond(
     time_s: np.ndarray, charge_ah: np.ndarray, limit_a: np.ndarray | float, window_s: float,
     block: int = 256,
@@ -312,12 +295,19 @@ def first_window_beyond(
 
     if nodes < 2:
         return end, start, mean
+    # a row whose times are not all finite (a batch row the flight refuses anyway) would
+    # spoil the other rows' interpolation: it is searched on 0, 1, 2, ... instead
+    t = np.where(np.isfinite(t).all(axis=1, keepdims=True), t, np.arange(nodes, dtype=float))
     first, last = t[:, :1], t[:, -1:]
+
+    def charge_at(x: np.ndarray) -> np.ndarray:
+        return np.stack([interp_rows(x, t, q[:, p]) for p in range(q.shape[1])], axis=1)
+
     # exactly window_s from each node, and to each node (inside the flight)
     ahead = np.minimum(t + window_s, last)
-    take(t, ahead, q, _rows_interp(ahead, t, q))
+    take(t, ahead, q, charge_at(ahead))
     behind = np.maximum(t - window_s, first)
-    take(behind, t, _rows_interp(behind, t, q), q)
+    take(behind, t, charge_at(behind), q)
     # node to node, of window_s to twice it for one history (see Notes); all pairs for a
     # batch of short rows
     packs = q.shape[1]
