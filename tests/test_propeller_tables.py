@@ -170,3 +170,17 @@ def test_an_rpm_line_that_is_no_speed_is_bad_input(tmp_path: Path, rpm: str) -> 
     path.write_text(APC_10X7E.replace("PROP RPM =       2000", f"PROP RPM = {rpm}"))
     with pytest.raises(InputError, match="is no speed"):
         read_apc_per3(path)
+
+
+def test_report_draws_a_propeller_manifest_as_measured_points(tmp_path: Path) -> None:
+    """``report --campaign props.yaml`` (or a propulsion file fitted from one): its points."""
+    from tuflexperf.io.case import load_case
+    from tuflexperf.report.data import load_measured
+
+    manifest = _manifest(tmp_path)
+    case = load_case(Path("requirements/tuflex.yaml"))
+    measured = load_measured(case, manifest)
+    assert measured.kind == "table" and measured.points is not None
+    table = read_propeller_tables(manifest)
+    np.testing.assert_array_equal(measured.points.thrust_n, table.thrust_n)
+    assert "propeller tables" in measured.notes[0]

@@ -174,16 +174,27 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
         )
         return measured
     measured.files.append(source)
-    if source.name.lower().endswith(".csv"):
-        from tuflexperf.io.runs import read_thrust_table
+    from tuflexperf.io.proptables import is_propeller_manifest
 
-        table = read_thrust_table(source)
+    tables = is_propeller_manifest(source)
+    if source.name.lower().endswith(".csv") or tables:
+        # a published propeller table is points too (throttle = rpm / max rpm), like a CSV
+        if tables:
+            from tuflexperf.io.proptables import read_propeller_tables
+
+            table = read_propeller_tables(source)
+            what = "the propeller tables of"
+        else:
+            from tuflexperf.io.runs import read_thrust_table
+
+            table = read_thrust_table(source)
+            what = "the thrust table"
         measured.kind = "table"
         measured.points = MeasuredPoints(
             table.engine, table.throttle, table.airspeed_m_s, table.thrust_n
         )
         measured.notes.append(
-            f"measured points from the thrust table {source.name}; no raw runs, so the run, "
+            f"measured points from {what} {source.name}; no raw runs, so the run, "
             "sine-sweep and model-vs-run figures are left out"
         )
         return measured

@@ -442,7 +442,8 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
     measured_colour = "#d62728"  # points on a viridis surface: the one colour it lacks
     ax3.scatter(px, pv, pt, color=measured_colour, s=16, depthshade=False, zorder=5,
                 edgecolors="white", linewidths=0.4)
-    ax3.set_title(f"surface and measured points (red: segment means, n = {pt.size})",
+    what = "segment means" if measured.kind == "campaign" else "table points"
+    ax3.set_title(f"surface and measured points (red: {what}, n = {pt.size})",
                   fontsize=10)
     sc = ax_r.scatter(px, residual, c=pv, cmap="plasma", s=22, zorder=3)
     fig.colorbar(sc, ax=ax_r, location="bottom", label="airspeed V (m/s)", shrink=0.8,
