@@ -195,6 +195,21 @@ def test_bad_flags_give_one_line_and_exit_2():
         assert "Traceback" not in done.stderr
 
 
+def test_a_case_given_by_position_to_a_command_that_takes_case_says_so(capsys):
+    """``report case.yaml --out r``: typer's "unexpected extra argument" alone left the user
+    guessing; only check and mission take a file by position."""
+    from tuflexperf.cli import main
+
+    with pytest.raises(SystemExit) as done:
+        main(["report", "my_case.yaml", "--out", "r"])
+    assert done.value.code == 2
+    line = capsys.readouterr().err
+    assert line.count("\n") == 1 and "--case my_case.yaml" in line
+    with pytest.raises(SystemExit):
+        main(["trim", "--case", "a.yaml", "b.yaml"])  # --case given: no hint
+    assert "--case b.yaml" not in capsys.readouterr().err
+
+
 def test_symbolic_link_loops_are_one_line_not_a_traceback(tmp_path):
     """A link that points at itself, as a campaign's run and as a case's propulsion file:
     pathlib raised RuntimeError("Symlink loop ...") out of fit, report, check, mission and

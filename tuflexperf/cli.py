@@ -1211,6 +1211,15 @@ for _info in app.registered_commands:  # every command above, whichever section 
     _info.callback = _guarded(_info.callback)
 
 
+def _case_hint(message: str, argv: list[str] | None) -> str:
+    """For ``report case.yaml``: only ``check`` and ``mission`` take a file by position."""
+    args = sys.argv[1:] if argv is None else argv
+    if not message.startswith("Got unexpected extra argument") or "--case" in args:
+        return ""
+    extra = next((a for a in args[1:] if a.lower().endswith((".yaml", ".yml"))), None)
+    return "" if extra is None else f": give the case file with --case {extra}"
+
+
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: usage errors become one line on stderr and exit 2."""
     from typer.exceptions import Abort, TyperException
@@ -1239,7 +1248,8 @@ def main(argv: list[str] | None = None) -> None:
     except TyperException as exc:
         if type(exc).__name__ == "NoArgsIsHelpError":
             app(args=["--help"], prog_name="tuflexperf")
-        sys.stderr.write(f"tuflexperf: error: {one_line(exc.format_message())}\n")
+        message = exc.format_message() + _case_hint(exc.format_message(), argv)
+        sys.stderr.write(f"tuflexperf: error: {one_line(message)}\n")
         sys.exit(getattr(exc, "exit_code", 2) or 2)
     except Exception:
         # an interrupt raised inside an import or a C extension comes out as its error
