@@ -1018,7 +1018,8 @@ def _print_fit(summary: dict[str, Any]) -> None:
 @app.command("fit")
 def fit_command(
     input_file: Path = typer.Argument(
-        ..., help="Campaign manifest (campaign.yaml) or thrust table (.csv)."
+        ..., help="Campaign manifest (campaign.yaml), propeller-table manifest, thrust table "
+        "(.csv) or battery file."
     ),
     out_text: str | None = typer.Option(
         None, "--out", metavar="<path>",
@@ -1071,8 +1072,8 @@ def report_command(
     campaign: Path | None = typer.Option(
         None,
         "--campaign",
-        help="Measured data: campaign manifest or thrust-table CSV (default: the propulsion "
-        "file's source, else campaign/campaign.yaml beside it).",
+        help="Measured data: campaign or propeller-table manifest, or thrust-table CSV "
+        "(default: the propulsion file's source, else campaign/campaign.yaml beside it).",
     ),
     as_json: bool = JsonOption,
     sets: list[str] | None = SetOption,
