@@ -258,10 +258,11 @@ def test_a_power_model_far_below_momentum_theory_flies_no_endurance(tmp_path):
 
 def test_best_with_a_pack_too_small_names_the_throttle_asked_for_then_the_search():
     """--best named a throttle from its own search (0.679179) as if the user had asked it."""
-    pack = "battery.capacity_ah=0.5"  # below its cut-off from the start at any cruise power
+    # a pack that takes off (a smaller one is beyond the battery at the take-off itself)
+    # but reaches its cut-off in the climb
+    pack = "battery.capacity_ah=1.7"
     asked = CliRunner().invoke(app, ["endurance", "--throttle", "0.5", "--best", "--set", pack])
-    # the two packs in parallel per fan hold 0.5's power at the start; the launch empties them
-    assert asked.exit_code == 1 and "throttle 0.5: the launch leaves no cruise" in asked.stderr
+    assert asked.exit_code == 1 and "throttle 0.5: segment 2 (climb)" in asked.stderr
     best = CliRunner().invoke(app, ["endurance", "--best", "--set", pack])
     assert best.exit_code == 1
     assert "no best endurance: its search starts halfway from the least level-flight " \

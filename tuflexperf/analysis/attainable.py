@@ -29,6 +29,7 @@ from tuflexperf.models.powertrain import beyond_jet_velocity, jet_velocity_ceili
 BELOW_STALL = "below stall"
 BEYOND_JET_VELOCITY = "beyond the fans' jet velocity"
 NEEDS_MORE_THAN_FULL_THROTTLE = "needs more than full throttle"
+BEYOND_THE_BATTERY = "beyond the battery"  # the packs cannot fly it (analysis.pack_limits)
 _SCAN_POINTS = 2001
 _BISECTIONS = 100
 
@@ -152,7 +153,8 @@ def describe_unattainable(airspeed_m_s: np.ndarray, reasons: tuple[str | None, .
     """One phrase per reason: ``below stall at 15-23 m/s (17 of 61 grid airspeeds)``."""
     v = np.asarray(airspeed_m_s, dtype=float)
     phrases = []
-    for reason in (BELOW_STALL, BEYOND_JET_VELOCITY, NEEDS_MORE_THAN_FULL_THROTTLE):
+    for reason in (BELOW_STALL, BEYOND_JET_VELOCITY, NEEDS_MORE_THAN_FULL_THROTTLE,
+                   BEYOND_THE_BATTERY):
         hit = np.array([r == reason for r in reasons], dtype=bool)
         if hit.any():
             low, high = v[hit].min(), v[hit].max()

@@ -238,6 +238,12 @@ class BatchEvaluator:
             from tuflexperf.analysis.batch_endurance import battery_side
 
             self._endurance = battery_side(case)
+        # trim and OEI are flown on the packs as the single case flies them (pack_limits)
+        self._packs: Any = None
+        if any(r.block in ("envelope", "oei") for r in self.requirements):
+            from tuflexperf.analysis.pack_limits import pack_side
+
+            self._packs = pack_side(case)
 
     # -- the batch's model objects -----------------------------------------------------------
     def _aircraft(self, values: Mapping[str, Array], size: int) -> Aircraft:
@@ -353,12 +359,23 @@ class BatchEvaluator:
                                  obstacle_height_of(self.case), size)
                 out[requirement.name] = model.distance_to_obstacle(roll, height)
             elif requirement.block == "envelope":
-                out[requirement.name] = np.where(unflown, np.nan, model.trim_max_throttle(
-                    grid, self._candidates()[0]))
+                value = model.trim_max_throttle(grid, self._candidates()[0])
+                if self._packs is not None and not model.packs_never_bind(
+                        grid, self._packs, self._battery_rows(values, size), value):
+                    value = model.over_grid_on_packs(grid, None, "windmilling", self._packs,
+                                                     self._battery_rows(values, size))
+                out[requirement.name] = np.where(unflown, np.nan, value)
             elif requirement.block == "oei":
                 mode = self.case.requirements.oei.dead_engine
-                out[requirement.name] = np.where(unflown, np.nan, model.oei_min_throttle(
-                    grid, mode, self._candidates()[1]))
+                value = model.oei_min_throttle(grid, mode, self._candidates()[1])
+                if self._packs is not None and not model.packs_never_bind(
+                        grid, self._packs, self._battery_rows(values, size), np.ones(size)):
+                    worst = np.full(size, -np.inf)
+                    for dead in range(len(self.case.propulsion.engines)):
+                        worst = np.maximum(worst, model.over_grid_on_packs(
+                            grid, dead, mode, self._packs, self._battery_rows(values, size)))
+                    value = worst
+                out[requirement.name] = np.where(unflown, np.nan, value)
             else:
                 # a catapult launch starts airborne at its release speed (no runway)
                 launch = roll or (model.catapult_release() if catapult else model.ground_roll())
@@ -366,8 +383,7 @@ class BatchEvaluator:
                 key = "requirements.endurance.throttle"
                 throttle = _column(values, key, self.case.requirements.endurance.throttle, size)
                 throttle = np.asarray(throttle, dtype=float).reshape(-1) * np.ones(size)
-                battery = {k: np.asarray(_column(values, k, v, size), dtype=float).reshape(-1)
-                           * np.ones(size) for k, v in self._battery_nominal().items()}
+                battery = self._battery_rows(values, size)
                 out[requirement.name] = model.flight_endurance_min(
                     self._endurance, throttle, launch, battery
                 )
@@ -383,7 +399,13 @@ class BatchEvaluator:
     def _battery_nominal(self) -> dict[str, float]:
         from tuflexperf.io.dotted import battery_key_values
 
-        return battery_key_values(self._endurance.battery)
+        side = self._endurance if self._endurance is not None else self._packs
+        return battery_key_values(side.battery)
+
+    def _battery_rows(self, values: Mapping[str, Array], size: int) -> dict[str, Array]:
+        """The battery keys that vary (dotted.BATTERY_KEYS), one value per row."""
+        return {k: np.asarray(_column(values, k, v, size), dtype=float).reshape(-1)
+                * np.ones(size) for k, v in self._battery_nominal().items()}
 
     def _candidates(self) -> tuple[Array | None, dict[int, Array]]:
         """Grid indices beside the nominal case's highest trim throttle (and the envelope's
@@ -1014,6 +1036,111 @@ class _Model:
                 best[rows] = np.min(throttle, axis=1)
             worst = np.maximum(worst, best)
         return np.where(np.isfinite(worst), worst, np.nan)
+
+    def packs_never_bind(self, grid: Array, packs: Any, battery: dict[str, Array],
+                         top_throttle: Array) -> bool:
+        """True when the packs change no row's answer, so the candidates' answer stands: no
+        reference voltage (the thrust does not depend on the packs) and, in every row, each
+        fan's greatest power over the grid and throttles in ``[0, top_throttle]`` within the
+        power its packs give at the landing reserve (``pack_limits.power_limit_w``; power
+        is quadratic in throttle for a surface, monotone for the fan law, so the ends and
+        the vertex bound it). A row whose answer is NaN binds nothing."""
+        from tuflexperf.analysis.batch_endurance import _power_w
+        from tuflexperf.analysis.pack_limits import power_limit_w
+
+        if self.propulsion.reference_voltage_v is not None:
+            return False
+        limit = power_limit_w(packs, battery)[:, None]
+        top = np.nan_to_num(np.asarray(top_throttle, dtype=float)).reshape(-1, 1)
+        engines = self.propulsion.engines if packs.own_surfaces else (None,)
+        for engine in engines:
+            p0, ph, p1 = (np.maximum(_power_w(packs, self, x, grid, engine), 0.0)
+                          for x in (0.0 * top, 0.5 * top, top))
+            curvature = 2.0 * (p1 - 2.0 * ph + p0)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                vertex = np.clip(0.5 - (p1 - p0) / (2.0 * curvature), 0.0, 1.0)
+            vertex = np.where(np.isfinite(vertex), vertex, 0.0)
+            pv = np.maximum(_power_w(packs, self, vertex * top, grid, engine), 0.0)
+            most = np.max(np.maximum(np.maximum(p0, p1), pv), axis=1, keepdims=True)
+            with np.errstate(invalid="ignore"):
+                if not np.all(most <= limit * (1.0 - 1e-9)):
+                    return False
+        return True
+
+    def over_grid_on_packs(self, grid: Array, dead: int | None, mode: str, packs: Any,
+                           battery: dict[str, Array]) -> Array:
+        """Trim's highest (``dead`` None) or one dead engine's least throttle over the grid,
+        flown on the packs at the landing reserve as the single case flies it
+        (:func:`tuflexperf.analysis.pack_limits.level_flight_on_packs`); NaN where not
+        attainable (trim: at some airspeed; OEI: at every one).
+
+        Every airspeed of every row is solved (no candidates): where the packs bind depends
+        on the power, not only on the throttle.
+        """
+        from tuflexperf.analysis.batch_endurance import _power_w
+        from tuflexperf.models.battery import equivalent_packs, loaded_voltage_at_power_v
+
+        prop = self.propulsion
+        u_ref, k = prop.reference_voltage_v, prop.voltage_exponent
+        live_terms, windmill = self._grid_terms(grid)
+        live = [j for j in range(len(prop.engines)) if j != dead]
+        drag = np.asarray(level_flight_drag_n(self.aircraft, grid, self.density), dtype=float)
+        other = -drag + (windmill[dead] if dead is not None and mode == "windmilling" else 0.0)
+        shape = np.broadcast_shapes(np.shape(other), (self.size, 1))
+        flyable = np.broadcast_to(self._flyable(grid), shape)
+        b_ = packs.battery
+        per_engine = b_.packs_in_parallel_per_engine
+        capacity = battery["battery.capacity_ah"][:, None]
+        circuit = np.asarray(equivalent_packs(per_engine, capacity, b_.as_read.capacity_ah),
+                             dtype=float)
+        charge = per_engine * capacity * (1.0 - battery[
+            "battery.mission.landing_reserve_fraction"][:, None])
+        cutoff = b_.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"][:, None]
+        rating = (None if b_.max_discharge_c is None
+                  else float(b_.max_discharge_c) * capacity)
+        m = 0.0 if u_ref is None else 1.5 * k
+
+        def solve(factors: dict[int, Any]) -> Array:
+            a, b, c = (sum(factors[j] * live_terms[j][i] for j in live) for i in range(3))
+            return np.broadcast_to(self._roots(a, b, c + other), shape)
+
+        def on_packs(x: Array) -> list[tuple[Array, Array, Array]]:
+            out = []
+            for j in live:
+                engine = prop.engines[j] if packs.own_surfaces else None
+                power = np.maximum(_power_w(packs, self, x, grid, engine), 0.0)
+                with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                    u = np.asarray(loaded_voltage_at_power_v(packs.params, charge, power,
+                                                             circuit, u_ref, m), dtype=float)
+                    factor = np.ones_like(u) if u_ref is None else (u / u_ref) ** k
+                    current = power * factor ** 1.5 / u / per_engine
+                out.append((u, current, factor))
+            return out
+
+        if u_ref is None:
+            x = np.where(flyable, solve(dict.fromkeys(live, 1.0)), np.nan)
+        else:  # the thrust follows the sagging pack: no closed form (pack_limits)
+            from tuflexperf.analysis.pack_limits import least_throttle_where
+
+            def excess(xs: Array) -> Array:
+                total = np.broadcast_to(other, shape)
+                for j, (_, _, factor) in zip(live, on_packs(xs), strict=True):
+                    a, b, c = live_terms[j]
+                    total = total + factor * ((a * xs + b) * xs + c)
+                return total
+
+            x = np.where(flyable, least_throttle_where(excess, shape), np.nan)
+        ok = np.isfinite(x)
+        with np.errstate(invalid="ignore"):
+            for u, current, _ in on_packs(np.nan_to_num(x)):
+                ok &= (u >= cutoff * (1.0 - 1e-12))
+                if rating is not None:
+                    ok &= ~(current > rating * (1.0 + 1e-9))
+        x = np.where(ok, x, np.nan)
+        if dead is None:
+            return np.where(np.all(ok, axis=1), np.max(x, axis=1), np.nan)
+        least = np.min(np.where(ok, x, np.inf), axis=1)
+        return np.where(np.isfinite(least), least, np.nan)
 
     def _grid_terms(self, grid: Array) -> tuple[list[tuple[Array, Array, Array]], list[Array]]:
         """:meth:`_engine_thrusts` on the grid, shared by trim and OEI (keyed on the object)."""

@@ -35,7 +35,6 @@ from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.thrust import (
     DeadEngineMode,
-    reference_voltage_note,
     total_thrust_n,
     unlapsed_density_warning,
 )
@@ -129,7 +128,9 @@ def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
     speeds = airspeed_grid(v_min, v_max)
     least = least_airspeed_m_s(case)
     aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
-    cases = []
+    from tuflexperf.analysis.pack_limits import with_packs
+
+    cases, pack_notes = [], []
     for index, engine in enumerate(propulsion.engines):
         throttle, reasons = stall_bounded(speeds, oei_solver(case, index, mode)(speeds), least,
                                           case)
@@ -140,12 +141,13 @@ def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
 
         attainable = attainable_range(full_throttle_excess, least, v_min,
                                       min(v_max, jet_ceiling_m_s(case)))
+        throttle, reasons, attainable, notes = with_packs(
+            case, f"OEI ({engine.name} dead)", speeds, throttle, reasons, attainable, index, mode)
+        pack_notes.extend(notes)
         cases.append(DeadEngineCase(speeds, throttle, engine.name, reasons, attainable))
     extrapolated, warnings = extrapolation_note(case, speeds)
     warnings.extend(jet_ceiling_note(case, speeds))
-    voltage_note = reference_voltage_note(propulsion, "OEI")
-    if voltage_note:
-        warnings.append(voltage_note)
+    warnings.extend(pack_notes)
     density_note = unlapsed_density_warning(propulsion, rho)
     if density_note:
         warnings.append(density_note)

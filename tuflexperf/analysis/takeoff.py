@@ -265,12 +265,19 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
             f"the catapult's launch_energy_j {aircraft.launch_energy_j:g} J is below the "
             f"kinetic energy at release, m V^2 / 2 = {kinetic:.0f} J ({aircraft.mass_kg:g} kg "
             f"at {release:.1f} m/s)", known)
+    if beyond_jet_velocity(case.propulsion, release, rho):  # as a lift-off there (audit)
+        jet = float(static_jet_velocity_m_s(case.propulsion, rho))
+        raise NotAttainable(
+            f"release at {release:.1f} m/s is beyond the fans' jet velocity {jet:.1f} m/s "
+            "(momentum theory), where they make no thrust to climb away", known)
     warnings = [f"catapult launch at {aircraft.launch_speed_m_s:g} m/s EAS: no runway, no "
                 "ground roll"]
     if aircraft.launch_energy_j is None:
         warnings.append(f"launch_energy_j not given: the catapult's energy is not checked "
                         f"(the release needs m V^2 / 2 = {kinetic:.0f} J)")
     air = _airborne(case, height)
+    _refuse_beyond_battery(case, np.array([release, air.speed_m_s]),
+                           (air.distance_m or 0.0) / air.speed_m_s, known)
     return TakeoffResult(
         ground_roll_m=0.0,
         liftoff_speed_m_s=release,
@@ -287,6 +294,19 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
         **air.fields(0.0, aircraft.takeoff.transition_load_factor, height),
         launch="catapult",
     )
+
+
+def _refuse_beyond_battery(case: Case, speeds: np.ndarray, seconds: float,
+                           known: dict[str, Any]) -> None:
+    """Full throttle on the packs over these airspeeds [m/s] for ``seconds``, or not
+    attainable (:func:`tuflexperf.analysis.pack_limits.takeoff_beyond_battery`; no battery:
+    nothing)."""
+    from tuflexperf.analysis.pack_limits import pack_side, takeoff_beyond_battery
+
+    side = pack_side(case)
+    why = None if side is None else takeoff_beyond_battery(case, side, speeds, seconds)
+    if why is not None:
+        raise NotAttainable(why, known)
 
 
 def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> TakeoffResult:
@@ -365,6 +385,9 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
     rotation_m = v_lo * to.rotation_time_s  # Raymer 17.8.2: rotation at the lift-off speed
 
     air = _airborne(case, height)
+    airborne_s = (air.distance_m or 0.0) / air.speed_m_s
+    _refuse_beyond_battery(case, np.append(history_speed, air.speed_m_s),
+                           float(time[-1]) + to.rotation_time_s + airborne_s, known)
     ground_roll = float(distance[-1]) + rotation_m
 
     warnings: list[str] = []

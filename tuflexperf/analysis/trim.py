@@ -31,11 +31,7 @@ from tuflexperf.analysis.level_flight import (
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import MAX_AIRSPEED_M_S, level_flight_drag_n, stall_speed_m_s
-from tuflexperf.models.thrust import (
-    reference_voltage_note,
-    total_thrust_n,
-    unlapsed_density_warning,
-)
+from tuflexperf.models.thrust import total_thrust_n, unlapsed_density_warning
 
 _cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
 
@@ -153,9 +149,11 @@ def solve_trim(case: Case) -> TrimResult:
     attainable = attainable_range(full_throttle_excess, least, v_min,
                                   min(v_max, jet_ceiling_m_s(case)))
     warnings.extend(jet_ceiling_note(case, speeds))
-    voltage_note = reference_voltage_note(propulsion, "trim")
-    if voltage_note:
-        warnings.append(voltage_note)
+    from tuflexperf.analysis.pack_limits import with_packs
+
+    throttle, reasons, attainable, notes = with_packs(case, "trim", speeds, throttle, reasons,
+                                                      attainable)
+    warnings.extend(notes)
     density_note = unlapsed_density_warning(propulsion, rho)
     if density_note:
         warnings.append(density_note)

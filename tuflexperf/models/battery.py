@@ -38,7 +38,16 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from tuflexperf.models._math import Vectorizable, exp, fmin, interp_rows, is_symbolic, sqrt
+from tuflexperf.models._math import (
+    Vectorizable,
+    exp,
+    fmax,
+    fmin,
+    interp_rows,
+    is_symbolic,
+    sqrt,
+    where,
+)
 
 SECONDS_PER_HOUR = 3600.0
 PARAMETER_NAMES: tuple[str, ...] = (
@@ -153,6 +162,67 @@ def current_at_power_a(
     disc = ocv * ocv - 4.0 * r * power_w
     disc = disc - fmin(disc, 0.0)  # max(disc, 0) with the backend-neutral helpers
     return 2.0 * power_w / (ocv + sqrt(disc))
+
+
+def loaded_voltage_at_power_v(
+    p: Vectorizable,
+    charge_ah: Vectorizable,
+    power_w: Vectorizable,
+    packs: Vectorizable = 1,
+    reference_voltage_v: float | None = None,
+    power_exponent: float = 0.0,
+) -> Vectorizable:
+    """Terminal voltage [V] of ``packs`` parallel packs delivering ``power_w`` [W]; NaN where
+    the packs cannot deliver it (beyond their maximum power).
+
+    Without a reference voltage the power is fixed: ``U = (OCV + sqrt(OCV^2 - 4 (R/n) P)) / 2``
+    (the larger root of ``U^2 - OCV U + (R/n) P = 0``, the normal branch; the current is
+    ``P / U``, :func:`current_at_power_a`). With ``reference_voltage_v`` the fan draws
+    ``P (U / U_ref)^m`` (``m = power_exponent``; the fan laws give ``1.5 x`` the thrust's
+    voltage exponent), so ``g(U) = U - OCV + (R/n) P U^(m-1) / U_ref^m = 0``: increasing in
+    ``U`` for ``m > 1``, negative near 0 and not negative at ``OCV``, one root, found by
+    Newton from the fixed-power root (monotone for a convex ``g``, ``m >= 2``; from one
+    side after one step for a concave one) and NaN where it did not converge.
+
+    Parameters
+    ----------
+    p : DischargeParameters
+        The fitted circuit of one measured pack.
+    charge_ah : float or array
+        Charge drawn from the ``packs`` together [Ah].
+    power_w : float or array
+        Electrical power at the terminals [W] (at the reference voltage, with one).
+    packs : float or array
+        Measured packs in parallel [-].
+    reference_voltage_v : float, optional
+        The voltage ``power_w`` was measured at [V].
+    power_exponent : float
+        ``m`` [-].
+
+    References
+    ----------
+    Tremblay & Dessaint (2009) (the circuit); SPEC 3 (thrust and pack voltage).
+    """
+    ocv = open_circuit_voltage_v(p, charge_ah, packs)
+    r = p.resistance_ohm / packs
+    if reference_voltage_v is None or power_exponent == 0.0:
+        disc = ocv * ocv - 4.0 * r * power_w
+        return where(disc >= 0.0, 0.5 * (ocv + sqrt(fmax(disc, 0.0))), math.nan)
+    m = float(power_exponent)
+    c = r * power_w / float(reference_voltage_v) ** m
+    # from the fixed-power root at the reference voltage's power (close: a few steps), or
+    # from the open-circuit voltage beyond that power
+    disc = ocv * ocv - 4.0 * r * power_w * fmin(ocv / float(reference_voltage_v), 1.0) ** m
+    u = where(disc >= 0.0, 0.5 * (ocv + sqrt(fmax(disc, 0.0))), ocv)
+    floor = 1e-6 * ocv
+    for _ in range(NEWTON_STEPS):
+        g = u - ocv + c * u ** (m - 1.0)
+        u = fmin(fmax(u - g / (1.0 + c * (m - 1.0) * u ** (m - 2.0)), floor), ocv)
+    g = u - ocv + c * u ** (m - 1.0)
+    return where(fmax(g, -g) <= 1e-9 * ocv, u, math.nan)
+
+
+NEWTON_STEPS = 8  # loaded_voltage_at_power_v: from a root a few % off, rounding in ~4
 
 
 def cutoff_residual_v(

@@ -1,0 +1,363 @@
+"""Can the packs fly it? Loaded voltage, current and the voltage effect at steady points.
+
+SPEC 3 and 4: "beyond the battery" fails with a reason, never a PASS. Take-off, trim and
+one engine inoperative are point analyses; where the case names a battery file each point
+is also flown on the packs (the fitted circuit of :mod:`tuflexperf.models.battery`, the
+power model the mission uses: the propulsion's power surfaces, else the battery file's
+fan-power law), by the mission's rules (``MissionModel._beyond_rating``):
+
+- **take-off**: from full packs at full throttle over the ground roll's airspeeds. The
+  loaded voltage stays at or above the cut-off and no pack's current exceeds its burst
+  rating (:data:`~tuflexperf.analysis.mission.BURST_OVER_CONTINUOUS` x the continuous one:
+  a roll lasts seconds).
+- **level flight** (trim, OEI): at the landing reserve, the lowest charge of a flight and so
+  the lowest voltage. The loaded voltage stays at or above the cut-off and the current within
+  the continuous rating (steady flight lasts). With the propulsion's ``reference_voltage_v``
+  the thrust is ``T (U / U_ref)^k`` and the power ``P (U / U_ref)^(1.5 k)`` at the loaded
+  voltage ``U``, so the least throttle and the voltage are solved together (fixed point).
+
+A pack that passed a 4.3 kW full-throttle take-off while sagging to 38.6 V against a 40.8 V
+cut-off, and trim at 45 m/s at the test's voltage that the pack holds only when fresh, had
+PASSed (outside audit).
+
+References
+----------
+Tremblay & Dessaint (2009) (the circuit); SPEC 3 (thrust and pack voltage, stall and
+"beyond the battery"); paper section 2.1 (two 12S packs per fan, 40 C).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tuflexperf.analysis.attainable import BEYOND_THE_BATTERY, AttainableRange
+from tuflexperf.io.case import Case
+from tuflexperf.models.aircraft import level_flight_drag_n
+from tuflexperf.models.battery import loaded_voltage_at_power_v
+from tuflexperf.models.thrust import (
+    density_ratio,
+    engine_thrust_n,
+    windmilling_thrust_n,
+)
+
+_SCAN = 33  # least_throttle_where: throttles scanned for the first bracket (1/32 apart)
+_BISECTIONS = 50  # ... then halved to 2^-55 of full throttle
+
+
+@dataclass(frozen=True)
+class PackSide:
+    """What the point analyses fly on: the battery, its circuit and the fans' power."""
+
+    battery: Any  # tuflexperf.io.battery.Battery
+    params: Any  # DischargeParameters
+    power: Any  # PowerSurfaces or FanPowerModel (per fan, at the case's density)
+    own_surfaces: bool
+    density_scale: float
+
+    @property
+    def rating_a(self) -> float | None:
+        """Continuous rating of one pack [A] (None without ``max_discharge_c``)."""
+        c_rate = self.battery.max_discharge_c
+        return None if c_rate is None else float(c_rate) * float(self.battery.capacity_ah)
+
+    @property
+    def reserve_charge_ah(self) -> float:
+        """Charge drawn per engine at the landing reserve [Ah]."""
+        b = self.battery
+        return b.packs_in_parallel_per_engine * b.capacity_ah * (1.0 - b.landing_reserve_fraction)
+
+
+def pack_side(case: Case) -> PackSide | None:
+    """The case's packs and power model, or None when the case names no battery file."""
+    if case.battery_path is None:
+        return None
+    from tuflexperf.analysis.endurance import characterise_battery
+    from tuflexperf.io.battery import case_battery
+    from tuflexperf.models.powertrain import power_surfaces
+
+    battery = case_battery(case)
+    characterised = characterise_battery(battery, case)
+    surfaces = power_surfaces(case.propulsion, case.density_kg_m3)
+    if surfaces is not None:
+        return PackSide(battery, characterised.fit.parameters, surfaces, True,
+                        surfaces.density_scale)
+    return PackSide(battery, characterised.fit.parameters, characterised.power.model, False, 1.0)
+
+
+def fan_power_w(side: PackSide, case: Case, engine: int, throttle: Any, airspeed: Any) -> Any:
+    """Engine ``engine``'s electrical power [W] at the reference voltage (never negative:
+    an ESC draws, it does not charge), as the mission takes it."""
+    from tuflexperf.models.powertrain import engine_power_w
+
+    if side.own_surfaces:
+        power = side.density_scale * np.asarray(
+            engine_power_w(case.propulsion.engines[engine], throttle, airspeed), dtype=float)
+    else:
+        power = np.asarray(side.power.electrical_power_w(throttle, airspeed), dtype=float)
+    return np.maximum(power, 0.0)
+
+
+def on_packs(side: PackSide, case: Case, power_w: Any, charge_ah: float
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Loaded voltage [V], current per pack [A] and thrust factor ``(U/U_ref)^k`` [-] of one
+    engine's packs drawing ``power_w`` [W] (at the reference voltage) after ``charge_ah``."""
+    prop = case.propulsion
+    u_ref, k = prop.reference_voltage_v, prop.voltage_exponent
+    m = 0.0 if u_ref is None else 1.5 * k
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        u = np.asarray(loaded_voltage_at_power_v(
+            side.params, charge_ah, power_w, side.battery.circuit_packs, u_ref, m), dtype=float)
+        factor = np.ones_like(u) if u_ref is None else (u / u_ref) ** k
+        power = power_w * (1.0 if u_ref is None else factor ** 1.5)
+        current = power / u / side.battery.packs_in_parallel_per_engine
+    return u, current, factor
+
+
+def limit_reason(side: PackSide, voltage_v: float, current_a: float, power_w: float,
+                 rating_a: float | None, rating_name: str) -> str | None:
+    """Why one engine's packs cannot fly a point (None: they can)."""
+    cutoff = side.battery.cutoff_voltage_v
+    if not np.isfinite(voltage_v):
+        return f"the packs cannot deliver {power_w:.0f} W (beyond their maximum power)"
+    if voltage_v < cutoff * (1.0 - 1e-12):
+        return (f"the packs sag to {voltage_v:.2f} V under {power_w:.0f} W, below their "
+                f"cut-off {cutoff:.2f} V")
+    if rating_a is not None and current_a > rating_a * (1.0 + 1e-9):
+        return (f"{current_a:.1f} A per pack, beyond its {rating_name} rating {rating_a:.1f} A "
+                f"(max_discharge_c {side.battery.max_discharge_c:g} C x "
+                f"{side.battery.capacity_ah:g} Ah)")
+    return None
+
+
+def _thrust_terms(case: Case, speeds: np.ndarray, engine: int) -> tuple[np.ndarray, ...]:
+    """Engine ``engine``'s thrust [N] as ``a x^2 + b x + c`` in throttle at ``speeds``."""
+    prop = case.propulsion
+    scale = density_ratio(prop, case.density_kg_m3)
+    t = [np.asarray(engine_thrust_n(prop.engines[engine], x, speeds, scale), dtype=float)
+         * np.ones_like(speeds) for x in (0.0, 0.5, 1.0)]
+    a = 2.0 * (t[2] - 2.0 * t[1] + t[0])
+    return a, t[2] - t[0] - a, t[0]
+
+
+@dataclass(frozen=True)
+class LevelOnPacks:
+    """Level flight at the landing reserve per airspeed: the least throttle (NaN where not
+    attainable), and per airspeed why the packs cannot fly it (None where they can)."""
+
+    throttle: np.ndarray
+    beyond: tuple[str | None, ...]
+    voltage_v: np.ndarray  # least loaded voltage over the live engines [V]
+
+    @property
+    def any_beyond(self) -> bool:
+        return any(b is not None for b in self.beyond)
+
+
+def least_throttle_where(excess: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """Least throttle ``x`` in [0, 1] with ``excess(x) >= 0`` at each point (NaN where none):
+    a scan of :data:`_SCAN` throttles, then bisection to 1e-15 on the first bracket.
+
+    With the packs' voltage in the thrust the excess need not grow with the throttle (more
+    power sags the pack), so no closed form holds: a fixed-point iteration on the closed
+    form had "converged" on 0.968 at 43 m/s where no throttle reaches (a test's find).
+    ``excess`` takes an array of throttles of ``shape`` (NaN counts as not reaching).
+    """
+    x = np.zeros(shape)
+    with np.errstate(invalid="ignore"):
+        found = np.asarray(excess(x)) >= 0.0
+        low, high = np.zeros(shape), np.zeros(shape)
+        step = 1.0 / (_SCAN - 1)
+        for n in range(1, _SCAN):
+            at = n * step
+            reached = ~found & (np.asarray(excess(np.full(shape, at))) >= 0.0)
+            low = np.where(reached, at - step, low)
+            high = np.where(reached, at, high)
+            found |= reached
+        for _ in range(_BISECTIONS):
+            mid = 0.5 * (low + high)
+            up = np.asarray(excess(mid)) >= 0.0
+            low, high = np.where(up, low, mid), np.where(up, mid, high)
+    return np.where(found, high, np.nan)
+
+
+def level_flight_on_packs(case: Case, side: PackSide, speeds: np.ndarray,
+                          throttle: np.ndarray, flyable: np.ndarray | None = None,
+                          dead: int | None = None, mode: str = "windmilling") -> LevelOnPacks:
+    """The least level-flight throttle on the packs at the landing reserve (module docstring).
+
+    Parameters
+    ----------
+    speeds : array
+        True airspeeds [m/s].
+    throttle : array
+        The least throttle at the reference voltage [fraction], NaN where not attainable.
+    flyable : array of bool, optional
+        Where level flight may be attainable at all (above stall, short of the jet
+        velocity); with a reference voltage the throttle is solved again there.
+    dead : int, optional
+        The inoperative engine (OEI), ``mode`` its drag (``windmilling`` or ``zero``).
+    """
+    prop, rho = case.propulsion, case.density_kg_m3
+    v = np.asarray(speeds, dtype=float)
+    q = side.reserve_charge_ah
+    live = [j for j in range(len(prop.engines)) if j != dead]
+    x = np.asarray(throttle, dtype=float).copy()
+    flyable = np.isfinite(x) if flyable is None else np.asarray(flyable, dtype=bool)
+    beyond: list[str | None] = [None] * v.size
+    rating = side.rating_a
+
+    def mark(n: int, engine: int, why: str | None) -> None:
+        if why is not None and beyond[n] is None:
+            beyond[n] = f"{prop.engines[engine].name}: {why}"
+
+    if prop.reference_voltage_v is not None:
+        terms = {j: _thrust_terms(case, v, j) for j in live}
+        other = -np.asarray(level_flight_drag_n(case.aircraft, v, rho), dtype=float)
+        if dead is not None and mode == "windmilling":
+            other = other + np.asarray(windmilling_thrust_n(
+                prop.engines[dead], v, density_ratio(prop, rho), rho, prop.fan_area_m2),
+                dtype=float)
+
+        def excess(xs: np.ndarray) -> np.ndarray:
+            total = other.copy()
+            for j in live:
+                factor = on_packs(side, case, fan_power_w(side, case, j, xs, v), q)[2]
+                a, b, c = terms[j]
+                total = total + factor * ((a * xs + b) * xs + c)
+            return total
+
+        x = np.where(flyable, least_throttle_where(excess, v.shape), np.nan)
+        for n in np.flatnonzero(flyable & ~np.isfinite(x)):
+            beyond[n] = ("needs more than full throttle at the packs' loaded voltage "
+                         f"(thrust x (U/{prop.reference_voltage_v:g} V)^"
+                         f"{prop.voltage_exponent:g}), or more power than they give")
+    least_u = np.full(v.shape, np.inf)
+    for j in live:
+        power = fan_power_w(side, case, j, np.nan_to_num(x), v)
+        u, current, _ = on_packs(side, case, power, q)
+        least_u = np.where(np.isfinite(x), np.fmin(least_u, u), least_u)
+        for n in np.flatnonzero(np.isfinite(x)):
+            mark(int(n), j, limit_reason(side, float(u[n]), float(current[n]),
+                                         float(power[n]), rating, "continuous"))
+    x = np.where([b is None for b in beyond], x, np.nan)
+    return LevelOnPacks(x, tuple(beyond), least_u)
+
+
+def beyond_note(what: str, side: PackSide, speeds: np.ndarray, on: LevelOnPacks) -> str:
+    """The warning naming where and why level flight is beyond the battery."""
+    hit = np.array([b is not None for b in on.beyond])
+    v = np.asarray(speeds, dtype=float)[hit]
+    first = next(b for b in on.beyond if b is not None)
+    span = f"{v.min():g}" if v.min() == v.max() else f"{v.min():g}-{v.max():g}"
+    return (f"{what}: {BEYOND_THE_BATTERY} at {span} m/s at the landing reserve "
+            f"({side.battery.landing_reserve_fraction:.0%} of the charge left): {first}")
+
+
+def takeoff_beyond_battery(case: Case, side: PackSide, speeds: np.ndarray,
+                           seconds: float) -> str | None:
+    """Why full packs cannot give full throttle over these take-off airspeeds [m/s] for
+    ``seconds`` [s] (None: they can): the loaded voltage at or above the cut-off and the
+    current within the burst rating, on full packs and again after the charge the most
+    current drawn for the whole take-off would take (an upper bound: the packs sag as
+    they give it; a pack that held at the brake release reached its cut-off 2.7 s into
+    the mission's roll)."""
+    from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
+
+    rating = side.rating_a
+    burst = None if rating is None else BURST_OVER_CONTINUOUS * rating
+    v = np.asarray(speeds, dtype=float)
+    per_engine = side.battery.packs_in_parallel_per_engine
+    for j, engine in enumerate(case.propulsion.engines):
+        power = fan_power_w(side, case, j, np.ones_like(v), v)
+        charge = 0.0
+        for _ in range(2):
+            u, current, _ = on_packs(side, case, power, charge)
+            for n in range(v.size):
+                why = limit_reason(side, float(u[n]), float(current[n]), float(power[n]),
+                                   burst, "burst")
+                if why is not None:
+                    when = "on full packs" if charge == 0.0 else (
+                        f"after the take-off's {charge:.3f} Ah")
+                    return (f"full throttle at {v[n]:.1f} m/s {when}: {engine.name}: {why}: "
+                            f"not attainable, {BEYOND_THE_BATTERY}")
+            charge = float(np.max(current)) * per_engine * seconds / SECONDS_PER_HOUR
+    return None
+
+
+def with_packs(case: Case, what: str, speeds: np.ndarray, throttle: np.ndarray,
+               reasons: tuple[str | None, ...], attainable: AttainableRange,
+               dead: int | None = None, mode: str = "windmilling"
+               ) -> tuple[np.ndarray, tuple[str | None, ...], AttainableRange, list[str]]:
+    """Trim's or OEI's grid flown on the case's packs (unchanged without a battery file):
+    the throttles, each airspeed's reason, the attainable range and the notes.
+
+    The range stays the exact one of full throttle at the reference voltage where the packs
+    change nothing; otherwise it is the grid's (0.5 m/s steps), as the note says.
+    """
+    side = pack_side(case)
+    if side is None:
+        from tuflexperf.models.thrust import reference_voltage_note
+
+        note = reference_voltage_note(case.propulsion, what)
+        return throttle, reasons, attainable, [note] if note else []
+    from tuflexperf.analysis.attainable import BELOW_STALL, BEYOND_JET_VELOCITY
+
+    flyable = np.array([r not in (BELOW_STALL, BEYOND_JET_VELOCITY) for r in reasons])
+    on = level_flight_on_packs(case, side, speeds, throttle, flyable, dead, mode)
+    notes = []
+    if case.propulsion.reference_voltage_v is not None:
+        notes.append(f"{what} at the packs' loaded voltage at the landing reserve "
+                     f"({side.battery.landing_reserve_fraction:.0%} of the charge left), "
+                     f"least {np.min(on.voltage_v):.1f} V: thrust x (U/"
+                     f"{case.propulsion.reference_voltage_v:g} V)^"
+                     f"{case.propulsion.voltage_exponent:g}")
+    changed = on.any_beyond or not np.allclose(on.throttle, throttle, rtol=0.0, atol=1e-12,
+                                                equal_nan=True)
+    if not changed:
+        return throttle, reasons, attainable, notes
+    reasons = tuple(BEYOND_THE_BATTERY if b is not None else None if np.isfinite(x) else r
+                    for r, b, x in zip(reasons, on.beyond, on.throttle, strict=True))
+    if on.any_beyond:
+        notes.append(beyond_note(what, side, speeds, on))
+    flown = np.asarray(speeds, dtype=float)[np.isfinite(on.throttle)]
+    if flown.size == 0:
+        attainable = AttainableRange(None, None)
+    else:
+        inside = np.isfinite(on.throttle[(speeds >= flown.min()) & (speeds <= flown.max())])
+        attainable = AttainableRange(float(flown.min()), float(flown.max()), bool(inside.all()))
+        notes.append(f"{what}: the attainable airspeeds on the packs are the grid's "
+                     f"({flown.min():g}-{flown.max():g} m/s, 0.5 m/s steps)")
+    return on.throttle, reasons, attainable, notes
+
+
+def power_limit_w(side: PackSide, battery: dict[str, np.ndarray]) -> np.ndarray:
+    """Most power [W] one engine's packs give at the landing reserve without a reference
+    voltage, per row of ``battery`` (the varied battery keys): within the cut-off, the
+    continuous rating and the packs' maximum power.
+
+    With ``U = OCV - (R/n) P / U`` falling as ``P`` rises: at the cut-off ``U = Vc`` the
+    power is ``Vc (OCV - Vc) / (R/n)``, at the rated current ``I`` it is ``I (OCV - (R/n) I)``
+    (on the normal branch, ``I <= OCV / (2 R/n)``), and no more than ``OCV^2 / (4 R/n)``.
+    """
+    from tuflexperf.models.battery import equivalent_packs, open_circuit_voltage_v
+
+    b = side.battery
+    per_engine = b.packs_in_parallel_per_engine
+    capacity = np.asarray(battery["battery.capacity_ah"], dtype=float)
+    circuit = np.asarray(equivalent_packs(per_engine, capacity, b.as_read.capacity_ah),
+                         dtype=float)
+    charge = per_engine * capacity * (1.0 - battery["battery.mission.landing_reserve_fraction"])
+    cutoff = b.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"]
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        ocv = np.asarray(open_circuit_voltage_v(side.params, charge, circuit), dtype=float)
+        r = side.params.resistance_ohm / circuit
+        most = ocv * ocv / (4.0 * r)
+        limit = np.where(cutoff >= 0.5 * ocv, cutoff * (ocv - cutoff) / r, most)
+        if b.max_discharge_c is not None:
+            current = float(b.max_discharge_c) * capacity * per_engine
+            limit = np.fmin(limit, np.where(current <= ocv / (2.0 * r),
+                                            current * (ocv - r * current), most))
+    return np.where(np.isfinite(limit), limit, -np.inf)
