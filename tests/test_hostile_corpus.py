@@ -216,6 +216,8 @@ _BY_SIGINT = {130, -signal.SIGINT}
 @pytest.mark.parametrize(("signum", "when", "codes"), [
     (signal.SIGINT, "*.png", {130}), (signal.SIGTERM, "*.png", {130}),
     (signal.SIGINT, "", _BY_SIGINT), (signal.SIGTERM, "", {130}),
+    # a closed terminal or a dropped ssh session: it had left the staging behind (audit)
+    (signal.SIGHUP, "*.png", {130}), (signal.SIGHUP, "", {130}),
 ])
 def test_interrupting_the_whole_report_process_group(workdir: Path, signum: int, when: str,
                                                      codes: set[int]) -> None:

@@ -60,6 +60,8 @@ def _start_with_workers() -> tuple[subprocess.Popen[str], list[int]]:
     (signal.SIGINT, 0.0, True), (signal.SIGINT, 0.3, True), (signal.SIGTERM, 0.15, True),
     # to the command alone (a supervisor's SIGTERM): its workers are stopped by it
     (signal.SIGTERM, 0.0, False), (signal.SIGINT, 0.3, False),
+    # a hang-up to the command alone had left its workers running, orphaned (outside audit)
+    (signal.SIGHUP, 0.3, False),
 ])
 def test_an_interrupt_ends_the_command_and_its_workers_quietly(
     signum: int, after_s: float, group: bool

@@ -15,6 +15,9 @@ import signal
 import sys
 
 INTERRUPTED_EXIT = 130  # 128 + SIGINT; SIGTERM unwinds like Ctrl-C (tuflexperf.io.files)
+# as tuflexperf.io.files.INTERRUPT_SIGNALS (not imported: nothing but the standard library
+# is loaded before the command starts)
+_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
 
 
 def _exit_at_once(signum: int, frame: object) -> None:
@@ -22,7 +25,7 @@ def _exit_at_once(signum: int, frame: object) -> None:
 
 
 def _exit_on_interrupt() -> None:
-    for signum in (signal.SIGINT, signal.SIGTERM):
+    for signum in _SIGNALS:
         signal.signal(signum, _exit_at_once)
 
 
@@ -65,7 +68,7 @@ def main() -> None:
         # would be raised where nothing reports it (the process died of the signal). Once
         # the output has replaced the earlier one the run is done whatever comes now
         if output_committed():
-            for signum in (signal.SIGINT, signal.SIGTERM):
+            for signum in _SIGNALS:
                 signal.signal(signum, signal.SIG_IGN)
         else:
             _exit_on_interrupt()

@@ -573,7 +573,13 @@ def read_marker(folder: Path) -> str | None:
 
 
 class _Terminated(KeyboardInterrupt):
-    """SIGTERM, delivered as an interrupt so every cleanup path runs (and exit is 130)."""
+    """SIGTERM (or SIGHUP), delivered as an interrupt so every cleanup path runs (exit 130)."""
+
+
+# Ctrl-C, kill, and the hang-up of a closed terminal or a dropped ssh session: a hang-up
+# had left the staging folder and the --workers helpers behind (outside audit)
+INTERRUPT_SIGNALS: tuple[int, ...] = tuple(
+    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
 _signals_received: list[int] = []
@@ -586,7 +592,7 @@ _committed = [False]
 
 
 def _interrupt(signum: int) -> KeyboardInterrupt:
-    return _Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+    return KeyboardInterrupt() if signum == signal.SIGINT else _Terminated()
 
 
 def _raise_interrupt(signum: int, frame: object) -> None:
@@ -640,8 +646,8 @@ def install_interrupt_handlers() -> None:
             default_hook(unraisable)
 
     with contextlib.suppress(ValueError):  # not the main thread: leave the defaults
-        signal.signal(signal.SIGINT, _raise_interrupt)
-        signal.signal(signal.SIGTERM, _raise_interrupt)
+        for signum in INTERRUPT_SIGNALS:
+            signal.signal(signum, _raise_interrupt)
         sys.unraisablehook = quiet_interrupts
 
 
@@ -671,7 +677,7 @@ def release_interrupts() -> None:
     parent reports the interrupt and removes what was staged."""
     _signals_received.clear()  # the parent's to report, not this helper's
     _holding[0] = False
-    for signum in (signal.SIGINT, signal.SIGTERM):
+    for signum in INTERRUPT_SIGNALS:
         signal.signal(signum, signal.SIG_DFL)
 
 
