@@ -458,3 +458,35 @@ def test_a_folder_or_device_named_as_an_input_is_said_as_such(tmp_path) -> None:
     _assert_bad(runner.invoke(app, ["check", str(path)]), "aircraft: not a regular file")
     aircraft.unlink()
     _assert_bad(runner.invoke(app, ["check", str(path)]), "aircraft: file not found")
+
+
+@pytest.mark.parametrize(("file", "old", "new", "message"), [
+    # a p02 of 1e300 and a p01 that gives 150 N at idle PASSed trim at throttle 0 (audit)
+    ("propulsion.yaml", "p02: 0.0006833333333", "p02: 1e300", "inside the tested range"),
+    ("propulsion.yaml", "p01: -0.13", "p01: 5", "at throttle 0"),
+    ("propulsion.yaml", "tested_airspeed_m_s: [0, 30]", "tested_airspeed_m_s: [0, 1e308]",
+     "tested_airspeed_m_s"),
+])
+def test_nonsense_models_are_bad_input_not_a_pass(tmp_path, file, old, new, message):
+    from tests.conftest import copy_shipped_case
+
+    case = copy_shipped_case(tmp_path)
+    path = tmp_path / "data" / "tuflex" / file
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new, 1))
+    _assert_bad(runner.invoke(app, ["check", str(case)]), file, message)
+
+
+def test_a_catapult_release_beyond_mach_1_or_the_jet_velocity_is_no_pass(tmp_path):
+    from tests.conftest import copy_shipped_case
+
+    case = copy_shipped_case(tmp_path)
+    aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
+    shipped = aircraft.read_text()
+    aircraft.write_text(shipped + "launch: catapult\nlaunch_speed_m_s: 400\n")
+    _assert_bad(runner.invoke(app, ["takeoff", "--case", str(case)]), "aircraft.yaml",
+                "launch_speed_m_s")
+    aircraft.write_text(shipped + "launch: catapult\nlaunch_speed_m_s: 150\n")
+    result = runner.invoke(app, ["takeoff", "--case", str(case)])
+    assert result.exit_code == 1 and "beyond the fans' jet velocity" in result.stderr

@@ -78,7 +78,8 @@ class AircraftSchema(StrictModel):
     cl_max: Annotated[float, Field(gt=0, le=MAX_CL_MAX)]
     takeoff: TakeoffSchema
     launch: Literal["runway", "catapult"] = "runway"
-    launch_speed_m_s: Positive | None = None  # EAS at the end of the catapult stroke
+    # EAS at the end of the catapult stroke; below Mach 1 (400 m/s "flew"; outside audit)
+    launch_speed_m_s: Annotated[float, Field(gt=0, le=MAX_AIRSPEED_M_S)] | None = None
     launch_energy_j: Annotated[float, Field(ge=0)] | None = None  # from ground equipment
 
     @model_validator(mode="after")
@@ -206,6 +207,9 @@ class PropulsionSchema(StrictModel):
         low, high = self.tested_airspeed_m_s
         if not low < high:
             raise ValueError(f"tested_airspeed_m_s: low {low} must be below high {high}")
+        if not (low >= 0.0 and high <= MAX_AIRSPEED_M_S):  # [0, 1e308] silenced every note
+            raise ValueError(f"tested_airspeed_m_s: [{low:g}, {high:g}] m/s is no range a fan "
+                             f"was tested over (0 to {MAX_AIRSPEED_M_S:g} m/s, below Mach 1)")
         names = [engine.name for engine in self.engines]
         if len(set(names)) != len(names):
             raise ValueError(f"engines: duplicate engine names {names}")
@@ -523,6 +527,8 @@ def refuse_absurd_propulsion(case: Case) -> None:
 
     weight = case.aircraft.weight_n
     scale = density_ratio(case.propulsion, case.density_kg_m3)
+    low, high = case.propulsion.tested_airspeed_m_s
+    throttle, airspeed = np.meshgrid(np.linspace(0.0, 1.0, 11), np.linspace(low, high, 13))
     for index, engine in enumerate(case.propulsion.engines):
         static = float(engine_thrust_n(engine, 1.0, 0.0, scale))
         where = f"{case.propulsion_path}: engines[{index}] ({engine.name})"
@@ -535,6 +541,24 @@ def refuse_absurd_propulsion(case: Case) -> None:
                 f"x the aircraft's weight ({weight:.3g} N): physically absurd; is throttle_unit "
                 "right (fraction vs percent)?"
             )
+        # inside the tested range the model is the measurement: a p02 of 1e300 (or a p01
+        # giving 150 N at idle) PASSed trim at throttle 0 (outside audit)
+        with np.errstate(over="ignore", invalid="ignore"):
+            thrust = np.asarray(engine_thrust_n(engine, throttle, airspeed, scale), dtype=float)
+        worst = np.unravel_index(np.nanargmax(np.abs(np.nan_to_num(thrust, nan=np.inf))),
+                                 thrust.shape)
+        if not abs(thrust[worst]) <= ABSURD_THRUST_TO_WEIGHT * weight:
+            raise InputError(
+                f"{where}: thrust {thrust[worst]:.4g} N at throttle {throttle[worst]:.1f}, "
+                f"{airspeed[worst]:.3g} m/s (inside the tested range) is beyond "
+                f"{ABSURD_THRUST_TO_WEIGHT:g} x the aircraft's weight: check the coefficients")
+        idle = thrust[:, 0]
+        if np.max(idle) > 0.5 * static:
+            k = int(np.argmax(idle))
+            raise InputError(
+                f"{where}: thrust {idle[k]:.4g} N at throttle 0 and {airspeed[k, 0]:.3g} m/s "
+                f"(inside the tested range), more than half the full-throttle static "
+                f"{static:.4g} N: a fan at idle makes no such thrust; check the coefficients")
 
 
 def load_case(path: Path | str | None = None) -> Case:
