@@ -826,3 +826,22 @@ def test_the_continuous_rating_holds_over_any_30_s_not_per_segment(tmp_path: Pat
     assert "on average over 30 s (0-30 s into the mission)" in fast.reason
     slow = fly(26.0)  # ~11 A per pack: the same segments, within the rating
     assert slow.attainable
+
+
+def test_a_segment_beyond_the_tested_airspeeds_says_so(tmp_path: Path,
+                                                      shipped: MissionModel) -> None:
+    """SPEC: extrapolation is said; a mission cruising at 38 m/s (tested to 30) said nothing."""
+    assert not [w for w in shipped.fly().warnings if "extrapolated" in w]
+    fast = _mission(tmp_path, """\
+        name: fast
+        segments:
+          - {type: takeoff}
+          - {type: climb, to_altitude_m: 100, airspeed_m_s: 20, throttle: 1.0}
+          - {type: cruise, airspeed_m_s: 38, time_min: 2}
+          - {type: loiter, airspeed_m_s: 20, time_min: 1}
+        """)
+    result = MissionModel(load_case(None), load_mission(fast), None).fly()
+    notes = [w for w in result.warnings if "extrapolated" in w]
+    true = float(true_airspeed_m_s(38.0, isa_density_kg_m3(100.0)))
+    assert notes == [f"segment 3 (cruise): thrust model extrapolated at {true:.1f} m/s true "
+                     "(tested 0-30 m/s)"]

@@ -1153,8 +1153,25 @@ class MissionModel:
             reason=reason or (f"lands with {100 * landing:.1f} % charge (reserve "
                               f"{100 * self.reserve:g} %)"),
             engines=self.engines, history=history, solved=solved, ended_at_s=ended_at,
-            warnings=(*self.start_notes, *self.battery.scaled_notes),
+            warnings=(*self.start_notes, *self.battery.scaled_notes,
+                      *self._extrapolation_notes(v, segment_of)),
         )
+
+    def _extrapolation_notes(self, v: np.ndarray, segment_of: np.ndarray) -> list[str]:
+        """Per segment flown outside the thrust model's tested airspeeds: a note saying so
+        (SPEC: extrapolation is said; a mission at 40 m/s said nothing; outside audit)."""
+        low, high = self.case.propulsion.tested_airspeed_m_s
+        with np.errstate(invalid="ignore"):
+            outside = (v < low - 1e-9) | (v > high + 1e-9)
+        notes = []
+        for k in np.unique(np.asarray(segment_of)[outside]).astype(int):
+            speeds = v[outside & (segment_of == k)]
+            segment = self.mission.segments[k]
+            span = (f"{speeds.min():.1f}" if round(speeds.min(), 1) == round(speeds.max(), 1)
+                    else f"{speeds.min():.1f}-{speeds.max():.1f}")
+            notes.append(f"segment {k + 1} ({segment.type}): thrust model extrapolated at "
+                         f"{span} m/s true (tested {low:g}-{high:g} m/s)")
+        return notes
 
     def _braking_engine(self, throttle: float, v: np.ndarray, h: np.ndarray,
                         live: list[int]) -> tuple[int, str] | None:
