@@ -24,6 +24,7 @@ import numpy as np
 from tuflexperf.analysis.attainable import (
     BELOW_STALL,
     BEYOND_JET_VELOCITY,
+    BEYOND_THE_BATTERY,
     NEEDS_MORE_THAN_FULL_THROTTLE,
 )
 from tuflexperf.io.case import Case
@@ -112,7 +113,7 @@ def _legend(ax: Any, **kwargs: Any) -> Any:
 _REQUIREMENT_TEXT_COLUMNS = 128
 
 # hatch of a stretch not attainable, by reason (full throttle not enough: the plain band)
-_REASON_HATCH = {BELOW_STALL: "..", BEYOND_JET_VELOCITY: "xx"}
+_REASON_HATCH = {BELOW_STALL: "..", BEYOND_JET_VELOCITY: "xx", BEYOND_THE_BATTERY: "\\\\"}
 
 
 def _reason_runs(reasons: Sequence[str | None], throttle: Any) -> list[tuple[int, int, str]]:
