@@ -129,7 +129,14 @@ def test_fitted_model_is_a_drop_in_for_check(fitted, tmp_path: Path) -> None:
     runner = CliRunner()
     shipped = runner.invoke(app, ["check", str(SHIPPED_CASE), "--json"])
     refit = runner.invoke(app, ["check", str(path), "--json"])
-    assert refit.exit_code == shipped.exit_code, refit.stderr
     verdicts = {r["name"]: r["passed"] for r in json.loads(shipped.stdout)["results"]}
-    refitted = {r["name"]: r["passed"] for r in json.loads(refit.stdout)["results"]}
-    assert refitted == verdicts
+    results = {r["name"]: r for r in json.loads(refit.stdout)["results"]}
+    # the refit carries its runs' pack voltage (reference_voltage_v), which the shipped
+    # reconstruction has not: trim is flown at the landing reserve's loaded voltage, where
+    # the top of the envelope needs more than full throttle (analysis.pack_limits)
+    trim = results.pop("trim_throttle_max")
+    assert refit.exit_code == 1 and not trim["passed"], refit.stderr
+    assert "beyond the battery at 42.5-45 m/s" in trim["reason"]
+    assert any("loaded voltage" in w for w in trim["warnings"])
+    verdicts.pop("trim_throttle_max")
+    assert {name: r["passed"] for name, r in results.items()} == verdicts

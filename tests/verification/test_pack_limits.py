@@ -197,3 +197,26 @@ def test_the_batch_flies_trim_and_oei_on_the_packs_as_the_single_case(tmp_path, 
                 assert np.isnan(got), (name, row, got)
             else:
                 assert got == pytest.approx(expected, abs=1e-9), (name, row)
+
+
+@pytest.mark.parametrize(("reference_v", "c_rate"), [(None, None), (None, 4.7), (47.3, None)])
+def test_the_batch_takes_off_on_the_packs_as_the_single_case(tmp_path, reference_v, c_rate):
+    """Full throttle at the brake release and after the take-off's charge: the rows' packs
+    decide as the single case's (a batch that took off where the case could not)."""
+    capacities = [0.7, 0.9, 1.1, 1.3, 1.45, 1.55, 1.7, 2.0, 5.0, 8.0]
+    nominal = _case(tmp_path / "nominal", reference_v, c_rate)
+    batch = BatchEvaluator(nominal).evaluate({"battery.capacity_ah": np.array(capacities)})
+    verdicts = []
+    for i, capacity in enumerate(capacities):
+        single = _case(tmp_path / f"row{i}", reference_v, c_rate,
+                       (f"battery.capacity_ah={capacity}",))
+        got = float(batch.values["takeoff_ground_roll"][i])
+        try:
+            expected = solve_takeoff(single).ground_roll_m
+        except NotAttainable:
+            assert np.isnan(got), capacity
+            verdicts.append(False)
+            continue
+        assert got == pytest.approx(expected, rel=1e-6), capacity
+        verdicts.append(True)
+    assert True in verdicts and False in verdicts  # the rows straddle the packs' limit

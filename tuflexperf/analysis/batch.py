@@ -240,7 +240,7 @@ class BatchEvaluator:
             self._endurance = battery_side(case)
         # trim and OEI are flown on the packs as the single case flies them (pack_limits)
         self._packs: Any = None
-        if any(r.block in ("envelope", "oei") for r in self.requirements):
+        if self.requirements:
             from tuflexperf.analysis.pack_limits import pack_side
 
             self._packs = pack_side(case)
@@ -347,16 +347,26 @@ class BatchEvaluator:
         if any(r.block in ("envelope", "oei") for r in self.requirements):
             grid, unflown = self._grids(values, model.density, size)  # trim's and OEI's
         catapult = self.case.aircraft.launch == "catapult"
+        height = _column(values, "requirements.takeoff.obstacle_height_m",
+                         obstacle_height_of(self.case), size)
+
+        def launched() -> tuple[Array, Array, Array, Array]:
+            # a catapult's "roll" is its release: no runway (SPEC 4), as solve_takeoff; the
+            # packs give full throttle over it (pack_limits.takeoff_beyond_battery)
+            found = model.catapult_release() if catapult else model.ground_roll()
+            if self._packs is None:
+                return found
+            within = model.launch_within_packs(found, height, catapult, self._packs,
+                                               self._battery_rows(values, size))
+            return found[0], found[1], found[2], np.where(within, found[3], 0.0)
+
         for requirement in self.requirements:
             limits[requirement.name] = self._limit(values, requirement, size)
             if requirement.name == "takeoff_ground_roll":
-                # a catapult's "roll" is its release: no runway (SPEC 4), as solve_takeoff
-                roll = roll or (model.catapult_release() if catapult else model.ground_roll())
+                roll = roll or launched()
                 out[requirement.name] = np.where(roll[3] > 0.5, roll[0], np.nan)
             elif requirement.name == "takeoff_distance_to_obstacle":
-                roll = roll or (model.catapult_release() if catapult else model.ground_roll())
-                height = _column(values, "requirements.takeoff.obstacle_height_m",
-                                 obstacle_height_of(self.case), size)
+                roll = roll or launched()
                 out[requirement.name] = model.distance_to_obstacle(roll, height)
             elif requirement.block == "envelope":
                 value = model.trim_max_throttle(grid, self._candidates()[0])
@@ -378,7 +388,7 @@ class BatchEvaluator:
                 out[requirement.name] = np.where(unflown, np.nan, value)
             else:
                 # a catapult launch starts airborne at its release speed (no runway)
-                launch = roll or (model.catapult_release() if catapult else model.ground_roll())
+                launch = roll or launched()
                 roll = launch
                 key = "requirements.endurance.throttle"
                 throttle = _column(values, key, self.case.requirements.endurance.throttle, size)
@@ -801,8 +811,67 @@ class _Model:
         short = catapult_energy_shortfall(
             mass, release, None if energy is None else np.asarray(energy, dtype=float).reshape(-1))
         ok = (release >= stall_speed(self) * (1.0 - 1e-12)) & ~short
+        # no thrust to climb away beyond the fans' jet velocity (solve_takeoff)
+        density = np.asarray(self.density, dtype=float).reshape(-1, 1)
+        ok &= ~np.asarray(beyond_jet_velocity(self.propulsion, release[:, None], density),
+                          dtype=bool).reshape(-1)
         zero = np.zeros(self.size)
         return zero, zero, release, ok.astype(float)
+
+    def launch_within_packs(self, roll: tuple[Array, Array, Array, Array], height: Any,
+                            catapult: bool, packs: Any, battery: dict[str, Array]
+                            ) -> NDArray[np.bool_]:
+        """Per row: the packs give full throttle over the take-off, as the single case
+        checks it (:func:`tuflexperf.analysis.pack_limits.takeoff_beyond_battery`): over the
+        roll's 101 history airspeeds (a catapult: its release) and the transition speed, on
+        full packs and after the charge the most current for the whole take-off (roll,
+        rotation, and the arc and climb to the obstacle at the transition speed) would draw,
+        the loaded voltage at or above the cut-off and each pack within its burst rating."""
+        from tuflexperf.analysis.batch_endurance import _power_w
+        from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
+        from tuflexperf.analysis.takeoff import HISTORY_POINTS
+        from tuflexperf.models.battery import equivalent_packs, loaded_voltage_at_power_v
+
+        prop, b_ = self.propulsion, packs.battery
+        v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
+                          dtype=float).reshape(-1, 1) * np.ones((self.size, 1))
+        radius = transition_radius_m(v_tr, self.aircraft.takeoff.transition_load_factor)
+        gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
+        arc, climb, _ = obstacle_distances_m(radius, gradient, height)
+        airborne = (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
+        airborne = np.where(np.isfinite(airborne), airborne, 0.0)
+        seconds = np.nan_to_num(roll[1]) + airborne / v_tr[:, 0]
+        v_lo = np.nan_to_num(roll[2]).reshape(-1, 1)
+        along = (v_lo if catapult else
+                 v_lo * np.linspace(0.0, 1.0, HISTORY_POINTS)[None, :])
+        speeds = np.concatenate([along * np.ones((self.size, 1)), v_tr], axis=1)
+        per_engine = b_.packs_in_parallel_per_engine
+        capacity = battery["battery.capacity_ah"][:, None]
+        circuit = np.asarray(equivalent_packs(per_engine, capacity, b_.as_read.capacity_ah),
+                             dtype=float)
+        cutoff = b_.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"][:, None]
+        burst = (None if b_.max_discharge_c is None
+                 else BURST_OVER_CONTINUOUS * float(b_.max_discharge_c) * capacity)
+        u_ref, k = prop.reference_voltage_v, prop.voltage_exponent
+        m = 0.0 if u_ref is None else 1.5 * k
+        ok = np.ones(self.size, dtype=bool)
+        for engine in prop.engines if packs.own_surfaces else (None,):
+            power = np.maximum(_power_w(packs, self, 1.0, speeds, engine), 0.0)
+            power = power * np.ones_like(speeds)
+            charge = np.zeros((self.size, 1))
+            for _ in range(2):
+                with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                    u = np.asarray(loaded_voltage_at_power_v(packs.params, charge, power,
+                                                             circuit, u_ref, m), dtype=float)
+                    factor = np.ones_like(u) if u_ref is None else (u / u_ref) ** k
+                    current = power * factor ** 1.5 / u / per_engine
+                    good = u >= cutoff * (1.0 - 1e-12)
+                    if burst is not None:
+                        good &= ~(current > burst * (1.0 + 1e-9))
+                ok &= np.all(good, axis=1)
+                charge = (np.max(current, axis=1) * per_engine * seconds
+                          / SECONDS_PER_HOUR)[:, None]
+        return ok
 
     def distance_to_obstacle(self, roll: tuple[Array, Array, Array, Array],
                              height: Any) -> Array:
