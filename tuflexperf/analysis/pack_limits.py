@@ -309,9 +309,10 @@ def with_packs(case: Case, what: str, speeds: np.ndarray, throttle: np.ndarray,
     on = level_flight_on_packs(case, side, speeds, throttle, flyable, dead, mode)
     notes = []
     if case.propulsion.reference_voltage_v is not None:
+        least = float(np.min(on.voltage_v))
         notes.append(f"{what} at the packs' loaded voltage at the landing reserve "
-                     f"({side.battery.landing_reserve_fraction:.0%} of the charge left), "
-                     f"least {np.min(on.voltage_v):.1f} V: thrust x (U/"
+                     f"({side.battery.landing_reserve_fraction:.0%} of the charge left)"
+                     f"{f', least {least:.1f} V' if np.isfinite(least) else ''}: thrust x (U/"
                      f"{case.propulsion.reference_voltage_v:g} V)^"
                      f"{case.propulsion.voltage_exponent:g}")
     changed = on.any_beyond or not np.allclose(on.throttle, throttle, rtol=0.0, atol=1e-12,
