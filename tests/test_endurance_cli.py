@@ -267,3 +267,20 @@ def test_best_with_a_pack_too_small_names_the_throttle_asked_for_then_the_search
     assert best.exit_code == 1
     assert "no best endurance: its search starts halfway from the least level-flight " \
         "throttle 0.358 to full, and there throttle 0.679" in best.stderr
+
+
+def test_a_cruise_that_ends_at_the_cutoff_does_not_call_the_charge_left_a_reserve():
+    """A cut-off of 3.75 V per cell ends the cruise with 33.7 % left: the flight said "lands
+    with 33.7 % charge (reserve 20 %)" as if the reserve were there to draw (outside audit)."""
+    result = CliRunner().invoke(app, ["endurance", "--throttle", "0.5", "--json", "--set",
+                                      "battery.cutoff_voltage_per_cell_v=3.75"])
+    out = json.loads(result.stdout)
+    assert out["cruise_ends_at"] == "cut-off"
+    left = 100 * out["flight"]["landing_charge_fraction"]
+    assert left > 20.0 and out["flight"]["reason"].startswith(
+        f"the cruise ends at the packs' cut-off with {left:.1f} % of the charge left")
+    assert any("the reserve is charge, not power" in w for w in out["warnings"])
+    shipped = json.loads(CliRunner().invoke(app, ["endurance", "--throttle", "0.5",
+                                                  "--json"]).stdout)
+    assert shipped["cruise_ends_at"] == "landing reserve"
+    assert shipped["flight"]["reason"].startswith("lands with")

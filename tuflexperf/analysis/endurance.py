@@ -37,7 +37,7 @@ flight, and of longest cruise distance (constant-power cruise, no voltage effect
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -817,6 +817,15 @@ class EnduranceModel:
                 f"{p[-1]:.0f} W; the airspeed, power and one-pack figures above are at "
                 f"{u_ref:g} V, the flight time is flown with the sag"
             )
+        if ends_at == "cut-off" and flight is not None and flight.attainable:
+            # the charge left at the cut-off is not the landing reserve: the packs no longer
+            # hold the cruise's power (outside audit: "lands with 33.7 %, reserve 20 %")
+            left = (f"the cruise ends at the packs' cut-off with "
+                    f"{100 * flight.landing_charge_fraction:.1f} % of the charge left (reserve "
+                    f"{100 * flight.min_landing_charge_fraction:g} %), which the packs do not "
+                    "give at the cruise's power: the reserve is charge, not power")
+            flight = replace(flight, reason=left)
+            warnings.append(left)
         return EnduranceResult(
             throttle=throttle,
             airspeed_m_s=speed,
