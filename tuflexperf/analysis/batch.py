@@ -349,6 +349,8 @@ class BatchEvaluator:
         catapult = self.case.aircraft.launch == "catapult"
         height = _column(values, "requirements.takeoff.obstacle_height_m",
                          obstacle_height_of(self.case), size)
+        battery = (self._battery_rows(values, size)
+                   if self._packs is not None or self._endurance is not None else {})
 
         def launched() -> tuple[Array, Array, Array, Array]:
             # a catapult's "roll" is its release: no runway (SPEC 4), as solve_takeoff; the
@@ -356,8 +358,7 @@ class BatchEvaluator:
             found = model.catapult_release() if catapult else model.ground_roll()
             if self._packs is None:
                 return found
-            within = model.launch_within_packs(found, height, catapult, self._packs,
-                                               self._battery_rows(values, size))
+            within = model.launch_within_packs(found, height, catapult, self._packs, battery)
             return found[0], found[1], found[2], np.where(within, found[3], 0.0)
 
         for requirement in self.requirements:
@@ -371,19 +372,19 @@ class BatchEvaluator:
             elif requirement.block == "envelope":
                 value = model.trim_max_throttle(grid, self._candidates()[0])
                 if self._packs is not None and not model.packs_never_bind(
-                        grid, self._packs, self._battery_rows(values, size), value):
+                        grid, self._packs, battery, value):
                     value = model.over_grid_on_packs(grid, None, "windmilling", self._packs,
-                                                     self._battery_rows(values, size))
+                                                     battery)
                 out[requirement.name] = np.where(unflown, np.nan, value)
             elif requirement.block == "oei":
                 mode = self.case.requirements.oei.dead_engine
                 value = model.oei_min_throttle(grid, mode, self._candidates()[1])
                 if self._packs is not None and not model.packs_never_bind(
-                        grid, self._packs, self._battery_rows(values, size), np.ones(size)):
+                        grid, self._packs, battery, np.ones(size)):
                     worst = np.full(size, -np.inf)
                     for dead in range(len(self.case.propulsion.engines)):
                         worst = np.maximum(worst, model.over_grid_on_packs(
-                            grid, dead, mode, self._packs, self._battery_rows(values, size)))
+                            grid, dead, mode, self._packs, battery))
                     value = worst
                 out[requirement.name] = np.where(unflown, np.nan, value)
             else:
@@ -393,7 +394,6 @@ class BatchEvaluator:
                 key = "requirements.endurance.throttle"
                 throttle = _column(values, key, self.case.requirements.endurance.throttle, size)
                 throttle = np.asarray(throttle, dtype=float).reshape(-1) * np.ones(size)
-                battery = self._battery_rows(values, size)
                 out[requirement.name] = model.flight_endurance_min(
                     self._endurance, throttle, launch, battery
                 )
@@ -829,10 +829,10 @@ class _Model:
         the loaded voltage at or above the cut-off and each pack within its burst rating."""
         from tuflexperf.analysis.batch_endurance import _power_w
         from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
+        from tuflexperf.analysis.pack_limits import operating_point, pack_rows, within_limits
         from tuflexperf.analysis.takeoff import HISTORY_POINTS
-        from tuflexperf.models.battery import equivalent_packs, loaded_voltage_at_power_v
 
-        prop, b_ = self.propulsion, packs.battery
+        prop = self.propulsion
         v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
                           dtype=float).reshape(-1, 1) * np.ones((self.size, 1))
         radius = transition_radius_m(v_tr, self.aircraft.takeoff.transition_load_factor)
@@ -845,31 +845,21 @@ class _Model:
         along = (v_lo if catapult else
                  v_lo * np.linspace(0.0, 1.0, HISTORY_POINTS)[None, :])
         speeds = np.concatenate([along * np.ones((self.size, 1)), v_tr], axis=1)
-        per_engine = b_.packs_in_parallel_per_engine
-        capacity = battery["battery.capacity_ah"][:, None]
-        circuit = np.asarray(equivalent_packs(per_engine, capacity, b_.as_read.capacity_ah),
-                             dtype=float)
-        cutoff = b_.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"][:, None]
-        burst = (None if b_.max_discharge_c is None
-                 else BURST_OVER_CONTINUOUS * float(b_.max_discharge_c) * capacity)
-        u_ref, k = prop.reference_voltage_v, prop.voltage_exponent
-        m = 0.0 if u_ref is None else 1.5 * k
+        rows = pack_rows(packs.battery, battery)
+        circuit, cutoff = rows.circuit_packs[:, None], rows.cutoff_v[:, None]
+        burst = (None if rows.rating_a is None
+                 else BURST_OVER_CONTINUOUS * rows.rating_a[:, None])
         ok = np.ones(self.size, dtype=bool)
         for engine in prop.engines if packs.own_surfaces else (None,):
             power = np.maximum(_power_w(packs, self, 1.0, speeds, engine), 0.0)
             power = power * np.ones_like(speeds)
             charge = np.zeros((self.size, 1))
             for _ in range(2):
-                with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-                    u = np.asarray(loaded_voltage_at_power_v(packs.params, charge, power,
-                                                             circuit, u_ref, m), dtype=float)
-                    factor = np.ones_like(u) if u_ref is None else (u / u_ref) ** k
-                    current = power * factor ** 1.5 / u / per_engine
-                    good = u >= cutoff * (1.0 - 1e-12)
-                    if burst is not None:
-                        good &= ~(current > burst * (1.0 + 1e-9))
-                ok &= np.all(good, axis=1)
-                charge = (np.max(current, axis=1) * per_engine * seconds
+                _, current, _ = point = operating_point(
+                    packs.params, charge, power, circuit, rows.packs_per_engine,
+                    prop.reference_voltage_v, prop.voltage_exponent)
+                ok &= np.all(within_limits(point[0], current, cutoff, burst), axis=1)
+                charge = (np.max(current, axis=1) * rows.packs_per_engine * seconds
                           / SECONDS_PER_HOUR)[:, None]
         return ok
 
@@ -1147,64 +1137,48 @@ class _Model:
         on the power, not only on the throttle.
         """
         from tuflexperf.analysis.batch_endurance import _power_w
-        from tuflexperf.models.battery import equivalent_packs, loaded_voltage_at_power_v
+        from tuflexperf.analysis.pack_limits import (
+            least_throttle_where,
+            operating_point,
+            pack_rows,
+            within_limits,
+        )
 
         prop = self.propulsion
-        u_ref, k = prop.reference_voltage_v, prop.voltage_exponent
-        live_terms, windmill = self._grid_terms(grid)
+        terms = self._grid_terms(grid)
         live = [j for j in range(len(prop.engines)) if j != dead]
-        drag = np.asarray(level_flight_drag_n(self.aircraft, grid, self.density), dtype=float)
-        other = -drag + (windmill[dead] if dead is not None and mode == "windmilling" else 0.0)
-        shape = np.broadcast_shapes(np.shape(other), (self.size, 1))
+        # the level-flight excess at idle; its shape is every row's grid
+        idle = self._excess_quadratic(grid, dead, mode, terms)[2]
+        shape = idle.shape
         flyable = np.broadcast_to(self._flyable(grid), shape)
-        b_ = packs.battery
-        per_engine = b_.packs_in_parallel_per_engine
-        capacity = battery["battery.capacity_ah"][:, None]
-        circuit = np.asarray(equivalent_packs(per_engine, capacity, b_.as_read.capacity_ah),
-                             dtype=float)
-        charge = per_engine * capacity * (1.0 - battery[
-            "battery.mission.landing_reserve_fraction"][:, None])
-        cutoff = b_.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"][:, None]
-        rating = (None if b_.max_discharge_c is None
-                  else float(b_.max_discharge_c) * capacity)
-        m = 0.0 if u_ref is None else 1.5 * k
-
-        def solve(factors: dict[int, Any]) -> Array:
-            a, b, c = (sum(factors[j] * live_terms[j][i] for j in live) for i in range(3))
-            return np.broadcast_to(self._roots(a, b, c + other), shape)
+        rows = pack_rows(packs.battery, battery)
+        charge, circuit = rows.reserve_charge_ah[:, None], rows.circuit_packs[:, None]
+        rating = None if rows.rating_a is None else rows.rating_a[:, None]
 
         def on_packs(x: Array) -> list[tuple[Array, Array, Array]]:
-            out = []
-            for j in live:
-                engine = prop.engines[j] if packs.own_surfaces else None
-                power = np.maximum(_power_w(packs, self, x, grid, engine), 0.0)
-                with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-                    u = np.asarray(loaded_voltage_at_power_v(packs.params, charge, power,
-                                                             circuit, u_ref, m), dtype=float)
-                    factor = np.ones_like(u) if u_ref is None else (u / u_ref) ** k
-                    current = power * factor ** 1.5 / u / per_engine
-                out.append((u, current, factor))
-            return out
+            engines = [prop.engines[j] if packs.own_surfaces else None for j in live]
+            return [operating_point(packs.params, charge,
+                                    np.maximum(_power_w(packs, self, x, grid, engine), 0.0),
+                                    circuit, rows.packs_per_engine, prop.reference_voltage_v,
+                                    prop.voltage_exponent) for engine in engines]
 
-        if u_ref is None:
-            x = np.where(flyable, solve(dict.fromkeys(live, 1.0)), np.nan)
+        if prop.reference_voltage_v is None:
+            x = np.where(flyable, self.least_throttle(grid, dead, mode, terms), np.nan)
         else:  # the thrust follows the sagging pack: no closed form (pack_limits)
-            from tuflexperf.analysis.pack_limits import least_throttle_where
+            # the excess without the live engines: the dead one's drag less the airframe's
+            other = idle - sum(terms[0][j][2] for j in live)
 
             def excess(xs: Array) -> Array:
                 total = np.broadcast_to(other, shape)
                 for j, (_, _, factor) in zip(live, on_packs(xs), strict=True):
-                    a, b, c = live_terms[j]
-                    total = total + factor * ((a * xs + b) * xs + c)
+                    a_j, b_j, c_j = terms[0][j]
+                    total = total + factor * ((a_j * xs + b_j) * xs + c_j)
                 return total
 
             x = np.where(flyable, least_throttle_where(excess, shape), np.nan)
         ok = np.isfinite(x)
-        with np.errstate(invalid="ignore"):
-            for u, current, _ in on_packs(np.nan_to_num(x)):
-                ok &= (u >= cutoff * (1.0 - 1e-12))
-                if rating is not None:
-                    ok &= ~(current > rating * (1.0 + 1e-9))
+        for u, current, _ in on_packs(np.nan_to_num(x)):
+            ok &= within_limits(u, current, rows.cutoff_v[:, None], rating)
         x = np.where(ok, x, np.nan)
         if dead is None:
             return np.where(np.all(ok, axis=1), np.max(x, axis=1), np.nan)

@@ -36,7 +36,6 @@ from tuflexperf.models.battery import (
     current_at_power_a,
     cutoff_residual_v,
     discharge_time_s,
-    equivalent_packs,
     first_window_beyond,
 )
 from tuflexperf.models.powertrain import (
@@ -403,15 +402,13 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     from tuflexperf.analysis.batch import stall_speed
 
     stall = stall_speed(m)
+    from tuflexperf.analysis.pack_limits import pack_rows
+
     # the battery keys that vary without refitting the pack (dotted.BATTERY_KEYS); a pack of
     # another capacity flies as that many measured packs in parallel
-    per_engine = model.battery.packs_in_parallel_per_engine
-    capacity = battery["battery.capacity_ah"]
-    packs = np.asarray(equivalent_packs(per_engine, capacity,
-                                        model.battery.as_read.capacity_ah), dtype=float)
-    cutoff = model.battery.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"]
-    reserve_ah = (per_engine * capacity
-                  * (1.0 - battery["battery.mission.landing_reserve_fraction"]))
+    rows = pack_rows(model.battery, battery)
+    capacity, packs, cutoff = rows.capacity_ah, rows.circuit_packs, rows.cutoff_v
+    reserve_ah = rows.reserve_charge_ah
     # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
     most, least_speed = _most_excess(m, throttle, m.least_airspeed(), stall)
     # EnduranceModel.check_throttle accepts a throttle down to the least one less 1e-9

@@ -939,15 +939,20 @@ class EnduranceModel:
         )
 
 
+def cached_case_battery(case: Case) -> Battery:
+    """:func:`case_battery`, its YAML parsed once per file version, not per call (the
+    endurance and the point analyses' packs read it)."""
+    return case_battery(case, lambda path: _battery_cache.get(
+        fingerprint(file_key(path)), lambda: load_battery(path)))
+
+
 def endurance_model(case: Case) -> EnduranceModel:
     """The case's endurance model, built once and cached (case contents + battery files)."""
     if case.battery_path is None:
         raise InputError(
             f"{case.path}: battery: the case names no battery file; endurance needs one"
         )
-    # parse the YAML once per file version, not per call
-    battery = case_battery(case, lambda path: _battery_cache.get(
-        fingerprint(file_key(path)), lambda: load_battery(path)))
+    battery = cached_case_battery(case)
     key = fingerprint(
         case.aircraft,
         case.propulsion,

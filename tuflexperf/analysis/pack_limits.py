@@ -43,6 +43,8 @@ from tuflexperf.models.thrust import (
     windmilling_thrust_n,
 )
 
+_CUTOFF_TOLERANCE = 1e-12  # relative: a loaded voltage at the cut-off is within it
+_RATING_TOLERANCE = 1e-9  # relative, as the mission's rating rule
 _SCAN = 33  # least_throttle_where: throttles scanned for the first bracket (1/32 apart)
 _BISECTIONS = 50  # ... then halved to 2^-55 of full throttle
 
@@ -74,11 +76,10 @@ def pack_side(case: Case) -> PackSide | None:
     """The case's packs and power model, or None when the case names no battery file."""
     if case.battery_path is None:
         return None
-    from tuflexperf.analysis.endurance import characterise_battery
-    from tuflexperf.io.battery import case_battery
+    from tuflexperf.analysis.endurance import cached_case_battery, characterise_battery
     from tuflexperf.models.powertrain import power_surfaces
 
-    battery = case_battery(case)
+    battery = cached_case_battery(case)
     characterised = characterise_battery(battery, case)
     surfaces = power_surfaces(case.propulsion, case.density_kg_m3)
     if surfaces is not None:
@@ -100,46 +101,86 @@ def fan_power_w(side: PackSide, case: Case, engine: int, throttle: Any, airspeed
     return np.maximum(power, 0.0)
 
 
-def on_packs(side: PackSide, case: Case, power_w: Any, charge_ah: float
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def operating_point(params: Any, charge_ah: Any, power_w: Any, circuit_packs: Any,
+                    packs_per_engine: int, reference_voltage_v: float | None,
+                    voltage_exponent: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Loaded voltage [V], current per pack [A] and thrust factor ``(U/U_ref)^k`` [-] of one
-    engine's packs drawing ``power_w`` [W] (at the reference voltage) after ``charge_ah``."""
-    prop = case.propulsion
-    u_ref, k = prop.reference_voltage_v, prop.voltage_exponent
+    engine's ``circuit_packs`` (measured packs; ``packs_per_engine`` of the battery's own)
+    drawing ``power_w`` [W] at the reference voltage after ``charge_ah`` [Ah]; arrays
+    broadcast (the single case and the batch alike). NaN voltage: beyond their power."""
+    u_ref, k = reference_voltage_v, voltage_exponent
     m = 0.0 if u_ref is None else 1.5 * k
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        u = np.asarray(loaded_voltage_at_power_v(
-            side.params, charge_ah, power_w, side.battery.circuit_packs, u_ref, m), dtype=float)
+        u = np.asarray(loaded_voltage_at_power_v(params, charge_ah, power_w, circuit_packs,
+                                                 u_ref, m), dtype=float)
         factor = np.ones_like(u) if u_ref is None else (u / u_ref) ** k
-        power = power_w * (1.0 if u_ref is None else factor ** 1.5)
-        current = power / u / side.battery.packs_in_parallel_per_engine
+        current = power_w * factor ** 1.5 / u / packs_per_engine
     return u, current, factor
+
+
+def on_packs(side: PackSide, case: Case, power_w: Any, charge_ah: float
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`operating_point` of one engine of the case's packs."""
+    b = side.battery
+    return operating_point(side.params, charge_ah, power_w, b.circuit_packs,
+                           b.packs_in_parallel_per_engine, case.propulsion.reference_voltage_v,
+                           case.propulsion.voltage_exponent)
+
+
+def within_limits(voltage_v: Any, current_a: Any, cutoff_v: Any, rating_a: Any) -> Any:
+    """Where the packs fly a point: a voltage (NaN: none) at or above the cut-off [V] and a
+    current per pack [A] within the rating (``None``: no rating)."""
+    with np.errstate(invalid="ignore"):
+        ok = np.asarray(voltage_v) >= cutoff_v * (1.0 - _CUTOFF_TOLERANCE)
+        if rating_a is not None:
+            ok = ok & ~(np.asarray(current_a) > rating_a * (1.0 + _RATING_TOLERANCE))
+    return ok
 
 
 def limit_reason(side: PackSide, voltage_v: float, current_a: float, power_w: float,
                  rating_a: float | None, rating_name: str) -> str | None:
-    """Why one engine's packs cannot fly a point (None: they can)."""
+    """Why one engine's packs cannot fly a point (None: they can; :func:`within_limits`)."""
     cutoff = side.battery.cutoff_voltage_v
+    if within_limits(voltage_v, current_a, cutoff, rating_a):
+        return None
     if not np.isfinite(voltage_v):
         return f"the packs cannot deliver {power_w:.0f} W (beyond their maximum power)"
-    if voltage_v < cutoff * (1.0 - 1e-12):
+    if not within_limits(voltage_v, current_a, cutoff, None):
         return (f"the packs sag to {voltage_v:.2f} V under {power_w:.0f} W, below their "
                 f"cut-off {cutoff:.2f} V")
-    if rating_a is not None and current_a > rating_a * (1.0 + 1e-9):
-        return (f"{current_a:.1f} A per pack, beyond its {rating_name} rating {rating_a:.1f} A "
-                f"(max_discharge_c {side.battery.max_discharge_c:g} C x "
-                f"{side.battery.capacity_ah:g} Ah)")
-    return None
+    return (f"{current_a:.1f} A per pack, beyond its {rating_name} rating {rating_a:.1f} A "
+            f"(max_discharge_c {side.battery.max_discharge_c:g} C x "
+            f"{side.battery.capacity_ah:g} Ah)")
 
 
-def _thrust_terms(case: Case, speeds: np.ndarray, engine: int) -> tuple[np.ndarray, ...]:
-    """Engine ``engine``'s thrust [N] as ``a x^2 + b x + c`` in throttle at ``speeds``."""
-    prop = case.propulsion
-    scale = density_ratio(prop, case.density_kg_m3)
-    t = [np.asarray(engine_thrust_n(prop.engines[engine], x, speeds, scale), dtype=float)
-         * np.ones_like(speeds) for x in (0.0, 0.5, 1.0)]
-    a = 2.0 * (t[2] - 2.0 * t[1] + t[0])
-    return a, t[2] - t[0] - a, t[0]
+@dataclass(frozen=True)
+class PackRows:
+    """The battery a batch's rows fly, one value per row ``(R,)`` (dotted.BATTERY_KEYS)."""
+
+    packs_per_engine: int
+    capacity_ah: np.ndarray  # rated, per pack
+    circuit_packs: np.ndarray  # measured packs per engine (models.battery.equivalent_packs)
+    cutoff_v: np.ndarray
+    reserve_charge_ah: np.ndarray  # drawn per engine at the landing reserve
+    rating_a: np.ndarray | None  # continuous, per pack
+
+
+def pack_rows(battery: Any, values: dict[str, np.ndarray]) -> PackRows:
+    """:class:`PackRows` of ``battery`` (a :class:`~tuflexperf.io.battery.Battery`) with the
+    rows' ``values`` of its varying keys."""
+    from tuflexperf.models.battery import equivalent_packs
+
+    per_engine = battery.packs_in_parallel_per_engine
+    capacity = np.asarray(values["battery.capacity_ah"], dtype=float)
+    return PackRows(
+        per_engine, capacity,
+        np.asarray(equivalent_packs(per_engine, capacity, battery.as_read.capacity_ah),
+                   dtype=float),
+        battery.cells_in_series * values["battery.cutoff_voltage_per_cell_v"],
+        per_engine * capacity * (1.0 - values["battery.mission.landing_reserve_fraction"]),
+        None if battery.max_discharge_c is None
+        else float(battery.max_discharge_c) * capacity,
+    )
 
 
 @dataclass(frozen=True)
@@ -214,19 +255,17 @@ def level_flight_on_packs(case: Case, side: PackSide, speeds: np.ndarray,
             beyond[n] = f"{prop.engines[engine].name}: {why}"
 
     if prop.reference_voltage_v is not None:
-        terms = {j: _thrust_terms(case, v, j) for j in live}
+        scale = density_ratio(prop, rho)
         other = -np.asarray(level_flight_drag_n(case.aircraft, v, rho), dtype=float)
         if dead is not None and mode == "windmilling":
             other = other + np.asarray(windmilling_thrust_n(
-                prop.engines[dead], v, density_ratio(prop, rho), rho, prop.fan_area_m2),
-                dtype=float)
+                prop.engines[dead], v, scale, rho, prop.fan_area_m2), dtype=float)
 
         def excess(xs: np.ndarray) -> np.ndarray:
             total = other.copy()
             for j in live:
                 factor = on_packs(side, case, fan_power_w(side, case, j, xs, v), q)[2]
-                a, b, c = terms[j]
-                total = total + factor * ((a * xs + b) * xs + c)
+                total = total + factor * engine_thrust_n(prop.engines[j], xs, v, scale)
             return total
 
         x = np.where(flyable, least_throttle_where(excess, v.shape), np.nan)
@@ -239,7 +278,8 @@ def level_flight_on_packs(case: Case, side: PackSide, speeds: np.ndarray,
         power = fan_power_w(side, case, j, np.nan_to_num(x), v)
         u, current, _ = on_packs(side, case, power, q)
         least_u = np.where(np.isfinite(x), np.fmin(least_u, u), least_u)
-        for n in np.flatnonzero(np.isfinite(x)):
+        cutoff = side.battery.cutoff_voltage_v
+        for n in np.flatnonzero(np.isfinite(x) & ~within_limits(u, current, cutoff, rating)):
             mark(int(n), j, limit_reason(side, float(u[n]), float(current[n]),
                                          float(power[n]), rating, "continuous"))
     x = np.where([b is None for b in beyond], x, np.nan)
@@ -275,14 +315,16 @@ def takeoff_beyond_battery(case: Case, side: PackSide, speeds: np.ndarray,
         charge = 0.0
         for _ in range(2):
             u, current, _ = on_packs(side, case, power, charge)
-            for n in range(v.size):
+            beyond = np.flatnonzero(~within_limits(u, current, side.battery.cutoff_voltage_v,
+                                                   burst))
+            if beyond.size:
+                n = int(beyond[0])
                 why = limit_reason(side, float(u[n]), float(current[n]), float(power[n]),
                                    burst, "burst")
-                if why is not None:
-                    when = "on full packs" if charge == 0.0 else (
-                        f"after the take-off's {charge:.3f} Ah")
-                    return (f"full throttle at {v[n]:.1f} m/s {when}: {engine.name}: {why}: "
-                            f"not attainable, {BEYOND_THE_BATTERY}")
+                when = "on full packs" if charge == 0.0 else (
+                    f"after the take-off's {charge:.3f} Ah")
+                return (f"full throttle at {v[n]:.1f} m/s {when}: {engine.name}: {why}: "
+                        f"not attainable, {BEYOND_THE_BATTERY}")
             charge = float(np.max(current)) * per_engine * seconds / SECONDS_PER_HOUR
     return None
 
@@ -343,22 +385,18 @@ def power_limit_w(side: PackSide, battery: dict[str, np.ndarray]) -> np.ndarray:
     power is ``Vc (OCV - Vc) / (R/n)``, at the rated current ``I`` it is ``I (OCV - (R/n) I)``
     (on the normal branch, ``I <= OCV / (2 R/n)``), and no more than ``OCV^2 / (4 R/n)``.
     """
-    from tuflexperf.models.battery import equivalent_packs, open_circuit_voltage_v
+    from tuflexperf.models.battery import open_circuit_voltage_v
 
-    b = side.battery
-    per_engine = b.packs_in_parallel_per_engine
-    capacity = np.asarray(battery["battery.capacity_ah"], dtype=float)
-    circuit = np.asarray(equivalent_packs(per_engine, capacity, b.as_read.capacity_ah),
-                         dtype=float)
-    charge = per_engine * capacity * (1.0 - battery["battery.mission.landing_reserve_fraction"])
-    cutoff = b.cells_in_series * battery["battery.cutoff_voltage_per_cell_v"]
+    rows = pack_rows(side.battery, battery)
+    cutoff = rows.cutoff_v
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        ocv = np.asarray(open_circuit_voltage_v(side.params, charge, circuit), dtype=float)
-        r = side.params.resistance_ohm / circuit
+        ocv = np.asarray(open_circuit_voltage_v(side.params, rows.reserve_charge_ah,
+                                                rows.circuit_packs), dtype=float)
+        r = side.params.resistance_ohm / rows.circuit_packs
         most = ocv * ocv / (4.0 * r)
         limit = np.where(cutoff >= 0.5 * ocv, cutoff * (ocv - cutoff) / r, most)
-        if b.max_discharge_c is not None:
-            current = float(b.max_discharge_c) * capacity * per_engine
+        if rows.rating_a is not None:
+            current = rows.rating_a * rows.packs_per_engine
             limit = np.fmin(limit, np.where(current <= ocv / (2.0 * r),
                                             current * (ocv - r * current), most))
     return np.where(np.isfinite(limit), limit, -np.inf)
