@@ -1249,8 +1249,8 @@ def main(argv: list[str] | None = None) -> None:
     except TyperException as exc:
         if type(exc).__name__ == "NoArgsIsHelpError":
             app(args=["--help"], prog_name="tuflexperf")
-        message = exc.format_message() + _case_hint(exc.format_message(), argv)
-        sys.stderr.write(f"tuflexperf: error: {one_line(message)}\n")
+        message = exc.format_message()
+        sys.stderr.write(f"tuflexperf: error: {one_line(message + _case_hint(message, argv))}\n")
         sys.exit(getattr(exc, "exit_code", 2) or 2)
     except Exception:
         # an interrupt raised inside an import or a C extension comes out as its error

@@ -73,6 +73,7 @@ from tuflexperf.models.thrust import (
     density_ratio,
     engine_thrust_n,
     least_throttle_reaching,
+    outside_tested_range,
     poly22,
     total_thrust_n,
     windmilling_thrust_n,
@@ -577,8 +578,7 @@ class _Model:
         """Total thrust [N]; the extrapolation error adds to each live engine beyond the range."""
         total = total_thrust_n(self.propulsion, throttle, speed, self.density, dead, mode)
         if self.extrapolation_n is not None:
-            low, high = self.propulsion.tested_airspeed_m_s
-            outside = ((speed > high + 1e-9) | (speed < low - 1e-9)).astype(float)
+            outside = outside_tested_range(self.propulsion, speed).astype(float)
             scale = density_ratio(self.propulsion, self.density)
             for j in range(len(self.propulsion.engines)):
                 if j != dead:
@@ -963,8 +963,7 @@ class _Model:
         scale = density_ratio(self.propulsion, self.density)
         outside = None
         if self.extrapolation_n is not None:
-            low, high = self.propulsion.tested_airspeed_m_s
-            outside = ((speed > high + 1e-9) | (speed < low - 1e-9)).astype(float)
+            outside = outside_tested_range(self.propulsion, speed).astype(float)
         live, dead = [], []
         for j, engine in enumerate(self.propulsion.engines):
             error = 0.0 if outside is None else scale * outside * self.extrapolation_n[j][:, None]

@@ -83,6 +83,7 @@ from tuflexperf.models.thrust import (
     density_ratio,
     engine_thrust_n,
     least_throttle_reaching,
+    outside_tested_range,
     total_thrust_n,
     windmilling_thrust_n,
 )
@@ -1161,8 +1162,7 @@ class MissionModel:
         """Per segment flown outside the thrust model's tested airspeeds: a note saying so
         (SPEC: extrapolation is said; a mission at 40 m/s said nothing; outside audit)."""
         low, high = self.case.propulsion.tested_airspeed_m_s
-        with np.errstate(invalid="ignore"):
-            outside = (v < low - 1e-9) | (v > high + 1e-9)
+        outside = outside_tested_range(self.case.propulsion, v)
         notes = []
         for k in np.unique(np.asarray(segment_of)[outside]).astype(int):
             speeds = v[outside & (segment_of == k)]

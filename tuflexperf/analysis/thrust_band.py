@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tuflexperf.models.thrust import Engine, Propulsion, engine_thrust_n
+from tuflexperf.models.thrust import Engine, Propulsion, engine_thrust_n, outside_tested_range
 
 Z_95 = 1.959963984540054
 
@@ -56,9 +56,7 @@ class ThrustBand:
 
 def extrapolation_weight(propulsion: Propulsion, airspeed_m_s: Any) -> Any:
     """1 beyond the tested airspeed range (above or below), 0 inside it."""
-    low, high = propulsion.tested_airspeed_m_s
-    v = np.asarray(airspeed_m_s, dtype=float)
-    return ((v > high + 1e-9) | (v < low - 1e-9)).astype(float)
+    return outside_tested_range(propulsion, np.asarray(airspeed_m_s, dtype=float)).astype(float)
 
 
 def thrust_sd_n(

@@ -31,7 +31,11 @@ from tuflexperf.analysis.level_flight import (
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import MAX_AIRSPEED_M_S, level_flight_drag_n, stall_speed_m_s
-from tuflexperf.models.thrust import total_thrust_n, unlapsed_density_warning
+from tuflexperf.models.thrust import (
+    outside_tested_range,
+    total_thrust_n,
+    unlapsed_density_warning,
+)
 
 _cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
 
@@ -63,7 +67,7 @@ def envelope_of(case: Case, density_kg_m3: float | None = None) -> tuple[float, 
 def extrapolation_note(case: Case, airspeeds_m_s: np.ndarray) -> tuple[bool, list[str]]:
     """Whether airspeeds leave the thrust model's tested range, and the warning saying so."""
     low, high = case.propulsion.tested_airspeed_m_s
-    outside = (airspeeds_m_s < low - 1e-9) | (airspeeds_m_s > high + 1e-9)
+    outside = outside_tested_range(case.propulsion, airspeeds_m_s)
     if not outside.any():
         return False, []
     beyond = airspeeds_m_s[outside]

@@ -552,7 +552,7 @@ def refuse_absurd_propulsion(case: Case) -> None:
         # at throttle 0 (outside audit)
         with np.errstate(over="ignore", invalid="ignore"):
             thrust = np.asarray(engine_thrust_n(engine, throttle, airspeed, scale), dtype=float)
-        worst = np.unravel_index(np.nanargmax(np.abs(np.nan_to_num(thrust, nan=np.inf))),
+        worst = np.unravel_index(np.argmax(np.abs(np.nan_to_num(thrust, nan=np.inf))),
                                  thrust.shape)
         if not abs(thrust[worst]) <= ABSURD_THRUST_TO_WEIGHT * weight:
             raise InputError(

@@ -195,10 +195,21 @@ def total_thrust_n(
     return total
 
 
+def outside_tested_range(propulsion: Propulsion, airspeed_m_s: Any) -> Any:
+    """Where airspeeds [m/s] (a float or a numpy array) lie outside the model's tested
+    airspeed range, 1e-9 m/s of slack keeping a tested end inside (a bool or bool array).
+
+    References
+    ----------
+    SPEC 3 (extrapolation is said); paper section 4 (tunnel limit 30 m/s).
+    """
+    low, high = propulsion.tested_airspeed_m_s
+    return (airspeed_m_s < low - 1e-9) | (airspeed_m_s > high + 1e-9)
+
+
 def is_extrapolated(propulsion: Propulsion, airspeed_m_s: float) -> bool:
     """True when ``airspeed_m_s`` lies outside the model's tested airspeed range."""
-    low, high = propulsion.tested_airspeed_m_s
-    return bool(airspeed_m_s < low - 1e-9 or airspeed_m_s > high + 1e-9)
+    return bool(outside_tested_range(propulsion, airspeed_m_s))
 
 
 def least_throttle_reaching(
