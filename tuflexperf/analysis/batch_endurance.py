@@ -433,6 +433,7 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     params = model.params
     # the packs in parallel per fan fly, not one of them alone (EnduranceModel.solve)
     ok &= (cutoff_residual_v(params, 0.0, power_w, cutoff, packs) > 0.0)
+    level = ok.copy()  # the single case's checks before it flies its mission
     # each fan on its own packs, with its own power surface, as the mission flies them: the
     # flight ends when the first fan's packs do (the largest launch charge with the largest
     # cruise power, of different fans at low throttle, was 2 % short; outside audit). Where
@@ -464,6 +465,13 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     ok &= np.all(_within_rating(model, launch, own, start, span, seconds, packs, capacity),
                  axis=0)
     cruise_s = np.min(seconds, axis=0)
+    if m.propulsion.reference_voltage_v is not None:
+        # thrust and power follow the packs' loaded voltage: flown as the single case's
+        # mission flies them (the constant-power cruise above only sizes the steps)
+        from tuflexperf.analysis.batch_sagging import flight_on_sagging_packs
+
+        return flight_on_sagging_packs(m, model, rows, throttle, roll, stall, height, speed,
+                                       level, np.where(ok, cruise_s, np.nan))
     minutes = cruise_s / 60.0 + np.where(ok, climb_time, 0.0) / 60.0
     return np.where(ok & np.isfinite(minutes), minutes, np.nan)
 
