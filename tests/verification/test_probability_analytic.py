@@ -113,12 +113,16 @@ def test_distributions_draw_what_they_say(tmp_path) -> None:
     cl = draw.values["aircraft.cl_max"]
     assert cl.min() >= 1.35 and cl.max() <= 1.6
     assert stats.kstest(draw.values["aircraft.cd0"], stats.norm(0.02, 0.002).cdf).pvalue > 1e-3
-    # the thrust coefficients scatter with the file's covariance
+    # the thrust coefficients scatter with the file's covariance, and the constant term with
+    # the model's own error at a point too (residual_sd_n, independent of the covariance's)
     engine = case.propulsion.engines[0]
     spread = np.cov(draw.coefficients[0].T)
-    sd = np.sqrt(np.diag(np.asarray(engine.covariance)))
-    np.testing.assert_allclose(np.sqrt(np.diag(spread)), sd, rtol=0.1)
-    assert draw.extrapolation_n[0].std() == pytest.approx(engine.extrapolation_sd_n, rel=0.1)
+    variance = np.diag(np.asarray(engine.covariance)).copy()
+    variance[0] += engine.residual_sd_n ** 2
+    np.testing.assert_allclose(np.sqrt(np.diag(spread)), np.sqrt(variance), rtol=0.1)
+    # beyond the tested range the whole error is extrapolation_sd_n: the rest of it on top
+    rest = math.sqrt(engine.extrapolation_sd_n ** 2 - engine.residual_sd_n ** 2)
+    assert draw.extrapolation_n[0].std() == pytest.approx(rest, rel=0.1)
     assert math.isfinite(float(draw.extrapolation_n.sum()))
 
 

@@ -378,6 +378,9 @@ class DistributionSchema(StrictModel):
 class PropulsionUncertaintySchema(StrictModel):
     covariance: bool = True
     extrapolation: bool = True
+    # the fit's residual_sd_n as the model's own error at a point (the paper's +-0.5 N):
+    # the coefficients' covariance is the mean surface's uncertainty alone
+    residual: bool = True
 
 
 class UncertaintySchema(StrictModel):
