@@ -151,6 +151,47 @@ def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
     density_note = unlapsed_density_warning(propulsion, rho)
     if density_note:
         warnings.append(density_note)
+    if mode == "windmilling":
+        warnings.extend(windmilling_notes(propulsion, rho))
     stall = float(stall_speed_m_s(aircraft, rho))
     return OeiResult(mode, tuple(cases), extrapolated, tuple(warnings), stall,
                      stall_margin_of(case))
+
+
+WINDMILLING_SHORTFALL = 2.0
+"""A coefficient's drag under 1/this of the model's own throttle-0 drag is said."""
+
+
+def windmilling_notes(propulsion: Any, density_kg_m3: float) -> list[str]:
+    """Where an engine's ``windmilling_drag_coefficient`` drags far less than its own thrust
+    model does at throttle 0 (its measured idle, ``min(T(0, V), 0)``) at the highest tested
+    airspeed: the dead engine takes the coefficient (SPEC 3), so the OEI figures are the
+    coefficient's, and the data disagree (the shipped 0.2 gives 0.48 N at 30 m/s where the
+    model's idle drags 3.3 N; outside audit).
+
+    References
+    ----------
+    SPEC 3 (one engine inoperative); Hoerner, *Fluid-Dynamic Drag*, ch. 3.
+    """
+    from tuflexperf.models.thrust import density_ratio, engine_thrust_n, windmilling_thrust_n
+
+    top = float(propulsion.tested_airspeed_m_s[1])
+    if propulsion.fan_area_m2 is None or top <= 0.0:
+        return []
+    scale = density_ratio(propulsion, density_kg_m3)
+    notes = []
+    for engine in propulsion.engines:
+        if engine.windmilling_drag_coefficient is None:
+            continue
+        by_coefficient = -float(windmilling_thrust_n(engine, top, scale, density_kg_m3,
+                                                     propulsion.fan_area_m2))
+        by_model = -min(float(engine_thrust_n(engine, 0.0, top, scale)), 0.0)
+        if by_model > WINDMILLING_SHORTFALL * by_coefficient:
+            notes.append(
+                f"{engine.name}'s windmilling_drag_coefficient "
+                f"{engine.windmilling_drag_coefficient:g} drags {by_coefficient:.2f} N at "
+                f"{top:g} m/s, its own thrust model at throttle 0 {by_model:.2f} N there "
+                f"({by_model / max(by_coefficient, 1e-12):.1f}x): a dead {engine.name} is "
+                "flown with the coefficient's drag (SPEC 3); the data disagree"
+            )
+    return notes
