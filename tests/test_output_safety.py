@@ -579,6 +579,37 @@ def test_a_fitted_battery_file_and_a_propulsion_file_never_replace_each_other(
     assert {n: (folder / n).read_bytes() for n in written} == written
 
 
+def test_an_output_of_one_kind_never_replaces_another_of_the_same_command(tmp_path) -> None:
+    """fit's --table replaced a fitted propulsion model with a CSV, a battery fit's --out a
+    thrust table, sweep's --csv its own carpet plot: all exit 0 (outside audit)."""
+    from tests.conftest import copy_shipped_case
+
+    copy_shipped_case(tmp_path)
+    folder = tmp_path / "data" / "tuflex"
+    campaign = str(folder / "campaign" / "campaign.yaml")
+    assert _run(tmp_path, "fit", campaign, "--out", "model.yaml").returncode == 0
+    assert _run(tmp_path, "sweep", "--case", "requirements/tuflex.yaml", "--vary",
+                "aircraft.mass_kg=20:30:2", "--plot", "carpet.png").returncode == 0
+    before = _tree(tmp_path)
+    for args, found, wanted in (
+            (("fit", campaign, "--out", "other.yaml", "--table", "model.yaml"),
+             "propulsion file", "thrust table"),
+            (("fit", str(folder / "battery.yaml"), "--out", "model_thrust_table.csv"),
+             "thrust table", "battery file"),
+            (("sweep", "--case", "requirements/tuflex.yaml", "--vary",
+              "aircraft.mass_kg=20:30:2", "--csv", "carpet.png"), "sweep plot", "sweep grid")):
+        out = _run(tmp_path, *args)
+        assert out.returncode == 2, (args, out.stderr)
+        assert f"is a {found} written by `tuflexperf" in out.stderr
+        assert f"not a {wanted}" in out.stderr
+        assert len(out.stderr.strip().splitlines()) == 1
+    assert _tree(tmp_path) == before
+    # the same artefact is still replaced: a refit, a new carpet plot
+    assert _run(tmp_path, "fit", campaign, "--out", "model.yaml").returncode == 0
+    assert _run(tmp_path, "sweep", "--case", "requirements/tuflex.yaml", "--vary",
+                "aircraft.mass_kg=20:30:3", "--plot", "carpet.png").returncode == 0
+
+
 def test_an_output_named_with_bytes_that_are_no_utf8_is_written(tmp_path) -> None:
     """Every writer raised UnicodeEncodeError on such a name (outside audit); CasADi's own
     save got '' for it."""

@@ -425,7 +425,8 @@ def sweep(
         from tuflexperf.io.case import case_files
         from tuflexperf.io.files import guard_outputs
 
-        guard_outputs(outputs, [path for _, path in case_files(case)], "sweep")
+        guard_outputs(outputs, [path for _, path in case_files(case)], "sweep",
+                      {"--csv": "sweep grid", "--plot": "sweep plot"})
     result = run_sweep(case, axes, workers, dask)
     notes = _batch_notes(case, [key for key, _ in axes], sets)
     written: dict[Path, bytes | str] = {}
@@ -786,7 +787,7 @@ def mission(
 
         # every file the flight reads: the case's (SPEC 5) and the mission itself
         inputs = [Path(mission_file), *(path for _, path in case_files(case))]
-        guard_outputs({"--csv": csv}, inputs, "mission")
+        guard_outputs({"--csv": csv}, inputs, "mission", {"--csv": "mission history"})
     limit = requirement.min_landing_charge_fraction if requirement is not None else None
     try:
         result = solve_mission(case, plan, limit)

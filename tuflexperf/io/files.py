@@ -318,24 +318,34 @@ def _png_software(head: bytes) -> str | None:
     return None
 
 
-def written_by(head: bytes) -> str | None:
-    """Which command wrote a file that begins with ``head`` (None: not this tool).
+ARTEFACT_WRITERS = {
+    "propulsion file": "fit", "battery file": "fit", "thrust table": "fit",
+    "mission history": "mission", "sweep grid": "sweep", "sweep plot": "sweep",
+    "report page": "report",
+}
+"""Each single-file artefact of the tool and the command that writes it."""
 
-    YAML written by ``fit`` says ``written by `tuflexperf ...``` on its first comment line; a
-    PNG carries ``Software: tuflexperf sweep`` (the carpet plot) or ``tuflexperf VERSION`` (a
-    report page); each CSV has its own header, matched whole: fit's thrust table, a
-    mission's history (its columns, then six per engine), a sweep's grid (the varied keys,
-    then ``<requirement>_value, _limit, _passed`` per requirement).
+
+def artefact_of(head: bytes) -> str | None:
+    """Which of the tool's artefacts (:data:`ARTEFACT_WRITERS`) a file that begins with
+    ``head`` is (None: not this tool's).
+
+    YAML written by ``fit`` says ``written by `tuflexperf ...``` on its first comment line
+    (the propulsion model's line names poly22); a PNG carries ``Software: tuflexperf sweep``
+    (the carpet plot) or ``tuflexperf VERSION`` (a report page); each CSV has its own
+    header, matched whole: fit's thrust table, a mission's history (its columns, then six
+    per engine), a sweep's grid (the varied keys, then ``<requirement>_value, _limit,
+    _passed`` per requirement).
     """
     first_line = head.split(b"\n", 1)[0]
     # fit's YAML (thrust model, battery) says so on its first comment line
     if first_line.startswith(b"#") and b"written by `tuflexperf fit" in first_line.lower():
-        return "fit"
+        return fit_yaml_kind(head) + " file"
     if head.startswith(b"\x89PNG"):
         software = _png_software(head) or ""
         if software in (SWEEP_PNG_SOFTWARE, PNG_SOFTWARE):  # the bare name: earlier sweeps'
-            return "sweep"
-        return "report" if software.startswith(PNG_SOFTWARE + " ") else None
+            return "sweep plot"
+        return "report page" if software.startswith(PNG_SOFTWARE + " ") else None
     if b"\n" not in head:  # a header is a whole first line
         return None
     try:
@@ -344,10 +354,17 @@ def written_by(head: bytes) -> str | None:
         return None
     columns = header.split(",")
     if header in _thrust_table_headers():
-        return "fit"
+        return "thrust table"
     if _is_mission_history(columns):
-        return "mission"
-    return "sweep" if _is_sweep_grid(columns) else None
+        return "mission history"
+    return "sweep grid" if _is_sweep_grid(columns) else None
+
+
+def written_by(head: bytes) -> str | None:
+    """Which command wrote a file that begins with ``head`` (None: not this tool;
+    :func:`artefact_of`)."""
+    kind = artefact_of(head)
+    return None if kind is None else ARTEFACT_WRITERS[kind]
 
 
 FIT_PROPULSION_HEADER = "# Written by `tuflexperf fit` (poly22"  # the propulsion file's
@@ -360,9 +377,12 @@ def fit_yaml_kind(head: bytes) -> str:
 
 
 def refuse_foreign_files(outputs: dict[str, Path], command: str,
-                         yaml_kind: str | None = None) -> None:
+                         kinds: dict[str, str] | None = None) -> None:
     """Refuse (exit 2) to replace an existing file that ``command`` did not write (SPEC 5:
-    a fitted model is not a mission's to overwrite, nor a report page a sweep's)."""
+    a fitted model is not a mission's to overwrite, nor a report page a sweep's), or that
+    is another artefact than the one its flag writes (``kinds``: flag -> artefact of
+    :data:`ARTEFACT_WRITERS`): fit's ``--table`` replaced a fitted propulsion model with a
+    CSV, and sweep's ``--csv`` its own carpet plot, with exit 0 (outside audit)."""
     for flag, out in outputs.items():
         out, target = Path(out), output_path(out)
         if target.is_symlink():  # replacing it would replace the user's link, not write through
@@ -378,26 +398,25 @@ def refuse_foreign_files(outputs: dict[str, Path], command: str,
                 head = handle.read(4096)
         except OSError:
             head = None
-        writer = written_by(head) if head is not None else None
-        if writer == "fit" and head is not None and head.startswith(b"#"):
-            found = fit_yaml_kind(head)
-            if yaml_kind is not None and found != yaml_kind:
-                # a fitted battery file (its runs, its fit block) replaced by a propulsion
-                # model, or the reverse, with exit 0 (outside audit)
-                raise InputError(
-                    f"{flag}: {out} is a {found} file written by `tuflexperf fit`, not a "
-                    f"{yaml_kind} file; refusing to replace it, choose another path")
-            _refuse_unsealed(flag, out, target)
-        if writer is None:
+        found = artefact_of(head) if head is not None else None
+        if found is None:
             raise InputError(
                 f"{flag}: {out} exists and is not an earlier output of tuflexperf; refusing "
                 "to replace it, choose another path"
             )
+        writer = ARTEFACT_WRITERS[found]
         if writer != command:
             raise InputError(
                 f"{flag}: {out} was written by `tuflexperf {writer}`, not by `tuflexperf "
                 f"{command}`; refusing to replace it, choose another path"
             )
+        wanted = (kinds or {}).get(flag)
+        if wanted is not None and found != wanted:
+            raise InputError(
+                f"{flag}: {out} is a {found} written by `tuflexperf {writer}`, not a "
+                f"{wanted}; refusing to replace it, choose another path")
+        if found.endswith(" file"):  # fit's YAML: replaced only as fit wrote it
+            _refuse_unsealed(flag, out, target)
 
 
 def _refuse_unsealed(flag: str, shown: Path, target: Path) -> None:
@@ -417,9 +436,10 @@ def _refuse_unsealed(flag: str, shown: Path, target: Path) -> None:
 
 
 def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str,
-                  yaml_kind: str | None = None) -> None:
+                  kinds: dict[str, str] | None = None) -> None:
     """Refuse an output that is, or would overwrite, one of the command's inputs, or an
-    existing file that is not an earlier output of ``command`` (exit 2).
+    existing file that is not an earlier output of ``command`` of the artefact its flag
+    writes (``kinds``: flag -> artefact, :data:`ARTEFACT_WRITERS`) (exit 2).
 
     ``outputs`` maps the flag (``--out``) to its path. Also refuses an output that is an
     existing directory where a file is expected. Two outputs may not be the same path.
@@ -440,7 +460,7 @@ def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str
                 )
         if target.is_dir():
             raise InputError(f"{flag}: {out} is a directory, expected a file")
-    refuse_foreign_files(outputs, command, yaml_kind)
+    refuse_foreign_files(outputs, command, kinds)
 
 
 def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> None:

@@ -1399,7 +1399,8 @@ def run_fit(
 
     inputs = _fit_inputs(input_path)
     battery = is_battery_file(input_path)
-    guard_outputs({"--out": out}, inputs, "fit", "battery" if battery else "propulsion")
+    guard_outputs({"--out": out}, inputs, "fit",
+                  {"--out": "battery file" if battery else "propulsion file"})
     if battery:
         return _fit_battery(input_path, out, table, glauert)
 
@@ -1417,7 +1418,8 @@ def run_fit(
         _check_output(table, "--table")
         if table.resolve() == out.resolve():
             raise InputError("--table: must differ from --out")
-        guard_outputs({"--out": out, "--table": table}, inputs, "fit", "propulsion")
+        guard_outputs({"--out": out, "--table": table}, inputs, "fit",
+                      {"--out": "propulsion file", "--table": "thrust table"})
         if result.table_text is not None:
             files[table] = result.table_text
     write_files(files)
