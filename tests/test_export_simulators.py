@@ -363,3 +363,57 @@ def test_a_compiler_that_fails_is_one_line_naming_it(tmp_path: Path) -> None:
         assert done.returncode == 2 and "Traceback" not in done.stderr
         assert said in done.stderr, done.stderr
         assert len(done.stderr.splitlines()) == 1 and not (tmp_path / "fmu").exists()
+
+
+def test_an_interrupt_while_compiling_leaves_no_compiler_files_or_processes(tmp_path: Path):
+    """gcc's assembler files (cc*.s, cc*.o) were left in $TMPDIR and a cc1 zombie behind
+    when the export was interrupted while compiling (outside audit): the compiler runs with
+    its temporary files in the export's own scratch folder, its process group ended whole."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    user_tmp = tmp_path / "tmp"
+    user_tmp.mkdir()
+    marker = tmp_path / "compiler_pid"
+    compiler = tmp_path / "slowcc"
+    # a compiler that writes its temporary file, starts a child of its own and takes its time
+    compiler.write_text("#!/bin/sh\n"
+                        f"echo $$ > {marker}\n"
+                        ": > \"$TMPDIR/ccTEST.s\"\n"
+                        "sleep 60 &\n"
+                        "wait\n")
+    compiler.chmod(0o755)
+    process = subprocess.Popen([sys.executable, "-m", "tuflexperf", "export", "--format", "fmu",
+                                "--out", str(tmp_path / "fmu")], cwd=tmp_path,
+                               env={**os.environ, "CC": str(compiler), "TMPDIR": str(user_tmp)},
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    for _ in range(600):
+        if marker.exists() and marker.read_text().strip():
+            break
+        time.sleep(0.05)
+    pid = int(marker.read_text())
+    time.sleep(0.2)
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode != 0 and "Traceback" not in err
+    assert list(user_tmp.iterdir()) == [], list(user_tmp.iterdir())
+    assert not (tmp_path / "fmu").exists()
+
+    def living_in_group() -> list[str]:  # zombies wait for init to reap them: not living
+        found = []
+        for stat in Path("/proc").glob("[0-9]*/stat"):
+            try:
+                fields = stat.read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[2]) == pid and fields[0] != "Z":
+                found.append(stat.parent.name)
+        return found
+
+    for _ in range(100):  # the compiler's group, its child included, is killed
+        if not living_in_group():
+            break
+        time.sleep(0.05)
+    assert living_in_group() == []

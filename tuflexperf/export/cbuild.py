@@ -5,10 +5,13 @@ Flight software does not need this module; it compiles ``tfp_thrust.c`` with its
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import os
 import shutil
+import signal
 import subprocess
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -27,6 +30,24 @@ def find_compiler() -> str | None:
     return None
 
 
+def run_compiler(command: Sequence[str], scratch: Path | str) -> subprocess.CompletedProcess[str]:
+    """Run a compiler ``command`` with its temporary files in ``scratch`` (``TMPDIR``) and
+    in a process group of its own, which an interrupt ends whole: ``subprocess.run`` killed
+    the driver alone, and its assembler and compiler proper left their ``cc*.s`` / ``cc*.o``
+    in the user's ``$TMPDIR`` and a zombie behind (outside audit)."""
+    env = {**os.environ, "TMPDIR": str(scratch)}
+    process = subprocess.Popen(list(command), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True, env=env, start_new_session=True)
+    try:
+        out, err = process.communicate()
+    except BaseException:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(process.pid, signal.SIGKILL)
+        process.wait()
+        raise
+    return subprocess.CompletedProcess(list(command), process.returncode, out, err)
+
+
 def compile_shared(
     sources: Sequence[Path | str], library: Path | str, cflags: Sequence[str] = STRICT_CFLAGS
 ) -> Path:
@@ -40,7 +61,8 @@ def compile_shared(
     library = Path(library)
     command = [compiler, *cflags, "-shared", "-fPIC", "-o", str(library)]
     command += [str(s) for s in sources] + ["-lm"]
-    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    with tempfile.TemporaryDirectory() as scratch:
+        done = run_compiler(command, scratch)
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed:\n{done.stdout}{done.stderr}")
     return library

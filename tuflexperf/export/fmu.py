@@ -30,7 +30,6 @@ import io
 import os
 import platform
 import shutil
-import subprocess
 import tempfile
 import zipfile
 from pathlib import Path
@@ -38,7 +37,7 @@ from xml.sax.saxutils import escape, quoteattr
 
 from tuflexperf.errors import InputError
 from tuflexperf.export.c_code import HEADER_NAME, SOURCE_NAME, header_text, source_text
-from tuflexperf.export.cbuild import find_compiler
+from tuflexperf.export.cbuild import find_compiler, run_compiler
 from tuflexperf.export.model import EXTRAPOLATION_WARNING, ExportModel, model_notes
 
 FMU_NAME = "tfp_thrust.fmu"
@@ -500,7 +499,9 @@ def build_fmu(model: ExportModel, target: Path) -> Path:
         command = [compiler, "-std=c99", "-O2", "-shared", "-fPIC", "-I", str(build),
                    "-o", str(library), str(build / SOURCE_NAME), str(build / "fmu.c"), "-lm"]
         try:
-            done = subprocess.run(command, capture_output=True, text=True, check=False)
+            scratch = build / "tmp"
+            scratch.mkdir()
+            done = run_compiler(command, scratch)
         except OSError as exc:
             raise InputError(f"--format fmu: cannot run the C compiler {compiler}: "
                              f"{exc.strerror}; set CC to a working one") from None
