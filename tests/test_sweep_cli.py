@@ -45,6 +45,12 @@ def test_sweep_json_rows_equal_the_deterministic_check(tmp_path) -> None:
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no staging debris
 
 
+def test_one_point_is_start_equal_to_stop() -> None:
+    result = runner.invoke(app, ["sweep", "--vary", "aircraft.mass_kg=30:30:1"])
+    assert result.exit_code == 0 and "1 grid points" in result.stdout
+    assert "FAIL" in result.stdout  # 30 kg fails trim
+
+
 def test_one_axis_human_output_and_workers_equal(tmp_path) -> None:
     result = runner.invoke(app, ["sweep", "--vary", "aircraft.cd0=0.015:0.04:6",
                                  "--plot", str(tmp_path / "line.png")])
@@ -64,6 +70,8 @@ def test_one_axis_human_output_and_workers_equal(tmp_path) -> None:
     (["--vary", "aircraft.mass_kgg=18:30:3"], "aircraft.mass_kg"),
     (["--vary", "aircraft.mass_kg=-5:30:3"], "aircraft.mass_kg"),
     (["--vary", "aircraft.mass_kg=18:30:3", "--plot", "x.pdf"], "--plot"),
+    # one point at 18 kg PASSed, 30 kg (where trim fails) never flown (outside audit)
+    (["--vary", "aircraft.mass_kg=18:30:1"], "N = 1 flies START alone"),
 ])
 def test_bad_vary_is_exit_2_one_line(args: list[str], message: str) -> None:
     result = runner.invoke(app, ["sweep", *args])

@@ -49,6 +49,11 @@ def parse_vary(case: Case, spec: str) -> tuple[str, Array]:
             from None
     if count < 1 or not (np.isfinite(start) and np.isfinite(stop)):
         raise InputError(f"--vary {spec!r}: need finite START, STOP and N >= 1")
+    if count == 1 and start != stop:
+        # one point is START alone: STOP was never flown, and its FAIL never said (outside
+        # audit: 18:30:1 PASSed at 18 kg where 30 kg fails trim)
+        raise InputError(f"--vary {spec!r}: N = 1 flies START alone; give START = STOP for one "
+                         "point, or N >= 2 to reach STOP")
     for value in (start, stop):  # the key's own bounds, as in the files (a negative mass)
         check_value(case, key, value, "--vary")
     return key, np.linspace(start, stop, count)
