@@ -388,6 +388,10 @@ MORE = [
     Case("--set a misspelt key", ("check", "--set", "aircraft.mas_kg=30"), 2,
          "did you mean aircraft.mass_kg"),
     Case("--set out of range", ("trim", "--set", "aircraft.mass_kg=-3"), 2, "aircraft.mass_kg"),
+    # the value as given: '=1: Input should be less than or equal to 1' (outside audit)
+    Case("--set just beyond a bound",
+         ("check", "--set", "requirements.endurance.throttle=1.0000001"), 2,
+         "throttle=1.0000001: Input should be less than or equal to 1"),
     Case("--set tightens a limit", ("check", "--case", "requirements/tuflex.yaml", "--set",
                                     "requirements.takeoff.max_ground_roll_m=50"), 1, "FAIL"),
     Case("table to a full disk", ("trim", "--table"), 2, "disk full", None),

@@ -213,7 +213,7 @@ def check_value(case: Case, key: str, value: float, where: str, unset: bool = Fa
             else field.annotation
         TypeAdapter(kind).validate_python(value)
     except ValidationError as exc:
-        raise InputError(f"{where}: {key}={value:g}: {_problem(exc)}") from None
+        raise InputError(f"{where}: {key}={float(value)!r}: {_problem(exc)}") from None
 
 
 def _problem(exc: ValidationError) -> str:
@@ -262,7 +262,7 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
                 check_value(case, key, float(value), where, unset=True)
                 changed[key] = (rest, float(value))
         except ValidationError as exc:
-            raise InputError(f"{where}: {key}={value:g}: {_problem(exc)}") from None
+            raise InputError(f"{where}: {key}={float(value)!r}: {_problem(exc)}") from None
     if changed:
         data = requirements.model_dump(exclude_none=True)  # absent blocks stay absent
         for rest, value in changed.values():
