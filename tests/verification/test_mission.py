@@ -848,3 +848,24 @@ def test_a_segment_beyond_the_tested_airspeeds_says_so(tmp_path: Path,
     true = float(true_airspeed_m_s(38.0, isa_density_kg_m3(100.0)))
     assert notes == [f"segment 3 (cruise): thrust model extrapolated at {true:.1f} m/s true "
                      "(tested 0-30 m/s)"]
+
+
+@pytest.mark.parametrize(("last", "said"), [
+    ("  - {type: climb, to_altitude_m: 100, airspeed_m_s: 20, throttle: 1.0}\n", True),
+    ("  - {type: climb, to_altitude_m: 100, airspeed_m_s: 20, throttle: 1.0}\n"
+     "  - {type: descent, to_altitude_m: 0, airspeed_m_s: 20, throttle: 0.1}\n", False),
+])
+def test_a_mission_that_ends_in_the_air_says_it_did_not_land(tmp_path, last, said) -> None:
+    """A take-off and a climb to 100 m 'landed with 93.4 %' and PASSed, unsaid (outside
+    audit): the descent and landing are not flown, and the flight says so."""
+    from tuflexperf.analysis.mission import solve_mission
+
+    case = load_case(copy_shipped_case(tmp_path))
+    path = tmp_path / "m.yaml"
+    path.write_text("name: m\nsegments:\n  - {type: takeoff}\n" + last)
+    flown = solve_mission(case, load_mission(path))
+    assert flown.attainable
+    notes = [w for w in flown.warnings if "descent and landing are not flown" in w]
+    assert bool(notes) is said
+    if said:
+        assert "ends 100 m above the field" in notes[0]

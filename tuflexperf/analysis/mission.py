@@ -1405,7 +1405,27 @@ def solve_mission(case: Case, mission: MissionFile,
         if flown is None:
             raise
         return flown
-    return model.solve_for() if mission.solve_for is not None else model.fly()
+    flown = model.solve_for() if mission.solve_for is not None else model.fly()
+    return _said_if_airborne(flown)
+
+
+AIRBORNE_AT_END_M = 1.0
+"""A mission that ends this high above the field [m] or more has not landed."""
+
+
+def _said_if_airborne(flown: MissionResult) -> MissionResult:
+    """A mission whose last segment ends in the air says that its descent and landing are
+    not flown: the charge it 'lands' with is the one up there (a take-off and a climb to
+    100 m 'landed with 93.4 %' and PASSed, unsaid; outside audit)."""
+    import dataclasses
+
+    height = np.asarray(flown.history.get("altitude_m", ()), dtype=float)
+    if not flown.attainable or height.size == 0 or not height[-1] >= AIRBORNE_AT_END_M:
+        return flown
+    note = (f"mission {flown.name!r} ends {height[-1]:.0f} m above the field: its descent and "
+            "landing are not flown, the landing charge is the one at the last segment's end "
+            "(add {type: descent, to_altitude_m: 0, ...} to fly them)")
+    return dataclasses.replace(flown, warnings=(*flown.warnings, note))
 
 
 def _flown_up_to(case: Case, mission: MissionFile, min_landing_fraction: float | None,
