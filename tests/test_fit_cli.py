@@ -550,3 +550,29 @@ def test_a_run_in_another_unit_is_refused_and_deaf_runs_give_no_set_point(
     assert result.exit_code == 2, result.output
     assert "EDF1: the throttle-step runs cover only 2 airspeed set point" in result.stderr
     assert not out.exists()
+
+
+def test_engines_whose_delays_disagree_are_said(tmp_path) -> None:
+    """EDF2's sine sweeps logged on a tenth of their time base: the model's one delay_s, the
+    engines' mean 0.289 s, fitted neither (0.049 and 0.529 s), unsaid (outside audit)."""
+    import gzip
+
+    campaign = tmp_path / "campaign"
+    shutil.copytree(Path(__file__).resolve().parent.parent / "data" / "tuflex" / "campaign",
+                    campaign)
+    for name in ("edf2_sweep_v30", "edf2_sweep_v00"):
+        path = campaign / "runs" / f"{name}.csv.gz"
+        lines = gzip.open(path, "rt").read().splitlines()
+        scaled = [",".join([repr(round(float(row.split(",")[0]) * 10, 4)), *row.split(",")[1:]])
+                  for row in lines[1:]]
+        with gzip.open(path, "wt") as handle:
+            handle.write("\n".join([lines[0], *scaled]) + "\n")
+    result = runner.invoke(app, ["fit", str(campaign / "campaign.yaml"), "--out",
+                                 str(tmp_path / "model.yaml")])
+    assert result.exit_code == 0, result.stderr
+    assert "the engines disagree on the delay (EDF1 0.049 s, EDF2 0.529 s" in result.stdout
+    # the shipped campaign's engines agree: nothing said
+    shipped = runner.invoke(app, ["fit", str(Path(__file__).resolve().parent.parent / "data"
+                                             / "tuflex" / "campaign" / "campaign.yaml"),
+                                  "--out", str(tmp_path / "shipped.yaml")])
+    assert shipped.exit_code == 0 and "disagree on the delay" not in shipped.stdout

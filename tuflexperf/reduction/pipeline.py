@@ -86,6 +86,9 @@ POOR_POLY22_R2 = 0.9
 # shipped campaign's agree to 0.2 ms; a sweep logged with a tenth of its time base came out
 # 45 ms off and passed the earlier 0.05 s unseen: outside audit)
 MAX_DELAY_SPREAD_S = 0.01
+# Engines' delays further apart than this (the paper's whole delay, 0.05 s) get one mean
+# delay_s that fits neither engine
+MAX_DELAY_ENGINES_APART_S = 0.05
 ELECTRICAL_COLUMNS = ("voltage_v", "current_a")
 
 
@@ -451,6 +454,19 @@ def fit_campaign(
                 f"{max(spread):.3f} s (more than {MAX_DELAY_SPREAD_S:g} s apart): is a run's "
                 "time base shifted?"
             )
+    per_engine = {engine: float(np.mean([d["delay_s"] for d in delay_runs
+                                         if str(d["engine"]) == engine]))
+                  for engine in sorted({str(d["engine"]) for d in delay_runs})}
+    if per_engine and max(per_engine.values()) - min(per_engine.values()) > \
+            MAX_DELAY_ENGINES_APART_S:
+        # the model has one delay_s, their mean: two ESCs 10x apart got one that fits neither,
+        # unsaid (outside audit)
+        named = ", ".join(f"{e} {v:.3f} s" for e, v in per_engine.items())
+        degenerate.append(
+            f"the engines disagree on the delay ({named}, more than "
+            f"{MAX_DELAY_ENGINES_APART_S:g} s apart): the model's one delay_s is their mean "
+            f"{measured_delay:.3f} s, which fits neither; is a run's time base off?"
+        )
     # the spool lag after the dead time (issue 15): the sweeps' mean, written as lag_s
     measured_lag = _mean_or_none([d["lag_s"] for d in delay_runs])
     delay = delay_s if delay_s is not None else measured_delay
