@@ -281,3 +281,20 @@ def test_a_semicolon_separated_run_is_said_as_such(tmp_path) -> None:
     path.write_text("time_s;throttle;airspeed_m_s;force_n\n0;0;0;0\n0,1;0;0;0\n")
     with pytest.raises(InputError, match="separated by ';'"):
         read_run(path)
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-4, 1e6, 1e300])
+def test_a_time_base_in_no_units_of_a_measurement_is_bad_input(tmp_path: Path, scale) -> None:
+    """time_s x 1e-300 overflowed the filters with a message naming no file; x 1e300 was
+    fitted, with dozens of 300-digit notes (outside audit)."""
+    data = columns()
+    data["time_s"] = data["time_s"] * scale
+    with pytest.raises(InputError, match=r"a\.csv: column time_s: a sample interval of .* s "
+                                         r"is no measurement"):
+        read_run(write_csv(tmp_path / "a.csv", data))
+
+
+@pytest.mark.parametrize("fs", [1e5, 0.01])
+def test_fast_and_slow_loggers_are_read(tmp_path: Path, fs: float) -> None:
+    run = read_run(write_csv(tmp_path / "a.csv", columns(fs=fs)))
+    assert run.sample_rate_hz == pytest.approx(fs)

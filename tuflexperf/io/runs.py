@@ -60,6 +60,10 @@ STATIC_AIRSPEED_NOISE_M_S = 0.5  # a thrust table's airspeed may dip this far be
 BACKWARDS_RUN_AIRSPEED_M_S = 2.0
 MAX_NAN_FRACTION = 0.01
 """Largest share of NaN samples per column that is repaired rather than refused."""
+MIN_SAMPLE_INTERVAL_S = 1e-6
+"""The shortest median sample interval [s] of a run: no balance logs at over 1 MHz."""
+MAX_SAMPLE_INTERVAL_S = 3600.0
+"""The longest [s]: a run logged once an hour measures no step, sweep or discharge."""
 MIN_SAMPLES = 10
 THROTTLE_TOLERANCE = 0.05
 """A logged throttle may overshoot [0, 1] by this much (PWM rounding); beyond it is an error."""
@@ -398,6 +402,12 @@ def read_run(
             raise InputError(f"{path}: column airspeed_m_s: median {typical:.4g} m/s is "
                              "negative (a tunnel blows one way: is its sign flipped?)")
     step = float(np.median(steps))
+    if not MIN_SAMPLE_INTERVAL_S <= step <= MAX_SAMPLE_INTERVAL_S:
+        # a time base scaled by 1e-300 overflowed the filters with no file named, one by
+        # 1e300 was fitted (outside audit)
+        raise InputError(f"{path}: column time_s: a sample interval of {step:.3g} s is no "
+                         f"measurement (expected {MIN_SAMPLE_INTERVAL_S:g}-"
+                         f"{MAX_SAMPLE_INTERVAL_S:g} s; a time base in other units?)")
     if steps.max() > 10 * step:
         gap = int(np.argmax(steps))
         warnings.append(f"gap of {steps[gap]:.3g} s in time_s after t = {time_s[gap]:.6g} s")
