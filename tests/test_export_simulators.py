@@ -401,16 +401,10 @@ def test_an_interrupt_while_compiling_leaves_no_compiler_files_or_processes(tmp_
     assert list(user_tmp.iterdir()) == [], list(user_tmp.iterdir())
     assert not (tmp_path / "fmu").exists()
 
-    def living_in_group() -> list[str]:  # zombies wait for init to reap them: not living
-        found = []
-        for stat in Path("/proc").glob("[0-9]*/stat"):
-            try:
-                fields = stat.read_text().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[2]) == pid and fields[0] != "Z":
-                found.append(stat.parent.name)
-        return found
+    from tests.test_workers_interrupt import _processes
+
+    def living_in_group() -> list[int]:  # zombies wait for init to reap them: not living
+        return [p for p, state, _, group in _processes() if group == pid and state != "Z"]
 
     for _ in range(100):  # the compiler's group, its child included, is killed
         if not living_in_group():

@@ -362,9 +362,26 @@ def _bracketed_root(f: Any, low: Array, high: Array) -> Array:
         up = f_mid >= 0.0
         low, f_low = np.where(up, mid, low), np.where(up, f_mid, f_low)
         high, f_high = np.where(up, high, mid), np.where(up, f_high, f_mid)
-    # a row stops at its own convergence: its root is the same whatever rows share its batch
-    going = np.ones(np.shape(low), dtype=bool)
-    for _ in range(_BISECTIONS):
+    low, high, f_low, f_high = illinois(f, low, high, f_low, f_high,
+                                        np.ones(np.shape(low), dtype=bool))
+    return np.where(np.abs(f_low) <= np.abs(f_high), low, high)
+
+
+def illinois(f: Any, low: Array, high: Array, f_low: Array, f_high: Array,
+             going: NDArray[np.bool_], steps: int = _BISECTIONS
+             ) -> tuple[Array, Array, Array, Array]:
+    """The Illinois variant of regula falsi on the brackets ``[low, high]`` with
+    ``f(low) >= 0 > f(high)`` of the rows ``going`` (vectorised): the brackets and their
+    values once each row has converged (to 1e-13 relative, or a zero) or after ``steps``.
+
+    A row stops at its own convergence: its root is the same whatever rows share its batch.
+
+    References
+    ----------
+    Dahlquist & Bjorck, *Numerical Methods*, 6.2.
+    """
+    going = going.copy()
+    for _ in range(steps):
         with np.errstate(invalid="ignore", divide="ignore"):
             trial = high - f_high * (high - low) / (f_high - f_low)
         trial = np.where(np.isfinite(trial) & (trial > low) & (trial < high), trial,
@@ -380,7 +397,7 @@ def _bracketed_root(f: Any, low: Array, high: Array) -> Array:
         going &= ~((high - low) <= 1e-13 * np.maximum(np.abs(high), 1.0)) & (f_trial != 0)
         if not going.any():
             break
-    return np.where(np.abs(f_low) <= np.abs(f_high), low, high)
+    return low, high, f_low, f_high
 
 
 def _excess_grid(m: Any, throttle: Array, speed: Array) -> Array:

@@ -212,22 +212,11 @@ class SaggingFlight:
                 on_step = to_low & ~(f_above >= 0.0)
                 high, f_high = (np.where(on_step, above, high),
                                 np.where(on_step, f_above, f_high))
-        going = bracketed & ~(high - low <= 1e-9 * high)
-        for _ in range(_ILLINOIS_STEPS):
-            with np.errstate(divide="ignore", invalid="ignore"):
-                trial = high - f_high * (high - low) / (f_high - f_low)
-            trial = np.where(np.isfinite(trial) & (trial > low) & (trial < high), trial,
-                             0.5 * (low + high))
-            f_trial = residual(trial)
-            up = going & (f_trial >= 0.0)
-            down = going & ~(f_trial >= 0.0)
-            f_high = np.where(up, 0.5 * f_high, f_high)
-            f_low = np.where(down, 0.5 * f_low, f_low)
-            low, f_low = np.where(up, trial, low), np.where(up, f_trial, f_low)
-            high, f_high = np.where(down, trial, high), np.where(down, f_trial, f_high)
-            going &= ~(high - low <= 1e-13 * high) & ~(np.abs(f_trial) < 1e-15)
-            if not going.any():
-                break
+        from tuflexperf.analysis.batch_endurance import illinois
+
+        low, high, f_low, f_high = illinois(residual, low, high, f_low, f_high,
+                                            bracketed & ~(high - low <= 1e-9 * high),
+                                            _ILLINOIS_STEPS)
         nearer = np.abs(f_low) <= np.abs(f_high)
         v = np.where(nearer, low, high)
         level = bracketed & ((np.where(nearer, np.abs(f_low), np.abs(f_high)) < _LEVEL)
