@@ -60,8 +60,9 @@ STATIC_AIRSPEED_NOISE_M_S = 0.5  # a thrust table's airspeed may dip this far be
 BACKWARDS_RUN_AIRSPEED_M_S = 2.0
 MAX_NAN_FRACTION = 0.01
 """Largest share of NaN samples per column that is repaired rather than refused."""
-MIN_SAMPLE_INTERVAL_S = 1e-6
-"""The shortest median sample interval [s] of a run: no balance logs at over 1 MHz."""
+MIN_SAMPLE_INTERVAL_S = 1e-10
+"""The shortest median sample interval [s] of a run: no balance logs at 10 GHz (a run logged
+in microseconds, 1e-9 s apart, reads and is named as giving no test point)."""
 MAX_SAMPLE_INTERVAL_S = 3600.0
 """The longest [s]: a run logged once an hour measures no step, sweep or discharge."""
 MIN_SAMPLES = 10
