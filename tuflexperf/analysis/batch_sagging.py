@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from tuflexperf.analysis.batch_endurance import _best_climb, _power_w, illinois
 from tuflexperf.analysis.mission import (
     BURST_OVER_CONTINUOUS,
     RATING_SEGMENT_S,
@@ -41,7 +42,7 @@ from tuflexperf.analysis.mission import (
 )
 from tuflexperf.analysis.pack_limits import PackRows, operating_point
 from tuflexperf.models._math import interp_rows
-from tuflexperf.models.aircraft import level_flight_drag_n
+from tuflexperf.models.aircraft import ground_roll_resistance_n, level_flight_drag_n
 from tuflexperf.models.battery import SECONDS_PER_HOUR, first_window_beyond
 from tuflexperf.models.powertrain import beyond_jet_velocity
 
@@ -53,8 +54,25 @@ _ILLINOIS_STEPS = 100
 _SECANT_STEPS = 8
 _LEVEL = 1e-9  # (T - D)/W of level flight, the mission's test
 _NEAR_STEP = 0.05  # a guess this near a tested end (relative) looks for the step there
+# the airspeeds just inside and just beyond a tested end's step (outside_tested_range's slack)
+_STEP_BELOW, _STEP_ABOVE = 0.5e-9, 2e-9
 _MAX_CRUISE_STEPS = 16 * STEPS  # a sag that lengthens the cruise 16-fold is no cruise here
 _END_STEPS = 40  # Illinois steps on the cut-off within the last cruise step
+
+
+@dataclass(frozen=True)
+class _Step:
+    """The thrust's step at a tested end: the airspeeds [m/s] just inside and beyond it, the
+    level-flight residuals there, and per row where the fast root lies (the fast root is the
+    greatest: beyond the step wherever the excess is still positive there)."""
+
+    below: float
+    above: float
+    f_below: Array
+    f_above: Array
+    beyond: NDArray[np.bool_]
+    here: NDArray[np.bool_]
+    under: NDArray[np.bool_]
 
 
 @dataclass
@@ -80,10 +98,7 @@ class SaggingFlight:
     """
 
     def __init__(self, m: Any, model: Any, rows: PackRows, engines: tuple[Any, ...]) -> None:
-        from tuflexperf.analysis.batch_endurance import _power_w
-
         self.m, self.model, self.rows, self.engines = m, model, rows, engines
-        self._power_w = _power_w
         prop = m.propulsion
         self.u_ref, self.k = prop.reference_voltage_v, prop.voltage_exponent
         self.weight = np.asarray(m.aircraft.weight_n, dtype=float).reshape(-1) * np.ones(m.size)
@@ -109,7 +124,7 @@ class SaggingFlight:
         """At ``throttle`` [-] and true airspeed ``speed`` [m/s] per row with ``charge`` [Ah]
         drawn per fan ``(fans, rows)``: the live thrust [N] per row, and per fan the loaded
         voltage [V], the current through its packs [A] and the electrical power [W]."""
-        power = np.stack([np.asarray(self._power_w(self.model, self.m, throttle, speed, e),
+        power = np.stack([np.asarray(_power_w(self.model, self.m, throttle, speed, e),
                                      dtype=float) * np.ones(self.m.size) for e in self.engines])
         rows = self.rows
         u, per_pack, factor = operating_point(self.model.params, charge, power,
@@ -140,23 +155,18 @@ class SaggingFlight:
         on_step = np.zeros(guess.shape, dtype=bool)
         step_v = np.zeros_like(guess)
         if self.m.extrapolation_n is not None:
-            # the thrust steps at the tested range's ends: near one, the root is on the step
-            # or the secant keeps to the root's side of it
+            # near a step of the thrust the root is on it, or the secant keeps to its side
             for end in self.m.propulsion.tested_airspeed_m_s:
                 near = self.active & (np.abs(guess - end) < _NEAR_STEP * max(end, 1.0))
                 if not near.any():
                     continue
-                below, above = end + 0.5e-9, end + 2e-9  # outside_tested_range's slack
-                f_below = residual(np.full_like(guess, below))
-                f_above = residual(np.full_like(guess, above))
-                # the fast root is the greatest: beyond the step if the excess is there
-                beyond = near & (f_above >= 0.0)
-                here = near & ~beyond & (f_below >= 0.0)
-                step_v = np.where(here, np.where(np.abs(f_below) <= np.abs(f_above), below,
-                                                 above), step_v)
-                on_step |= here
-                floor = np.where(beyond, above, floor)
-                ceiling = np.where(near & ~beyond & ~here, below, ceiling)
+                step = self._thrust_step(residual, end, near)
+                step_v = np.where(step.here, np.where(np.abs(step.f_below)
+                                                      <= np.abs(step.f_above),
+                                                      step.below, step.above), step_v)
+                on_step |= step.here
+                floor = np.where(step.beyond, step.above, floor)
+                ceiling = np.where(step.under, step.below, ceiling)
         start = np.clip(guess, floor, ceiling)
         v0, v1 = start, np.clip(start * (1.0 + 1e-7), floor, ceiling)
         v1 = np.where(v1 == v0, start * (1.0 - 1e-7), v1)
@@ -179,6 +189,16 @@ class SaggingFlight:
         v, level = self._bracketed_level_speed(residual, guess)
         return np.where(done, v1, v), done | level
 
+    def _thrust_step(self, residual: Any, end: float, rows: NDArray[np.bool_]) -> _Step:
+        """:class:`_Step` at the tested end ``end`` [m/s] for ``rows``: the samples'
+        extrapolation error begins there, and no airspeed may give ``T = D`` exactly."""
+        below, above = end + _STEP_BELOW, end + _STEP_ABOVE
+        f_below = residual(np.full(self.m.size, below))
+        f_above = residual(np.full(self.m.size, above))
+        beyond = rows & (f_above >= 0.0)
+        here = rows & ~beyond & (f_below >= 0.0)
+        return _Step(below, above, f_below, f_above, beyond, here, rows & ~beyond & ~here)
+
     def _bracketed_level_speed(self, residual: Any, guess: Array) -> tuple[Array, Array]:
         """:meth:`level_speed` by bracket and Illinois (the secant's fallback)."""
         low, high = guess * (1.0 - _BRACKET), guess * (1.0 + _BRACKET)
@@ -193,27 +213,19 @@ class SaggingFlight:
             f_low, f_high = residual(low), residual(high)
         bracketed = (f_low >= 0.0) & (f_high < 0.0)
         if self.m.extrapolation_n is not None:
-            # the thrust steps at the tested range's ends: the bracket is narrowed to one
-            # side of a step inside it, or closed on the step where the root is there
+            # a bracket across a step of the thrust: narrowed to the root's side, or closed on
+            # the step where the root is there
             for end in self.m.propulsion.tested_airspeed_m_s:
-                below, above = end + 0.5e-9, end + 2e-9  # outside_tested_range's slack
-                across = bracketed & (low < below) & (high > above)
+                across = bracketed & (low < end + _STEP_BELOW) & (high > end + _STEP_ABOVE)
                 if not across.any():
                     continue
-                f_below, f_above = residual(np.full_like(low, below)), \
-                    residual(np.full_like(low, above))
-                to_low = across & (f_below >= 0.0)  # the root is at or beyond the step
-                to_high = across & ~(f_below >= 0.0)
-                low, f_low = np.where(to_low, below, low), np.where(to_low, f_below, f_low)
-                high, f_high = (np.where(to_high, below, high),
-                                np.where(to_high, f_below, f_high))
-                beyond = to_low & (f_above >= 0.0)
-                low, f_low = np.where(beyond, above, low), np.where(beyond, f_above, f_low)
-                on_step = to_low & ~(f_above >= 0.0)
-                high, f_high = (np.where(on_step, above, high),
-                                np.where(on_step, f_above, f_high))
-        from tuflexperf.analysis.batch_endurance import illinois
-
+                step = self._thrust_step(residual, end, across)
+                low = np.where(step.beyond, step.above, np.where(step.here, step.below, low))
+                f_low = np.where(step.beyond, step.f_above,
+                                 np.where(step.here, step.f_below, f_low))
+                high = np.where(step.here, step.above, np.where(step.under, step.below, high))
+                f_high = np.where(step.here, step.f_above,
+                                  np.where(step.under, step.f_below, f_high))
         low, high, f_low, f_high = illinois(residual, low, high, f_low, f_high,
                                             bracketed & ~(high - low <= 1e-9 * high),
                                             _ILLINOIS_STEPS)
@@ -256,8 +268,10 @@ class SaggingFlight:
 
             def rolling(charge: Array, v: Array) -> tuple[Array, Array, Array]:
                 thrust, u, current, _ = self.point(1.0, v, charge)
-                reference = m.net_force(v.reshape(-1, 1))[:, 0]
-                resist = m.thrust(1.0, v.reshape(-1, 1))[:, 0] - reference
+                drag, friction = ground_roll_resistance_n(m.aircraft, v.reshape(-1, 1),
+                                                          m.density)
+                resist = np.asarray(drag + friction, dtype=float).reshape(-1)
+                reference = m.thrust(1.0, v.reshape(-1, 1))[:, 0] - resist
                 stretch = reference / np.maximum(thrust - resist, 1e-9 * self.mass)
                 return current / SECONDS_PER_HOUR * stretch, stretch, u
 
@@ -271,7 +285,7 @@ class SaggingFlight:
                 return current / SECONDS_PER_HOUR, np.ones(m.size), u
 
             q, t = self._rk4(q, t, np.where(ok, rotation, 0.0) / ROTATION_STEPS, constant,
-                             rotating, nodes, check, first_speed=v_lo, repeat_first=False)
+                             rotating, nodes, check, first_speed=v_lo)
         # the climb over height at the full-throttle rate of the loaded packs
         climbing_rows = ok & (height > 0)
         dh = np.where(climbing_rows, height, 0.0) / STEPS
@@ -287,17 +301,17 @@ class SaggingFlight:
             return current / SECONDS_PER_HOUR * dt_dh, dt_dh, u
 
         q, t = self._rk4(q, t, dh, [np.stack([climb_v] * 3)] * STEPS, climbing, nodes,
-                         check, first_speed=climb_v, repeat_first=False)
+                         check, first_speed=climb_v)
         return q, np.where(height > 0, t - t_climb0, 0.0), held, nodes
 
     def _rk4(self, q: Array, t: Array, step: Array, speeds: list[Array], rate: Any,
-             nodes: _Nodes, check: Any, first_speed: Array, repeat_first: bool = True
-             ) -> tuple[Array, Array]:
+             nodes: _Nodes, check: Any, first_speed: Array) -> tuple[Array, Array]:
         """RK4 of ``dq/ds = rate(q, v)[0]``, ``dt/ds = rate(q, v)[1]`` over steps ``step``
         of the variable ``s`` (time, the analysis's time, height), each step's airspeeds
-        (start, middle, end) in ``speeds``; the nodes are recorded and ``check``ed."""
-        k1, dt1, u = rate(q, first_speed)
-        if repeat_first or not nodes.time:
+        (start, middle, end) in ``speeds``; the nodes are recorded and ``check``ed (the
+        flight's first node where the history is empty, at ``first_speed``)."""
+        if not nodes.time:
+            k1, dt1, u = rate(q, first_speed)
             nodes.add(t, q, k1 * SECONDS_PER_HOUR / np.where(dt1 > 0, dt1, 1.0))
             check(u, k1, q)
         for v0, vm, v1 in speeds:
@@ -350,8 +364,8 @@ class SaggingFlight:
         k_here = current / SECONDS_PER_HOUR
 
         def stage(charge: Array, guess: Array) -> tuple[Array, Array]:
-            v_here = self.level_speed(throttle, charge, guess)[0]
-            return v_here, self.point(throttle, v_here, charge)[2] / SECONDS_PER_HOUR
+            v_here, _, _, current, _ = state(charge, guess)
+            return v_here, current / SECONDS_PER_HOUR
 
         for _ in range(_MAX_CRUISE_STEPS):
             if not going.any():
@@ -496,7 +510,6 @@ def flight_on_sagging_packs(m: Any, model: Any, rows: PackRows, throttle: Array,
     case's check before its mission), ``speed`` [m/s] their level-flight airspeed there,
     ``estimate_s`` [s] the constant-power cruise (it sizes the cruise's steps).
     """
-    from tuflexperf.analysis.batch_endurance import _best_climb
     from tuflexperf.models.powertrain import PowerSurfaces
 
     engines: tuple[Any, ...] = (None,)
