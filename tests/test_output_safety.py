@@ -143,7 +143,7 @@ def test_a_command_never_replaces_what_another_command_wrote(tmp_path) -> None:
     assert _run(tmp_path, *vary, "--csv", "s.csv", "--plot", "s.png").returncode == 0
 
 
-def test_written_by_reads_the_png_software_chunk() -> None:
+def test_artefact_of_reads_the_png_software_chunk() -> None:
     import io
 
     from PIL import Image
@@ -157,12 +157,13 @@ def test_written_by_reads_the_png_software_chunk() -> None:
         Image.new("RGB", (4, 4)).save(buffer, format="png", pnginfo=info)
         return buffer.getvalue()
 
-    assert files.written_by(png("tuflexperf sweep")) == "sweep"
-    assert files.written_by(png("tuflexperf 0.1.0")) == "report"
-    assert files.written_by(png("tuflexperf")) == "sweep"  # carpet plots of earlier versions
-    assert files.written_by(png("tuflexperfX")) is None
-    assert files.written_by(png("GIMP")) is None
-    assert files.written_by(png(None)) is None
+    assert files.artefact_of(png("tuflexperf sweep")) == "sweep plot"
+    assert files.artefact_of(png("tuflexperf 0.1.0")) == "report page"
+    # carpet plots of earlier versions
+    assert files.artefact_of(png("tuflexperf")) == "sweep plot"
+    assert files.artefact_of(png("tuflexperfX")) is None
+    assert files.artefact_of(png("GIMP")) is None
+    assert files.artefact_of(png(None)) is None
 
 
 def test_the_recognised_sweep_names_are_every_requirement_check_can_name() -> None:

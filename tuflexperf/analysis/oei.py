@@ -35,8 +35,12 @@ from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.thrust import (
     DeadEngineMode,
+    Propulsion,
+    density_ratio,
+    engine_thrust_n,
     total_thrust_n,
     unlapsed_density_warning,
+    windmilling_thrust_n,
 )
 
 _cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
@@ -162,7 +166,7 @@ WINDMILLING_SHORTFALL = 2.0
 """A coefficient's drag under 1/this of the model's own throttle-0 drag is said."""
 
 
-def windmilling_notes(propulsion: Any, density_kg_m3: float) -> list[str]:
+def windmilling_notes(propulsion: Propulsion, density_kg_m3: float) -> list[str]:
     """Where an engine's ``windmilling_drag_coefficient`` drags far less than its own thrust
     model does at throttle 0 (its measured idle, ``min(T(0, V), 0)``) at the highest tested
     airspeed: the dead engine takes the coefficient (SPEC 3), so the OEI figures are the
@@ -173,8 +177,6 @@ def windmilling_notes(propulsion: Any, density_kg_m3: float) -> list[str]:
     ----------
     SPEC 3 (one engine inoperative); Hoerner, *Fluid-Dynamic Drag*, ch. 3.
     """
-    from tuflexperf.models.thrust import density_ratio, engine_thrust_n, windmilling_thrust_n
-
     top = float(propulsion.tested_airspeed_m_s[1])
     if propulsion.fan_area_m2 is None or top <= 0.0:
         return []

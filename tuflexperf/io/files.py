@@ -360,13 +360,6 @@ def artefact_of(head: bytes) -> str | None:
     return "sweep grid" if _is_sweep_grid(columns) else None
 
 
-def written_by(head: bytes) -> str | None:
-    """Which command wrote a file that begins with ``head`` (None: not this tool;
-    :func:`artefact_of`)."""
-    kind = artefact_of(head)
-    return None if kind is None else ARTEFACT_WRITERS[kind]
-
-
 FIT_PROPULSION_HEADER = "# Written by `tuflexperf fit` (poly22"  # the propulsion file's
 
 

@@ -445,18 +445,17 @@ def fit_campaign(
             }
         )
     measured_delay = _mean_or_none([d["delay_s"] for d in delay_runs])
+    per_engine: dict[str, float] = {}
     for engine in sorted({str(d["engine"]) for d in delay_runs}):
         # one engine's sweeps measure one ESC: two engines may well differ
         spread = [d["delay_s"] for d in delay_runs if str(d["engine"]) == engine]
+        per_engine[engine] = float(np.mean(spread))
         if max(spread) - min(spread) > MAX_DELAY_SPREAD_S:
             degenerate.append(
                 f"{engine}: its sine sweeps disagree on the delay: {min(spread):.3f}-"
                 f"{max(spread):.3f} s (more than {MAX_DELAY_SPREAD_S:g} s apart): is a run's "
                 "time base shifted?"
             )
-    per_engine = {engine: float(np.mean([d["delay_s"] for d in delay_runs
-                                         if str(d["engine"]) == engine]))
-                  for engine in sorted({str(d["engine"]) for d in delay_runs})}
     if per_engine and max(per_engine.values()) - min(per_engine.values()) > \
             MAX_DELAY_ENGINES_APART_S:
         # the model has one delay_s, their mean: two ESCs 10x apart got one that fits neither,
