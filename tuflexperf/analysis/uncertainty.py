@@ -42,6 +42,7 @@ from tuflexperf.analysis.probability import normal_logcdf, normal_ppf_of_log
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import MAX_SAMPLES, Case, UncertaintySchema
 from tuflexperf.io.dotted import value_bounds
+from tuflexperf.models.thrust import Engine
 
 Array = NDArray[np.float64]
 CHUNK_SIZE = 2500
@@ -191,7 +192,7 @@ def draw_chunk(case: Case, plan: SamplingPlan, index: int) -> ChunkDraw:
     return ChunkDraw(values, coefficients, extrapolation, size)
 
 
-def _beyond_residual_sd_n(engine: Any, residual: bool) -> float:
+def _beyond_residual_sd_n(engine: Engine, residual: bool) -> float:
     """The extrapolation error's sd [N] beyond the tested range, on top of the residual's
     where that is drawn too: ``extrapolation_sd_n`` (a leave-one-airspeed-out error, the
     scatter at that airspeed in it) is the whole error there, ``sqrt(e^2 - r^2)`` the rest."""
