@@ -106,10 +106,46 @@ def test_a_capacity_label_far_above_what_the_runs_drew_is_bad_input(tmp_path: Pa
     done = subprocess.run([sys.executable, "-m", "tuflexperf", *args], capture_output=True,
                           text=True)
     assert done.returncode == 2 and done.stdout == ""
-    assert "capacity_ah: 10 Ah is more than 1.5 x the most any discharge run drew" in done.stderr
-    path.write_text(text.replace("capacity_ah: 5.0 ", "capacity_ah: 6.5", 1))  # 1.36 x: kept
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", *args], capture_output=True,
-                          text=True)
+    if command == "fit":
+        assert ("capacity_ah: 10 Ah is more than 1.5 x the most any discharge run drew"
+                in done.stderr)
+        path.write_text(text.replace("capacity_ah: 5.0 ", "capacity_ah: 6.5", 1))  # 1.36 x
+        done = subprocess.run([sys.executable, "-m", "tuflexperf", *args],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+    else:  # check reads the fit, which was fitted with 5 Ah: any other label is refused
+        assert "was fitted with capacity_ah 5 Ah" in done.stderr
+
+
+@pytest.mark.parametrize("command", [["check"], ["endurance", "--throttle", "0.5"],
+                                     ["mission", "MISSION"]])
+def test_a_capacity_label_edited_after_the_fit_is_bad_input(tmp_path: Path, command) -> None:
+    """capacity_ah 6 in a file whose pack model was fitted with 5 Ah: the reserve (a fraction
+    of the label) was counted on charge the measured pack does not give (flight 22.20 min),
+    while --set battery.capacity_ah=6 flies the pack scaled (22.54 min): two answers to one
+    question (outside audit). The file is refused; --set stays the what-if. A fit block
+    written before the fit recorded its capacity still loads."""
+    import yaml
+
+    copy_shipped_case(tmp_path)
+    path = tmp_path / "data" / "tuflex" / "battery.yaml"
+    case = str(tmp_path / "requirements" / "tuflex.yaml")
+    command = [str(tmp_path / "data" / "tuflex" / "missions" / "test_flight.yaml")
+               if word == "MISSION" else word for word in command]
+    text = path.read_text()
+    assert yaml.safe_load(text)["fit"]["capacity_ah"] == 5.0  # written by the fit
+    path.write_text(text.replace("capacity_ah: 5.0 ", "capacity_ah: 6.0 ", 1))
+    done = subprocess.run([sys.executable, "-m", "tuflexperf", *command, "--case", case],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.count("\n") == 1 and str(path) in done.stderr
+    assert ("capacity_ah: 6 Ah, but the pack model in `fit:` was fitted with capacity_ah "
+            "5 Ah" in done.stderr and "--set battery.capacity_ah=6" in done.stderr)
+    # an older fit block (no capacity_ah of its own) keeps the earlier, looser rule
+    path.write_text(text.replace("fit:\n  capacity_ah: 5.0\n", "fit:\n", 1))
+    assert "capacity_ah" not in yaml.safe_load(path.read_text())["fit"]
+    done = subprocess.run([sys.executable, "-m", "tuflexperf", *command, "--case", case],
+                          capture_output=True, text=True)
     assert done.returncode in (0, 1), done.stderr
 
 

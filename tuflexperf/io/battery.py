@@ -27,6 +27,7 @@ the discharge model is fitted (:mod:`tuflexperf.models.battery`).
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -99,6 +100,10 @@ class CrossValidationSchema(StrictModel):
 class BatteryFitSchema(StrictModel):
     """Written by ``tuflexperf fit``: the pack model fitted to the runs (check never fits)."""
 
+    # the file's capacity_ah the model was fitted with: a label edited after the fit is
+    # refused, since a relabelled file counted its reserve on charge the pack does not give
+    # while --set flew it scaled (outside audit; absent in files written before it)
+    capacity_ah: Positive | None = None
     parameters: PackParametersSchema
     rms_v: Annotated[float, Field(ge=0)]
     max_abs_v: Annotated[float, Field(ge=0)]
@@ -255,6 +260,15 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
             raise InputError(f"{path}: runs[{index}].file: {run.file} is listed twice")
         runs.append(DischargeRunRef(path=target, engine=run.engine))
     if schema.fit is not None and not refitting:
+        fitted_with = schema.fit.capacity_ah
+        if fitted_with is not None and not math.isclose(fitted_with, schema.capacity_ah,
+                                                        rel_tol=1e-9):
+            raise InputError(
+                f"{path}: capacity_ah: {schema.capacity_ah:g} Ah, but the pack model in `fit:` "
+                f"was fitted with capacity_ah {fitted_with:g} Ah; fit it again (tuflexperf fit "
+                f"{path.name} --out ...), or keep {fitted_with:g} Ah in the file and fly another "
+                f"size with --set battery.capacity_ah={schema.capacity_ah:g}"
+            )
         fitted = schema.fit.parameters.max_capacity_ah
         if not 0.5 <= fitted / schema.capacity_ah <= 2.0:  # edited after the fit
             raise InputError(

@@ -345,6 +345,7 @@ def fit_battery_block(battery: Any, relative_to: Any) -> dict[str, Any]:
     fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
     refuse_unreproduced_runs(battery, fit.parameters, runs)
     return {
+        "capacity_ah": float(battery.capacity_ah),
         "parameters": {k: float(v) for k, v in fit.parameters.to_dict().items()},
         "rms_v": float(fit.rms_v),
         "max_abs_v": float(fit.max_abs_v),
