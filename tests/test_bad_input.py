@@ -250,6 +250,24 @@ def test_a_misspelt_required_key_is_matched_to_the_missing_one(tmp_path):
             load_case(tmp_path / "requirements" / "tuflex.yaml")
 
 
+def test_a_misspelt_key_under_a_named_parameter_gets_the_closest_one(tmp_path):
+    """A distribution under ``uncertainty.parameters.<key>`` (a key the user names):
+    'normall' had no suggestion, the schema walk stopped at the user's key (outside audit)."""
+    from tuflexperf.errors import InputError
+    from tuflexperf.io.case import load_case
+
+    copy_shipped_case(tmp_path)
+    case = tmp_path / "requirements" / "tuflex.yaml"
+    original = case.read_text()
+    for wrong, meant in (("normall", "normal"), ("truncated_nomal", "truncated_normal"),
+                         ("unifrom", "uniform")):
+        case.write_text(original + "uncertainty:\n  parameters:\n    aircraft.mass_kg: {"
+                        + wrong + ": [20.0, 0.5]}\n")
+        with pytest.raises(InputError, match=rf"aircraft.mass_kg.{wrong}: unknown key "
+                                             rf"'{wrong}' \(did you mean '{meant}'"):
+            load_case(case)
+
+
 @pytest.mark.parametrize(("args", "needle"), [
     # --set met none of the files' cross checks: 1e-9 kg passed with 1e10 x thrust/weight
     (["takeoff", "--set", "aircraft.mass_kg=1e-9"], "physically absurd"),

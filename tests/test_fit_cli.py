@@ -576,3 +576,18 @@ def test_engines_whose_delays_disagree_are_said(tmp_path) -> None:
                                              / "tuflex" / "campaign" / "campaign.yaml"),
                                   "--out", str(tmp_path / "shipped.yaml")])
     assert shipped.exit_code == 0 and "disagree on the delay" not in shipped.stdout
+
+
+@pytest.mark.parametrize("flag", [["--delay-s", "0.1"], ["--glauert"], ["--table", "t.csv"]])
+def test_a_flag_the_pack_fit_has_no_use_for_is_refused(tmp_path: Path, flag) -> None:
+    """`fit battery.yaml --delay-s 0.1` fitted and wrote the pack, the delay silently dropped
+    (outside audit); like --table and --glauert it is refused, and nothing is written."""
+    shipped = Path(__file__).resolve().parents[1] / "data" / "tuflex"
+    shutil.copytree(shipped / "endurance", tmp_path / "endurance")
+    shutil.copy(shipped / "battery.yaml", tmp_path / "battery.yaml")
+    flag = [str(tmp_path / f) if f == "t.csv" else f for f in flag]
+    result = runner.invoke(app, ["fit", str(tmp_path / "battery.yaml"), "--out",
+                                 str(tmp_path / "b.yaml"), *flag])
+    assert result.exit_code == 2
+    assert f"{flag[0]}: not for a battery file" in result.stderr
+    assert not (tmp_path / "b.yaml").exists() and not (tmp_path / "t.csv").exists()

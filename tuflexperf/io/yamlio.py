@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import collections.abc
 import difflib
 import re
 import typing
@@ -266,15 +267,25 @@ def _submodel(annotation: Any) -> type[BaseModel] | None:
     return None
 
 
+def _is_mapping(annotation: Any) -> bool:
+    """Whether an annotation (``dict[str, X]``, ``X | None``, ``Annotated``) is a mapping."""
+    if typing.get_origin(annotation) in (dict, collections.abc.Mapping):
+        return True
+    return any(_is_mapping(arg) for arg in typing.get_args(annotation))
+
+
 def _valid_keys(model: type[BaseModel] | None, loc: tuple[Any, ...]) -> list[str]:
     """The keys the schema accepts at ``loc`` (the location of the offending key)."""
+    user_key = False  # the next part is a key the user names (of a dict[str, X] field)
     for part in loc[:-1]:
         if model is None:
             return []
-        if isinstance(part, int):
+        if isinstance(part, int) or user_key:
+            user_key = False
             continue
         field = model.model_fields.get(str(part))
         model = _submodel(field.annotation) if field is not None else None
+        user_key = field is not None and _is_mapping(field.annotation)
     return list(model.model_fields) if model is not None else []
 
 

@@ -1353,13 +1353,16 @@ def is_battery_file(path: Path) -> bool:
     return len(keys & battery) > len(keys & campaign)
 
 
-def _fit_battery(path: Path, out: Path, table: Path | None, glauert: bool) -> dict[str, Any]:
+def _fit_battery(path: Path, out: Path, table: Path | None, glauert: bool,
+                 delay_s: float | None) -> dict[str, Any]:
     """``fit BATTERY.yaml``: the pack model fitted to the file's discharge runs, written back."""
     from tuflexperf.reduction.battery import fitted_battery_text
 
-    if table is not None or glauert:
-        raise InputError(f"{'--table' if table is not None else '--glauert'}: not for a "
-                         "battery file (it fits the pack model alone)")
+    # a flag the pack fit has no use for is refused, not ignored (--delay-s was: outside audit)
+    given = [flag for flag, used in (("--table", table is not None), ("--glauert", glauert),
+                                     ("--delay-s", delay_s is not None)) if used]
+    if given:
+        raise InputError(f"{given[0]}: not for a battery file (it fits the pack model alone)")
     text, block = fitted_battery_text(path, out)
     write_files({out: sealed(text)})
     return {"kind": "battery", "input": str(path), "out": str(out), "table": None,
@@ -1417,7 +1420,7 @@ def run_fit(
     guard_outputs({"--out": out}, inputs, "fit",
                   {"--out": "battery file" if battery else "propulsion file"})
     if battery:
-        return _fit_battery(input_path, out, table, glauert)
+        return _fit_battery(input_path, out, table, glauert, delay_s)
 
     if is_thrust_table(input_path) or is_propeller_manifest(input_path):
         if glauert:
