@@ -283,6 +283,26 @@ def test_a_semicolon_separated_run_is_said_as_such(tmp_path) -> None:
         read_run(path)
 
 
+@pytest.mark.parametrize("seed", range(8))
+def test_random_bytes_are_said_to_be_binary_not_semicolon_separated(tmp_path, seed) -> None:
+    """3 kB of random bytes were called "the header's columns are separated by ';'" (outside
+    audit). A Latin-1 degree sign in a text header stays a text problem."""
+    import numpy as np
+
+    from tuflexperf.errors import InputError
+    from tuflexperf.io.runs import read_run
+
+    path = tmp_path / "run.csv"
+    path.write_bytes(np.random.default_rng(seed).bytes(3000))
+    with pytest.raises(InputError, match="holds binary bytes, not text") as raised:
+        read_run(path)
+    assert str(path) in str(raised.value)
+    path.write_bytes(b"time_s,throttle,airspeed_m_s,force_n,temp_\xb0C\n0,0,0,0,20\n")
+    with pytest.raises(InputError) as raised:
+        read_run(path)
+    assert "binary" not in str(raised.value)
+
+
 @pytest.mark.parametrize("scale", [1e-300, 1e-9, 1e6, 1e300])
 def test_a_time_base_in_no_units_of_a_measurement_is_bad_input(tmp_path: Path, scale) -> None:
     """time_s x 1e-300 overflowed the filters with a message naming no file; x 1e300 was

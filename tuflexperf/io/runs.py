@@ -142,7 +142,12 @@ def _first_line(path: Path) -> str:
         return ""
 
 
-def _refuse_semicolons(path: Path, semicolons: bool) -> None:
+def _refuse_header(path: Path, header: str, semicolons: bool) -> None:
+    # binary bytes (NUL, not UTF-8) were described as a ';'-separated header (outside audit)
+    # (a Latin-1 degree sign is one bad byte in a header, not a tenth of it)
+    if "\x00" in header or header.count("\ufffd") > 0.1 * len(header):
+        raise InputError(f"{path}: holds binary bytes, not text: a run file is comma-separated "
+                         "text (CSV) with a header row, or a .csv.gz / .mat of one")
     # a continental-European export (and its decimal commas): it said "missing column
     # 'time_s' (found: none)" or a tokenizer's error (outside audit)
     if semicolons:
@@ -168,13 +173,15 @@ def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: empty file (expected a header row and data)") from None
     except (pd.errors.ParserError, UnicodeDecodeError, OSError, EOFError, ValueError) as exc:
-        _refuse_semicolons(path, ";" in _first_line(path))
+        header = _first_line(path)
+        _refuse_header(path, header, ";" in header)
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"{path}: cannot read as CSV: {first}") from None
     finally:
         if source is not path:
             source.close()
-    _refuse_semicolons(path, frame.shape[1] == 1 and ";" in str(frame.columns[0]))
+    _refuse_header(path, " ".join(map(str, frame.columns)),
+                   frame.shape[1] == 1 and ";" in str(frame.columns[0]))
     repeated = repeated_columns(frame.columns)
     for name in (*RUN_COLUMNS, *KNOWN_OPTIONAL):
         if name in repeated:
