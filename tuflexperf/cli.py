@@ -557,6 +557,9 @@ def takeoff(
             f"{r.liftoff_speed_m_s:8.2f} m/s  "
             f"({r.liftoff_speed_eas_m_s:.2f} m/s EAS; stall {r.stall_speed_m_s:.2f} m/s)"
         )
+        if catapult and r.acceleration_distance_m > 0.0:  # level, before the arc
+            typer.echo(f"  acceleration       {r.acceleration_distance_m:8.2f} m  (level, "
+                       f"{r.liftoff_speed_m_s:.2f} -> {r.transition_speed_m_s:.2f} m/s)")
         if not catapult:  # a catapult has no runway: nothing rolls
             typer.echo(f"  acceleration       {r.acceleration_distance_m:8.2f} m")
             typer.echo(

@@ -487,27 +487,36 @@ def _takeoff(ref: Reference, y0: np.ndarray, index: int, integrate: Any
         y, _, v_rot = integrate(index, at_speed(v_lo, lambda t: 0.0), y, rotation, [])
         total += rotation
         volts += v_rot
-    # the airborne part at the transition speed (SPEC 3), the gradient at full throttle and
-    # the field's density (the textbook's closed-form path)
+    # the airborne part at the transition speed (SPEC 3), at full throttle and the field's
+    # density: the arc turns the path up until its angle reaches the climb angle of the
+    # packs' thrust there (they sag on the way), then the climb at that thrust's rate
     v_tr = 1.15 * stall_true
     n_tr = float(to.get("transition_load_factor", 1.19))
     radius = v_tr * v_tr / (G0 * (n_tr - 1.0))
-    thrust_tr = sum(ref.sigma(rho0) * poly22(e["coefficients"], ref.x_scale, v_tr)
-                    for e in ref.prop["engines"])
-    gradient = (thrust_tr - ref.drag(v_tr, rho0)) / ref.weight
-    angle = math.asin(gradient)
     height = ref.obstacle_m
-    if radius * (1.0 - math.cos(angle)) >= height:
-        angle, straight = math.acos(1.0 - height / radius), 0.0
-    else:
-        straight = (height - radius * (1.0 - math.cos(angle))) / (v_tr * gradient)
-    arc_s = radius * angle / v_tr
-    y, _, v_arc = integrate(index, at_speed(v_tr, lambda t: v_tr * math.sin(v_tr * t / radius)),
-                            y, arc_s, [])
+
+    def gradient(q: np.ndarray) -> float:
+        thrust = ref.live_state(1.0, v_tr, rho0, q, None)[0]
+        return (thrust - ref.drag(v_tr, rho0)) / ref.weight
+
+    def tangent(t: float, yy: np.ndarray) -> float:
+        return v_tr * t / radius - math.asin(min(gradient(yy[:n]), 1.0))
+
+    def over(t: float, yy: np.ndarray) -> float:
+        return yy[n] - height
+
+    tangent.terminal = over.terminal = True
+    y, arc_s, v_arc = integrate(index, at_speed(v_tr, lambda t: v_tr * math.sin(v_tr * t / radius)),
+                                y, 1e3, [tangent, over])
     total += arc_s
     volts += v_arc
-    if straight > 0:
-        y, _, v_cl = integrate(index, at_speed(v_tr, lambda t: v_tr * gradient), y, straight, [])
+    if y[n] < height * (1.0 - 1e-12):
+        def climb(t: float, yy: np.ndarray) -> tuple[np.ndarray, Any]:
+            packs = ref.live_state(1.0, v_tr, ref.rho(float(yy[n])), yy[:n], None)[1]
+            rate = v_tr * gradient(yy[:n])  # the path's, at the field's density
+            return np.array([packs[i][1] / 3600.0 for i in range(n)] + [rate, v_tr]), packs
+
+        y, straight, v_cl = integrate(index, climb, y, 1e3, [over])
         total += straight
         volts += v_cl
     return y, total, volts
@@ -585,6 +594,7 @@ def made_up_case(tmp_path: Path, *, mission: str = MADE_UP_MISSION,
     battery.update({"name": "Made-up 12S 6 Ah", "capacity_ah": 6.0,
                     "packs_in_parallel_per_engine": 2, "cutoff_voltage_per_cell_v": 3.45})
     battery["fit"]["parameters"] = dict(MADE_UP_PACK)
+    battery["fit"]["capacity_ah"] = 6.0  # the made-up pack model is a 6 Ah pack's
     battery["mission"] = {"pattern_altitude_m": 100, "landing_reserve_fraction": 0.3}
     runs = tmp_path / "endurance"
     runs.mkdir(exist_ok=True)

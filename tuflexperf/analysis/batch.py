@@ -353,10 +353,28 @@ class BatchEvaluator:
         battery = (self._battery_rows(values, size)
                    if self._packs is not None or self._endurance is not None else {})
 
+        sagging = self._packs is not None and self.case.propulsion.reference_voltage_v is not None
+
         def launched() -> tuple[Array, Array, Array, Array]:
             # a catapult's "roll" is its release: no runway (SPEC 4), as solve_takeoff; the
             # packs give full throttle over it (pack_limits.takeoff_beyond_battery)
             found = model.catapult_release() if catapult else model.ground_roll()
+            if sagging:  # rolled on the packs' loaded voltage, as solve_takeoff rolls
+                from tuflexperf.analysis import batch_takeoff_packs as packs_takeoff
+                from tuflexperf.analysis.pack_limits import pack_rows
+
+                rows = pack_rows(self._packs.battery, battery)
+                if catapult:
+                    model.release = packs_takeoff.release_on_packs(model, self._packs, rows)
+                    model.packs_roll = packs_takeoff.RollOnPacks(
+                        *found, np.zeros((size, 1)), model.release[2])
+                else:
+                    model.packs_roll = packs_takeoff.roll_on_packs(model, self._packs, rows)
+                found = model.packs_roll.as_roll()
+            elif catapult:
+                model.release = model.release_run()
+            if catapult:  # one that does not accelerate to the arc's speed never gets there
+                found = (*found[:3], np.where(model.release[3], found[3], 0.0))
             if self._packs is None:
                 return found
             within = model.launch_within_packs(found, height, catapult, self._packs, battery)
@@ -369,7 +387,15 @@ class BatchEvaluator:
                 out[requirement.name] = np.where(roll[3] > 0.5, roll[0], np.nan)
             elif requirement.name == "takeoff_distance_to_obstacle":
                 roll = roll or launched()
-                out[requirement.name] = model.distance_to_obstacle(roll, height)
+                airborne = None
+                if sagging:
+                    from tuflexperf.analysis import batch_takeoff_packs as packs_takeoff
+                    from tuflexperf.analysis.pack_limits import pack_rows
+
+                    airborne = packs_takeoff.obstacle_on_packs(
+                        model, self._packs, pack_rows(self._packs.battery, battery),
+                        model.packs_roll, height) - model.packs_roll.distance
+                out[requirement.name] = model.distance_to_obstacle(roll, height, airborne)
             elif requirement.block == "envelope":
                 value = model.trim_max_throttle(grid, self._candidates()[0])
                 if self._packs is not None and not model.packs_never_bind(
@@ -560,6 +586,11 @@ class _Model:
     _pieces: Any = None  # memo of _roll_pieces (False: evaluate node by node)
     _terms: Any = None
     _force_range: tuple[Array, Array] | None = None  # memo of force_range
+    # the take-off on sagging packs (batch_takeoff_packs.RollOnPacks), where one is flown
+    packs_roll: Any = None
+    # a catapult's level acceleration from release to the transition speed (distance [m],
+    # time [s], charge per fan [Ah] or None, accelerates): takeoff.release_acceleration
+    release: Any = None
 
     def least_airspeed(self) -> Array:
         """Least level-flight airspeed [m/s] per row: stall x the envelope's margin (SPEC 3)."""
@@ -795,6 +826,22 @@ class _Model:
         return (np.where(ok, distance, np.nan), np.where(ok, time, np.nan), v_lo[:, 0],
                 ok.astype(float))
 
+    def release_run(self) -> tuple[Array, Array, None, Array]:
+        """A catapult's acceleration after the release at the model's thrust
+        (:func:`tuflexperf.analysis.takeoff.release_acceleration`)."""
+        from tuflexperf.analysis.takeoff import release_acceleration
+
+        release = np.asarray(true_airspeed_m_s(self.aircraft.launch_speed_m_s, self.density),
+                             dtype=float).reshape(-1) * np.ones(self.size)
+        v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
+                          dtype=float).reshape(-1) * np.ones(self.size)
+
+        def excess(speed: Array) -> Array:
+            return self.thrust(1.0, speed) - np.asarray(
+                level_flight_drag_n(self.aircraft, speed, self.density), dtype=float)
+
+        return release_acceleration(self.aircraft.mass_kg, release, v_tr, excess)
+
     def catapult_release(self) -> tuple[Array, Array, Array, Array]:
         """A catapult launch as :meth:`ground_roll` reports a roll: no distance, no time, the
         release true airspeed [m/s] (``launch_speed_m_s`` is an EAS) and attainable (1/0).
@@ -841,6 +888,8 @@ class _Model:
         airborne = (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
         airborne = np.where(np.isfinite(airborne), airborne, 0.0)
         seconds = np.nan_to_num(roll[1]) + airborne / v_tr[:, 0]
+        if catapult:  # and its level acceleration after the release, as the single case
+            seconds = seconds + np.nan_to_num(self.release[1])
         v_lo = np.nan_to_num(roll[2]).reshape(-1, 1)
         along = (v_lo if catapult else
                  v_lo * np.linspace(0.0, 1.0, HISTORY_POINTS)[None, :])
@@ -864,14 +913,19 @@ class _Model:
         return ok
 
     def distance_to_obstacle(self, roll: tuple[Array, Array, Array, Array],
-                             height: Any) -> Array:
-        """Ground roll + transition arc + climb to the obstacle [m] (as :func:`solve_takeoff`)."""
-        v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
-                          dtype=float).reshape(-1, 1) * np.ones((self.size, 1))
-        radius = transition_radius_m(v_tr, self.aircraft.takeoff.transition_load_factor)
-        gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
-        arc, climb, _ = obstacle_distances_m(radius, gradient, height)
-        total = roll[0] + (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
+                             height: Any, airborne: Array | None = None) -> Array:
+        """Ground roll + transition arc + climb to the obstacle [m] (as :func:`solve_takeoff`);
+        ``airborne`` [m] per row where it was flown otherwise (on sagging packs)."""
+        if airborne is None:
+            v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
+                              dtype=float).reshape(-1, 1) * np.ones((self.size, 1))
+            radius = transition_radius_m(v_tr, self.aircraft.takeoff.transition_load_factor)
+            gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
+            arc, climb, _ = obstacle_distances_m(radius, gradient, height)
+            airborne = (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
+            if self.release is not None:  # a catapult's: its acceleration before the arc
+                airborne = airborne + self.release[0]
+        total = roll[0] + airborne
         # a launch that is not attainable (a catapult's "roll" of 0 m included) reaches nothing;
         # nor does an arc that needs more than cl_max (solve_takeoff)
         flown = ~np.asarray(transition_beyond_cl_max(np.asarray(

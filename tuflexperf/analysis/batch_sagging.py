@@ -2,21 +2,22 @@
 
 With a reference voltage the single case flies its endurance mission with each fan's
 thrust ``T (U/U_ref)^k`` and power ``P (U/U_ref)^(1.5 k)`` at its packs' loaded voltage
-``U`` (:class:`tuflexperf.analysis.mission.MissionModel`): the roll's time stretches by
-``F_ref / F(U)``, the climb's rate follows the loaded thrust, and the cruise's airspeed
+``U`` (:class:`tuflexperf.analysis.mission.MissionModel`): the roll follows the take-off
+on the sagging packs, the climb's rate follows the loaded thrust, and the cruise's airspeed
 falls as the packs sag. The constant-power batch (:mod:`.batch_endurance`) took the
 reference voltage's figures throughout, so its endurance differed from the single case's
 (18.5 against 16.2 min for a reference of 44 V; P(met) 1.0 where the case FAILed).
 
-Here the same flight is flown per row, vectorised: the roll (64 RK4 steps over the
-take-off analysis's time), the rotation (8 steps), the climb (64 steps over height) and the
-cruise (RK4 in time, steps of 1/64 of the constant-power estimate, until the first fan's
-packs reach the landing reserve or the cut-off, the end between two nodes by cubic Hermite
-interpolation of the charges). Every stage solves each fan's loaded voltage
-(:func:`tuflexperf.analysis.pack_limits.operating_point`) and, in the cruise, the fast
-level-flight airspeed at it (secant from the stage before). The flight is not attainable
-where the single case's is not: a node below the cut-off, below stall, off level flight,
-beyond the jet velocity, a climb that does not climb, or a pack beyond its rating.
+Here the same flight is flown per row, vectorised: the roll (64 RK4 steps in time along
+the airspeed history of :mod:`.batch_takeoff_packs`), the rotation (8 steps), the climb
+(64 steps over height) and the cruise (RK4 in time, steps of 1/64 of the constant-power
+estimate, until the first fan's packs reach the landing reserve or the cut-off, the end
+between two nodes by cubic Hermite interpolation of the charges). Every stage solves each
+fan's loaded voltage (:func:`tuflexperf.analysis.pack_limits.operating_point`) and, in
+the cruise, the fast level-flight airspeed at it (secant from the stage before). The
+flight is not attainable where the single case's is not: a node below the cut-off, below
+stall, off level flight, beyond the jet velocity, a climb that does not climb, or a pack
+beyond its rating.
 
 References
 ----------
@@ -42,7 +43,7 @@ from tuflexperf.analysis.mission import (
 )
 from tuflexperf.analysis.pack_limits import PackRows, operating_point
 from tuflexperf.models._math import interp_rows
-from tuflexperf.models.aircraft import ground_roll_resistance_n, level_flight_drag_n
+from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import SECONDS_PER_HOUR, first_window_beyond
 from tuflexperf.models.powertrain import beyond_jet_velocity
 
@@ -260,22 +261,19 @@ class SaggingFlight:
             rotation = np.asarray(m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
                 * np.ones(m.size)
             roll_only = np.where(ok, np.maximum(np.nan_to_num(roll_time) - rotation, 0.0), 0.0)
-            t_hist = np.where(ok[:, None], m.roll_history(ok), 0.0)
+            # the roll's airspeed history on the sagging packs (batch_takeoff_packs), flown
+            # in time as the mission flies the take-off analysis's
+            t_hist = np.where(ok[:, None], np.nan_to_num(m.packs_roll.history_time), 0.0)
             v_hist = v_lo[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
             stage_t = (roll_only / (2 * STEPS))[:, None] * np.arange(2 * STEPS + 1)[None, :]
             speeds = interp_rows(stage_t, t_hist, v_hist)
-            tau = roll_only / STEPS
+            step = roll_only / STEPS
 
             def rolling(charge: Array, v: Array) -> tuple[Array, Array, Array]:
-                thrust, u, current, _ = self.point(1.0, v, charge)
-                drag, friction = ground_roll_resistance_n(m.aircraft, v.reshape(-1, 1),
-                                                          m.density)
-                resist = np.asarray(drag + friction, dtype=float).reshape(-1)
-                reference = m.thrust(1.0, v.reshape(-1, 1))[:, 0] - resist
-                stretch = reference / np.maximum(thrust - resist, 1e-9 * self.mass)
-                return current / SECONDS_PER_HOUR * stretch, stretch, u
+                _, u, current, _ = self.point(1.0, v, charge)
+                return current / SECONDS_PER_HOUR, np.ones(m.size), u
 
-            q, t = self._rk4(q, t, tau, [speeds[:, 2 * j:2 * j + 3].T for j in range(STEPS)],
+            q, t = self._rk4(q, t, step, [speeds[:, 2 * j:2 * j + 3].T for j in range(STEPS)],
                              rolling, nodes, check, first_speed=speeds[:, 0])
             # the rotation at the lift-off speed, in time
             constant = [np.stack([v_lo] * 3)] * ROTATION_STEPS

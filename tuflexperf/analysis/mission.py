@@ -30,8 +30,8 @@ case's temperature offset):
   rotation at ``V_LO``, then the landed take-off analysis's airborne part flown along the
   path at the transition speed: the arc ``h = R (1 - cos(V t / R))`` and the straight climb
   at the full-throttle gradient to the obstacle height (the path's airspeeds are the
-  analysis's; with a reference voltage the roll's time stretches by ``F_ref / F(U)``, the
-  net force at the reference over that at the packs' loaded voltage).
+  analysis's, which flies on the packs' loaded voltage where the propulsion has a reference
+  voltage: the roll's airspeed history is the sagging packs' own).
 
 Each segment is integrated by classic RK4 with :data:`STEPS` fixed steps (over time for
 level segments and the take-off, over height for climbs and descents, so their end is
@@ -63,7 +63,6 @@ from tuflexperf.io.case import Case
 from tuflexperf.io.mission import MissionFile, SegmentSchema
 from tuflexperf.models.aircraft import (
     MAX_AIRSPEED_M_S,
-    ground_roll_resistance_n,
     level_flight_drag_n,
     stall_speed_eas_m_s,
     true_airspeed_m_s,
@@ -664,25 +663,9 @@ class MissionModel:
             safe = ca.if_else(step > 0, ca.fmax(rate, 1e-6), ca.fmin(rate, -1e-6))
             return d / safe
 
-        aircraft, prop = self.case.aircraft, self.case.propulsion
-
-        def in_roll(state: Any, v_given: Any) -> Any:
-            # over the take-off analysis's time tau, at its airspeed V(tau): dstate/dtau =
-            # dstate/dt x F_ref(V) / F(V, U), the pack's sag slowing the roll (SPEC 3); at
-            # the reference voltage (or without one) the analysis's time is the roll's
-            d, a = rates(state, v_given)
-            if prop.reference_voltage_v is None:
-                return d
-            drag, friction = ground_roll_resistance_n(aircraft, v_given, self._rho(state[2 * n]))
-            reference = total_thrust_n(prop, 1.0, v_given, self._rho(state[2 * n])) \
-                - drag - friction
-            loaded = a[6 + 3 * n] - drag - friction
-            # a sag that stops the roll is slow beyond any mission; the floor keeps it finite
-            return d * reference / ca.fmax(loaded, 1e-9 * aircraft.mass_kg)
-
         if kind == "aux":
             return ca.Function("aux", [s, p], [evaluate(s, p[6])])
-        derivative = {"time": in_time, "height": in_height, "roll": in_roll}[kind]
+        derivative = {"time": in_time, "height": in_height}[kind]
         return ca.Function(f"step_{kind}", [s, step, p], [rk4(derivative)])
 
     def _segment_graph(self, plan: _Plan, state: Any, durations: Any, theta: Any,
@@ -813,7 +796,7 @@ class MissionModel:
         rows[:, 1] = 1.0  # full throttle
         rows[:, 5] = 1.0  # airspeed given, height rate forced (0 on the runway)
         rows[:, 6], rows[:, 7], rows[:, 8] = at[0:-1:2], at[1::2], at[2::2]
-        phases: list[tuple[str, Any, np.ndarray]] = [("roll", roll_s / STEPS, rows)]
+        phases: list[tuple[str, Any, np.ndarray]] = [("time", roll_s / STEPS, rows)]
         if result.rotation_time_s > 0:
             rot = np.zeros((ROTATION_STEPS, _P_SIZE))
             rot[:, 1], rot[:, 5], rot[:, 6:9] = 1.0, 1.0, v_lo
@@ -839,7 +822,8 @@ class MissionModel:
         if result.obstacle_cleared_in_transition:
             angle, straight_s = math.acos(1.0 - height / radius), 0.0
         else:
-            angle = math.asin(sine)
+            # the arc ends at the angle of its own gradient (the climb's, unless packs sag)
+            angle = math.asin(min(result.transition_gradient, 1.0))
             straight_s = (height - radius * (1.0 - math.cos(angle))) / (v_tr * sine)
         arc_s = radius * angle / v_tr
         # each step climbs its chord at a constant rate: the height inside a step (and so the

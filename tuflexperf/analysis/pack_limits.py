@@ -35,6 +35,7 @@ import numpy as np
 
 from tuflexperf.analysis.attainable import BEYOND_THE_BATTERY, AttainableRange
 from tuflexperf.io.case import Case
+from tuflexperf.models._math import fmax, is_symbolic
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import loaded_voltage_at_power_v
 from tuflexperf.models.thrust import (
@@ -90,15 +91,45 @@ def pack_side(case: Case) -> PackSide | None:
 
 def fan_power_w(side: PackSide, case: Case, engine: int, throttle: Any, airspeed: Any) -> Any:
     """Engine ``engine``'s electrical power [W] at the reference voltage (never negative:
-    an ESC draws, it does not charge), as the mission takes it."""
+    an ESC draws, it does not charge), as the mission takes it (floats, numpy or CasADi)."""
     from tuflexperf.models.powertrain import engine_power_w
 
     if side.own_surfaces:
-        power = side.density_scale * np.asarray(
-            engine_power_w(case.propulsion.engines[engine], throttle, airspeed), dtype=float)
+        power = side.density_scale * engine_power_w(case.propulsion.engines[engine], throttle,
+                                                    airspeed)
     else:
-        power = np.asarray(side.power.electrical_power_w(throttle, airspeed), dtype=float)
-    return np.maximum(power, 0.0)
+        power = side.power.electrical_power_w(throttle, airspeed)
+    return fmax(power if is_symbolic(power) else np.asarray(power, dtype=float), 0.0)
+
+
+def full_throttle_on_packs(case: Case, side: PackSide, charge_ah: Any, airspeed_m_s: Any
+                           ) -> tuple[Any, list[Any], list[Any]]:
+    """Full throttle at the packs' loaded voltage: the total thrust [N], and per engine the
+    current through its packs [A] and their loaded voltage [V] (NaN: beyond their power),
+    after ``charge_ah[j]`` [Ah] drawn from engine ``j``'s packs; floats, numpy or CasADi.
+
+    Each fan draws ``P (U/U_ref)^(1.5 k)`` and makes ``T (U/U_ref)^k`` at the loaded
+    voltage ``U`` of its packs (:func:`operating_point`'s rule, SPEC 3); without a
+    reference voltage the thrust is the model's and the voltage the fixed-power root.
+
+    References
+    ----------
+    SPEC 3 (thrust and pack voltage); Tremblay & Dessaint (2009) (the circuit).
+    """
+    prop, b = case.propulsion, side.battery
+    scale = density_ratio(prop, case.density_kg_m3)
+    u_ref, k = prop.reference_voltage_v, prop.voltage_exponent
+    thrust: Any = 0.0
+    currents, voltages = [], []
+    for j, engine in enumerate(prop.engines):
+        power = fan_power_w(side, case, j, 1.0, airspeed_m_s)
+        u = loaded_voltage_at_power_v(side.params, charge_ah[j], power, b.circuit_packs,
+                                      u_ref, 0.0 if u_ref is None else 1.5 * k)
+        factor = 1.0 if u_ref is None else (u / u_ref) ** k
+        thrust = thrust + factor * engine_thrust_n(engine, 1.0, airspeed_m_s, scale)
+        currents.append(power * factor ** 1.5 / u)
+        voltages.append(u)
+    return thrust, currents, voltages
 
 
 def operating_point(params: Any, charge_ah: Any, power_w: Any, circuit_packs: Any,

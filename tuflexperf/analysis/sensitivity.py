@@ -312,8 +312,19 @@ def symbolic_values(case: Case, keys: list[str]) -> tuple[Any, dict[str, Any]]:
     s = _Symbolic(case, keys)
     values: dict[str, Any] = {}
     roll = None
+    # the take-off and the endurance on sagging packs (the charge a state of the flight) and a
+    # catapult's acceleration after the release have no symbolic form here: no derivative,
+    # rather than the reference voltage's or the arc's alone
+    sagging = case.propulsion.reference_voltage_v is not None and case.battery_path is not None
     for requirement in present_requirements(case):
         name = requirement.name
+        if sagging and name in ("takeoff_ground_roll", "takeoff_distance_to_obstacle",
+                                "flight_endurance"):
+            values[name] = None
+            continue
+        if name == "takeoff_distance_to_obstacle" and _accelerates_after_release(case):
+            values[name] = None
+            continue
         if name in ("takeoff_ground_roll", "takeoff_distance_to_obstacle"):
             if case.aircraft.launch == "catapult":
                 # released airborne: no roll, so none of the runway's terms (SPEC 4; margins
@@ -335,6 +346,17 @@ def symbolic_values(case: Case, keys: list[str]) -> tuple[Any, dict[str, Any]]:
         else:
             values[name] = _endurance_value(s)
     return s.ca.vertcat(*s.symbols.values()), values
+
+
+def _accelerates_after_release(case: Case) -> bool:
+    """A catapult released below the transition speed (it accelerates level first)."""
+    if case.aircraft.launch != "catapult":
+        return False
+    from tuflexperf.models.aircraft import true_airspeed_m_s
+
+    rho = case.density_kg_m3
+    return bool(true_airspeed_m_s(case.aircraft.launch_speed_m_s, rho)
+                < transition_speed_m_s(case.aircraft, rho))
 
 
 def sensitivities(case: Case, keys: list[str]) -> dict[str, dict[str, float | None]]:

@@ -31,6 +31,7 @@ from tuflexperf.models.aircraft import (
     climb_gradient,
     ground_roll_net_force_n,
     ground_roll_resistance_n,
+    level_flight_drag_n,
     liftoff_speed_eas_m_s,
     liftoff_speed_m_s,
     obstacle_distances_m,
@@ -41,6 +42,7 @@ from tuflexperf.models.aircraft import (
     transition_speed_m_s,
     true_airspeed_m_s,
 )
+from tuflexperf.models.battery import SECONDS_PER_HOUR
 from tuflexperf.models.powertrain import beyond_jet_velocity, static_jet_velocity_m_s
 from tuflexperf.models.thrust import (
     Propulsion,
@@ -95,6 +97,8 @@ class TakeoffResult:
     transition_load_factor: float = math.nan
     transition_radius_m: float = math.nan
     climb_gradient: float = math.nan
+    # the gradient whose angle ends the arc: the climb's, but on packs that sag on the way
+    transition_gradient: float = math.nan
     transition_distance_m: float = math.nan
     transition_height_m: float = math.nan
     climb_distance_m: float | None = None
@@ -133,6 +137,7 @@ class TakeoffResult:
             "transition_distance_m": self.transition_distance_m,
             "transition_height_m": self.transition_height_m,
             "climb_gradient": self.climb_gradient,
+            "transition_gradient": self.transition_gradient,
             "climb_angle_deg": self.climb_angle_deg,
             "climb_distance_m": self.climb_distance_m,
             "airborne_distance_m": self.airborne_distance_m,
@@ -184,6 +189,205 @@ def _integrator_for(case: Case) -> Any:
     )
 
 
+ROTATION_STEPS = 8  # RK4 steps of the rotation's charge at the lift-off speed (the mission's)
+OBSTACLE_ITERATIONS = 4  # fixed point of the airborne part's charge (the batch's too)
+
+
+class _Packs:
+    """The take-off on sagging packs (a battery and the propulsion's ``reference_voltage_v``).
+
+    Each fan makes ``T (U/U_ref)^k`` at its packs' loaded voltage ``U``, which falls as the
+    roll draws charge (:func:`tuflexperf.analysis.pack_limits.full_throttle_on_packs`): the
+    roll integrates the charge drawn per engine beside the distance and the time (CVODES,
+    ``dq/dV = I m / (3600 F)``), the rotation adds its own at the lift-off speed, and the
+    arc and climb to the obstacle fly at the packs' thrust halfway through them
+    (:meth:`airborne_thrust`).
+    """
+
+    def __init__(self, case: Case, side: Any) -> None:
+        import casadi as ca
+
+        from tuflexperf.analysis.pack_limits import full_throttle_on_packs
+
+        aircraft, rho = case.aircraft, case.density_kg_m3
+        n = len(case.propulsion.engines)
+        self.n = n
+        q, v = ca.SX.sym("q", n), ca.SX.sym("v")
+        thrust, currents, volts = full_throttle_on_packs(case, side, [q[j] for j in range(n)], v)
+        self.at = ca.Function("full_throttle_on_packs", [q, v],
+                              [thrust, ca.vertcat(*currents), ca.vertcat(*volts)])
+        u, v_lo = ca.SX.sym("u"), ca.SX.sym("v_lo")
+        state = ca.SX.sym("state", 2 + n)  # distance m, time s, charge Ah per engine
+        speed = u * v_lo
+        thrust_u, current_u, _ = self.at(state[2:], speed)
+        dt_dv = aircraft.mass_kg / ground_roll_net_force_n(aircraft, thrust_u, speed, rho)
+        rhs = ca.vertcat(speed * dt_dv, dt_dv, current_u * dt_dv / SECONDS_PER_HOUR) * v_lo
+        grid = np.linspace(0.0, 1.0, HISTORY_POINTS)
+        integrator = ca.integrator(
+            "ground_roll_on_packs", "cvodes",
+            {"x": state, "p": v_lo, "t": u, "ode": rhs}, 0.0, grid[1:],
+            {"abstol": 1e-12, "reltol": 1e-11, "max_num_steps": 100000,
+             "disable_internal_warnings": True},
+        )
+        given = ca.MX.sym("v_lo_in")
+        self.roll = ca.Function("ground_roll_on_packs_history", [given],
+                                [integrator(x0=ca.DM.zeros(2 + n), p=given)["xf"]])
+
+    def point(self, charge_ah: np.ndarray, speeds: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Thrust [N] ``(K,)``, current [A] and loaded voltage [V] per engine ``(n, K)`` at
+        the airspeeds ``speeds`` [m/s] ``(K,)`` after ``charge_ah`` ``(n,)`` or ``(n, K)``."""
+        v = np.atleast_1d(np.asarray(speeds, dtype=float)).reshape(1, -1)
+        q = np.asarray(charge_ah, dtype=float).reshape(self.n, -1) * np.ones((1, v.shape[1]))
+        thrust, current, volts = self.at.map(v.shape[1])(q, v)
+        return (np.asarray(thrust, dtype=float).reshape(-1), np.asarray(current, dtype=float),
+                np.asarray(volts, dtype=float))
+
+    def rotation(self, charge_ah: np.ndarray, v_lo: float, seconds: float) -> np.ndarray:
+        """The charge per engine [Ah] after ``seconds`` [s] at full throttle at ``v_lo``."""
+        h = seconds / ROTATION_STEPS
+        q = np.asarray(charge_ah, dtype=float).copy()
+
+        def rate(charge: np.ndarray) -> np.ndarray:
+            return self.point(charge, np.array([v_lo]))[1][:, 0] / SECONDS_PER_HOUR
+
+        for _ in range(ROTATION_STEPS):
+            k1 = rate(q)
+            k2 = rate(q + 0.5 * h * k1)
+            k3 = rate(q + 0.5 * h * k2)
+            k4 = rate(q + h * k3)
+            q = q + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        return q
+
+
+def airborne_gradients(radius_m: Any, speed_m_s: Any, height_m: Any, charge_ah: Any,
+                       point: Any, gradient_of: Any) -> tuple[Any, Any, Any]:
+    """The full-throttle climb gradients of a take-off's airborne part on sagging packs: at
+    the transition arc's end (which sets its angle) and halfway up the straight climb, and
+    the charge per engine [Ah] at the obstacle; rows broadcast (the single case is one row,
+    the batch's many: one code path for both).
+
+    From ``charge_ah`` ``(engines, rows)`` at the arc's start, :data:`OBSTACLE_ITERATIONS`
+    fixed-point steps on ``q_arc = q0 + I t_arc / 3600`` and ``q_climb = q_arc +
+    I t_climb / 7200``, ``t`` each part's path length over ``speed_m_s`` [m/s]; ``point(q)``
+    gives the thrust [N] ``(rows,)`` and the current per engine [A] at ``q``, and
+    ``gradient_of(thrust)`` the climb gradient [-]. The packs sag almost linearly over these
+    seconds, so the gradient halfway up stands for the straight climb's to second order (a
+    test holds the distance to an integration with the charge along the path).
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, 6.7.2 (the arc and the climb); SPEC 3
+    (thrust and pack voltage).
+    """
+    q0 = np.asarray(charge_ah, dtype=float)
+    q_arc, q_climb = q0, q0
+    radius = np.asarray(radius_m, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cleared_at = np.arccos(np.clip(1.0 - height_m / radius, -1.0, 1.0))
+        for _ in range(OBSTACLE_ITERATIONS):
+            thrust_a, current_a = point(q_arc)[:2]
+            thrust_c, current_c = point(q_climb)[:2]
+            g_arc, g_climb = gradient_of(thrust_a), gradient_of(thrust_c)
+            angle = np.arcsin(np.clip(g_arc, 0.0, 1.0))
+            top = radius * (1.0 - np.cos(angle))
+            cleared = top >= height_m
+            arc_s = np.nan_to_num(radius * np.where(cleared, cleared_at, angle) / speed_m_s)
+            climb_s = np.where(cleared | ~(g_climb > 0.0), 0.0,
+                               (height_m - top) / (speed_m_s * np.clip(g_climb, 1e-300, 1.0)))
+            q_arc = q0 + current_a * arc_s / SECONDS_PER_HOUR
+            q_climb = q_arc + current_c * 0.5 * climb_s / SECONDS_PER_HOUR
+        thrust_a, current_a = point(q_arc)[:2]
+        thrust_c, current_c = point(q_climb)[:2]
+    return (gradient_of(thrust_a), gradient_of(thrust_c),
+            q_arc + current_c * climb_s / SECONDS_PER_HOUR)
+
+
+RELEASE_NODES = 32  # Gauss-Legendre nodes of a catapult's acceleration after the release
+_RELEASE_CHECK = 201  # airspeeds where its excess thrust must stay positive
+
+
+def release_acceleration(mass_kg: Any, release_m_s: Any, transition_m_s: Any, excess_of: Any,
+                         current_of: Any = None) -> tuple[Any, Any, Any, Any]:
+    """A catapult's level full-throttle acceleration from the release to the transition
+    speed per row: distance [m], time [s], charge drawn per engine [Ah] (``None`` without
+    ``current_of``) and whether it accelerates at all (the excess thrust positive at
+    :data:`_RELEASE_CHECK` airspeeds); none where the release is already that fast.
+
+    ``s = int m V / (T - D) dV`` and ``t = int m / (T - D) dV`` from ``V_rel`` to ``V_tr``
+    (``L = W``: the level-flight drag), by :data:`RELEASE_NODES`-point Gauss-Legendre;
+    ``excess_of(V)`` gives ``T - D`` [N] at airspeeds ``(rows, K)``, ``current_of(V)`` the
+    current per engine [A] ``(engines, rows, K)`` (on full packs: the seconds are few). The
+    arc and the climb to the obstacle follow at ``V_tr`` (Anderson's transition, 1.15
+    V_stall): a release below it had started the arc at ``V_tr`` for nothing, 11.7 m short
+    of the obstacle distance (outside audit).
+
+    References
+    ----------
+    Raymer, *Aircraft Design*, 17.8.1 (the acceleration integral); Anderson, *Aircraft
+    Performance and Design*, 6.7.2 (the transition speed).
+    """
+    release = np.atleast_1d(np.asarray(release_m_s, dtype=float))
+    span = np.maximum(np.atleast_1d(np.asarray(transition_m_s, dtype=float)) - release, 0.0)
+    nodes, weights = np.polynomial.legendre.leggauss(RELEASE_NODES)
+    speeds = release[:, None] + span[:, None] * 0.5 * (nodes[None, :] + 1.0)
+    check = release[:, None] + span[:, None] * np.linspace(0.0, 1.0, _RELEASE_CHECK)[None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        accelerates = (span == 0.0) | np.all(np.asarray(excess_of(check)) > 0.0, axis=1)
+        dt_dv = np.atleast_1d(np.asarray(mass_kg, dtype=float)).reshape(-1, 1) / np.asarray(
+            excess_of(speeds))
+        half = 0.5 * span
+        time = half * np.sum(weights * dt_dv, axis=1)
+        distance = half * np.sum(weights * speeds * dt_dv, axis=1)
+        charge = None if current_of is None else half * np.sum(
+            weights * np.asarray(current_of(speeds)) * dt_dv, axis=-1) / SECONDS_PER_HOUR
+    return (np.where(span > 0.0, distance, 0.0), np.where(span > 0.0, time, 0.0),
+            None if charge is None else np.where(span > 0.0, charge, 0.0), accelerates)
+
+
+_ON_PACKS = " at the packs' loaded voltage"
+
+
+def _on_packs_force(case: Case, packs: _Packs, charge_ah: np.ndarray,
+                    speeds: np.ndarray) -> np.ndarray:
+    """Full-throttle net force on the runway [N] at ``speeds`` on the sagging packs."""
+    thrust = packs.point(charge_ah, speeds)[0]
+    return np.asarray(ground_roll_net_force_n(case.aircraft, thrust, speeds,
+                                              case.density_kg_m3), dtype=float)
+
+
+def _packs_note(case: Case, start_v: np.ndarray, liftoff_v: np.ndarray | None,
+                air: _Airborne) -> str:
+    """What the take-off flew on: the packs' least loaded voltage [V] at the brake release
+    (a catapult's release), at lift-off and at the obstacle."""
+    prop = case.propulsion
+    start = "the release" if liftoff_v is None else "the brake release"
+    return (f"the take-off at the packs' loaded voltage: thrust x (U/"
+            f"{prop.reference_voltage_v:g} V)^{prop.voltage_exponent:g}, U "
+            f"{float(np.min(start_v)):.1f} V at {start}"
+            + ("" if liftoff_v is None else f", {float(np.min(liftoff_v)):.1f} V at lift-off")
+            + (f", {air.least_voltage_v:.1f} V at the obstacle" if air.distance_m is not None
+               else ""))
+
+
+def _packs_of(case: Case) -> _Packs | None:
+    """The sagging packs the take-off flies on, or None (no battery, or no reference
+    voltage: the thrust model's own thrust)."""
+    if case.propulsion.reference_voltage_v is None or case.battery_path is None:
+        return None
+    from tuflexperf.analysis.pack_limits import pack_side
+
+    side = pack_side(case)
+    if side is None:
+        return None
+    return _cache.get(
+        fingerprint("packs", case.aircraft, case.propulsion, case.density_kg_m3,
+                    side.battery, side.params, side.power, side.own_surfaces,
+                    side.density_scale),
+        lambda: _Packs(case, side),
+    )
+
+
 def obstacle_height_of(case: Case) -> float:
     """The case's obstacle height [m] (requirements.takeoff.obstacle_height_m, default 15 m)."""
     requirement = case.requirements.takeoff
@@ -203,6 +407,8 @@ class _Airborne:
     climb_m: float
     arc_top_m: float
     reason: str
+    least_voltage_v: float = math.nan  # the packs' at the obstacle (sagging packs only)
+    arc_gradient: float = math.nan  # sets the arc's end angle (the climb's, but on sagging packs)
 
     @property
     def distance_m(self) -> float | None:
@@ -217,6 +423,8 @@ class _Airborne:
             "transition_load_factor": load_factor,
             "transition_radius_m": self.radius_m,
             "climb_gradient": self.gradient,
+            "transition_gradient": (self.arc_gradient if math.isfinite(self.arc_gradient)
+                                    else self.gradient),
             "transition_distance_m": self.arc_m,
             "transition_height_m": self.arc_top_m,
             "climb_distance_m": self.climb_m if math.isfinite(self.climb_m) else None,
@@ -229,17 +437,30 @@ class _Airborne:
         }
 
 
-def _airborne(case: Case, height: float) -> _Airborne:
-    """Transition arc at 1.15 V_stall and n, then the full-throttle climb (Anderson 6.7.2)."""
+def _airborne(case: Case, height: float, packs: _Packs | None = None,
+              charge_ah: np.ndarray | None = None) -> _Airborne:
+    """Transition arc at 1.15 V_stall and n, then the full-throttle climb (Anderson 6.7.2);
+    on sagging ``packs`` from ``charge_ah`` drawn per engine at the arc's start, each at the
+    packs' thrust on the way (:func:`airborne_gradients`)."""
     aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
     v_tr = float(transition_speed_m_s(aircraft, rho))
     radius = float(transition_radius_m(v_tr, aircraft.takeoff.transition_load_factor))
-    thrust_tr = total_thrust_n(propulsion, 1.0, v_tr, rho)
-    gradient = float(climb_gradient(aircraft, thrust_tr, v_tr, rho))
-    arc_m, climb_m, arc_top_m = (float(x) for x in obstacle_distances_m(radius, gradient, height))
+    least_voltage = math.nan
+    if packs is None:
+        thrust_tr = total_thrust_n(propulsion, 1.0, v_tr, rho)
+        gradient = straight = float(climb_gradient(aircraft, thrust_tr, v_tr, rho))
+    else:
+        start = np.zeros((packs.n, 1)) if charge_ah is None else np.reshape(charge_ah, (-1, 1))
+        arc_g, climb_g, end = airborne_gradients(
+            radius, v_tr, height, start, lambda q: packs.point(q, np.array([v_tr])),
+            lambda thrust: np.asarray(climb_gradient(aircraft, thrust, v_tr, rho), dtype=float))
+        gradient, straight = float(arc_g[0]), float(climb_g[0])
+        least_voltage = float(np.min(packs.point(end, np.array([v_tr]))[2]))
+    arc_m, climb_m, arc_top_m = (float(x) for x in obstacle_distances_m(
+        radius, gradient, height, straight))
     reason = "" if math.isfinite(arc_m + climb_m) else (
         f"the {height:g} m obstacle is never cleared: the arc tops out at {arc_top_m:.1f} m "
-        f"and the full-throttle climb gradient at {v_tr:.1f} m/s is {gradient:.3f} (no climb)"
+        f"and the full-throttle climb gradient at {v_tr:.1f} m/s is {straight:.3f} (no climb)"
     )
     n = aircraft.takeoff.transition_load_factor
     if transition_beyond_cl_max(n):
@@ -248,7 +469,37 @@ def _airborne(case: Case, height: float) -> _Airborne:
                   f"V_stall) with load factor {n:g} needs CL = "
                   f"{n / TRANSITION_SPEED_OVER_STALL ** 2:.2f} cl_max, beyond cl_max (at most "
                   f"n = {TRANSITION_SPEED_OVER_STALL ** 2:.5g})")
-    return _Airborne(v_tr, radius, gradient, arc_m, climb_m, arc_top_m, reason)
+    return _Airborne(v_tr, radius, straight, arc_m, climb_m, arc_top_m, reason, least_voltage,
+                     gradient)
+
+
+def _release_forces(case: Case, packs: _Packs | None) -> tuple[Any, Any]:
+    """``excess_of`` and ``current_of`` of :func:`release_acceleration` for the case (on
+    full packs where they sag)."""
+    aircraft, rho = case.aircraft, case.density_kg_m3
+
+    def drag(v: np.ndarray) -> np.ndarray:
+        return np.asarray(level_flight_drag_n(aircraft, v, rho), dtype=float)
+
+    if packs is None:
+        return (lambda v: np.asarray(total_thrust_n(case.propulsion, 1.0, v, rho), dtype=float)
+                - drag(v)), None
+
+    def excess(v: np.ndarray) -> np.ndarray:
+        return packs.point(np.zeros(packs.n), v.ravel())[0].reshape(v.shape) - drag(v)
+
+    def current(v: np.ndarray) -> np.ndarray:
+        return packs.point(np.zeros(packs.n), v.ravel())[1].reshape(packs.n, *v.shape)
+
+    return excess, current
+
+
+def _after_release(fields: dict[str, Any], accelerate_m: float) -> dict[str, Any]:
+    """A catapult's airborne fields with its level acceleration before the arc [m]."""
+    for key in ("airborne_distance_m", "distance_to_obstacle_m"):
+        if fields[key] is not None:
+            fields[key] += accelerate_m
+    return fields
 
 
 def _catapult_launch(case: Case, height: float) -> TakeoffResult:
@@ -275,9 +526,30 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
     if aircraft.launch_energy_j is None:
         warnings.append(f"launch_energy_j not given: the catapult's energy is not checked "
                         f"(the release needs m V^2 / 2 = {kinetic:.0f} J)")
-    air = _airborne(case, height)
+    v_tr = float(transition_speed_m_s(aircraft, rho))
+    packs = _packs_of(case)
+    if packs is not None:  # full packs give full throttle at all (else no voltage to fly on)
+        _refuse_beyond_battery(case, np.array([release, v_tr]), 0.0, known)
+    accelerate, seconds, charge, accelerates = release_acceleration(
+        aircraft.mass_kg, release, v_tr, *_release_forces(case, packs))
+    if not accelerates[0]:
+        raise NotAttainable(
+            f"after the release at {release:.1f} m/s full throttle does not accelerate to the "
+            f"transition speed {v_tr:.1f} m/s ({TRANSITION_SPEED_OVER_STALL:g} x stall): "
+            "thrust below the level-flight drag on the way", known)
+    air = _airborne(case, height, packs, None if charge is None else charge[:, 0])
     _refuse_beyond_battery(case, np.array([release, air.speed_m_s]),
-                           (air.distance_m or 0.0) / air.speed_m_s, known)
+                           float(seconds[0]) + (air.distance_m or 0.0) / air.speed_m_s, known)
+    if accelerate[0] > 0.0:
+        warnings.append(f"released at {release:.1f} m/s, below the transition speed "
+                        f"{v_tr:.1f} m/s: {float(accelerate[0]):.1f} m of level acceleration at "
+                        f"full throttle ({float(seconds[0]):.2f} s) before the arc")
+    if packs is not None:
+        warnings.append(_packs_note(case, packs.point(np.zeros(packs.n), np.array([release]))[2],
+                                    None, air))
+    else:
+        note = reference_voltage_note(case.propulsion, "the take-off")
+        warnings.extend([note] if note else [])
     return TakeoffResult(
         ground_roll_m=0.0,
         liftoff_speed_m_s=release,
@@ -290,8 +562,9 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
         liftoff_speed_eas_m_s=float(aircraft.launch_speed_m_s),
         stall_speed_m_s=stall,
         density_kg_m3=rho,
-        acceleration_distance_m=0.0,
-        **air.fields(0.0, aircraft.takeoff.transition_load_factor, height),
+        acceleration_distance_m=float(accelerate[0]),
+        **_after_release(air.fields(0.0, aircraft.takeoff.transition_load_factor, height),
+                         float(accelerate[0])),
         launch="catapult",
     )
 
@@ -336,8 +609,15 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
             f"{stall_speed_eas_m_s(aircraft):.2f} m/s EAS"
         )
     speeds = np.linspace(0.0, v_lo, _CHECK_POINTS)
-    force = np.asarray(net_force_n(aircraft, propulsion, speeds, rho), dtype=float)
     known = {"liftoff_speed_m_s": v_lo, "stall_speed_m_s": stall}
+    packs = _packs_of(case)
+    if packs is None:
+        force = np.asarray(net_force_n(aircraft, propulsion, speeds, rho), dtype=float)
+    else:
+        # full packs give full throttle over the roll at all (else no voltage to fly on)
+        _refuse_beyond_battery(case, speeds[::(_CHECK_POINTS - 1) // (HISTORY_POINTS - 1)],
+                               0.0, known)
+        force = _on_packs_force(case, packs, np.zeros((packs.n, 1)), speeds)
     if force[0] <= 0.0:
         raise NotAttainable(
             f"never starts rolling: static thrust does not overcome rolling friction "
@@ -362,29 +642,47 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
             f"{propulsion.tested_airspeed_m_s[0]:g}-{propulsion.tested_airspeed_m_s[1]:g} m/s)",
             known,
         )
+    rows = 2 if packs is None else 2 + packs.n
     try:
         # CasADi prints the failed call's inputs (8 lines per try) through Python's stderr:
         # the reason below says what failed, in one line
         with contextlib.redirect_stderr(io.StringIO()):
-            states = np.asarray(_integrator_for(case)(v_lo))
+            states = np.asarray(_integrator_for(case)(v_lo) if packs is None
+                                else packs.roll(v_lo))
     except RuntimeError:  # CVODES failed: the net force nearly vanishes between check points
-        states = np.full((2, HISTORY_POINTS - 1), np.nan)
+        states = np.full((rows, HISTORY_POINTS - 1), np.nan)
     if not np.all(np.isfinite(states)):
         raise NotAttainable(
             f"never reaches lift-off: the net force all but vanishes below the lift-off speed "
-            f"{v_lo:.2f} m/s (least {force.min():.3g} N)", known
+            f"{v_lo:.2f} m/s (least {force.min():.3g} N{_ON_PACKS if packs else ''})", known
         )
     distance = np.concatenate([[0.0], states[0, :]])
     time = np.concatenate([[0.0], states[1, :]])
     history_speed = np.linspace(0.0, v_lo, distance.size)
-    history_thrust = np.asarray(total_thrust_n(propulsion, 1.0, history_speed, rho), dtype=float)
+    charge = np.zeros((0, distance.size)) if packs is None else np.concatenate(
+        [np.zeros((packs.n, 1)), states[2:, :]], axis=1)
+    if packs is None:
+        history_thrust = np.asarray(total_thrust_n(propulsion, 1.0, history_speed, rho),
+                                    dtype=float)
+    else:
+        history_thrust, _, history_volts = packs.point(charge, history_speed)
+        # the force where the packs have sagged (between the history's nodes, its charge
+        # interpolated): a roll that stalls as they sag never lifts off
+        along = np.stack([np.interp(speeds, history_speed, q) for q in charge])
+        sagged = _on_packs_force(case, packs, along, speeds)
+        if np.any(sagged <= 0.0):
+            stuck = float(speeds[int(np.argmax(sagged <= 0.0))])
+            raise NotAttainable(
+                f"never reaches lift-off: the net force vanishes at {stuck:.2f} m/s as the "
+                f"packs sag{_ON_PACKS}, below the lift-off speed {v_lo:.2f} m/s", known)
     history_drag, history_friction = (
         np.broadcast_to(np.asarray(f, dtype=float), history_speed.shape).copy()
         for f in ground_roll_resistance_n(aircraft, history_speed, rho)
     )
     rotation_m = v_lo * to.rotation_time_s  # Raymer 17.8.2: rotation at the lift-off speed
 
-    air = _airborne(case, height)
+    air = _airborne(case, height, packs, None if packs is None else packs.rotation(
+        charge[:, -1], v_lo, to.rotation_time_s))
     airborne_s = (air.distance_m or 0.0) / air.speed_m_s
     _refuse_beyond_battery(case, np.append(history_speed, air.speed_m_s),
                            float(time[-1]) + to.rotation_time_s + airborne_s, known)
@@ -399,9 +697,12 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
             f"take-off airspeed {max(beyond):.1f} m/s is outside the thrust model's tested "
             f"airspeed range {low:g}-{high:g} m/s (extrapolated)"
         )
-    voltage_note = reference_voltage_note(propulsion, "the take-off")
-    if voltage_note:
-        warnings.append(voltage_note)
+    if packs is None:
+        voltage_note = reference_voltage_note(propulsion, "the take-off")
+        if voltage_note:
+            warnings.append(voltage_note)
+    else:
+        warnings.append(_packs_note(case, history_volts[:, 0], history_volts[:, -1], air))
     density_note = unlapsed_density_warning(propulsion, rho)
     if density_note:
         warnings.append(density_note)

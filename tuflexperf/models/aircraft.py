@@ -307,7 +307,8 @@ def transition_radius_m(airspeed_m_s: Vectorizable, load_factor: Vectorizable) -
 
 
 def obstacle_distances_m(
-    radius_m: Vectorizable, climb_gradient_: Vectorizable, obstacle_height_m: Vectorizable
+    radius_m: Vectorizable, climb_gradient_: Vectorizable, obstacle_height_m: Vectorizable,
+    straight_gradient: Vectorizable | None = None,
 ) -> tuple[Vectorizable, Vectorizable, Vectorizable]:
     """Horizontal distances [m] from lift-off to an obstacle: (arc, straight climb, arc top [m]).
 
@@ -316,9 +317,10 @@ def obstacle_distances_m(
     If the obstacle ``h`` [m] is cleared during the arc (``h_TR >= h``) the airborne
     distance is ``R sin(acos(1 - h/R)) = sqrt(h (2R - h))`` and the climb part is 0;
     otherwise the arc covers ``R sin(gamma)`` and the straight climb
-    ``(h - h_TR) / tan(gamma)``. With no positive climb gradient an obstacle
-    above the arc is never cleared: the climb part is ``inf``; a gradient of 1 or more
-    (thrust beyond drag plus weight) climbs vertically, ``gamma = 90 deg``.
+    ``(h - h_TR) / tan(gamma_c)``, ``sin(gamma_c)`` the ``straight_gradient`` [-] (default
+    the arc's; packs that sag on the way lower it). With no positive climb gradient an
+    obstacle above the arc is never cleared: the climb part is ``inf``; a gradient of 1 or
+    more (thrust beyond drag plus weight) climbs vertically, ``gamma = 90 deg``.
 
     References
     ----------
@@ -334,8 +336,14 @@ def obstacle_distances_m(
     arc_height = radius_m * (1.0 - cos_g)
     cleared_in_arc = arc_height >= obstacle_height_m
     within = sqrt(fmax(obstacle_height_m * (2.0 * radius_m - obstacle_height_m), 0.0))
-    safe_sin = where(positive, sin_g, 1.0)
-    climb = where(positive, (obstacle_height_m - arc_height) * cos_g / safe_sin, math.inf)
+    if straight_gradient is None:
+        straight, sin_c, cos_c = positive, sin_g, cos_g
+    else:
+        straight = where(positive, straight_gradient, 0.0) > 0.0
+        sin_c = where(straight, _at_most_one(straight_gradient), 0.0)
+        cos_c = sqrt(1.0 - _at_most_one(sin_c * sin_c))
+    safe_sin = where(straight, sin_c, 1.0)
+    climb = where(straight, (obstacle_height_m - arc_height) * cos_c / safe_sin, math.inf)
     arc = where(cleared_in_arc, within, radius_m * sin_g)
     climb = where(cleared_in_arc, 0.0, climb)
     # where the obstacle is cleared in the arc, the arc is flown only up to its height

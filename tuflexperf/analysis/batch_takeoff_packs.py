@@ -1,0 +1,197 @@
+"""The batch's take-off on sagging packs: the propulsion's ``reference_voltage_v``.
+
+With a reference voltage and a battery the single case rolls, rotates and climbs to the
+obstacle with each fan's thrust ``T (U/U_ref)^k`` at its packs' loaded voltage ``U``
+(:func:`tuflexperf.analysis.takeoff.solve_takeoff`): CVODES over the airspeed with the
+charge drawn per engine beside the distance and the time. Here the same roll is flown per
+row, vectorised, in the reference roll's own time ``tau`` (the batch's exact quadrature of
+``m / F_ref``, :meth:`tuflexperf.analysis.batch._Model.roll_history`):
+
+``dt/dtau = F_ref(V) / F(V, q)``, ``ds/dtau = V dt/dtau``, ``dq/dtau = I(V, q) / 3600 dt/dtau``,
+
+classic RK4 over the 100 intervals between the history's airspeeds, the airspeed inside an
+interval by cubic Hermite interpolation (``dV/dtau = F_ref / m`` at both ends). The sagging
+packs pass through the same airspeeds as the reference roll, only later, so no event is
+needed, and where the net force all but vanishes the reference's long intervals carry it
+(the ratio stays smooth). The rotation and the airborne part follow the single case
+(:data:`~tuflexperf.analysis.takeoff.ROTATION_STEPS` RK4 steps, then
+:func:`~tuflexperf.analysis.takeoff.airborne_gradients`).
+
+References
+----------
+SPEC 3 (thrust and pack voltage); Raymer, *Aircraft Design*, 17.8 (ground roll); Hairer,
+Norsett & Wanner, *Solving Ordinary Differential Equations I*, II.1 and II.6 (RK4, Hermite
+interpolation).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tuflexperf.analysis.batch_sagging import SaggingFlight
+from tuflexperf.analysis.pack_limits import PackRows
+from tuflexperf.analysis.takeoff import (
+    ROTATION_STEPS,
+    airborne_gradients,
+    release_acceleration,
+)
+from tuflexperf.models.aircraft import (
+    climb_gradient,
+    ground_roll_net_force_n,
+    level_flight_drag_n,
+    obstacle_distances_m,
+    transition_radius_m,
+    transition_speed_m_s,
+    true_airspeed_m_s,
+)
+from tuflexperf.models.battery import SECONDS_PER_HOUR
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class RollOnPacks:
+    """Per row: ground roll [m] and time [s] (rotation included), lift-off speed [m/s],
+    attainable (1/0), the acceleration's time [s] at the 101 history airspeeds ``(B, 101)``
+    and the charge per fan flown [Ah] after the rotation ``(fans, B)``."""
+
+    distance: Array
+    time: Array
+    v_lo: Array
+    ok: Array
+    history_time: Array
+    charge_ah: Array
+
+    def as_roll(self) -> tuple[Array, Array, Array, Array]:
+        """The batch's roll tuple (:meth:`tuflexperf.analysis.batch._Model.ground_roll`)."""
+        return self.distance, self.time, self.v_lo, self.ok
+
+
+def _flight(m: Any, packs: Any, rows: PackRows) -> SaggingFlight:
+    return SaggingFlight(m, packs, rows,
+                         tuple(m.propulsion.engines) if packs.own_surfaces else (None,))
+
+
+def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
+    """The ground roll and rotation of each row on its sagging packs (see the module).
+
+    ``m`` the batch's physics (``analysis.batch._Model``), ``packs`` the case's
+    :class:`~tuflexperf.analysis.pack_limits.PackSide`, ``rows`` the rows' packs.
+    """
+    flight = _flight(m, packs, rows)
+    reference = m.ground_roll()
+    ok = reference[3] > 0.5
+    v_lo = np.where(ok, reference[2], 1.0)
+    fans = len(flight.engines)
+    mass = flight.mass[:, None]
+    tau = np.where(ok[:, None], m.roll_history(ok), 0.0)
+    speeds = v_lo[:, None] * np.linspace(0.0, 1.0, tau.shape[1])[None, :]
+    force_ref = m.uniform_force()
+    slope = force_ref / mass  # dV/dtau at the history's airspeeds
+    h = np.diff(tau, axis=1)
+    middle = 0.5 * (speeds[:, :-1] + speeds[:, 1:]) + h / 8.0 * (slope[:, :-1] - slope[:, 1:])
+    force_middle = m.net_force(middle)
+
+    def rates(charge: Array, v: Array, reference_force: Array) -> tuple[Array, Array]:
+        thrust, _, current, _ = flight.point(1.0, v, charge)
+        loaded = np.asarray(ground_roll_net_force_n(m.aircraft, thrust.reshape(-1, 1),
+                                                    v.reshape(-1, 1), m.density),
+                            dtype=float).reshape(-1) * np.ones(m.size)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            stretch = np.where(loaded > 0.0, reference_force / loaded, np.nan)
+        return current / SECONDS_PER_HOUR * stretch, stretch
+
+    q = np.zeros((fans, m.size))
+    t = np.zeros(m.size)
+    s = np.zeros(m.size)
+    times = [t]
+    with np.errstate(invalid="ignore", over="ignore"):
+        for i in range(tau.shape[1] - 1):
+            v0, vm, v1 = speeds[:, i], middle[:, i], speeds[:, i + 1]
+            f0, fm, f1 = force_ref[:, i], force_middle[:, i], force_ref[:, i + 1]
+            step = h[:, i]
+            k1, d1 = rates(q, v0, f0)
+            k2, d2 = rates(q + 0.5 * step * k1, vm, fm)
+            k3, d3 = rates(q + 0.5 * step * k2, vm, fm)
+            k4, d4 = rates(q + step * k3, v1, f1)
+            q = q + step / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            t = t + step / 6.0 * (d1 + 2.0 * d2 + 2.0 * d3 + d4)
+            s = s + step / 6.0 * (v0 * d1 + 2.0 * vm * (d2 + d3) + v1 * d4)
+            times.append(t)
+        # a row whose loaded force vanished at a stage went NaN: it never lifts off
+        ok &= np.isfinite(t) & np.isfinite(s) & np.all(np.isfinite(q), axis=0)
+        ok &= rates(q, v_lo, force_ref[:, -1])[1] > 0.0  # and at lift-off itself
+        rotation = np.asarray(m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
+            * np.ones(m.size)
+        step = np.where(ok, rotation, 0.0) / ROTATION_STEPS
+        for _ in range(ROTATION_STEPS):
+            k1 = flight.point(1.0, v_lo, q)[2] / SECONDS_PER_HOUR
+            k2 = flight.point(1.0, v_lo, q + 0.5 * step * k1)[2] / SECONDS_PER_HOUR
+            k3 = flight.point(1.0, v_lo, q + 0.5 * step * k2)[2] / SECONDS_PER_HOUR
+            k4 = flight.point(1.0, v_lo, q + step * k3)[2] / SECONDS_PER_HOUR
+            q = q + step / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return RollOnPacks(
+        distance=np.where(ok, s + v_lo * rotation, np.nan),
+        time=np.where(ok, t + rotation, np.nan),
+        v_lo=reference[2],
+        ok=ok.astype(float),
+        history_time=np.where(ok[:, None], np.stack(times, axis=1), np.nan),
+        charge_ah=q,
+    )
+
+
+def release_on_packs(m: Any, packs: Any, rows: PackRows) -> tuple[Array, Array, Array, Array]:
+    """A catapult's acceleration after the release on full packs, per row
+    (:func:`tuflexperf.analysis.takeoff.release_acceleration`; the charge per fan flown)."""
+    flight = _flight(m, packs, rows)
+    release = np.asarray(true_airspeed_m_s(m.aircraft.launch_speed_m_s, m.density),
+                         dtype=float).reshape(-1) * np.ones(m.size)
+    v_tr = np.asarray(transition_speed_m_s(m.aircraft, m.density), dtype=float).reshape(-1) \
+        * np.ones(m.size)
+    full = np.zeros((len(flight.engines), m.size))
+
+    def columns(speed: Array) -> tuple[Array, Array]:
+        points = [flight.point(1.0, speed[:, k], full) for k in range(speed.shape[1])]
+        return (np.stack([p[0] for p in points], axis=1),
+                np.stack([p[2] for p in points], axis=-1))
+
+    def excess(speed: Array) -> Array:
+        return columns(speed)[0] - np.asarray(level_flight_drag_n(m.aircraft, speed, m.density),
+                                              dtype=float)
+
+    return release_acceleration(m.aircraft.mass_kg, release, v_tr, excess,
+                                lambda speed: columns(speed)[1])
+
+
+def obstacle_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
+                      height: Any) -> Array:
+    """Ground roll + transition arc + climb to the obstacle [m] per row on the sagging
+    packs (as :func:`tuflexperf.analysis.takeoff.solve_takeoff`); NaN where not reached."""
+    flight = _flight(m, packs, rows)
+    v_tr = np.asarray(transition_speed_m_s(m.aircraft, m.density), dtype=float).reshape(-1) \
+        * np.ones(m.size)
+    radius = np.asarray(transition_radius_m(v_tr.reshape(-1, 1),
+                                            m.aircraft.takeoff.transition_load_factor),
+                        dtype=float).reshape(-1) * np.ones(m.size)
+    tall = np.asarray(height, dtype=float).reshape(-1) * np.ones(m.size)
+
+    def point(charge: Array) -> tuple[Array, Array]:
+        thrust, _, current, _ = flight.point(1.0, v_tr, charge)
+        return thrust, current
+
+    def gradient_of(thrust: Any) -> Any:
+        return np.asarray(climb_gradient(m.aircraft, np.reshape(thrust, (-1, 1)),
+                                         v_tr.reshape(-1, 1), m.density),
+                          dtype=float).reshape(-1)
+
+    start = np.where(roll.ok > 0.5, roll.charge_ah, 0.0)
+    arc_g, climb_g, _ = airborne_gradients(radius, v_tr, tall, start, point, gradient_of)
+    arc, climb, _ = obstacle_distances_m(radius, arc_g, tall, climb_g)
+    # a catapult's level acceleration after the release comes before the arc
+    accelerate = 0.0 if m.release is None else m.release[0]
+    return (roll.distance + accelerate + np.asarray(arc, dtype=float)
+            + np.asarray(climb, dtype=float))
