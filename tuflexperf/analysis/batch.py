@@ -370,6 +370,8 @@ class BatchEvaluator:
                         *found, np.zeros((size, 1)), model.release[2])
                 else:
                     model.packs_roll = packs_takeoff.roll_on_packs(model, self._packs, rows)
+                model.packs_airborne = packs_takeoff.airborne_on_packs(
+                    model, self._packs, rows, model.packs_roll, height)
                 found = model.packs_roll.as_roll()
             elif catapult:
                 model.release = model.release_run()
@@ -387,15 +389,7 @@ class BatchEvaluator:
                 out[requirement.name] = np.where(roll[3] > 0.5, roll[0], np.nan)
             elif requirement.name == "takeoff_distance_to_obstacle":
                 roll = roll or launched()
-                airborne = None
-                if sagging:
-                    from tuflexperf.analysis import batch_takeoff_packs as packs_takeoff
-                    from tuflexperf.analysis.pack_limits import pack_rows
-
-                    airborne = packs_takeoff.obstacle_on_packs(
-                        model, self._packs, pack_rows(self._packs.battery, battery),
-                        model.packs_roll, height) - model.packs_roll.distance
-                out[requirement.name] = model.distance_to_obstacle(roll, height, airborne)
+                out[requirement.name] = model.distance_to_obstacle(roll, height)
             elif requirement.block == "envelope":
                 value = model.trim_max_throttle(grid, self._candidates()[0])
                 if self._packs is not None and not model.packs_never_bind(
@@ -591,6 +585,8 @@ class _Model:
     # a catapult's level acceleration from release to the transition speed (distance [m],
     # time [s], charge per fan [Ah] or None, accelerates): takeoff.release_acceleration
     release: Any = None
+    # the arc and climb to the obstacle on sagging packs [m] (batch_takeoff_packs)
+    packs_airborne: Array | None = None
 
     def least_airspeed(self) -> Array:
         """Least level-flight airspeed [m/s] per row: stall x the envelope's margin (SPEC 3)."""
@@ -882,10 +878,7 @@ class _Model:
         prop = self.propulsion
         v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
                           dtype=float).reshape(-1, 1) * np.ones((self.size, 1))
-        radius = transition_radius_m(v_tr, self.aircraft.takeoff.transition_load_factor)
-        gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
-        arc, climb, _ = obstacle_distances_m(radius, gradient, height)
-        airborne = (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
+        airborne = self.airborne_m(height)
         airborne = np.where(np.isfinite(airborne), airborne, 0.0)
         seconds = np.nan_to_num(roll[1]) + airborne / v_tr[:, 0]
         if catapult:  # and its level acceleration after the release, as the single case
@@ -912,19 +905,26 @@ class _Model:
                           / SECONDS_PER_HOUR)[:, None]
         return ok
 
+    def airborne_m(self, height: Any) -> Array:
+        """Transition arc + climb to the obstacle [m] per row (``inf`` where never cleared):
+        on the sagging packs where they were flown (:attr:`packs_airborne`), else at the
+        model's thrust (as :func:`solve_takeoff`)."""
+        if self.packs_airborne is not None:
+            return self.packs_airborne
+        v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
+                          dtype=float).reshape(-1, 1) * np.ones((self.size, 1))
+        radius = transition_radius_m(v_tr, self.aircraft.takeoff.transition_load_factor)
+        gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
+        arc, climb, _ = obstacle_distances_m(radius, gradient, height)
+        return (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
+
     def distance_to_obstacle(self, roll: tuple[Array, Array, Array, Array],
-                             height: Any, airborne: Array | None = None) -> Array:
-        """Ground roll + transition arc + climb to the obstacle [m] (as :func:`solve_takeoff`);
-        ``airborne`` [m] per row where it was flown otherwise (on sagging packs)."""
-        if airborne is None:
-            v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
-                              dtype=float).reshape(-1, 1) * np.ones((self.size, 1))
-            radius = transition_radius_m(v_tr, self.aircraft.takeoff.transition_load_factor)
-            gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
-            arc, climb, _ = obstacle_distances_m(radius, gradient, height)
-            airborne = (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
-            if self.release is not None:  # a catapult's: its acceleration before the arc
-                airborne = airborne + self.release[0]
+                             height: Any) -> Array:
+        """Ground roll + transition arc + climb to the obstacle [m] (as :func:`solve_takeoff`),
+        a catapult's level acceleration after the release included."""
+        airborne = self.airborne_m(height)
+        if self.release is not None:
+            airborne = airborne + self.release[0]
         total = roll[0] + airborne
         # a launch that is not attainable (a catapult's "roll" of 0 m included) reaches nothing;
         # nor does an arc that needs more than cl_max (solve_takeoff)

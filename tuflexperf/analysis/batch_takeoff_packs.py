@@ -167,10 +167,11 @@ def release_on_packs(m: Any, packs: Any, rows: PackRows) -> tuple[Array, Array, 
                                 lambda speed: columns(speed)[1])
 
 
-def obstacle_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
+def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
                       height: Any) -> Array:
-    """Ground roll + transition arc + climb to the obstacle [m] per row on the sagging
-    packs (as :func:`tuflexperf.analysis.takeoff.solve_takeoff`); NaN where not reached."""
+    """Transition arc + climb to the obstacle [m] per row on the sagging packs from the
+    charge after the roll and rotation (a catapult's release acceleration), as
+    :func:`tuflexperf.analysis.takeoff.solve_takeoff`; ``inf`` where never cleared."""
     flight = _flight(m, packs, rows)
     v_tr = np.asarray(transition_speed_m_s(m.aircraft, m.density), dtype=float).reshape(-1) \
         * np.ones(m.size)
@@ -191,7 +192,4 @@ def obstacle_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
     start = np.where(roll.ok > 0.5, roll.charge_ah, 0.0)
     arc_g, climb_g, _ = airborne_gradients(radius, v_tr, tall, start, point, gradient_of)
     arc, climb, _ = obstacle_distances_m(radius, arc_g, tall, climb_g)
-    # a catapult's level acceleration after the release comes before the arc
-    accelerate = 0.0 if m.release is None else m.release[0]
-    return (roll.distance + accelerate + np.asarray(arc, dtype=float)
-            + np.asarray(climb, dtype=float))
+    return np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float)
