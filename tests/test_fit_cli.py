@@ -591,3 +591,32 @@ def test_a_flag_the_pack_fit_has_no_use_for_is_refused(tmp_path: Path, flag) -> 
     assert result.exit_code == 2
     assert f"{flag[0]}: not for a battery file" in result.stderr
     assert not (tmp_path / "b.yaml").exists() and not (tmp_path / "t.csv").exists()
+
+
+def test_a_run_without_a_test_point_counts_as_no_airspeed(tmp_path: Path) -> None:
+    """EDF1 at 15 and 30 m/s and a 27.5 m/s run whose clock is in ks (no 0.5 s plateau): the
+    empty run counted as a set point at 0 m/s, so the 3-airspeed rule passed and a surface
+    with the wrong curvature in airspeed was written (outside audit)."""
+    import gzip
+
+    campaign = tmp_path / "campaign"
+    shutil.copytree(Path(__file__).resolve().parents[1] / "data" / "tuflex" / "campaign",
+                    campaign)
+    kept = [line for line in (campaign / "campaign.yaml").read_text().splitlines()
+            if not any(s in line for s in ("edf2", "edf1_v00p", "edf1_v20p", "edf1_v22p",
+                                           "edf1_v25p"))]
+    (campaign / "campaign.yaml").write_text("\n".join(kept) + "\n")
+    run = campaign / "runs" / "edf1_v27p5.csv.gz"
+    lines = gzip.open(run, "rt").read().splitlines()
+    slowed = [lines[0]] + [f"{float(line.split(',', 1)[0]) / 1000},{line.split(',', 1)[1]}"
+                           for line in lines[1:]]
+    with gzip.open(run, "wt") as handle:
+        handle.write("\n".join(slowed) + "\n")
+    import re
+
+    result = runner.invoke(app, ["fit", str(campaign / "campaign.yaml"), "--out",
+                                 str(tmp_path / "p.yaml")])
+    assert result.exit_code == 2, result.output
+    assert "cover only 2 airspeed set point(s)" in result.stderr
+    assert "edf1_v27p5.csv.gz gave no test point" in result.stderr
+    assert not re.search(r"\b0 m/s", result.stderr) and not (tmp_path / "p.yaml").exists()

@@ -356,18 +356,24 @@ def _check_set_points(campaign: Any, step_results: list[Any]) -> list[str]:
     defeats the rank test of the fit).
     """
     by_engine: dict[str, dict[float, list[str]]] = {}
+    empty: dict[str, list[str]] = {}
     for result in step_results:
         runs = by_engine.setdefault(str(result.run.engine), {})
-        speeds = [seg.airspeed_m_s for seg in result.segments] or [0.0]
+        speeds = [seg.airspeed_m_s for seg in result.segments]
+        if not speeds:  # no test point: no airspeed either (it counted as 0 m/s: audit)
+            empty.setdefault(str(result.run.engine), []).append(result.run.file)
+            continue
         runs.setdefault(_set_point(float(np.median(speeds))), []).append(result.run.file)
     for engine, points in by_engine.items():
         if len(points) < MIN_SET_POINTS:
             listed = "; ".join(f"{v:g} m/s ({', '.join(files)})" for v, files in
                                sorted(points.items()))
+            without = empty.get(engine, [])
             raise InputError(
                 f"{campaign.path}: {engine}: the throttle-step runs cover only {len(points)} "
-                f"airspeed set point(s), {listed}; a poly22 surface needs at least "
-                f"{MIN_SET_POINTS}"
+                f"airspeed set point(s){', ' + listed if listed else ''}; a poly22 surface "
+                f"needs at least {MIN_SET_POINTS}"
+                + (f" ({', '.join(without)} gave no test point)" if without else "")
             )
     return [
         f"{engine}: {len(files)} throttle-step runs at {v:g} m/s ({', '.join(files)}): fitted "
