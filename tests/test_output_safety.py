@@ -657,3 +657,25 @@ def test_the_working_directory_is_no_output_folder(tmp_path, out) -> None:
     done = _run(here, "export", "--out", out)
     assert done.returncode == 2 and "is the working directory or holds it" in done.stderr
     assert here.is_dir() and not list(here.iterdir())
+
+
+def test_a_file_saved_at_an_output_while_the_command_ran_is_not_replaced(tmp_path):
+    """The guard looked at single-file outputs before the computation and the rename did not
+    look again: a CSV the user saved there meanwhile was overwritten with exit 0 (outside
+    audit). The rename refuses (exit 2), the user's file and no temporary file remain."""
+    from tuflexperf.errors import InputError
+    from tuflexperf.io.files import guard_outputs, write_files_atomically
+
+    target = tmp_path / "grid.csv"
+    guard_outputs({"--csv": target}, [], "sweep", {"--csv": "sweep grid"})
+    target.write_text("the user's own table\n")  # saved while the sweep computes
+    with pytest.raises(InputError, match="changed while this command ran"):
+        write_files_atomically({target: "new grid\n"})
+    assert target.read_text() == "the user's own table\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["grid.csv"]
+    # a path the guard allowed and nobody touched is written, and may be written again
+    other = tmp_path / "other.csv"
+    guard_outputs({"--csv": other}, [], "sweep", {"--csv": "sweep grid"})
+    write_files_atomically({other: "first\n"})
+    write_files_atomically({other: "second\n"})
+    assert other.read_text() == "second\n"

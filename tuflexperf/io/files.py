@@ -195,6 +195,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
             try:
                 for tmp, target in staged:
                     current = target
+                    _refuse_changed_since_guarded(target)
                     old = None
                     if target.exists():
                         # a second name for the earlier file, which stays where it is until
@@ -209,6 +210,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
                             shutil.copy2(target, old)
                     kept.append((target, old))
                     os.replace(tmp, target)
+                    _written(target)
                 raise_if_interrupted()
             except BaseException:
                 for target, old in reversed(kept):  # every earlier file back in place
@@ -428,6 +430,36 @@ def _refuse_unsealed(flag: str, shown: Path, target: Path) -> None:
     )
 
 
+_guarded: dict[Path, tuple[str, Path, tuple[int, int, int] | None]] = {}
+"""What :func:`guard_outputs` saw at each output it allowed: flag, path as given, state."""
+
+
+def _state_of(path: Path) -> tuple[int, int, int] | None:
+    """An existing file's (inode, size, mtime ns), or None where there is none."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return (st.st_ino, st.st_size, st.st_mtime_ns)
+
+
+def _refuse_changed_since_guarded(target: Path) -> None:
+    """Refuse to rename onto an output that changed after :func:`guard_outputs` allowed it
+    (a file the user saved there while the command ran was overwritten; outside audit)."""
+    seen = _guarded.get(target.resolve())
+    if seen is not None and _state_of(target) != seen[2]:
+        raise InputError(f"{seen[0]}: {seen[1]} changed while this command ran; refusing to "
+                         "replace it, choose another path or run again")
+
+
+def _written(target: Path) -> None:
+    """A guarded output this process wrote: its new state is the one to compare with."""
+    key = target.resolve()
+    if key in _guarded:
+        flag, shown, _ = _guarded[key]
+        _guarded[key] = (flag, shown, _state_of(target))
+
+
 def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str,
                   kinds: dict[str, str] | None = None) -> None:
     """Refuse an output that is, or would overwrite, one of the command's inputs, or an
@@ -442,6 +474,7 @@ def guard_outputs(outputs: dict[str, Path], inputs: Iterable[Path], command: str
     for flag, out in outputs.items():
         out, target = Path(out), output_path(out)
         resolved = target.resolve()
+        _guarded[resolved] = (flag, out, _state_of(target))
         if resolved in seen:
             raise InputError(f"{flag}: {out} is also {seen[resolved]}; give different files")
         seen[resolved] = flag
