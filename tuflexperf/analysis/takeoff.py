@@ -200,8 +200,8 @@ class _Packs:
     roll draws charge (:func:`tuflexperf.analysis.pack_limits.full_throttle_on_packs`): the
     roll integrates the charge drawn per engine beside the distance and the time (CVODES,
     ``dq/dV = I m / (3600 F)``), the rotation adds its own at the lift-off speed, and the
-    arc and climb to the obstacle fly at the packs' thrust halfway through them
-    (:meth:`airborne_thrust`).
+    arc and climb to the obstacle fly at the packs' thrust on the way
+    (:func:`airborne_gradients`).
     """
 
     def __init__(self, case: Case, side: Any) -> None:
