@@ -47,6 +47,15 @@ from numpy.typing import NDArray
 
 from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.analysis.level_flight import airspeed_grid, airspeed_grids
+from tuflexperf.analysis.pack_limits import (
+    least_throttle_where,
+    operating_point,
+    pack_rows,
+    pack_side,
+    power_limit_w,
+    sagging_packs,
+    within_limits,
+)
 from tuflexperf.analysis.takeoff import obstacle_height_of
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
@@ -242,8 +251,6 @@ class BatchEvaluator:
         # trim and OEI are flown on the packs as the single case flies them (pack_limits)
         self._packs: Any = None
         if self.requirements:
-            from tuflexperf.analysis.pack_limits import pack_side
-
             self._packs = pack_side(case)
 
     # -- the batch's model objects -----------------------------------------------------------
@@ -353,7 +360,7 @@ class BatchEvaluator:
         battery = (self._battery_rows(values, size)
                    if self._packs is not None or self._endurance is not None else {})
 
-        sagging = self._packs is not None and self.case.propulsion.reference_voltage_v is not None
+        sagging = self._packs is not None and sagging_packs(self.case)
 
         def launched() -> tuple[Array, Array, Array, Array]:
             # a catapult's "roll" is its release: no runway (SPEC 4), as solve_takeoff; the
@@ -361,7 +368,6 @@ class BatchEvaluator:
             found = model.catapult_release() if catapult else model.ground_roll()
             if sagging:  # rolled on the packs' loaded voltage, as solve_takeoff rolls
                 from tuflexperf.analysis import batch_takeoff_packs as packs_takeoff
-                from tuflexperf.analysis.pack_limits import pack_rows
 
                 rows = pack_rows(self._packs.battery, battery)
                 if catapult:
@@ -822,9 +828,11 @@ class _Model:
         return (np.where(ok, distance, np.nan), np.where(ok, time, np.nan), v_lo[:, 0],
                 ok.astype(float))
 
-    def release_run(self) -> tuple[Array, Array, None, Array]:
-        """A catapult's acceleration after the release at the model's thrust
-        (:func:`tuflexperf.analysis.takeoff.release_acceleration`)."""
+    def release_run(self, thrust_and_current: Any = None
+                    ) -> tuple[Array, Array, Array | None, Array]:
+        """A catapult's acceleration after the release per row
+        (:func:`tuflexperf.analysis.takeoff.release_acceleration`): at the model's thrust, or
+        at ``thrust_and_current(V)`` (thrust [N], current per fan [A]; on sagging packs)."""
         from tuflexperf.analysis.takeoff import release_acceleration
 
         release = np.asarray(true_airspeed_m_s(self.aircraft.launch_speed_m_s, self.density),
@@ -832,11 +840,15 @@ class _Model:
         v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
                           dtype=float).reshape(-1) * np.ones(self.size)
 
-        def excess(speed: Array) -> Array:
-            return self.thrust(1.0, speed) - np.asarray(
-                level_flight_drag_n(self.aircraft, speed, self.density), dtype=float)
+        def forces(speed: Array) -> tuple[Array, Array | None]:
+            drag = np.asarray(level_flight_drag_n(self.aircraft, speed, self.density),
+                              dtype=float)
+            if thrust_and_current is None:
+                return self.thrust(1.0, speed) - drag, None
+            thrust, current = thrust_and_current(speed)
+            return thrust - drag, current
 
-        return release_acceleration(self.aircraft.mass_kg, release, v_tr, excess)
+        return release_acceleration(self.aircraft.mass_kg, release, v_tr, forces)
 
     def catapult_release(self) -> tuple[Array, Array, Array, Array]:
         """A catapult launch as :meth:`ground_roll` reports a roll: no distance, no time, the
@@ -872,7 +884,6 @@ class _Model:
         the loaded voltage at or above the cut-off and each pack within its burst rating."""
         from tuflexperf.analysis.batch_endurance import _power_w
         from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
-        from tuflexperf.analysis.pack_limits import operating_point, pack_rows, within_limits
         from tuflexperf.analysis.takeoff import HISTORY_POINTS
 
         prop = self.propulsion
@@ -1158,7 +1169,6 @@ class _Model:
         is quadratic in throttle for a surface, monotone for the fan law, so the ends and
         the vertex bound it). A row whose answer is NaN binds nothing."""
         from tuflexperf.analysis.batch_endurance import _power_w
-        from tuflexperf.analysis.pack_limits import power_limit_w
 
         if self.propulsion.reference_voltage_v is not None:
             return False
@@ -1190,12 +1200,6 @@ class _Model:
         on the power, not only on the throttle.
         """
         from tuflexperf.analysis.batch_endurance import _power_w
-        from tuflexperf.analysis.pack_limits import (
-            least_throttle_where,
-            operating_point,
-            pack_rows,
-            within_limits,
-        )
 
         prop = self.propulsion
         terms = self._grid_terms(grid)

@@ -34,19 +34,13 @@ from numpy.typing import NDArray
 
 from tuflexperf.analysis.batch_sagging import SaggingFlight
 from tuflexperf.analysis.pack_limits import PackRows
-from tuflexperf.analysis.takeoff import (
-    ROTATION_STEPS,
-    airborne_gradients,
-    release_acceleration,
-)
+from tuflexperf.analysis.takeoff import airborne_gradients, rotation_charge
 from tuflexperf.models.aircraft import (
     climb_gradient,
     ground_roll_net_force_n,
-    level_flight_drag_n,
     obstacle_distances_m,
     transition_radius_m,
     transition_speed_m_s,
-    true_airspeed_m_s,
 )
 from tuflexperf.models.battery import SECONDS_PER_HOUR
 
@@ -127,13 +121,8 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
         ok &= rates(q, v_lo, force_ref[:, -1])[1] > 0.0  # and at lift-off itself
         rotation = np.asarray(m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
             * np.ones(m.size)
-        step = np.where(ok, rotation, 0.0) / ROTATION_STEPS
-        for _ in range(ROTATION_STEPS):
-            k1 = flight.point(1.0, v_lo, q)[2] / SECONDS_PER_HOUR
-            k2 = flight.point(1.0, v_lo, q + 0.5 * step * k1)[2] / SECONDS_PER_HOUR
-            k3 = flight.point(1.0, v_lo, q + 0.5 * step * k2)[2] / SECONDS_PER_HOUR
-            k4 = flight.point(1.0, v_lo, q + step * k3)[2] / SECONDS_PER_HOUR
-            q = q + step / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        q = rotation_charge(lambda charge: flight.point(1.0, v_lo, charge)[2] / SECONDS_PER_HOUR,
+                            q, np.where(ok, rotation, 0.0))
     return RollOnPacks(
         distance=np.where(ok, s + v_lo * rotation, np.nan),
         time=np.where(ok, t + rotation, np.nan),
@@ -146,25 +135,16 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
 
 def release_on_packs(m: Any, packs: Any, rows: PackRows) -> tuple[Array, Array, Array, Array]:
     """A catapult's acceleration after the release on full packs, per row
-    (:func:`tuflexperf.analysis.takeoff.release_acceleration`; the charge per fan flown)."""
+    (:meth:`tuflexperf.analysis.batch._Model.release_run`; the charge per fan flown)."""
     flight = _flight(m, packs, rows)
-    release = np.asarray(true_airspeed_m_s(m.aircraft.launch_speed_m_s, m.density),
-                         dtype=float).reshape(-1) * np.ones(m.size)
-    v_tr = np.asarray(transition_speed_m_s(m.aircraft, m.density), dtype=float).reshape(-1) \
-        * np.ones(m.size)
     full = np.zeros((len(flight.engines), m.size))
 
-    def columns(speed: Array) -> tuple[Array, Array]:
+    def thrust_and_current(speed: Array) -> tuple[Array, Array]:
         points = [flight.point(1.0, speed[:, k], full) for k in range(speed.shape[1])]
         return (np.stack([p[0] for p in points], axis=1),
                 np.stack([p[2] for p in points], axis=-1))
 
-    def excess(speed: Array) -> Array:
-        return columns(speed)[0] - np.asarray(level_flight_drag_n(m.aircraft, speed, m.density),
-                                              dtype=float)
-
-    return release_acceleration(m.aircraft.mass_kg, release, v_tr, excess,
-                                lambda speed: columns(speed)[1])
+    return m.release_run(thrust_and_current)
 
 
 def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,

@@ -58,6 +58,7 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.takeoff import ROTATION_STEPS
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
 from tuflexperf.io.mission import MissionFile, SegmentSchema
@@ -90,7 +91,6 @@ from tuflexperf.models.thrust import (
 RATING_SEGMENT_S = 30.0  # any stretch of the flight this long keeps its mean current within it
 BURST_OVER_CONTINUOUS = 2.0  # a LiPo's burst rating, the usual twice the continuous one
 STEPS = 64  # RK4 steps per segment: the states are smooth, 64 steps give ~1e-9 relative
-ROTATION_STEPS = 8  # the rotation at the lift-off speed: constant power
 SECONDS_PER_HOUR = 3600.0
 ARC_STEPS = 64  # the take-off's transition arc (see MissionModel._airborne_phases)
 # unrolled Newton steps on the loaded voltage (and a fixed throttle's airspeed): from the

@@ -73,6 +73,12 @@ class PackSide:
         return b.packs_in_parallel_per_engine * b.capacity_ah * (1.0 - b.landing_reserve_fraction)
 
 
+def sagging_packs(case: Case) -> bool:
+    """Whether each fan flies at its packs' loaded voltage: the case names a battery file
+    and the propulsion a ``reference_voltage_v`` (SPEC 3)."""
+    return case.propulsion.reference_voltage_v is not None and case.battery_path is not None
+
+
 def pack_side(case: Case) -> PackSide | None:
     """The case's packs and power model, or None when the case names no battery file."""
     if case.battery_path is None:
@@ -116,18 +122,18 @@ def full_throttle_on_packs(case: Case, side: PackSide, charge_ah: Any, airspeed_
     ----------
     SPEC 3 (thrust and pack voltage); Tremblay & Dessaint (2009) (the circuit).
     """
-    prop, b = case.propulsion, side.battery
+    prop = case.propulsion
     scale = density_ratio(prop, case.density_kg_m3)
-    u_ref, k = prop.reference_voltage_v, prop.voltage_exponent
     thrust: Any = 0.0
     currents, voltages = [], []
     for j, engine in enumerate(prop.engines):
         power = fan_power_w(side, case, j, 1.0, airspeed_m_s)
-        u = loaded_voltage_at_power_v(side.params, charge_ah[j], power, b.circuit_packs,
-                                      u_ref, 0.0 if u_ref is None else 1.5 * k)
-        factor = 1.0 if u_ref is None else (u / u_ref) ** k
+        # the engine's packs together (one "pack per engine"): their whole current
+        u, current, factor = operating_point(side.params, charge_ah[j], power,
+                                             side.battery.circuit_packs, 1,
+                                             prop.reference_voltage_v, prop.voltage_exponent)
         thrust = thrust + factor * engine_thrust_n(engine, 1.0, airspeed_m_s, scale)
-        currents.append(power * factor ** 1.5 / u)
+        currents.append(current)
         voltages.append(u)
     return thrust, currents, voltages
 
@@ -138,13 +144,18 @@ def operating_point(params: Any, charge_ah: Any, power_w: Any, circuit_packs: An
     """Loaded voltage [V], current per pack [A] and thrust factor ``(U/U_ref)^k`` [-] of one
     engine's ``circuit_packs`` (measured packs; ``packs_per_engine`` of the battery's own)
     drawing ``power_w`` [W] at the reference voltage after ``charge_ah`` [Ah]; arrays
-    broadcast (the single case and the batch alike). NaN voltage: beyond their power."""
+    broadcast (the single case and the batch alike; CasADi too). NaN voltage: beyond their
+    power."""
     u_ref, k = reference_voltage_v, voltage_exponent
     m = 0.0 if u_ref is None else 1.5 * k
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        u = np.asarray(loaded_voltage_at_power_v(params, charge_ah, power_w, circuit_packs,
-                                                 u_ref, m), dtype=float)
-        factor = np.ones_like(u) if u_ref is None else (u / u_ref) ** k
+        u = loaded_voltage_at_power_v(params, charge_ah, power_w, circuit_packs, u_ref, m)
+        symbolic = is_symbolic(u)  # CasADi for the take-off's integrand, numpy elsewhere
+        u = u if symbolic else np.asarray(u, dtype=float)
+        if u_ref is None:
+            factor = 1.0 if symbolic else np.ones_like(u)
+        else:
+            factor = (u / u_ref) ** k
         current = power_w * factor ** 1.5 / u / packs_per_engine
     return u, current, factor
 

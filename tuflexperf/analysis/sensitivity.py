@@ -23,7 +23,8 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.analysis.batch import present_requirements
-from tuflexperf.analysis.takeoff import obstacle_height_of
+from tuflexperf.analysis.pack_limits import sagging_packs
+from tuflexperf.analysis.takeoff import ROTATION_STEPS, obstacle_height_of
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     climb_gradient,
@@ -34,6 +35,7 @@ from tuflexperf.models.aircraft import (
     stall_speed_m_s,
     transition_radius_m,
     transition_speed_m_s,
+    true_airspeed_m_s,
 )
 from tuflexperf.models.atmosphere import isa_density_kg_m3
 from tuflexperf.models.battery import (
@@ -213,7 +215,7 @@ def _endurance_value(s: _Symbolic) -> Any:
     # the launch's RK4 in the single case's mission's steps: STEPS of equal time along the
     # roll's history, ROTATION_STEPS at the lift-off speed, STEPS of the climb; power looked
     # up as the nominal does; a catapult launch has no roll
-    from tuflexperf.analysis.mission import ROTATION_STEPS, STEPS
+    from tuflexperf.analysis.mission import STEPS
 
     rotation: Any = 0.0 if catapult else ac.takeoff.rotation_time_s
     roll_only = 0.0 if catapult else t_hist[count - 1]
@@ -315,7 +317,7 @@ def symbolic_values(case: Case, keys: list[str]) -> tuple[Any, dict[str, Any]]:
     # the take-off and the endurance on sagging packs (the charge a state of the flight) and a
     # catapult's acceleration after the release have no symbolic form here: no derivative,
     # rather than the reference voltage's or the arc's alone
-    sagging = case.propulsion.reference_voltage_v is not None and case.battery_path is not None
+    sagging = sagging_packs(case)
     for requirement in present_requirements(case):
         name = requirement.name
         if sagging and name in ("takeoff_ground_roll", "takeoff_distance_to_obstacle",
@@ -352,8 +354,6 @@ def _accelerates_after_release(case: Case) -> bool:
     """A catapult released below the transition speed (it accelerates level first)."""
     if case.aircraft.launch != "catapult":
         return False
-    from tuflexperf.models.aircraft import true_airspeed_m_s
-
     rho = case.density_kg_m3
     return bool(true_airspeed_m_s(case.aircraft.launch_speed_m_s, rho)
                 < transition_speed_m_s(case.aircraft, rho))

@@ -193,6 +193,21 @@ ROTATION_STEPS = 8  # RK4 steps of the rotation's charge at the lift-off speed (
 OBSTACLE_ITERATIONS = 4  # fixed point of the airborne part's charge (the batch's too)
 
 
+def rotation_charge(rate: Any, charge_ah: Any, seconds: Any) -> Any:
+    """The charge per engine [Ah] after the rotation's ``seconds`` [s] (one or per row) at
+    full throttle at the lift-off speed: :data:`ROTATION_STEPS` RK4 steps of
+    ``dq/dt = rate(q)`` [Ah/s] (the single case and the batch alike)."""
+    h = seconds / ROTATION_STEPS
+    q = charge_ah
+    for _ in range(ROTATION_STEPS):
+        k1 = rate(q)
+        k2 = rate(q + 0.5 * h * k1)
+        k3 = rate(q + 0.5 * h * k2)
+        k4 = rate(q + h * k3)
+        q = q + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return q
+
+
 class _Packs:
     """The take-off on sagging packs (a battery and the propulsion's ``reference_voltage_v``).
 
@@ -245,19 +260,9 @@ class _Packs:
 
     def rotation(self, charge_ah: np.ndarray, v_lo: float, seconds: float) -> np.ndarray:
         """The charge per engine [Ah] after ``seconds`` [s] at full throttle at ``v_lo``."""
-        h = seconds / ROTATION_STEPS
-        q = np.asarray(charge_ah, dtype=float).copy()
-
-        def rate(charge: np.ndarray) -> np.ndarray:
-            return self.point(charge, np.array([v_lo]))[1][:, 0] / SECONDS_PER_HOUR
-
-        for _ in range(ROTATION_STEPS):
-            k1 = rate(q)
-            k2 = rate(q + 0.5 * h * k1)
-            k3 = rate(q + 0.5 * h * k2)
-            k4 = rate(q + h * k3)
-            q = q + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        return q
+        return rotation_charge(
+            lambda q: self.point(q, np.array([v_lo]))[1][:, 0] / SECONDS_PER_HOUR,
+            np.asarray(charge_ah, dtype=float), seconds)
 
 
 def airborne_gradients(radius_m: Any, speed_m_s: Any, height_m: Any, charge_ah: Any,
@@ -307,17 +312,18 @@ RELEASE_NODES = 32  # Gauss-Legendre nodes of a catapult's acceleration after th
 _RELEASE_CHECK = 201  # airspeeds where its excess thrust must stay positive
 
 
-def release_acceleration(mass_kg: Any, release_m_s: Any, transition_m_s: Any, excess_of: Any,
-                         current_of: Any = None) -> tuple[Any, Any, Any, Any]:
+def release_acceleration(mass_kg: Any, release_m_s: Any, transition_m_s: Any, forces: Any
+                         ) -> tuple[Any, Any, Any, Any]:
     """A catapult's level full-throttle acceleration from the release to the transition
-    speed per row: distance [m], time [s], charge drawn per engine [Ah] (``None`` without
-    ``current_of``) and whether it accelerates at all (the excess thrust positive at
-    :data:`_RELEASE_CHECK` airspeeds); none where the release is already that fast.
+    speed per row: distance [m], time [s], charge drawn per engine [Ah] (``None`` where
+    ``forces`` gives no current) and whether it accelerates at all (the excess thrust
+    positive at :data:`_RELEASE_CHECK` airspeeds); none where the release is already that
+    fast.
 
     ``s = int m V / (T - D) dV`` and ``t = int m / (T - D) dV`` from ``V_rel`` to ``V_tr``
     (``L = W``: the level-flight drag), by :data:`RELEASE_NODES`-point Gauss-Legendre;
-    ``excess_of(V)`` gives ``T - D`` [N] at airspeeds ``(rows, K)``, ``current_of(V)`` the
-    current per engine [A] ``(engines, rows, K)`` (on full packs: the seconds are few). The
+    ``forces(V)`` gives ``T - D`` [N] at airspeeds ``(rows, K)`` and the current per engine
+    [A] ``(engines, rows, K)`` or None (on full packs: the seconds are few). The
     arc and the climb to the obstacle follow at ``V_tr`` (Anderson's transition, 1.15
     V_stall): a release below it had started the arc at ``V_tr`` for nothing, 11.7 m short
     of the obstacle distance (outside audit).
@@ -333,14 +339,15 @@ def release_acceleration(mass_kg: Any, release_m_s: Any, transition_m_s: Any, ex
     speeds = release[:, None] + span[:, None] * 0.5 * (nodes[None, :] + 1.0)
     check = release[:, None] + span[:, None] * np.linspace(0.0, 1.0, _RELEASE_CHECK)[None, :]
     with np.errstate(divide="ignore", invalid="ignore"):
-        accelerates = (span == 0.0) | np.all(np.asarray(excess_of(check)) > 0.0, axis=1)
+        accelerates = (span == 0.0) | np.all(np.asarray(forces(check)[0]) > 0.0, axis=1)
+        excess, current = forces(speeds)
         dt_dv = np.atleast_1d(np.asarray(mass_kg, dtype=float)).reshape(-1, 1) / np.asarray(
-            excess_of(speeds))
+            excess)
         half = 0.5 * span
         time = half * np.sum(weights * dt_dv, axis=1)
         distance = half * np.sum(weights * speeds * dt_dv, axis=1)
-        charge = None if current_of is None else half * np.sum(
-            weights * np.asarray(current_of(speeds)) * dt_dv, axis=-1) / SECONDS_PER_HOUR
+        charge = None if current is None else half * np.sum(
+            weights * np.asarray(current) * dt_dv, axis=-1) / SECONDS_PER_HOUR
     return (np.where(span > 0.0, distance, 0.0), np.where(span > 0.0, time, 0.0),
             None if charge is None else np.where(span > 0.0, charge, 0.0), accelerates)
 
@@ -373,10 +380,10 @@ def _packs_note(case: Case, start_v: np.ndarray, liftoff_v: np.ndarray | None,
 def _packs_of(case: Case) -> _Packs | None:
     """The sagging packs the take-off flies on, or None (no battery, or no reference
     voltage: the thrust model's own thrust)."""
-    if case.propulsion.reference_voltage_v is None or case.battery_path is None:
-        return None
-    from tuflexperf.analysis.pack_limits import pack_side
+    from tuflexperf.analysis.pack_limits import pack_side, sagging_packs
 
+    if not sagging_packs(case):
+        return None
     side = pack_side(case)
     if side is None:
         return None
@@ -473,25 +480,20 @@ def _airborne(case: Case, height: float, packs: _Packs | None = None,
                      gradient)
 
 
-def _release_forces(case: Case, packs: _Packs | None) -> tuple[Any, Any]:
-    """``excess_of`` and ``current_of`` of :func:`release_acceleration` for the case (on
-    full packs where they sag)."""
+def _release_forces(case: Case, packs: _Packs | None) -> Any:
+    """``forces`` of :func:`release_acceleration` for the case (on full packs where they
+    sag)."""
     aircraft, rho = case.aircraft, case.density_kg_m3
 
-    def drag(v: np.ndarray) -> np.ndarray:
-        return np.asarray(level_flight_drag_n(aircraft, v, rho), dtype=float)
+    def forces(v: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        drag = np.asarray(level_flight_drag_n(aircraft, v, rho), dtype=float)
+        if packs is None:
+            thrust = np.asarray(total_thrust_n(case.propulsion, 1.0, v, rho), dtype=float)
+            return thrust - drag, None
+        thrust, current, _ = packs.point(np.zeros(packs.n), v.ravel())
+        return thrust.reshape(v.shape) - drag, current.reshape(packs.n, *v.shape)
 
-    if packs is None:
-        return (lambda v: np.asarray(total_thrust_n(case.propulsion, 1.0, v, rho), dtype=float)
-                - drag(v)), None
-
-    def excess(v: np.ndarray) -> np.ndarray:
-        return packs.point(np.zeros(packs.n), v.ravel())[0].reshape(v.shape) - drag(v)
-
-    def current(v: np.ndarray) -> np.ndarray:
-        return packs.point(np.zeros(packs.n), v.ravel())[1].reshape(packs.n, *v.shape)
-
-    return excess, current
+    return forces
 
 
 def _after_release(fields: dict[str, Any], accelerate_m: float) -> dict[str, Any]:
@@ -531,7 +533,7 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
     if packs is not None:  # full packs give full throttle at all (else no voltage to fly on)
         _refuse_beyond_battery(case, np.array([release, v_tr]), 0.0, known)
     accelerate, seconds, charge, accelerates = release_acceleration(
-        aircraft.mass_kg, release, v_tr, *_release_forces(case, packs))
+        aircraft.mass_kg, release, v_tr, _release_forces(case, packs))
     if not accelerates[0]:
         raise NotAttainable(
             f"after the release at {release:.1f} m/s full throttle does not accelerate to the "
