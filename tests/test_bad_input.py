@@ -508,3 +508,27 @@ def test_a_catapult_release_beyond_mach_1_or_the_jet_velocity_is_no_pass(tmp_pat
     aircraft.write_text(shipped + "launch: catapult\nlaunch_speed_m_s: 150\n")
     result = runner.invoke(app, ["takeoff", "--case", str(case)])
     assert result.exit_code == 1 and "beyond the fans' jet velocity" in result.stderr
+
+
+@pytest.mark.parametrize("args", [
+    ["endurance", "--throttle", "0.5", "--throttle", "0.6"],
+    ["endurance", "--throttle=0.5", "--throttle", "0.5"],
+    ["takeoff", "--case", "a.yaml", "--case=b.yaml"],
+])
+def test_a_single_valued_option_given_twice_is_refused(args, capsys):
+    # click keeps the last value silently: `--throttle 0.5 --throttle 0.6` flew 0.6
+    from tuflexperf.cli import main
+
+    with pytest.raises(SystemExit) as done:
+        main(args)
+    assert done.value.code == 2
+    out = capsys.readouterr()
+    assert out.out == "" and out.err.count("\n") == 1, out
+    flag = args[1].partition("=")[0]
+    assert f"'{flag}'" in out.err and "given twice" in out.err and "give it once" in out.err
+
+
+def test_repeatable_options_and_repeated_flags_are_not_refused():
+    result = runner.invoke(app, ["endurance", "--throttle", "0.5", "--set", "aircraft.mass_kg=21",
+                                 "--set", "aircraft.cd0=0.02", "--json", "--json"])
+    assert result.exit_code == 0, result.output

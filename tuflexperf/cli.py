@@ -1212,8 +1212,47 @@ def _guarded(callback: Any) -> Any:
     return run
 
 
+def repeated_option(params: Iterable[Any], args: list[str]) -> tuple[Any, list[str]] | None:
+    """The first option of ``params`` that takes one value and that ``args`` give more than
+    once, with the values given, or None (click keeps the last silently: `--throttle 0.5
+    --throttle 0.6` flew 0.6; outside audit). A flag said twice means the same: allowed."""
+    by_name = {name: p for p in params if getattr(p, "param_type_name", "") == "option"
+               and not p.multiple and not p.count for name in (*p.opts, *p.secondary_opts)}
+    seen: dict[str, list[str]] = {}
+    tokens = iter(args)
+    for token in tokens:
+        if token == "--":  # what follows is arguments, not options
+            break
+        name, equals, value = token.partition("=")
+        option = by_name.get(name if name.startswith("--") else token)
+        if option is None:
+            continue
+        if option.is_flag:
+            continue
+        if not equals:
+            value = next(tokens, "")
+        given = seen.setdefault(option.name, [])
+        given.append(value)
+        if len(given) > 1:
+            return option, given
+    return None
+
+
+class _OnceCommand(typer.core.TyperCommand):
+    """A command whose single-valued options may be given once."""
+
+    def parse_args(self, ctx: Any, args: list[str]) -> list[str]:
+        found = repeated_option(self.params, args)
+        if found is not None:
+            option, given = found
+            raise typer.BadParameter(f"given twice ({', '.join(given)}); give it once",
+                                     ctx=ctx, param=option)
+        return super().parse_args(ctx, args)  # type: ignore[no-any-return]
+
+
 for _info in app.registered_commands:  # every command above, whichever section wrote it
     _info.callback = _guarded(_info.callback)
+    _info.cls = _OnceCommand
 
 
 def _case_hint(message: str, argv: list[str] | None) -> str:
