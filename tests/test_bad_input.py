@@ -532,3 +532,26 @@ def test_repeatable_options_and_repeated_flags_are_not_refused():
     result = runner.invoke(app, ["endurance", "--throttle", "0.5", "--set", "aircraft.mass_kg=21",
                                  "--set", "aircraft.cd0=0.02", "--json", "--json"])
     assert result.exit_code == 0, result.output
+
+
+@pytest.mark.parametrize("named, kind", [
+    ("../data/tuflex/aircraft.yaml", "an aircraft file"),
+    ("../data/tuflex/battery.yaml", "a battery file"),
+    ("../data/tuflex/campaign/campaign.yaml", "a campaign file"),
+    ("tuflex.yaml", "a case file"),
+])
+def test_another_kind_of_file_as_the_mission_is_named_as_such(tmp_path, named, kind):
+    # a case's mission naming its aircraft file was told "mass_kg: unknown key"
+    case = copy_shipped_case(tmp_path)
+    text = case.read_text() + f"  mission: {{file: {named}, min_landing_charge_fraction: 0.2}}\n"
+    case.write_text(text)
+    result = runner.invoke(app, ["check", str(case)])
+    _assert_bad(result, Path(named).name, f"this is {kind}, not a mission file")
+
+
+def test_a_misspelt_key_of_the_right_kind_of_file_still_gets_its_closest_key(tmp_path):
+    case = copy_shipped_case(tmp_path)
+    (tmp_path / "m.yaml").write_text("name: m\nsegmnts: []\n")
+    mission = f"  mission: {{file: {tmp_path / 'm.yaml'}, min_landing_charge_fraction: 0.2}}\n"
+    case.write_text(case.read_text() + mission)
+    _assert_bad(runner.invoke(app, ["check", str(case)]), "did you mean 'segments'?")

@@ -31,7 +31,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, ClassVar
 
 from pydantic import Field, model_validator
 
@@ -117,6 +117,7 @@ MAX_CAPACITY_AH = 1000.0
 
 
 class BatterySchema(StrictModel):
+    file_kind: ClassVar[str] = "battery"  # named when another kind of file is given
     name: Name
     cells_in_series: Annotated[int, Field(ge=1, le=100)]
     # no aircraft pack holds more (a what-if of 1e308 Ah "flew" 4e20 min: outside audit)

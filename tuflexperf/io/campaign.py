@@ -28,7 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 from pydantic import Field, model_validator
 
@@ -91,6 +91,7 @@ class FilterSettings(StrictModel):
 
 
 class CampaignSchema(ThrustStandKeys):
+    file_kind: ClassVar[str] = "campaign"  # named when another kind of file is given
     name: Annotated[Name, Field(min_length=1)]
     fan_area_m2: Positive
     tunnel_area_m2: Positive

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -70,6 +70,7 @@ MAX_WING_AREA_M2 = 1.0e4  # ten times an A380's: a 1e300 m^2 wing lifted off at 
 
 
 class AircraftSchema(StrictModel):
+    file_kind: ClassVar[str] = "aircraft"  # named when another kind of file is given
     name: Name
     mass_kg: Annotated[float, Field(gt=0, le=MAX_MASS_KG)]
     wing_area_m2: Annotated[float, Field(gt=0, le=MAX_WING_AREA_M2)]
@@ -181,6 +182,7 @@ MAX_TESTED_AIRSPEED_M_S = 1000.0
 
 
 class PropulsionSchema(StrictModel):
+    file_kind: ClassVar[str] = "propulsion"  # named when another kind of file is given
     name: Name
     model: Literal["poly22"]
     tested_airspeed_m_s: Annotated[list[float], Field(min_length=2, max_length=2)]
@@ -393,6 +395,7 @@ class UncertaintySchema(StrictModel):
 
 
 class CaseSchema(StrictModel):
+    file_kind: ClassVar[str] = "case"  # named when another kind of file is given
     name: Name
     aircraft: FileName
     propulsion: FileName

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 from pydantic import Field, model_validator
 
@@ -95,6 +95,8 @@ class SegmentSchema(StrictModel):
 
 class MissionFileSchema(StrictModel):
     """A mission: its name, the segments and optionally the segment to solve for."""
+
+    file_kind: ClassVar[str] = "mission"
 
     name: Name
     segments: Annotated[list[SegmentSchema], Field(min_length=1, max_length=200)]

@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 import re
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -60,6 +60,7 @@ class TableEntry(StrictModel):
 
 
 class PropellerTablesSchema(StrictModel):
+    file_kind: ClassVar[str] = "propeller-table manifest"  # named when another kind is given
     name: Annotated[Name, Field(min_length=1)]
     air_density_kg_m3: Positive = ISA_SEA_LEVEL_DENSITY_KG_M3
     max_rpm: dict[str, Positive] = {}
