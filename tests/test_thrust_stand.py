@@ -138,6 +138,17 @@ def test_wrong_thrust_sign_is_refused_not_fitted(tmp_path: Path) -> None:
     assert not (tmp_path / "o.yaml").exists()
 
 
+def test_one_thrust_logged_in_two_units_is_read_once(tmp_path: Path) -> None:
+    rows = ["Time (s),ESC signal (µs),Thrust (kgf),Thrust (N),Airspeed (m/s)"]
+    rows += [f"{0.1 * k},1500,{0.1 * k:.4f},{0.1 * k * KGF_N:.4f},3" for k in range(12)]
+    (tmp_path / "r.csv").write_text("\n".join(rows) + "\n")
+    manifest = _manifest(tmp_path, [{"file": "r.csv", "engine": "E", "kind": "throttle_steps"}],
+                         format="rcbenchmark")
+    run = load_campaign(manifest).runs[0]
+    force = read_run(run.path, vendor=run.vendor)["force_n"]
+    np.testing.assert_allclose(force, 0.1 * np.arange(12) * KGF_N, rtol=1e-3)
+
+
 def test_airspeed_column_units(tmp_path: Path) -> None:
     rows = ["Time (s),ESC signal (µs),Thrust (N),Airspeed (km/h)"]
     rows += [f"{0.1 * k},1500,1.0,36" for k in range(12)]
@@ -164,6 +175,12 @@ def test_airspeed_column_units(tmp_path: Path) -> None:
         # the second thrust column was dropped and the first fitted, unremarked
         ("Time (s),ESC signal (µs),Thrust (kgf),Airspeed (m/s),Thrust (kgf)",
          "{t},1500,0.1,3,0.2", {}, r"'Thrust \(kgf\)' appears more than once"),
+        # one thrust in kgf, another in N that says something else: which is the thrust?
+        ("Time (s),ESC signal (µs),Thrust (kgf),Airspeed (m/s),Thrust (N)",
+         "{t},1500,0.1,3,0.2", {}, r"'Thrust \(kgf\)' and 'Thrust \(N\)' both give the "
+         r"thrust and they disagree"),
+        ("Time (s),ESC signal (µs),Thrust (kgf),Airspeed (m/s),Airspeed (km/h)",
+         "{t},1500,0.1,3,36", {}, r"'Airspeed \(m/s\)' and 'Airspeed \(km/h\)' both give"),
     ],
 )
 def test_bad_vendor_files_name_file_and_column(tmp_path: Path, header: str, row: str,

@@ -172,11 +172,30 @@ def read_rcbenchmark(
 
     repeated = repeated_columns(frame.columns)
 
-    def find(test: Callable[[str, str], bool]) -> str | None:
-        raw = next((raw for raw, (name, unit) in headers.items() if test(name, unit)), None)
+    def find(test: Callable[[str, str], bool], units: dict[str, float] | None = None) -> str | None:
+        found = [raw for raw, (name, unit) in headers.items() if test(name, unit)]
+        raw = found[0] if found else None
         if raw is not None and raw.strip() in repeated:
             raise repeated_header_error(path, raw.strip())
+        for other in found[1:]:  # 'Thrust (kgf)' beside 'Thrust (N)': read the first only if
+            _same_quantity(raw, other, units)  # both say the same (one was read, unchecked)
         return raw
+
+    def _same_quantity(raw: str, other: str, units: dict[str, float] | None) -> None:
+        both = f"columns {raw!r} and {other!r} both give the {headers[raw][0]}"
+        first, second = pd.to_numeric(frame[raw], errors="coerce"), pd.to_numeric(
+            frame[other], errors="coerce")
+        if units is None or headers[raw][1] not in units or headers[other][1] not in units:
+            raise InputError(f"{path}: {both}; keep one{where}")
+        a = first.to_numpy(dtype=float) * units[headers[raw][1]]
+        b = second.to_numpy(dtype=float) * units[headers[other][1]]
+        scale = max(float(np.nanmax(np.abs(a), initial=0.0)), 1e-12)
+        gap = np.abs(a - b)
+        # a vendor logging one quantity in two units rounds each: a part in 1000 of the range
+        if (np.isnan(a) != np.isnan(b)).any() or float(np.nanmax(gap, initial=0.0)) > 1e-3 * scale:
+            raise InputError(f"{path}: {both} and they disagree (by up to "
+                             f"{float(np.nanmax(gap, initial=np.inf)):.3g} in SI units); keep "
+                             f"the one to read{where}")
 
     columns: dict[str, np.ndarray] = {}
     bad_cells: dict[str, tuple[int, str]] = {}
@@ -202,11 +221,12 @@ def read_rcbenchmark(
         if values is not None:
             columns[target] = values * factor
 
-    time_raw = need(find(lambda n, u: n == "time" and u in TIME_UNITS_S), "'Time (s)'")
+    time_raw = need(find(lambda n, u: n == "time" and u in TIME_UNITS_S, TIME_UNITS_S),
+                    "'Time (s)'")
     convert("time_s", time_raw, TIME_UNITS_S[headers[time_raw][1]])
 
     thrust_raw = need(
-        find(lambda n, u: n == "thrust" and u in THRUST_UNITS_N),
+        find(lambda n, u: n == "thrust" and u in THRUST_UNITS_N, THRUST_UNITS_N),
         "'Thrust (kgf)' (or N, lbf, gf, ozf)",
     )
     convert("force_n", thrust_raw, settings.thrust_sign * THRUST_UNITS_N[headers[thrust_raw][1]])
@@ -227,7 +247,7 @@ def read_rcbenchmark(
             )
         columns["throttle"] = (pulse - idle) / span
 
-    speed_raw = find(lambda n, u: any(n.startswith(a) for a in AIRSPEED_NAMES))
+    speed_raw = find(lambda n, u: any(n.startswith(a) for a in AIRSPEED_NAMES), SPEED_UNITS_M_S)
     if speed_raw is not None:
         unit = headers[speed_raw][1]
         if unit not in SPEED_UNITS_M_S:
