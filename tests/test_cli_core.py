@@ -230,3 +230,19 @@ def test_set_moves_the_envelope_bounds_of_one_case():
                                                                   rel=1e-9)
     assert rows[1]["trim_throttle_max"]["value"] == pytest.approx(shipped["max_throttle"],
                                                                   rel=1e-9)
+
+
+def test_sweep_says_where_it_extrapolates_the_thrust_model() -> None:
+    """SPEC: extrapolation is said. An envelope to 30 m/s stays within the tested 0-30 m/s,
+    one to 45 m/s does not; the single case says the same of each (`extrapolated`)."""
+    batch = run("sweep", "--json", "--vary", "requirements.envelope.max_airspeed_m_s=30:45:2")
+    rows = json.loads(batch.stdout)["rows"]
+    flags = [r["trim_throttle_max"]["extrapolated"] for r in rows]
+    singles = [json.loads(run("trim", "--json", "--set",
+                              f"requirements.envelope.max_airspeed_m_s={top}").stdout)
+               ["extrapolated"] for top in (30, 45)]
+    assert flags == singles == [False, True]
+    text = run("sweep", "--vary", "requirements.envelope.max_airspeed_m_s=30:45:2").stdout
+    assert ("note: trim_throttle_max: thrust model extrapolated beyond its tested 0-30 m/s at "
+            "1 of 2 grid points") in text
+    assert "takeoff_ground_roll: thrust model" not in text  # lift-off at 16.6 m/s

@@ -353,11 +353,12 @@ def margins(
     sets: list[str] | None = SetOption,
 ) -> None:
     """Per requirement and parameter: the value where it just holds, and d(value)/d(parameter)."""
-    from tuflexperf.analysis.margins import solve_margins
+    from tuflexperf.analysis.margins import extrapolation_notes, solve_margins
 
     case = load_case_with(case_file, sets)
     rows = solve_margins(case)
-    notes = _batch_notes(case, [], None) + _scaled_pack_notes({m.parameter for m in rows})
+    notes = (extrapolation_notes(rows, case.propulsion.tested_airspeed_m_s)
+             + _batch_notes(case, [], None) + _scaled_pack_notes({m.parameter for m in rows}))
     if as_json:
         emit_json({"case": case.name, "case_file": str(case.path),
                    "margins": [m.to_dict() for m in rows], "notes": notes})
@@ -428,7 +429,8 @@ def sweep(
         guard_outputs(outputs, [path for _, path in case_files(case)], "sweep",
                       {"--csv": "sweep grid", "--plot": "sweep plot"})
     result = run_sweep(case, axes, workers, dask)
-    notes = _batch_notes(case, [key for key, _ in axes], sets)
+    notes = (result.extrapolation_notes(case.propulsion.tested_airspeed_m_s)
+             + _batch_notes(case, [key for key, _ in axes], sets))
     written: dict[Path, bytes | str] = {}
     if plot is not None:
         from tuflexperf.report.sweep_plot import carpet_png

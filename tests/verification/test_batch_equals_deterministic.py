@@ -33,6 +33,27 @@ def assert_equal_to_deterministic(case, batch_values: dict, row: int) -> None:
             assert got == pytest.approx(verdict.value, rel=RTOL, abs=1e-9), verdict.name
 
 
+def assert_same_extrapolation(case, result, row: int) -> list[bool]:
+    """The batch's row flags where the single case says its answer is extrapolated."""
+    from tuflexperf.analysis.study import Study
+    from tuflexperf.errors import NotAttainable
+
+    study = Study(case)
+    asks = {"takeoff_ground_roll": study.takeoff, "takeoff_distance_to_obstacle": study.takeoff,
+            "trim_throttle_max": study.trim, "oei_min_throttle": study.oei}
+    if case.requirements.endurance is not None:
+        asks["flight_endurance"] = lambda: study.endurance(case.requirements.endurance.throttle)
+    said = []
+    for name, flags in result.extrapolated.items():
+        try:
+            single = asks[name]().extrapolated
+        except NotAttainable:
+            continue
+        assert bool(flags[row]) == single, (name, row)
+        said.append(single)
+    return said
+
+
 def test_nominal_shipped_case() -> None:
     case = load_case(SHIPPED_CASE)
     result = BatchEvaluator(case).evaluate()
@@ -75,6 +96,7 @@ def test_made_up_parameter_sets_in_one_batch(tmp_path, shipped: bool) -> None:
     if not shipped:
         assert "takeoff_distance_to_obstacle" in result.values
     unattainable = 0
+    said: list[bool] = []
     for row, s in enumerate(sets):
         try:
             single = with_values(case, s)
@@ -83,10 +105,12 @@ def test_made_up_parameter_sets_in_one_batch(tmp_path, shipped: bool) -> None:
             unattainable += 1
             continue
         assert_equal_to_deterministic(single, result.values, row)
+        said += assert_same_extrapolation(single, result, row)
         unattainable += sum(v.value is None for v in check_case(single))
         for verdict in check_case(single):
             assert bool(result.met(verdict.name)[row]) == verdict.passed
     assert unattainable > 0  # the sets include not-attainable cases
+    assert any(said) and not all(said)  # and answers within and beyond the tested airspeeds
 
 
 def test_below_stall_and_never_lifting_off_are_nan(tmp_path) -> None:
@@ -203,6 +227,7 @@ def test_catapult_launch_in_a_batch_equals_the_deterministic_check(tmp_path) -> 
             assert math.isnan(result.values["flight_endurance"][row])
             continue
         assert_equal_to_deterministic(single, result.values, row)
+        assert_same_extrapolation(single, result, row)
     endurance = result.values["flight_endurance"]
     # a faster release leaves less to climb... and a runway launch would not be attainable
     assert np.isfinite(endurance[:-2]).all() and math.isnan(endurance[-2])

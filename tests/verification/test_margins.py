@@ -261,3 +261,22 @@ def test_a_catapult_launch_has_no_runway_sensitivities(tmp_path) -> None:
         down = deterministic(catapult, key, nominal[key] - step, "takeoff_distance_to_obstacle")
         central = (up - down) / (2 * step)
         assert slopes["takeoff_distance_to_obstacle"][key] == pytest.approx(central, rel=1e-4)
+
+
+def test_margins_say_where_the_answer_extrapolates(case) -> None:
+    """Each limit value's `extrapolated` is the single case's at that value (SPEC: said)."""
+    from tuflexperf.analysis.margins import solve_margins
+    from tuflexperf.analysis.study import Study
+
+    rows = {(m.requirement, m.parameter): m for m in solve_margins(case)}
+    throttle = rows[("flight_endurance", "requirements.endurance.throttle")]
+    mass = rows[("takeoff_ground_roll", "aircraft.mass_kg")]
+    for m, ask in ((throttle, lambda s, x: s.endurance(x)), (mass, lambda s, x: s.takeoff())):
+        single = with_values(case, {m.parameter: m.limit_value})
+        said = ask(Study(single), m.limit_value).extrapolated
+        assert m.extrapolated is said
+    assert throttle.extrapolated and not mass.extrapolated  # 30.x m/s past the tested 30
+    assert rows[("trim_throttle_max", "aircraft.cd0")].extrapolated_at_nominal
+    result = CliRunner().invoke(app, ["margins"])
+    assert ("note: flight_endurance: thrust model extrapolated beyond its tested 0-30 m/s at "
+            "the limit values of requirements.endurance.throttle") in result.stdout

@@ -61,6 +61,7 @@ from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     EAS_REFERENCE_DENSITY_KG_M3,
     MAX_AIRSPEED_M_S,
+    TRANSITION_SPEED_OVER_STALL,
     Aircraft,
     catapult_energy_shortfall,
     climb_gradient,
@@ -208,6 +209,9 @@ class BatchResult:
     # envelope bounds cross (trim and OEI are NaN there): each consumer says what they mean
     refused: NDArray[np.bool_] | None = None
     without_envelope: NDArray[np.bool_] | None = None
+    # rows whose answer flies the thrust model outside its tested airspeeds, as the single
+    # case's `extrapolated` (SPEC: extrapolation is said; a sweep said nothing)
+    extrapolated: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
 
     def met(self, name: str) -> NDArray[np.bool_]:
         """Met per sample, by the verdict rule of :mod:`tuflexperf.analysis.requirements`."""
@@ -388,14 +392,31 @@ class BatchEvaluator:
             within = model.launch_within_packs(found, height, catapult, self._packs, battery)
             return found[0], found[1], found[2], np.where(within, found[3], 0.0)
 
+        beyond: dict[str, NDArray[np.bool_]] = {}
+        propulsion = self.case.propulsion
+
+        def airborne_beyond(launch: tuple[Array, Array, Array, Array]) -> NDArray[np.bool_]:
+            # as solve_takeoff: the lift-off speed (a runway's) and the arc's 1.15 V_stall
+            outside = outside_tested_range(
+                propulsion, TRANSITION_SPEED_OVER_STALL * stall_speed(model))
+            if not catapult:
+                outside = outside | outside_tested_range(propulsion, launch[2])
+            return np.asarray(outside, dtype=bool)
+
         for requirement in self.requirements:
             limits[requirement.name] = self._limit(values, requirement, size)
+            if requirement.block in ("envelope", "oei"):
+                flown = np.where(np.isfinite(grid), grid, propulsion.tested_airspeed_m_s[0])
+                beyond[requirement.name] = np.broadcast_to(
+                    np.any(outside_tested_range(propulsion, flown), axis=1), (size,)).copy()
             if requirement.name == "takeoff_ground_roll":
                 roll = roll or launched()
                 out[requirement.name] = np.where(roll[3] > 0.5, roll[0], np.nan)
+                beyond[requirement.name] = airborne_beyond(roll)
             elif requirement.name == "takeoff_distance_to_obstacle":
                 roll = roll or launched()
                 out[requirement.name] = model.distance_to_obstacle(roll, height)
+                beyond[requirement.name] = airborne_beyond(roll)
             elif requirement.block == "envelope":
                 value = model.trim_max_throttle(grid, self._candidates()[0])
                 if self._packs is not None and not model.packs_never_bind(
@@ -421,9 +442,11 @@ class BatchEvaluator:
                 key = "requirements.endurance.throttle"
                 throttle = _column(values, key, self.case.requirements.endurance.throttle, size)
                 throttle = np.asarray(throttle, dtype=float).reshape(-1) * np.ones(size)
-                out[requirement.name] = model.flight_endurance_min(
+                out[requirement.name], speed = model.flight_endurance_min(
                     self._endurance, throttle, launch, battery
                 )
+                beyond[requirement.name] = np.asarray(
+                    outside_tested_range(propulsion, speed), dtype=bool)
         return BatchResult(
             values=out,
             limits=limits,
@@ -431,6 +454,7 @@ class BatchEvaluator:
             units={r.name: r.unit for r in self.requirements},
             refused=self.rows_refused(values, size, coefficients),
             without_envelope=unflown,
+            extrapolated=beyond,
         )
 
     def _battery_nominal(self) -> dict[str, float]:
@@ -1251,8 +1275,9 @@ class _Model:
     # -- endurance ----------------------------------------------------------------------------
     def flight_endurance_min(self, model: Any, throttle: Array,
                              roll: tuple[Array, Array, Array, Array],
-                             battery: dict[str, Array]) -> Array:
-        """Flight endurance [min] at ``throttle`` per row (see :class:`EnduranceModel`)."""
+                             battery: dict[str, Array]) -> tuple[Array, Array]:
+        """Flight endurance [min] at ``throttle`` per row (see :class:`EnduranceModel`), and
+        the level-flight airspeed [m/s] on full packs."""
         from tuflexperf.analysis import batch_endurance
 
         return batch_endurance.flight_endurance_min(self, model, throttle, roll, battery)

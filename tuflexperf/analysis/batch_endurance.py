@@ -414,8 +414,9 @@ def _excess(m: Any, throttle: Array, speed: Array) -> Array:
 
 def flight_endurance_min(m: Any, model: Any, throttle: Array,
                          roll: tuple[Array, Array, Array, Array],
-                         battery: dict[str, Array]) -> Array:
-    """Flight endurance [min] per row; NaN where the single-case analysis says not attainable."""
+                         battery: dict[str, Array]) -> tuple[Array, Array]:
+    """Flight endurance [min] per row, NaN where the single-case analysis says not
+    attainable, and the level-flight airspeed [m/s] on full packs (the result's)."""
     from tuflexperf.analysis.batch import stall_speed
 
     stall = stall_speed(m)
@@ -488,9 +489,9 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
         from tuflexperf.analysis.batch_sagging import flight_on_sagging_packs
 
         return flight_on_sagging_packs(m, model, rows, throttle, roll, stall, height, speed,
-                                       level, np.where(ok, cruise_s, np.nan))
+                                       level, np.where(ok, cruise_s, np.nan)), speed
     minutes = cruise_s / 60.0 + np.where(ok, climb_time, 0.0) / 60.0
-    return np.where(ok & np.isfinite(minutes), minutes, np.nan)
+    return np.where(ok & np.isfinite(minutes), minutes, np.nan), speed
 
 
 def _impossible_cruise(m: Any, throttle: Array, speed: Array, power_w: Array) -> Array:

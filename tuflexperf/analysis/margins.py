@@ -99,6 +99,10 @@ class Margin:
     unit: str  # the requirement's unit
     search_range: tuple[float, float]
     binds: str  # "limit", "not attainable", "envelope ends", "aircraft refused", "none in range"
+    # the requirement's answer at the limit value flies the thrust model beyond its tested
+    # airspeeds (None: no limit value); at the nominal: ``extrapolated_at_nominal``
+    extrapolated: bool | None = None
+    extrapolated_at_nominal: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -110,6 +114,7 @@ class Margin:
             "unit": self.unit,
             "search_range": list(self.search_range),
             "binds": self.binds,
+            "extrapolated": self.extrapolated,
         }
 
 
@@ -224,6 +229,17 @@ def solve_margins(case: Case) -> list[Margin]:
     nominal = margin_parameters(case)
     limits = limit_values(case, nominal)
     slopes = sensitivities(case, list(nominal))
+    # where each answer extrapolates the thrust model: the nominal (row 0), then every
+    # finite limit value with the other parameters nominal, in one batch
+    found = [(name, key, limit) for (name, key), (limit, _, _) in limits.items()
+             if limit is not None]
+    evaluator = BatchEvaluator(case)
+    at = evaluator.evaluate(
+        _rows_pairs(nominal, [(None, key) for _, key, _ in found],
+                    np.array([limit for *_, limit in found])) if found else {},
+        size=len(found) or 1).extrapolated
+    nominal_at = evaluator.evaluate().extrapolated
+    beyond = {(name, key): bool(at[name][i]) for i, (name, key, _) in enumerate(found)}
     margins = []
     for requirement in requirements:
         for key, value in nominal.items():
@@ -238,8 +254,30 @@ def solve_margins(case: Case) -> list[Margin]:
                 unit=requirement.unit,
                 search_range=search,
                 binds=binds,
+                extrapolated=beyond.get((requirement.name, key)),
+                extrapolated_at_nominal=bool(nominal_at[requirement.name][0]),
             ))
     return margins
+
+
+def extrapolation_notes(margins: list[Margin], tested_m_s: tuple[float, float]) -> list[str]:
+    """One line per requirement whose answer extrapolates the thrust model at the nominal or
+    at a limit value (SPEC: extrapolation is said)."""
+    notes = []
+    for name in dict.fromkeys(m.requirement for m in margins):
+        rows = [m for m in margins if m.requirement == name]
+        limits = [m for m in rows if m.extrapolated is not None]
+        beyond = [m.parameter for m in limits if m.extrapolated]
+        where = []
+        if rows[0].extrapolated_at_nominal:
+            where.append("the nominal")
+        if beyond:
+            where.append("every limit value" if len(beyond) == len(limits) else
+                         "the limit values of " + ", ".join(beyond))
+        if where:
+            notes.append(f"{name}: thrust model extrapolated beyond its tested "
+                         f"{tested_m_s[0]:g}-{tested_m_s[1]:g} m/s at {' and '.join(where)}")
+    return notes
 
 
 

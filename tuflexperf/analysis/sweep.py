@@ -13,7 +13,7 @@ Raymer, *Aircraft Design*, 19.5 (carpet plots for design trades).
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -70,6 +70,20 @@ class SweepResult:
     limits: dict[str, Array]
     met: dict[str, NDArray[np.bool_]]
     units: dict[str, str]
+    # rows whose answer flies the thrust model beyond its tested airspeeds (BatchResult's)
+    extrapolated: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+
+    def extrapolation_notes(self, tested_m_s: tuple[float, float]) -> list[str]:
+        """One line per requirement that extrapolates the thrust model at some grid point."""
+        notes = []
+        rows = self.points.shape[0]
+        for name, beyond in self.extrapolated.items():
+            count = int(np.count_nonzero(beyond))
+            if count:
+                where = "every grid point" if count == rows else f"{count} of {rows} grid points"
+                notes.append(f"{name}: thrust model extrapolated beyond its tested "
+                             f"{tested_m_s[0]:g}-{tested_m_s[1]:g} m/s at {where}")
+        return notes
 
     def to_dict(self) -> dict[str, Any]:
         rows = []
@@ -81,6 +95,8 @@ class SweepResult:
                 row[name] = {"value": value if np.isfinite(value) else None,
                              "limit": float(self.limits[name][i]),
                              "passed": bool(self.met[name][i])}
+                if name in self.extrapolated:
+                    row[name]["extrapolated"] = bool(self.extrapolated[name][i])
             rows.append(row)
         return {"parameters": list(self.parameters), "units": self.units, "rows": rows}
 
@@ -112,6 +128,7 @@ def evaluate_rows(case: Case, keys: tuple[str, ...], points: Array) -> dict[str,
         out[f"value:{name}"] = values
         out[f"limit:{name}"] = result.limits[name]
         out[f"met:{name}"] = requirement_met(values, result.limits[name], result.kinds[name])
+        out[f"extrapolated:{name}"] = result.extrapolated[name]
     return out
 
 
@@ -176,4 +193,5 @@ def run_sweep(case: Case, axes: list[tuple[str, Array]], workers: int | None = N
         limits={n: join("limit", n) for n in names},
         met={n: join("met", n) for n in names},
         units={r.name: r.unit for r in present_requirements(case)},
+        extrapolated={n: join("extrapolated", n) for n in names},
     )
