@@ -163,6 +163,24 @@ def test_ceilings_with_density_lapse_equal_closed_form(tmp_path, offset, cl_max)
     assert 0 < service < absolute < 20000
 
 
+@pytest.mark.parametrize("tested_top", [36.0, 37.0, 60.0])
+def test_a_ceiling_flown_beyond_the_tested_airspeeds_is_said(tmp_path, tested_top):
+    """True airspeeds grow with altitude: Vy at the ceilings (closed form, 36.4 and 37.5 m/s)
+    extrapolates a model tested to 36 m/s and not one tested to 60; only the sea-level
+    speeds were checked (SPEC: extrapolation is said)."""
+    propulsion = {**_propulsion(), "tested_airspeed_m_s": [0, tested_top]}
+    r = solve_performance(_case(tmp_path, propulsion=propulsion))
+    said = " ".join(w for w in r.warnings if "extrapolated" in w)
+    for label, height in (("service ceiling", r.service_ceiling_m),
+                          ("absolute ceiling", r.absolute_ceiling_m)):
+        rho = _isa_density(height)
+        vy = ClosedForm(AIRCRAFT, rho, rho / 1.225, A_TOTAL, C_TOTAL).vy()
+        assert (label in said) == (vy > tested_top), (label, vy)
+    v_max = ClosedForm(AIRCRAFT, _isa_density(0.0), 1.0, A_TOTAL, C_TOTAL).level_speeds()[1]
+    assert ("max level speed" in said) == (v_max > tested_top)
+    assert (said == "") == (tested_top == 60.0)
+
+
 def test_ceiling_without_lapse_is_not_claimed(tmp_path):
     r = solve_performance(_case(tmp_path, propulsion=_propulsion(reference=None)))
     # thrust as measured at every altitude: this aircraft climbs at 20 km; no ceiling is made up

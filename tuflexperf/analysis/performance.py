@@ -548,15 +548,27 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
     except NotAttainable as exc:
         obstacle = None
         notes.append(f"take-off: {exc}")
-    speeds = [s for s in (v_max, vy, vx, least) if s is not None]
-    beyond = [s for s in speeds if is_extrapolated(prop, s)]
+    # each answer at the airspeed it is flown at (true): the OEI speeds and the ceilings' Vy
+    # (true airspeeds grow with altitude) extrapolate too, unsaid before
+    flown: list[tuple[str, float | None]] = [
+        ("max level speed", v_max), ("Vy", vy), ("Vx", vx), ("least airspeed", least)]
+    for case_oei in oei:
+        flown += [("OEI max level speed", case_oei.max_level_speed_m_s),
+                  ("OEI Vx", case_oei.max_climb_gradient_speed_m_s)]
+    for label, altitude in (("service ceiling", service), ("absolute ceiling", absolute)):
+        if altitude is not None:
+            flown.append((label, p.max_climb_rate(
+                float(isa_density_kg_m3(altitude, p.offset_k)))[1]))
+    beyond = {label: v for label, v in flown if v is not None and is_extrapolated(prop, v)}
     if beyond:
         low, high = prop.tested_airspeed_m_s
-        span = f"{min(beyond):.1f}" + (
-            f"-{max(beyond):.1f}" if max(beyond) - min(beyond) >= 0.05 else ""
+        values = beyond.values()
+        span = f"{min(values):.1f}" + (
+            f"-{max(values):.1f}" if max(values) - min(values) >= 0.05 else ""
         )
         warnings.append(
-            f"thrust model extrapolated at {span} m/s (tested {low:g}-{high:g} m/s)"
+            f"thrust model extrapolated at {span} m/s (tested {low:g}-{high:g} m/s): "
+            + ", ".join(dict.fromkeys(beyond))
         )
     density_note = unlapsed_density_warning(prop, rho)
     if density_note:
