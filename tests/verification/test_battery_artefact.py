@@ -109,7 +109,8 @@ def test_a_capacity_label_far_above_what_the_runs_drew_is_bad_input(tmp_path: Pa
     if command == "fit":
         assert ("capacity_ah: 10 Ah is more than 1.5 x the most any discharge run drew"
                 in done.stderr)
-        path.write_text(text.replace("capacity_ah: 5.0 ", "capacity_ah: 6.5", 1))  # 1.36 x
+        # 1.36 x: within that rule, but beyond the 5.54 Ah the fitted circuit holds (below)
+        path.write_text(text.replace("capacity_ah: 5.0 ", "capacity_ah: 5.5", 1))
         done = subprocess.run([sys.executable, "-m", "tuflexperf", *args],
                               capture_output=True, text=True)
         assert done.returncode == 0, done.stderr
@@ -147,6 +148,68 @@ def test_a_capacity_label_edited_after_the_fit_is_bad_input(tmp_path: Path, comm
     done = subprocess.run([sys.executable, "-m", "tuflexperf", *command, "--case", case],
                           capture_output=True, text=True)
     assert done.returncode in (0, 1), done.stderr
+
+
+def test_a_label_beyond_the_fitted_pack_is_refused_by_fit_as_by_check(tmp_path: Path) -> None:
+    """The refit that check's message recommends for a relabelled 6 Ah file wrote it with the
+    5.54 Ah circuit of the measured pack, and the flight 'landed with 20 %' 0.6 min before the
+    cut-off (22.20 min against the pack's 18.54; outside audit). No discharge of the pack
+    gives more than the fitted circuit's full charge, so fit refuses such a label."""
+    copy_shipped_case(tmp_path)
+    folder = tmp_path / "data" / "tuflex"
+    text = (folder / "battery.yaml").read_text()
+    holds = yaml.safe_load(text)["fit"]["parameters"]["max_capacity_ah"]
+    assert 5.5 < holds < 6.0
+    (folder / "battery.yaml").write_text(text.replace("capacity_ah: 5.0 ", "capacity_ah: 6.0 ", 1))
+    done = subprocess.run([sys.executable, "-m", "tuflexperf", "fit", "battery.yaml", "--out",
+                           "refit.yaml"], cwd=folder, capture_output=True, text=True)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert f"capacity_ah: 6 Ah is more than the fitted pack holds ({holds:.2f} Ah" in done.stderr
+    assert not (folder / "refit.yaml").exists()
+    # a block of an earlier version (no capacity_ah of its own) is held to the same bound
+    old = text.replace("capacity_ah: 5.0 ", "capacity_ah: 6.0 ", 1).replace(
+        "fit:\n  capacity_ah: 5.0\n", "fit:\n", 1)
+    (folder / "battery.yaml").write_text(old)
+    with pytest.raises(Exception, match="more than the fitted pack holds"):
+        load_battery(folder / "battery.yaml")
+
+
+@pytest.mark.parametrize(("key", "old", "new"), [
+    ("cells_in_series", "cells_in_series: 12 ", "cells_in_series: 10 "),
+    ("cutoff_voltage_per_cell_v", "cutoff_voltage_per_cell_v: 3.4 ",
+     "cutoff_voltage_per_cell_v: 3.0 "),
+])
+def test_cells_or_cutoff_edited_after_the_fit_are_bad_input(tmp_path: Path, key, old, new):
+    """A 12S pack relabelled 10S (cut-off 34 V on the 12S circuit) or given a 3.0 V cut-off
+    after its fit flew voltages no run measured and turned trim on 3 Ah packs from FAIL into
+    PASS, where fit refuses the same file (its runs never reach that cut-off; outside
+    audit). The fit block records both; --set stays the what-if, with a note."""
+    copy_shipped_case(tmp_path)
+    folder = tmp_path / "data" / "tuflex"
+    case = tmp_path / "requirements" / "tuflex.yaml"
+    text = (folder / "battery.yaml").read_text()
+    edited = text.replace(old, new, 1)
+    if key == "cells_in_series":  # keep the file's own 3.0-4.2 V per cell rule met
+        edited = edited.replace("nominal_voltage_v: 44.4 ", "nominal_voltage_v: 37.0 ", 1)
+    (folder / "battery.yaml").write_text(edited)
+    for args in (["check", str(case)], ["fit", str(folder / "battery.yaml"), "--out",
+                                        str(tmp_path / "refit.yaml")]):
+        done = subprocess.run([sys.executable, "-m", "tuflexperf", *args], capture_output=True,
+                              text=True)
+        assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+        if args[0] == "check":
+            assert f"{key}: " in done.stderr and "was fitted with" in done.stderr
+        else:  # the runs end at 40.8 V: short of a 34 V or 36 V cut-off
+            assert "short of the cut-off" in done.stderr
+    (folder / "battery.yaml").write_text(text)
+    if key == "cutoff_voltage_per_cell_v":
+        done = subprocess.run([sys.executable, "-m", "tuflexperf", "endurance", "--throttle",
+                               "0.5", "--case", str(case), "--set",
+                               "battery.cutoff_voltage_per_cell_v=3.0"],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        assert "measured down to the file's cut-off 40.80 V; below it the pack model is " \
+               "extrapolated" in done.stdout
 
 
 def test_a_discharge_run_whose_voltage_rises_is_bad_input(tmp_path: Path) -> None:

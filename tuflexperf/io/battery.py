@@ -104,6 +104,12 @@ class BatteryFitSchema(StrictModel):
     # refused, since a relabelled file counted its reserve on charge the pack does not give
     # while --set flew it scaled (outside audit; absent in files written before it)
     capacity_ah: Positive | None = None
+    # likewise the pack's cells and cut-off: the circuit is the fitted pack's and the runs
+    # end at its cut-off, so a file relabelled 10S (a 34 V cut-off on the 12S circuit) or to
+    # a lower cut-off flew voltages no run measured, where fit itself refuses it (outside
+    # audit; absent in files written before it)
+    cells_in_series: Annotated[int, Field(ge=1)] | None = None
+    cutoff_voltage_per_cell_v: Positive | None = None
     parameters: PackParametersSchema
     rms_v: Annotated[float, Field(ge=0)]
     max_abs_v: Annotated[float, Field(ge=0)]
@@ -204,13 +210,21 @@ class Battery:
     @property
     def scaled_notes(self) -> tuple[str, ...]:
         """What a results' reader must know of a capacity other than the file's (or nothing)."""
+        notes: tuple[str, ...] = ()
         measured = self.as_read.capacity_ah
-        if self.capacity_ah == measured:
-            return ()
-        return (f"capacity_ah {self.capacity_ah:g} Ah: the measured {measured:g} Ah pack "
-                f"scaled (it flies as {self.circuit_packs:.3g} measured packs per fan: charge "
-                "x the ratio, resistance / the ratio); no run measured a pack of this size, "
-                "and the aircraft's mass is as given",)
+        if self.capacity_ah != measured:
+            notes += (f"capacity_ah {self.capacity_ah:g} Ah: the measured {measured:g} Ah pack "
+                      f"scaled (it flies as {self.circuit_packs:.3g} measured packs per fan: "
+                      "charge x the ratio, resistance / the ratio); no run measured a pack of "
+                      "this size, and the aircraft's mass is as given",)
+        runs_cutoff = self.as_read.cutoff_voltage_v
+        if self.cutoff_voltage_v < runs_cutoff * (1.0 - 1e-9):
+            # the discharge runs end at the file's cut-off: below it the pack model is
+            # extrapolated (SPEC: extrapolation is said)
+            notes += (f"cutoff_voltage_per_cell_v {self.cutoff_voltage_per_cell_v:g} V: the "
+                      f"discharge runs were measured down to the file's cut-off "
+                      f"{runs_cutoff:.2f} V; below it the pack model is extrapolated",)
+        return notes
 
 
 # The battery keys that change without refitting the pack model (--set, samples, sweeps,
@@ -270,6 +284,18 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
                 f"{path.name} --out ...), or keep {fitted_with:g} Ah in the file and fly another "
                 f"size with --set battery.capacity_ah={schema.capacity_ah:g}"
             )
+        for key, value, unit in (("cells_in_series", schema.cells_in_series, ""),
+                                 ("cutoff_voltage_per_cell_v", schema.cutoff_voltage_per_cell_v,
+                                  " V")):
+            with_fit = getattr(schema.fit, key)
+            if with_fit is not None and not math.isclose(with_fit, value, rel_tol=1e-9):
+                also = (f", or keep {with_fit:g} in the file and fly another with --set "
+                        f"battery.{key}={value:g}" if key != "cells_in_series" else "")
+                raise InputError(
+                    f"{path}: {key}: {value:g}{unit}, but the pack model in `fit:` was fitted "
+                    f"with {key} {with_fit:g}{unit}; fit it again (tuflexperf fit {path.name} "
+                    f"--out ...){also}")
+        refuse_label_beyond_fitted(path, schema.capacity_ah, schema.fit.parameters.max_capacity_ah)
         fitted = schema.fit.parameters.max_capacity_ah
         if not 0.5 <= fitted / schema.capacity_ah <= 2.0:  # edited after the fit
             raise InputError(
@@ -324,6 +350,20 @@ CAPACITY_TOLERANCE = 1.05
 LABEL_OVER_DRAWN = 1.5
 """Largest ``capacity_ah`` over the most charge a discharge run drew to its cut-off (the
 shipped pack: 5.0 Ah against 4.77 Ah; a conservative cut-off draws ~25 % less, not half)."""
+
+
+def refuse_label_beyond_fitted(path: Path, capacity_ah: float, max_capacity_ah: float) -> None:
+    """Bad input when ``capacity_ah`` [Ah] exceeds the fitted circuit's full charge
+    ``max_capacity_ah`` [Ah], where its voltage collapses: no discharge of that pack gives
+    the label, and the landing reserve, a fraction of it, would be counted on charge the
+    pack does not hold (a 5 Ah pack relabelled and refitted as 6 Ah "landed with 20 %"
+    0.6 min before its cut-off; outside audit)."""
+    if capacity_ah > max_capacity_ah * (1.0 + 1e-9):
+        raise InputError(
+            f"{path}: capacity_ah: {capacity_ah:g} Ah is more than the fitted pack holds "
+            f"({max_capacity_ah:.2f} Ah, where the circuit fitted to its discharge runs "
+            "collapses); give what the pack holds, or fly a larger pack with --set "
+            "battery.capacity_ah (the measured pack scaled)")
 
 
 def refuse_contradicted_capacity(battery: Battery, drawn: Sequence[tuple[str, float]]) -> None:

@@ -336,7 +336,7 @@ def fit_battery_block(battery: Any, relative_to: Any) -> dict[str, Any]:
     relative to ``relative_to`` (the folder of the file written). A capacity the runs
     contradict (a run drew more than the pack holds) is bad input.
     """
-    from tuflexperf.io.battery import refuse_contradicted_capacity
+    from tuflexperf.io.battery import refuse_contradicted_capacity, refuse_label_beyond_fitted
     from tuflexperf.io.discharge import read_discharge_run, summarise_run
 
     runs = [read_discharge_run(r.path) for r in battery.runs]
@@ -344,8 +344,11 @@ def fit_battery_block(battery: Any, relative_to: Any) -> dict[str, Any]:
     refuse_contradicted_capacity(battery, [(r.path.name, float(r.charge_ah[-1])) for r in runs])
     fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
     refuse_unreproduced_runs(battery, fit.parameters, runs)
+    refuse_label_beyond_fitted(battery.path, battery.capacity_ah, fit.parameters.max_capacity_ah)
     return {
         "capacity_ah": float(battery.capacity_ah),
+        "cells_in_series": int(battery.cells_in_series),
+        "cutoff_voltage_per_cell_v": float(battery.cutoff_voltage_per_cell_v),
         "parameters": {k: float(v) for k, v in fit.parameters.to_dict().items()},
         "rms_v": float(fit.rms_v),
         "max_abs_v": float(fit.max_abs_v),
