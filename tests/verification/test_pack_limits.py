@@ -92,6 +92,24 @@ def test_a_pack_that_sags_below_its_cutoff_at_full_throttle_cannot_take_off(tmp_
     assert solve_takeoff(_case(tmp_path / "five")).ground_roll_m > 0
 
 
+def test_the_sag_message_names_the_power_drawn_at_the_sagged_voltage(tmp_path):
+    """With a reference voltage the fans draw P (U/U_ref)^(1.5 k): at 40.04 V of a 47 V
+    reference, 2628 W of the reference's 4250 W. The message named the reference's power,
+    at a voltage it does not flow at (outside audit)."""
+    import re
+
+    case = _case(tmp_path, reference_v=47.0, sets=("battery.capacity_ah=1.0",))
+    with pytest.raises(NotAttainable) as caught:
+        solve_takeoff(case)
+    found = re.search(r"(EDF\d): the packs sag to ([\d.]+) V under (\d+) W", str(caught.value))
+    assert found is not None, str(caught.value)
+    engine = ["EDF1", "EDF2"].index(found.group(1))
+    voltage, said = float(found.group(2)), float(found.group(3))
+    reference = float(fan_power_w(pack_side(case), case, engine, 1.0, 0.0))
+    assert said == pytest.approx(reference * (voltage / 47.0) ** 3, abs=1.0)
+    assert said < 0.7 * reference
+
+
 def test_trim_beyond_the_continuous_rating_is_not_attainable_there(tmp_path):
     case = _case(tmp_path, c_rate=8)
     trim = solve_trim(case)

@@ -188,7 +188,10 @@ def limit_reason(side: PackSide, voltage_v: float, current_a: float, power_w: fl
     if not np.isfinite(voltage_v):
         return f"the packs cannot deliver {power_w:.0f} W (beyond their maximum power)"
     if not within_limits(voltage_v, current_a, cutoff, None):
-        return (f"the packs sag to {voltage_v:.2f} V under {power_w:.0f} W, below their "
+        # the power the packs give at that voltage: with a reference voltage the fans draw
+        # less as it sags (power_w is the reference voltage's: 4250 W where 2628 W flow)
+        drawn = current_a * voltage_v * side.battery.packs_in_parallel_per_engine
+        return (f"the packs sag to {voltage_v:.2f} V under {drawn:.0f} W, below their "
                 f"cut-off {cutoff:.2f} V")
     return (f"{current_a:.1f} A per pack, beyond its {rating_name} rating {rating_a:.1f} A "
             f"(max_discharge_c {side.battery.max_discharge_c:g} C x "
