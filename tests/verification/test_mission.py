@@ -753,8 +753,11 @@ def test_a_pack_asked_for_more_than_its_c_rating_ends_the_flight(tmp_path: Path)
     # flight's first 30 s, beyond 5 C continuous (the pack does not see where the take-off,
     # the climb and the cruise begin and end)
     first = fly("5", "2", SHIPPED_MISSION)
-    assert not first.attainable and "on average over 30 s (0-30 s into the mission)" in \
+    assert not first.attainable and "on average over 30 s (0-30 s into the mission" in \
         first.reason and "beyond its continuous rating 25.0 A" in first.reason
+    # it ends in the cruise, but was drawn by the take-off and climb too: all are named
+    assert first.reason.startswith("segment 3 (cruise)")
+    assert "over segments 1-3 (takeoff, climb, cruise)" in first.reason
     assert fly("9", "2", SHIPPED_MISSION).attainable
     high = _mission(tmp_path, """\
         name: a long climb
@@ -826,7 +829,8 @@ def test_the_continuous_rating_holds_over_any_30_s_not_per_segment(tmp_path: Pat
     fast = fly(45.0)
     assert not fast.attainable and not fast.passed
     assert "beyond its continuous rating 30.0 A" in fast.reason
-    assert "on average over 30 s (0-30 s into the mission)" in fast.reason
+    assert "on average over 30 s (0-30 s into the mission" in fast.reason
+    assert ("over segments 1-2 (cruise, cruise)" in fast.reason) == (pieces > 1)
     slow = fly(26.0)  # ~11 A per pack: the same segments, within the rating
     assert slow.attainable
 

@@ -963,9 +963,21 @@ class MissionModel:
             # the flight ends where the stretch ends, not at the node after it
             found.append((k, (
                 f"draws {mean:.1f} A per pack on average over {end - begin:.0f} s "
-                f"({begin:.0f}-{end:.0f} s into the mission), beyond its continuous rating "
-                f"{rating:.1f} A {what}"), min(float(t[a + k]), end)))
+                f"({begin:.0f}-{end:.0f} s into the mission{self._spanned(t, begin, end)}), "
+                f"beyond its continuous rating {rating:.1f} A {what}"),
+                min(float(t[a + k]), end)))
         return min(found, key=lambda item: item[:2]) if found else None
+
+    def _spanned(self, t: np.ndarray, begin: float, end: float) -> str:
+        """``, over segments 1-3 (takeoff, climb, cruise)`` where the stretch ``[begin,
+        end]`` [s] covers more than the segment it ends in: the flight ends in that one, but
+        the current was drawn over all of them (a take-off and climb read as the cruise's)."""
+        covered = [plan for plan, (a, b) in zip(self.plans, self.bounds, strict=True)
+                   if b > a and t[a] < end - 1e-9 and t[b - 1] > begin + 1e-9]
+        if len(covered) < 2:
+            return ""
+        return (f", over segments {covered[0].index + 1}-{covered[-1].index + 1} "
+                f"({', '.join(plan.type for plan in covered)})")
 
     def _result(self, states: np.ndarray, aux: np.ndarray, solved: dict[str, Any] | None,
                 theta: np.ndarray, durations: np.ndarray) -> MissionResult:
