@@ -138,25 +138,26 @@ def test_wrong_thrust_sign_is_refused_not_fitted(tmp_path: Path) -> None:
     assert not (tmp_path / "o.yaml").exists()
 
 
+def _read_vendor_rows(folder: Path, rows: list[str]) -> dict[str, np.ndarray]:
+    """One RCbenchmark CSV of ``rows`` in a manifest of its own, read as fit reads it."""
+    (folder / "r.csv").write_text("\n".join(rows) + "\n")
+    manifest = _manifest(folder, [{"file": "r.csv", "engine": "E", "kind": "throttle_steps"}],
+                         format="rcbenchmark")
+    run = load_campaign(manifest).runs[0]
+    return read_run(run.path, vendor=run.vendor)
+
+
 def test_one_thrust_logged_in_two_units_is_read_once(tmp_path: Path) -> None:
     rows = ["Time (s),ESC signal (µs),Thrust (kgf),Thrust (N),Airspeed (m/s)"]
     rows += [f"{0.1 * k},1500,{0.1 * k:.4f},{0.1 * k * KGF_N:.4f},3" for k in range(12)]
-    (tmp_path / "r.csv").write_text("\n".join(rows) + "\n")
-    manifest = _manifest(tmp_path, [{"file": "r.csv", "engine": "E", "kind": "throttle_steps"}],
-                         format="rcbenchmark")
-    run = load_campaign(manifest).runs[0]
-    force = read_run(run.path, vendor=run.vendor)["force_n"]
+    force = _read_vendor_rows(tmp_path, rows)["force_n"]
     np.testing.assert_allclose(force, 0.1 * np.arange(12) * KGF_N, rtol=1e-3)
 
 
 def test_airspeed_column_units(tmp_path: Path) -> None:
     rows = ["Time (s),ESC signal (µs),Thrust (N),Airspeed (km/h)"]
     rows += [f"{0.1 * k},1500,1.0,36" for k in range(12)]
-    (tmp_path / "r.csv").write_text("\n".join(rows) + "\n")
-    manifest = _manifest(tmp_path, [{"file": "r.csv", "engine": "E", "kind": "throttle_steps"}],
-                         format="rcbenchmark")
-    run = load_campaign(manifest).runs[0]
-    np.testing.assert_allclose(read_run(run.path, vendor=run.vendor)["airspeed_m_s"], 10.0)
+    np.testing.assert_allclose(_read_vendor_rows(tmp_path, rows)["airspeed_m_s"], 10.0)
 
 
 @pytest.mark.parametrize(
