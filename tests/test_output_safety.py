@@ -679,3 +679,40 @@ def test_a_file_saved_at_an_output_while_the_command_ran_is_not_replaced(tmp_pat
     write_files_atomically({other: "first\n"})
     write_files_atomically({other: "second\n"})
     assert other.read_text() == "second\n"
+
+
+def _as_a_user() -> list[str]:
+    """The prefix that runs a command without root's right to write anywhere (the suite may
+    run as root, whom a folder's mode does not stop)."""
+    import shutil
+
+    if os.geteuid() != 0:
+        return []
+    setpriv = shutil.which("setpriv")
+    if setpriv is None:
+        pytest.skip("root without setpriv: a write-protected folder does not stop root")
+    return [setpriv, "--bounding-set=-dac_override,-dac_read_search,-fowner"]
+
+
+def test_a_write_protected_earlier_output_is_refused_not_left_as_a_hidden_copy(tmp_path):
+    """chmod 555 on an earlier export: the rerun put the new output in place, could not
+    remove the old one, and left `.exp.old-*` behind on every run, exit 0 (outside audit)."""
+    user = _as_a_user()
+
+    def run(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([*user, *TUFLEXPERF, *args], cwd=tmp_path, capture_output=True,
+                              text=True, timeout=300)
+
+    assert run("export", "--format", "json", "--out", "exp").returncode == 0
+    before = _tree(tmp_path / "exp")
+    (tmp_path / "exp").chmod(0o555)
+    try:
+        again = run("export", "--format", "json,c", "--out", "exp")
+        assert again.returncode == 2 and again.stderr.count("\n") == 1, again.stderr
+        assert "exp is write-protected" in again.stderr
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["exp"]  # no hidden copy
+        assert _tree(tmp_path / "exp") == before
+    finally:
+        (tmp_path / "exp").chmod(0o755)
+    assert run("export", "--format", "json,c", "--out", "exp").returncode == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["exp"]

@@ -564,6 +564,23 @@ def _refuse_unless_earlier_output(out: Path, shown: Path, command: str) -> None:
     _refuse_held(shown, [name for name in entries if name != MARKER and name not in hashes
                          and name not in listed],
                  f"which the earlier `tuflexperf {command}` did not write")
+    # its files are removed once the new output is in place: in a folder the user
+    # write-protected they cannot be, and every run left a hidden copy behind (audit)
+    folders = _folders_of(out, entries)
+    locked = next((f for f in folders if not os.access(f, os.W_OK | os.X_OK)), None)
+    if locked is not None:
+        where = "" if locked == out else f" ({locked.relative_to(out)})"
+        raise InputError(f"--out: {shown} is write-protected{where}: the earlier output "
+                         "cannot be removed to replace it; make it writable or choose "
+                         "another folder")
+
+
+def _folders_of(out: Path, entries: list[str]) -> list[Path]:
+    """``out`` and every folder under it that holds one of ``entries`` (relative paths)."""
+    found = {out}
+    for name in entries:
+        found.update(p for p in (out / name).parents if p == out or out in p.parents)
+    return sorted(found)
 
 
 def _refuse_held(folder: Path, names: list[str], why: str) -> None:
