@@ -716,3 +716,29 @@ def test_a_write_protected_earlier_output_is_refused_not_left_as_a_hidden_copy(t
         (tmp_path / "exp").chmod(0o755)
     assert run("export", "--format", "json,c", "--out", "exp").returncode == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["exp"]
+
+
+def test_a_copy_or_an_edit_of_a_written_csv_is_not_replaced(tmp_path) -> None:
+    """A CSV was taken for the tool's by its header alone: the user's corrected copy of a
+    thrust table, saved under another name, was replaced by the next fit (outside audit).
+    Each file the tool writes carries the sha256 of its bytes as an extended attribute."""
+    probe = tmp_path / "probe"
+    files.atomic_write_text(probe, "x\n")
+    if files.written_mark(probe) == files._UNKNOWN:
+        pytest.skip("this file system keeps no extended attributes")
+    manifest = str(ROOT / "data" / "tuflex" / "campaign" / "campaign.yaml")
+
+    def fit(table: str) -> subprocess.CompletedProcess[str]:
+        return _run(tmp_path, "fit", manifest, "--out", "f.yaml", "--table", table)
+
+    assert fit("t.csv").returncode == 0
+    assert fit("t.csv").returncode == 0  # its own output, as written: replaced
+    written = (tmp_path / "t.csv").read_bytes()
+    (tmp_path / "mine.csv").write_bytes(written + b"EDF1,0.5,10.0,1.0\n")  # a corrected copy
+    copied = fit("mine.csv")
+    assert copied.returncode == 2 and "was not written there by it" in copied.stderr
+    (tmp_path / "t.csv").write_bytes(written.replace(b"\n", b"\n", 1) + b"EDF1,0.5,10,1\n")
+    edited = fit("t.csv")
+    assert edited.returncode == 2 and "changed since" in edited.stderr
+    assert (tmp_path / "mine.csv").read_bytes().endswith(b"EDF1,0.5,10.0,1.0\n")
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []

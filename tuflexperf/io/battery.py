@@ -295,13 +295,13 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
                     f"{path}: {key}: {value:g}{unit}, but the pack model in `fit:` was fitted "
                     f"with {key} {with_fit:g}{unit}; fit it again (tuflexperf fit {path.name} "
                     f"--out ...){also}")
-        refuse_label_beyond_fitted(path, schema.capacity_ah, schema.fit.parameters.max_capacity_ah)
         fitted = schema.fit.parameters.max_capacity_ah
         if not 0.5 <= fitted / schema.capacity_ah <= 2.0:  # edited after the fit
             raise InputError(
                 f"{path}: capacity_ah: {schema.capacity_ah:g} Ah, but the pack model in `fit:` "
-                f"holds {fitted:.2f} Ah; fit it again (tuflexperf fit {path.name} --out ...)"
+                f"holds {fitted:.3g} Ah; fit it again (tuflexperf fit {path.name} --out ...)"
             )
+        refuse_label_beyond_fitted(path, schema.capacity_ah, fitted)
         # matched by position and name (a copied file may point at its runs another way);
         # the content is then checked by sha256 where the fit is used
         stored = [Path(r.file).name for r in schema.fit.runs]
@@ -361,7 +361,7 @@ def refuse_label_beyond_fitted(path: Path, capacity_ah: float, max_capacity_ah: 
     if capacity_ah > max_capacity_ah * (1.0 + 1e-9):
         raise InputError(
             f"{path}: capacity_ah: {capacity_ah:g} Ah is more than the fitted pack holds "
-            f"({max_capacity_ah:.2f} Ah, where the circuit fitted to its discharge runs "
+            f"({max_capacity_ah:.3g} Ah, where the circuit fitted to its discharge runs "
             "collapses); give what the pack holds, or fly a larger pack with --set "
             "battery.capacity_ah (the measured pack scaled)")
 

@@ -156,6 +156,35 @@ def _remove_folders(made: list[Path]) -> None:
             folder.rmdir()
 
 
+# Each single file the tool writes carries the sha256 of its bytes in an extended attribute:
+# metadata of the file itself (no second file), which a copy (`cp`) or an editor's new file
+# drops and an edit in place outdates. A later run replaces a CSV or PNG only as written (its
+# header alone let a user's edited copy be replaced; outside audit). Where the file system
+# keeps no extended attributes, how the file begins is all there is to go by.
+WRITTEN_XATTR = "user.tuflexperf.sha256"
+_UNKNOWN = "unknown"  # no extended attributes here: whether we wrote it cannot be told
+
+
+def _mark_written(path: str | Path, data: bytes) -> None:
+    """Give ``path`` the sha256 of ``data`` (its bytes) in :data:`WRITTEN_XATTR`, where the
+    platform and file system keep extended attributes."""
+    with contextlib.suppress(OSError, AttributeError):  # AttributeError: no os.setxattr
+        os.setxattr(path, WRITTEN_XATTR, hashlib.sha256(data).hexdigest().encode("ascii"))
+
+
+def written_mark(path: Path) -> str | None:
+    """The sha256 ``path`` was written with (:data:`WRITTEN_XATTR`), None where it has no
+    mark, or :data:`_UNKNOWN` where the file system keeps no extended attributes."""
+    import errno
+
+    try:
+        return os.getxattr(path, WRITTEN_XATTR).decode("ascii", "replace")
+    except AttributeError:  # a platform without os.getxattr
+        return _UNKNOWN
+    except OSError as exc:
+        return None if exc.errno == errno.ENODATA else _UNKNOWN
+
+
 def write_files_atomically(files: dict[Path, bytes | str]) -> None:
     """Write several files all-or-nothing: every temporary file first, then the renames.
 
@@ -180,10 +209,12 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
             fd, tmp = tempfile.mkstemp(prefix=f".{_short(current.name)}.", suffix=".tmp",
                                        dir=current.parent)
             staged.append((tmp, current))
+            raw = data.encode("utf-8") if isinstance(data, str) else data
             with os.fdopen(fd, "wb") as handle:
-                handle.write(data.encode("utf-8") if isinstance(data, str) else data)
+                handle.write(raw)
                 handle.flush()
                 os.fsync(handle.fileno())
+            _mark_written(tmp, raw)
             try:  # an earlier file keeps the mode the user gave it (a 0600 file stays so)
                 keep = stat.S_IMODE(current.stat().st_mode) if current.is_file() else mode
             except OSError:
@@ -412,6 +443,30 @@ def refuse_foreign_files(outputs: dict[str, Path], command: str,
                 f"{wanted}; refusing to replace it, choose another path")
         if found.endswith(" file"):  # fit's YAML: replaced only as fit wrote it
             _refuse_unsealed(flag, out, target)
+        else:
+            _refuse_unmarked(flag, out, target, found, writer)
+
+
+def _refuse_unmarked(flag: str, shown: Path, target: Path, found: str, writer: str) -> None:
+    """Refuse to replace a CSV or PNG at ``target`` unless it is as the tool wrote it there
+    (:func:`written_mark`; where the file system cannot say, its beginning was enough)."""
+    mark = written_mark(target)
+    if mark == _UNKNOWN:
+        return
+    if mark is None:
+        raise InputError(
+            f"{flag}: {shown} looks like a {found} of `tuflexperf {writer}` but was not written "
+            "there by it (a copy, a file saved anew, or an earlier version's output): whether "
+            "it is yours cannot be told; refusing to replace it, move it away or choose "
+            "another path")
+    try:
+        same = sha256_of(target) == mark
+    except OSError:
+        same = False
+    if not same:
+        raise InputError(
+            f"{flag}: {shown} was written by `tuflexperf {writer}` and changed since; refusing "
+            "to replace it, move it away or choose another path")
 
 
 def _refuse_unsealed(flag: str, shown: Path, target: Path) -> None:
