@@ -72,6 +72,10 @@ CASES = [
     # physics bounds found by an outside review (each was a PASS before): an obstacle above
     # 100 m was climbed at the field's gradient (15 km "passed"); cl_max 100 gave a 2 m roll
     ("aircraft", ["cl_max"], 100.0, "aircraft.yaml", "cl_max"),
+    # an unbounded value overflowed into a message naming no file or key (outside audit)
+    ("aircraft", ["takeoff", "cl_ground"], 1e308, "aircraft.yaml", "takeoff.cl_ground"),
+    ("propulsion", ["voltage_exponent"], 1000.0, "propulsion.yaml", "voltage_exponent"),
+    ("propulsion", ["reference_voltage_v"], 1e300, "propulsion.yaml", "reference_voltage_v"),
     ("requirements", ["takeoff", "obstacle_height_m"], 15000.0, "case.yaml",
      "requirements.takeoff.obstacle_height_m"),
     ("propulsion", ["model"], "poly33", "propulsion.yaml", "model"),

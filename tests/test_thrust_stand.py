@@ -176,6 +176,9 @@ def test_airspeed_column_units(tmp_path: Path) -> None:
         # the second thrust column was dropped and the first fitted, unremarked
         ("Time (s),ESC signal (µs),Thrust (kgf),Airspeed (m/s),Thrust (kgf)",
          "{t},1500,0.1,3,0.2", {}, r"'Thrust \(kgf\)' appears more than once"),
+        # the manifest's tunnel speed against the run's own column: it was dropped unsaid
+        ("Time (s),ESC signal (µs),Thrust (kgf),Airspeed (m/s)", "{t},1500,0.1,20",
+         {"airspeed_m_s": 25}, r"gives 20 m/s \(median\), the manifest's airspeed_m_s 25 m/s"),
         # one thrust in kgf, another in N that says something else: which is the thrust?
         ("Time (s),ESC signal (µs),Thrust (kgf),Airspeed (m/s),Thrust (N)",
          "{t},1500,0.1,3,0.2", {}, r"'Thrust \(kgf\)' and 'Thrust \(N\)' both give the "

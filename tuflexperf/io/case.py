@@ -48,9 +48,16 @@ MAX_CL_MAX = 5.0
 # Highest obstacle of the take-off [m]: the climb to it is flown at the field's density and
 # gradient (FAR 23/25: 15 m or 10.7 m)
 MAX_OBSTACLE_HEIGHT_M = 100.0
+# Highest pack voltage [V] a propulsion file may name (electric aircraft run up to ~800 V)
+MAX_REFERENCE_VOLTAGE_V = 1000.0
+# Largest exponent of thrust on the voltage ratio, either sign (2 by rpm ~ U; fit searches
+# -2..6)
+MAX_VOLTAGE_EXPONENT = 10.0
 
 class TakeoffSchema(StrictModel):
-    cl_ground: NonNegative
+    # the ground-roll attitude's lift coefficient is below the wing's most (cl_max's bound):
+    # 1e308 gave "the net force vanishes at nan m/s" (outside audit)
+    cl_ground: Annotated[float, Field(ge=0, le=MAX_CL_MAX)]
     rolling_friction: Annotated[float, Field(ge=0, le=1)] = 0.04
     liftoff_speed_m_s: Positive | None = None  # EAS; replaces the factor
     liftoff_speed_factor: Annotated[float, Field(ge=1, le=3)] = DEFAULT_LIFTOFF_SPEED_FACTOR
@@ -192,8 +199,11 @@ class PropulsionSchema(StrictModel):
     # the test day's air: a test stand or tunnel is on the ground (ISA 11 km is 0.36; the
     # coldest sea-level air ~1.5); 1e-9 scaled the thrust 1e9-fold into a PASS (outside audit)
     reference_density_kg_m3: Annotated[float, Field(ge=0.3, le=2.0)] | None = None
-    reference_voltage_v: Positive | None = None
-    voltage_exponent: float = DEFAULT_VOLTAGE_EXPONENT
+    # a pack of any aircraft a ducted fan flies, and thrust ~ U^2 (rpm ~ U); beyond these the
+    # powers of the voltage ratio overflowed with a message naming no key (outside audit)
+    reference_voltage_v: Annotated[float, Field(gt=0, le=MAX_REFERENCE_VOLTAGE_V)] | None = None
+    voltage_exponent: Annotated[float, Field(ge=-MAX_VOLTAGE_EXPONENT, le=MAX_VOLTAGE_EXPONENT)] = \
+        DEFAULT_VOLTAGE_EXPONENT
     fan_area_m2: Annotated[float, Field(gt=0.0, le=MAX_FAN_AREA_M2)] | None = None
     throttle_unit: Literal["fraction", "percent"] = "fraction"
     engines: Annotated[list[EngineSchema], Field(min_length=1)]

@@ -87,6 +87,10 @@ class VendorSettings:
 _HEADER = re.compile(r"^(?P<name>.*?)\s*[\(\[](?P<unit>[^\)\]]*)[\)\]]\s*$")
 
 
+AIRSPEED_AGREEMENT_M_S = 0.5
+"""A manifest's ``airspeed_m_s`` and a run's airspeed column agree within this [m/s] (or 5 %)."""
+
+
 def _split_header(cell: str) -> tuple[str, str]:
     """``"Thrust (kgf)"`` -> ``("thrust", "kgf")``; no unit -> ``(name, "")``."""
     text = " ".join(str(cell).replace("\ufeff", "").split())
@@ -256,6 +260,16 @@ def read_rcbenchmark(
                 f"(use one of {', '.join(SPEED_UNITS_M_S)})"
             )
         convert("airspeed_m_s", speed_raw, SPEED_UNITS_M_S[unit])
+        logged = columns.get("airspeed_m_s")
+        if settings.airspeed_m_s is not None and logged is not None and np.isfinite(logged).any():
+            # the column is read; a manifest speed it contradicts was dropped unsaid (audit)
+            median = float(np.nanmedian(logged))
+            if abs(median - settings.airspeed_m_s) > max(AIRSPEED_AGREEMENT_M_S,
+                                                          0.05 * abs(median)):
+                raise InputError(
+                    f"{path}: column {speed_raw!r} gives {median:.3g} m/s (median), the "
+                    f"manifest's airspeed_m_s {settings.airspeed_m_s:g} m/s{where}: which is "
+                    "it? drop one")
     elif settings.airspeed_m_s is not None:
         columns["airspeed_m_s"] = np.full(len(frame), float(settings.airspeed_m_s))
     else:
