@@ -305,6 +305,11 @@ def test_a_null_requirement_block_is_bad_input(tmp_path):
         result = runner.invoke(app, ["check", str(case)])
         assert result.exit_code == 2, result.output
         assert "requirements.takeoff: the requirement block is empty (null)" in result.stderr
+    # so is a bare `uncertainty:`, which turned the probabilistic check off unsaid (audit)
+    case.write_text(text + "uncertainty:\n")
+    result = runner.invoke(app, ["check", str(case)])
+    assert result.exit_code == 2, result.output
+    assert "uncertainty: the uncertainty block is empty (null)" in result.stderr
 
 
 def test_an_alias_bomb_in_the_propulsion_source_is_refused_at_once(tmp_path):

@@ -414,6 +414,16 @@ class CaseSchema(StrictModel):
     requirements: Requirements = Requirements()
     uncertainty: UncertaintySchema | None = None
 
+    @field_validator("uncertainty", mode="before")
+    @classmethod
+    def _no_null_uncertainty(cls, value: Any) -> Any:
+        # a bare `uncertainty:` turned the probabilistic check off without a word (outside
+        # audit), as an empty requirement block dropped the requirement
+        if value is None:
+            raise ValueError("the uncertainty block is empty (null): leave it out, or give "
+                             "its keys ({} for the defaults)")
+        return value
+
 
 # --- loaded objects -------------------------------------------------------------------------
 @dataclass(frozen=True)
