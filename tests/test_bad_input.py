@@ -564,3 +564,32 @@ def test_a_misspelt_key_of_the_right_kind_of_file_still_gets_its_closest_key(tmp
     mission = f"  mission: {{file: {tmp_path / 'm.yaml'}, min_landing_charge_fraction: 0.2}}\n"
     case.write_text(case.read_text() + mission)
     _assert_bad(runner.invoke(app, ["check", str(case)]), "did you mean 'segments'?")
+
+
+def test_small_hostile_leftovers_are_one_line_naming_the_flag_or_key(tmp_path, capsys):
+    """Outside audit: `--dask ''` ran locally unsaid; a 5000-digit --set value was echoed
+    whole; a campaign fan of 1e-300 m^2 was fitted; a table's 3e7 m/s airspeed was refused
+    as 'points that do not determine a surface'."""
+    from tuflexperf.cli import main
+
+    def refused(args: list[str]) -> str:
+        with pytest.raises(SystemExit) as done:
+            main(args)
+        assert done.value.code == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1, err
+        return err
+
+    assert "--dask: empty address" in refused(["check", "--samples", "50", "--dask", ""])
+    long = refused(["check", "--set", "aircraft.mass_kg=1" + "x" * 5000])
+    assert "not a number" in long and len(long) < 200
+    manifest = ROOT / "data" / "tuflex" / "campaign" / "campaign.yaml"
+    tiny = tmp_path / "campaign.yaml"
+    tiny.write_text(manifest.read_text().replace("fan_area_m2: 0.006793",
+                                                 "fan_area_m2: 1.0e-300", 1))
+    assert "fan_area_m2" in refused(["fit", str(tiny), "--out", str(tmp_path / "o.yaml")])
+    table = tmp_path / "t.csv"
+    rows = [f"E,{x},{v},{x}" for v in ("0", "10", "20", "3e7") for x in (0, 0.5, 1)]
+    table.write_text("engine,throttle,airspeed_m_s,thrust_n\n" + "\n".join(rows) + "\n")
+    assert "beyond the speed of sound" in refused(["fit", str(table), "--out",
+                                                   str(tmp_path / "t.yaml")])

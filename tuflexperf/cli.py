@@ -63,25 +63,35 @@ def parse_sets(sets: list[str] | None) -> dict[str, float]:
     """
     from tuflexperf.io.yamlio import ambiguous_number
 
+    def shown(text: str) -> str:  # a 5000-digit value was echoed whole (outside audit)
+        return repr(text if len(text) <= 60 else text[:57] + "...")
+
     values: dict[str, float] = {}
     for item in sets or []:
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
-            fail_input(f"--set: expected KEY=VALUE, got {item!r}")
+            fail_input(f"--set: expected KEY=VALUE, got {shown(item)}")
         odd = ambiguous_number(text)
         if odd is not None:  # as in the files: 020 was a limit of 16 (outside audit)
             fail_input(f"--set: {key}: {odd.problem()}")
         try:
             value = float(text)
         except ValueError:
-            fail_input(f"--set: {key}: not a number: {text!r}")
+            fail_input(f"--set: {key}: not a number: {shown(text)}")
         if not math.isfinite(value):
-            fail_input(f"--set: {key}: not a finite number: {text!r}")
+            fail_input(f"--set: {key}: not a finite number: {shown(text)}")
         if key.strip() in values:  # the last one won, silently (outside audit)
             fail_input(f"--set: {key.strip()} given twice ({values[key.strip()]:g} and "
                        f"{value:g}); give each key once")
         values[key.strip()] = value
     return values
+
+
+def refuse_empty_address(dask: str | None) -> None:
+    """``--dask ''`` ran locally without a word (outside audit): an address is needed."""
+    if dask is not None and not dask.strip():
+        fail_input("--dask: empty address; give the scheduler's tcp://HOST:PORT, or leave "
+                   "--dask out to run here")
 
 
 def output_file(value: str | None, flag: str) -> Path | None:
@@ -232,6 +242,7 @@ def check(
         # a check of nothing is no PASS: the blocks may all have been commented out
         fail_input(f"{case.path}: requirements: none stated, nothing to verify (give at least "
                    f"one of {', '.join(CHECKS)})")
+    refuse_empty_address(dask)
     sampling = samples is not None or case.uncertainty is not None
     for flag, value in (("--seed", seed), ("--workers", workers), ("--dask", dask)):
         if value is not None and not sampling:  # it would change nothing: say so
@@ -416,6 +427,7 @@ def sweep(
 
     if workers is not None and workers < 1:
         fail_input(f"--workers: must be at least 1, got {workers}")
+    refuse_empty_address(dask)
     csv_out, plot = output_file(csv_text, "--csv"), output_file(plot_text, "--plot")
     case, axes = _sweep_case(case_file, sets, vary)
     outputs = {flag: target for flag, target in (("--csv", csv_out), ("--plot", plot))

@@ -144,8 +144,8 @@ class BatterySchema(StrictModel):
             # LiPo/Li-ion nominal is 3.6-3.85 V per cell; anything else is a typo in one key.
             if not 3.0 <= per_cell <= 4.2:
                 raise ValueError(
-                    f"nominal_voltage_v: {self.nominal_voltage_v} V is {per_cell:.2f} V per cell "
-                    f"for {self.cells_in_series} cells (expected 3.0-4.2)"
+                    f"nominal_voltage_v: {self.nominal_voltage_v:.4g} V is {per_cell:.3g} V per "
+                    f"cell for {self.cells_in_series} cells (expected 3.0-4.2)"
                 )
         return self
 

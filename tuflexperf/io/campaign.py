@@ -36,6 +36,7 @@ from tuflexperf.errors import InputError
 from tuflexperf.io.files import same_file, why_not_a_file
 from tuflexperf.io.vendor import VendorSettings
 from tuflexperf.io.yamlio import FileName, Name, StrictModel, load_model
+from tuflexperf.models.thrust import MAX_FAN_AREA_M2, MIN_FAN_AREA_M2
 
 Positive = Annotated[float, Field(gt=0)]
 RunKind = Literal["throttle_steps", "sine_sweep", "drag_sweep", "endurance"]
@@ -93,8 +94,10 @@ class FilterSettings(StrictModel):
 class CampaignSchema(ThrustStandKeys):
     file_kind: ClassVar[str] = "campaign"  # named when another kind of file is given
     name: Annotated[Name, Field(min_length=1)]
-    fan_area_m2: Positive
-    tunnel_area_m2: Positive
+    # a fan of 3.6 mm to a tunnel of 100 m x 100 m: 1e-300 m^2 was fitted with a figure of
+    # merit 130 digits long (outside audit)
+    fan_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=MAX_FAN_AREA_M2)]
+    tunnel_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=1.0e4)]
     # a tunnel's air: from a hot day at altitude to a cold pressurised one (0.01 scaled
     # the fitted thrust x122 as the reference density and let everything pass)
     air_density_kg_m3: Annotated[float, Field(ge=0.3, le=2.0)] | None = None

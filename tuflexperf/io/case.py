@@ -28,6 +28,7 @@ from tuflexperf.models.thrust import (
     DEFAULT_VOLTAGE_EXPONENT,
     MAX_DELAY_S,
     MAX_FAN_AREA_M2,
+    MIN_FAN_AREA_M2,
     POLY22_TERMS,
     Engine,
     Propulsion,
@@ -204,7 +205,7 @@ class PropulsionSchema(StrictModel):
     reference_voltage_v: Annotated[float, Field(gt=0, le=MAX_REFERENCE_VOLTAGE_V)] | None = None
     voltage_exponent: Annotated[float, Field(ge=-MAX_VOLTAGE_EXPONENT, le=MAX_VOLTAGE_EXPONENT)] = \
         DEFAULT_VOLTAGE_EXPONENT
-    fan_area_m2: Annotated[float, Field(gt=0.0, le=MAX_FAN_AREA_M2)] | None = None
+    fan_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=MAX_FAN_AREA_M2)] | None = None
     throttle_unit: Literal["fraction", "percent"] = "fraction"
     engines: Annotated[list[EngineSchema], Field(min_length=1)]
     source: dict[str, Any] | None = None  # free-form provenance written by `fit`

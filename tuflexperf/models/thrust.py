@@ -22,6 +22,9 @@ of ms (the paper's 0.05 s), and the shortest throttle plateau a run may hold is 
 MAX_FAN_AREA_M2 = 10.0
 """The largest fan (or rotor disc) area [m^2] a model may name: a 3.5 m rotor; 4342 was an
 area in mm^2 (outside audit)."""
+MIN_FAN_AREA_M2 = 1.0e-5
+"""The smallest fan area [m^2] a model or campaign may name: a 3.6 mm fan (1e-300 gave a
+figure of merit 130 digits long; outside audit)."""
 DeadEngineMode = Literal["windmilling", "zero"]
 
 
