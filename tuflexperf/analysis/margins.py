@@ -229,8 +229,8 @@ def solve_margins(case: Case) -> list[Margin]:
     nominal = margin_parameters(case)
     limits = limit_values(case, nominal)
     slopes = sensitivities(case, list(nominal))
-    # where each answer extrapolates the thrust model: the nominal (row 0), then every
-    # finite limit value with the other parameters nominal, in one batch
+    # where each answer extrapolates the thrust model: every finite limit value with the
+    # other parameters nominal (one batch), and the nominal
     found = [(name, key, limit) for (name, key), (limit, _, _) in limits.items()
              if limit is not None]
     evaluator = BatchEvaluator(case)
