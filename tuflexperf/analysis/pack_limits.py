@@ -402,6 +402,14 @@ def with_packs(case: Case, what: str, speeds: np.ndarray, throttle: np.ndarray,
                      f"{f', least {least:.1f} V' if np.isfinite(least) else ''}: thrust x (U/"
                      f"{case.propulsion.reference_voltage_v:g} V)^"
                      f"{case.propulsion.voltage_exponent:g}")
+    measured = side.battery.measured_cutoff_v
+    flown_v = on.voltage_v[np.isfinite(on.throttle) & np.isfinite(on.voltage_v)]
+    if flown_v.size and float(flown_v.min()) < measured * (1.0 - 1e-9):
+        # a cut-off below the runs' lets the packs fly voltages no run measured (a file's
+        # 3.0 V/cell turned trim on 3 Ah packs from FAIL into PASS at 40.66 V; outside audit)
+        notes.append(f"{what}: the packs fly down to {float(flown_v.min()):.2f} V, below the "
+                     f"discharge runs' cut-off {measured:.2f} V: the pack model is "
+                     "extrapolated there")
     changed = on.any_beyond or not np.allclose(on.throttle, throttle, rtol=0.0, atol=1e-12,
                                                 equal_nan=True)
     if not changed:

@@ -104,10 +104,10 @@ class BatteryFitSchema(StrictModel):
     # refused, since a relabelled file counted its reserve on charge the pack does not give
     # while --set flew it scaled (outside audit; absent in files written before it)
     capacity_ah: Positive | None = None
-    # likewise the pack's cells and cut-off: the circuit is the fitted pack's and the runs
-    # end at its cut-off, so a file relabelled 10S (a 34 V cut-off on the 12S circuit) or to
-    # a lower cut-off flew voltages no run measured, where fit itself refuses it (outside
-    # audit; absent in files written before it)
+    # likewise the pack's cells: the circuit is the fitted pack's, and a file relabelled 10S
+    # flew a 34 V cut-off on the 12S circuit, voltages no run measured, where fit refuses it
+    # (outside audit); and the cut-off its runs end at: a lower one flies the pack model
+    # below what they measured, which is said (absent in files written before them)
     cells_in_series: Annotated[int, Field(ge=1)] | None = None
     cutoff_voltage_per_cell_v: Positive | None = None
     parameters: PackParametersSchema
@@ -200,6 +200,16 @@ class Battery:
                                       self.as_read.capacity_ah))
 
     @property
+    def measured_cutoff_v(self) -> float:
+        """The pack voltage [V] the discharge runs end at: the cut-off they were fitted with
+        (the file's, in a fit block from before it was recorded). Below it the pack model is
+        extrapolated."""
+        read = self.as_read
+        fitted = read.fitted.cutoff_voltage_per_cell_v if read.fitted is not None else None
+        return self.cells_in_series * (fitted if fitted is not None
+                                       else read.cutoff_voltage_per_cell_v)
+
+    @property
     def title(self) -> str:
         """The pack's name, with its capacity where that is not the file's (a what-if)."""
         measured = self.as_read.capacity_ah
@@ -217,13 +227,11 @@ class Battery:
                       f"scaled (it flies as {self.circuit_packs:.3g} measured packs per fan: "
                       "charge x the ratio, resistance / the ratio); no run measured a pack of "
                       "this size, and the aircraft's mass is as given",)
-        runs_cutoff = self.as_read.cutoff_voltage_v
+        runs_cutoff = self.measured_cutoff_v
         if self.cutoff_voltage_v < runs_cutoff * (1.0 - 1e-9):
-            # the discharge runs end at the file's cut-off: below it the pack model is
-            # extrapolated (SPEC: extrapolation is said)
             notes += (f"cutoff_voltage_per_cell_v {self.cutoff_voltage_per_cell_v:g} V: the "
-                      f"discharge runs were measured down to the file's cut-off "
-                      f"{runs_cutoff:.2f} V; below it the pack model is extrapolated",)
+                      f"discharge runs were measured down to their cut-off {runs_cutoff:.2f} "
+                      "V; below it the pack model is extrapolated",)
         return notes
 
 
@@ -284,17 +292,12 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
                 f"{path.name} --out ...), or keep {fitted_with:g} Ah in the file and fly another "
                 f"size with --set battery.capacity_ah={schema.capacity_ah:g}"
             )
-        for key, value, unit in (("cells_in_series", schema.cells_in_series, ""),
-                                 ("cutoff_voltage_per_cell_v", schema.cutoff_voltage_per_cell_v,
-                                  " V")):
-            with_fit = getattr(schema.fit, key)
-            if with_fit is not None and not math.isclose(with_fit, value, rel_tol=1e-9):
-                also = (f", or keep {with_fit:g} in the file and fly another with --set "
-                        f"battery.{key}={value:g}" if key != "cells_in_series" else "")
-                raise InputError(
-                    f"{path}: {key}: {value:g}{unit}, but the pack model in `fit:` was fitted "
-                    f"with {key} {with_fit:g}{unit}; fit it again (tuflexperf fit {path.name} "
-                    f"--out ...){also}")
+        fitted_cells = schema.fit.cells_in_series
+        if fitted_cells is not None and fitted_cells != schema.cells_in_series:
+            raise InputError(
+                f"{path}: cells_in_series: {schema.cells_in_series}, but the pack model in "
+                f"`fit:` was fitted with cells_in_series {fitted_cells}; fit it again "
+                f"(tuflexperf fit {path.name} --out ...)")
         fitted = schema.fit.parameters.max_capacity_ah
         if not 0.5 <= fitted / schema.capacity_ah <= 2.0:  # edited after the fit
             raise InputError(
