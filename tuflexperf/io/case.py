@@ -337,6 +337,13 @@ class MissionRequirement(StrictModel):
     min_landing_charge_fraction: Annotated[float, Field(ge=0, lt=1)] = 0.2
 
 
+def refuse_null_block(value: Any, what: str, hint: str) -> Any:
+    """``value`` unless it is null (a bare ``key:``), which drops a block without a word."""
+    if value is None:
+        raise ValueError(f"{what} is empty (null): leave it out, or give its keys{hint}")
+    return value
+
+
 class Requirements(StrictModel):
     takeoff: TakeoffRequirement | None = None
     envelope: EnvelopeRequirement | None = None
@@ -349,10 +356,7 @@ class Requirements(StrictModel):
     def _no_null_block(cls, value: Any) -> Any:
         # `takeoff: null` (or a bare `takeoff:`) dropped the requirement without a word, and
         # check passed without it (outside audit): leave a block out, or give its keys
-        if value is None:
-            raise ValueError("the requirement block is empty (null): leave it out, or give "
-                             "its keys")
-        return value
+        return refuse_null_block(value, "the requirement block", "")
 
 
 class DistributionSchema(StrictModel):
@@ -420,10 +424,7 @@ class CaseSchema(StrictModel):
     def _no_null_uncertainty(cls, value: Any) -> Any:
         # a bare `uncertainty:` turned the probabilistic check off without a word (outside
         # audit), as an empty requirement block dropped the requirement
-        if value is None:
-            raise ValueError("the uncertainty block is empty (null): leave it out, or give "
-                             "its keys ({} for the defaults)")
-        return value
+        return refuse_null_block(value, "the uncertainty block", " ({} for the defaults)")
 
 
 # --- loaded objects -------------------------------------------------------------------------
