@@ -36,7 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from tuflexperf.analysis.batch import BatchEvaluator, present_requirements
+from tuflexperf.analysis.batch import present_requirements
+from tuflexperf.analysis.uncertainty import evaluator_for
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.io.dotted import numeric_keys
@@ -135,7 +136,7 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
     """(requirement, parameter) -> (limit value, how it binds, search range); see module doc."""
     nominal = parameters or margin_parameters(case)
     keys = list(nominal)
-    evaluator = BatchEvaluator(case)
+    evaluator = evaluator_for(case)  # one per case: its candidates once
     ranges = {k: parameter_range(k, nominal[k]) for k in keys}
     with np.errstate(over="ignore", invalid="ignore"):  # 2 x 1e308 is inf: not attainable
         grids = [np.unique(np.concatenate([np.linspace(*ranges[k], _SCAN_POINTS),
@@ -229,16 +230,15 @@ def solve_margins(case: Case) -> list[Margin]:
     nominal = margin_parameters(case)
     limits = limit_values(case, nominal)
     slopes = sensitivities(case, list(nominal))
-    # where each answer extrapolates the thrust model: every finite limit value with the
-    # other parameters nominal (one batch), and the nominal
+    # where each answer extrapolates the thrust model, in one batch: every finite limit
+    # value with the other parameters nominal, then the nominal itself (its first key set to
+    # its own value)
     found = [(name, key, limit) for (name, key), (limit, _, _) in limits.items()
              if limit is not None]
-    evaluator = BatchEvaluator(case)
-    at = evaluator.evaluate(
-        _rows_pairs(nominal, [(None, key) for _, key, _ in found],
-                    np.array([limit for *_, limit in found])) if found else {},
-        size=len(found) or 1).extrapolated
-    nominal_at = evaluator.evaluate().extrapolated
+    first = next(iter(nominal))
+    at = evaluator_for(case).evaluate(_rows_pairs(
+        nominal, [(None, key) for _, key, _ in found] + [(None, first)],
+        np.array([limit for *_, limit in found] + [nominal[first]]))).extrapolated
     beyond = {(name, key): bool(at[name][i]) for i, (name, key, _) in enumerate(found)}
     margins = []
     for requirement in requirements:
@@ -255,7 +255,7 @@ def solve_margins(case: Case) -> list[Margin]:
                 search_range=search,
                 binds=binds,
                 extrapolated=beyond.get((requirement.name, key)),
-                extrapolated_at_nominal=bool(nominal_at[requirement.name][0]),
+                extrapolated_at_nominal=bool(at[requirement.name][-1]),
             ))
     return margins
 
@@ -320,7 +320,7 @@ def tornado(case: Case, requirement: str, relative_change: float = 0.1) -> Torna
     Tornado
         For the report's tornado figure (``report/`` draws it; nothing is computed there).
     """
-    evaluator = BatchEvaluator(case)
+    evaluator = evaluator_for(case)  # one per case: its candidates once
     nominal = margin_parameters(case)
     offsets = {"atmosphere.temperature_offset_k": 10.0, "atmosphere.altitude_m": 500.0}
     keys = [k for k in nominal if nominal[k] != 0.0 or k in offsets]
