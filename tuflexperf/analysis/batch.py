@@ -61,7 +61,6 @@ from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     EAS_REFERENCE_DENSITY_KG_M3,
     MAX_AIRSPEED_M_S,
-    TRANSITION_SPEED_OVER_STALL,
     Aircraft,
     catapult_energy_shortfall,
     climb_gradient,
@@ -397,8 +396,7 @@ class BatchEvaluator:
 
         def airborne_beyond(launch: tuple[Array, Array, Array, Array]) -> NDArray[np.bool_]:
             # as solve_takeoff: the lift-off speed (a runway's) and the arc's 1.15 V_stall
-            outside = outside_tested_range(
-                propulsion, TRANSITION_SPEED_OVER_STALL * stall_speed(model))
+            outside = outside_tested_range(propulsion, model.transition_speed())
             if not catapult:
                 outside = outside | outside_tested_range(propulsion, launch[2])
             return np.asarray(outside, dtype=bool)
@@ -617,6 +615,11 @@ class _Model:
     release: Any = None
     # the arc and climb to the obstacle on sagging packs [m] (batch_takeoff_packs)
     packs_airborne: Array | None = None
+
+    def transition_speed(self) -> Array:
+        """The take-off arc's true airspeed [m/s] per row ``(B,)``: 1.15 V_stall."""
+        return np.asarray(transition_speed_m_s(self.aircraft, self.density),
+                          dtype=float).reshape(-1) * np.ones(self.size)
 
     def least_airspeed(self) -> Array:
         """Least level-flight airspeed [m/s] per row: stall x the envelope's margin (SPEC 3)."""
@@ -861,8 +864,7 @@ class _Model:
 
         release = np.asarray(true_airspeed_m_s(self.aircraft.launch_speed_m_s, self.density),
                              dtype=float).reshape(-1) * np.ones(self.size)
-        v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
-                          dtype=float).reshape(-1) * np.ones(self.size)
+        v_tr = self.transition_speed()
 
         def forces(speed: Array) -> tuple[Array, Array | None]:
             drag = np.asarray(level_flight_drag_n(self.aircraft, speed, self.density),
@@ -911,8 +913,7 @@ class _Model:
         from tuflexperf.analysis.takeoff import HISTORY_POINTS
 
         prop = self.propulsion
-        v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
-                          dtype=float).reshape(-1, 1) * np.ones((self.size, 1))
+        v_tr = self.transition_speed()[:, None]
         airborne = self.airborne_m(height)
         airborne = np.where(np.isfinite(airborne), airborne, 0.0)
         seconds = np.nan_to_num(roll[1]) + airborne / v_tr[:, 0]
@@ -946,8 +947,7 @@ class _Model:
         model's thrust (as :func:`solve_takeoff`)."""
         if self.packs_airborne is not None:
             return self.packs_airborne
-        v_tr = np.asarray(transition_speed_m_s(self.aircraft, self.density),
-                          dtype=float).reshape(-1, 1) * np.ones((self.size, 1))
+        v_tr = self.transition_speed()[:, None]
         radius = transition_radius_m(v_tr, self.aircraft.takeoff.transition_load_factor)
         gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
         arc, climb, _ = obstacle_distances_m(radius, gradient, height)

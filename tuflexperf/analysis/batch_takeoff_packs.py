@@ -40,7 +40,6 @@ from tuflexperf.models.aircraft import (
     ground_roll_net_force_n,
     obstacle_distances_m,
     transition_radius_m,
-    transition_speed_m_s,
 )
 from tuflexperf.models.battery import SECONDS_PER_HOUR
 
@@ -153,8 +152,7 @@ def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
     charge after the roll and rotation (a catapult's release acceleration), as
     :func:`tuflexperf.analysis.takeoff.solve_takeoff`; ``inf`` where never cleared."""
     flight = _flight(m, packs, rows)
-    v_tr = np.asarray(transition_speed_m_s(m.aircraft, m.density), dtype=float).reshape(-1) \
-        * np.ones(m.size)
+    v_tr = m.transition_speed()
     radius = np.asarray(transition_radius_m(v_tr.reshape(-1, 1),
                                             m.aircraft.takeoff.transition_load_factor),
                         dtype=float).reshape(-1) * np.ones(m.size)
