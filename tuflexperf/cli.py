@@ -1231,7 +1231,8 @@ def repeated_option(params: Iterable[Any], args: list[str]) -> tuple[Any, list[s
     once, with the values given, or None (click keeps the last silently: `--throttle 0.5
     --throttle 0.6` flew 0.6; outside audit). A flag said twice means the same: allowed."""
     by_name = {name: p for p in params if getattr(p, "param_type_name", "") == "option"
-               and not p.multiple and not p.count for name in (*p.opts, *p.secondary_opts)}
+               and not (p.multiple or p.count or p.is_flag)
+               for name in (*p.opts, *p.secondary_opts)}
     seen: dict[str, list[str]] = {}
     tokens = iter(args)
     for token in tokens:
@@ -1239,9 +1240,7 @@ def repeated_option(params: Iterable[Any], args: list[str]) -> tuple[Any, list[s
             break
         name, equals, value = token.partition("=")
         option = by_name.get(name if name.startswith("--") else token)
-        if option is None:
-            continue
-        if option.is_flag:
+        if option is None:  # an argument, a flag, or an option that repeats
             continue
         if not equals:
             value = next(tokens, "")

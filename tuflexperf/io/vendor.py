@@ -187,12 +187,10 @@ def read_rcbenchmark(
 
     def _same_quantity(raw: str, other: str, units: dict[str, float] | None) -> None:
         both = f"columns {raw!r} and {other!r} both give the {headers[raw][0]}"
-        first, second = pd.to_numeric(frame[raw], errors="coerce"), pd.to_numeric(
-            frame[other], errors="coerce")
         if units is None or headers[raw][1] not in units or headers[other][1] not in units:
             raise InputError(f"{path}: {both}; keep one{where}")
-        a = first.to_numpy(dtype=float) * units[headers[raw][1]]
-        b = second.to_numpy(dtype=float) * units[headers[other][1]]
+        a, b = (pd.to_numeric(frame[c], errors="coerce").to_numpy(dtype=float)
+                * units[headers[c][1]] for c in (raw, other))
         scale = max(float(np.nanmax(np.abs(a), initial=0.0)), 1e-12)
         gap = np.abs(a - b)
         # a vendor logging one quantity in two units rounds each: a part in 1000 of the range

@@ -345,14 +345,14 @@ def _decimal_hint(value: str) -> str:
 _FILE_SCHEMA_MODULES = ("case", "battery", "mission", "campaign", "proptables")
 
 
-def _file_schemas(base: type[BaseModel] = StrictModel) -> list[type[BaseModel]]:
+def _file_schemas() -> list[type[BaseModel]]:
     """The schemas of whole files (a ``file_kind``)."""
     import importlib
 
     for module in _FILE_SCHEMA_MODULES:
         importlib.import_module(f"tuflexperf.io.{module}")
     found = []
-    pending = list(base.__subclasses__())
+    pending = list(StrictModel.__subclasses__())
     while pending:
         cls = pending.pop()
         pending.extend(cls.__subclasses__())
