@@ -60,3 +60,35 @@ def test_numpy_overflow_warnings_stay_off_the_screen():
                            "aircraft.mass_kg=80"], capture_output=True, text=True)
     assert done.returncode in (0, 1), done.stderr
     assert "RuntimeWarning" not in done.stderr and "Traceback" not in done.stderr
+
+
+def _fake_pydantic_plugin(root, marker):
+    """A distribution on ``root`` whose pydantic plugin, once loaded, writes ``marker``."""
+    (root / "fakeplug.py").write_text(
+        f"open({str(marker)!r}, 'w').close()\n"
+        "class _Plugin:\n"
+        "    def new_schema_validator(self, *args, **kwargs):\n"
+        "        return None, None, None\n"
+        "plugin = _Plugin()\n")
+    info = root / "fakeplug-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: fakeplug\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text("[pydantic]\nfake = fakeplug:plugin\n")
+
+
+@pytest.mark.parametrize(("setting", "loaded"), [(None, False), ("someone_else", True)])
+def test_pydantic_plugins_stay_out_unless_the_user_asks(tmp_path, setting, loaded):
+    """pydantic scans every installed distribution for plugins on the first schema it
+    builds (~12 ms of each `check`); the tool turns that off, keeping the user's setting."""
+    import os
+
+    marker = tmp_path / "plugin_loaded"
+    _fake_pydantic_plugin(tmp_path, marker)
+    env = {k: v for k, v in os.environ.items() if k != "PYDANTIC_DISABLE_PLUGINS"}
+    env["PYTHONPATH"] = os.pathsep.join([str(tmp_path), *sys.path[1:]])
+    if setting is not None:
+        env["PYDANTIC_DISABLE_PLUGINS"] = setting
+    done = subprocess.run([sys.executable, "-m", "tuflexperf", "check", "--json"],
+                          capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stderr
+    assert marker.exists() is loaded
