@@ -787,7 +787,7 @@ def mission(
 ) -> None:
     """Fly a mission with the battery model; charge at landing against the reserve."""
     from tuflexperf.analysis.mission import solve_mission
-    from tuflexperf.analysis.requirements import mission_path
+    from tuflexperf.analysis.requirements import mission_path, mission_verdicts
     from tuflexperf.io.mission import load_mission
 
     csv = output_file(csv_text, "--csv")
@@ -841,16 +841,14 @@ def mission(
                 f"{s.end_altitude_m:8.0f}{eas:>8}{sum(s.charge_ah):10.3f}"
                 f"{sum(s.energy_wh):10.1f}{s.min_voltage_v:8.2f}{thr:>8}"
             )
-        if result.solved is not None:
-            ends = result.solved.get("ends_at", "landing reserve")
-            typer.echo(f"  solved: longest {result.solved['segment']} "
-                       f"{result.solved['time_min']:.2f} min "
-                       + ("that lands on the reserve" if ends == "landing reserve"
-                          else "before the pack's cut-off voltage"))
         for note in result.warnings:  # the JSON's "warnings": said in the text too
             typer.echo(f"  note: {note}")
-        verdict = "PASS" if result.passed else "FAIL"
-        typer.echo(f"  {result.reason}  {verdict}")
+        landing, *solved = mission_verdicts(result)
+        typer.echo(f"  {result.reason}  {'PASS' if landing.passed else 'FAIL'}")
+        for verdict in solved:  # solve_for: the longest segment against the file's own
+            value = "not attainable" if verdict.value is None else f"{verdict.value:.2f} min"
+            typer.echo(f"  solve_for: {value}, {verdict.reason}  "
+                       f"{'PASS' if verdict.passed else 'FAIL'}")
         if csv is not None:
             typer.echo(f"  wrote {csv}")
     raise typer.Exit(0 if result.passed else 1)

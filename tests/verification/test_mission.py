@@ -873,3 +873,68 @@ def test_a_mission_that_ends_in_the_air_says_it_did_not_land(tmp_path, last, sai
     assert bool(notes) is said
     if said:
         assert "ends 100 m above the field" in notes[0]
+
+
+def _case_with_mission(tmp_path: Path, mission_text: str, reserve: float = 0.2) -> Path:
+    """The shipped case, its only requirement the mission ``mission_text`` (a file beside)."""
+    import yaml
+
+    case = copy_shipped_case(tmp_path)
+    (case.parent / "planned.yaml").write_text(textwrap.dedent(mission_text))
+    data = yaml.safe_load(case.read_text())
+    data["requirements"] = {"mission": {"file": "planned.yaml",
+                                        "min_landing_charge_fraction": reserve}}
+    case.write_text(yaml.safe_dump(data, sort_keys=False))
+    return case
+
+
+PLANNED = """\
+    name: planned
+    segments:
+      - {type: takeoff}
+      - {type: climb, to_altitude_m: 100, airspeed_m_s: 20, throttle: 1.0}
+      - {type: cruise, airspeed_m_s: 26, CRUISE}
+      - {type: engine_failure, engine: EDF2}
+      - {type: loiter, airspeed_m_s: 20, time_min: LOITER}
+      - {type: descent, to_altitude_m: 0, airspeed_m_s: 20, throttle: 0.1}
+"""
+
+
+@pytest.mark.parametrize(("cruise", "loiter", "fits"), [
+    ("time_min: 8", 12.2, False), ("time_min: 8", 2, True), ("distance_km: 5", 2, True),
+    ("distance_km: 13", 12.2, False),
+])
+def test_check_holds_a_solved_mission_to_the_time_its_file_plans(
+        tmp_path: Path, cruise: str, loiter: float, fits: bool) -> None:
+    """With solve_for the flown mission lands on the reserve by construction: check passed
+    a cruise planned at 8 min whose longest is 0.47 min, and never showed the 0.47 (outside
+    audit). The plan's verdict is now that of the same file without solve_for."""
+    from typer.testing import CliRunner
+
+    from tuflexperf.cli import app
+
+    plan = PLANNED.replace("CRUISE", cruise).replace("LOITER", str(loiter))
+    solved_case = _case_with_mission(tmp_path / "solved", plan + "    solve_for: cruise\n")
+    plain_case = _case_with_mission(tmp_path / "plain", plan)
+    runner = CliRunner()
+    out = runner.invoke(app, ["check", "--json", "--case", str(solved_case)])
+    results = {r["name"]: r for r in json.loads(out.stdout)["results"]}
+    assert set(results) == {"mission_landing_charge", "mission_solved_time"}
+    solved = results["mission_solved_time"]
+    flown = json.loads(runner.invoke(app, ["mission", "--json", "--case", str(solved_case)]).stdout)
+    written = 8.0 if cruise == "time_min: 8" else None
+    if written is None:  # a distance: its time at the segment's true airspeed (26 m/s EAS)
+        km = float(cruise.split(":")[1])
+        written = 1000.0 * km / float(true_airspeed_m_s(26.0, isa_density_kg_m3(100.0))) / 60.0
+        assert flown["solved"]["written_distance_km"] == km
+    assert solved["limit"] == pytest.approx(written, rel=1e-12)
+    assert solved["value"] == pytest.approx(flown["solved"]["time_min"], rel=1e-12)
+    assert solved["passed"] is fits and json.loads(out.stdout)["passed"] is fits
+    assert out.exit_code == (0 if fits else 1)
+    # the mission command gives the same verdict, and the file as written agrees with both
+    assert flown["passed"] is fits
+    plain = json.loads(runner.invoke(app, ["check", "--json", "--case", str(plain_case)]).stdout)
+    assert plain["passed"] is fits
+    text = runner.invoke(app, ["mission", "--case", str(solved_case)]).stdout
+    assert f"solve_for: {flown['solved']['time_min']:.2f} min" in text
+    assert text.rstrip().endswith("PASS" if fits else "FAIL")

@@ -17,6 +17,7 @@ from tuflexperf.errors import NotAttainable
 from tuflexperf.io.case import Case
 
 if TYPE_CHECKING:
+    from tuflexperf.analysis.mission import MissionResult
     from tuflexperf.analysis.study import Study
 
 MARGIN_TOLERANCE = 1e-12
@@ -242,17 +243,38 @@ def endurance_verdict(requirement: Any, result: Any) -> Verdict:
     )
 
 
-def _mission(study: Study) -> Verdict:
+def _mission(study: Study) -> Verdict | list[Verdict]:
     limit = study.case.requirements.mission.min_landing_charge_fraction
     try:
         result = study.mission()
     except NotAttainable as exc:
         return Verdict("mission_landing_charge", None, limit, "fraction", "min", str(exc))
+    return mission_verdicts(result)
+
+
+def mission_verdicts(result: MissionResult) -> list[Verdict]:
+    """A flown mission's verdicts: the landing charge against the reserve, and with
+    ``solve_for`` the longest time of that segment against the file's own (the solved flight
+    lands on the reserve by construction: alone it passed a plan that cannot be flown)."""
     value = result.landing_charge_fraction if result.attainable else None
-    return Verdict(
-        "mission_landing_charge", value, limit, "fraction", "min",
-        f"{result.name}: {result.reason}", {"warnings": list(result.warnings)},
-    )
+    verdicts = [Verdict(
+        "mission_landing_charge", value, result.min_landing_charge_fraction, "fraction",
+        "min", f"{result.name}: {result.reason}", {"warnings": list(result.warnings)},
+    )]
+    solved = result.solved
+    if solved is not None:
+        segment, written = solved["segment"], solved["written_time_min"]
+        planned = (f"{solved['written_distance_km']:g} km ({written:.2f} min)"
+                   if "written_distance_km" in solved else f"{written:g} min")
+        bound = ("that lands on the reserve" if solved.get("ends_at") != "cut-off"
+                 else "before the packs' cut-off")
+        verdicts.append(Verdict(
+            "mission_solved_time", solved["time_min"] if result.attainable else None, written,
+            "min", "min",
+            f"the longest {segment} (segment {solved['index'] + 1}) {bound}, against the "
+            f"{planned} the mission file plans",
+        ))
+    return verdicts
 
 
 def mission_path(case: Case) -> Any:

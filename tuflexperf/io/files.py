@@ -304,7 +304,7 @@ MISSION_CSV_ENGINE_COLUMNS = ("current_a", "voltage_v", "charge_ah", "charge_fra
                               "power_w", "energy_wh")  # each + "_<engine>", per engine
 REQUIREMENT_NAMES = frozenset({  # check's result names (analysis/requirements.py)
     "takeoff_ground_roll", "takeoff_distance_to_obstacle", "trim_throttle_max",
-    "oei_min_throttle", "flight_endurance", "mission_landing_charge",
+    "oei_min_throttle", "flight_endurance", "mission_landing_charge", "mission_solved_time",
 })
 PNG_SOFTWARE = "tuflexperf"  # the PNG text chunk 'Software' of a report page: + " VERSION"
 SWEEP_PNG_SOFTWARE = "tuflexperf sweep"  # ... and of sweep's carpet plot

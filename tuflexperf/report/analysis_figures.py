@@ -487,8 +487,12 @@ def mission(case: Case, analyses: Analyses) -> Any:
     if verdict is not None:
         outcome += f" ({'PASS' if verdict.passed else 'FAIL'})"
     if result.solved is not None:
+        solved = _verdict(analyses, "mission_solved_time")
         outcome += (f"; solved: longest {result.solved['segment']} "
-                    f"{result.solved['time_min']:.2f} min")
+                    f"{result.solved['time_min']:.2f} min, planned "
+                    f"{result.solved['written_time_min']:.2f} min")
+        if solved is not None:
+            outcome += f" ({'PASS' if solved.passed else 'FAIL'})"
     fig.suptitle(textwrap.fill(f"Mission '{result.name}' of {case.name}: {outcome}", 150),
                  fontsize=11)
     return fig
