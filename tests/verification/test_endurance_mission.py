@@ -240,3 +240,23 @@ def test_best_endurance_and_range_equal_a_fine_scan() -> None:
     # and no scanned airspeed beats the optimiser
     assert max(flights) <= best.endurance.flight_endurance_min * (1 + 1e-9)
     assert max(ranges) <= best.range_km * (1 + 1e-9)
+
+
+def test_an_optimum_on_the_least_airspeed_says_so() -> None:
+    """The shipped longest flight sits on --best's least airspeed (1.2 x stall): flown
+    slower, at the least level-flight throttle, it lasts longer, which the output did not
+    say (outside audit: 32.82 min at 17.4 m/s against 32.89 at 16.9). Range's optimum is
+    inside the range and carries no such flag."""
+    case = load_case(None)
+    model = endurance_model(case)
+    best = solve_best(case)
+    low, _ = model.best_airspeed_bounds()
+    assert best.least_airspeed_m_s == low and best.least_airspeed_is == "1.2 x stall"
+    assert low == pytest.approx(1.2 * model.stall_m_s, rel=1e-12)
+    out = best.to_dict()
+    assert out["best_endurance"]["held_at_least_airspeed"] is True
+    assert out["best_range"]["held_at_least_airspeed"] is False
+    assert best.range_airspeed_m_s > 1.01 * low
+    slower = solve_endurance(case, model.min_throttle + 1e-4)  # below the bound, still flying
+    assert slower.airspeed_m_s < low
+    assert slower.flight_endurance_min > best.endurance.flight_endurance_min
