@@ -364,6 +364,9 @@ def main() -> None:
         "name: TU-Flex EDF wind-tunnel campaign (synthetic)",
         f"fan_area_m2: {FAN_AREA_M2:.6f}        # 93 mm fan (paper Table 1)",
         f"tunnel_area_m2: {TUNNEL_AREA_M2}            # 400 mm x 400 mm open jet (paper 2.1)",
+        # the test day's density, so that the fitted file lapses with altitude like the
+        # shipped one (without it the fit is used as measured at every density, SPEC 3)
+        f"air_density_kg_m3: {AIR_DENSITY_KG_M3}     # the truth's (truth.yaml)",
         "runs:",
     ]
     for run in runs:

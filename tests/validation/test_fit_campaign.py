@@ -100,6 +100,9 @@ def test_propulsion_file_is_complete(fitted) -> None:
         assert set(engine["standard_errors"]) == set(engine["coefficients"])
     files = document["source"]["files"]
     assert len(files) == 19 and all(len(f["sha256"]) == 64 for f in files)
+    # the campaign's test-day density: the fit lapses with altitude like the shipped file
+    # (without it, "used as measured" at 3000 m, the endurance PASSed; outside audit)
+    assert document["reference_density_kg_m3"] == TRUTH["air_density_kg_m3"]
 
 
 def test_validation_error_within_the_papers_accuracy_goal(fitted) -> None:
