@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -139,7 +140,7 @@ def _first_line(path: Path) -> str:
         opener: Any = gzip.open if path.name.lower().endswith(".gz") else open
         with opener(path, "rb") as handle:
             return handle.readline(1 << 16).decode("utf-8", errors="replace")
-    except (OSError, EOFError):
+    except (OSError, EOFError, zlib.error):
         return ""
 
 
@@ -173,6 +174,8 @@ def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
                          "largest run file read") from None
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: empty file (expected a header row and data)") from None
+    except zlib.error as exc:  # a damaged compressed body: it raised past every handler
+        raise InputError(f"{path}: corrupt gzip data ({exc})") from None
     except (pd.errors.ParserError, UnicodeDecodeError, OSError, EOFError, ValueError) as exc:
         header = _first_line(path)
         _refuse_header(path, header, ";" in header)
