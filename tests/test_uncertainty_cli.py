@@ -172,6 +172,72 @@ def test_unreachable_dask_scheduler_is_bad_input() -> None:
     assert result.exit_code == 2 and "--dask" in result.stderr
 
 
+@pytest.mark.parametrize("address", ["tls://127.0.0.1:1", "ucx://127.0.0.1:1"])
+def test_a_dask_address_of_another_scheme_is_refused_by_name(address: str) -> None:
+    """tls:// and ucx:// raised a TypeError inside distributed: a traceback (outside audit)."""
+    pytest.importorskip("distributed")
+    result = runner.invoke(app, ["check", "--samples", "10", "--dask", address])
+    assert result.exit_code == 2, result.output
+    assert "only tcp://HOST:PORT" in result.stderr and "Traceback" not in result.output
+
+
+def _server(reply: bytes) -> tuple[object, int]:
+    """A local TCP server that accepts and sends ``reply`` (or nothing), then stays silent."""
+    import socket
+    import threading
+
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen()
+    held = []
+
+    def serve() -> None:
+        try:
+            while True:
+                connection, _ = listener.accept()
+                held.append(connection)
+                connection.sendall(reply)
+        except OSError:
+            pass
+
+    threading.Thread(target=serve, daemon=True).start()
+    return listener, listener.getsockname()[1]
+
+
+@pytest.mark.parametrize(("reply", "said"), [
+    (b"", "no Dask scheduler answered"), (b"SSH-2.0-OpenSSH_9.0\r\n" * 10, "no Dask scheduler at"),
+])
+def test_a_server_that_is_not_a_scheduler_is_bad_input_in_bounded_time(monkeypatch, reply,
+                                                                       said) -> None:
+    """A server that accepts and never answers hung for ever; one that speaks first made
+    distributed allocate 2.82 EiB (a traceback; outside audit)."""
+    pytest.importorskip("distributed")
+    from tuflexperf.analysis import uncertainty
+
+    monkeypatch.setattr(uncertainty, "DASK_CONNECT_S", 1.0)
+    listener, port = _server(reply)
+    try:
+        result = runner.invoke(app, ["check", "--samples", "10", "--dask",
+                                     f"tcp://127.0.0.1:{port}"])
+    finally:
+        listener.close()
+    assert result.exit_code == 2, result.output
+    assert said in result.stderr and "--dask" in result.stderr
+
+
+def test_a_scheduler_without_workers_is_said_not_waited_on(monkeypatch) -> None:
+    distributed = pytest.importorskip("distributed")
+    from tuflexperf.analysis import uncertainty
+
+    monkeypatch.setattr(uncertainty, "DASK_WORKER_WAIT_S", 1.0)
+    with distributed.LocalCluster(n_workers=0, processes=True,
+                                  dashboard_address=None) as cluster:
+        result = runner.invoke(app, ["check", "--samples", "10", "--dask",
+                                     cluster.scheduler_address])
+    assert result.exit_code == 2, result.output
+    assert "has no worker" in result.stderr
+
+
 def test_check_with_samples_imports_no_scipy_pandas_or_matplotlib() -> None:
     import subprocess
     import sys

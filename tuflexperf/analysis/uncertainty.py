@@ -278,6 +278,69 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range) -> dict[str, A
     return out
 
 
+DASK_CONNECT_S = 10.0  # connect and handshake: a server that never answers hung for ever
+DASK_WORKER_WAIT_S = 30.0  # a scheduler without workers: said, not waited on for ever
+
+
+def dask_client(address: str) -> Any:
+    """A ``distributed.Client`` on the scheduler at ``address`` (``tcp://HOST:PORT``) with at
+    least one worker; :class:`InputError` naming ``--dask`` otherwise.
+
+    distributed's own timeout covers the TCP connect only: a server that accepts and never
+    answers (an HTTP server) hung for ever, one that speaks first (an SSH banner) raised
+    "cannot allocate 2.82 EiB", a tls:// or ucx:// address a TypeError, and a scheduler
+    with no worker took the chunks and waited for ever, all unsaid (outside audit).
+    """
+    import threading
+
+    try:
+        from distributed import Client
+    except ImportError:
+        raise InputError(
+            "--dask: dask.distributed is not installed (pip install 'tuflexperf[dask]')"
+        ) from None
+    scheme = address.split("://", 1)[0].lower() if "://" in address else "tcp"
+    if scheme != "tcp":
+        raise InputError(f"--dask: {address!r}: only tcp://HOST:PORT scheduler addresses are "
+                         f"supported, not {scheme}://")
+    outcome: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            outcome["client"] = Client(address, timeout="5s")
+        except Exception as exc:  # whatever a server that is not a scheduler makes it raise
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=connect, name="dask-connect", daemon=True)
+    thread.start()
+    thread.join(DASK_CONNECT_S)
+    if thread.is_alive():  # left behind: a daemon thread, ended with the process
+        raise InputError(f"--dask: no Dask scheduler answered at {address} within "
+                         f"{DASK_CONNECT_S:g} s (is a scheduler listening there?)")
+    error = outcome.get("error")
+    if isinstance(error, ValueError) and "client" not in outcome:
+        raise InputError(f"--dask: {address!r} is not a scheduler address (expected "
+                         f"tcp://HOST:PORT): {_first_line(error)}")
+    if error is not None:
+        raise InputError(f"--dask: no Dask scheduler at {address}: {type(error).__name__}: "
+                         f"{_first_line(error)}")
+    client = outcome["client"]
+    try:
+        client.wait_for_workers(1, timeout=DASK_WORKER_WAIT_S)
+    except Exception:  # distributed's TimeoutError (or the scheduler gone meanwhile)
+        client.close()
+        raise InputError(f"--dask: the scheduler at {address} has no worker (none joined "
+                         f"within {DASK_WORKER_WAIT_S:g} s): start one with "
+                         f"`dask worker {address}`") from None
+    return client
+
+
+def _first_line(error: BaseException, limit: int = 160) -> str:
+    text = str(error).strip().splitlines()
+    line = text[0] if text else ""
+    return line if len(line) <= limit else line[: limit - 3] + "..."
+
+
 def run_chunks(
     function: Callable[..., dict[str, Array]],
     arguments: Sequence[tuple[Any, ...]],
@@ -286,20 +349,7 @@ def run_chunks(
 ) -> list[dict[str, Array]]:
     """``function(*a)`` for each argument tuple, in order: here, in processes, or on Dask."""
     if dask_address:
-        try:
-            from distributed import Client
-        except ImportError:
-            raise InputError(
-                "--dask: dask.distributed is not installed (pip install 'tuflexperf[dask]')"
-            ) from None
-        try:
-            client = Client(dask_address, timeout="5s")
-        except ValueError as exc:  # distributed's own word on a malformed address
-            raise InputError(f"--dask: {dask_address!r} is not a scheduler address "
-                             f"(expected tcp://HOST:PORT): {exc}") from None
-        except (OSError, TimeoutError) as exc:
-            raise InputError(f"--dask: cannot reach the scheduler at {dask_address}: {exc}") \
-                from None
+        client = dask_client(dask_address)
         try:
             futures = [client.submit(function, *a, pure=False) for a in arguments]
             return list(client.gather(futures))
