@@ -593,3 +593,33 @@ def test_small_hostile_leftovers_are_one_line_naming_the_flag_or_key(tmp_path, c
     table.write_text("engine,throttle,airspeed_m_s,thrust_n\n" + "\n".join(rows) + "\n")
     assert "beyond the speed of sound" in refused(["fit", str(table), "--out",
                                                    str(tmp_path / "t.yaml")])
+
+
+MISSION_FILE = str(ROOT / "data" / "tuflex" / "missions" / "test_flight.yaml")
+
+
+@pytest.mark.parametrize(("args", "said"), [
+    (["mission", MISSION_FILE, "--csv", "-"], "--csv: '-' (stdout)"),
+    (["mission", MISSION_FILE, "--csv", "--json"], "--csv: '--json' looks like an option"),
+    (["sweep", "--vary", "aircraft.mass_kg=20:25:2", "--csv", "--plot"],
+     "--csv: '--plot' looks like an option"),
+    (["sweep", "--vary", "aircraft.mass_kg=20:25:2", "--plot", "-"], "--plot: '-' (stdout)"),
+    (["export", "--out", "-"], "--out: '-' (stdout)"),
+    (["export", "--out", "--json"], "--out: '--json' looks like an option"),
+    (["report", "--out", "-"], "--out: '-' (stdout)"),
+    (["fit", str(ROOT / "data/tuflex/campaign/campaign.yaml"), "--out", "--json"],
+     "--out: '--json' looks like an option"),
+])
+def test_an_output_named_dash_or_like_an_option_is_refused(tmp_path, monkeypatch, capsys,
+                                                           args, said):
+    """`--csv --json` wrote a file named --json (read later by `--case --json`), `export
+    --out -` a folder named -, with exit 0 (outside audit); fit already refused '-'."""
+    from tuflexperf.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as done:
+        main(args)
+    assert done.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and said in err, err
+    assert list(tmp_path.iterdir()) == []

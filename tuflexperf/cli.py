@@ -99,9 +99,22 @@ def output_file(value: str | None, flag: str) -> Path | None:
     ``Path`` it lost the slash, and ``--csv newdir/`` wrote a file named ``newdir``)."""
     if value is None:
         return None
+    refuse_dash(value, flag)
     if value.endswith(("/", "\\")) or value in ("", ".", ".."):
         fail_input(f"{flag}: {value!r} names a folder; give a file name")
     return Path(value)
+
+
+def refuse_dash(value: str, flag: str) -> None:
+    """An output named ``-`` or ``-...``: the shell's stdout, or the next option taken as
+    the path (``--csv --json`` wrote a file named --json, ``export --out -`` a folder named
+    -, and a later ``--case --json`` read it; outside audit)."""
+    if value == "-":
+        fail_input(f"{flag}: '-' (stdout) is no file name; give a path, and --json for JSON "
+                   "on stdout")
+    if value.startswith("-"):
+        fail_input(f"{flag}: {one_line(value)!r} looks like an option, not a path (the value "
+                   f"is missing?); for a file of that name give ./{one_line(value)}")
 
 
 def load_case_with(case_file: Path | None, sets: list[str] | None) -> Any:
@@ -1089,7 +1102,8 @@ def fit_command(
 @app.command("report")
 def report_command(
     case_file: Path | None = CaseOption,
-    out: Path = typer.Option(..., "--out", help="Directory for the PNG figures and review.pdf."),
+    out_text: str = typer.Option(..., "--out", metavar="<path>",
+                                 help="Directory for the PNG figures and review.pdf."),
     campaign: Path | None = typer.Option(
         None,
         "--campaign",
@@ -1102,8 +1116,9 @@ def report_command(
     """Design-review figures (PNG, 150 dpi) and one multi-page PDF, review.pdf."""
     from tuflexperf.report import build_report  # lazy: matplotlib stays out of `check`
 
+    refuse_dash(out_text, "--out")
     case = load_case_with(case_file, sets) if sets else case_file
-    result = build_report(case, out, campaign=campaign)
+    result = build_report(case, Path(out_text), campaign=campaign)
     if as_json:
         emit_json(result.to_dict())
         return
@@ -1127,13 +1142,15 @@ def export_command(
         "--format",
         help="Comma list of c, casadi, json, jsbsim, fmu (default: c,casadi,json).",
     ),
-    out: Path = typer.Option(..., "--out", help="Directory to write the model files into."),
+    out_text: str = typer.Option(..., "--out", metavar="<path>",
+                                 help="Directory to write the model files into."),
     as_json: bool = JsonOption,
 ) -> None:
     """The thrust model for simulation and flight software: C99, CasADi, JSON, JSBSim, FMU."""
     from tuflexperf.export import export_model, parse_formats
 
-    result = export_model(case_file, parse_formats(formats), out)
+    refuse_dash(out_text, "--out")
+    result = export_model(case_file, parse_formats(formats), Path(out_text))
     if as_json:
         emit_json(result.as_dict())
         return
