@@ -742,3 +742,19 @@ def test_a_copy_or_an_edit_of_a_written_csv_is_not_replaced(tmp_path) -> None:
     assert edited.returncode == 2 and "changed since" in edited.stderr
     assert (tmp_path / "mine.csv").read_bytes().endswith(b"EDF1,0.5,10.0,1.0\n")
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
+
+
+def test_an_input_unreadable_inside_a_staged_run_is_named_not_the_output(tmp_path: Path) -> None:
+    """report with an unreadable campaign run said "--out folder: cannot write: Permission
+    denied" (outside audit): an OS error naming a file outside the staging is its read."""
+    import errno
+
+
+    source = tmp_path / "runs" / "edf1.csv.gz"
+    with pytest.raises(InputError, match=r"edf1\.csv\.gz: cannot read: Permission denied"), \
+            files.staged_directory(tmp_path / "review", "report"):
+        raise PermissionError(errno.EACCES, "Permission denied", str(source))
+    with pytest.raises(InputError, match=r"review: cannot write: disk full"), \
+            files.staged_directory(tmp_path / "review", "report") as staging:
+        raise OSError(errno.ENOSPC, "No space left on device", str(staging / "01.png"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

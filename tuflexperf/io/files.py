@@ -112,6 +112,18 @@ def _os_error(path: Path, exc: OSError) -> InputError:
     return InputError(f"{path}: cannot write: {why}")
 
 
+def _staged_os_error(exc: OSError, staging: Path, out: Path) -> InputError:
+    """An OS error inside a staged run: a write where it names the staging folder (or no
+    file), else the read of the input it names (an unreadable campaign run was reported as
+    "--out folder: cannot write: Permission denied"; outside audit)."""
+    name = exc.filename
+    if isinstance(name, (str, bytes, os.PathLike)):
+        path = Path(os.fsdecode(name))
+        if not (path == staging or staging in path.parents):
+            return InputError(f"{path}: cannot read: {exc.strerror or exc}")
+    return _os_error(out, exc)
+
+
 def output_path(out: Path | str) -> Path:
     """Where an output named ``out`` lands: its folder resolved as the OS resolves it once the
     missing folders exist, its own name kept (a symbolic link there is still seen as one).
@@ -939,5 +951,5 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
             shutil.rmtree(staging, ignore_errors=True)
             _remove_folders(created)
         if isinstance(exc, OSError):
-            raise _os_error(out, exc) from None
+            raise _staged_os_error(exc, staging, out) from None
         raise
