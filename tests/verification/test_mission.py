@@ -938,3 +938,33 @@ def test_check_holds_a_solved_mission_to_the_time_its_file_plans(
     text = runner.invoke(app, ["mission", "--case", str(solved_case)]).stdout
     assert f"solve_for: {flown['solved']['time_min']:.2f} min" in text
     assert text.rstrip().endswith("PASS" if fits else "FAIL")
+
+
+@pytest.mark.parametrize("loiter_min", [100, 21])
+def test_solve_for_after_a_segment_that_empties_the_packs_names_that_segment(
+        tmp_path: Path, loiter_min: int) -> None:
+    """A 100 min loiter before the solved cruise hits the cut-off; the solve blamed the
+    cruise with "the rest of the mission alone leaves -80.0 %" (an emptied pack's marker;
+    outside audit). The file without solve_for names the loiter, and so does the solve."""
+    body = f"""\
+        name: x
+        segments:
+          - {{type: takeoff}}
+          - {{type: climb, to_altitude_m: 100, airspeed_m_s: 20, throttle: 1.0}}
+          - {{type: loiter, airspeed_m_s: 26, time_min: {loiter_min}}}
+          - {{type: cruise, airspeed_m_s: 26, time_min: 5}}
+          - {{type: descent, to_altitude_m: 0, airspeed_m_s: 20, throttle: 0.1}}
+        """
+    case = load_case(None)
+    plain = MissionModel(case, load_mission(_mission(tmp_path, body)), None).fly()
+    solved = MissionModel(case, load_mission(_mission(tmp_path, body + "solve_for: cruise\n")),
+                          None)
+    with pytest.raises(NotAttainable) as refused:
+        solved.solve_for()
+    said = str(refused.value)
+    if loiter_min == 100:
+        assert not plain.attainable and plain.reason.startswith("segment 3 (loiter)")
+        assert said.startswith(plain.reason) and "segment 4 (cruise), the one solved for" in said
+    else:  # the rest lands, short of the reserve: by how much, as flown without the cruise
+        left = float(said.split("leaves ")[1].split(" %")[0])
+        assert said.startswith("segment 4 (cruise): no duration lands") and 0 < left < 20

@@ -1357,12 +1357,19 @@ class MissionModel:
             zero = at(0.0)
             tau = illinois(2, 0.0, tau, zero[2], at(tau)[2]) if zero[2] >= 0 else None
         if tau is None or not tau > 0 or at(tau)[0] < -1e-8:
-            zero = at(0.0)
-            left = zero[0] + self.reserve
+            # the rest of the mission flown as it is: a segment before this one that empties
+            # the packs is named with its own time, not blamed on this one with "-80 %" left
+            # (the marker of an emptied pack; outside audit)
+            d[k] = 0.0
+            rest = self.fly(d)
+            label = f"segment {k + 1} ({plan.type})"
+            if not rest.attainable:
+                raise NotAttainable(f"{rest.reason} (flown with {label}, the one solved for, "
+                                    "of no duration: no duration of it lands)")
             raise NotAttainable(
-                f"segment {k + 1} ({plan.type}): no duration lands with the reserve "
-                f"{100 * self.reserve:g} % before the cut-off (the rest of the mission alone "
-                f"leaves {100 * left:.1f} %)"
+                f"{label}: no duration lands with the reserve {100 * self.reserve:g} % before "
+                f"the cut-off (the rest of the mission alone leaves "
+                f"{100 * rest.landing_charge_fraction:.1f} %)"
             )
         return tau, ends
 
