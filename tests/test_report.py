@@ -469,3 +469,43 @@ def test_the_endurance_figure_names_a_scaled_pack():
     analyses = run_analyses(shipped)
     plain = fg.endurance(shipped, analyses)._suptitle.get_text()
     assert plain.endswith(f" with {analyses.battery.name}")
+
+
+def test_measured_data_other_than_the_fits_are_said(tmp_path):
+    """A campaign edited after the fit was drawn against the model as its own data, and a
+    missing source.input fell back to campaign/campaign.yaml unsaid (outside audit)."""
+    import hashlib
+
+    from tests.conftest import copy_shipped_case
+    from tuflexperf.io.case import load_case
+    from tuflexperf.report.data import provenance_notes
+
+    case_path = copy_shipped_case(tmp_path)
+    folder = tmp_path / "data" / "tuflex"
+    manifest, run = folder / "campaign" / "campaign.yaml", folder / "campaign" / "runs" / \
+        "structure_drag.csv"
+
+    def sha(path):
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+
+    def with_source(input_text):
+        text = (folder / "propulsion.yaml").read_text()
+        block = (f"source:\n  input: {input_text}\n  input_sha256: {sha(manifest)}\n  files:\n"
+                 f"  - {{file: runs/structure_drag.csv, sha256: {sha(run)}}}\n")
+        (folder / "propulsion.yaml").write_text(text.split("source:")[0] + block)
+        return load_case(case_path)
+
+    case = with_source("campaign/campaign.yaml")
+    assert provenance_notes(case, manifest) == []
+    run.write_text(run.read_text() + "\n")  # a run changed after the fit
+    said = provenance_notes(case, manifest)
+    assert len(said) == 1 and "changed since propulsion.yaml was fitted" in said[0]
+    assert "runs/structure_drag.csv" in said[0]
+    case = with_source("elsewhere/campaign.yaml")  # gone: the campaign beside is drawn
+    said = provenance_notes(case, manifest)
+    assert "fitted to elsewhere/campaign.yaml (file not found)" in said[0]
+    assert str(manifest) in said[0]
+    case = with_source("campaign/campaign.yaml")
+    other = tmp_path / "other.yaml"
+    other.write_text(manifest.read_text())
+    assert "the measured data drawn are" in provenance_notes(case, other)[0]

@@ -131,6 +131,49 @@ def find_measured_source(case: Case, explicit: Path | None) -> Path | None:
     return beside if beside.is_file() else None
 
 
+def provenance_notes(case: Case, used: Path | None) -> list[str]:
+    """Notes where the measured data drawn are not those the propulsion file was fitted to:
+    its ``source.input`` missing or another file than the one used, or that file or a run
+    changed since (sha256 against ``source``). A campaign edited after the fit was drawn
+    against the model as if it were the fit's own data, unsaid (outside audit)."""
+    import os
+
+    from tuflexperf.io.files import sha256_of, why_not_a_file
+
+    source = case.propulsion.metadata.get("source") or {}
+    given = source.get("input") if isinstance(source, dict) else None
+    if not isinstance(given, str):
+        return []
+    name = case.propulsion_path.name
+    fitted = Path(given)
+    if not fitted.is_absolute():
+        fitted = case.propulsion_path.parent / fitted
+    if used is None or not fitted.is_file():
+        what = "nothing" if used is None else str(used)
+        return [f"{name} was fitted to {given} ({why_not_a_file(fitted)}); the measured data "
+                f"drawn are {what}"]
+    if os.path.realpath(fitted) != os.path.realpath(used):
+        return [f"{name} was fitted to {given}; the measured data drawn are {used}'s"]
+    changed = []
+    if isinstance(source.get("input_sha256"), str) and sha256_of(used) != source["input_sha256"]:
+        changed.append(used.name)
+    for entry in source.get("files") or []:
+        if not (isinstance(entry, dict) and isinstance(entry.get("file"), str)
+                and isinstance(entry.get("sha256"), str)):
+            continue
+        run = used.parent / entry["file"]
+        if not run.is_file():
+            changed.append(f"{entry['file']} (gone)")
+        elif sha256_of(run) != entry["sha256"]:
+            changed.append(entry["file"])
+    if not changed:
+        return []
+    listed = ", ".join(changed[:3]) + (f" and {len(changed) - 3} more" if len(changed) > 3
+                                       else "")
+    return [f"the measured data changed since {name} was fitted ({listed}): the figures draw "
+            "today's data against a model fitted to other data (fit again to compare them)"]
+
+
 def _points_from_rows(rows: list[dict[str, Any]]) -> MeasuredPoints:
     return MeasuredPoints(
         engine=tuple(str(r["engine"]) for r in rows),
@@ -166,6 +209,7 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
     """Measured points, one processed run, one sweep and two model comparisons."""
     source = find_measured_source(case, explicit)
     measured = Measured(source=source)
+    measured.notes.extend(provenance_notes(case, source))
     if source is None:
         measured.notes.append(
             "no measured data for this propulsion model (no --campaign, no source.input in "
