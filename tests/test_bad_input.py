@@ -623,3 +623,25 @@ def test_an_output_named_dash_or_like_an_option_is_refused(tmp_path, monkeypatch
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and said in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_small_leftovers_of_the_sixteenth_audit(tmp_path, capsys):
+    """A mission and a case by position hinted the mission as the case; a propulsion file
+    given to fit (sharing fan_area_m2 with a campaign) got "unknown key 'model' (and 6 more
+    problems)" instead of what kind of file it is (outside audit)."""
+    from tuflexperf.cli import main
+
+    def refused(args: list[str]) -> str:
+        with pytest.raises(SystemExit) as done:
+            main(args)
+        assert done.value.code == 2
+        return capsys.readouterr().err
+
+    case = str(ROOT / "requirements" / "tuflex.yaml")
+    said = refused(["mission", MISSION_FILE, case])
+    assert said.rstrip().endswith(f"give the case file with --case {case}")
+    propulsion = str(ROOT / "data" / "tuflex" / "propulsion.yaml")
+    said = refused(["fit", propulsion, "--out", str(tmp_path / "o.yaml")])
+    assert "this is a propulsion file, not a campaign file" in said
+    said = refused(["report", "--campaign", propulsion, "--out", str(tmp_path / "r")])
+    assert "this is a propulsion file, not a campaign file" in said

@@ -758,3 +758,15 @@ def test_an_input_unreadable_inside_a_staged_run_is_named_not_the_output(tmp_pat
             files.staged_directory(tmp_path / "review", "report") as staging:
         raise OSError(errno.ENOSPC, "No space left on device", str(staging / "01.png"))
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_a_mission_history_with_a_long_header_is_replaced_by_the_next_run(tmp_path: Path) -> None:
+    """Four engines of 200-character names make a header of ~5 kB: its first 4 KiB alone
+    were no mission history, and the tool refused to replace its own CSV (outside audit)."""
+    engines = [f"E{i}" + "x" * 198 for i in range(4)]
+    header = ",".join([*files.MISSION_CSV_COLUMNS,
+                       *(f"{c}_{e}" for e in engines for c in files.MISSION_CSV_ENGINE_COLUMNS)])
+    assert len(header) > 4096
+    out = tmp_path / "history.csv"
+    files.atomic_write_text(out, header + "\n" + ",".join(["0"] * header.count(",")) + ",0\n")
+    files.refuse_foreign_files({"--csv": out}, "mission", {"--csv": "mission history"})

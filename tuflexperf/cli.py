@@ -1296,7 +1296,11 @@ def _case_hint(message: str, argv: list[str] | None) -> str:
     args = sys.argv[1:] if argv is None else argv
     if not message.startswith("Got unexpected extra argument") or "--case" in args:
         return ""
-    extra = next((a for a in args[1:] if a.lower().endswith((".yaml", ".yml"))), None)
+    # the argument refused, as the message names it: `mission M.yaml CASE.yaml` was told to
+    # give the mission file as the case (outside audit)
+    named = message.rpartition("(")[2].partition(")")[0].split()
+    extra = next((a for a in (*named, *args[1:]) if a.lower().endswith((".yaml", ".yml"))),
+                 None)
     return "" if extra is None else f": give the case file with --case {extra}"
 
 
