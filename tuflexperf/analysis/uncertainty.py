@@ -318,7 +318,7 @@ def dask_client(address: str) -> Any:
         raise InputError(f"--dask: no Dask scheduler answered at {address} within "
                          f"{DASK_CONNECT_S:g} s (is a scheduler listening there?)")
     error = outcome.get("error")
-    if isinstance(error, ValueError) and "client" not in outcome:
+    if isinstance(error, ValueError):  # distributed's own word on a malformed address
         raise InputError(f"--dask: {address!r} is not a scheduler address (expected "
                          f"tcp://HOST:PORT): {_first_line(error)}")
     if error is not None:
