@@ -126,3 +126,16 @@ def test_window_samples_from_seconds() -> None:
 
 def test_block_mean_drops_partial_block() -> None:
     np.testing.assert_array_equal(block_mean(np.arange(7.0), 3), [1.0, 4.0])
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 10, 37, 200])
+def test_movmedian_with_a_window_longer_than_the_signal_is_the_definition(n: int) -> None:
+    """Windows of n..2n+3 samples (a run logged in microseconds spans its 0.1 s window):
+    each sample's window cut to the signal, ties included, equals np.median of it."""
+    rng = np.random.default_rng(n)
+    x = np.round(rng.normal(size=n), 1)  # rounded: ties
+    for k in range(n, 2 * n + 4):
+        kk = min(k, 2 * n + 1)
+        before, after = kk // 2, kk - 1 - kk // 2
+        expected = [np.median(x[max(i - before, 0):min(i + after + 1, n)]) for i in range(n)]
+        np.testing.assert_array_equal(movmedian(x, k), expected)

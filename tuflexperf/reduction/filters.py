@@ -115,11 +115,53 @@ def movmedian(x: ArrayLike, k: int) -> Array:
                 out[n - after :] = tail[::-1]
             return out
         edges = np.r_[0 : min(before, n), max(n - after, 0) : n]
+    elif np.isfinite(values).all():
+        # a window longer than the signal: each one is a prefix, a suffix or the whole
+        # signal. One median per sample took 53 s for a run whose time was logged in
+        # microseconds (its 0.1 s window spanned every sample; outside audit)
+        return _clipped_window_medians(values, before, after)
     else:
         edges = np.arange(n)
     for i in edges:
         out[i] = np.median(values[max(i - before, 0) : min(i + after + 1, n)])
     return out
+
+
+def _clipped_window_medians(values: Array, before: int, after: int) -> Array:
+    """``median(values[max(i - before, 0) : min(i + after + 1, n)])`` for every ``i`` when
+    the window is at least as long as the signal (finite values), in O(n log n)."""
+    n = values.size
+    out = np.full(n, float(np.median(values)))  # the windows that hold every sample
+    prefix = np.arange(n)[np.arange(n) + after + 1 < n]  # end cut short: [0, i + after + 1)
+    if prefix.size:
+        out[prefix] = _growing_medians(values, after + 1)[: prefix.size]
+    suffix = np.arange(n)[np.arange(n) - before > 0]  # start cut short: [i - before, n)
+    if suffix.size:
+        tail = _growing_medians(values[::-1], n - suffix[-1] + before)
+        out[suffix] = tail[: suffix.size][::-1]
+    return out
+
+
+def _growing_medians(values: Array, first: int) -> Array:
+    """Medians of ``values[:first]``, ``values[:first + 1]``, ... ``values[:n]`` by two
+    heaps (a max-heap of the lower half, a min-heap of the upper): O(n log n)."""
+    import heapq
+
+    lower: list[float] = []  # negated
+    upper: list[float] = []
+    medians = []
+    for count, value in enumerate(values.tolist(), start=1):
+        if lower and value > -lower[0]:
+            heapq.heappush(upper, value)
+        else:
+            heapq.heappush(lower, -value)
+        if len(lower) > len(upper) + 1:
+            heapq.heappush(upper, -heapq.heappop(lower))
+        elif len(upper) > len(lower):
+            heapq.heappush(lower, -heapq.heappop(upper))
+        if count >= first:
+            medians.append(-lower[0] if count % 2 else 0.5 * (upper[0] - lower[0]))
+    return np.asarray(medians, dtype=float)
 
 
 def _growing_window_medians(head: Array, first: int) -> Array:
