@@ -134,23 +134,43 @@ def _clipped_window_medians(values: Array, before: int, after: int) -> Array:
     out = np.full(n, float(np.median(values)))  # the windows that hold every sample
     prefix = np.arange(n)[np.arange(n) + after + 1 < n]  # end cut short: [0, i + after + 1)
     if prefix.size:
-        out[prefix] = _growing_medians(values, after + 1)[: prefix.size]
+        out[prefix] = _growing_window_medians(values, after + 1)[: prefix.size]
     suffix = np.arange(n)[np.arange(n) - before > 0]  # start cut short: [i - before, n)
     if suffix.size:
-        tail = _growing_medians(values[::-1], n - suffix[-1] + before)
+        tail = _growing_window_medians(values[::-1], n - suffix[-1] + before)
         out[suffix] = tail[: suffix.size][::-1]
     return out
 
 
-def _growing_medians(values: Array, first: int) -> Array:
-    """Medians of ``values[:first]``, ``values[:first + 1]``, ... ``values[:n]`` by two
-    heaps (a max-heap of the lower half, a min-heap of the upper): O(n log n)."""
+_SORTED_ROWS_MAX = 1 << 22  # cells of the padded matrix below (32 MiB of float64)
+
+
+def _growing_window_medians(head: Array, first: int) -> Array:
+    """Medians of ``head[:first]``, ``head[:first + 1]``, ... up to the whole of ``head``.
+
+    Each row holds one window, padded with +inf past its end; after sorting, the
+    median is the mean of the row's two middle values (equal for an odd count). Where
+    that matrix would be large (a window of thousands of samples), two heaps instead
+    (a max-heap of the lower half, a min-heap of the upper): O(n log n), O(n) memory.
+    """
+    width = head.size
+    counts = np.arange(first, width + 1)
+    if counts.size * width > _SORTED_ROWS_MAX:
+        return _growing_window_medians_by_heaps(head, first)
+    rows = np.where(np.arange(width) < counts[:, None], head, np.inf)
+    rows.sort(axis=1)
+    at = np.arange(counts.size)
+    return 0.5 * (rows[at, (counts - 1) // 2] + rows[at, counts // 2])
+
+
+def _growing_window_medians_by_heaps(head: Array, first: int) -> Array:
+    """:func:`_growing_window_medians` by two heaps (see there)."""
     import heapq
 
     lower: list[float] = []  # negated
     upper: list[float] = []
     medians = []
-    for count, value in enumerate(values.tolist(), start=1):
+    for count, value in enumerate(head.tolist(), start=1):
         if lower and value > -lower[0]:
             heapq.heappush(upper, value)
         else:
@@ -162,20 +182,6 @@ def _growing_medians(values: Array, first: int) -> Array:
         if count >= first:
             medians.append(-lower[0] if count % 2 else 0.5 * (upper[0] - lower[0]))
     return np.asarray(medians, dtype=float)
-
-
-def _growing_window_medians(head: Array, first: int) -> Array:
-    """Medians of ``head[:first]``, ``head[:first + 1]``, ... up to the whole of ``head``.
-
-    Each row holds one window, padded with +inf past its end; after sorting, the
-    median is the mean of the row's two middle values (equal for an odd count).
-    """
-    width = head.size
-    counts = np.arange(first, width + 1)
-    rows = np.where(np.arange(width) < counts[:, None], head, np.inf)
-    rows.sort(axis=1)
-    at = np.arange(counts.size)
-    return 0.5 * (rows[at, (counts - 1) // 2] + rows[at, counts // 2])
 
 
 def isoutlier_movmean(x: ArrayLike, k: int, threshold: float = 3.0) -> NDArray[np.bool_]:
