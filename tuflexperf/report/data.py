@@ -119,16 +119,22 @@ def find_measured_source(case: Case, explicit: Path | None) -> Path | None:
 
             raise InputError(f"--campaign: {why_not_a_file(explicit)}: {explicit}")
         return explicit
-    source = case.propulsion.metadata.get("source") or {}
-    given = source.get("input") if isinstance(source, dict) else None
-    if isinstance(given, str):
-        candidate = Path(given)
-        if not candidate.is_absolute():
-            candidate = case.propulsion_path.parent / candidate
-        if candidate.is_file():
-            return candidate
+    fitted = _fitted_input(case)
+    if fitted is not None and fitted[1].is_file():
+        return fitted[1]
     beside = case.propulsion_path.parent / CAMPAIGN_BESIDE_PROPULSION
     return beside if beside.is_file() else None
+
+
+def _fitted_input(case: Case) -> tuple[str, Path] | None:
+    """The propulsion file's ``source.input`` as written by ``fit`` and as a path (relative
+    to the propulsion file), or None without one."""
+    source = case.propulsion.metadata.get("source") or {}
+    given = source.get("input") if isinstance(source, dict) else None
+    if not isinstance(given, str):
+        return None
+    path = Path(given)
+    return given, path if path.is_absolute() else case.propulsion_path.parent / path
 
 
 def provenance_notes(case: Case, used: Path | None) -> list[str]:
@@ -140,14 +146,12 @@ def provenance_notes(case: Case, used: Path | None) -> list[str]:
 
     from tuflexperf.io.files import sha256_of, why_not_a_file
 
-    source = case.propulsion.metadata.get("source") or {}
-    given = source.get("input") if isinstance(source, dict) else None
-    if not isinstance(given, str):
+    found = _fitted_input(case)
+    if found is None:
         return []
+    given, fitted = found
+    source = case.propulsion.metadata["source"]
     name = case.propulsion_path.name
-    fitted = Path(given)
-    if not fitted.is_absolute():
-        fitted = case.propulsion_path.parent / fitted
     if used is None or not fitted.is_file():
         what = "nothing" if used is None else str(used)
         return [f"{name} was fitted to {given} ({why_not_a_file(fitted)}); the measured data "
