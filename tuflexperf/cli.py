@@ -947,18 +947,18 @@ def endurance(
         if best_result is not None:
             b = best_result.to_dict()
             e, r = b["best_endurance"], b["best_range"]
-            held = (f" (held at {b['least_airspeed_is']}, {b['least_airspeed_m_s']:.1f} m/s: "
-                    "slower would fly longer)")
+            def held(best: dict[str, Any], better: str) -> str:
+                return (f" (held at {b['least_airspeed_is']}, {b['least_airspeed_m_s']:.1f} "
+                        f"m/s: slower would fly {better})" if best["held_at_least_airspeed"]
+                        else "")
+
             typer.echo(
                 f"  longest flight: throttle {e['throttle']:.3f} at {e['airspeed_m_s']:.1f} m/s, "
-                f"{e['flight_endurance_min']:.2f} min" + (held if e["held_at_least_airspeed"]
-                                                          else "")
+                f"{e['flight_endurance_min']:.2f} min" + held(e, "longer")
             )
             typer.echo(
                 f"  best range: throttle {r['throttle']:.3f} at {r['airspeed_m_s']:.1f} m/s, "
-                f"{r['cruise_range_km']:.1f} km in cruise" + (
-                    held.replace("fly longer", "fly farther") if r["held_at_least_airspeed"]
-                    else "")
+                f"{r['cruise_range_km']:.1f} km in cruise" + held(r, "farther")
             )
         _print_warnings(data["warnings"])
     raise typer.Exit(0 if met else 1)

@@ -468,8 +468,8 @@ class BestResult:
     range_flight_endurance_min: float
     # the least airspeed searched [m/s] and what sets it: an optimum held there would be
     # longer slower (the shipped case's longest flight is 0.2 % longer at 1.17 x stall)
-    least_airspeed_m_s: float = 0.0
-    least_airspeed_is: str = ""
+    least_airspeed_m_s: float
+    least_airspeed_is: str
 
     def held_at_least_airspeed(self, airspeed_m_s: float) -> bool:
         """Whether an optimum at ``airspeed_m_s`` [m/s] sits on the least airspeed searched."""

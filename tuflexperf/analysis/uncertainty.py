@@ -335,10 +335,10 @@ def dask_client(address: str) -> Any:
     return client
 
 
-def _first_line(error: BaseException, limit: int = 160) -> str:
+def _first_line(error: BaseException) -> str:
+    """An exception's first line (the CLI shortens a long one, as every message)."""
     text = str(error).strip().splitlines()
-    line = text[0] if text else ""
-    return line if len(line) <= limit else line[: limit - 3] + "..."
+    return text[0] if text else ""
 
 
 def run_chunks(
