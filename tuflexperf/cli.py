@@ -600,7 +600,9 @@ def takeoff(
         angle = r.climb_angle_deg
         typer.echo(
             f"  climb              {_fmt(r.climb_distance_m, 2):>8} m  (gradient "
-            f"{r.climb_gradient:.3f}" + ("" if angle is None else f", {angle:.1f} deg") + ")"
+            f"{r.climb_gradient:.3f}" + ("" if angle is None else f", {angle:.1f} deg")
+            + (": thrust above weight plus drag, a vertical climb" if r.climb_gradient >= 1.0
+               else "") + ")"
         )
         typer.echo(
             f"  to {r.obstacle_height_m:g} m obstacle  {_fmt(r.distance_to_obstacle_m, 2):>8} m"

@@ -968,3 +968,50 @@ def test_solve_for_after_a_segment_that_empties_the_packs_names_that_segment(
     else:  # the rest lands, short of the reserve: by how much, as flown without the cruise
         left = float(said.split("leaves ")[1].split(" %")[0])
         assert said.startswith("segment 4 (cruise): no duration lands") and 0 < left < 20
+
+
+def test_a_climb_with_thrust_above_weight_is_flown_vertical_and_said(tmp_path: Path) -> None:
+    """At 3 kg the full-throttle excess thrust is above the weight: the small-angle rate of
+    climb ``(T - D) V / W`` would climb faster than the aircraft flies (an outside audit saw
+    85 m gained on a 21 m path). The climb is vertical at most: height gained <= path flown,
+    equal where it is vertical, and the result says so."""
+    from tuflexperf.io.dotted import with_values
+
+    path = _mission(tmp_path, """\
+        name: light
+        segments:
+          - {type: takeoff}
+          - {type: climb, to_altitude_m: 100, airspeed_m_s: 20, throttle: 1.0}
+          - {type: cruise, airspeed_m_s: 26, time_min: 1}
+        """)
+    case = with_values(load_case(None), {"aircraft.mass_kg": 3.0})
+    model = MissionModel(case, load_mission(path), None)
+    result = model.fly()
+    assert result.attainable, result.reason
+    sl = _segment_slice(model, 1)
+    h, dist = result.history["altitude_m"][sl], result.history["distance_m"][sl]
+    climbed, flown = np.diff(h), np.diff(dist)
+    assert np.all(climbed <= flown * (1 + 1e-9))
+    assert climbed == pytest.approx(flown, rel=1e-9)  # vertical all the way, at 3 kg
+    assert result.history["climb_rate_m_s"][sl] == pytest.approx(
+        result.history["airspeed_m_s"][sl], rel=1e-12)
+    assert any(w.startswith("segment 2 (climb): thrust at throttle 1 exceeds weight plus drag")
+               for w in result.warnings)
+    # the shipped mass climbs at a gradient below 1 and says nothing of it
+    heavy = MissionModel(load_case(None), load_mission(path), None).fly()
+    assert not any("weight plus drag" in w for w in heavy.warnings)
+
+
+def test_a_commanded_climb_steeper_than_vertical_is_not_attainable(tmp_path: Path) -> None:
+    """25 m/s of climb at 20 m/s: a path steeper than vertical, whatever the thrust."""
+    path = _mission(tmp_path, """\
+        name: steep
+        segments:
+          - {type: takeoff}
+          - {type: climb, to_altitude_m: 100, airspeed_m_s: 20, climb_rate_m_s: 25}
+          - {type: cruise, airspeed_m_s: 26, time_min: 1}
+        """)
+    result = MissionModel(load_case(None), load_mission(path), None).fly()
+    assert not result.attainable
+    assert ("segment 2 (climb): a climb at 25 m/s is steeper than vertical at 20.0 m/s true "
+            "airspeed: not attainable") in result.reason

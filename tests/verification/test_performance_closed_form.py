@@ -249,3 +249,46 @@ def test_json_has_the_spec_keys(tmp_path, capsys):
         assert key in data
     assert len(data["climb"]["airspeed_m_s"]) == len(data["climb"]["climb_rate_m_s"]) > 10
     assert data["takeoff_distance_to_obstacle_m"] > 0
+
+
+def test_thrust_above_weight_is_a_vertical_climb_said_and_bounded(tmp_path):
+    """80 N of static thrust on a 5 kg aircraft (49 N): the small-angle gradient
+    ``(T - D) / W`` passes 1 over a band of airspeeds. A climb cannot be steeper than
+    vertical: the gradient is held at 1 and the rate of climb at the airspeed there
+    (``V min((T - D) / W, 1)``), and the result says where (outside audit: a gradient of
+    11.08 was printed)."""
+    light = {**AIRCRAFT, "mass_kg": 5.0}
+    r = solve_performance(_case(tmp_path, aircraft=light))
+    rho = _isa_density(0.0)
+    cf = ClosedForm(light, rho, rho / 1.225, A_TOTAL, C_TOTAL)
+
+    def capped(v):
+        return v * min(cf.excess(v) / cf.w, 1.0)
+
+    # the band where T - D > W: a u^2 + (sA - W) u - Q = 0 in u = V^2
+    disc = (cf.sa - cf.w) ** 2 + 4 * cf.a * cf.q
+    top = math.sqrt((-(cf.sa - cf.w) - math.sqrt(disc)) / (2 * cf.a))
+    low = max(math.sqrt((-(cf.sa - cf.w) + math.sqrt(disc)) / (2 * cf.a)), cf.stall)
+    assert cf.excess(0.5 * (low + top)) > cf.w  # the case does climb vertically
+    assert r.max_climb_gradient == 1.0
+    assert low * (1 - 1e-9) <= r.best_climb_angle_speed_m_s <= top * (1 + 1e-9)
+    for v, rate in zip(r.climb_airspeed_m_s, r.climb_rate_curve_m_s, strict=True):
+        assert rate == pytest.approx(capped(v), rel=1e-9)
+    # the best rate of climb: a golden section on the closed form (no steady climb beyond V)
+    lo, hi = cf.stall, r.max_level_speed_m_s
+    for _ in range(200):
+        m1, m2 = hi - 0.618034 * (hi - lo), lo + 0.618034 * (hi - lo)
+        lo, hi = (lo, m2) if capped(m1) >= capped(m2) else (m1, hi)
+    assert r.max_climb_rate_m_s == pytest.approx(capped(0.5 * (lo + hi)), rel=1e-7)
+    assert r.max_climb_rate_m_s <= r.best_climb_rate_speed_m_s * (1 + 1e-12)
+    said = [w for w in r.warnings if w.startswith("full thrust exceeds weight plus drag")]
+    assert len(said) == 1
+    band = [float(x) for x in said[0].split(" at ")[1].split(" m/s")[0].split("-")]
+    step = (r.climb_airspeed_m_s[-1] - cf.stall) / 1200  # the scan's spacing at most
+    assert band[0] == pytest.approx(low, abs=0.05 + step)
+    assert band[1] == pytest.approx(top, abs=0.05 + step)
+    assert not any("stall-bounded" in note for note in r.notes)
+    # the shipped-like mass climbs at a gradient below 1 and says nothing of it
+    heavy = solve_performance(_case(tmp_path / "heavy"))
+    assert heavy.max_climb_gradient < 1.0
+    assert not any("weight plus drag" in w for w in heavy.warnings)

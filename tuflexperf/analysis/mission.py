@@ -64,6 +64,7 @@ from tuflexperf.io.case import Case
 from tuflexperf.io.mission import MissionFile, SegmentSchema
 from tuflexperf.models.aircraft import (
     MAX_AIRSPEED_M_S,
+    climb_sine,
     level_flight_drag_n,
     stall_speed_eas_m_s,
     true_airspeed_m_s,
@@ -539,7 +540,7 @@ class MissionModel:
             power.append(p_i)
             current.append(i_i)
             volt.append(ocv - r * i_i)
-        rate = ca.if_else(from_excess > 0.5, (thrust - drag) * v / weight, rate_cmd)
+        rate = ca.if_else(from_excess > 0.5, climb_sine((thrust - drag) / weight) * v, rate_cmd)
         ok = ca.if_else(solve_x > 0.5, reached, 1.0)
         # thrust at idle beyond what a commanded descent needs: it cannot be flown that steep
         idle_excess = ca.if_else(solve_x > 0.5, t[0] - needed, 0.0)
@@ -1001,6 +1002,7 @@ class MissionModel:
         reason = ""
         first_bad, ended_at = None, None
         segments: list[SegmentResult] = []
+        vertical: list[str] = []  # climbs whose thrust exceeds weight plus drag
         for plan, (a, b) in zip(self.plans, self.bounds, strict=True):
             label = f"segment {plan.index + 1} ({plan.type})"
             if plan.kind == "event":
@@ -1069,6 +1071,17 @@ class MissionModel:
                     what = ("the rate of climb is not attainable" if plan.solve_x
                             else f"cannot {verb} at throttle {plan.throttle:g}")
                     problems.append((int(wrong[0]), what))
+                if plan.solve_x and np.any(np.abs(plan.rate) >= v[sl]):
+                    k0 = int(np.argmax(np.abs(plan.rate) >= v[sl]))
+                    problems.append((k0, f"a {'climb' if climbing else 'descent'} at "
+                                     f"{abs(plan.rate):g} m/s is steeper than vertical at "
+                                     f"{v[a + k0]:.1f} m/s true airspeed: not attainable"))
+                if plan.rate_from_excess and np.any(level_residual[sl] > 1.0):
+                    vertical.append(
+                        f"{label}: thrust at throttle {plan.throttle:g} exceeds weight plus "
+                        "drag: flown as a vertical climb (rate of climb at the airspeed); the "
+                        "steady-climb model (L = W) does not hold there, the excess would "
+                        "accelerate it")
                 if plan.solve_x and not climbing:
                     steep = np.flatnonzero(idle[sl] > 1e-9)
                     if steep.size:
@@ -1152,7 +1165,7 @@ class MissionModel:
             reason=reason or (f"lands with {100 * landing:.1f} % charge (reserve "
                               f"{100 * self.reserve:g} %)"),
             engines=self.engines, history=history, solved=solved, ended_at_s=ended_at,
-            warnings=(*self.start_notes, *self.battery.scaled_notes,
+            warnings=(*self.start_notes, *self.battery.scaled_notes, *vertical,
                       *self._extrapolation_notes(v, segment_of)),
         )
 

@@ -37,6 +37,7 @@ from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     climb_gradient,
     climb_rate_m_s,
+    climb_sine,
     level_flight_drag_n,
     minimum_drag_speed_m_s,
     stall_speed_m_s,
@@ -260,9 +261,16 @@ class PerformanceProblems:
         return climb_rate_m_s(self.aircraft, thrust, v, rho)
 
     def gradient(self, v: Any, rho: Any, dead: int | None = None) -> Any:
-        """Full-throttle climb gradient [-] (numpy)."""
-        thrust = total_thrust_n(self.propulsion, 1.0, v, rho, dead, self.mode)
-        return climb_gradient(self.aircraft, thrust, v, rho)
+        """Full-throttle climb gradient [-] (numpy), at most 1 (a vertical climb)."""
+        return climb_sine(self.excess_n(v, rho, dead) / self.aircraft.weight_n)
+
+    def vertical_range_m_s(self, rho: float, dead: int | None = None) -> tuple[float, float] | None:
+        """(lowest, highest) scanned airspeed [m/s] where full thrust exceeds weight plus drag
+        (a gradient above 1: the climb is vertical), or ``None`` where it nowhere does."""
+        grid, _ = self.scan(rho)
+        over = grid[np.asarray(self.excess_n(grid, rho, dead), dtype=float)
+                    > self.aircraft.weight_n]
+        return (float(over[0]), float(over[-1])) if over.size else None
 
     def speed_cap_m_s(self, rho: Any) -> Any:
         """Speed [m/s] above which full thrust stays below parasite drag (``inf`` if none).
@@ -520,7 +528,7 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
         )
     max_rate, vy = p.max_climb_rate(rho)
     max_grad, vx = p.max_gradient(rho)
-    if vx <= least * (1.0 + 1e-9):
+    if vx <= least * (1.0 + 1e-9) and max_grad < 1.0:  # a vertical climb's Vx is said below
         notes.append(f"best climb angle at the least airspeed {least:.2f} m/s (stall-bounded)")
     service, why = p.ceiling_m(SERVICE_CEILING_CLIMB_RATE_M_S)
     if why:
@@ -570,6 +578,14 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
             f"thrust model extrapolated at {span} m/s (tested {low:g}-{high:g} m/s): "
             + ", ".join(dict.fromkeys(beyond))
         )
+    for dead in p.dead_cases:
+        vertical = p.vertical_range_m_s(rho, dead)
+        if vertical is not None:
+            who = "full thrust" if dead is None else f"{prop.engines[dead].name} dead, full thrust"
+            warnings.append(
+                f"{who} exceeds weight plus drag at {vertical[0]:.1f}-{vertical[1]:.1f} m/s: the "
+                "climb there is vertical (gradient held at 1, rate of climb at the airspeed); "
+                "the steady-climb model (L = W) does not hold, the excess would accelerate it")
     density_note = unlapsed_density_warning(prop, rho)
     if density_note:
         warnings.append(density_note)

@@ -228,19 +228,35 @@ def climb_gradient(
     )
 
 
+def climb_sine(gradient: Vectorizable) -> Vectorizable:
+    """Sine of the steady climb angle [-] from the climb ``gradient`` [-]: at most 1.
+
+    A gradient of 1 or more (thrust above weight plus drag) is a vertical climb: the
+    path cannot be steeper, and the excess thrust would accelerate the aircraft, which a
+    steady climb does not fly. Below 1 the two are equal.
+
+    References
+    ----------
+    Anderson, *Aircraft Performance and Design*, eq. 5.78 (``sin gamma = (T - D) / W``).
+    """
+    return _at_most_one(gradient)
+
+
 def climb_rate_m_s(
     aircraft: Aircraft,
     thrust_n: Vectorizable,
     airspeed_m_s: Vectorizable,
     density_kg_m3: Vectorizable,
 ) -> Vectorizable:
-    """Steady rate of climb ``R/C = V (T - D) / W`` [m/s] (Anderson eq. 5.80), drag at ``L = W``.
+    """Steady rate of climb ``R/C = V sin(gamma)`` [m/s], ``sin(gamma) = (T - D) / W`` (Anderson
+    eq. 5.80), drag at ``L = W``; a vertical climb (:func:`climb_sine`) climbs at ``V``.
 
     References
     ----------
     Anderson, *Aircraft Performance and Design*, eq. 5.80.
     """
-    return airspeed_m_s * climb_gradient(aircraft, thrust_n, airspeed_m_s, density_kg_m3)
+    return airspeed_m_s * climb_sine(
+        climb_gradient(aircraft, thrust_n, airspeed_m_s, density_kg_m3))
 
 
 def ground_roll_net_force_n(
