@@ -104,6 +104,8 @@ CASES = [
      "engines[0].name"),
     ("propulsion", ["engines", 0, "name"], "E\x001", "propulsion.yaml", "engines[0].name"),
     ("propulsion", ["engines", 1, "name"], "EDF,2", "propulsion.yaml", "engines[1].name"),
+    # and fills CSV cells, where a spreadsheet runs a leading '=' as a formula
+    ("propulsion", ["engines", 1, "name"], "=SUM(A1)", "propulsion.yaml", "engines[1].name"),
     ("propulsion", ["name"], "x" * 201, "propulsion.yaml", "name"),
     ("requirements", ["takeof"], {"max_ground_roll_m": 60}, "case.yaml", "requirements.takeof"),
     ("requirements", ["envelope", "max_airspeed_m_s"], 10, "case.yaml", "envelope"),
@@ -455,6 +457,25 @@ def test_a_thrust_table_is_checked_like_every_input(tmp_path) -> None:
                          (long, "cannot read as CSV"), (big, "larger than a thrust table")):
         _assert_bad(runner.invoke(app, ["fit", str(path), "--out", str(tmp_path / "p.yaml")]),
                     path.name, needle)
+    assert not (tmp_path / "p.yaml").exists()
+
+
+def test_an_engine_name_a_spreadsheet_would_run_is_refused_in_a_table_and_a_campaign(
+        tmp_path) -> None:
+    """An engine named ``=HYPERLINK(...)`` in a thrust table or a campaign reached fit's
+    propulsion file and thrust table, a formula in every spreadsheet (outside audit)."""
+    import shutil
+
+    table = tmp_path / "table.csv"
+    table.write_text("engine,throttle,airspeed_m_s,thrust_n\n@cmd,0.5,0,10\n")
+    _assert_bad(runner.invoke(app, ["fit", str(table), "--out", str(tmp_path / "p.yaml")]),
+                "table.csv: line 2: engine", "cannot start with '@'")
+    campaign = tmp_path / "campaign"
+    shutil.copytree(ROOT / "data" / "tuflex" / "campaign", campaign)
+    manifest = campaign / "campaign.yaml"
+    manifest.write_text(manifest.read_text().replace("engine: EDF1", "engine: '=1+1'", 1))
+    _assert_bad(runner.invoke(app, ["fit", str(manifest), "--out", str(tmp_path / "p.yaml")]),
+                "runs[0].engine", "cannot start with '='")
     assert not (tmp_path / "p.yaml").exists()
 
 

@@ -35,7 +35,7 @@ from pydantic import Field, model_validator
 from tuflexperf.errors import InputError
 from tuflexperf.io.files import same_file, why_not_a_file
 from tuflexperf.io.vendor import VendorSettings
-from tuflexperf.io.yamlio import FileName, Name, StrictModel, load_model
+from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, load_model
 from tuflexperf.models.thrust import MAX_FAN_AREA_M2, MIN_FAN_AREA_M2
 
 Positive = Annotated[float, Field(gt=0)]
@@ -66,7 +66,7 @@ class ThrustStandKeys(StrictModel):
 class RunEntry(ThrustStandKeys):
     file: FileName
     kind: RunKind
-    engine: Annotated[str, Field(min_length=1)] | None = None
+    engine: EngineName | None = None
 
     @model_validator(mode="after")
     def _engine_needed(self) -> RunEntry:

@@ -465,6 +465,7 @@ def read_thrust_table(path: Path | str) -> ThrustTable:
     a few diagnostics) are ignored; the four SPEC columns are required.
     """
     from tuflexperf.io.files import MAX_TABLE_BYTES, check_input_file
+    from tuflexperf.io.yamlio import engine_name_problem
 
     # a FIFO hung it, /dev/zero filled the memory, 3 GB gave a traceback (outside audit)
     path = check_input_file(path, "thrust table (.csv)", MAX_TABLE_BYTES)
@@ -496,6 +497,9 @@ def read_thrust_table(path: Path | str) -> ThrustTable:
         name = row[index["engine"]].strip()
         if not name:
             raise InputError(f"{path}: line {line}: engine: empty name")
+        problem = engine_name_problem(name)
+        if problem is not None:  # the fit writes it into a propulsion file that must load
+            raise InputError(f"{path}: line {line}: engine: {problem}")
         engines.append(name)
         for column in TABLE_COLUMNS[1:]:
             cell = row[index[column]].strip()

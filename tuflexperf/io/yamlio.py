@@ -52,7 +52,21 @@ def _column_safe(name: str) -> str:
     # split them, and the file was then no longer recognised as the mission's own output
     if any(c in name for c in ',"'):
         raise ValueError("an engine's name heads CSV columns: no comma or double quote")
+    # and it fills the thrust table's engine cells: a spreadsheet runs a cell that starts
+    # with one of these as a formula (CSV injection; outside audit)
+    if name[:1] in ("=", "+", "-", "@"):
+        raise ValueError(f"an engine's name fills CSV cells: it cannot start with {name[0]!r} "
+                         "(a spreadsheet would run it as a formula)")
     return name
+
+
+def engine_name_problem(name: str) -> str | None:
+    """Why ``name`` cannot name an engine (:data:`EngineName`), or ``None`` if it can."""
+    try:
+        _column_safe(_one_printable_line(name))
+    except ValueError as exc:
+        return str(exc)
+    return None
 
 
 EngineName = Annotated[str, Field(min_length=1), AfterValidator(_one_printable_line),
