@@ -666,3 +666,31 @@ def test_small_leftovers_of_the_sixteenth_audit(tmp_path, capsys):
     assert "this is a propulsion file, not a campaign file" in said
     said = refused(["report", "--campaign", propulsion, "--out", str(tmp_path / "r")])
     assert "this is a propulsion file, not a campaign file" in said
+
+
+def test_an_empty_value_or_a_gzipped_table_is_said_as_such(tmp_path, capsys):
+    """``--case=`` became the path '.' ("is a directory"); a gzipped thrust table "cannot
+    decode byte 0x8b", in fit and in report (outside audit)."""
+    import gzip
+
+    from tuflexperf.cli import main
+
+    def refused(args: list[str]) -> str:
+        with pytest.raises(SystemExit) as done:
+            main(args)
+        assert done.value.code == 2
+        err = capsys.readouterr().err  # the report's progress lines, then one error line
+        assert "Traceback" not in err
+        assert [line.startswith("tuflexperf: error:") for line in err.splitlines()][-1:] == [True]
+        return err.splitlines()[-1]
+
+    assert "Invalid value for '--case': empty" in refused(["check", "--case="])
+    assert "Invalid value for '--case': empty" in refused(["trim", "--case", ""])
+    assert "an empty argument" in refused(["mission", ""])
+    table = tmp_path / "table.csv.gz"
+    table.write_bytes(gzip.compress(b"engine,throttle,airspeed_m_s,thrust_n\nE,0.5,0,10\n"))
+    assert "table.csv.gz: gzip-compressed" in refused(
+        ["fit", str(table), "--out", str(tmp_path / "p.yaml")])
+    assert "table.csv.gz: gzip-compressed" in refused(
+        ["report", "--campaign", str(table), "--out", str(tmp_path / "r")])
+    assert not (tmp_path / "p.yaml").exists() and not (tmp_path / "r").exists()

@@ -182,7 +182,10 @@ def test_airspeed_column_units(tmp_path: Path) -> None:
         # one thrust in kgf, another in N that says something else: which is the thrust?
         ("Time (s),ESC signal (µs),Thrust (kgf),Airspeed (m/s),Thrust (N)",
          "{t},1500,0.1,3,0.2", {}, r"'Thrust \(kgf\)' and 'Thrust \(N\)' both give the "
-         r"thrust and they disagree"),
+         r"thrust and they disagree \(by up to 0.781 in SI units\)"),  # it said "inf"
+        ("Time (s),ESC signal (µs),Thrust (kgf),Airspeed (m/s),Thrust (N)",
+         "{t},1500,0.1,3,", {}, r"'Thrust \(kgf\)' and 'Thrust \(N\)' both give the "
+         r"thrust and one is empty where the other is not"),
         ("Time (s),ESC signal (µs),Thrust (kgf),Airspeed (m/s),Airspeed (km/h)",
          "{t},1500,0.1,3,36", {}, r"'Airspeed \(m/s\)' and 'Airspeed \(km/h\)' both give"),
     ],

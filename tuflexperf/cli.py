@@ -1289,6 +1289,26 @@ def _refuse_repeated(args: list[str]) -> None:
         sys.exit(2)
 
 
+def _refuse_empty(args: list[str]) -> None:
+    """Exit 2 naming an option (or argument) given an empty value: ``--case=`` or ``--case ''``
+    became the path '.', reported as "is a directory" (outside audit)."""
+    for k, token in enumerate(args):
+        if token == "--":
+            return
+        name, equals, value = token.partition("=")
+        if token.startswith("--") and equals and not value:
+            empty = name
+        elif token == "":
+            before = args[k - 1] if k > 0 else ""
+            empty = before if before.startswith("-") and "=" not in before else "an argument"
+        else:
+            continue
+        what = (f"Invalid value for '{empty}': empty" if empty.startswith("-")
+                else "an empty argument")
+        sys.stderr.write(f"tuflexperf: error: {what}; give a value\n")
+        sys.exit(2)
+
+
 for _info in app.registered_commands:  # every command above, whichever section wrote it
     _info.callback = _guarded(_info.callback)
 
@@ -1327,6 +1347,7 @@ def main(argv: list[str] | None = None) -> None:
         sys.stderr.write("tuflexperf: aborted\n")
         sys.exit(130)
 
+    _refuse_empty(sys.argv[1:] if argv is None else list(argv))
     _refuse_repeated(sys.argv[1:] if argv is None else list(argv))
     try:
         code = app(args=argv, standalone_mode=False, prog_name="tuflexperf")

@@ -470,7 +470,11 @@ def read_thrust_table(path: Path | str) -> ThrustTable:
     # a FIFO hung it, /dev/zero filled the memory, 3 GB gave a traceback (outside audit)
     path = check_input_file(path, "thrust table (.csv)", MAX_TABLE_BYTES)
     try:
-        text = path.read_text(encoding="utf-8-sig")
+        data = path.read_bytes()
+        if data[:2] == b"\x1f\x8b":  # it said "cannot decode byte 0x8b" (outside audit)
+            raise InputError(f"{path}: gzip-compressed; a thrust table is plain CSV text "
+                             "(unpack it with gunzip)")
+        text = data.decode("utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: cannot read: {exc}") from None
     try:

@@ -194,10 +194,14 @@ def read_rcbenchmark(
         scale = max(float(np.nanmax(np.abs(a), initial=0.0)), 1e-12)
         gap = np.abs(a - b)
         # a vendor logging one quantity in two units rounds each: a part in 1000 of the range
-        if (np.isnan(a) != np.isnan(b)).any() or float(np.nanmax(gap, initial=0.0)) > 1e-3 * scale:
-            raise InputError(f"{path}: {both} and they disagree (by up to "
-                             f"{float(np.nanmax(gap, initial=np.inf)):.3g} in SI units); keep "
+        # (nanmax's initial is a floor: an initial of inf said "by up to inf" every time)
+        largest = float(np.nanmax(gap, initial=0.0))
+        if (np.isnan(a) != np.isnan(b)).any():
+            raise InputError(f"{path}: {both} and one is empty where the other is not; keep "
                              f"the one to read{where}")
+        if largest > 1e-3 * scale:
+            raise InputError(f"{path}: {both} and they disagree (by up to {largest:.3g} in SI "
+                             f"units); keep the one to read{where}")
 
     columns: dict[str, np.ndarray] = {}
     bad_cells: dict[str, tuple[int, str]] = {}

@@ -1384,8 +1384,9 @@ def _check_output(path: Path, flag: str) -> None:
 
 
 def is_thrust_table(path: Path) -> bool:
-    """A ``.csv`` input is a thrust table; anything else is a campaign manifest."""
-    return path.name.lower().endswith(".csv")
+    """A ``.csv`` input is a thrust table (a ``.csv.gz`` one is told to unpack it); anything
+    else is a campaign manifest."""
+    return path.name.lower().endswith((".csv", ".csv.gz"))
 
 
 def default_table_path(out: Path) -> Path:

@@ -223,9 +223,11 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
         return measured
     measured.files.append(source)
     from tuflexperf.io.proptables import is_propeller_manifest
+    from tuflexperf.reduction.pipeline import is_thrust_table
 
-    tables = is_propeller_manifest(source)
-    if source.name.lower().endswith(".csv") or tables:
+    table_file = is_thrust_table(source)
+    tables = not table_file and is_propeller_manifest(source)
+    if table_file or tables:
         # a published propeller table is points too (throttle = rpm / max rpm), like a CSV
         if tables:
             from tuflexperf.io.proptables import read_propeller_tables
