@@ -601,7 +601,9 @@ def test_small_hostile_leftovers_are_one_line_naming_the_flag_or_key(tmp_path, c
         assert err.count("\n") == 1, err
         return err
 
-    assert "--dask: empty address" in refused(["check", "--samples", "50", "--dask", ""])
+    assert "Invalid value for '--dask': empty" in refused(["check", "--samples", "50",
+                                                           "--dask", ""])
+    assert "--dask: empty address" in refused(["check", "--samples", "50", "--dask", "  "])
     long = refused(["check", "--set", "aircraft.mass_kg=1" + "x" * 5000])
     assert "not a number" in long and len(long) < 200
     manifest = ROOT / "data" / "tuflex" / "campaign" / "campaign.yaml"

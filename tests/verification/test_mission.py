@@ -180,7 +180,7 @@ def test_a_mission_without_a_takeoff_says_it_starts_airborne(tmp_path: Path) -> 
     [
         ("{type: cruise, airspeed_m_s: 26, time_min: 90}", "segment 2 (cruise): the pack"),
         ("{type: loiter, airspeed_m_s: 5, time_min: 1}", "below stall"),
-        ("{type: climb, to_altitude_m: 200, airspeed_m_s: 20, climb_rate_m_s: 30}",
+        ("{type: climb, to_altitude_m: 200, airspeed_m_s: 20, climb_rate_m_s: 15}",
          "needs more than full throttle"),
         ("{type: cruise, airspeed_m_s: 60, time_min: 1}",
          "segment 2 (cruise): needs more than full throttle at "),

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from tuflexperf.analysis import endurance as single
 from tuflexperf.analysis.mission import STEPS
 from tuflexperf.models._math import interp_rows
-from tuflexperf.models.aircraft import level_flight_drag_n
+from tuflexperf.models.aircraft import climb_sine, level_flight_drag_n
 from tuflexperf.models.battery import (
     SECONDS_PER_HOUR,
     current_at_power_a,
@@ -155,7 +155,8 @@ def _best_climb(m: Any, v_lo: Array, stall: Array) -> tuple[Array, Array]:
         excess = m.thrust(1.0, speed) - np.asarray(
             level_flight_drag_n(m.aircraft, speed, m.density), dtype=float)
         # no climb at or beyond the jet velocity (the grid's first point excepted)
-        rate = np.where((speed >= ceiling) & (index > 0), -np.inf, excess * speed / weight)
+        rate = np.where((speed >= ceiling) & (index > 0), -np.inf,
+                        np.asarray(climb_sine(excess / weight), dtype=float) * speed)
         return rate, speed
 
     a, _ = _golden_section_max(

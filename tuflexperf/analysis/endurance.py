@@ -57,7 +57,7 @@ from tuflexperf.io.discharge import (
     DischargeRun,
     read_discharge_run,
 )
-from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
+from tuflexperf.models.aircraft import climb_sine, level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.battery import (
     DischargeParameters,
     current_at_power_a,
@@ -238,7 +238,8 @@ class LaunchBudget:
 
 
 def _best_climb(case: Case) -> tuple[float, float]:
-    """Airspeed (m/s) and rate (m/s) of the best full-throttle climb, ``(T - D) V / W``.
+    """Airspeed (m/s) and rate (m/s) of the best full-throttle climb, ``(T - D) V / W``
+    (at most ``V``: a vertical climb, :func:`~tuflexperf.models.aircraft.climb_sine`).
 
     Small-angle climb with ``L = W`` (Anderson, *Aircraft Performance and Design*, 5.10).
     Searched from the lift-off speed to 8 x stall, short of the fans' jet velocity (beyond
@@ -257,7 +258,7 @@ def _best_climb(case: Case) -> tuple[float, float]:
                          _SPEED_GRID_POINTS)
     thrust = total_thrust_n(case.propulsion, 1.0, speeds, rho)
     excess = np.asarray(thrust - level_flight_drag_n(aircraft, speeds, rho), dtype=float)
-    rate = excess * speeds / aircraft.weight_n
+    rate = np.asarray(climb_sine(excess / aircraft.weight_n), dtype=float) * speeds
     # at or beyond the jet velocity no climb (the first grid point stays: a lift-off there
     # is refused by the take-off)
     beyond = speeds[1:] >= float(jet_velocity_ceiling_m_s(case.propulsion, rho))
