@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import pytest
 import yaml
@@ -78,6 +78,31 @@ MADE_UP_REQUIREMENTS: dict[str, Any] = {
     "envelope": {"min_airspeed_m_s": 14, "max_airspeed_m_s": 30, "max_trim_throttle": 1.0},
     "oei": {"dead_engine": "windmilling", "max_throttle": 1.0},
 }
+
+
+class ShippedReport(NamedTuple):
+    parent: Path  # holds nothing but ``out``
+    out: Path
+    data: dict[str, Any]  # the command's --json
+
+
+@pytest.fixture(scope="session")
+def shipped_report(tmp_path_factory: pytest.TempPathFactory) -> ShippedReport:
+    """``tuflexperf report --out .../review --json`` of the shipped case, run once per session
+    in a subprocess as a user runs it. Tests read it, never change it; one that needs an
+    earlier report to protect copies it (``shutil.copytree``) instead of drawing its own."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    parent = tmp_path_factory.mktemp("shipped_report")
+    out = parent / "review"
+    done = subprocess.run([sys.executable, "-m", "tuflexperf", "report", "--out", str(out),
+                           "--json"], cwd=parent, capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "PYTHONWARNINGS": "ignore"})
+    assert done.returncode == 0, done.stderr
+    return ShippedReport(parent, out, json.loads(done.stdout))
 
 
 def write_case(

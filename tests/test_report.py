@@ -44,12 +44,8 @@ def siblings(folder: Path) -> set[str]:
 
 
 @pytest.fixture(scope="module")
-def shipped(tmp_path_factory):
-    parent = tmp_path_factory.mktemp("shipped")
-    out = parent / "review"
-    result = runner.invoke(app, ["report", "--out", str(out), "--json"])
-    assert result.exit_code == 0, result.output
-    return parent, out, json.loads(result.stdout)
+def shipped(shipped_report):
+    return shipped_report  # (parent, out, --json), drawn once per session (conftest)
 
 
 @pytest.fixture(scope="module")

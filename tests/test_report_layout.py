@@ -39,13 +39,13 @@ def _report(case: Path | None, out: Path) -> dict:
     return json.loads(result.stdout)
 
 
-def test_every_page_is_a4_and_the_first_page_carries_every_verdict(tmp_path: Path) -> None:
+def test_every_page_is_a4_and_the_first_page_carries_every_verdict(shipped_report) -> None:
     from tuflexperf.analysis.requirements import check_case
     from tuflexperf.io.case import load_case
     from tuflexperf.report.build import title_lines
     from tuflexperf.report.data import load_measured, run_analyses
 
-    data = _report(None, tmp_path / "review")
+    data = shipped_report.data
     boxes = _media_boxes(Path(data["pdf"]))
     assert len(boxes) == data["pages"]
     for width, height in boxes:

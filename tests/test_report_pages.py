@@ -159,13 +159,12 @@ def _figures(case_path: Path | None):
 
 # --- the shipped case ---------------------------------------------------------------------
 @pytest.fixture(scope="module")
-def shipped_report(tmp_path_factory):
-    out = tmp_path_factory.mktemp("shipped") / "review"
-    return out, _report(None, out)
+def shipped(shipped_report):
+    return shipped_report.out, shipped_report.data  # drawn once per session (conftest)
 
 
-def test_shipped_report_has_every_new_page_as_png_and_pdf_page(shipped_report):
-    out, data = shipped_report
+def test_shipped_report_has_every_new_page_as_png_and_pdf_page(shipped):
+    out, data = shipped
     names = {Path(f).stem for f in data["figures"]}
     assert set(NEW_PAGES) <= names
     assert "10_mission" not in names  # the shipped case states no mission
@@ -278,7 +277,7 @@ def test_tornado_labels_each_bar_with_the_limit_value_or_none_in_range(shipped_f
     assert f"{mass:.4g} kg" in texts
 
 
-def test_every_png_is_its_page_of_the_pdf_pixel_for_pixel(shipped_report):
+def test_every_png_is_its_page_of_the_pdf_pixel_for_pixel(shipped):
     """Each page is drawn once (a vector PDF page); its PNG is that page rasterised, so the
     PNG shows exactly what the PDF does, in the PDF's page order (title page first)."""
     import pypdfium2
@@ -286,7 +285,7 @@ def test_every_png_is_its_page_of_the_pdf_pixel_for_pixel(shipped_report):
 
     from tuflexperf.report.build import PNG_DPI
 
-    out, data = shipped_report
+    out, data = shipped
     pngs = sorted(Path(f) for f in data["figures"])
     document = pypdfium2.PdfDocument(out / "review.pdf")
     try:
