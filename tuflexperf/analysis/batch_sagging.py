@@ -183,7 +183,9 @@ class SaggingFlight:
             done = (np.abs(r1) < _LEVEL) | on_step
         if not (~done & self.active).any():
             return v1, done
-        v, level = self._bracketed_level_speed(residual, guess)
+        # only the rows the secant left matter (the others keep v1): a row without level
+        # flight no longer holds every row's bracket to its 40 widenings and 100 steps
+        v, level = self._bracketed_level_speed(residual, guess, ~done & self.active)
         return np.where(done, v1, v), done | level
 
     def _thrust_step(self, residual: Any, end: float, rows: NDArray[np.bool_]) -> _Step:
@@ -196,18 +198,26 @@ class SaggingFlight:
         here = rows & ~beyond & (f_below >= 0.0)
         return _Step(below, above, f_below, f_above, beyond, here, rows & ~beyond & ~here)
 
-    def _bracketed_level_speed(self, residual: Any, guess: Array) -> tuple[Array, Array]:
-        """:meth:`level_speed` by bracket and Illinois (the secant's fallback)."""
+    def _bracketed_level_speed(self, residual: Any, guess: Array,
+                               need: NDArray[np.bool_]) -> tuple[Array, Array]:
+        """:meth:`level_speed` by bracket and Illinois (the secant's fallback) for the rows
+        ``need``; the other rows' answers are not used."""
         low, high = guess * (1.0 - _BRACKET), guess * (1.0 + _BRACKET)
         f_low, f_high = residual(low), residual(high)
         for _ in range(_WIDENINGS):  # the fast root: excess above it falls below zero
-            short = (~(f_low >= 0.0) | ~(f_high < 0.0)) & self.active
+            short = (~(f_low >= 0.0) | ~(f_high < 0.0)) & need
             if not short.any():
                 break
             width = high - low
-            low = np.where(f_low >= 0.0, low, np.maximum(low - width, 1e-3 * guess))
-            high = np.where(f_high < 0.0, high, high + width)
-            f_low, f_high = residual(low), residual(high)
+            wider = np.where(f_low >= 0.0, low, np.maximum(low - width, 1e-3 * guess))
+            higher = np.where(f_high < 0.0, high, high + width)
+            lower, upper = (need & (wider != low)).any(), (need & (higher != high)).any()
+            if not (lower or upper):
+                break  # low at its floor, high past the root: every further widening the same
+            if lower:  # an end no row needed moved keeps its residual
+                low, f_low = wider, residual(wider)
+            if upper:
+                high, f_high = higher, residual(higher)
         bracketed = (f_low >= 0.0) & (f_high < 0.0)
         if self.m.extrapolation_n is not None:
             # a bracket across a step of the thrust: narrowed to the root's side, or closed on
@@ -224,7 +234,7 @@ class SaggingFlight:
                 f_high = np.where(step.here, step.f_above,
                                   np.where(step.under, step.f_below, f_high))
         low, high, f_low, f_high = illinois(residual, low, high, f_low, f_high,
-                                            bracketed & ~(high - low <= 1e-9 * high),
+                                            bracketed & need & ~(high - low <= 1e-9 * high),
                                             _ILLINOIS_STEPS)
         nearer = np.abs(f_low) <= np.abs(f_high)
         v = np.where(nearer, low, high)
