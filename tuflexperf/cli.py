@@ -1347,8 +1347,9 @@ def main(argv: list[str] | None = None) -> None:
         sys.stderr.write("tuflexperf: aborted\n")
         sys.exit(130)
 
-    _refuse_empty(sys.argv[1:] if argv is None else list(argv))
-    _refuse_repeated(sys.argv[1:] if argv is None else list(argv))
+    args = sys.argv[1:] if argv is None else list(argv)
+    _refuse_empty(args)
+    _refuse_repeated(args)
     try:
         code = app(args=argv, standalone_mode=False, prog_name="tuflexperf")
     except (Abort, KeyboardInterrupt):  # click's word for an interrupt, or one before click's

@@ -260,16 +260,20 @@ class PerformanceProblems:
         thrust = total_thrust_n(self.propulsion, 1.0, v, rho, dead, self.mode)
         return climb_rate_m_s(self.aircraft, thrust, v, rho)
 
+    def _steady_gradient(self, v: Any, rho: Any, dead: int | None) -> Any:
+        """Full-throttle ``(T - D) / W`` [-] (numpy), not yet bounded by a vertical climb."""
+        thrust = total_thrust_n(self.propulsion, 1.0, v, rho, dead, self.mode)
+        return climb_gradient(self.aircraft, thrust, v, rho)
+
     def gradient(self, v: Any, rho: Any, dead: int | None = None) -> Any:
         """Full-throttle climb gradient [-] (numpy), at most 1 (a vertical climb)."""
-        return climb_sine(self.excess_n(v, rho, dead) / self.aircraft.weight_n)
+        return climb_sine(self._steady_gradient(v, rho, dead))
 
     def vertical_range_m_s(self, rho: float, dead: int | None = None) -> tuple[float, float] | None:
         """(lowest, highest) scanned airspeed [m/s] where full thrust exceeds weight plus drag
         (a gradient above 1: the climb is vertical), or ``None`` where it nowhere does."""
         grid, _ = self.scan(rho)
-        over = grid[np.asarray(self.excess_n(grid, rho, dead), dtype=float)
-                    > self.aircraft.weight_n]
+        over = grid[np.asarray(self._steady_gradient(grid, rho, dead), dtype=float) > 1.0]
         return (float(over[0]), float(over[-1])) if over.size else None
 
     def speed_cap_m_s(self, rho: Any) -> Any:
