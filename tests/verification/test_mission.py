@@ -1015,3 +1015,19 @@ def test_a_commanded_climb_steeper_than_vertical_is_not_attainable(tmp_path: Pat
     assert not result.attainable
     assert ("segment 2 (climb): a climb at 25 m/s is steeper than vertical at 20.0 m/s true "
             "airspeed: not attainable") in result.reason
+
+
+def test_a_climb_that_cannot_climb_says_nothing_of_a_vertical_climb(tmp_path: Path) -> None:
+    """Throttle 0.3 at 20 m/s: thrust below drag, so the climb fails; the nodes integrated
+    past that failure (unphysical states, enormous densities) are not read for the vertical
+    note (it said "exceeds weight plus drag: flown as a vertical climb" beside the FAIL)."""
+    path = _mission(tmp_path, """\
+        name: weak
+        segments:
+          - {type: takeoff}
+          - {type: climb, to_altitude_m: 100, airspeed_m_s: 20, throttle: 0.3}
+        """)
+    result = MissionModel(load_case(None), load_mission(path), None).fly()
+    assert not result.attainable
+    assert "segment 2 (climb): cannot climb at throttle 0.3" in result.reason
+    assert not any("weight plus drag" in w for w in result.warnings)

@@ -1076,17 +1076,19 @@ class MissionModel:
                     problems.append((k0, f"a {'climb' if climbing else 'descent'} at "
                                      f"{abs(plan.rate):g} m/s is steeper than vertical at "
                                      f"{v[a + k0]:.1f} m/s true airspeed: not attainable"))
-                if plan.rate_from_excess and np.any(level_residual[sl] > 1.0):
-                    vertical.append(
-                        f"{label}: thrust at throttle {plan.throttle:g} exceeds weight plus "
-                        "drag: flown as a vertical climb (rate of climb at the airspeed); the "
-                        "steady-climb model (L = W) does not hold there, the excess would "
-                        "accelerate it")
                 if plan.solve_x and not climbing:
                     steep = np.flatnonzero(idle[sl] > 1e-9)
                     if steep.size:
                         problems.append((int(steep[0]), f"needs less than idle thrust to descend "
                                          f"at {-plan.rate:g} m/s"))
+                # only the nodes flown: past a failure the integration runs on unphysical states
+                flown = level_residual[sl][:min(problems)[0] if problems else None]
+                if plan.rate_from_excess and np.any(flown > 1.0):
+                    vertical.append(
+                        f"{label}: thrust at throttle {plan.throttle:g} exceeds weight plus "
+                        "drag: flown as a vertical climb (rate of climb at the airspeed); the "
+                        "steady-climb model (L = W) does not hold there, the excess would "
+                        "accelerate it")
             if problems and first_bad is None:
                 k, why = min(problems)
                 at = exact_at.get(why, float(t[a + k]))
