@@ -91,6 +91,17 @@ def test_takeoff_not_attainable_is_exit_1_with_reason(tmp_path):
     assert item["value"] is None and item["passed"] is False and "never" in item["reason"]
 
 
+def test_an_arc_beyond_cl_max_prints_no_nan():
+    """Load factor 1.5 at 1.15 V_stall needs CL beyond cl_max: no arc, said as n/a ('nan m'
+    before), and the obstacle distance FAILs with the reason."""
+    result = run("takeoff", "--set", "aircraft.takeoff.transition_load_factor=1.5",
+                 "--set", "requirements.takeoff.max_distance_to_obstacle_m=200")
+    assert result.exit_code == 1
+    assert "nan" not in result.stdout.lower()
+    assert "transition arc          n/a m" in result.stdout
+    assert "beyond cl_max" in result.stdout
+
+
 def test_set_gives_an_optional_key_the_case_leaves_unset():
     # the shipped aircraft has no lift-off speed (it uses the factor); --set may give one,
     # as the file could, and the take-off then lifts off at it (an EAS, sea level: = TAS)

@@ -206,7 +206,8 @@ def _echo_electrical(electrical: dict[str, Any] | None) -> None:
 
 
 def _fmt(value: float | None, digits: int = 3) -> str:
-    return "n/a" if value is None else f"{value:.{digits}f}"
+    # NaN is what a result holds where no value exists (an arc beyond cl_max): never printed
+    return "n/a" if value is None or value != value else f"{value:.{digits}f}"
 
 
 def _print_warnings(warnings: list[str]) -> None:
@@ -594,8 +595,9 @@ def takeoff(
             )
         typer.echo(f"  ground roll        {r.ground_roll_m:8.2f} m  in {r.time_s:.2f} s")
         typer.echo(
-            f"  transition arc     {r.transition_distance_m:8.2f} m  (R {r.transition_radius_m:.1f}"
-            f" m at {r.transition_speed_m_s:.2f} m/s, n {r.transition_load_factor:g})"
+            f"  transition arc     {_fmt(r.transition_distance_m, 2):>8} m  "
+            f"(R {r.transition_radius_m:.1f} m at {r.transition_speed_m_s:.2f} m/s, "
+            f"n {r.transition_load_factor:g})"
         )
         angle = r.climb_angle_deg
         typer.echo(
