@@ -74,6 +74,9 @@ CASES = [
     ("aircraft", ["cl_max"], 100.0, "aircraft.yaml", "cl_max"),
     # an unbounded value overflowed into a message naming no file or key (outside audit)
     ("aircraft", ["takeoff", "cl_ground"], 1e308, "aircraft.yaml", "takeoff.cl_ground"),
+    # a ground-roll lift above cl_max held the weight below stall (2.5 on 1.69 "passed" with
+    # a note; outside audit)
+    ("aircraft", ["takeoff", "cl_ground"], 2.5, "aircraft.yaml", "takeoff.cl_ground"),
     ("propulsion", ["voltage_exponent"], 1000.0, "propulsion.yaml", "voltage_exponent"),
     ("propulsion", ["reference_voltage_v"], 1e300, "propulsion.yaml", "reference_voltage_v"),
     ("requirements", ["takeoff", "obstacle_height_m"], 15000.0, "case.yaml",

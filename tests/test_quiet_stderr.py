@@ -27,7 +27,8 @@ def _run(*args: str, cwd=None) -> subprocess.CompletedProcess:
     # a roll whose net force all but vanishes: CVODES gives up, and CasADi printed each try's
     # inputs (54 lines) before the one-line reason
     (("check", "--json", "--set", "aircraft.mass_kg=11.446817162898647",
-      "--set", "aircraft.takeoff.cl_ground=2.0", "--set", "aircraft.takeoff.rolling_friction=1.0",
+      "--set", "aircraft.takeoff.cl_ground=2.0", "--set", "aircraft.cl_max=2.0",
+      "--set", "aircraft.takeoff.rolling_friction=1.0",
       "--set", "aircraft.takeoff.liftoff_speed_factor=1.1359427930494517"), 1),
 ])
 def test_extreme_values_leave_stderr_to_the_tool(tmp_path, args, code) -> None:

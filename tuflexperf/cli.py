@@ -328,8 +328,8 @@ def check(
                     "not met",
                     REFUSED_AIRCRAFT_KEY: "are aircraft check refuses (a full-throttle static "
                     "thrust not positive or above 10 x the weight: physically absurd; a stall "
-                    "beyond the speed of sound; a release or lift-off speed below stall); they "
-                    "count as not met",
+                    "beyond the speed of sound; a release or lift-off speed below stall; "
+                    "cl_ground above cl_max); they count as not met",
                 }.get(key, f"of {key} fall outside its valid range; they count as not met")
                 typer.echo(f"  note: {count} samples {what}")
             for note in sample_notes:
@@ -414,7 +414,7 @@ def margins(
     if any(m.binds == "aircraft refused" for m in rows):
         typer.echo("#: where check refuses the aircraft as bad input (a lift-off or catapult "
                    "release below stall, a stall beyond the speed of sound, thrust above 10 x "
-                   "the weight): the search ends there")
+                   "the weight, cl_ground above cl_max): the search ends there")
     if any(m.binds == "envelope ends" for m in rows):
         typer.echo("^: where the envelope's bounds cross (an equivalent-airspeed bound at that "
                    "density): beyond it the case has no envelope to fly")

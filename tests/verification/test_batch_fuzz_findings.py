@@ -19,7 +19,10 @@ from tuflexperf.io.case import load_case
 from tuflexperf.io.dotted import with_values
 
 runner = CliRunner()
-GRASS = {"aircraft.takeoff.cl_ground": 2.0, "aircraft.takeoff.rolling_friction": 1.0}
+# cl_max as high as cl_ground (no ground lift beyond it): the force's least lies where the
+# lift unloads the wheels, inside the roll either way, so the rows' masses stand
+GRASS = {"aircraft.takeoff.cl_ground": 2.0, "aircraft.cl_max": 2.0,
+         "aircraft.takeoff.rolling_friction": 1.0}
 
 ROWS = [
     # the net force dips below 0 between the batch's 101 check points: -796 m "passed"
@@ -134,6 +137,13 @@ def test_the_batch_refuses_aircraft_the_schema_refuses(tmp_path) -> None:
     assert swept.exit_code == 2 and "is below the stall speed" in swept.stderr
     single = runner.invoke(app, ["check", str(path), "--set", "aircraft.mass_kg=40"])
     assert single.exit_code == 2 and "is below the stall speed" in single.stderr
+    # a ground-roll lift coefficient above cl_max: refused by both (the sweep flew it)
+    swept = runner.invoke(app, ["sweep", "--vary", "aircraft.takeoff.cl_ground=1.5:2.5:3"])
+    assert swept.exit_code == 2 and "above cl_max 1.6936" in swept.stderr
+    evaluator = BatchEvaluator(load_case(SHIPPED_CASE))
+    values = {"aircraft.takeoff.cl_ground": np.array([1.6936, 1.6937]),
+              "aircraft.cl_max": np.array([1.6936, 1.6936])}
+    assert evaluator.rows_refused(values, 2).tolist() == [False, True]
 
 
 def test_margins_end_where_check_refuses_the_aircraft(tmp_path) -> None:

@@ -148,7 +148,10 @@ def _best_rate_at(h, offset=0.0, reference=1.225, aircraft=AIRCRAFT):
     [(0.0, 1.6), (15.0, 1.6), (0.0, 0.35)],  # 0.35: Vy is on the stall bound at the ceiling
 )
 def test_ceilings_with_density_lapse_equal_closed_form(tmp_path, offset, cl_max):
-    aircraft = {**AIRCRAFT, "cl_max": cl_max}
+    # the ground roll's lift coefficient at most cl_max (the ceilings do not depend on it)
+    aircraft = {**AIRCRAFT, "cl_max": cl_max,
+                "takeoff": {**AIRCRAFT["takeoff"],
+                            "cl_ground": min(AIRCRAFT["takeoff"]["cl_ground"], cl_max)}}
     case = _case(tmp_path, aircraft,
                  atmosphere={"altitude_m": 0, "temperature_offset_k": offset})
     r = solve_performance(case)

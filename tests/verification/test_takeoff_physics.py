@@ -153,7 +153,9 @@ def test_friction_is_clamped_never_pushes():
 
 def test_high_cl_ground_roll_matches_clamped_integration(tmp_path):
     aircraft = copy.deepcopy(MADE_UP_AIRCRAFT)
-    aircraft["takeoff"].update(cl_ground=2.5, rolling_friction=0.2)  # lift > weight before V_LO
+    # lift > weight before V_LO (at 1.02 V_stall; cl_ground above cl_max is refused)
+    aircraft.update(cl_max=2.6)
+    aircraft["takeoff"].update(cl_ground=2.5, rolling_friction=0.2)
     case = _case(tmp_path, aircraft)
     result = solve_takeoff(case)
     distance, _, _ = _independent_roll(aircraft, MADE_UP_PROPULSION, case.density_kg_m3)

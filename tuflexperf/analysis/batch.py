@@ -545,7 +545,8 @@ class BatchEvaluator:
         across its keys): an engine's full-throttle static thrust [N] not positive, or above
         ``ABSURD_THRUST_TO_WEIGHT`` x the row's weight (a 0.01 kg draw of a 26 kg aircraft
         passed everything; outside audit); a stall speed beyond the speed of sound; a
-        catapult's release or a given lift-off speed below the row's stall (EAS)."""
+        catapult's release or a given lift-off speed below the row's stall (EAS); a runway's
+        ground-roll lift coefficient above ``cl_max``."""
         from tuflexperf.io.case import ABSURD_THRUST_TO_WEIGHT
 
         aircraft = self._aircraft(values, size)
@@ -558,6 +559,9 @@ class BatchEvaluator:
                       aircraft.takeoff.liftoff_speed_m_s):
             if speed is not None:
                 refused |= np.asarray(speed, dtype=float).reshape(-1) < stall_eas
+        if aircraft.launch == "runway":
+            refused |= (np.asarray(aircraft.takeoff.cl_ground, dtype=float).reshape(-1)
+                        > np.asarray(aircraft.cl_max, dtype=float).reshape(-1))
         propulsion = self._propulsion(coefficients)
         # at the row's air density, as the single case's analyses scale the thrust
         scale = density_ratio(propulsion, self._density(values, size))

@@ -112,6 +112,11 @@ class AircraftSchema(StrictModel):
                 )
         elif self.launch_speed_m_s is not None or self.launch_energy_j is not None:
             raise ValueError("launch_speed_m_s/launch_energy_j: only with launch: catapult")
+        elif self.takeoff.cl_ground > self.cl_max:  # it would hold the weight below stall
+            raise ValueError(
+                f"takeoff.cl_ground: {self.takeoff.cl_ground:g} is above cl_max "
+                f"{self.cl_max:g}; on the runway too the wing lifts at most cl_max"
+            )
         # the stall EAS is the same at every density, so the check belongs to the file
         liftoff = self.takeoff.liftoff_speed_m_s
         if liftoff is not None:
