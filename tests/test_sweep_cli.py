@@ -116,3 +116,18 @@ def test_a_set_the_grid_replaces_does_not_refuse_a_valid_grid() -> None:
                               "aircraft.cd0=0.03:0.04:2"])
     assert bad.exit_code == 2
     assert bad.stderr.startswith("tuflexperf: error: --set: aircraft.mass_kg")
+
+
+def test_sweep_refuses_what_check_refuses_an_oei_on_one_engine(tmp_path) -> None:
+    """One engine and an OEI requirement: check, oei, margins and --samples refuse it; the
+    sweep tabulated 'not attainable FAIL' at every point and exited 0 (outside audit)."""
+    from tests.conftest import MADE_UP_PROPULSION, write_case
+
+    one = {**MADE_UP_PROPULSION, "engines": MADE_UP_PROPULSION["engines"][:1]}
+    case = write_case(tmp_path, propulsion=one,
+                      requirements={"oei": {"dead_engine": "zero", "max_throttle": 1.0}})
+    for argv in (["check", str(case)],
+                 ["sweep", "--case", str(case), "--vary", "aircraft.mass_kg=8:12:3"]):
+        result = runner.invoke(app, argv)
+        assert result.exit_code == 2, (argv, result.stdout)
+        assert result.stderr.strip().endswith("engines: OEI needs at least two engines")
