@@ -92,3 +92,70 @@ def test_pydantic_plugins_stay_out_unless_the_user_asks(tmp_path, setting, loade
                           capture_output=True, text=True, env=env)
     assert done.returncode == 0, done.stderr
     assert marker.exists() is loaded
+
+
+def _tool(*argv: str) -> list[str]:
+    return [sys.executable, "-m", "tuflexperf", *argv]
+
+
+@pytest.mark.parametrize(("mass", "status"), [("22", 0), ("29", 1)])
+def test_a_reader_gone_leaves_the_verdict_its_exit_status(mass, status):
+    """`check | true`: the reader closes the pipe before the first line. The write's
+    BrokenPipeError ended a failing check with 0 (a PASS under `set -o pipefail`; outside
+    audit); now the command runs on, its lines dropped, and exits with its own verdict."""
+    proc = subprocess.Popen(_tool("check", "--set", f"aircraft.mass_kg={mass}"),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # before the ~0.3 s of imports are over: every write hits EPIPE
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == status, err
+    assert b"Traceback" not in err and err == b""
+
+
+def test_a_closed_stream_is_no_traceback():
+    """Started with stdout or stderr closed (`>&-`, a daemon): Python's sys.stdout is None,
+    and the first write was an AttributeError traceback with exit 1 (a PASS and bad input
+    alike)."""
+    import os
+
+    def run(argv: list[str], fd: int) -> subprocess.CompletedProcess:
+        return subprocess.run(_tool(*argv), capture_output=True, timeout=120,
+                              preexec_fn=lambda: os.close(fd))
+
+    assert run(["check"], 1).returncode == 0
+    assert run(["check", "--set", "aircraft.mass_kg=29"], 1).returncode == 1
+    refused = run(["check", "nonexistent.yaml"], 2)
+    assert refused.returncode == 2 and refused.stdout == b""
+    assert run(["check", "nonexistent.yaml"], 1).returncode == 2
+
+
+def test_a_stream_whose_reader_went_away_drops_its_writes():
+    import os
+
+    from tuflexperf.io.streams import ReaderTolerantStream
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    with os.fdopen(write_end, "w") as raw:
+        stream = ReaderTolerantStream(raw)
+        assert stream.write("one line\n") == 9
+        stream.flush()  # EPIPE: the reader is gone
+        assert stream.reader_gone
+        stream.writelines(["and more\n"] * 3)
+        stream.flush()
+    # its descriptor points at /dev/null now: the interpreter's last flush cannot raise
+
+
+def test_library_exit_cleanups_still_run(tmp_path):
+    """os._exit skipped atexit: matplotlib's temporary config folder (made where its own is
+    not writable) stayed in TMPDIR after every plot."""
+    import os
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    env = {**os.environ, "TMPDIR": str(scratch), "MPLCONFIGDIR": "/proc/not-writable"}
+    done = subprocess.run(_tool("sweep", "--vary", "aircraft.mass_kg=20:24:2", "--plot",
+                                str(tmp_path / "s.png")), capture_output=True, env=env,
+                          timeout=300)
+    assert done.returncode in (0, 1), done.stderr
+    assert (tmp_path / "s.png").exists()
+    assert list(scratch.iterdir()) == []

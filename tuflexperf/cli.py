@@ -1210,8 +1210,10 @@ def _guarded(callback: Any) -> Any:
             _unless_interrupted()
             sys.stderr.write(f"tuflexperf: error: {one_line(str(exc))}\n")
             raise typer.Exit(2) from None
-        except BrokenPipeError:  # the reader went away (`| head`): nothing more to say
-            raise typer.Exit(0) from None
+        except BrokenPipeError:  # a pipe of the command's own (io.streams guards stdout):
+            # no verdict was given, so none is claimed (exit 0 here "passed" `check | head`)
+            sys.stderr.write("tuflexperf: error: the output's reader went away\n")
+            raise typer.Exit(2) from None
         except OverflowError:  # a number of the input far beyond any aircraft's
             _unless_interrupted()
             sys.stderr.write("tuflexperf: error: a number of the input is too large to compute "
@@ -1333,8 +1335,11 @@ def main(argv: list[str] | None = None) -> None:
     from typer.exceptions import Abort, TyperException
 
     from tuflexperf.io.files import hold_interrupts, install_interrupt_handlers, interrupted
+    from tuflexperf.io.streams import guard_standard_streams
 
     install_interrupt_handlers()  # SIGTERM unwinds like Ctrl-C: no staging left behind
+    # `check | head -1`: the reader gone, the command still runs to its own exit status
+    guard_standard_streams()
     # pydantic otherwise scans every installed package's entry points for plugins on the
     # first model (importlib.metadata, ~10 ms of each `check`); a user may still enable them
     os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")

@@ -9,6 +9,7 @@ no cleanup is owed: the process ends at once with the interrupt's exit code.
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import os
 import signal
@@ -72,7 +73,10 @@ def main() -> None:
                 signal.signal(signum, signal.SIG_IGN)
         else:
             _exit_on_interrupt()
+        # what libraries clean up at exit (matplotlib's temporary config folder where its
+        # own is not writable) is not teardown: os._exit skipped it and left the folder
+        atexit._run_exitfuncs()
         for stream in (sys.stdout, sys.stderr):
-            with contextlib.suppress(OSError, ValueError):
+            with contextlib.suppress(OSError, ValueError, AttributeError):  # None: closed
                 stream.flush()
     os._exit(status)
