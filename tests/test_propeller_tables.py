@@ -147,6 +147,13 @@ def test_fit_accepts_a_propeller_manifest(tmp_path: Path) -> None:
          "file not found"),
         ({"max_rpm": {"P1": 1500}}, "above max_rpm"),
         ({"max_rpm": {"nobody": 1500}}, "no table for engine"),
+        # 1e100 m overflowed into a message naming no file or key (outside audit)
+        ({"tables": [{"file": "x.txt", "format": "uiuc", "engine": "E", "diameter_m": 1e100,
+                      "rpm": 4000}]}, "diameter_m"),
+        ({"air_density_kg_m3": 1e300}, "air_density_kg_m3"),
+        # the engine names a thrust table's CSV columns, as in a campaign
+        ({"tables": [{"file": "x.txt", "format": "apc_per3", "engine": "=1+1"}]},
+         "fills CSV cells"),
     ],
 )
 def test_bad_propeller_manifests(tmp_path: Path, change: dict, message: str) -> None:

@@ -36,21 +36,24 @@ from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.runs import ThrustTable
-from tuflexperf.io.yamlio import FileName, Name, StrictModel, load_model
+from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, load_model
 
 MPH_M_S = 0.44704  # exact (1609.344 m / 3600 s)
 LBF_N = 0.45359237 * 9.80665  # exact
 ISA_SEA_LEVEL_DENSITY_KG_M3 = 1.225
-Positive = Annotated[float, Field(gt=0)]
+# the largest propellers are ~6 m across; 1e100 m overflowed far from the file (outside audit)
+Diameter = Annotated[float, Field(gt=0, le=10.0)]
+Rpm = Annotated[float, Field(gt=0, le=500_000.0)]
+AirDensity = Annotated[float, Field(gt=0, le=2.0)]  # ISA sea level 1.225
 _RPM = re.compile(r"PROP\s+RPM\s*=\s*(\S*)", re.IGNORECASE)
 
 
 class TableEntry(StrictModel):
     file: FileName
     format: Literal["uiuc", "apc_per3"]
-    engine: Annotated[str, Field(min_length=1)]
-    diameter_m: Positive | None = None
-    rpm: Positive | None = None
+    engine: EngineName
+    diameter_m: Diameter | None = None
+    rpm: Rpm | None = None
 
     @model_validator(mode="after")
     def _uiuc_needs(self) -> TableEntry:
@@ -62,8 +65,8 @@ class TableEntry(StrictModel):
 class PropellerTablesSchema(StrictModel):
     file_kind: ClassVar[str] = "propeller-table manifest"  # named when another kind is given
     name: Annotated[Name, Field(min_length=1)]
-    air_density_kg_m3: Positive = ISA_SEA_LEVEL_DENSITY_KG_M3
-    max_rpm: dict[str, Positive] = {}
+    air_density_kg_m3: AirDensity = ISA_SEA_LEVEL_DENSITY_KG_M3
+    max_rpm: dict[str, Rpm] = {}
     tables: Annotated[list[TableEntry], Field(min_length=1)]
 
 
