@@ -699,3 +699,24 @@ def test_an_empty_value_or_a_gzipped_table_is_said_as_such(tmp_path, capsys):
     assert "table.csv.gz: gzip-compressed" in refused(
         ["report", "--campaign", str(table), "--out", str(tmp_path / "r")])
     assert not (tmp_path / "p.yaml").exists() and not (tmp_path / "r").exists()
+
+
+def test_a_removed_working_directory_is_named(tmp_path):
+    """fit without --out writes beside the working directory's paths: removed under it, the
+    error said 'stdout: No such file or directory' (outside audit)."""
+    import os
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    gone = tmp_path / "gone"
+    gone.mkdir()
+    done = subprocess.run(
+        [sys.executable, "-m", "tuflexperf", "fit",
+         str(ROOT / "data" / "tuflex" / "campaign" / "campaign.yaml")],
+        cwd=gone, preexec_fn=lambda: os.rmdir(gone), capture_output=True, text=True,
+        timeout=300, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == ("tuflexperf: error: the working directory (removed while in use): "
+                           "No such file or directory\n")

@@ -1199,6 +1199,16 @@ _RESULT_KEYS: dict[str, tuple[str, ...]] = {
 _SYMLINK_LOOP = "Symlink loop from "
 
 
+def _unnamed_os_error_place() -> str:
+    """What an OS error without a file name is about: a working directory that was removed
+    (a relative path resolves through it), else the output stream."""
+    try:
+        os.getcwd()
+    except OSError:
+        return "the working directory (removed while in use)"
+    return "stdout"
+
+
 def _guarded(callback: Any) -> Any:
     """Turn InputError into exit 2 and NotAttainable into exit 1, one line on stderr each."""
 
@@ -1224,7 +1234,7 @@ def _guarded(callback: Any) -> Any:
             _unless_interrupted()
             import errno
 
-            where = exc.filename or "stdout"
+            where = exc.filename or _unnamed_os_error_place()
             why = "disk full" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
             sys.stderr.write(f"tuflexperf: error: {one_line(f'{where}: {why}')}\n")
             raise typer.Exit(2) from None
