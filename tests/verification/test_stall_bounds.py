@@ -46,6 +46,8 @@ def _shipped_variant(tmp_path, **changes):
     aircraft = yaml.safe_load((root / "aircraft.yaml").read_text())
     aircraft.update(changes)
     aircraft["takeoff"].pop("liftoff_speed_m_s", None)  # the default 1.1 x stall EAS
+    # the ground roll's lift coefficient at most cl_max (above it: bad input)
+    aircraft["takeoff"]["cl_ground"] = min(aircraft["takeoff"]["cl_ground"], aircraft["cl_max"])
     propulsion = yaml.safe_load((root / "propulsion.yaml").read_text())
     requirements = {
         "envelope": {"min_airspeed_m_s": 15, "max_airspeed_m_s": 45, "max_trim_throttle": 1.0},
