@@ -237,3 +237,18 @@ def test_the_figures_dynamic_model_is_the_exported_step(tmp_path: Path, delay_s:
     for k, engine in enumerate(prop.engines):
         drawn = dynamic_thrust_n(engine, time, throttle, v, 1.0, delay_s, lag_s)
         np.testing.assert_allclose(drawn, stepped[:, k], rtol=1e-12, atol=1e-12)
+
+
+def test_a_long_take_off_title_stays_on_the_page(tmp_path: Path) -> None:
+    """A lift-off that cannot climb away puts the obstacle's whole reason in the take-off
+    page's title (~190 characters): it ran off both edges of the page."""
+    from tuflexperf.report import figures as fg
+
+    copy_shipped_case(tmp_path)
+    aircraft = tmp_path / "data" / "tuflex" / "aircraft.yaml"
+    aircraft.write_text("\n".join(("k: 0.3" if line.startswith("k:") else line)
+                                  for line in aircraft.read_text().splitlines()) + "\n")
+    case, analyses, _ = _drawn_inputs(tmp_path / "requirements" / "tuflex.yaml")
+    fig = fg.takeoff_history(case, analyses)
+    assert "is never" in fig._suptitle.get_text()  # wrapped: its words on two lines
+    assert texts_off_the_page(fig) == []

@@ -788,11 +788,11 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     _legend(af)
     start = (f"catapult release at {v_lo:.1f} m/s, no ground roll" if catapult else
              f"ground roll {roll:.1f} m to lift-off at {v_lo:.1f} m/s")
-    fig.suptitle(
+    # the obstacle's reason may be long (never cleared, and why): wrapped, not cut at the edges
+    fig.suptitle(_wrap(
         f"Take-off of {case.name} at full throttle: {start}"
         + (f", {obstacle:.1f} m to the {result.obstacle_height_m:g} m obstacle"
-           if obstacle is not None else f"; {result.obstacle_reason}")
-    )
+           if obstacle is not None else f"; {result.obstacle_reason}"), 140))
     return fig
 
 
