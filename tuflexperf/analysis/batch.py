@@ -656,6 +656,17 @@ class _Model:
         total = np.asarray(total, dtype=float)
         return np.broadcast_to(total, np.broadcast_shapes(total.shape, (self.size, 1)))
 
+    def engine_thrust(self, index: int, throttle: Any, speed: Array) -> Array:
+        """One live engine's thrust [N], as :meth:`thrust` counts it in the total (its model
+        at the row's density, its extrapolation error beyond the tested range)."""
+        scale = density_ratio(self.propulsion, self.density)
+        own = engine_thrust_n(self.propulsion.engines[index], throttle, speed, scale)
+        if self.extrapolation_n is not None:
+            outside = outside_tested_range(self.propulsion, speed).astype(float)
+            own = own + scale * outside * self.extrapolation_n[index][:, None]
+        own = np.asarray(own, dtype=float)
+        return np.broadcast_to(own, np.broadcast_shapes(own.shape, (self.size, 1)))
+
     # -- take-off -----------------------------------------------------------------------------
     def net_force(self, speed: Array) -> Array:
         thrust = self.thrust(1.0, speed)

@@ -110,10 +110,10 @@ class SaggingFlight:
         m, v = self.m, speed.reshape(-1, 1)
         if np.ndim(throttle):  # one throttle per row: a column against the rows' airspeeds
             throttle = np.reshape(throttle, (-1, 1))
-        total = m.thrust(throttle, v)[:, 0]
         if self.engines == (None,):
-            return total[None, :]
-        return np.stack([total - m.thrust(throttle, v, dead=j, mode="zero")[:, 0]
+            return m.thrust(throttle, v)[:, 0][None, :]
+        # each fan's own (the total less the others' took three totals for two fans)
+        return np.stack([m.engine_thrust(j, throttle, v)[:, 0]
                          for j in range(len(self.engines))])
 
     def point(self, throttle: Any, speed: Array, charge: Array
