@@ -119,6 +119,16 @@ def test_bad_uncertainty_block_names_the_key(tmp_path) -> None:
     path = shipped_with(tmp_path, {"samples": 10, "required_probability": 1})
     result = runner.invoke(app, ["check", str(path)])
     assert result.exit_code == 2 and "required_probability" in result.stderr
+    # a count written 1e9 (a float in YAML) named no cap ("not a valid integer"); a whole
+    # number in that notation is the integer, a fraction is still refused
+    for samples, said in ((1e9, "less than or equal to 100000000"),
+                          (2500.5, "a valid integer")):
+        path = shipped_with(tmp_path, {"samples": samples})
+        result = runner.invoke(app, ["check", str(path)])
+        assert result.exit_code == 2 and f"uncertainty.samples: Input should be {said}" in \
+            result.stderr, result.stderr
+    assert load_case(shipped_with(tmp_path, {"samples": 2e3, "seed": 7.0})).uncertainty.samples \
+        == 2000
 
 
 def test_set_on_a_sampled_key_says_the_samples_follow_the_block(tmp_path) -> None:

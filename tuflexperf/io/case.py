@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
-from pydantic import Field, field_validator, model_validator
+from pydantic import BeforeValidator, Field, field_validator, model_validator
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, count_values, load_model
@@ -405,9 +405,17 @@ class PropulsionUncertaintySchema(StrictModel):
     residual: bool = True
 
 
+def _whole_number(value: Any) -> Any:
+    """``1e5`` is how a count is often written, and YAML reads it as a float: a whole one is
+    the integer (``1e9`` then names the cap, not "not a valid integer"); 2.5 stays refused."""
+    if isinstance(value, float) and value.is_integer() and abs(value) < 2.0 ** 63:
+        return int(value)
+    return value
+
+
 class UncertaintySchema(StrictModel):
-    samples: Annotated[int, Field(ge=1, le=MAX_SAMPLES)] = 10_000
-    seed: Annotated[int, Field(ge=0)] = 1
+    samples: Annotated[int, BeforeValidator(_whole_number), Field(ge=1, le=MAX_SAMPLES)] = 10_000
+    seed: Annotated[int, BeforeValidator(_whole_number), Field(ge=0)] = 1
     # below 1: the lower confidence bound of P(met) never reaches 1 with finite samples
     required_probability: Annotated[float, Field(gt=0, lt=1)] = 0.95
     propulsion: PropulsionUncertaintySchema = PropulsionUncertaintySchema()
