@@ -720,3 +720,22 @@ def test_a_removed_working_directory_is_named(tmp_path):
     assert done.returncode == 2, done.stderr
     assert done.stderr == ("tuflexperf: error: the working directory (removed while in use): "
                            "No such file or directory\n")
+
+
+@pytest.mark.parametrize("line", ["exp_rate_per_ah: -50", "slope_v_per_ah: -5",
+                                  "knee_v: -0.1", "exp_amplitude_v: -1"])
+def test_a_pack_circuit_of_the_wrong_sign_names_its_key(tmp_path, line):
+    """exp_rate_per_ah -50 (a voltage rising as e^{50 q}) "reached cut-off after 2.4e117 min"
+    in a message that blamed capacity_ah (outside audit): the circuit's signs are bounded as
+    the fit bounds them."""
+    from tests.conftest import copy_shipped_case
+
+    case = copy_shipped_case(tmp_path)
+    battery = tmp_path / "data" / "tuflex" / "battery.yaml"
+    key = line.split(":")[0]
+    battery.write_text("\n".join(f"    {line}" if row.strip().startswith(f"{key}:") else row
+                                 for row in battery.read_text().splitlines()) + "\n")
+    result = runner.invoke(app, ["check", str(case)])
+    assert result.exit_code == 2, result.stdout
+    assert f"battery.yaml: fit.parameters.{key}: Input should be greater than" in result.stderr
+    assert len(result.stderr.splitlines()) == 1

@@ -69,11 +69,13 @@ class MissionSchema(StrictModel):
 class PackParametersSchema(StrictModel):
     """The fitted equivalent circuit of one pack (models.battery.DischargeParameters)."""
 
-    e0_v: float
-    slope_v_per_ah: float
-    exp_amplitude_v: float
-    exp_rate_per_ah: float
-    knee_v: float
+    # the circuit's signs, as the fit bounds them: a voltage that rises as charge is drawn
+    # (exp_rate -50: e^{50 q}) "reached cut-off after 2.4e117 min" and blamed the capacity
+    e0_v: Positive
+    slope_v_per_ah: Annotated[float, Field(ge=0)]
+    exp_amplitude_v: Annotated[float, Field(ge=0)]
+    exp_rate_per_ah: Annotated[float, Field(ge=0)]
+    knee_v: Annotated[float, Field(ge=0)]
     max_capacity_ah: Positive
     resistance_ohm: Annotated[float, Field(ge=0)]
 
