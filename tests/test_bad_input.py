@@ -739,3 +739,28 @@ def test_a_pack_circuit_of_the_wrong_sign_names_its_key(tmp_path, line):
     assert result.exit_code == 2, result.stdout
     assert f"battery.yaml: fit.parameters.{key}: Input should be greater than" in result.stderr
     assert len(result.stderr.splitlines()) == 1
+
+
+@pytest.mark.parametrize(("section", "path", "value", "said"), [
+    ("aircraft", ["name"], "", "a name cannot be empty"),
+    ("aircraft", ["name"], "TU-Flex \u202egnp.exe", "bidirectional text control"),
+    ("propulsion", ["tested_airspeed_m_s"], [-30, 30], "tested_airspeed_m_s[0]: Input should be"),
+])
+def test_names_and_tested_range_that_mislead(tmp_path, section, path, value, said):
+    """An empty aircraft name, a right-to-left override in a name (shown in another order
+    than stored, in the exported C and XML) and a negative tested airspeed were accepted
+    (outside audit)."""
+    import copy
+
+    from tests.conftest import MADE_UP_AIRCRAFT, MADE_UP_PROPULSION, write_case
+
+    docs = {"aircraft": copy.deepcopy(MADE_UP_AIRCRAFT),
+            "propulsion": copy.deepcopy(MADE_UP_PROPULSION)}
+    target = docs[section]
+    for key in path[:-1]:
+        target = target[key]
+    target[path[-1]] = value
+    case = write_case(tmp_path, aircraft=docs["aircraft"], propulsion=docs["propulsion"])
+    result = runner.invoke(app, ["check", str(case)])
+    assert result.exit_code == 2 and said in result.stderr, result.stderr
+    assert len(result.stderr.splitlines()) == 1

@@ -198,7 +198,9 @@ class PropulsionSchema(StrictModel):
     file_kind: ClassVar[str] = "propulsion"  # named when another kind of file is given
     name: Name
     model: Literal["poly22"]
-    tested_airspeed_m_s: Annotated[list[float], Field(min_length=2, max_length=2)]
+    # airspeeds tested in the tunnel: none negative (a range of [-30, 30] was taken)
+    tested_airspeed_m_s: Annotated[list[Annotated[float, Field(ge=0)]],
+                                   Field(min_length=2, max_length=2)]
     # a dead time or lag beyond MAX_DELAY_S is no fan's (1e9 s was taken; outside audit)
     delay_s: Annotated[float, Field(ge=0.0, le=MAX_DELAY_S)] = 0.0
     lag_s: Annotated[float, Field(ge=0.0, le=MAX_DELAY_S)] = 0.0  # spool lag after delay_s

@@ -27,6 +27,7 @@ FileName = Annotated[str, Field(min_length=1), AfterValidator(_no_nul)]
 """A file named in a YAML file (relative to that file)."""
 
 MAX_NAME_CHARS = 200
+_BIDI_CONTROLS = ("LRE", "RLE", "LRO", "RLO", "PDF", "LRI", "RLI", "FSI", "PDI")
 
 
 def _one_printable_line(name: str) -> str:
@@ -38,6 +39,13 @@ def _one_printable_line(name: str) -> str:
     if any(unicodedata.category(c) in ("Cc", "Zl", "Zp") for c in name):
         raise ValueError("a name is one line of printable characters (no newline, tab or "
                          "control character)")
+    # a bidirectional override shows a name in another order than it is stored (U+202E
+    # "Trojan Source" in the exported C and XML; outside audit)
+    if any(unicodedata.bidirectional(c) in _BIDI_CONTROLS for c in name):
+        raise ValueError("a name cannot hold a bidirectional text control (U+202A-202E, "
+                         "U+2066-2069)")
+    if not name.strip():
+        raise ValueError("a name cannot be empty")
     if len(name) > MAX_NAME_CHARS:
         raise ValueError(f"a name is at most {MAX_NAME_CHARS} characters, got {len(name)}")
     return name
