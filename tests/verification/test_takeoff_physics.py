@@ -388,29 +388,6 @@ def test_a_lift_off_that_cannot_climb_away_is_said() -> None:
                for w in result.warnings)
 
 
-def test_a_lift_off_that_cannot_climb_away_fails_the_ground_roll() -> None:
-    """The roll is reached but no take-off follows: the ground-roll requirement is not
-    attainable (it PASSed beside a note; a later outside audit), in the batch's rows as in
-    check; where the climb gains height (k = 0.05) both keep the roll."""
-    from tuflexperf.analysis.batch import BatchEvaluator
-    from tuflexperf.analysis.requirements import check_case
-    from tuflexperf.io.dotted import with_values
-
-    case = load_case(None)
-    rows = {"aircraft.k": np.array([0.3, 0.05])}
-    batch = BatchEvaluator(case).evaluate(rows).values["takeoff_ground_roll"]
-    for k, value in zip(rows["aircraft.k"], batch, strict=True):
-        single = with_values(case, {"aircraft.k": float(k)})
-        verdict = {v.name: v for v in check_case(single)}["takeoff_ground_roll"]
-        if k == 0.3:
-            assert verdict.value is None and not verdict.passed and np.isnan(value)
-            assert verdict.reason.startswith("not attainable: after ")
-            assert verdict.reason.endswith("the aircraft cannot climb away")
-            assert solve_takeoff(single).ground_roll_m < 60.0  # the roll alone would pass
-        else:
-            assert verdict.passed and value == pytest.approx(verdict.value, rel=1e-9)
-
-
 def test_the_point_analyses_say_they_take_the_reference_voltage(tmp_path) -> None:
     """Trim, OEI and take-off took the thrust at reference_voltage_v while the pack sags in
     flight (outside audit: a trim PASS that held for the flight's first minutes only); all

