@@ -69,6 +69,9 @@ def test_loaded_voltage_is_the_root_of_the_circuit(exponent: float) -> None:
         if exponent == 0.0 and ocv * ocv < 4 * r * power:
             assert np.isnan(ours)  # beyond the packs' maximum power: no operating point
             continue
+        if charge >= packs * SHIPPED_PACK.max_capacity_ah:
+            assert np.isnan(ours)  # past the circuit's pole: no pack there
+            continue
         # the normal branch: the largest root (U above OCV / 2 at fixed power)
         low = 0.5 * ocv if exponent == 0.0 else 1e-9 * ocv
         assert ours == pytest.approx(brentq(g, low, ocv, xtol=1e-13), rel=1e-10)
@@ -297,3 +300,36 @@ def test_sampled_cruises_cross_the_tested_range_on_sagging_packs(tmp_path) -> No
     nominal = next(v for v in check_case(case) if v.name == "flight_endurance").value
     assert np.isfinite(endurance).all()
     assert np.median(endurance) == pytest.approx(nominal, rel=2e-3)
+
+
+@pytest.mark.parametrize("exponent", [0.0, 3.0])
+def test_no_voltage_past_the_circuits_pole(exponent: float) -> None:
+    """Past q = n Q the knee term changes sign and the formula's "voltage" rose above a full
+    pack's: a take-off that drained 11.35 Ah of 10 Ah passed (outside audit). No pack
+    voltage there, so the packs cannot fly it."""
+    packs = 2.0
+    pole = packs * SHIPPED_PACK.max_capacity_ah
+    charge = np.array([0.5 * pole, pole * (1 - 1e-9), pole, 1.03 * pole, 2.0 * pole])
+    with np.errstate(all="ignore"):  # the formula at its pole divides by zero
+        u = np.asarray(loaded_voltage_at_power_v(SHIPPED_PACK, charge, 1000.0, packs,
+                                                 44.4 if exponent else None, exponent))
+    assert np.isfinite(u[0]) and np.all(np.isnan(u[2:]))
+    full = float(loaded_voltage_at_power_v(SHIPPED_PACK, 0.0, 1000.0, packs,
+                                           44.4 if exponent else None, exponent))
+    assert not np.any(u[np.isfinite(u)] > full)
+
+
+def test_a_take_off_that_drains_the_packs_is_not_attainable() -> None:
+    """k 0.2576: 456 s at full throttle to the obstacle draw 11.35 Ah of two 5 Ah packs;
+    it passed between two failures (k 0.2574 and 0.2584), in check and the batch alike."""
+    from tuflexperf.analysis.batch import BatchEvaluator
+    from tuflexperf.io.case import load_case
+    from tuflexperf.io.dotted import with_values
+
+    case = load_case(None)
+    ks = np.array([0.2572, 0.2576, 0.2582])
+    batch = BatchEvaluator(case).evaluate({"aircraft.k": ks}).values["takeoff_ground_roll"]
+    assert np.isfinite(batch[0]) and np.all(np.isnan(batch[1:]))
+    for k in ks[1:]:
+        with pytest.raises(NotAttainable, match="beyond"):
+            solve_takeoff(with_values(case, {"aircraft.k": float(k)}))

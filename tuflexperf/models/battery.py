@@ -205,9 +205,14 @@ def loaded_voltage_at_power_v(
     """
     ocv = open_circuit_voltage_v(p, charge_ah, packs)
     r = p.resistance_ohm / packs
+    # past the knee's pole (q = n Q) the circuit is no pack: its knee term changes sign and
+    # the "voltage" rises above a full pack's (61 V from 48 V let a take-off drain 11.35 Ah
+    # of 10 Ah and pass; outside audit)
+    drained = charge_ah >= packs * p.max_capacity_ah
     if reference_voltage_v is None or power_exponent == 0.0:
         disc = ocv * ocv - 4.0 * r * power_w
-        return where(disc >= 0.0, 0.5 * (ocv + sqrt(fmax(disc, 0.0))), math.nan)
+        return where(drained, math.nan,
+                     where(disc >= 0.0, 0.5 * (ocv + sqrt(fmax(disc, 0.0))), math.nan))
     m = float(power_exponent)
     c = r * power_w / float(reference_voltage_v) ** m
     # from the fixed-power root at the reference voltage's power (close: a few steps), or
@@ -226,7 +231,7 @@ def loaded_voltage_at_power_v(
         if numeric and not (np.abs(moved) > 1e-12 * ocv).any():
             break
     g = u - ocv + c * u ** (m - 1.0)
-    return where(fmax(g, -g) <= 1e-9 * ocv, u, math.nan)
+    return where(drained, math.nan, where(fmax(g, -g) <= 1e-9 * ocv, u, math.nan))
 
 
 NEWTON_STEPS = 8  # loaded_voltage_at_power_v: from a root a few % off, rounding in ~4
