@@ -159,3 +159,43 @@ def test_library_exit_cleanups_still_run(tmp_path):
     assert done.returncode in (0, 1), done.stderr
     assert (tmp_path / "s.png").exists()
     assert list(scratch.iterdir()) == []
+
+
+def test_a_full_device_is_no_traceback_and_keeps_the_status():
+    """stderr on a full disk changed bad input's exit 2 into 1; `--version` on a full
+    stdout was a traceback (second outside audit)."""
+    import os
+
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full on this system")
+    with open("/dev/full", "w") as full:
+        refused = subprocess.run(_tool("check", "--set", "aircraft.mas_kg=3"),
+                                 stdout=subprocess.DEVNULL, stderr=full, timeout=120)
+        failing = subprocess.run(_tool("check", "--set", "aircraft.mass_kg=29"),
+                                 stdout=subprocess.DEVNULL, stderr=full, timeout=120)
+        version = subprocess.run(_tool("--version"), stdout=full, stderr=subprocess.PIPE,
+                                 text=True, timeout=120)
+    assert refused.returncode == 2 and failing.returncode == 1
+    assert version.returncode == 2
+    assert version.stderr == "tuflexperf: error: stdout: disk full\n"
+
+
+def test_stdin_and_stdout_closed_keep_stdout_on_descriptor_1(tmp_path):
+    """With stdin closed too, the stand-in for a closed stdout took descriptor 0, and
+    descriptor 1 went to the next file opened: a C-level write to stdout would have landed
+    in an output file (second outside audit)."""
+    import os
+
+    probe = ("import os, sys\n"
+             "from tuflexperf.io.streams import guard_standard_streams\n"
+             "guard_standard_streams()\n"
+             "print(sys.stdout.fileno(), os.readlink('/proc/self/fd/1'), file=sys.stderr)\n")
+
+    def closed() -> None:
+        os.close(0)
+        os.close(1)
+
+    done = subprocess.run([sys.executable, "-c", probe], preexec_fn=closed,
+                          capture_output=False, stderr=subprocess.PIPE, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.split() == ["1", os.devnull]

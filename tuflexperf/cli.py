@@ -1199,6 +1199,15 @@ _RESULT_KEYS: dict[str, tuple[str, ...]] = {
 _SYMLINK_LOOP = "Symlink loop from "
 
 
+def _os_error_text(exc: OSError) -> str:
+    """One line for an OS error: the file (or place) and why."""
+    import errno
+
+    where = exc.filename or _unnamed_os_error_place()
+    why = "disk full" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+    return one_line(f"{where}: {why}")
+
+
 def _unnamed_os_error_place() -> str:
     """What an OS error without a file name is about: a working directory that was removed
     (a relative path resolves through it), else the output stream."""
@@ -1232,11 +1241,7 @@ def _guarded(callback: Any) -> Any:
             raise typer.Exit(2) from None
         except OSError as exc:  # a file the OS refuses (name too long, disk full, ...)
             _unless_interrupted()
-            import errno
-
-            where = exc.filename or _unnamed_os_error_place()
-            why = "disk full" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
-            sys.stderr.write(f"tuflexperf: error: {one_line(f'{where}: {why}')}\n")
+            sys.stderr.write(f"tuflexperf: error: {_os_error_text(exc)}\n")
             raise typer.Exit(2) from None
         except RuntimeError as exc:
             # pathlib's resolve() of a symbolic link that leads back to itself (Python < 3.13;
@@ -1377,6 +1382,11 @@ def main(argv: list[str] | None = None) -> None:
         message = exc.format_message()
         sys.stderr.write(f"tuflexperf: error: {one_line(message + _case_hint(message, argv))}\n")
         sys.exit(getattr(exc, "exit_code", 2) or 2)
+    except OSError as exc:  # outside a command's own guard (--version, --help): stdout full
+        if interrupted():
+            aborted()
+        sys.stderr.write(f"tuflexperf: error: {_os_error_text(exc)}\n")
+        sys.exit(2)
     except Exception:
         # an interrupt raised inside an import or a C extension comes out as its error
         # (RuntimeError, SystemError, ...): it is still the interrupt, not a failure

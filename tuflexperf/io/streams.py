@@ -28,15 +28,16 @@ from typing import Any, TextIO
 class ReaderTolerantStream:
     """A text stream that drops its writes once its reader has gone (``EPIPE``)."""
 
-    def __init__(self, inner: TextIO) -> None:
+    def __init__(self, inner: TextIO, dropped: type[OSError] = BrokenPipeError) -> None:
         self._inner = inner
+        self._dropped = dropped  # stderr: any OSError (a full disk), its messages are extras
         self.reader_gone = False
 
     def write(self, text: str) -> int:
         if not self.reader_gone:
             try:
                 return self._inner.write(text)
-            except BrokenPipeError:
+            except self._dropped:
                 self._reader_went_away()
         return len(text)
 
@@ -48,7 +49,7 @@ class ReaderTolerantStream:
         if not self.reader_gone:
             try:
                 self._inner.flush()
-            except BrokenPipeError:
+            except self._dropped:
                 self._reader_went_away()
 
     def _reader_went_away(self) -> None:
@@ -66,10 +67,17 @@ class ReaderTolerantStream:
 def guard_standard_streams() -> None:
     """Give ``sys.stdout`` and ``sys.stderr`` a :class:`ReaderTolerantStream` each (a
     closed one becomes ``os.devnull``). Idempotent."""
-    for name in ("stdout", "stderr"):
+    for name, fd in (("stdout", 1), ("stderr", 2)):
         stream = getattr(sys, name)
         if isinstance(stream, ReaderTolerantStream):
             continue
         if stream is None:  # closed before the start: what is written goes nowhere
-            stream = open(os.devnull, "w", encoding="utf-8")  # noqa: SIM115
-        setattr(sys, name, ReaderTolerantStream(stream))
+            # on its own descriptor (os.open takes the lowest free one: with stdin closed
+            # too that was 0, and descriptor 1 went to the next output file opened)
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            if devnull != fd:
+                os.dup2(devnull, fd)
+                os.close(devnull)
+            stream = open(fd, "w", encoding="utf-8", closefd=False)  # noqa: SIM115
+        setattr(sys, name, ReaderTolerantStream(
+            stream, OSError if name == "stderr" else BrokenPipeError))
