@@ -1160,8 +1160,9 @@ def _finite_or_none(value: float) -> float | None:
 
 
 def _tested_range(speeds: list[float]) -> list[float]:
-    """The data's airspeed range, to 0.1 m/s (the tunnel's set points are not more exact)."""
-    return [round(float(min(speeds)), 1) + 0.0, round(float(max(speeds)), 1) + 0.0]
+    """The data's airspeed range, to 0.1 m/s (the tunnel's set points are not more exact);
+    from no lower than rest (a pitot's zero offset, -0.6 m/s at rest, is no reverse wind)."""
+    return [max(round(float(min(speeds)), 1), 0.0) + 0.0, round(float(max(speeds)), 1) + 0.0]
 
 
 def _summary(
