@@ -641,29 +641,37 @@ class _Model:
         density = np.asarray(self.density, dtype=float).reshape(-1, 1)
         return above & ~beyond_jet_velocity(self.propulsion, grid, density)
 
+    def extrapolation_errors_n(self, speed: Array) -> list[Array] | None:
+        """Per engine, the row's sampled thrust error [N] at ``speed``: its draw beyond the
+        tested range, scaled to the row's density as the thrust is; ``None`` without draws."""
+        if self.extrapolation_n is None:
+            return None
+        beyond = density_ratio(self.propulsion, self.density) \
+            * outside_tested_range(self.propulsion, speed).astype(float)
+        return [beyond * error[:, None] for error in self.extrapolation_n]
+
+    def _per_row(self, value: Any) -> Array:
+        """``value`` [N] as an array with one row per batch row (a view where it is shared)."""
+        value = np.asarray(value, dtype=float)
+        return np.broadcast_to(value, np.broadcast_shapes(value.shape, (self.size, 1)))
+
     def thrust(self, throttle: Any, speed: Array, dead: int | None = None,
                mode: str = "windmilling") -> Array:
         """Total thrust [N]; the extrapolation error adds to each live engine beyond the range."""
         total = total_thrust_n(self.propulsion, throttle, speed, self.density, dead, mode)
-        if self.extrapolation_n is not None:
-            outside = outside_tested_range(self.propulsion, speed).astype(float)
-            scale = density_ratio(self.propulsion, self.density)
-            for j in range(len(self.propulsion.engines)):
-                if j != dead:
-                    total = total + scale * outside * self.extrapolation_n[j][:, None]
-        total = np.asarray(total, dtype=float)
-        return np.broadcast_to(total, np.broadcast_shapes(total.shape, (self.size, 1)))
+        errors = self.extrapolation_errors_n(speed)
+        for j, error in enumerate(errors or ()):
+            if j != dead:
+                total = total + error
+        return self._per_row(total)
 
     def engine_thrust(self, index: int, throttle: Any, speed: Array) -> Array:
         """One live engine's thrust [N], as :meth:`thrust` counts it in the total (its model
         at the row's density, its extrapolation error beyond the tested range)."""
-        scale = density_ratio(self.propulsion, self.density)
-        own = engine_thrust_n(self.propulsion.engines[index], throttle, speed, scale)
-        if self.extrapolation_n is not None:
-            outside = outside_tested_range(self.propulsion, speed).astype(float)
-            own = own + scale * outside * self.extrapolation_n[index][:, None]
-        own = np.asarray(own, dtype=float)
-        return np.broadcast_to(own, np.broadcast_shapes(own.shape, (self.size, 1)))
+        own = engine_thrust_n(self.propulsion.engines[index], throttle, speed,
+                              density_ratio(self.propulsion, self.density))
+        errors = self.extrapolation_errors_n(speed)
+        return self._per_row(own if errors is None else own + errors[index])
 
     # -- take-off -----------------------------------------------------------------------------
     def net_force(self, speed: Array) -> Array:
@@ -1069,12 +1077,10 @@ class _Model:
         poly22's basis functions, one matrix product per coefficient.
         """
         scale = density_ratio(self.propulsion, self.density)
-        outside = None
-        if self.extrapolation_n is not None:
-            outside = outside_tested_range(self.propulsion, speed).astype(float)
+        errors = self.extrapolation_errors_n(speed)
         live, dead = [], []
         for j, engine in enumerate(self.propulsion.engines):
-            error = 0.0 if outside is None else scale * outside * self.extrapolation_n[j][:, None]
+            error = 0.0 if errors is None else errors[j]
             coefficients = engine.coefficients
             if np.shape(speed)[0] == 1 and all(np.ndim(coefficients[t]) == 2
                                                for t in POLY22_TERMS):
