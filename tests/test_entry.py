@@ -12,6 +12,10 @@ import pytest
 from tuflexperf.entry import exit_status
 
 
+def _tool(*argv: str) -> list[str]:
+    return [sys.executable, "-m", "tuflexperf", *argv]
+
+
 def test_exit_status_is_pythons(capsys):
     assert exit_status(None) == 0
     assert exit_status(0) == 0 and exit_status(1) == 1 and exit_status(2) == 2
@@ -25,7 +29,7 @@ def test_exit_status_is_pythons(capsys):
     [(["check", "--json"], 0), (["check", "--json", "--set", "aircraft.mass_kg=60"], 1)],
 )
 def test_a_command_ends_with_its_status_and_whole_output(argv, status):
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", *argv], capture_output=True,
+    done = subprocess.run(_tool(*argv), capture_output=True,
                           text=True)
     assert done.returncode == status, done.stderr
     result = json.loads(done.stdout)  # the whole object, not a buffer cut at exit
@@ -33,8 +37,8 @@ def test_a_command_ends_with_its_status_and_whole_output(argv, status):
 
 
 def test_bad_input_still_one_line_and_exit_2():
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", "check", "--set",
-                           "aircraft.mas_kg=3"], capture_output=True, text=True)
+    done = subprocess.run(_tool("check", "--set",
+                           "aircraft.mas_kg=3"), capture_output=True, text=True)
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and "aircraft.mass_kg" in done.stderr
 
@@ -56,8 +60,8 @@ def test_a_bug_still_unwinds_with_its_traceback():
 def test_numpy_overflow_warnings_stay_off_the_screen():
     """An extreme margin search overflows exp (an inf the analysis handles); numpy's
     RuntimeWarning with its source line was printed on stderr (outside audit)."""
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", "margins", "--set",
-                           "aircraft.mass_kg=80"], capture_output=True, text=True)
+    done = subprocess.run(_tool("margins", "--set",
+                           "aircraft.mass_kg=80"), capture_output=True, text=True)
     assert done.returncode in (0, 1), done.stderr
     assert "RuntimeWarning" not in done.stderr and "Traceback" not in done.stderr
 
@@ -88,14 +92,10 @@ def test_pydantic_plugins_stay_out_unless_the_user_asks(tmp_path, setting, loade
     env["PYTHONPATH"] = os.pathsep.join([str(tmp_path), *sys.path[1:]])
     if setting is not None:
         env["PYDANTIC_DISABLE_PLUGINS"] = setting
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", "check", "--json"],
+    done = subprocess.run(_tool("check", "--json"),
                           capture_output=True, text=True, env=env)
     assert done.returncode == 0, done.stderr
     assert marker.exists() is loaded
-
-
-def _tool(*argv: str) -> list[str]:
-    return [sys.executable, "-m", "tuflexperf", *argv]
 
 
 @pytest.mark.parametrize(("mass", "status"), [("22", 0), ("29", 1)])
