@@ -57,7 +57,6 @@ from tuflexperf.analysis.pack_limits import (
     within_limits,
 )
 from tuflexperf.analysis.takeoff import obstacle_height_of
-from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     EAS_REFERENCE_DENSITY_KG_M3,
@@ -247,9 +246,11 @@ class BatchEvaluator:
     def __init__(self, case: Case) -> None:
         self.case = case
         self.requirements = present_requirements(case)
-        if any(r.block == "oei" for r in self.requirements) and len(case.propulsion.engines) < 2:
+        if any(r.block == "oei" for r in self.requirements):
             # as solve_oei refuses it (the sweep tabulated "not attainable" for every point)
-            raise InputError(f"{case.propulsion_path}: engines: OEI needs at least two engines")
+            from tuflexperf.analysis.oei import refuse_one_engine
+
+            refuse_one_engine(case)
         self._endurance: Any = None
         if case.requirements.endurance is not None:
             from tuflexperf.analysis.batch_endurance import battery_side

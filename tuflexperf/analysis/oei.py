@@ -122,10 +122,15 @@ class OeiResult:
         }
 
 
-def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
-    """Level flight with each engine dead in turn over the case's envelope grid."""
+def refuse_one_engine(case: Case) -> None:
+    """Bad input: one engine inoperative needs another one left."""
     if len(case.propulsion.engines) < 2:
         raise InputError(f"{case.propulsion_path}: engines: OEI needs at least two engines")
+
+
+def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
+    """Level flight with each engine dead in turn over the case's envelope grid."""
+    refuse_one_engine(case)
     if mode is None:
         mode = case.requirements.oei.dead_engine if case.requirements.oei else "windmilling"
     v_min, v_max = envelope_of(case)
