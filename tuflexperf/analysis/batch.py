@@ -83,6 +83,7 @@ from tuflexperf.models.thrust import (
     engine_thrust_n,
     least_throttle_reaching,
     outside_tested_range,
+    outside_tested_span,
     poly22,
     total_thrust_n,
     windmilling_thrust_n,
@@ -399,12 +400,18 @@ class BatchEvaluator:
         beyond: dict[str, NDArray[np.bool_]] = {}
         propulsion = self.case.propulsion
 
+        def flown_span(*speeds: Array, from_rest: bool) -> tuple[Array, Array]:
+            # the slowest and fastest airspeeds [m/s] flown on the thrust model: from rest on
+            # a runway; fmin/fmax: a speed a row does not fly (NaN) is no bound
+            stacked = np.stack(np.broadcast_arrays(*speeds))
+            slowest = np.zeros(size) if from_rest else np.fmin.reduce(stacked, axis=0)
+            return slowest, np.fmax.reduce(stacked, axis=0)
+
         def airborne_beyond(launch: tuple[Array, Array, Array, Array]) -> NDArray[np.bool_]:
-            # as solve_takeoff: the lift-off speed (a runway's) and the arc's 1.15 V_stall
-            outside = outside_tested_range(propulsion, model.transition_speed())
-            if not catapult:
-                outside = outside | outside_tested_range(propulsion, launch[2])
-            return np.asarray(outside, dtype=bool)
+            # as solve_takeoff: a runway's roll from rest to the lift-off speed, a catapult's
+            # release, and the arc's 1.15 V_stall
+            return np.asarray(outside_tested_span(propulsion, *flown_span(
+                launch[2], model.transition_speed(), from_rest=not catapult)), dtype=bool)
 
         for requirement in self.requirements:
             limits[requirement.name] = self._limit(values, requirement, size)
@@ -445,11 +452,15 @@ class BatchEvaluator:
                 key = "requirements.endurance.throttle"
                 throttle = _column(values, key, self.case.requirements.endurance.throttle, size)
                 throttle = np.asarray(throttle, dtype=float).reshape(-1) * np.ones(size)
-                out[requirement.name], speed = model.flight_endurance_min(
+                out[requirement.name], speed, climb = model.flight_endurance_min(
                     self._endurance, throttle, launch, battery
                 )
-                beyond[requirement.name] = np.asarray(
-                    outside_tested_range(propulsion, speed), dtype=bool)
+                # the roll and the climb fly the thrust model too, as the single case's
+                # mission (a catapult's release is no node of it): a roll from rest below
+                # the tested range was not said
+                flown = (speed, climb) if catapult else (launch[2], speed, climb)
+                beyond[requirement.name] = np.asarray(outside_tested_span(
+                    propulsion, *flown_span(*flown, from_rest=not catapult)), dtype=bool)
         return BatchResult(
             values=out,
             limits=limits,
@@ -1301,9 +1312,9 @@ class _Model:
     # -- endurance ----------------------------------------------------------------------------
     def flight_endurance_min(self, model: Any, throttle: Array,
                              roll: tuple[Array, Array, Array, Array],
-                             battery: dict[str, Array]) -> tuple[Array, Array]:
-        """Flight endurance [min] at ``throttle`` per row (see :class:`EnduranceModel`), and
-        the level-flight airspeed [m/s] on full packs."""
+                             battery: dict[str, Array]) -> tuple[Array, Array, Array]:
+        """Flight endurance [min] at ``throttle`` per row (see :class:`EnduranceModel`), the
+        level-flight airspeed [m/s] on full packs and the launch's climb airspeed [m/s]."""
         from tuflexperf.analysis import batch_endurance
 
         return batch_endurance.flight_endurance_min(self, model, throttle, roll, battery)

@@ -415,9 +415,10 @@ def _excess(m: Any, throttle: Array, speed: Array) -> Array:
 
 def flight_endurance_min(m: Any, model: Any, throttle: Array,
                          roll: tuple[Array, Array, Array, Array],
-                         battery: dict[str, Array]) -> tuple[Array, Array]:
+                         battery: dict[str, Array]) -> tuple[Array, Array, Array]:
     """Flight endurance [min] per row, NaN where the single-case analysis says not
-    attainable, and the level-flight airspeed [m/s] on full packs (the result's)."""
+    attainable, the level-flight airspeed [m/s] on full packs (the result's) and the
+    launch's climb airspeed [m/s]."""
     from tuflexperf.analysis.batch import stall_speed
 
     stall = stall_speed(m)
@@ -466,6 +467,8 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
         engines = m.propulsion.engines
         launch = _launch_charge(m, model, roll, stall, height, packs, cutoff, engines)
     climb_time = launch.climb_time_s
+    # the climb's airspeed (the last of them), where there is a climb
+    climb = np.where(height > 0, launch.full_throttle_speeds_m_s[:, -1], np.nan)
     ok &= np.all(np.isfinite(launch.charge_ah), axis=0)
     # every fan at once, as (fans, rows)
     own = np.stack([_power_w(model, m, throttle, speed, engine) for engine in engines])
@@ -490,9 +493,9 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
         from tuflexperf.analysis.batch_sagging import flight_on_sagging_packs
 
         return flight_on_sagging_packs(m, model, rows, throttle, roll, stall, height, speed,
-                                       level, np.where(ok, cruise_s, np.nan)), speed
+                                       level, np.where(ok, cruise_s, np.nan)), speed, climb
     minutes = cruise_s / 60.0 + np.where(ok, climb_time, 0.0) / 60.0
-    return np.where(ok & np.isfinite(minutes), minutes, np.nan), speed
+    return np.where(ok & np.isfinite(minutes), minutes, np.nan), speed, climb
 
 
 def _impossible_cruise(m: Any, throttle: Array, speed: Array, power_w: Array) -> Array:

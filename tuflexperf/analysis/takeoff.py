@@ -46,7 +46,7 @@ from tuflexperf.models.battery import SECONDS_PER_HOUR
 from tuflexperf.models.powertrain import beyond_jet_velocity, static_jet_velocity_m_s
 from tuflexperf.models.thrust import (
     Propulsion,
-    is_extrapolated,
+    outside_tested_span,
     reference_voltage_note,
     total_thrust_n,
     unlapsed_density_warning,
@@ -546,6 +546,10 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
         warnings.append(f"released at {release:.1f} m/s, below the transition speed "
                         f"{v_tr:.1f} m/s: {float(accelerate[0]):.1f} m of level acceleration at "
                         f"full throttle ({float(seconds[0]):.2f} s) before the arc")
+    # released airborne: the airspeeds between the release and the arc's are flown
+    extrapolated, beyond = flown_span_note(case.propulsion, min(release, air.speed_m_s),
+                                           max(release, air.speed_m_s))
+    warnings.extend(beyond)
     if packs is not None:
         warnings.append(_packs_note(case, packs.point(np.zeros(packs.n), np.array([release]))[2],
                                     None, air))
@@ -559,7 +563,7 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
         history_time_s=np.zeros(1),
         history_airspeed_m_s=np.full(1, release),
         history_distance_m=np.zeros(1),
-        extrapolated=is_extrapolated(case.propulsion, air.speed_m_s),
+        extrapolated=extrapolated,
         warnings=tuple(warnings),
         liftoff_speed_eas_m_s=float(aircraft.launch_speed_m_s),
         stall_speed_m_s=stall,
@@ -582,6 +586,30 @@ def _refuse_beyond_battery(case: Case, speeds: np.ndarray, seconds: float,
     why = None if side is None else takeoff_beyond_battery(case, side, speeds, seconds)
     if why is not None:
         raise NotAttainable(why, known)
+
+
+def flown_span_note(propulsion: Propulsion, slowest_m_s: float, fastest_m_s: float
+                    ) -> tuple[bool, list[str]]:
+    """Whether a take-off flying every airspeed from ``slowest_m_s`` to ``fastest_m_s``
+    [m/s] uses the thrust model outside its tested range, and the warnings saying where.
+
+    References
+    ----------
+    SPEC 3 (extrapolation is said); :func:`~tuflexperf.models.thrust.outside_tested_span`.
+    """
+    low, high = propulsion.tested_airspeed_m_s
+    warnings: list[str] = []
+    if outside_tested_span(propulsion, slowest_m_s, low):
+        warnings.append(
+            f"take-off airspeeds {slowest_m_s:.1f}-{min(fastest_m_s, low):.1f} m/s are below "
+            f"the thrust model's tested airspeed range {low:g}-{high:g} m/s (extrapolated)"
+        )
+    if outside_tested_span(propulsion, high, fastest_m_s):
+        warnings.append(
+            f"take-off airspeed {fastest_m_s:.1f} m/s is outside the thrust model's tested "
+            f"airspeed range {low:g}-{high:g} m/s (extrapolated)"
+        )
+    return bool(warnings), warnings
 
 
 def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> TakeoffResult:
@@ -690,15 +718,8 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
                            float(time[-1]) + to.rotation_time_s + airborne_s, known)
     ground_roll = float(distance[-1]) + rotation_m
 
-    warnings: list[str] = []
-    low, high = propulsion.tested_airspeed_m_s
-    beyond = [v for v in (v_lo, air.speed_m_s) if is_extrapolated(propulsion, v)]
-    extrapolated = bool(beyond)
-    if extrapolated:
-        warnings.append(
-            f"take-off airspeed {max(beyond):.1f} m/s is outside the thrust model's tested "
-            f"airspeed range {low:g}-{high:g} m/s (extrapolated)"
-        )
+    # the roll flies every airspeed from rest up to the lift-off's, the arc its own
+    extrapolated, warnings = flown_span_note(propulsion, 0.0, max(v_lo, air.speed_m_s))
     if packs is None:
         voltage_note = reference_voltage_note(propulsion, "the take-off")
         if voltage_note:

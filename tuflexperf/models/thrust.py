@@ -206,8 +206,22 @@ def outside_tested_range(propulsion: Propulsion, airspeed_m_s: Any) -> Any:
     ----------
     SPEC 3 (extrapolation is said); paper section 4 (tunnel limit 30 m/s).
     """
+    return outside_tested_span(propulsion, airspeed_m_s, airspeed_m_s)
+
+
+def outside_tested_span(propulsion: Propulsion, slowest_m_s: Any, fastest_m_s: Any) -> Any:
+    """Where airspeeds flown continuously from ``slowest_m_s`` to ``fastest_m_s`` [m/s]
+    (floats or numpy arrays) leave the model's tested airspeed range: the span reaches
+    below its low end or above its high end (1e-9 m/s of slack, as
+    :func:`outside_tested_range`). A ground roll from rest flies every airspeed up to the
+    lift-off's: a model tested from 15 m/s up is extrapolated there, whatever the lift-off.
+
+    References
+    ----------
+    SPEC 3 (extrapolation is said).
+    """
     low, high = propulsion.tested_airspeed_m_s
-    return (airspeed_m_s < low - 1e-9) | (airspeed_m_s > high + 1e-9)
+    return (slowest_m_s < low - 1e-9) | (fastest_m_s > high + 1e-9)
 
 
 def is_extrapolated(propulsion: Propulsion, airspeed_m_s: float) -> bool:
