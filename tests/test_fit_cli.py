@@ -620,3 +620,37 @@ def test_a_run_without_a_test_point_counts_as_no_airspeed(tmp_path: Path) -> Non
     assert "cover only 2 airspeed set point(s)" in result.stderr
     assert "edf1_v27p5.csv.gz gave no test point" in result.stderr
     assert not re.search(r"\b0 m/s", result.stderr) and not (tmp_path / "p.yaml").exists()
+
+
+def _two_engine_table(path, speeds_by_engine) -> None:
+    """A thrust table of a known quadratic surface, each engine at its own airspeeds."""
+    rows = ["engine,throttle,airspeed_m_s,thrust_n"]
+    for engine, speeds in speeds_by_engine.items():
+        for v in speeds:
+            for x in np.arange(0.0, 1.01, 0.1):
+                rows.append(f"{engine},{x:.2f},{v},{33.6 * x + 21.5 * x * x - 0.39 * x * v:.6f}")
+    path.write_text("\n".join(rows) + "\n")
+
+
+def test_the_tested_range_is_the_one_every_engine_shares(tmp_path) -> None:
+    # EDF1 tested to 20 m/s beside EDF2 to 40: the file said 0-40, so EDF1's model was flown
+    # to 40 m/s with no extrapolation said (outside audit)
+    table = tmp_path / "table.csv"
+    _two_engine_table(table, {"EDF1": [0, 10, 20], "EDF2": [0, 10, 20, 30, 40]})
+    out = tmp_path / "fitted.yaml"
+    done = runner.invoke(app, ["fit", str(table), "--out", str(out), "--json"])
+    assert done.exit_code == 0, done.stderr
+    summary = json.loads(done.stdout)
+    assert summary["tested_airspeed_m_s"] == [0.0, 20.0]
+    assert load_propulsion(out).tested_airspeed_m_s == (0.0, 20.0)
+    assert any("EDF1 0-20 m/s, EDF2 0-40 m/s" in w for w in summary["warnings"])
+
+
+def test_engines_tested_at_no_common_airspeed_are_bad_input(tmp_path) -> None:
+    table = tmp_path / "table.csv"
+    _two_engine_table(table, {"EDF1": [0, 5, 10], "EDF2": [20, 30, 40]})
+    out = tmp_path / "fitted.yaml"
+    done = runner.invoke(app, ["fit", str(table), "--out", str(out)])
+    assert done.exit_code == 2
+    assert "table.csv: the engines were tested at no airspeed in common" in done.stderr
+    assert not out.exists()

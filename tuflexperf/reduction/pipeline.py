@@ -26,7 +26,7 @@ schema ``check`` uses, and only then are files written, atomically.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -636,7 +636,7 @@ def fit_campaign(
         at_top = [abs(1 - p.glauert_ratio) for p in valid if p.airspeed_measured_m_s > top - 1.0]
         glauert_report["max_correction_at_top_airspeed_percent"] = 100 * max(at_top)
 
-    speeds = [p.airspeed_m_s for p in points]
+    speeds = _speeds_by_engine((p.engine, p.airspeed_m_s) for p in points)
     files = [
         {"file": r.file, "kind": r.kind, "engine": r.engine, "sha256": sha256_of(r.path)}
         for r in campaign.runs
@@ -1124,7 +1124,7 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
         for engine in table.engines()
     }
     refuse_unphysical_fit(str(table.path), fits)
-    speeds = list(table.airspeed_m_s)
+    speeds = _speeds_by_engine(zip(table.engine, table.airspeed_m_s, strict=True))
     source = {
         "tool": "tuflexperf fit",
         "input": str(Path(path).resolve()),
@@ -1159,10 +1159,53 @@ def _finite_or_none(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def _tested_range(speeds: list[float]) -> list[float]:
-    """The data's airspeed range, to 0.1 m/s (the tunnel's set points are not more exact);
+def _speeds_by_engine(points: Iterable[tuple[str, float]]) -> dict[str, list[float]]:
+    """Each engine's tested airspeeds [m/s] from ``(engine, airspeed)`` pairs."""
+    speeds: dict[str, list[float]] = {}
+    for engine, airspeed in points:
+        speeds.setdefault(engine, []).append(float(airspeed))
+    return speeds
+
+
+def _engine_range(speeds: list[float]) -> tuple[float, float]:
+    """One engine's airspeed range, to 0.1 m/s (the tunnel's set points are not more exact);
     from no lower than rest (a pitot's zero offset, -0.6 m/s at rest, is no reverse wind)."""
-    return [max(round(float(min(speeds)), 1), 0.0) + 0.0, round(float(max(speeds)), 1) + 0.0]
+    return max(round(min(speeds), 1), 0.0) + 0.0, round(max(speeds), 1) + 0.0
+
+
+def _tested_range(speeds: dict[str, list[float]], where: str) -> list[float]:
+    """The airspeed range [m/s] every engine was tested over (the file has one range, and
+    each engine's model is flown over all of it: an engine tested to 25 m/s beside one
+    tested to 30 m/s was written as tested to 30, its extrapolation never said; outside
+    audit). Engines with no airspeed in common are bad input."""
+    ranges = {engine: _engine_range(v) for engine, v in speeds.items()}
+    low = max(r[0] for r in ranges.values())
+    high = min(r[1] for r in ranges.values())
+    if low > high:
+        raise InputError(
+            f"{where}: the engines were tested at no airspeed in common ("
+            + ", ".join(f"{e} {r[0]:g}-{r[1]:g} m/s" for e, r in ranges.items())
+            + "): one propulsion file has one tested airspeed range")
+    return [low, high]
+
+
+RANGE_NOTE_M_S = 1.0  # engines' tested ends further apart than this are said (set points
+# are 2.5 m/s or more apart; the measured means of one set point scatter by a few 0.1 m/s)
+
+
+def tested_range_notes(speeds: dict[str, list[float]]) -> list[str]:
+    """A warning where the engines' own tested ranges differ from the one written by more
+    than :data:`RANGE_NOTE_M_S` at either end."""
+    ranges = {engine: _engine_range(v) for engine, v in speeds.items()}
+    lows, highs = [r[0] for r in ranges.values()], [r[1] for r in ranges.values()]
+    if max(lows) - min(lows) <= RANGE_NOTE_M_S and max(highs) - min(highs) <= RANGE_NOTE_M_S:
+        return []
+    low, high = _tested_range(speeds, "")
+    return [
+        "the engines were tested over different airspeeds ("
+        + ", ".join(f"{e} {r[0]:g}-{r[1]:g} m/s" for e, r in ranges.items())
+        + f"): the file's tested_airspeed_m_s is the range they share, {low:g}-{high:g} m/s"
+    ]
 
 
 def _summary(
@@ -1170,7 +1213,7 @@ def _summary(
     input_path: Path,
     fits: dict[str, Poly22Fit],
     delay: float | None,
-    speeds: list[float],
+    speeds: dict[str, list[float]],
 ) -> dict[str, Any]:
     engines = []
     for name, fit in fits.items():
@@ -1195,15 +1238,15 @@ def _summary(
         "engines": engines,
         "delay_s": delay,
         "lag_s": None,
-        "tested_airspeed_m_s": _tested_range(speeds),
-        "warnings": [],
+        "tested_airspeed_m_s": _tested_range(speeds, str(input_path)),
+        "warnings": tested_range_notes(speeds),
     }
 
 
 def _propulsion_text(
     name: str,
     fits: dict[str, Poly22Fit],
-    speeds: list[float],
+    speeds: dict[str, list[float]],
     delay: float | None,
     density: float | None,
     source: dict[str, Any],
@@ -1217,7 +1260,7 @@ def _propulsion_text(
     document: dict[str, Any] = {
         "name": name,
         "model": "poly22",
-        "tested_airspeed_m_s": _tested_range(speeds),
+        "tested_airspeed_m_s": _tested_range(speeds, name),
     }
     if delay is not None:
         document["delay_s"] = max(float(delay), 0.0)
