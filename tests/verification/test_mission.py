@@ -1031,3 +1031,56 @@ def test_a_climb_that_cannot_climb_says_nothing_of_a_vertical_climb(tmp_path: Pa
     assert not result.attainable
     assert "segment 2 (climb): cannot climb at throttle 0.3" in result.reason
     assert not any("weight plus drag" in w for w in result.warnings)
+
+
+def test_solve_for_sees_a_cutoff_in_a_later_one_engine_segment(tmp_path: Path) -> None:
+    """A cruise before an engine failure: the one-engine loiter after it draws the most and
+    cuts off first. The longest cruise is the one whose loiter just reaches the cut-off; the
+    search looked at the cruise's own end only, answered the reserve's longer cruise and then
+    refused it (outside audit: 18.43 min, where 16.04 min is the longest that flies)."""
+    from tuflexperf.io.dotted import with_values
+
+    case = with_values(load_case(None), {"battery.cutoff_voltage_per_cell_v": 3.7})
+    path = _mission(tmp_path, """\
+        name: a loiter on one engine after the cruise
+        segments:
+          - {type: takeoff}
+          - {type: climb, to_altitude_m: 100, airspeed_m_s: 20, throttle: 1.0}
+          - {type: cruise, airspeed_m_s: 26, time_min: 8}
+          - {type: engine_failure, engine: EDF2}
+          - {type: loiter, airspeed_m_s: 20, time_min: 2}
+          - {type: descent, to_altitude_m: 0, airspeed_m_s: 20, throttle: 0.1}
+        solve_for: cruise
+        """)
+    model = MissionModel(case, load_mission(path), 0.2)
+    solved = model.solve_for()
+    assert solved.attainable and solved.passed, solved.reason
+    assert solved.solved["ends_at"] == "cut-off"
+    assert solved.landing_charge_fraction > 0.2  # the cut-off, not the reserve, binds
+    loiter = solved.segments[4]
+    assert loiter.type == "loiter"
+    assert loiter.min_voltage_v == pytest.approx(model.cutoff_v, abs=1e-6)
+    # flown as a plain mission: the answer is where the flight turns not attainable
+    durations = model.durations.copy()
+    for seconds, flies in ((-1.0, True), (1.0, False)):
+        durations[2] = 60.0 * solved.solved["time_min"] + seconds
+        assert model.fly(durations).attainable == flies
+
+
+def test_a_set_cutoff_is_the_one_reported_and_drawn(tmp_path: Path) -> None:
+    """``--set battery.cutoff_voltage_per_cell_v`` is flown, and the endurance's JSON and the
+    mission's result (whose figure draws the line) carry that cut-off, not the file's 40.8 V
+    (outside audit: the figure showed a 5 V margin where 0.85 V was left)."""
+    from tuflexperf.analysis.study import Study
+    from tuflexperf.io.dotted import with_values
+
+    shipped_case = load_case(None)
+    case = with_values(shipped_case, {"battery.cutoff_voltage_per_cell_v": 3.6})
+    study = Study(case)
+    battery = study.endurance_model().battery
+    flown = battery.cutoff_voltage_v
+    assert flown == pytest.approx(3.6 * battery.cells_in_series)
+    assert flown != Study(shipped_case).endurance_model().battery.cutoff_voltage_v
+    assert study.endurance(0.5).to_dict()["cutoff_voltage_v"] == flown
+    mission = MissionModel(case, load_mission(SHIPPED_MISSION), 0.2).fly()
+    assert mission.cutoff_voltage_v == flown

@@ -169,6 +169,8 @@ class MissionResult:
     warnings: tuple[str, ...] = ()
     # when the flight ended early (cut-off, not attainable): the time of that event [s]
     ended_at_s: float | None = None
+    # the packs' cut-off voltage [V] flown to (a --set of it, not the battery file's)
+    cutoff_voltage_v: float | None = None
 
     @property
     def passed(self) -> bool:
@@ -1167,6 +1169,7 @@ class MissionModel:
             reason=reason or (f"lands with {100 * landing:.1f} % charge (reserve "
                               f"{100 * self.reserve:g} %)"),
             engines=self.engines, history=history, solved=solved, ended_at_s=ended_at,
+            cutoff_voltage_v=self.cutoff_v,
             warnings=(*self.start_notes, *self.battery.scaled_notes, *vertical,
                       *self._extrapolation_notes(v, segment_of)),
         )
@@ -1219,32 +1222,39 @@ class MissionModel:
         return margin * float(stall_speed_eas_m_s(self.case.aircraft))
 
     def _suffix_function(self, k: int) -> Any:
-        """``(start, durations, theta) -> (landing state, aux at segment k's end)``.
+        """``(start, durations, theta) -> (landing state, aux at segment k's end, most charge
+        per pack, least loaded voltage of a live engine [V])``.
 
         The mission from where segment ``k`` begins (``start``, its state) to the landing:
-        what the duration of segment ``k`` changes, without the part before it.
+        what the duration of segment ``k`` changes, without the part before it. The least
+        voltage is segment ``k``'s at its end and every later segment's at each of its nodes,
+        each segment's live engines only (as :meth:`fly` checks the cut-off): a longer cruise
+        before a one-engine loiter cuts off in the loiter, which segment ``k``'s end alone
+        did not see (outside audit: ``solve_for`` answered a cruise the loiter then refused).
         """
         import casadi as ca
 
         if k not in self._suffixes:
-            m = len(self.plans)
-            start = ca.MX.sym("start", 2 * self.n + 3)
+            m, n = len(self.plans), self.n
+            start = ca.MX.sym("start", 2 * n + 3)
             durations, theta = ca.MX.sym("durations", m), ca.MX.sym("theta", 3 * m)
-            state, at_k, nodes = start, None, [start]
+            state, at_k, nodes, least = start, None, [start], []
             for plan in self.plans[k:]:
                 if plan.kind == "event":
                     continue
                 both, auxes, state = self._segment_graph(plan, state, durations, theta,
-                                                         nodes_aux=False)
+                                                         nodes_aux=plan.index != k)
                 nodes.extend(both)
                 if plan.index == k:
                     at_k = auxes[-1][:, -1]
+                aux = ca.horzcat(*auxes)
+                least.extend(aux[6 + n + i, :].T for i in range(n) if i != plan.dead)
             # the most charge each pack gave at any node: beyond the model's knee (the pole of
             # the discharge curve) the charge stops rising and the answer means nothing
             drawn = ca.horzcat(*nodes)
-            most = ca.vertcat(*(ca.mmax(drawn[i, :]) for i in range(self.n)))
+            most = ca.vertcat(*(ca.mmax(drawn[i, :]) for i in range(n)))
             self._suffixes[k] = ca.Function(f"from_segment_{k}", [start, durations, theta],
-                                            [state, at_k, most])
+                                            [state, at_k, most, ca.mmin(ca.vertcat(*least))])
         return self._suffixes[k]
 
     def start_state(self, k: int, durations: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -1271,7 +1281,8 @@ class MissionModel:
         ``dg/dT = -i_j / (3600 Q)`` at the landing for the engine ``j`` that lands with
         least charge (from ``guess_s``, e.g. a closed form); otherwise regula falsi
         (Illinois) on a bracket from ``T = 0``. If the packs are then below their cut-off
-        voltage at the segment's end, the same on ``min_i U_i(T) - U_cutoff`` instead.
+        voltage on the way to the landing, the same on ``min U(T) - U_cutoff`` instead (the
+        least loaded voltage of a live engine from segment ``k``'s end on).
         Both to 1e-12 (fraction) and 1e-9 V. Returns the duration and what ends it:
         ``"landing reserve"`` or ``"cut-off"``. Raises :class:`NotAttainable` when no
         positive duration does.
@@ -1287,7 +1298,6 @@ class MissionModel:
         plan = self.plans[k]
         f = self._suffix_function(k)
         x0 = self.start_state(k, d, th) if start is None else start
-        live = [i for i in range(n) if i != plan.dead]
         last = all(p.kind == "event" for p in self.plans[k + 1:])
 
         pole = self.packs * self.params.max_capacity_ah
@@ -1300,13 +1310,14 @@ class MissionModel:
 
         def evaluate(tau: float) -> tuple[float, float, float]:
             d[k] = tau
-            end, aux, most = (np.asarray(v, dtype=float).ravel() for v in f(x0, d, th))
+            end, aux, most, least = (np.asarray(v, dtype=float).ravel()
+                                     for v in f(x0, d, th))
             if not (np.all(np.isfinite(end)) and np.all(most <= end[:n] + 1e-12)
                     and np.all(most < pole)):
                 return -1.0, math.nan, -1.0  # the packs were emptied on the way: beyond
             frac = 1.0 - end[:n] / self.capacity_ah
             j = int(np.argmin(frac))
-            volt = min(aux[6 + n + i] for i in live)
+            volt = float(least[0])  # a live engine's, to the landing (_suffix_function)
             slope = -aux[6 + j] / SECONDS_PER_HOUR / self.capacity_ah
             return float(frac[j] - self.reserve), float(slope), float(volt - self.cutoff_v)
 
