@@ -399,6 +399,7 @@ class EnduranceResult:
     pack_current_a: float  # one pack, full, at this power
     pack_energy_wh: float  # one pack, full to cut-off at this power
     cutoff_charge_ah: float
+    cutoff_voltage_v: float  # of the packs flown (a --set of the cut-off, not the file's)
     cruise_end_charge_ah: float  # per fan (all its packs)
     cruise_ends_at: str  # "landing reserve" or "cut-off"
     engines: int
@@ -429,7 +430,7 @@ class EnduranceResult:
             "pack_current_a": self.pack_current_a,
             "pack_energy_wh": self.pack_energy_wh,
             "cutoff_charge_ah": self.cutoff_charge_ah,
-            "cutoff_voltage_v": ch.battery.cutoff_voltage_v,
+            "cutoff_voltage_v": self.cutoff_voltage_v,
             "cruise_end_charge_ah": self.cruise_end_charge_ah,
             "cruise_ends_at": self.cruise_ends_at,
             "packs_in_parallel_per_engine": self.packs_in_parallel_per_engine,
@@ -863,6 +864,7 @@ class EnduranceModel:
             pack_current_a=float(self._current(0.0, power_w)) if q1 > 0.0 else math.nan,
             pack_energy_wh=power_w * t1 / 3600.0,
             cutoff_charge_ah=q1,
+            cutoff_voltage_v=self.cutoff_v,
             cruise_end_charge_ah=cruise_end,
             cruise_ends_at=ends_at,
             engines=len(self.case.propulsion.engines),

@@ -452,7 +452,7 @@ def mission(case: Case, analyses: Analyses) -> Any:
     throttle.set_ylabel("throttle, live\nengines (fraction)")
     throttle.set_ylim(0.0, 1.08)
     throttle.axhline(1.0, **STYLE["full_throttle"])
-    battery = _battery_limits(analyses)
+    battery = result.cutoff_voltage_v  # flown to (a --set of it), not the file's
     for k, name in enumerate(result.engines):
         dash = _ENGINE_DASHES[k % len(_ENGINE_DASHES)]
         line = {**style, "linestyle": dash}
@@ -496,12 +496,6 @@ def mission(case: Case, analyses: Analyses) -> Any:
     fig.suptitle(textwrap.fill(f"Mission '{result.name}' of {case.name}: {outcome}", 150),
                  fontsize=11)
     return fig
-
-
-def _battery_limits(analyses: Analyses) -> float | None:
-    """The pack's cut-off voltage [V] from the battery characterisation, if loaded."""
-    ch = analyses.characterisation
-    return None if ch is None else float(ch.battery.cutoff_voltage_v)
 
 
 def _segments(result: Any, axes: list[Any], *tops: Any) -> None:
