@@ -243,3 +243,37 @@ def test_provenance_json_cannot_hold_is_written_as_text(tmp_path: Path) -> None:
     model = json.loads((tmp_path / "ex" / "tfp_thrust.json").read_text())
     assert model["provenance"]["source"] == {"date": "2024-05-01", "blob": "68656c6c6f",
                                              "tags": ["a", "b"], "n": "nan"}
+
+
+def test_odd_file_and_engine_names_still_give_files_their_clients_read(tmp_path: Path) -> None:
+    """A propulsion file named with ``---`` and a control byte, an engine named ``X???/``:
+    every XML still parses and the C compiles with -Werror (outside audit: ``---`` became
+    ``--`` in the FMU's comment, the byte went raw into JSBSim's and FMI's XML, and ``???``
+    kept a ``??/`` trigraph)."""
+    import xml.etree.ElementTree as ElementTree
+    import zipfile
+
+    import yaml
+
+    if find_compiler() is None:
+        pytest.skip("no C compiler")
+    propulsion = copy.deepcopy(MADE_UP_PROPULSION)
+    propulsion["engines"][1]["name"] = "X???/"
+    folder = tmp_path / "case"
+    case = write_case(folder)
+    odd = "prop---v2\x01.yaml"
+    (folder / odd).write_text(yaml.safe_dump(propulsion))
+    text = case.read_text().replace("propulsion: propulsion.yaml", f'propulsion: "{odd}"'
+                                    .replace("\x01", "\\x01"))
+    case.write_text(text)
+    out = tmp_path / "out"
+    result = _export("--case", str(case), "--format", "c,jsbsim,fmu", "--out", str(out))
+    assert result.exit_code == 0, result.stderr
+    for name in ("tfp_thrust_system.xml", "tfp_thrust_reactions.xml"):
+        ElementTree.parse(out / name)
+    with zipfile.ZipFile(out / "tfp_thrust.fmu") as fmu:
+        description = fmu.read("modelDescription.xml")
+    ElementTree.fromstring(description)
+    assert b"prop-v2\\x01.yaml" in description
+    compile_shared([out / "tfp_thrust.c"], tmp_path / "lib.so",
+                   cflags=("-O2", "-std=c99", "-Wall", "-Wextra", "-Werror"))

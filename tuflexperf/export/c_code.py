@@ -13,12 +13,14 @@ wrapper for the requested plain-argument API, and a 12-flop polynomial gains not
 
 from __future__ import annotations
 
+import re
 import textwrap
 
 from tuflexperf.export.model import (
     EXTRAPOLATION_WARNING,
     ExportModel,
     model_notes,
+    plain_ascii,
     quadratic_coefficients,
 )
 from tuflexperf.models.thrust import AIRSPEED_CAP_FACTOR, POLY22_TERMS, max_model_airspeed_m_s
@@ -48,9 +50,11 @@ def c_double(value: float) -> str:
 
 
 def comment_safe(text: str) -> str:
-    """Text that cannot end a C block comment or form a trigraph (``-Wall`` warns), ASCII only."""
-    ascii_text = str(text).encode("ascii", "backslashreplace").decode("ascii")
-    return ascii_text.replace("*/", "* /").replace("/*", "/ *").replace("??", "? ?")
+    """Text that cannot end a C block comment or form a trigraph (``-Wall`` warns),
+    printable ASCII (:func:`~tuflexperf.export.model.plain_ascii`)."""
+    text = plain_ascii(text).replace("*/", "* /").replace("/*", "/ *")
+    # every "?" before another apart: one pass of "??" -> "? ?" left "???" as "? ??" (audit)
+    return re.sub(r"\?(?=\?)", "? ", text)
 
 
 def c_string(text: str) -> str:

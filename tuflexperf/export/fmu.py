@@ -38,7 +38,12 @@ from xml.sax.saxutils import escape, quoteattr
 from tuflexperf.errors import InputError
 from tuflexperf.export.c_code import HEADER_NAME, SOURCE_NAME, header_text, source_text
 from tuflexperf.export.cbuild import find_compiler, run_compiler
-from tuflexperf.export.model import EXTRAPOLATION_WARNING, ExportModel, model_notes
+from tuflexperf.export.model import (
+    EXTRAPOLATION_WARNING,
+    ExportModel,
+    model_notes,
+    xml_comment,
+)
 
 FMU_NAME = "tfp_thrust.fmu"
 MODEL_IDENTIFIER = "tfp_thrust"
@@ -142,8 +147,8 @@ def model_description(model: ExportModel) -> str:
     return (
         '<?xml version="1.0" encoding="UTF-8"?>\n'
         "<!-- Provenance: "
-        + escape("; ".join(f"{f.role} {f.label} sha256 {f.sha256}" for f in model.files))
-        .replace("--", "-")
+        + escape(xml_comment("; ".join(f"{f.role} {f.label} sha256 {f.sha256}"
+                                       for f in model.files)))
         + " -->\n"
         f'<fmiModelDescription fmiVersion="2.0" modelName={quoteattr(prop.name)} '
         f'guid="{_guid(model)}" description={quoteattr(description)} '

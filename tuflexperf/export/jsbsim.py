@@ -33,10 +33,14 @@ FGExternalReactions.h, flight_control/FGFCSComponent.cpp); paper section 4 (poly
 
 from __future__ import annotations
 
-import re
 from xml.sax.saxutils import escape
 
-from tuflexperf.export.model import EXTRAPOLATION_WARNING, ExportModel, model_notes
+from tuflexperf.export.model import (
+    EXTRAPOLATION_WARNING,
+    ExportModel,
+    model_notes,
+    xml_comment,
+)
 from tuflexperf.models.thrust import POLY22_TERMS, max_model_airspeed_m_s
 
 SYSTEM_FILE = "tfp_thrust_system.xml"
@@ -76,9 +80,8 @@ def _number(value: float) -> str:
 
 
 def _comment(text: str) -> str:
-    """XML comment text: no ``--`` (forbidden inside comments), ASCII."""
-    ascii_text = str(text).encode("ascii", "backslashreplace").decode("ascii")
-    return re.sub(r"-{2,}", "-", ascii_text)
+    """XML comment text: no ``--`` (forbidden inside comments), printable ASCII."""
+    return xml_comment(text)
 
 
 def _attribute(text: str) -> str:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,6 +37,20 @@ EXTRAPOLATION_WARNING = (
     "outside it (e.g. the upper flight envelope) thrust is an extrapolation, not a measurement. "
     "Throttle outside [0, 1] is outside the model."
 )
+
+
+def plain_ascii(text: str) -> str:
+    """``text`` as printable ASCII, every other character as its Python backslash escape
+    (``é`` -> ``\\xe9``, a control byte ``\\x01`` likewise): a file name's control byte
+    had made the exported XML unreadable by JSBSim and FMPy (outside audit)."""
+    return "".join(ch if " " <= ch <= "~" else ch.encode("unicode_escape").decode("ascii")
+                   for ch in str(text))
+
+
+def xml_comment(text: str) -> str:
+    """Text for an XML comment (:func:`plain_ascii`), with no ``--`` (forbidden there;
+    ``---`` once became ``--``: outside audit)."""
+    return re.sub(r"-{2,}", "-", plain_ascii(text))
 
 
 def model_notes(prop: Any) -> list[str]:
