@@ -72,6 +72,12 @@ def test_one_axis_human_output_and_workers_equal(tmp_path) -> None:
     (["--vary", "aircraft.mass_kg=18:30:3", "--plot", "x.pdf"], "--plot"),
     # one point at 18 kg PASSed, 30 kg (where trim fails) never flown (outside audit)
     (["--vary", "aircraft.mass_kg=18:30:1"], "N = 1 flies START alone"),
+    # refused before the grid is made: 1e23 points was numpy's traceback, 1e9 ate 7.5 GiB
+    (["--vary", "aircraft.mass_kg=20:25:99999999999999999999999"], "at most 1000000"),
+    (["--vary", "aircraft.mass_kg=20:25:1000000000"], "at most 1000000"),
+    # four axes of 1e6: 1e24 points, beyond numpy's int64 (its product wrapped)
+    ([arg for key in ("mass_kg=20:25", "cd0=0.02:0.03", "k=0.05:0.06", "cl_max=1.4:1.5")
+      for arg in ("--vary", f"aircraft.{key}:1000000")], "at most 1000000"),
 ])
 def test_bad_vary_is_exit_2_one_line(args: list[str], message: str) -> None:
     result = runner.invoke(app, ["sweep", *args])

@@ -13,6 +13,7 @@ Raymer, *Aircraft Design*, 19.5 (carpet plots for design trades).
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -49,6 +50,8 @@ def parse_vary(case: Case, spec: str) -> tuple[str, Array]:
             from None
     if count < 1 or not (np.isfinite(start) and np.isfinite(stop)):
         raise InputError(f"--vary {spec!r}: need finite START, STOP and N >= 1")
+    if count > MAX_POINTS:  # before the grid is made (1e23 points was a numpy traceback)
+        raise InputError(f"--vary {spec!r}: {count} grid points; at most {MAX_POINTS}")
     if count == 1 and start != stop:
         # one point is START alone: STOP was never flown, and its FAIL never said (outside
         # audit: 18:30:1 PASSed at 18 kg where 30 kg fails trim)
@@ -171,7 +174,7 @@ def run_sweep(case: Case, axes: list[tuple[str, Array]], workers: int | None = N
     keys = tuple(k for k, _ in axes)
     if len(set(keys)) != len(keys):
         raise InputError(f"--vary: a key is given twice ({', '.join(keys)})")
-    count = int(np.prod([a.size for _, a in axes]))
+    count = math.prod(a.size for _, a in axes)  # Python's integers: numpy's int64 wraps
     if count > MAX_POINTS:
         raise InputError(f"--vary: {count} grid points; at most {MAX_POINTS}")
     if not present_requirements(case):
