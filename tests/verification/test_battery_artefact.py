@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -44,7 +45,31 @@ def test_the_shipped_battery_file_is_what_its_script_writes(tmp_path: Path) -> N
                           capture_output=True, text=True, env={**os.environ,
                                                                "PYTHONPATH": str(ROOT)})
     assert done.returncode == 0, done.stderr
-    assert (tmp_path / "data" / "tuflex" / "battery.yaml").read_bytes() == BATTERY.read_bytes()
+    written = (tmp_path / "data" / "tuflex" / "battery.yaml").read_text()
+    shipped = BATTERY.read_text()
+    # the same text, its fitted numbers to round-off: the Levenberg-Marquardt steps' linear
+    # algebra rounds differently on other CPUs (BLAS kernels), ~1e-11 of the last digits
+    number = re.compile(r"-?\d+\.\d+(?:e[-+]?\d+)?")
+    seal = "# sha256 of the lines above"
+    assert [number.sub("#", line) for line in written.splitlines() if not line.startswith(seal)] \
+        == [number.sub("#", line) for line in shipped.splitlines() if not line.startswith(seal)]
+    _assert_close(yaml.safe_load(written), yaml.safe_load(shipped))
+
+
+def _assert_close(got: object, want: object, where: str = "") -> None:
+    """Equal structures, strings and integers equal, floats to 1e-9 relative."""
+    if isinstance(want, dict):
+        assert isinstance(got, dict) and got.keys() == want.keys(), where
+        for key in want:
+            _assert_close(got[key], want[key], f"{where}.{key}")
+    elif isinstance(want, list):
+        assert isinstance(got, list) and len(got) == len(want), where
+        for k, (a, b) in enumerate(zip(got, want, strict=True)):
+            _assert_close(a, b, f"{where}[{k}]")
+    elif isinstance(want, float):
+        assert got == pytest.approx(want, rel=1e-9, abs=1e-12), where
+    else:
+        assert got == want, where
 
 
 def test_check_neither_reads_nor_fits_the_discharge_runs(monkeypatch: pytest.MonkeyPatch) -> None:
