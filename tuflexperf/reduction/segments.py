@@ -65,6 +65,45 @@ def _segment_sse(
     return sse, level, amplitude  # type: ignore[return-value]
 
 
+GRID_BLOCK_VALUES = 1 << 16
+"""Regressor values per block of the time-constant grid (:func:`_grid_sse`)."""
+
+
+def _grid_sse(
+    t: NDArray[np.float64], y: NDArray[np.float64], taus: NDArray[np.float64],
+    starts: NDArray[np.intp],
+) -> NDArray[np.float64]:
+    """Total SSE of :func:`_segment_sse` for the regressor ``exp(-t / tau)``, per ``tau``.
+
+    Equal to the bit to ``_segment_sse(y, np.exp(-t / taus[:, None]), starts)[0]``, computed
+    a few time constants at a time: the whole grid at once (40 rows of the run's block means,
+    a few MB per temporary) spent most of its time faulting in fresh pages.
+
+    Parameters
+    ----------
+    t : ndarray
+        Time since each segment's onset [s].
+    y : ndarray
+        Force [N], one value per ``t``.
+    taus : ndarray
+        Time constants [s].
+    starts : ndarray of int
+        First index of each segment in ``t`` and ``y``.
+
+    Returns
+    -------
+    ndarray
+        SSE [N^2], one per time constant.
+    """
+    rows = max(1, GRID_BLOCK_VALUES // max(t.size, 1))
+    neg = -t
+    sse = np.empty(taus.size)
+    for first in range(0, taus.size, rows):
+        block = taus[first : first + rows, None]
+        sse[first : first + rows] = _segment_sse(y, np.exp(neg / block), starts)[0]
+    return sse
+
+
 def fit_transients(
     time_s: NDArray[np.float64],
     force_n: NDArray[np.float64],
@@ -116,7 +155,7 @@ def fit_transients(
         return float(_segment_sse(y, np.exp(-t / np.exp(log_tau)), index)[0])
 
     grid = np.linspace(np.log(tau_min), np.log(tau_max), 40)
-    values = _segment_sse(y, np.exp(-t / np.exp(grid)[:, None]), index)[0]  # all 40 at once
+    values = _grid_sse(t, y, np.exp(grid), index)
     best = int(np.argmin(values))
     lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
     result = minimize_scalar(objective, bounds=(lo, hi), method="bounded", options={"xatol": 1e-3})
