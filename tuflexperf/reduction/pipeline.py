@@ -26,7 +26,9 @@ schema ``check`` uses, and only then are files written, atomically.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -396,6 +398,89 @@ def fit_campaign(
 ) -> FitResult:
     """Reduce a campaign and fit the poly22 per engine (module docstring)."""
     campaign = load_campaign(Path(manifest))
+    pool = ThreadPoolExecutor(max_workers=_workers(), thread_name_prefix="tuflexperf-fit")
+    try:
+        # every run is read, and each sweep reduced, as soon as a worker is free; the results
+        # are taken in the manifest's order, so reports, warnings and errors come as before
+        sine = [(run, pool.submit(_sine_sweep, run)) for run in campaign.of_kind("sine_sweep")]
+        bare = [(run, pool.submit(_drag_sweep, campaign, run))
+                for run in campaign.of_kind("drag_sweep")]
+        reads = [(run, pool.submit(read_run, run.path, vendor=run.vendor))
+                 for run in campaign.of_kind("throttle_steps")]
+        return _fit_campaign(campaign, glauert, delay_s, progress, pool, sine, bare, reads)
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _workers() -> int:
+    """Threads that read and reduce runs: one per core, at most 4 (numpy, Bottleneck, SciPy's
+    filters, zlib and pandas' parser release the GIL; past a few the GIL holds them back)."""
+    return max(1, min(4, os.cpu_count() or 1))
+
+
+def _sine_sweep(run: CampaignRun) -> tuple[Run, DelayEstimate | None]:
+    """Read a sine-sweep run and fit its delay (None when its throttle barely moves)."""
+    data = read_run(run.path, vendor=run.vendor)
+    if float(np.ptp(data["throttle"])) < MIN_SWEEP_THROTTLE_SWING:
+        return data, None
+    return data, estimate_delay(data.time_s, data["throttle"], data["force_n"],
+                                data.sample_rate_hz)
+
+
+@dataclass(frozen=True)
+class _DragSweep:
+    """A drag-sweep run read and, unless it measures no drag, cleaned."""
+
+    data: Run
+    report: dict[str, Any]
+    problem: str = ""  # why it gives no drag curve ("" when it gives one)
+    curve: tuple[np.ndarray, np.ndarray] | None = None  # airspeed [m/s], force [N] cleaned
+
+
+def _drag_sweep(campaign: Campaign, run: CampaignRun) -> _DragSweep:
+    """Read and clean one bare-structure velocity sweep (module docstring, step 3)."""
+    data = read_run(run.path, vendor=run.vendor)
+    top = float(np.max(data["airspeed_m_s"]))
+    if top < MIN_DRAG_SWEEP_AIRSPEED_M_S:
+        return _DragSweep(
+            data, {**_run_header(run, data), "wind": "none"},
+            f"{run.file}: drag sweep without wind (airspeed at most {top:.2f} m/s): no "
+            "structure drag measured, none added",
+        )
+    span = top - float(np.min(data["airspeed_m_s"]))
+    if span < MIN_DRAG_SWEEP_SPAN_M_S:  # one airspeed: a curve in V^2 is not determined
+        return _DragSweep(
+            data, {**_run_header(run, data), "wind": "one airspeed"},
+            f"{run.file}: drag sweep over {span:.2f} m/s of airspeed only (needs "
+            f">= {MIN_DRAG_SWEEP_SPAN_M_S:g}): no drag curve from it, left out",
+        )
+    if float(np.ptp(data["force_n"])) <= DEAD_LOAD_CELL_N:
+        # the same force at every airspeed: "D = 0 (R^2 nan)" was added to every point
+        # unremarked (outside audit)
+        return _DragSweep(
+            data, {**_run_header(run, data), "force": "constant"},
+            f"{run.file}: drag sweep whose force is {float(data['force_n'][0]):.4g} N "
+            "throughout (a dead load cell?): no structure drag measured, none added",
+        )
+    force, replaced = clean_run(campaign, data)
+    _, _, k_med = _windows(campaign, data.sample_rate_hz)
+    return _DragSweep(
+        data, {**_run_header(run, data), "outliers_replaced": replaced},
+        curve=(movmedian(data["airspeed_m_s"], k_med), force),
+    )
+
+
+def _fit_campaign(
+    campaign: Campaign,
+    glauert: bool,
+    delay_s: float | None,
+    progress: Progress | None,
+    pool: ThreadPoolExecutor,
+    sine: list[tuple[CampaignRun, Future[tuple[Run, DelayEstimate | None]]]],
+    bare: list[tuple[CampaignRun, Future[_DragSweep]]],
+    reads: list[tuple[CampaignRun, Future[Run]]],
+) -> FitResult:
+    """:func:`fit_campaign` on runs that ``pool`` reads (and sweeps it reduces) meanwhile."""
     total = len(campaign.runs)
     done = 0
 
@@ -409,20 +494,17 @@ def fit_campaign(
     delay_runs: list[dict[str, Any]] = []
     degenerate: list[str] = []  # runs that carry no information, named (issue 10)
     sweep_results: list[SweepRunResult] = []
-    for run in campaign.of_kind("sine_sweep"):
+    for run, future in sine:
         tick(run.file)
-        data = read_run(run.path, vendor=run.vendor)
-        swing = float(np.ptp(data["throttle"]))
-        if swing < MIN_SWEEP_THROTTLE_SWING:
+        data, estimate = future.result()
+        if estimate is None:
+            swing = float(np.ptp(data["throttle"]))
             degenerate.append(
                 f"{run.file}: sine sweep without excitation (throttle swings {swing:.3f}, "
                 f"needs >= {MIN_SWEEP_THROTTLE_SWING}): left out of the delay"
             )
             run_reports.append({**_run_header(run, data), "excitation": "none"})
             continue
-        estimate = estimate_delay(
-            data.time_s, data["throttle"], data["force_n"], data.sample_rate_hz
-        )
         if not estimate.r2 >= MIN_SWEEP_R2:  # noise fits some delay too: it measures nothing
             degenerate.append(
                 f"{run.file}: the force does not follow the sine sweep (fit R^2 "
@@ -485,47 +567,28 @@ def fit_campaign(
 
     drag: DragModel | None = None
     sweeps = []
-    for run in campaign.of_kind("drag_sweep"):
+    for run, bare_future in bare:
         tick(run.file)
-        data = read_run(run.path, vendor=run.vendor)
-        top = float(np.max(data["airspeed_m_s"]))
-        if top < MIN_DRAG_SWEEP_AIRSPEED_M_S:
-            degenerate.append(
-                f"{run.file}: drag sweep without wind (airspeed at most {top:.2f} m/s): no "
-                "structure drag measured, none added"
-            )
-            run_reports.append({**_run_header(run, data), "wind": "none"})
+        swept = bare_future.result()
+        run_reports.append(swept.report)
+        if swept.curve is None:
+            degenerate.append(swept.problem)
             continue
-        span = top - float(np.min(data["airspeed_m_s"]))
-        if span < MIN_DRAG_SWEEP_SPAN_M_S:  # one airspeed: a curve in V^2 is not determined
-            degenerate.append(
-                f"{run.file}: drag sweep over {span:.2f} m/s of airspeed only (needs "
-                f">= {MIN_DRAG_SWEEP_SPAN_M_S:g}): no drag curve from it, left out"
-            )
-            run_reports.append({**_run_header(run, data), "wind": "one airspeed"})
-            continue
-        if float(np.ptp(data["force_n"])) <= DEAD_LOAD_CELL_N:
-            # the same force at every airspeed: "D = 0 (R^2 nan)" was added to every point
-            # unremarked (outside audit)
-            degenerate.append(
-                f"{run.file}: drag sweep whose force is {float(data['force_n'][0]):.4g} N "
-                "throughout (a dead load cell?): no structure drag measured, none added"
-            )
-            run_reports.append({**_run_header(run, data), "force": "constant"})
-            continue
-        force, replaced = clean_run(campaign, data)
-        _, _, k_med = _windows(campaign, data.sample_rate_hz)
-        sweeps.append((movmedian(data["airspeed_m_s"], k_med), force))
-        run_reports.append({**_run_header(run, data), "outliers_replaced": replaced})
+        sweeps.append(swept.curve)
     if sweeps:
         drag = fit_structure_drag(sweeps)
 
-    step_results: list[StepRunResult] = []
-    for run in campaign.of_kind("throttle_steps"):
-        tick(run.file)
-        data = read_run(run.path, vendor=run.vendor)
+    def reduce(run: CampaignRun, read: Future[Run]) -> StepRunResult:
         onset = onset_delay.get(str(run.engine)) or delay or 0.0
-        result = reduce_step_run(campaign, run, data, max(onset, 0.0))
+        return reduce_step_run(campaign, run, read.result(), max(onset, 0.0))
+
+    # queued behind every read: a worker waits at most on a read another one is doing
+    reduced = [(run, pool.submit(reduce, run, read)) for run, read in reads]
+    step_results: list[StepRunResult] = []
+    for run, step_future in reduced:
+        tick(run.file)
+        result = step_future.result()
+        data = result.data
         if not result.segments:  # e.g. 50 rows, or time stamps in microseconds
             degenerate.append(
                 f"{run.file}: no steady throttle plateau of at least {MIN_SEGMENT_S:g} s "
