@@ -68,7 +68,7 @@ from tuflexperf.reduction.segments import (
     SteadyMean,
     fit_transients,
     merge_test_points,
-    steady_mean,
+    steady_means,
 )
 
 Progress = Callable[[int, int, str], None]
@@ -218,7 +218,7 @@ def reduce_step_run(
     cleaned, replaced = clean_run(campaign, data)
     transients = fit_transients(t, cleaned, onsets, [p.stop for p in plateaus], fs)
 
-    segments: list[SteadyMean] = []
+    spans: list[tuple[int, int]] = []
     settle_samples: list[int] = []
     for p, onset, settle_s in zip(plateaus, onsets, transients.settle_s, strict=True):
         settle = int(math.ceil(settle_s * fs))
@@ -233,18 +233,10 @@ def reduce_step_run(
         if p.stop - start < 3:
             warnings.append(f"plateau at {t[p.start]:.2f} s too short after the transient: skipped")
             continue
-        segments.append(
-            steady_mean(
-                data["force_n"],
-                data["airspeed_m_s"],
-                data["throttle"],
-                start,
-                p.stop,
-                k_out,
-                threshold,
-                k_med,
-            )
-        )
+        spans.append((start, p.stop))
+    segments = steady_means(
+        data["force_n"], data["airspeed_m_s"], data["throttle"], spans, k_out, threshold, k_med
+    )
 
     changes = force_changepoints(cleaned, fs, min_segment_s=MIN_SEGMENT_S)
     steps = [

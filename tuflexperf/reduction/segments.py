@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from tuflexperf.reduction.filters import (
     block_mean,
     filloutliers_movmean,
-    movmedian,
+    movmedians,
     window_samples,
 )
 
@@ -198,20 +198,60 @@ def steady_mean(
     mean never sees a neighbouring step. Airspeed is averaged as logged; the
     throttle is the median of the logged command.
     """
-    raw = force_n[start:stop]
-    filled, replaced = filloutliers_movmean(raw, outlier_window, outlier_threshold)
-    smooth = movmedian(filled, median_window)
-    return SteadyMean(
-        throttle=float(np.median(throttle[start:stop])),
-        airspeed_m_s=float(np.mean(airspeed_m_s[start:stop])),
-        force_n=float(np.mean(smooth)),
-        force_std_n=float(np.std(filled, ddof=1)) if smooth.size > 1 else 0.0,
-        n_samples=int(stop - start),
-        start=start,
-        stop=stop,
-        outliers_replaced=replaced,
-        filtered_force_n=smooth,
-    )
+    return steady_means(force_n, airspeed_m_s, throttle, [(start, stop)], outlier_window,
+                        outlier_threshold, median_window)[0]
+
+
+def steady_means(
+    force_n: NDArray[np.float64],
+    airspeed_m_s: NDArray[np.float64],
+    throttle: NDArray[np.float64],
+    spans: Sequence[tuple[int, int]],
+    outlier_window: int,
+    outlier_threshold: float,
+    median_window: int,
+) -> list[SteadyMean]:
+    """:func:`steady_mean` of each ``(start, stop)`` in ``spans`` (a run's steady stretches).
+
+    Each stretch is filtered on its own, as :func:`steady_mean` does; the moving medians of
+    all of them run together (:func:`~tuflexperf.reduction.filters.movmedians`, equal to the
+    bit to one call per stretch).
+
+    Parameters
+    ----------
+    force_n, airspeed_m_s, throttle : ndarray
+        The run: force [N], airspeed [m/s], throttle [fraction].
+    spans : sequence of (int, int)
+        Sample ranges ``[start, stop)``.
+    outlier_window, median_window : int
+        The two filters' windows [samples].
+    outlier_threshold : float
+        Outlier threshold in local standard deviations [-].
+
+    Returns
+    -------
+    list of SteadyMean
+        One per span, in order.
+    """
+    fills = [
+        filloutliers_movmean(force_n[start:stop], outlier_window, outlier_threshold)
+        for start, stop in spans
+    ]
+    smooths = movmedians([filled for filled, _ in fills], median_window)
+    return [
+        SteadyMean(
+            throttle=float(np.median(throttle[start:stop])),
+            airspeed_m_s=float(np.mean(airspeed_m_s[start:stop])),
+            force_n=float(np.mean(smooth)),
+            force_std_n=float(np.std(filled, ddof=1)) if smooth.size > 1 else 0.0,
+            n_samples=int(stop - start),
+            start=start,
+            stop=stop,
+            outliers_replaced=replaced,
+            filtered_force_n=smooth,
+        )
+        for (start, stop), (filled, replaced), smooth in zip(spans, fills, smooths, strict=True)
+    ]
 
 
 THROTTLE_MATCH = 0.005
