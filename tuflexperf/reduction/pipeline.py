@@ -576,6 +576,7 @@ def _fit_campaign(
 
     # queued behind every read: a worker waits at most on a read another one is doing
     reduced = [(run, pool.submit(reduce, run, read)) for run, read in reads]
+    digests = [(r, pool.submit(sha256_of, r.path)) for r in campaign.runs]  # for the source
     step_results: list[StepRunResult] = []
     for run, step_future in reduced:
         tick(run.file)
@@ -665,10 +666,13 @@ def _fit_campaign(
         )
     refuse_unphysical_fit(str(campaign.path), fits, drag, points)
     degenerate.extend(poor_fit_notes(fits))
-    for index, result in enumerate(step_results):
-        result.report["validation"] = _validation(
-            result, fits[str(result.run.engine)], drag, point_ratios[index], glauert, electrical,
-        )
+    validations = [
+        pool.submit(_validation, result, fits[str(result.run.engine)], drag, point_ratios[index],
+                    glauert, electrical)
+        for index, result in enumerate(step_results)
+    ]
+    for result, validation in zip(step_results, validations, strict=True):
+        result.report["validation"] = validation.result()
         run_reports.append(result.report)
 
     # The summary speaks of thrusting points, as the paper's check did: for a windmilling
@@ -693,8 +697,8 @@ def _fit_campaign(
 
     speeds = [p.airspeed_m_s for p in points]
     files = [
-        {"file": r.file, "kind": r.kind, "engine": r.engine, "sha256": sha256_of(r.path)}
-        for r in campaign.runs
+        {"file": r.file, "kind": r.kind, "engine": r.engine, "sha256": digest.result()}
+        for r, digest in digests
     ]
     source = {
         "tool": "tuflexperf fit",
