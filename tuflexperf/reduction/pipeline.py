@@ -66,6 +66,7 @@ from tuflexperf.reduction.power import (
 from tuflexperf.reduction.segments import (
     MIN_STEADY_SHARE,
     SteadyMean,
+    TestPoint,
     fit_transients,
     merge_test_points,
     steady_means,
@@ -462,6 +463,10 @@ def _drag_sweep(campaign: Campaign, run: CampaignRun) -> _DragSweep:
     )
 
 
+_Cell = tuple[TestPoint, tuple[float, float, float]]
+"""A run's test point with its mean pack voltage [V], current [A] and ``U I`` [W]."""
+
+
 def _fit_campaign(
     campaign: Campaign,
     glauert: bool,
@@ -570,17 +575,22 @@ def _fit_campaign(
     if sweeps:
         drag = fit_structure_drag(sweeps)
 
-    def reduce(run: CampaignRun, read: Future[Run]) -> StepRunResult:
+    def reduce(run: CampaignRun, read: Future[Run]) -> tuple[StepRunResult, list[_Cell]]:
         onset = onset_delay.get(str(run.engine)) or delay or 0.0
-        return reduce_step_run(campaign, run, read.result(), max(onset, 0.0))
+        result = reduce_step_run(campaign, run, read.result(), max(onset, 0.0))
+        # the run's test points and their pack voltage and current, while on the worker
+        return result, [(cell, _electrical(result, cell.members))
+                        for cell in merge_test_points(result.segments)]
 
     # queued behind every read: a worker waits at most on a read another one is doing
     reduced = [(run, pool.submit(reduce, run, read)) for run, read in reads]
     digests = [(r, pool.submit(sha256_of, r.path)) for r in campaign.runs]  # for the source
     step_results: list[StepRunResult] = []
+    cells_of: list[list[_Cell]] = []
     for run, step_future in reduced:
         tick(run.file)
-        result = step_future.result()
+        result, cells = step_future.result()
+        cells_of.append(cells)
         data = result.data
         if not result.segments:  # e.g. 50 rows, or time stamps in microseconds
             degenerate.append(
@@ -614,7 +624,7 @@ def _fit_campaign(
         if result.run.file in deaf:  # no fan's response: it would bend the surface
             point_ratios[index] = ratios
             continue
-        for cell in merge_test_points(result.segments):
+        for cell, (volts, amps, watts) in cells_of[index]:
             d = float(drag.drag_n(cell.airspeed_m_s)) if drag is not None else 0.0
             thrust = cell.force_n + d
             ratio = float(
@@ -629,7 +639,6 @@ def _fit_campaign(
             for member in cell.members:
                 ratios[member] = ratio
             used_v = cell.airspeed_m_s * ratio if glauert and math.isfinite(ratio) else None
-            volts, amps, watts = _electrical(result, cell.members)
             # the table stores 10 significant digits; the fit uses exactly those numbers,
             # so `tuflexperf fit TABLE` reproduces this fit
             points.append(
