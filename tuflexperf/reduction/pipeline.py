@@ -663,7 +663,7 @@ def _fit_campaign(
         point_ratios[index] = ratios
 
     engines = list(dict.fromkeys(str(r.run.engine) for r in step_results))
-    electrical = _electrical_fits(campaign, engines, points)
+    electrical = _electrical_fits(campaign, engines, points, pool)
     fits: dict[str, Poly22Fit] = {}
     for engine in engines:
         mine = [p for p in points if p.engine == engine]
@@ -855,11 +855,16 @@ class ElectricalFits:
         }
 
 
-def _electrical_fits(campaign: Campaign, engines: list[str], points: list[Point]) -> ElectricalFits:
+def _electrical_fits(
+    campaign: Campaign, engines: list[str], points: list[Point],
+    pool: ThreadPoolExecutor | None = None,
+) -> ElectricalFits:
     """Voltage exponent, power surface and windmilling drag per engine (module docstring, 7).
 
     With a determined voltage exponent every point's ``thrust_n`` is brought to the
     reference voltage in place (``T (U_ref / U)^n``), so the poly22 holds at ``U_ref``.
+    The engines' exponent profiles (independent, ~300 least squares each) run on ``pool``
+    when one is given.
     """
     out = ElectricalFits()
     logged = [p for p in points if math.isfinite(p.voltage_v) and p.voltage_v > 0]
@@ -870,21 +875,36 @@ def _electrical_fits(campaign: Campaign, engines: list[str], points: list[Point]
         thrusting = [p.voltage_v for p in logged if p.thrust_n > 0]
         chosen = full or thrusting or [p.voltage_v for p in logged]
         out.reference_voltage_v = round(float(np.mean(chosen)), 1)
+    reference = out.reference_voltage_v
+
+    def voltage_fit(mine: list[Point], reference_v: float) -> VoltageFit:
+        # idle points carry no thrust to scale: the exponent is fitted on thrusting ones
+        fit_pts = [p for p in mine if p.throttle > 1e-3]
+        return fit_voltage_exponent(
+            [p.throttle for p in fit_pts],
+            [p.airspeed_m_s for p in fit_pts],
+            [p.thrust_n for p in fit_pts],
+            [p.voltage_v for p in fit_pts],
+            reference_v,
+        )
+
+    by_engine = {engine: [p for p in points if p.engine == engine] for engine in engines}
+    logged_all = {
+        engine: all(math.isfinite(p.voltage_v) and p.voltage_v > 0 for p in mine)
+        for engine, mine in by_engine.items()
+    }
+    pending = {
+        engine: pool.submit(voltage_fit, by_engine[engine], reference)
+        for engine in engines if pool is not None and reference is not None and logged_all[engine]
+    }
     unlogged: list[str] = []
     for engine in engines:
-        mine = [p for p in points if p.engine == engine]
+        mine = by_engine[engine]
         label = f"{campaign.path}: engine {engine}"
         with_volts = [p for p in mine if math.isfinite(p.voltage_v) and p.voltage_v > 0]
         if out.reference_voltage_v is not None and len(with_volts) == len(mine):
-            # idle points carry no thrust to scale: the exponent is fitted on thrusting ones
-            fit_pts = [p for p in mine if p.throttle > 1e-3]
-            out.voltage[engine] = fit_voltage_exponent(
-                [p.throttle for p in fit_pts],
-                [p.airspeed_m_s for p in fit_pts],
-                [p.thrust_n for p in fit_pts],
-                [p.voltage_v for p in fit_pts],
-                out.reference_voltage_v,
-            )
+            out.voltage[engine] = (pending[engine].result() if engine in pending
+                                   else voltage_fit(mine, out.reference_voltage_v))
         elif out.reference_voltage_v is not None:
             unlogged.append(f"engine {engine} ({len(with_volts)} of {len(mine)} points)")
         with_power = [p for p in mine if math.isfinite(p.electrical_power_w)]
