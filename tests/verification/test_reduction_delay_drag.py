@@ -135,3 +135,21 @@ def test_glauert_undefined_at_rest_and_for_strong_windmilling() -> None:
     assert np.isnan(ratios[0])  # no stream to correct
     assert np.isnan(ratios[1])  # 1 + 2 tau < 0
     assert 0.9 < ratios[2] < 1.0
+
+
+def test_the_residual_at_several_delays_equals_one_delay_at_a_time() -> None:
+    """The refinement's stencil asks for three dead times at once: each row is to the bit
+    what a call with that dead time alone gives (lags 0 and > 0, a delay past the grid)."""
+    from tuflexperf.reduction.delay import _projected_sse
+    from tuflexperf.reduction.filters import block_mean
+
+    t, x, force = fine_sweep(1000.0, 0.045, 0.03)
+    t, x, y = (block_mean(v, 5) for v in (t, x, force))
+    sse = _projected_sse(t, x, y, 0.005)
+    delays = np.array([0.0, 0.0437, 0.05, 0.2])
+    taus = np.array([0.0, 0.003, 0.031])
+    together = sse(delays, taus)
+    assert together.shape == (delays.size, taus.size)
+    for row, delay in zip(together, delays, strict=True):
+        assert np.array_equal(row, sse(float(delay), taus))
+        assert np.array_equal(row[1:2], sse(float(delay), taus[1:2]))

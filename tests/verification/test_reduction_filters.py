@@ -139,3 +139,25 @@ def test_movmedian_with_a_window_longer_than_the_signal_is_the_definition(n: int
         before, after = kk // 2, kk - 1 - kk // 2
         expected = [np.median(x[max(i - before, 0):min(i + after + 1, n)]) for i in range(n)]
         np.testing.assert_array_equal(movmedian(x, k), expected)
+
+
+@pytest.mark.parametrize("k", [1, 2, 7, 100, 101])
+def test_movmedians_equal_one_movmedian_per_piece(k: int) -> None:
+    """The pieces filtered together (one running median over their concatenation, one sort
+    for every cut-short end) give to the bit what movmedian gives each piece on its own:
+    long and short pieces, NaN in one, ties and signed zeros among the values."""
+    from tuflexperf.reduction.filters import movmedians
+
+    rng = np.random.default_rng(k)
+    sizes = [3085, 2 * k + 5, k + 1, k, max(k - 3, 1), 1, 4000, 250]
+    pieces = [np.round(rng.normal(30.0, 2.0, size=n), 1) for n in sizes]
+    pieces[1][::7] = 0.0
+    pieces[1][3::7] = -0.0
+    pieces[6][100] = np.nan  # movmedian's path for NaN, not the shared one
+    together = movmedians(pieces, k)
+    assert len(together) == len(pieces)
+    for piece, filtered in zip(pieces, together, strict=True):
+        alone = movmedian(piece, k)
+        assert filtered.shape == alone.shape
+        assert np.array_equal(filtered, alone, equal_nan=True)
+        assert np.array_equal(np.signbit(filtered), np.signbit(alone))

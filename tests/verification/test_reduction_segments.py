@@ -107,3 +107,20 @@ def test_merge_test_points_weights_by_samples() -> None:
     assert [c.members for c in cells] == [(0, 2), (1,)]
     assert cells[0].force_n == pytest.approx((10 * 1.0 + 30 * 3.0) / 40)
     assert cells[0].n_samples == 40
+
+
+@pytest.mark.parametrize("n_values", [5, 10_000, 70_000])
+def test_grid_sse_in_blocks_equals_the_whole_grid_at_once(n_values: int) -> None:
+    """The time-constant grid evaluated a few rows at a time (cache-sized temporaries) gives
+    the bit-identical SSE of evaluating all rows in one broadcast, as the fit did before."""
+    from tuflexperf.reduction.segments import _grid_sse, _segment_sse
+
+    rng = np.random.default_rng(n_values)
+    cuts = np.sort(rng.choice(np.arange(1, n_values), size=min(11, n_values - 1), replace=False))
+    starts = np.concatenate(([0], cuts)).astype(np.intp)
+    t = np.concatenate([np.sort(rng.uniform(0, 3, size=b - a))
+                        for a, b in zip(starts, [*starts[1:], n_values], strict=True)])
+    y = rng.normal(20.0, 5.0, size=n_values)
+    taus = np.geomspace(2e-3, 1.0, 40)
+    whole = _segment_sse(y, np.exp(-t / taus[:, None]), starts)[0]
+    assert np.array_equal(_grid_sse(t, y, taus, starts), whole)

@@ -77,31 +77,42 @@ def _xcorr_lag(x: NDArray[np.float64], y: NDArray[np.float64], dt: float, max_la
 
 def _projected_sse(
     t: NDArray[np.float64], x: NDArray[np.float64], y: NDArray[np.float64], dt: float
-) -> Callable[[float, NDArray[np.float64]], NDArray[np.float64]]:
+) -> Callable[[float | NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]]:
     """``(delay, taus) -> residual sum of squares per tau`` of the variable-projection fit
-    on one sampling ``t`` [s] of throttle ``x`` [-] and force ``y`` [N] (step ``dt`` [s])."""
+    on one sampling ``t`` [s] of throttle ``x`` [-] and force ``y`` [N] (step ``dt`` [s]).
+
+    ``delay`` [s] may be an array of dead times: the result is then one row per dead time,
+    each equal to the bit to a call with that dead time alone (the dead times share one lag
+    filter call and one batch of normal equations per lag: the refinement's stencil).
+    """
     # constant and trend columns do not depend on (d, tau): project them out once
     _, basis, _, y_free, yy = _without_trend(y)
 
-    def sse_of_taus(delay: float, taus: NDArray[np.float64]) -> NDArray[np.float64]:
-        u = np.interp(t - delay, t, x)
-        both = np.stack([u, u * u])
+    def sse_of_taus(
+        delay: float | NDArray[np.float64], taus: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        delays = np.atleast_1d(np.asarray(delay, dtype=float))
+        inputs = [np.interp(t - d, t, x) for d in delays]
+        both = np.stack([column for u in inputs for column in (u, u * u)])
         rows = np.empty((6, t.size))
         rows[3:5], rows[5] = basis.T, y_free
-        grams = np.empty((taus.size, 3, 3))
-        rhs = np.empty((taus.size, 3))
+        grams = np.empty((delays.size, taus.size, 3, 3))
+        rhs = np.empty((delays.size, taus.size, 3))
         for m, tau in enumerate(taus):
-            rows[0], rows[2] = _lag_filter(both, float(tau), dt)
-            np.multiply(rows[0], rows[0], out=rows[1])
-            # one product gives every dot product of the fan columns L[u], L[u]^2, L[u^2]
-            # with each other, the constant/trend basis and the data
-            dots = np.einsum("an,bn->ab", rows[:3], rows)  # no BLAS: its threads
-            cross = dots[:, 3:5]
-            grams[m] = dots[:, :3] - cross @ cross.T  # fan columns with the basis projected out
-            rhs[m] = dots[:, 5]  # y_free is orthogonal to the basis already
+            lagged = _lag_filter(both, float(tau), dt)  # row by row: L[u], L[u^2] per delay
+            for a in range(delays.size):
+                rows[0], rows[2] = lagged[2 * a], lagged[2 * a + 1]
+                np.multiply(rows[0], rows[0], out=rows[1])
+                # one product gives every dot product of the fan columns L[u], L[u]^2,
+                # L[u^2] with each other, the constant/trend basis and the data
+                dots = np.einsum("an,bn->ab", rows[:3], rows)  # no BLAS: its threads
+                cross = dots[:, 3:5]
+                grams[a, m] = dots[:, :3] - cross @ cross.T  # basis projected out
+                rhs[a, m] = dots[:, 5]  # y_free is orthogonal to the basis already
         # 3 x 3 normal equations, rank-deficient at tau = 0 (where L[u^2] = L[u]^2): the
         # least-squares residual is ||y||^2 - b' G^+ b
-        return yy - _explained(grams, rhs)
+        sse = yy - _explained(grams.reshape(-1, 3, 3), rhs.reshape(-1, 3))
+        return sse.reshape(delays.size, taus.size) if np.ndim(delay) else sse
 
     return sse_of_taus
 
@@ -273,7 +284,7 @@ def estimate_delay(
             break
         d_pts = np.clip(delay + h_d * offsets, 0.0, max_delay_s)
         tau_pts = np.maximum(tau + h_tau * offsets, 0.0)
-        values = np.array([sse_of_taus(float(d), tau_pts) for d in d_pts])
+        values = sse_of_taus(d_pts, tau_pts)  # (delay, tau)
         dd, tt = np.meshgrid(d_pts - delay, tau_pts - tau, indexing="ij")
         design = np.column_stack(
             [np.ones(9), dd.ravel(), tt.ravel(), dd.ravel() ** 2, dd.ravel() * tt.ravel(),

@@ -26,7 +26,9 @@ schema ``check`` uses, and only then are files written, atomically.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Iterable
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -64,9 +66,10 @@ from tuflexperf.reduction.power import (
 from tuflexperf.reduction.segments import (
     MIN_STEADY_SHARE,
     SteadyMean,
+    TestPoint,
     fit_transients,
     merge_test_points,
-    steady_mean,
+    steady_means,
 )
 
 Progress = Callable[[int, int, str], None]
@@ -216,7 +219,7 @@ def reduce_step_run(
     cleaned, replaced = clean_run(campaign, data)
     transients = fit_transients(t, cleaned, onsets, [p.stop for p in plateaus], fs)
 
-    segments: list[SteadyMean] = []
+    spans: list[tuple[int, int]] = []
     settle_samples: list[int] = []
     for p, onset, settle_s in zip(plateaus, onsets, transients.settle_s, strict=True):
         settle = int(math.ceil(settle_s * fs))
@@ -231,18 +234,10 @@ def reduce_step_run(
         if p.stop - start < 3:
             warnings.append(f"plateau at {t[p.start]:.2f} s too short after the transient: skipped")
             continue
-        segments.append(
-            steady_mean(
-                data["force_n"],
-                data["airspeed_m_s"],
-                data["throttle"],
-                start,
-                p.stop,
-                k_out,
-                threshold,
-                k_med,
-            )
-        )
+        spans.append((start, p.stop))
+    segments = steady_means(
+        data["force_n"], data["airspeed_m_s"], data["throttle"], spans, k_out, threshold, k_med
+    )
 
     changes = force_changepoints(cleaned, fs, min_segment_s=MIN_SEGMENT_S)
     steps = [
@@ -396,6 +391,93 @@ def fit_campaign(
 ) -> FitResult:
     """Reduce a campaign and fit the poly22 per engine (module docstring)."""
     campaign = load_campaign(Path(manifest))
+    pool = ThreadPoolExecutor(max_workers=_workers(), thread_name_prefix="tuflexperf-fit")
+    try:
+        # every run is read, and each sweep reduced, as soon as a worker is free; the results
+        # are taken in the manifest's order, so reports, warnings and errors come as before
+        sine = [(run, pool.submit(_sine_sweep, run)) for run in campaign.of_kind("sine_sweep")]
+        bare = [(run, pool.submit(_drag_sweep, campaign, run))
+                for run in campaign.of_kind("drag_sweep")]
+        reads = [(run, pool.submit(read_run, run.path, vendor=run.vendor))
+                 for run in campaign.of_kind("throttle_steps")]
+        return _fit_campaign(campaign, glauert, delay_s, progress, pool, sine, bare, reads)
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _workers() -> int:
+    """Threads that read and reduce runs: one per core, at most 4 (numpy, Bottleneck, SciPy's
+    filters, zlib and pandas' parser release the GIL; past a few the GIL holds them back)."""
+    return max(1, min(4, os.cpu_count() or 1))
+
+
+def _sine_sweep(run: CampaignRun) -> tuple[Run, DelayEstimate | None]:
+    """Read a sine-sweep run and fit its delay (None when its throttle barely moves)."""
+    data = read_run(run.path, vendor=run.vendor)
+    if float(np.ptp(data["throttle"])) < MIN_SWEEP_THROTTLE_SWING:
+        return data, None
+    return data, estimate_delay(data.time_s, data["throttle"], data["force_n"],
+                                data.sample_rate_hz)
+
+
+@dataclass(frozen=True)
+class _DragSweep:
+    """A drag-sweep run read and, unless it measures no drag, cleaned."""
+
+    data: Run
+    report: dict[str, Any]
+    problem: str = ""  # why it gives no drag curve ("" when it gives one)
+    curve: tuple[np.ndarray, np.ndarray] | None = None  # airspeed [m/s], force [N] cleaned
+
+
+def _drag_sweep(campaign: Campaign, run: CampaignRun) -> _DragSweep:
+    """Read and clean one bare-structure velocity sweep (module docstring, step 3)."""
+    data = read_run(run.path, vendor=run.vendor)
+    top = float(np.max(data["airspeed_m_s"]))
+    if top < MIN_DRAG_SWEEP_AIRSPEED_M_S:
+        return _DragSweep(
+            data, {**_run_header(run, data), "wind": "none"},
+            f"{run.file}: drag sweep without wind (airspeed at most {top:.2f} m/s): no "
+            "structure drag measured, none added",
+        )
+    span = top - float(np.min(data["airspeed_m_s"]))
+    if span < MIN_DRAG_SWEEP_SPAN_M_S:  # one airspeed: a curve in V^2 is not determined
+        return _DragSweep(
+            data, {**_run_header(run, data), "wind": "one airspeed"},
+            f"{run.file}: drag sweep over {span:.2f} m/s of airspeed only (needs "
+            f">= {MIN_DRAG_SWEEP_SPAN_M_S:g}): no drag curve from it, left out",
+        )
+    if float(np.ptp(data["force_n"])) <= DEAD_LOAD_CELL_N:
+        # the same force at every airspeed: "D = 0 (R^2 nan)" was added to every point
+        # unremarked (outside audit)
+        return _DragSweep(
+            data, {**_run_header(run, data), "force": "constant"},
+            f"{run.file}: drag sweep whose force is {float(data['force_n'][0]):.4g} N "
+            "throughout (a dead load cell?): no structure drag measured, none added",
+        )
+    force, replaced = clean_run(campaign, data)
+    _, _, k_med = _windows(campaign, data.sample_rate_hz)
+    return _DragSweep(
+        data, {**_run_header(run, data), "outliers_replaced": replaced},
+        curve=(movmedian(data["airspeed_m_s"], k_med), force),
+    )
+
+
+_Cell = tuple[TestPoint, tuple[float, float, float]]
+"""A run's test point with its mean pack voltage [V], current [A] and ``U I`` [W]."""
+
+
+def _fit_campaign(
+    campaign: Campaign,
+    glauert: bool,
+    delay_s: float | None,
+    progress: Progress | None,
+    pool: ThreadPoolExecutor,
+    sine: list[tuple[CampaignRun, Future[tuple[Run, DelayEstimate | None]]]],
+    bare: list[tuple[CampaignRun, Future[_DragSweep]]],
+    reads: list[tuple[CampaignRun, Future[Run]]],
+) -> FitResult:
+    """:func:`fit_campaign` on runs that ``pool`` reads (and sweeps it reduces) meanwhile."""
     total = len(campaign.runs)
     done = 0
 
@@ -409,20 +491,17 @@ def fit_campaign(
     delay_runs: list[dict[str, Any]] = []
     degenerate: list[str] = []  # runs that carry no information, named (issue 10)
     sweep_results: list[SweepRunResult] = []
-    for run in campaign.of_kind("sine_sweep"):
+    for run, future in sine:
         tick(run.file)
-        data = read_run(run.path, vendor=run.vendor)
-        swing = float(np.ptp(data["throttle"]))
-        if swing < MIN_SWEEP_THROTTLE_SWING:
+        data, estimate = future.result()
+        if estimate is None:
+            swing = float(np.ptp(data["throttle"]))
             degenerate.append(
                 f"{run.file}: sine sweep without excitation (throttle swings {swing:.3f}, "
                 f"needs >= {MIN_SWEEP_THROTTLE_SWING}): left out of the delay"
             )
             run_reports.append({**_run_header(run, data), "excitation": "none"})
             continue
-        estimate = estimate_delay(
-            data.time_s, data["throttle"], data["force_n"], data.sample_rate_hz
-        )
         if not estimate.r2 >= MIN_SWEEP_R2:  # noise fits some delay too: it measures nothing
             degenerate.append(
                 f"{run.file}: the force does not follow the sine sweep (fit R^2 "
@@ -485,47 +564,34 @@ def fit_campaign(
 
     drag: DragModel | None = None
     sweeps = []
-    for run in campaign.of_kind("drag_sweep"):
+    for run, bare_future in bare:
         tick(run.file)
-        data = read_run(run.path, vendor=run.vendor)
-        top = float(np.max(data["airspeed_m_s"]))
-        if top < MIN_DRAG_SWEEP_AIRSPEED_M_S:
-            degenerate.append(
-                f"{run.file}: drag sweep without wind (airspeed at most {top:.2f} m/s): no "
-                "structure drag measured, none added"
-            )
-            run_reports.append({**_run_header(run, data), "wind": "none"})
+        swept = bare_future.result()
+        run_reports.append(swept.report)
+        if swept.curve is None:
+            degenerate.append(swept.problem)
             continue
-        span = top - float(np.min(data["airspeed_m_s"]))
-        if span < MIN_DRAG_SWEEP_SPAN_M_S:  # one airspeed: a curve in V^2 is not determined
-            degenerate.append(
-                f"{run.file}: drag sweep over {span:.2f} m/s of airspeed only (needs "
-                f">= {MIN_DRAG_SWEEP_SPAN_M_S:g}): no drag curve from it, left out"
-            )
-            run_reports.append({**_run_header(run, data), "wind": "one airspeed"})
-            continue
-        if float(np.ptp(data["force_n"])) <= DEAD_LOAD_CELL_N:
-            # the same force at every airspeed: "D = 0 (R^2 nan)" was added to every point
-            # unremarked (outside audit)
-            degenerate.append(
-                f"{run.file}: drag sweep whose force is {float(data['force_n'][0]):.4g} N "
-                "throughout (a dead load cell?): no structure drag measured, none added"
-            )
-            run_reports.append({**_run_header(run, data), "force": "constant"})
-            continue
-        force, replaced = clean_run(campaign, data)
-        _, _, k_med = _windows(campaign, data.sample_rate_hz)
-        sweeps.append((movmedian(data["airspeed_m_s"], k_med), force))
-        run_reports.append({**_run_header(run, data), "outliers_replaced": replaced})
+        sweeps.append(swept.curve)
     if sweeps:
         drag = fit_structure_drag(sweeps)
 
-    step_results: list[StepRunResult] = []
-    for run in campaign.of_kind("throttle_steps"):
-        tick(run.file)
-        data = read_run(run.path, vendor=run.vendor)
+    def reduce(run: CampaignRun, read: Future[Run]) -> tuple[StepRunResult, list[_Cell]]:
         onset = onset_delay.get(str(run.engine)) or delay or 0.0
-        result = reduce_step_run(campaign, run, data, max(onset, 0.0))
+        result = reduce_step_run(campaign, run, read.result(), max(onset, 0.0))
+        # the run's test points and their pack voltage and current, while on the worker
+        return result, [(cell, _electrical(result, cell.members))
+                        for cell in merge_test_points(result.segments)]
+
+    # queued behind every read: a worker waits at most on a read another one is doing
+    reduced = [(run, pool.submit(reduce, run, read)) for run, read in reads]
+    digests = [(r, pool.submit(sha256_of, r.path)) for r in campaign.runs]  # for the source
+    step_results: list[StepRunResult] = []
+    cells_of: list[list[_Cell]] = []
+    for run, step_future in reduced:
+        tick(run.file)
+        result, cells = step_future.result()
+        cells_of.append(cells)
+        data = result.data
         if not result.segments:  # e.g. 50 rows, or time stamps in microseconds
             degenerate.append(
                 f"{run.file}: no steady throttle plateau of at least {MIN_SEGMENT_S:g} s "
@@ -558,7 +624,7 @@ def fit_campaign(
         if result.run.file in deaf:  # no fan's response: it would bend the surface
             point_ratios[index] = ratios
             continue
-        for cell in merge_test_points(result.segments):
+        for cell, (volts, amps, watts) in cells_of[index]:
             d = float(drag.drag_n(cell.airspeed_m_s)) if drag is not None else 0.0
             thrust = cell.force_n + d
             ratio = float(
@@ -573,7 +639,6 @@ def fit_campaign(
             for member in cell.members:
                 ratios[member] = ratio
             used_v = cell.airspeed_m_s * ratio if glauert and math.isfinite(ratio) else None
-            volts, amps, watts = _electrical(result, cell.members)
             # the table stores 10 significant digits; the fit uses exactly those numbers,
             # so `tuflexperf fit TABLE` reproduces this fit
             points.append(
@@ -598,7 +663,7 @@ def fit_campaign(
         point_ratios[index] = ratios
 
     engines = list(dict.fromkeys(str(r.run.engine) for r in step_results))
-    electrical = _electrical_fits(campaign, engines, points)
+    electrical = _electrical_fits(campaign, engines, points, pool)
     fits: dict[str, Poly22Fit] = {}
     for engine in engines:
         mine = [p for p in points if p.engine == engine]
@@ -610,10 +675,13 @@ def fit_campaign(
         )
     refuse_unphysical_fit(str(campaign.path), fits, drag, points)
     degenerate.extend(poor_fit_notes(fits))
-    for index, result in enumerate(step_results):
-        result.report["validation"] = _validation(
-            result, fits[str(result.run.engine)], drag, point_ratios[index], glauert, electrical,
-        )
+    validations = [
+        pool.submit(_validation, result, fits[str(result.run.engine)], drag, point_ratios[index],
+                    glauert, electrical)
+        for index, result in enumerate(step_results)
+    ]
+    for result, validation in zip(step_results, validations, strict=True):
+        result.report["validation"] = validation.result()
         run_reports.append(result.report)
 
     # The summary speaks of thrusting points, as the paper's check did: for a windmilling
@@ -638,8 +706,8 @@ def fit_campaign(
 
     speeds = _speeds_by_engine((p.engine, p.airspeed_m_s) for p in points)
     files = [
-        {"file": r.file, "kind": r.kind, "engine": r.engine, "sha256": sha256_of(r.path)}
-        for r in campaign.runs
+        {"file": r.file, "kind": r.kind, "engine": r.engine, "sha256": digest.result()}
+        for r, digest in digests
     ]
     source = {
         "tool": "tuflexperf fit",
@@ -787,11 +855,16 @@ class ElectricalFits:
         }
 
 
-def _electrical_fits(campaign: Campaign, engines: list[str], points: list[Point]) -> ElectricalFits:
+def _electrical_fits(
+    campaign: Campaign, engines: list[str], points: list[Point],
+    pool: ThreadPoolExecutor | None = None,
+) -> ElectricalFits:
     """Voltage exponent, power surface and windmilling drag per engine (module docstring, 7).
 
     With a determined voltage exponent every point's ``thrust_n`` is brought to the
     reference voltage in place (``T (U_ref / U)^n``), so the poly22 holds at ``U_ref``.
+    The engines' exponent profiles (independent, ~300 least squares each) run on ``pool``
+    when one is given.
     """
     out = ElectricalFits()
     logged = [p for p in points if math.isfinite(p.voltage_v) and p.voltage_v > 0]
@@ -802,21 +875,36 @@ def _electrical_fits(campaign: Campaign, engines: list[str], points: list[Point]
         thrusting = [p.voltage_v for p in logged if p.thrust_n > 0]
         chosen = full or thrusting or [p.voltage_v for p in logged]
         out.reference_voltage_v = round(float(np.mean(chosen)), 1)
+    reference = out.reference_voltage_v
+
+    def voltage_fit(mine: list[Point], reference_v: float) -> VoltageFit:
+        # idle points carry no thrust to scale: the exponent is fitted on thrusting ones
+        fit_pts = [p for p in mine if p.throttle > 1e-3]
+        return fit_voltage_exponent(
+            [p.throttle for p in fit_pts],
+            [p.airspeed_m_s for p in fit_pts],
+            [p.thrust_n for p in fit_pts],
+            [p.voltage_v for p in fit_pts],
+            reference_v,
+        )
+
+    by_engine = {engine: [p for p in points if p.engine == engine] for engine in engines}
+    logged_all = {
+        engine: all(math.isfinite(p.voltage_v) and p.voltage_v > 0 for p in mine)
+        for engine, mine in by_engine.items()
+    }
+    pending = {
+        engine: pool.submit(voltage_fit, by_engine[engine], reference)
+        for engine in engines if pool is not None and reference is not None and logged_all[engine]
+    }
     unlogged: list[str] = []
     for engine in engines:
-        mine = [p for p in points if p.engine == engine]
+        mine = by_engine[engine]
         label = f"{campaign.path}: engine {engine}"
         with_volts = [p for p in mine if math.isfinite(p.voltage_v) and p.voltage_v > 0]
         if out.reference_voltage_v is not None and len(with_volts) == len(mine):
-            # idle points carry no thrust to scale: the exponent is fitted on thrusting ones
-            fit_pts = [p for p in mine if p.throttle > 1e-3]
-            out.voltage[engine] = fit_voltage_exponent(
-                [p.throttle for p in fit_pts],
-                [p.airspeed_m_s for p in fit_pts],
-                [p.thrust_n for p in fit_pts],
-                [p.voltage_v for p in fit_pts],
-                out.reference_voltage_v,
-            )
+            out.voltage[engine] = (pending[engine].result() if engine in pending
+                                   else voltage_fit(mine, out.reference_voltage_v))
         elif out.reference_voltage_v is not None:
             unlogged.append(f"engine {engine} ({len(with_volts)} of {len(mine)} points)")
         with_power = [p for p in mine if math.isfinite(p.electrical_power_w)]

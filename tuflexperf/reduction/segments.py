@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from tuflexperf.reduction.filters import (
     block_mean,
     filloutliers_movmean,
-    movmedian,
+    movmedians,
     window_samples,
 )
 
@@ -63,6 +63,45 @@ def _segment_sse(
         amplitude = np.where(ok, (n * sye - se * sy) / det, 0.0)
     sse = np.sum(np.maximum(syy - level * sy - amplitude * sye, 0.0), axis=-1)
     return sse, level, amplitude  # type: ignore[return-value]
+
+
+GRID_BLOCK_VALUES = 1 << 16
+"""Regressor values per block of the time-constant grid (:func:`_grid_sse`)."""
+
+
+def _grid_sse(
+    t: NDArray[np.float64], y: NDArray[np.float64], taus: NDArray[np.float64],
+    starts: NDArray[np.intp],
+) -> NDArray[np.float64]:
+    """Total SSE of :func:`_segment_sse` for the regressor ``exp(-t / tau)``, per ``tau``.
+
+    Equal to the bit to ``_segment_sse(y, np.exp(-t / taus[:, None]), starts)[0]``, computed
+    a few time constants at a time: the whole grid at once (40 rows of the run's block means,
+    a few MB per temporary) spent most of its time faulting in fresh pages.
+
+    Parameters
+    ----------
+    t : ndarray
+        Time since each segment's onset [s].
+    y : ndarray
+        Force [N], one value per ``t``.
+    taus : ndarray
+        Time constants [s].
+    starts : ndarray of int
+        First index of each segment in ``t`` and ``y``.
+
+    Returns
+    -------
+    ndarray
+        SSE [N^2], one per time constant.
+    """
+    rows = max(1, GRID_BLOCK_VALUES // max(t.size, 1))
+    neg = -t
+    sse = np.empty(taus.size)
+    for first in range(0, taus.size, rows):
+        block = taus[first : first + rows, None]
+        sse[first : first + rows] = _segment_sse(y, np.exp(neg / block), starts)[0]
+    return sse
 
 
 def fit_transients(
@@ -116,7 +155,7 @@ def fit_transients(
         return float(_segment_sse(y, np.exp(-t / np.exp(log_tau)), index)[0])
 
     grid = np.linspace(np.log(tau_min), np.log(tau_max), 40)
-    values = _segment_sse(y, np.exp(-t / np.exp(grid)[:, None]), index)[0]  # all 40 at once
+    values = _grid_sse(t, y, np.exp(grid), index)
     best = int(np.argmin(values))
     lo, hi = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
     result = minimize_scalar(objective, bounds=(lo, hi), method="bounded", options={"xatol": 1e-3})
@@ -159,20 +198,60 @@ def steady_mean(
     mean never sees a neighbouring step. Airspeed is averaged as logged; the
     throttle is the median of the logged command.
     """
-    raw = force_n[start:stop]
-    filled, replaced = filloutliers_movmean(raw, outlier_window, outlier_threshold)
-    smooth = movmedian(filled, median_window)
-    return SteadyMean(
-        throttle=float(np.median(throttle[start:stop])),
-        airspeed_m_s=float(np.mean(airspeed_m_s[start:stop])),
-        force_n=float(np.mean(smooth)),
-        force_std_n=float(np.std(filled, ddof=1)) if smooth.size > 1 else 0.0,
-        n_samples=int(stop - start),
-        start=start,
-        stop=stop,
-        outliers_replaced=replaced,
-        filtered_force_n=smooth,
-    )
+    return steady_means(force_n, airspeed_m_s, throttle, [(start, stop)], outlier_window,
+                        outlier_threshold, median_window)[0]
+
+
+def steady_means(
+    force_n: NDArray[np.float64],
+    airspeed_m_s: NDArray[np.float64],
+    throttle: NDArray[np.float64],
+    spans: Sequence[tuple[int, int]],
+    outlier_window: int,
+    outlier_threshold: float,
+    median_window: int,
+) -> list[SteadyMean]:
+    """:func:`steady_mean` of each ``(start, stop)`` in ``spans`` (a run's steady stretches).
+
+    Each stretch is filtered on its own, as :func:`steady_mean` does; the moving medians of
+    all of them run together (:func:`~tuflexperf.reduction.filters.movmedians`, equal to the
+    bit to one call per stretch).
+
+    Parameters
+    ----------
+    force_n, airspeed_m_s, throttle : ndarray
+        The run: force [N], airspeed [m/s], throttle [fraction].
+    spans : sequence of (int, int)
+        Sample ranges ``[start, stop)``.
+    outlier_window, median_window : int
+        The two filters' windows [samples].
+    outlier_threshold : float
+        Outlier threshold in local standard deviations [-].
+
+    Returns
+    -------
+    list of SteadyMean
+        One per span, in order.
+    """
+    fills = [
+        filloutliers_movmean(force_n[start:stop], outlier_window, outlier_threshold)
+        for start, stop in spans
+    ]
+    smooths = movmedians([filled for filled, _ in fills], median_window)
+    return [
+        SteadyMean(
+            throttle=float(np.median(throttle[start:stop])),
+            airspeed_m_s=float(np.mean(airspeed_m_s[start:stop])),
+            force_n=float(np.mean(smooth)),
+            force_std_n=float(np.std(filled, ddof=1)) if smooth.size > 1 else 0.0,
+            n_samples=int(stop - start),
+            start=start,
+            stop=stop,
+            outliers_replaced=replaced,
+            filtered_force_n=smooth,
+        )
+        for (start, stop), (filled, replaced), smooth in zip(spans, fills, smooths, strict=True)
+    ]
 
 
 THROTTLE_MATCH = 0.005
