@@ -33,6 +33,28 @@ def test_force_changepoints_ignore_pure_noise() -> None:
     assert force_changepoints(40 + rng.normal(0, 1.0, 20_000), FS) == []
 
 
+def test_a_long_run_searched_in_windows_finds_what_one_search_finds() -> None:
+    """A run longer than one PELT window (here 3.5 windows of block means, with steps on and
+    near the windows' seams) gives the change points of one search over the whole run: PELT
+    grows with the square of a steady run's length, the windows with it (outside audit)."""
+    import ruptures
+
+    from tuflexperf.reduction import changepoints
+
+    rng = np.random.default_rng(3)
+    n = int(3.5 * changepoints.PELT_WINDOW_BLOCKS)
+    core = changepoints.PELT_WINDOW_BLOCKS - 2 * changepoints.PELT_MARGIN_BLOCKS
+    steps = sorted({700, core - 3, core + 15, 2 * core, 2 * core + 40, 3 * core - 600, n - 300})
+    levels = np.cumsum(rng.choice([-1.0, 1.0], len(steps) + 1) * rng.uniform(0.5, 3.0,
+                                                                            len(steps) + 1))
+    coarse = np.repeat(levels, np.diff([0, *steps, n])) + rng.normal(0.0, 0.05, n)
+    penalty = 10 * 0.05**2 * np.log(n)
+    whole = ruptures.KernelCPD(kernel="linear", min_size=10, jump=1).fit(
+        coarse.reshape(-1, 1)).predict(pen=penalty)[:-1]
+    assert whole == steps  # the test's own truth, found by one search
+    assert changepoints.kernel_breaks(coarse, 10, penalty) == whole
+
+
 def test_throttle_plateaus_from_logged_steps() -> None:
     throttle, edges = staircase([0, 1.0, 0.9, 0.8, 0.8, 0.0], [1, 2, 2, 1, 1, 1])
     plateaus = throttle_plateaus(throttle, FS)

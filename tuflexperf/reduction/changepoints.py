@@ -119,6 +119,43 @@ def _l2_split(csum: NDArray[np.float64], csum2: NDArray[np.float64], lo: int, hi
     return int(s[np.argmax(explained)])
 
 
+PELT_WINDOW_BLOCKS = 4000  # block means searched at once (200 s at 20 Hz; see kernel_breaks)
+PELT_MARGIN_BLOCKS = 200  # each window's overlap with its neighbours (10 s at 20 Hz)
+
+
+def kernel_breaks(coarse: NDArray[np.float64], min_size: int, penalty: float) -> list[int]:
+    """Change points of ``coarse`` (PELT, ruptures' linear-kernel ``KernelCPD``): the index
+    of the first block of each new segment, ascending.
+
+    PELT prunes little where the mean never changes, so its time grows with the square of
+    the length (a steady run of 10 million samples took ten minutes; outside audit). A run
+    longer than :data:`PELT_WINDOW_BLOCKS` is searched in windows of that many blocks, each
+    overlapping its neighbours by :data:`PELT_MARGIN_BLOCKS` and keeping the changes in its
+    own core (a change is local: the penalty and the segments' least length are the whole
+    run's); a change closer than ``min_size`` to the one before is dropped.
+    """
+    import ruptures
+
+    def search(piece: NDArray[np.float64]) -> list[int]:
+        detector = ruptures.KernelCPD(kernel="linear", min_size=min_size, jump=1)
+        return [int(b) for b in detector.fit(piece.reshape(-1, 1)).predict(pen=penalty)[:-1]]
+
+    n = coarse.size
+    if n <= PELT_WINDOW_BLOCKS:
+        return search(coarse)
+    margin = max(PELT_MARGIN_BLOCKS, 4 * min_size)
+    core = max(PELT_WINDOW_BLOCKS - 2 * margin, 2 * min_size)
+    breaks: list[int] = []
+    for start in range(0, n, core):
+        lo, hi = max(start - margin, 0), min(start + core + margin, n)
+        if hi - lo < 2 * min_size:
+            continue
+        for b in search(coarse[lo:hi]):
+            if start <= lo + b < start + core and (not breaks or lo + b - breaks[-1] >= min_size):
+                breaks.append(lo + b)
+    return breaks
+
+
 def force_changepoints(
     force: NDArray[np.float64],
     sample_rate_hz: float,
@@ -154,8 +191,6 @@ def force_changepoints(
     list of int
         Index of the first sample of each new segment, ascending.
     """
-    import ruptures
-
     y = np.asarray(force, dtype=float)
     block = max(1, window_samples(block_s, sample_rate_hz))
     coarse = block_mean(y, block)
@@ -172,8 +207,7 @@ def force_changepoints(
         penalty_factor * sigma**2 * np.log(coarse.size),
         0.5 * min_size * min_shift_n**2,  # two segments of min_size, means min_shift apart
     )
-    detector = ruptures.KernelCPD(kernel="linear", min_size=min_size, jump=1)
-    breaks = detector.fit(coarse.reshape(-1, 1)).predict(pen=penalty)[:-1]
+    breaks = kernel_breaks(coarse, min_size, penalty)
     if not breaks:
         return []
     # refine at full rate: best split between the neighbouring coarse change points
