@@ -211,15 +211,25 @@ def test_the_climb_is_the_first_root_of_its_equation_or_says_why_not() -> None:
 
 
 def test_a_climb_that_takes_the_packs_below_their_cut_off_is_beyond_the_battery() -> None:
-    """The same climbs with a 43 V cut-off: the packs (44 V less 1 V/Ah) reach it at 1 Ah,
-    before the obstacle in the slower climbs (1.02 and 1.16 Ah), which are not reached."""
-    a = np.array([0.001, 0.005, 0.01])
+    """The same climbs with a 43 V cut-off: the packs (44 V less 1 V/Ah) reach it at 1 Ah
+    drawn. A climb still gaining height there is beyond the battery (never reached), one
+    that topped out before (the peak of ``phi`` at ``x = G_arc / (2 a)`` halfway, ``2 x``
+    at its end) tops out; one that reaches the obstacle first reaches it."""
+    a = np.array([0.001, 0.005, 0.01, 0.017, 0.05])
     free = _synthetic(a)[0]
     cut = _synthetic(a, cutoff=43.0)[0]
+    expected = []
     for j in range(a.size):
-        if free.charge_ah[0, j] > 1.0:
-            assert cut.status[j] == takeoff.BEYOND_THE_BATTERY_STATUS
-            assert math.isnan(cut.climb_gradient[j])
+        q_arc = free.arc_charge_ah[0, j]
+        if free.status[j] == takeoff.REACHED:
+            gone = free.charge_ah[0, j] > 1.0
+            expected.append(takeoff.BEYOND_THE_BATTERY_STATUS if gone else takeoff.REACHED)
         else:
-            assert cut.status[j] == takeoff.REACHED
-    assert list(cut.status) == [takeoff.REACHED] + [takeoff.BEYOND_THE_BATTERY_STATUS] * 2
+            peak_end = q_arc + (0.03 - a[j] * q_arc) / a[j]
+            expected.append(takeoff.BEYOND_THE_BATTERY_STATUS if peak_end > 1.0
+                            else takeoff.TOPS_OUT)
+    assert list(cut.status) == expected
+    assert expected == [takeoff.REACHED] + [takeoff.BEYOND_THE_BATTERY_STATUS] * 3 + [
+        takeoff.TOPS_OUT]
+    assert np.isnan(cut.climb_gradient[1:]).all()
+    assert cut.apex_m[-1] == pytest.approx(free.apex_m[-1], rel=1e-9)

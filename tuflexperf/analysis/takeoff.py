@@ -493,11 +493,37 @@ def settle_airborne(radius_m: Any, speed_m_s: Any, height_m: Any, charge_ah: Any
             scanning &= keep
         status[scanning] = UNSETTLED
 
-        # past phi's peak below the obstacle: golden section for the peak on [before, high]
-        # (phi rose up to low and fell at high); high enough, the crossing is before it
+        # the packs out at the scan's point (the obstacle maybe reached there too): where do
+        # they give out? (their charge only grows: a bisection); the climb may have topped
+        # out before, or reached the obstacle in between: the peak's search below decides
+        out = bracketed & ~holds_high
+        bracketed &= ~out
+        end, q_end_low, phi_end = high.copy(), q_low, phi_low.copy()
+        if out.any():
+            gone, q_gone, onset = high.copy(), q_high, out.copy()
+            end = np.where(out, low, end)
+            for _ in range(SETTLE_ITERATIONS):
+                onset &= ~(2.0 * np.max(np.abs(q_gone - q_end_low), axis=0)
+                           < CHARGE_TOLERANCE_AH)
+                if not onset.any():
+                    break
+                middle = 0.5 * (end + gone)
+                q, _, phi, holds, settled = at(middle, q_end_low, onset)
+                status[onset & ~settled] = UNSETTLED
+                onset &= settled
+                held, lost = onset & holds, onset & ~holds
+                end, q_end_low = np.where(held, middle, end), np.where(held, q, q_end_low)
+                phi_end = np.where(held, phi, phi_end)
+                gone, q_gone = np.where(lost, middle, gone), np.where(lost, q, q_gone)
+            status[onset] = UNSETTLED
+            peaked |= out & (status == REACHED)
+
+        # past phi's peak below the obstacle, or the packs out: golden section for the peak
+        # on [before, end] (phi rose up to low; it fell at high, or the packs give out at
+        # end); high enough, the crossing is before it; a peak at end is the packs' limit
         apex = np.full(rows, np.nan)
         if peaked.any():
-            a, b = before.copy(), high.copy()
+            a, b = before.copy(), end.copy()
             c, d = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
             q_c, _, phi_c, _, ok_c = at(c, q_low, peaked)
             q_d, _, phi_d, _, ok_d = at(d, q_low, peaked)
@@ -526,9 +552,14 @@ def settle_airborne(radius_m: Any, speed_m_s: Any, height_m: Any, charge_ah: Any
             q_p, g_p, phi_p, holds_p, ok_p = at(peak_s, q_low, peaked)
             candidate = peaked & (status == REACHED) & ok_p
             high_enough = candidate & event(phi_p, holds_p)
-            tops = candidate & ~high_enough
+            highest = np.fmax(phi_p, np.fmax(phi_c, phi_d))
+            # the packs out while the climb still gains height: beyond the battery; where it
+            # stopped gaining before (the peak inside), it topped out first
+            gave_out = candidate & ~high_enough & out & ~(highest > phi_end)
+            tops = candidate & ~high_enough & ~gave_out
             status[tops] = TOPS_OUT
-            apex = np.where(tops, top + np.fmax(phi_p, np.fmax(phi_c, phi_d)), np.nan)
+            status[gave_out] = BEYOND_THE_BATTERY_STATUS
+            apex = np.where(tops, top + highest, np.nan)
             low, q_low = np.where(high_enough, before, low), np.where(high_enough, q_before,
                                                                        q_low)
             high, q_high = np.where(high_enough, peak_s, high), np.where(high_enough, q_p,
