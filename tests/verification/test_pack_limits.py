@@ -26,7 +26,7 @@ from tuflexperf.analysis.takeoff import solve_takeoff
 from tuflexperf.analysis.trim import solve_trim
 from tuflexperf.cli import load_case_with
 from tuflexperf.errors import NotAttainable
-from tuflexperf.models.aircraft import level_flight_drag_n
+from tuflexperf.models.aircraft import level_flight_drag_n, transition_speed_m_s
 from tuflexperf.models.battery import (
     DischargeParameters,
     loaded_voltage_at_power_v,
@@ -98,7 +98,8 @@ def test_a_pack_that_sags_below_its_cutoff_at_full_throttle_cannot_take_off(tmp_
 def test_the_sag_message_names_the_power_drawn_at_the_sagged_voltage(tmp_path):
     """With a reference voltage the fans draw P (U/U_ref)^(1.5 k): at 40.04 V of a 47 V
     reference, 2628 W of the reference's 4250 W. The message named the reference's power,
-    at a voltage it does not flow at (outside audit)."""
+    at a voltage it does not flow at (outside audit). The power is the one at the airspeed
+    the message names (the climb's: the take-off's charge is drawn by its end)."""
     import re
 
     case = _case(tmp_path, reference_v=47.0, sets=("battery.capacity_ah=1.0",))
@@ -108,7 +109,8 @@ def test_the_sag_message_names_the_power_drawn_at_the_sagged_voltage(tmp_path):
     assert found is not None, str(caught.value)
     engine = ["EDF1", "EDF2"].index(found.group(1))
     voltage, said = float(found.group(2)), float(found.group(3))
-    reference = float(fan_power_w(pack_side(case), case, engine, 1.0, 0.0))
+    airspeed = float(re.search(r"full throttle at ([\d.]+) m/s", str(caught.value)).group(1))
+    reference = float(fan_power_w(pack_side(case), case, engine, 1.0, airspeed))
     assert said == pytest.approx(reference * (voltage / 47.0) ** 3, abs=1.0)
     assert said < 0.7 * reference
 
@@ -333,3 +335,44 @@ def test_a_take_off_that_drains_the_packs_is_not_attainable() -> None:
     for k in ks[1:]:
         with pytest.raises(NotAttainable, match="beyond"):
             solve_takeoff(with_values(case, {"aircraft.k": float(k)}))
+
+
+def test_beyond_the_battery_after_the_take_off_names_the_climb_airspeed(tmp_path) -> None:
+    """Packs of 3.92 V/cell cut-off on a 44 V reference hold full throttle at the brake
+    release and fall below it by the end of the take-off: the reason named "full throttle at
+    0.0 m/s after the take-off's 0.158 Ah", a point never flown (the brake release is on
+    full packs); it names the climb's airspeed, where the charge is drawn."""
+    case = _case(tmp_path, 44.0, sets=("battery.cutoff_voltage_per_cell_v=3.92",))
+    with pytest.raises(NotAttainable) as caught:
+        solve_takeoff(case)
+    message = str(caught.value)
+    v_tr = float(transition_speed_m_s(case.aircraft, case.density_kg_m3))
+    assert message.startswith(f"full throttle at {v_tr:.1f} m/s after the take-off's ")
+    assert "0.0 m/s" not in message and "beyond the battery" in message
+
+
+def test_beyond_the_battery_only_in_the_bound_says_so(tmp_path) -> None:
+    """Where the take-off's charge (the most current for all its seconds) fails only at an
+    airspeed before the last, the reason says that point has the charge only in the bound
+    and that the last airspeed holds: EDF2 sags more at 16.7 m/s than at rest, so listed
+    as [16.7, 0] with a cut-off between its two voltages only the first fails."""
+    from tuflexperf.analysis.pack_limits import on_packs, takeoff_beyond_battery
+
+    nominal = _case(tmp_path / "nominal", 44.0)
+    side = pack_side(nominal)
+    speeds, seconds = np.array([16.7, 0.0]), 5.0
+    volts = []
+    for j in range(2):
+        power = fan_power_w(side, nominal, j, np.ones(2), speeds)
+        current = on_packs(side, nominal, power, 0.0)[1]
+        charge = float(np.max(current)) * side.battery.packs_in_parallel_per_engine * seconds \
+            / 3600.0
+        volts.append(on_packs(side, nominal, power, charge)[0])
+    cutoff = 0.5 * (volts[1][0] + volts[1][1])  # EDF2: below it at 16.7 m/s, above at rest
+    assert volts[1][0] < cutoff < volts[1][1] and np.all(volts[0] > cutoff)
+    cells = cutoff / side.battery.cutoff_voltage_v * side.battery.cutoff_voltage_per_cell_v
+    case = _case(tmp_path / "cut", 44.0, sets=(f"battery.cutoff_voltage_per_cell_v={cells}",))
+    why = takeoff_beyond_battery(case, pack_side(case), speeds, seconds)
+    assert why is not None and why.startswith("full throttle at 16.7 m/s with the take-off's ")
+    assert "upper bound" in why and "at the last airspeed 0.0 m/s the packs hold" in why
+    assert "EDF2" in why

@@ -385,7 +385,7 @@ class BatchEvaluator:
                         *found, np.zeros((size, 1)), model.release[2])
                 else:
                     model.packs_roll = packs_takeoff.roll_on_packs(model, self._packs, rows)
-                model.packs_airborne = packs_takeoff.airborne_on_packs(
+                model.packs_airborne, model.packs_beyond = packs_takeoff.airborne_on_packs(
                     model, self._packs, rows, model.packs_roll, height)
                 found = model.packs_roll.as_roll()
             elif catapult:
@@ -635,6 +635,8 @@ class _Model:
     release: Any = None
     # the arc and climb to the obstacle on sagging packs [m] (batch_takeoff_packs)
     packs_airborne: Array | None = None
+    # where those packs reach their cut-off in the climb, before the obstacle
+    packs_beyond: NDArray[np.bool_] | None = None
 
     def transition_speed(self) -> Array:
         """The take-off arc's true airspeed [m/s] per row ``(B,)``: 1.15 V_stall."""
@@ -946,7 +948,9 @@ class _Model:
         roll's 101 history airspeeds (a catapult: its release) and the transition speed, on
         full packs and after the charge the most current for the whole take-off (roll,
         rotation, and the arc and climb to the obstacle at the transition speed) would draw,
-        the loaded voltage at or above the cut-off and each pack within its burst rating."""
+        the loaded voltage at or above the cut-off and each pack within its burst rating;
+        and, on sagging packs, the climb reaching the obstacle before their cut-off
+        (:attr:`packs_beyond`)."""
         from tuflexperf.analysis.batch_endurance import _power_w
         from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
         from tuflexperf.analysis.takeoff import HISTORY_POINTS
@@ -978,6 +982,8 @@ class _Model:
                 ok &= np.all(within_limits(point[0], current, cutoff, burst), axis=1)
                 charge = (np.max(current, axis=1) * rows.packs_per_engine * seconds
                           / SECONDS_PER_HOUR)[:, None]
+        if self.packs_beyond is not None:  # the packs give out in the climb (solve_takeoff)
+            ok &= ~self.packs_beyond
         return ok
 
     def airborne_m(self, height: Any) -> Array:

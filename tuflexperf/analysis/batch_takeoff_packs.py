@@ -15,7 +15,7 @@ packs pass through the same airspeeds as the reference roll, only later, so no e
 needed, and where the net force all but vanishes the reference's long intervals carry it
 (the ratio stays smooth). The rotation and the airborne part follow the single case
 (:data:`~tuflexperf.analysis.takeoff.ROTATION_STEPS` RK4 steps, then
-:func:`~tuflexperf.analysis.takeoff.airborne_gradients`).
+:func:`~tuflexperf.analysis.takeoff.settle_airborne`).
 
 References
 ----------
@@ -34,7 +34,11 @@ from numpy.typing import NDArray
 
 from tuflexperf.analysis.batch_sagging import SaggingFlight
 from tuflexperf.analysis.pack_limits import PackRows
-from tuflexperf.analysis.takeoff import airborne_gradients, rotation_charge
+from tuflexperf.analysis.takeoff import (
+    BEYOND_THE_BATTERY_STATUS,
+    rotation_charge,
+    settle_airborne,
+)
 from tuflexperf.models.aircraft import (
     climb_gradient,
     ground_roll_net_force_n,
@@ -147,10 +151,12 @@ def release_on_packs(m: Any, packs: Any, rows: PackRows) -> tuple[Array, Array, 
 
 
 def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
-                      height: Any) -> Array:
+                      height: Any) -> tuple[Array, NDArray[np.bool_]]:
     """Transition arc + climb to the obstacle [m] per row on the sagging packs from the
     charge after the roll and rotation (a catapult's release acceleration), as
-    :func:`tuflexperf.analysis.takeoff.solve_takeoff`; ``inf`` where never cleared."""
+    :func:`tuflexperf.analysis.takeoff.solve_takeoff`; ``inf`` where never cleared. And per
+    row whether the packs reach their cut-off in the climb before the obstacle (the
+    take-off is then not attainable, as the single case's)."""
     flight = _flight(m, packs, rows)
     v_tr = m.transition_speed()
     radius = np.asarray(transition_radius_m(v_tr.reshape(-1, 1),
@@ -158,9 +164,9 @@ def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
                         dtype=float).reshape(-1) * np.ones(m.size)
     tall = np.asarray(height, dtype=float).reshape(-1) * np.ones(m.size)
 
-    def point(charge: Array) -> tuple[Array, Array]:
-        thrust, _, current, _ = flight.point(1.0, v_tr, charge)
-        return thrust, current
+    def point(charge: Array) -> tuple[Array, Array, Array]:
+        thrust, volts, current, _ = flight.point(1.0, v_tr, charge)
+        return thrust, current, volts
 
     def gradient_of(thrust: Any) -> Any:
         return np.asarray(climb_gradient(m.aircraft, np.reshape(thrust, (-1, 1)),
@@ -168,6 +174,8 @@ def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
                           dtype=float).reshape(-1)
 
     start = np.where(roll.ok > 0.5, roll.charge_ah, 0.0)
-    arc_g, climb_g, _ = airborne_gradients(radius, v_tr, tall, start, point, gradient_of)
-    arc, climb, _ = obstacle_distances_m(radius, arc_g, tall, climb_g)
-    return np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float)
+    air = settle_airborne(radius, v_tr, tall, start, point, gradient_of, rows.cutoff_v)
+    # the climb's gradient is NaN where the obstacle is not reached: an infinite climb
+    arc, climb, _ = obstacle_distances_m(radius, air.arc_gradient, tall, air.climb_gradient)
+    return (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float),
+            air.status == BEYOND_THE_BATTERY_STATUS)
