@@ -646,11 +646,12 @@ def test_the_tested_range_is_the_one_every_engine_shares(tmp_path) -> None:
     assert any("EDF1 0-20 m/s, EDF2 0-40 m/s" in w for w in summary["warnings"])
 
 
-def test_engines_tested_at_no_common_airspeed_are_bad_input(tmp_path) -> None:
+@pytest.mark.parametrize("second", [[20, 30, 40], [10, 20, 30]])  # apart, or touching at 10
+def test_engines_tested_at_no_common_airspeed_are_bad_input(tmp_path, second) -> None:
     table = tmp_path / "table.csv"
-    _two_engine_table(table, {"EDF1": [0, 5, 10], "EDF2": [20, 30, 40]})
+    _two_engine_table(table, {"EDF1": [0, 5, 10], "EDF2": second})
     out = tmp_path / "fitted.yaml"
     done = runner.invoke(app, ["fit", str(table), "--out", str(out)])
     assert done.exit_code == 2
-    assert "table.csv: the engines were tested at no airspeed in common" in done.stderr
+    assert "table.csv: the engines were tested at no airspeed range in common" in done.stderr
     assert not out.exists()

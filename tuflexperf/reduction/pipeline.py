@@ -1269,9 +1269,9 @@ def _tested_range(speeds: dict[str, list[float]], where: str) -> list[float]:
     ranges = {engine: _engine_range(v) for engine, v in speeds.items()}
     low = max(r[0] for r in ranges.values())
     high = min(r[1] for r in ranges.values())
-    if low > high:
+    if low >= high:  # one airspeed in common is no range either (the schema's low < high)
         raise InputError(
-            f"{where}: the engines were tested at no airspeed in common ("
+            f"{where}: the engines were tested at no airspeed range in common ("
             + ", ".join(f"{e} {r[0]:g}-{r[1]:g} m/s" for e, r in ranges.items())
             + "): one propulsion file has one tested airspeed range")
     return [low, high]
