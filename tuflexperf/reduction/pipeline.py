@@ -1288,11 +1288,11 @@ def tested_range_notes(speeds: dict[str, list[float]]) -> list[str]:
     lows, highs = [r[0] for r in ranges.values()], [r[1] for r in ranges.values()]
     if max(lows) - min(lows) <= RANGE_NOTE_M_S and max(highs) - min(highs) <= RANGE_NOTE_M_S:
         return []
-    low, high = _tested_range(speeds, "")
-    return [
+    return [  # the range they share, as _tested_range writes it
         "the engines were tested over different airspeeds ("
         + ", ".join(f"{e} {r[0]:g}-{r[1]:g} m/s" for e, r in ranges.items())
-        + f"): the file's tested_airspeed_m_s is the range they share, {low:g}-{high:g} m/s"
+        + f"): the file's tested_airspeed_m_s is the range they share, "
+        f"{max(lows):g}-{min(highs):g} m/s"
     ]
 
 
