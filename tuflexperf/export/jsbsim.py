@@ -79,15 +79,10 @@ def _number(value: float) -> str:
     return repr(float(value))
 
 
-def _comment(text: str) -> str:
-    """XML comment text: no ``--`` (forbidden inside comments), printable ASCII."""
-    return xml_comment(text)
-
-
 def _attribute(text: str) -> str:
     """A double-quoted XML attribute's text: ``&``, ``<``, ``>`` and ``"`` escaped (an engine
     named with a quote wrote ``name="tfp-EDF"2"``, no XML; outside audit)."""
-    return escape(_comment(text), {'"': "&quot;"})
+    return escape(xml_comment(text), {'"': "&quot;"})
 
 
 def _header(model: ExportModel, what: str) -> str:
@@ -110,7 +105,7 @@ def _header(model: ExportModel, what: str) -> str:
         ),
         "Provenance: " + "; ".join(f"{f.role} {f.label} sha256 {f.sha256}" for f in model.files),
     ]
-    return "\n".join(f"  {_comment(line)}" for line in lines)
+    return "\n".join(f"  {xml_comment(line)}" for line in lines)
 
 
 # the true airspeed in m/s the thrust functions read, held to the model's range
@@ -213,7 +208,7 @@ def system_text(model: ExportModel) -> str:
             )
         channels.append(
             f'  <channel name="tfp-{_attribute(engine.name)}">\n'
-            f"    <!-- {_comment(engine.name)}: dead time on the throttle command -->\n"
+            f"    <!-- {xml_comment(engine.name)}: dead time on the throttle command -->\n"
             f"{dead_time}\n"
             f"    <!-- static thrust in lbf at the delayed throttle, true airspeed, density -->\n"
             f'    <fcs_function name="{base}/thrust-static-lbs">\n'
@@ -272,7 +267,7 @@ def reactions_text(model: ExportModel) -> str:
         base = property_base(i)
         forces.append(
             f'  <force name="tfp-engine-{i + 1}" frame="BODY" unit="LBS">\n'
-            f"    <!-- {_comment(engine.name)} -->\n"
+            f"    <!-- {xml_comment(engine.name)} -->\n"
             "    <function>\n"
             f"      <property>{base}/thrust-lbs</property>\n"
             "    </function>\n"
