@@ -175,15 +175,16 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.bench is not None:
         names = BENCHES if args.bench in ([], ["all"]) else tuple(args.bench)
-        updates = {f"bench:{name}": bench_block(name) for name in names}
+        makers = {f"bench:{name}": (lambda name=name: bench_block(name)) for name in names}
     else:
-        updates = {name: make() for name, make in TABLES.items()}
+        makers = dict(TABLES)
     stale = []
-    for name, body in updates.items():
+    for name, make in makers.items():  # each written as soon as it is made
         paths = _docs_with(name)
         if not paths:
             print(f"no docs file holds <!-- begin:{name} -->", file=sys.stderr)
             return 2
+        body = make()
         for path in paths:
             text = path.read_text(encoding="utf-8")
             if blocks(text).get(name) == body:
