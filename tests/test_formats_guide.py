@@ -297,3 +297,18 @@ def test_propeller_table_example_reads(tmp_path: Path) -> None:
         _write(tmp_path, entry["file"], found["uiuc minimal"])
     table = read_propeller_tables(manifest)
     assert len(table.thrust_n) == 3
+
+
+def test_minimal_case_passes_check(tmp_path: Path) -> None:
+    # the README's tutorial runs `check` on these three examples: it must answer, and pass
+    from typer.testing import CliRunner
+
+    from tuflexperf.cli import app
+
+    found = examples(_text())
+    _write(tmp_path, "aircraft.yaml", found["aircraft minimal"])
+    _write(tmp_path, "propulsion.yaml", found["propulsion minimal"])
+    case = _write(tmp_path, "case.yaml", found["case minimal"])
+    result = CliRunner().invoke(app, ["check", str(case), "--json"])
+    assert result.exit_code == 0, result.output
+    assert "takeoff_ground_roll" in result.stdout
