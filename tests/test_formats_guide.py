@@ -23,34 +23,13 @@ from tuflexperf.io import runs as run_columns
 from tuflexperf.io import vendor
 from tuflexperf.io.battery import BatterySchema, load_battery
 from tuflexperf.io.campaign import CampaignSchema, load_campaign
-from tuflexperf.io.case import (
-    AircraftSchema,
-    CaseSchema,
-    Poly22Schema,
-    PropulsionSchema,
-    UncertaintySchema,
-    load_case,
-)
+from tuflexperf.io.case import AircraftSchema, CaseSchema, PropulsionSchema, load_case
 from tuflexperf.io.discharge import DISCHARGE_COLUMNS
 from tuflexperf.io.mission import _ALLOWED, MissionFileSchema, load_mission
 from tuflexperf.io.proptables import PropellerTablesSchema, read_propeller_tables
 from tuflexperf.io.yamlio import load_model
 
 GUIDE = Path(__file__).resolve().parent.parent / "docs" / "formats.md"
-
-# each schema that has a section of its own; a field of one of these types is documented in
-# its own section, the field itself in the section that holds it
-SECTIONS: dict[type[BaseModel], str] = {
-    CaseSchema: "case",
-    UncertaintySchema: "uncertainty",
-    AircraftSchema: "aircraft",
-    PropulsionSchema: "propulsion",
-    Poly22Schema: "poly22",
-    BatterySchema: "battery",
-    MissionFileSchema: "mission",
-    CampaignSchema: "campaign",
-    PropellerTablesSchema: "proptables",
-}
 
 
 def _text() -> str:
@@ -91,6 +70,29 @@ def _models_in(annotation: Any) -> list[tuple[str, type[BaseModel]]]:
 def _literals(annotation: Any) -> list[Any]:
     return [value for kind in _unwrap(annotation) if typing.get_origin(kind) is Literal
             for value in typing.get_args(kind)]
+
+
+def _field_model(model: type[BaseModel], name: str) -> type[BaseModel]:
+    """The model a field holds (found from the schema, wherever the module defines it)."""
+    return _models_in(model.model_fields[name].annotation)[0][1]
+
+
+UncertaintySchema = _field_model(CaseSchema, "uncertainty")
+Poly22Schema = _field_model(_field_model(PropulsionSchema, "engines"), "coefficients")
+
+# each schema that has a section of its own; a field of one of these types is documented in
+# its own section, the field itself in the section that holds it
+SECTIONS: dict[type[BaseModel], str] = {
+    CaseSchema: "case",
+    UncertaintySchema: "uncertainty",
+    AircraftSchema: "aircraft",
+    PropulsionSchema: "propulsion",
+    Poly22Schema: "poly22",
+    BatterySchema: "battery",
+    MissionFileSchema: "mission",
+    CampaignSchema: "campaign",
+    PropellerTablesSchema: "proptables",
+}
 
 
 class Key(typing.NamedTuple):
