@@ -480,5 +480,9 @@ def series_csv(series: dict[str, np.ndarray]) -> str:
     names = list(series)
     table = np.column_stack([series[k] for k in names]) if names else np.empty((0, 0))
     lines = [",".join(names)]
-    lines += [",".join("" if not np.isfinite(x) else f"{x:.10g}" for x in row) for row in table]
+    # time keeps microseconds (a PX4 SITL clock counts from 1970: 10 digits are whole seconds)
+    formats = ["{:.6f}" if name == "time_s" else "{:.10g}" for name in names]
+    lines += [",".join("" if not np.isfinite(x) else f.format(x) for f, x in zip(formats, row,
+                                                                               strict=True))
+              for row in table]
     return "\n".join(lines) + "\n"

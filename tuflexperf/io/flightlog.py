@@ -1,4 +1,4 @@
-"""Flight logs in: PX4 ULog (``.ulg``), pyulog's ``ulog2csv`` folder, ArduPilot DataFlash (``.bin``).
+"""Flight logs in: PX4 ULog (``.ulg``), a ``ulog2csv`` folder, ArduPilot DataFlash (``.bin``).
 
 One reader per format; each returns the same :class:`FlightLog`: the few streams the flown
 side needs (battery, airspeed, baro, throttle, land detector, climb rate), each on its own
@@ -361,9 +361,10 @@ def read_dataflash(path: Path) -> FlightLog:
     if baro_t:
         pick = baro_t["I"] == 0 if "I" in baro_t else np.ones(baro_t["TimeUS"].shape, bool)
         t = baro_t["TimeUS"][pick] * US
+        blank = np.full(pick.shape, np.nan)
         baro = Stream("BARO", t, {"altitude_m": baro_t["Alt"][pick],
-                                  "pressure_pa": baro_t.get("Press", np.full(t.shape, np.nan))[pick],
-                                  "temperature_c": baro_t.get("Temp", np.full(t.shape, np.nan))[pick]})
+                                  "pressure_pa": baro_t.get("Press", blank)[pick],
+                                  "temperature_c": baro_t.get("Temp", blank)[pick]})
         if "CRt" in baro_t:
             climb = Stream("BARO.CRt", t, {"climb_rate_m_s": baro_t["CRt"][pick]})
     ctun = table("CTUN")
