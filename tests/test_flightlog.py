@@ -22,7 +22,8 @@ from tuflexperf.cli import app
 pyulog = pytest.importorskip("pyulog")
 pytest.importorskip("pymavlink")
 
-DATA = Path(__file__).resolve().parent / "data" / "flightlogs"
+ROOT = Path(__file__).resolve().parent.parent
+DATA = ROOT / "tests" / "data" / "flightlogs"
 SMALL = DATA / "sample_log_small.ulg"  # CubeOrange VTOL hop: two packs, land detector
 EVENTS = DATA / "sample_px4_events.ulg"  # PX4 SITL take-off and landing, current -1
 ARDUPLANE = DATA / "arduplane_test.BIN"  # ArduPlane 3.8 on the ground, BAT/BARO/CTUN/STAT
@@ -319,3 +320,35 @@ def test_bins_equal_a_pandas_groupby() -> None:
         assert b.time_s == pytest.approx(row["time"], rel=1e-12)
         assert b.power_w == pytest.approx(row["pw"] / row["time"], rel=1e-12)
         assert b.throttle == pytest.approx(0.3 + 0.02 * b.airspeed_m_s, abs=0.02)
+
+
+def test_case_comparison_throttle_agrees_with_trim() -> None:
+    """Made-up flight (no real fixed-wing log is shipped): 12 s at each of 18, 20, 22 m/s at
+    the case's density (no baro) and mass; the model's throttle per bin is `trim`'s at that
+    airspeed, and flown/predicted is the flown power over the model's."""
+    from tuflexperf.analysis.flown import reduce_flight
+    from tuflexperf.analysis.flown_compare import compare_with_case
+    from tuflexperf.io.case import load_case
+    from tuflexperf.io.flightlog import FlightLog, Stream
+
+    case = load_case(ROOT / "requirements" / "tuflex.yaml")
+    trim = json.loads(runner.invoke(app, ["trim", "--json"]).stdout)
+    trim_throttle = dict(zip(trim["airspeed_m_s"], trim["throttle"], strict=True))
+    t = np.arange(0.0, 36.0, 0.1)
+    v = np.repeat([18.0, 20.0, 22.0], 120)
+    battery = Stream("battery_status[0]", t, {"voltage_v": np.full(t.size, 22.0),
+                                              "current_a": v * 2.0,
+                                              "discharged_mah": np.zeros(t.size)})
+    log = FlightLog(Path("made-up"), "ulog", (battery,), Stream("airspeed", t, {
+        "airspeed_m_s": v}), "calibrated", None, None, None,
+        Stream("land", np.array([0.0, 36.0]), {"landed": np.array([0.0, 1.0])}), None)
+    flown = reduce_flight(log)
+    cmp = compare_with_case(case, log, flown, None)
+    assert [r["airspeed_m_s"] for r in cmp.bins] == [18.0, 20.0, 22.0]
+    for row in cmp.bins:
+        assert row["predicted_throttle"] == pytest.approx(trim_throttle[row["airspeed_m_s"]],
+                                                          rel=1e-6)
+        assert row["flown_power_w"] == pytest.approx(22.0 * 2.0 * row["airspeed_m_s"])
+        assert row["ratio"] == pytest.approx(row["flown_power_w"] / row["predicted_power_w"])
+    assert cmp.density_kg_m3 == pytest.approx(case.density_kg_m3)
+    assert cmp.predicted_endurance_s is not None
