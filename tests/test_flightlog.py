@@ -352,3 +352,9 @@ def test_case_comparison_throttle_agrees_with_trim() -> None:
         assert row["ratio"] == pytest.approx(row["flown_power_w"] / row["predicted_power_w"])
     assert cmp.density_kg_m3 == pytest.approx(case.density_kg_m3)
     assert cmp.predicted_endurance_s is not None
+    handoff = cmp.handoff
+    best = json.loads(runner.invoke(app, ["endurance", "--best", "--json"]).stdout)
+    point = best["best"]["best_endurance"]
+    assert handoff is not None
+    assert handoff["airspeed_true_m_s"] == pytest.approx(point["airspeed_m_s"], rel=1e-9)
+    assert handoff["model_power_w"] == pytest.approx(2 * point["electrical_power_w"], rel=1e-9)

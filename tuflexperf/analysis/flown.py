@@ -7,7 +7,7 @@ not flown at the mean of its ends). Pure numpy, vectorised; no case is needed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -55,12 +55,13 @@ class SpeedBin:
     power_std_w: float
     throttle: float
     throttle_std: float
+    current_a: float = float("nan")  # mean total battery current [A]
 
     def to_dict(self, name: str = "flown_power_w") -> dict[str, Any]:
         return {"airspeed_m_s": self.airspeed_m_s, name: self.power_w,
                 "power_std_w": self.power_std_w, "time_s": self.time_s,
                 "samples": self.samples, "throttle": self.throttle,
-                "throttle_std": self.throttle_std}
+                "throttle_std": self.throttle_std, "current_a": self.current_a}
 
 
 @dataclass(frozen=True)
@@ -256,11 +257,12 @@ def _energy(packs: list[PackPower], window: AirborneWindow, notes: list[str]
     return energy_j / 3600.0, counter, integrated_as / 3.6, float(mean_w)
 
 
-def power_at(packs: list[PackPower], t: np.ndarray) -> np.ndarray:
-    """Total electrical power [W] of ``packs`` at times ``t`` [s] (NaN where one has none)."""
+def power_at(packs: list[PackPower], t: np.ndarray, what: str = "power_w") -> np.ndarray:
+    """Total electrical power [W] (or ``what="current_a"``: current [A]) of ``packs`` at
+    times ``t`` [s] (NaN where one has none)."""
     total = np.zeros(np.shape(t))
     for pack in packs:
-        total = total + interp_gapped(pack.time_s, pack.power_w, t)
+        total = total + interp_gapped(pack.time_s, getattr(pack, what), t)
     return total if packs else np.full(np.shape(t), np.nan)
 
 
@@ -454,7 +456,10 @@ def reduce_flight(log: FlightLog, airborne_airspeed_m_s: float = DEFAULT_AIRBORN
         if log.throttle is None:
             notes.append("no throttle logged (e.g. RC pass-through): throttle per bin is n/a")
         climb = climb_rate_at(log, t, notes)
+        current = power_at(packs, t, "current_a")
         bins = speed_bins(v, weight, power, throttle)
+        amps = {b.airspeed_m_s: b.power_w for b in speed_bins(v, weight, current, throttle)}
+        bins = tuple(replace(b, current_a=amps.get(b.airspeed_m_s, np.nan)) for b in bins)
         is_level = np.abs(climb) < LEVEL_CLIMB_M_S
         level = speed_bins(v, np.where(is_level, weight, 0.0), power, throttle)
         if mass_kg is not None:

@@ -34,12 +34,14 @@ class Comparison:
     flown_s: float
     summary: tuple[str, ...]
     notes: tuple[str, ...]
+    handoff: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {"density_kg_m3": self.density_kg_m3, "density_source": self.density_source,
                 "mass_kg": self.mass_kg, "power_model": self.power_model,
                 "bins": list(self.bins), "predicted_endurance_s": self.predicted_endurance_s,
-                "flown_s": self.flown_s, "summary": list(self.summary)}
+                "flown_s": self.flown_s, "summary": list(self.summary),
+                "autopilot_handoff": self.handoff}
 
 
 def log_density(log: FlightLog, flown: FlownResult, fallback: float) -> tuple[float, str]:
@@ -150,5 +152,51 @@ def compare_with_case(case: Any, log: FlightLog, flown: FlownResult,
                        " s flown")
     elif not bins:
         notes.append("no flown bin to compare the model with")
+    handoff = autopilot_handoff(case, flown, notes)
+    if handoff is not None:
+        line = (f"autopilot hand-off at the model's endurance airspeed "
+                f"{handoff['airspeed_eas_m_s']:.1f} m/s EAS: cruise power "
+                f"{handoff['model_power_w']:.0f} W, current {handoff['model_current_a']:.1f} A "
+                "(full packs)")
+        if handoff.get("flown_power_w") is not None:
+            line += (f"; flown there: {handoff['flown_power_w']:.0f} W, "
+                     f"{handoff['flown_current_a']:.1f} A")
+        summary.append(line)
     return Comparison(rho, rho_source, mass, model, tuple(rows), endurance,
-                      flown.window.duration_s, tuple(summary), tuple(notes))
+                      flown.window.duration_s, tuple(summary), tuple(notes), handoff)
+
+
+def autopilot_handoff(case: Any, flown: FlownResult, notes: list[str]) -> dict[str, Any] | None:
+    """Cruise power [W] and current [A] at the model's best-endurance airspeed, for an
+    autopilot's average-current setting and a ground station's flight-time estimate; the
+    flown power and current in the bin holding that airspeed, where one does.
+
+    The model's point is ``endurance``'s best (:func:`tuflexperf.analysis.endurance.solve_best`)
+    at the case's density and mass; its current is each fan's pack current summed over the
+    engines (one monitor on all packs), at full-pack voltage.
+    """
+    from tuflexperf.analysis.endurance import solve_best
+    from tuflexperf.errors import InputError, NotAttainable
+    from tuflexperf.models.aircraft import EAS_REFERENCE_DENSITY_KG_M3
+
+    if case.battery_path is None:
+        notes.append("autopilot hand-off: the case has no battery file")
+        return None
+    try:
+        best = solve_best(case).endurance
+    except (NotAttainable, InputError) as exc:
+        notes.append(f"autopilot hand-off: no best-endurance point ({exc})")
+        return None
+    eas = best.airspeed_m_s * float(np.sqrt(case.density_kg_m3 / EAS_REFERENCE_DENSITY_KG_M3))
+    out: dict[str, Any] = {
+        "airspeed_eas_m_s": eas, "airspeed_true_m_s": best.airspeed_m_s,
+        "throttle": best.throttle, "model_power_w": best.electrical_power_w * best.engines,
+        "model_current_a": best.pack_current_a * best.engines,
+        "flown_power_w": None, "flown_current_a": None,
+    }
+    label = float(np.floor(eas + 0.5))
+    held = next((b for b in flown.bins if b.airspeed_m_s == label), None)
+    if held is not None:
+        out["flown_power_w"] = held.power_w
+        out["flown_current_a"] = held.current_a
+    return out
