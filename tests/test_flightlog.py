@@ -358,3 +358,19 @@ def test_case_comparison_throttle_agrees_with_trim() -> None:
     assert handoff is not None
     assert handoff["airspeed_true_m_s"] == pytest.approx(point["airspeed_m_s"], rel=1e-9)
     assert handoff["model_power_w"] == pytest.approx(2 * point["electrical_power_w"], rel=1e-9)
+
+
+def test_without_the_extra_it_is_one_line_naming_the_package(monkeypatch) -> None:
+    monkeypatch.setitem(sys.modules, "pyulog", None)  # import pyulog now raises ImportError
+    code, _, err = run(str(SMALL))
+    assert code == 2 and err.count("\n") == 1
+    assert "pyulog" in err and "tuflexperf[flightlog]" in err
+
+
+def test_the_cli_loads_no_log_reader() -> None:
+    """`check` (any command but flightlog) imports neither pyulog nor pymavlink."""
+    code = ("import sys, tuflexperf.cli; "
+            "print(sorted(m for m in ('pyulog', 'pymavlink') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=60)
+    assert done.stdout.strip() == "[]", done.stderr
