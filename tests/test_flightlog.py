@@ -334,18 +334,20 @@ def test_case_comparison_throttle_agrees_with_trim() -> None:
     case = load_case(ROOT / "requirements" / "tuflex.yaml")
     trim = json.loads(runner.invoke(app, ["trim", "--json"]).stdout)
     trim_throttle = dict(zip(trim["airspeed_m_s"], trim["throttle"], strict=True))
-    t = np.arange(0.0, 36.0, 0.1)
-    v = np.repeat([18.0, 20.0, 22.0], 120)
+    t = np.arange(0.0, 48.0, 0.1)
+    v = np.repeat([12.0, 18.0, 20.0, 22.0], 120)  # 12 m/s: below the case's stall
     battery = Stream("battery_status[0]", t, {"voltage_v": np.full(t.size, 22.0),
                                               "current_a": v * 2.0,
                                               "discharged_mah": np.zeros(t.size)})
     log = FlightLog(Path("made-up"), "ulog", (battery,), Stream("airspeed", t, {
         "airspeed_m_s": v}), "calibrated", None, None, None,
-        Stream("land", np.array([0.0, 36.0]), {"landed": np.array([0.0, 1.0])}), None)
+        Stream("land", np.array([0.0, 48.0]), {"landed": np.array([0.0, 1.0])}), None)
     flown = reduce_flight(log)
     cmp = compare_with_case(case, log, flown, None)
-    assert [r["airspeed_m_s"] for r in cmp.bins] == [18.0, 20.0, 22.0]
-    for row in cmp.bins:
+    assert [r["airspeed_m_s"] for r in cmp.bins] == [12.0, 18.0, 20.0, 22.0]
+    assert np.isnan(cmp.bins[0]["predicted_power_w"]) and cmp.bins[0]["ratio"] is None
+    assert any("below the model's stall speed" in n for n in cmp.notes)
+    for row in cmp.bins[1:]:
         assert row["predicted_throttle"] == pytest.approx(trim_throttle[row["airspeed_m_s"]],
                                                           rel=1e-6)
         assert row["flown_power_w"] == pytest.approx(22.0 * 2.0 * row["airspeed_m_s"])

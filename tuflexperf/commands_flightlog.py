@@ -163,6 +163,9 @@ def _print_text(p: dict[str, Any], written: list[Path]) -> None:
          f"mean power {_num(p['mean_power_w'])} W")
     comparison = p.get("comparison")
     predicted = {b["airspeed_m_s"]: b for b in comparison["bins"]} if comparison else {}
+    # the model (level flight) stands beside the bins it was compared with
+    compared = (p["level_bins"] if comparison and comparison["bins"]
+                and comparison["bins"][0]["bins"] == "level-flight" else p["bins"])
     for title, key, bins in (
         (f"power against {p['airspeed_kind']} airspeed (bins of 1 m/s, >= "
          f"{p['min_bin_time_s']:g} s each)", "flown_power_w", p["bins"]),
@@ -176,11 +179,11 @@ def _print_text(p: dict[str, Any], written: list[Path]) -> None:
         echo(title)
         head = f"  {'V m/s':>6}{'time s':>8}{'P W':>9}{'sd W':>8}{'throttle':>10}"
         echo(head + (f"{'model W':>9}{'ratio':>7}{'model thr':>10}" if predicted and
-                     key == "flown_power_w" and bins is p["bins"] else ""))
+                     bins is compared else ""))
         for b in bins:
             row = (f"  {b['airspeed_m_s']:>6.0f}{b['time_s']:>8.1f}{_num(b[key]):>9}"
                    f"{_num(b['power_std_w']):>8}{_num(b['throttle'], 3):>10}")
-            if predicted and bins is p["bins"]:
+            if predicted and bins is compared:
                 m = predicted.get(b["airspeed_m_s"], {})
                 row += (f"{_num(m.get('predicted_power_w')):>9}{_num(m.get('ratio'), 2):>7}"
                         f"{_num(m.get('predicted_throttle'), 3):>10}")

@@ -78,7 +78,11 @@ def compare_with_case(case: Any, log: FlightLog, flown: FlownResult,
         Mass [kg]; ``None`` takes the case's.
     """
     from tuflexperf.analysis.level_flight import least_throttle_solver
-    from tuflexperf.models.aircraft import level_flight_drag_n, true_airspeed_m_s
+    from tuflexperf.models.aircraft import (
+        level_flight_drag_n,
+        stall_speed_m_s,
+        true_airspeed_m_s,
+    )
     from tuflexperf.models.powertrain import power_surfaces
     from tuflexperf.models.thrust import total_thrust_n
 
@@ -125,6 +129,13 @@ def compare_with_case(case: Any, log: FlightLog, flown: FlownResult,
     eas = np.array([b.airspeed_m_s for b in bins], dtype=float)
     v_true = np.asarray(true_airspeed_m_s(eas, rho), dtype=float)
     throttle = least_throttle_solver(excess)(v_true) if eas.size else eas
+    # SPEC 3: stall bounds everything; below it the model has no level flight to offer
+    stall = float(stall_speed_m_s(aircraft, rho))
+    below = v_true < stall
+    if below.any():
+        notes.append(f"bins below the model's stall speed ({stall:.1f} m/s true at the log's "
+                     "density and the mass): no level flight predicted there (n/a)")
+    throttle = np.where(below, np.nan, throttle)
     predicted = np.where(np.isfinite(throttle), power(np.nan_to_num(throttle), v_true), np.nan)
     rows = []
     for b, x, p, vt in zip(bins, throttle, predicted, v_true, strict=True):
@@ -133,9 +144,9 @@ def compare_with_case(case: Any, log: FlightLog, flown: FlownResult,
                      "ratio": float(b.power_w / p) if np.isfinite(p) and p > 0 else None,
                      "flown_throttle": b.throttle, "predicted_throttle": float(x),
                      "time_s": b.time_s, "bins": which})
-    if np.any(~np.isfinite(throttle)):
-        notes.append("the model holds no level flight at some flown airspeeds (below stall "
-                     "or beyond full throttle): n/a there")
+    if np.any(~np.isfinite(throttle) & ~below):
+        notes.append("the model holds no level flight at some flown airspeeds (beyond full "
+                     "throttle): n/a there")
     endurance = None
     summary = [f"model: level flight at {rho:.4f} kg/m^3 ({rho_source}), mass {mass:g} kg, "
                f"power from {model}; {which} bins"]
@@ -148,8 +159,9 @@ def compare_with_case(case: Any, log: FlightLog, flown: FlownResult,
         summary.append(f"flown/predicted power per bin: {ratios.min():.2f} to "
                        f"{ratios.max():.2f}")
         summary.append(f"predicted endurance on the flown {flown.energy_wh:.1f} Wh at the "
-                       f"flown airspeeds: {endurance:.0f} s, against {flown.window.duration_s:.0f}"
-                       " s flown")
+                       f"flown airspeeds (time-weighted over the {int(ok.sum())} of {ok.size} "
+                       f"bins the model flies): {endurance:.0f} s, against "
+                       f"{flown.window.duration_s:.0f} s flown")
     elif not bins:
         notes.append("no flown bin to compare the model with")
     handoff = autopilot_handoff(case, flown, notes)
