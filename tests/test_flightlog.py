@@ -376,3 +376,12 @@ def test_the_cli_loads_no_log_reader() -> None:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=60)
     assert done.stdout.strip() == "[]", done.stderr
+
+
+def test_garbage_after_a_dataflash_header_prints_one_line(tmp_path: Path, capfd) -> None:
+    """pymavlink's compiled indexer says "unknown msg type" on C's stderr: kept off it."""
+    bad = tmp_path / "garbage.bin"
+    bad.write_bytes(b"\xa3\x95" + bytes(range(256)) * 20)
+    code, _, err = run(str(bad))
+    assert code == 2 and err.count("\n") == 1 and "garbage.bin" in err
+    assert capfd.readouterr().err == ""

@@ -10,8 +10,12 @@ imported only by the reader that needs them: ``check`` never loads them.
 
 from __future__ import annotations
 
+import contextlib
+import io
+import os
 import re
-from collections.abc import Iterable
+import sys
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -165,7 +169,8 @@ def read_ulog(path: Path) -> FlightLog:
     with open(path, "rb") as raw:
         handle = _CountingFile(raw)
         try:
-            ulog = pyulog.ULog(handle, list(ULOG_TOPICS))
+            with _quiet():
+                ulog = pyulog.ULog(handle, list(ULOG_TOPICS))
         except Exception as exc:  # pyulog's ULogException, or struct errors on garbage
             raise InputError(f"{path}: not a readable ULog ({_short(exc)})") from None
     if handle.short:
@@ -310,13 +315,14 @@ def read_dataflash(path: Path) -> FlightLog:
     mavutil = _require("pymavlink.mavutil")
     notes: list[str] = []
     try:
-        log = mavutil.mavlink_connection(str(path), dialect="ardupilotmega")
-        rows: dict[str, list[dict[str, Any]]] = {t: [] for t in DATAFLASH_TYPES}
-        while True:
-            msg = log.recv_match(type=list(DATAFLASH_TYPES))
-            if msg is None:
-                break
-            rows[msg.get_type()].append(msg.to_dict())
+        with _quiet():
+            log = mavutil.mavlink_connection(str(path), dialect="ardupilotmega")
+            rows: dict[str, list[dict[str, Any]]] = {t: [] for t in DATAFLASH_TYPES}
+            while True:
+                msg = log.recv_match(type=list(DATAFLASH_TYPES))
+                if msg is None:
+                    break
+                rows[msg.get_type()].append(msg.to_dict())
     except Exception as exc:  # pymavlink raises bare exceptions on garbage
         raise InputError(f"{path}: not a readable DataFlash log ({_short(exc)})") from None
 
@@ -381,6 +387,38 @@ def read_dataflash(path: Path) -> FlightLog:
         armed = Stream("STAT.Armed", stat["TimeUS"] * US, {"armed": stat["Armed"]})
     return FlightLog(path, "dataflash", tuple(batteries), airspeed, airspeed_kind, baro, climb,
                      throttle, landed, armed, tuple(notes))
+
+
+@contextlib.contextmanager
+def _quiet() -> Iterator[None]:
+    """The readers' own prints ("unknown msg type", "File corruption detected") kept off
+    stdout (it carries --json) and stderr (one line per problem): the notes say it."""
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        with _quiet_c_stderr():
+            yield
+
+
+@contextlib.contextmanager
+def _quiet_c_stderr() -> Iterator[None]:
+    """File descriptor 2 to the null device: pymavlink's compiled indexer writes "unknown
+    msg type" with C's stdio, past Python's ``sys.stderr``."""
+    try:
+        sys.stderr.flush()
+        saved, null = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    except (OSError, ValueError, AttributeError):  # no fd 2 (an embedded interpreter)
+        yield
+        return
+    os.dup2(null, 2)
+    try:
+        yield
+    finally:
+        with contextlib.suppress(OSError, AttributeError, TypeError):
+            import ctypes
+
+            ctypes.CDLL(None).fflush(None)  # C's buffer out to the null device, not later
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(null)
 
 
 def _short(exc: BaseException) -> str:
