@@ -211,23 +211,19 @@ def read_ulog_csv(folder: Path) -> FlightLog:
 
 
 def _read_topic_csv(csv: Path) -> dict[str, np.ndarray]:
-    """One ulog2csv file as columns; every column float (NaN where blank)."""
+    """One ulog2csv file as columns, every column float (NaN where blank)."""
+    import pandas as pd  # the C parser: a 30-minute log's CSVs in well under a second
+
     try:
-        with open(csv, encoding="utf-8", errors="strict") as handle:
-            header = handle.readline().strip().split(",")
-            if "timestamp" not in header:
-                raise InputError(f"{csv}: no 'timestamp' column (not a ulog2csv file)")
-            table = np.genfromtxt(handle, delimiter=",", dtype=float, ndmin=2)
+        frame = pd.read_csv(csv, dtype=float, encoding="utf-8", index_col=False,
+                            low_memory=False)
     except UnicodeDecodeError:
         raise InputError(f"{csv}: not text (not a ulog2csv file)") from None
-    except ValueError as exc:
-        raise InputError(f"{csv}: rows of uneven length ({_short(exc)})") from None
-    if table.size == 0:
-        return {name: np.empty(0) for name in header}
-    if table.shape[1] != len(header):
-        raise InputError(f"{csv}: {table.shape[1]} columns in the rows, {len(header)} in the "
-                         "header")
-    return {name: table[:, i] for i, name in enumerate(header)}
+    except (ValueError, pd.errors.ParserError) as exc:
+        raise InputError(f"{csv}: not a ulog2csv table ({_short(exc)})") from None
+    if "timestamp" not in frame.columns:
+        raise InputError(f"{csv}: no 'timestamp' column (not a ulog2csv file)")
+    return {str(name): frame[name].to_numpy() for name in frame.columns}
 
 
 def _from_px4_topics(path: Path, kind: str, topics: Topics, notes: list[str]) -> FlightLog:
