@@ -385,3 +385,13 @@ def test_garbage_after_a_dataflash_header_prints_one_line(tmp_path: Path, capfd)
     code, _, err = run(str(bad))
     assert code == 2 and err.count("\n") == 1 and "garbage.bin" in err
     assert capfd.readouterr().err == ""
+
+
+def test_a_ulog2csv_row_longer_than_its_header_is_refused(small_csv: Path) -> None:
+    """Derived: one cell appended to the first data row of instance 0's battery CSV."""
+    path = battery_file(small_csv, 0)
+    lines = path.read_text().splitlines(keepends=True)
+    lines[1] = lines[1].rstrip("\n") + ",7\n"
+    path.write_text("".join(lines))
+    code, _, err = run(str(small_csv))
+    assert code == 2 and err.count("\n") == 1 and "battery_status_0.csv" in err

@@ -212,14 +212,18 @@ def read_ulog_csv(folder: Path) -> FlightLog:
 
 def _read_topic_csv(csv: Path) -> dict[str, np.ndarray]:
     """One ulog2csv file as columns, every column float (NaN where blank)."""
+    import warnings
+
     import pandas as pd  # the C parser: a 30-minute log's CSVs in well under a second
 
     try:
-        frame = pd.read_csv(csv, dtype=float, encoding="utf-8", index_col=False,
-                            low_memory=False)
+        with warnings.catch_warnings():  # a row longer than the header: refused, not cut
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            frame = pd.read_csv(csv, dtype=float, encoding="utf-8", index_col=False,
+                                low_memory=False)
     except UnicodeDecodeError:
         raise InputError(f"{csv}: not text (not a ulog2csv file)") from None
-    except (ValueError, pd.errors.ParserError) as exc:
+    except (ValueError, pd.errors.ParserError, pd.errors.ParserWarning) as exc:
         raise InputError(f"{csv}: not a ulog2csv table ({_short(exc)})") from None
     if "timestamp" not in frame.columns:
         raise InputError(f"{csv}: no 'timestamp' column (not a ulog2csv file)")
