@@ -395,3 +395,15 @@ def test_a_ulog2csv_row_longer_than_its_header_is_refused(small_csv: Path) -> No
     path.write_text("".join(lines))
     code, _, err = run(str(small_csv))
     assert code == 2 and err.count("\n") == 1 and "battery_status_0.csv" in err
+
+
+def test_outputs_never_replace_the_log_nor_a_foreign_file(tmp_path: Path) -> None:
+    log = tmp_path / "flight.ulg"
+    log.write_bytes(SMALL.read_bytes())
+    foreign = tmp_path / "mine.csv"
+    foreign.write_text("time_s,x\n1,2\n")
+    for flag, target in (("--csv", log), ("--csv", foreign), ("--plot", tmp_path / "p.txt")):
+        code, _, err = run(str(log), flag, str(target))
+        assert code == 2 and err.count("\n") == 1, err
+    assert log.read_bytes() == SMALL.read_bytes()
+    assert foreign.read_text() == "time_s,x\n1,2\n"
