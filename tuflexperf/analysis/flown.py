@@ -201,8 +201,9 @@ def pack_powers(log: FlightLog, window: AirborneWindow, notes: list[str]) -> lis
         current = s.column("current_a")
         sentinel = current == NO_CURRENT_SENSOR
         current = np.where(sentinel, np.nan, current)
-        if not np.isfinite(current).any():
-            why = "-1 (no sensor)" if sentinel.any() else "not logged"
+        if not np.any(np.nan_to_num(current) != 0):  # a phantom instance reads 0 A
+            why = ("-1 (no sensor)" if sentinel.any() else
+                   "0" if np.isfinite(current).any() else "not logged")
             notes.append(f"{s.source}: current {why} throughout; it adds no power")
             continue
         voltage = voltages[k]
