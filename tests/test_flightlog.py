@@ -407,3 +407,34 @@ def test_outputs_never_replace_the_log_nor_a_foreign_file(tmp_path: Path) -> Non
         assert code == 2 and err.count("\n") == 1, err
     assert log.read_bytes() == SMALL.read_bytes()
     assert foreign.read_text() == "time_s,x\n1,2\n"
+
+
+def test_the_airspeed_rule_on_a_real_log(small_csv: Path) -> None:
+    """Derived: land detector landed throughout (a log flown without arming), the airspeed
+    offset by +12 m/s, and the baro altitude raised by 5 m from 23.0 to 24.0 s."""
+    land = small_csv / "sample_log_small_vehicle_land_detected_0.csv"
+    frame = pd.read_csv(land)
+    frame["landed"] = 1
+    frame.to_csv(land, index=False)
+    speed_csv = small_csv / "sample_log_small_airspeed_validated_0.csv"
+    speed = pd.read_csv(speed_csv)
+    speed["indicated_airspeed_m_s"] += 12.0
+    speed.to_csv(speed_csv, index=False)
+    baro_csv = small_csv / "sample_log_small_vehicle_air_data_0.csv"
+    baro = pd.read_csv(baro_csv)
+    tb = baro["timestamp"] * 1e-6
+    baro.loc[(tb >= 23.0) & (tb <= 24.0), "baro_alt_meter"] += 5.0
+    baro.to_csv(baro_csv, index=False)
+    t, v = speed["timestamp"].to_numpy() * 1e-6, speed["indicated_airspeed_m_s"].to_numpy()
+    first = t[np.argmax(v >= 8.0)]
+    before = (tb >= first - 30) & (tb < first)
+    assert not before.any()  # the baro starts after the airspeed: its first 30 s are ground
+    ground = np.median(baro["baro_alt_meter"][tb <= tb.iloc[0] + 30])
+    ok = (v >= 8.0) & (np.interp(t, tb, baro["baro_alt_meter"]) >= ground + 3.0)
+    code, data, _ = run(str(small_csv), "--json")
+    assert code == 0
+    assert data["airborne_rule"].startswith("airspeed rule")
+    assert data["airborne_start_s"] == pytest.approx(t[ok][0])
+    assert data["airborne_end_s"] == pytest.approx(t[ok][-1])
+    assert any("landed throughout" in n for n in data["notes"])
+    assert any("ground is the median of the baro's first 30 s" in n for n in data["notes"])
