@@ -451,9 +451,10 @@ def reduce_flight(log: FlightLog, airborne_airspeed_m_s: float = DEFAULT_AIRBORN
                             else "a dead or unplugged sensor") + "): no power against airspeed")
             weight = np.zeros_like(weight)
         power = power_at(packs, t)
-        throttle = (interp_gapped(ordered(log.throttle, notes).time_s,
-                                  ordered(log.throttle, notes).column("throttle"), t)
-                    if log.throttle is not None else np.full(t.shape, np.nan))
+        throttle = np.full(t.shape, np.nan)
+        if log.throttle is not None:
+            commanded = ordered(log.throttle, notes)
+            throttle = interp_gapped(commanded.time_s, commanded.column("throttle"), t)
         if log.throttle is None:
             notes.append("no throttle logged (e.g. RC pass-through): throttle per bin is n/a")
         climb = climb_rate_at(log, t, notes)
@@ -469,8 +470,10 @@ def reduce_flight(log: FlightLog, airborne_airspeed_m_s: float = DEFAULT_AIRBORN
                                    corrected_power, throttle)
         else:
             notes.append("no mass (give --mass or --case): no climb-corrected power")
-        altitude = (interp_gapped(log.baro.time_s, log.baro.column("altitude_m"), t)
-                    if log.baro is not None else np.full(t.shape, np.nan))
+        altitude = np.full(t.shape, np.nan)
+        if log.baro is not None:
+            baro = ordered(log.baro, notes)
+            altitude = interp_gapped(baro.time_s, baro.column("altitude_m"), t)
         series = {"time_s": t, "airspeed_m_s": v, "power_w": power, "throttle": throttle,
                   "altitude_m": altitude, "climb_rate_m_s": climb,
                   "airborne": ((t >= window.start_s) & (t <= window.end_s)).astype(float)}
