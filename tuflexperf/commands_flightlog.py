@@ -24,15 +24,16 @@ def flightlog_command(
     case_file: Path | None = typer.Option(
         None, "--case", help="Requirement file: compare the model's power with the flown."),
     mass_kg: float | None = typer.Option(
-        None, "--mass", help="Aircraft mass [kg] (default: the case's)."),
+        None, "--mass", help="Aircraft mass in kg (default: the case's)."),
     airborne_airspeed: float | None = typer.Option(
         None, "--airborne-airspeed",
-        help="Airspeed [m/s] of the airborne rule (default 1.1x the case's stall speed, or 8)."),
+        help="Airspeed in m/s of the airborne rule (default 1.1x the case's stall speed, "
+        "or 8 m/s without a case)."),
     airborne_height: float = typer.Option(
-        3.0, "--airborne-height", help="Height above ground [m] of the airborne rule."),
+        3.0, "--airborne-height", help="Height above ground in m of the airborne rule."),
     efficiency: float = typer.Option(
         0.5, "--efficiency",
-        help="Electrical-to-climb-power efficiency of the climb correction (default 0.5)."),
+        help="Electrical-to-climb-power efficiency of the climb correction."),
     as_json: bool = typer.Option(False, "--json", metavar="",
                                  help="Print one JSON object on stdout."),
     csv_text: str | None = typer.Option(None, "--csv", metavar="<path>",
