@@ -85,6 +85,7 @@ from tuflexperf.models.thrust import (
     engine_thrust_n,
     least_throttle_reaching,
     outside_tested_range,
+    POLY22_TERMS,
     total_thrust_n,
     windmilling_thrust_n,
 )
@@ -98,6 +99,8 @@ ARC_STEPS = 64  # the take-off's transition arc (see MissionModel._airborne_phas
 # open-circuit voltage (a few % off) quadratic convergence reaches rounding in 4; 5 for margin
 NEWTON = 5
 _P_SIZE = 10  # per-step parameters, see MissionModel._step_functions
+SAMPLED_AIRCRAFT = ("mass_kg", "wing_area_m2", "cd0", "k")
+"""The aircraft's numbers the flight's equations read (its others bound the plan: stall)."""
 
 
 @dataclass(frozen=True)
@@ -269,7 +272,49 @@ class MissionModel:
              "field with full packs, the take-off's charge not counted (add {type: takeoff} "
              "first to fly it)",) if starts_airborne else ())
         self._takeoff_speeds: dict[int, np.ndarray] = {}
+        self.n_par = len(SAMPLED_AIRCRAFT) + 2 + 7 * self.n
         self._build()
+
+    # -- the sampled parameters ---------------------------------------------------------
+    def parameters(self, aircraft: Any = None, density: tuple[Any, Any] | None = None,
+                   coefficients: np.ndarray | None = None,
+                   extrapolation_n: np.ndarray | None = None, size: int = 1) -> np.ndarray:
+        """The chained function's ``par`` per row, ``(n_par, size)``: the aircraft's
+        :data:`SAMPLED_AIRCRAFT` fields, the field's height [m] and temperature offset [K],
+        each engine's six thrust coefficients (POLY22_TERMS order) and extrapolation error
+        [N]. Each argument left out is the case's own (no error)."""
+        craft = self.case.aircraft if aircraft is None else aircraft
+        atmosphere = self.case.atmosphere
+        field_m, dt_k = ((atmosphere.altitude_m, atmosphere.temperature_offset_k)
+                         if density is None else density)
+        columns = [getattr(craft, name) for name in SAMPLED_AIRCRAFT] + [field_m, dt_k]
+        rows = [np.broadcast_to(np.asarray(c, dtype=float).reshape(-1), (size,))
+                for c in columns]
+        nominal = np.array([[e.coefficients[t] for t in POLY22_TERMS]
+                            for e in self.case.propulsion.engines])
+        coef = (np.repeat(nominal[:, None, :], size, axis=1) if coefficients is None
+                else np.asarray(coefficients, dtype=float))
+        rows.extend(coef[j, :, i] for j in range(self.n) for i in range(len(POLY22_TERMS)))
+        errors = (np.zeros((self.n, size)) if extrapolation_n is None
+                  else np.asarray(extrapolation_n, dtype=float))
+        rows.extend(errors[j] for j in range(self.n))
+        return np.stack(rows)
+
+    def _symbolic_models(self, par: Any) -> tuple[Any, Any, list[Any]]:
+        """The aircraft and propulsion with ``par``'s symbols in place of their sampled
+        numbers, and each engine's extrapolation error [N] (see :meth:`parameters`)."""
+        import dataclasses
+
+        k = len(SAMPLED_AIRCRAFT)
+        aircraft = dataclasses.replace(self.case.aircraft,
+                                       **{name: par[i] for i, name in enumerate(SAMPLED_AIRCRAFT)})
+        base = self.case.propulsion
+        terms = len(POLY22_TERMS)
+        engines = tuple(dataclasses.replace(
+            engine, coefficients={t: par[k + 2 + terms * j + i] for i, t in enumerate(POLY22_TERMS)})
+            for j, engine in enumerate(base.engines))
+        errors = [par[k + 2 + terms * self.n + j] for j in range(self.n)]
+        return aircraft, dataclasses.replace(base, engines=engines), errors
 
     # -- static plan ---------------------------------------------------------------------
     def _plan(self, segments: tuple[SegmentSchema, ...]) -> tuple[_Plan, ...]:
@@ -368,9 +413,13 @@ class MissionModel:
             raise
         return tuple(plans)
 
-    def _rho(self, h: Any) -> Any:
+    def _rho(self, h: Any, par: Any = None) -> Any:
+        """ISA density [kg/m^3] at ``h`` [m] above the field (the sampled field height and
+        temperature offset of ``par`` where given)."""
         if self.fixed_density is not None:
             return self.fixed_density + 0.0 * h
+        if par is not None:
+            return isa_density_kg_m3(par[4] + h, par[5])
         # the nodes of a segment after its failure hold no flight (a climb that cannot climb
         # integrates to -4.5e6 m there): the ISA's stratosphere branch overflows on them,
         # harmlessly, as only the nodes before the failure are reported
@@ -492,15 +541,17 @@ class MissionModel:
         return fmax(self._modelled_power(i, x, v, rho), 0.0)
 
     def _algebra(self, u: list[Any], v: Any, q: Any, rho: Any, plan_p: Any,
-                 dead: int | None) -> dict[str, Any]:
+                 dead: int | None, par: Any) -> dict[str, Any]:
         """Everything at loaded pack voltages ``u`` [V] and true airspeed ``v`` [m/s].
 
         ``plan_p = [solve_x, throttle, rate, rate_from_excess]``. Without a reference
         voltage ``u`` is ignored and the current is the closed-form constant-power root.
+        ``par`` holds the sampled parameters (:meth:`parameters`); each engine's
+        extrapolation error [N] adds to its thrust beyond the tested airspeeds.
         """
         import casadi as ca
 
-        prop, aircraft = self.case.propulsion, self.case.aircraft
+        aircraft, prop, errors = self._symbolic_models(par)
         solve_x, x_fixed, rate_cmd, from_excess = plan_p[0], plan_p[1], plan_p[2], plan_p[3]
         sigma = density_ratio(prop, rho)
         weight = aircraft.weight_n
@@ -512,7 +563,10 @@ class MissionModel:
         if dead is not None and self.dead_mode == "windmilling":
             dead_t = windmilling_thrust_n(prop.engines[dead], v, sigma, rho, prop.fan_area_m2)
         factor = [(u[i] / u_ref) ** k_exp if u_ref is not None else 1.0 for i in range(self.n)]
-        t = [sum(factor[i] * engine_thrust_n(prop.engines[i], xs, v, sigma) for i in live)
+        low, high = prop.tested_airspeed_m_s
+        beyond = sigma * ca.if_else(ca.logic_or(v < low - 1e-9, v > high + 1e-9), 1.0, 0.0)
+        t = [sum(factor[i] * (engine_thrust_n(prop.engines[i], xs, v, sigma)
+                              + beyond * errors[i]) for i in live)
              for xs in (0.0, 0.5, 1.0)]
         a = 2.0 * (t[2] - 2.0 * t[1] + t[0])
         b = t[2] - t[0] - a
@@ -552,7 +606,7 @@ class MissionModel:
                 "thrust": thrust}
 
     def _instant_function(self, dead: int | None, solve_v: bool) -> Any:
-        """``(q, v_in, rho, p) -> aux`` with the loaded voltages (and airspeed) solved.
+        """``(q, v_in, rho, p, par) -> aux`` with the loaded voltages (and airspeed) solved.
 
         With a reference voltage the loaded voltage ``U = OCV - (R/n) P(U) / U`` is implicit
         (power follows the voltage); with ``solve_v`` the true airspeed of level flight at the
@@ -569,6 +623,7 @@ class MissionModel:
         q = ca.SX.sym("q", n)
         v_in, rho = ca.SX.sym("v_in"), ca.SX.sym("rho")
         p = ca.SX.sym("p", 4)
+        par = ca.SX.sym("par", self.n_par)
         voltage_unknown = self.case.propulsion.reference_voltage_v is not None
         ocv = [open_circuit_voltage_v(self.params, q[i], self.packs) for i in range(n)]
         m = (n if voltage_unknown else 0) + (1 if solve_v else 0)
@@ -580,7 +635,7 @@ class MissionModel:
 
         def equations(zz: Any) -> Any:
             u, v = split(zz)
-            alg = self._algebra(u, v, q, rho, p, dead)
+            alg = self._algebra(u, v, q, rho, p, dead, par)
             parts = list(alg["u_residual"]) if voltage_unknown else []
             if solve_v:
                 parts.append(alg["level_residual"])
@@ -588,22 +643,22 @@ class MissionModel:
 
         if m:
             res = equations(z)
-            newton = ca.Function("newton_step", [z, q, v_in, rho, p],
+            newton = ca.Function("newton_step", [z, q, v_in, rho, p, par],
                                  [z - ca.solve(ca.jacobian(res, z), res)])
             start = ca.vertcat(*(ocv if voltage_unknown else []), *([v_in] if solve_v else []))
             zk = start
             # without the voltage effect a fixed throttle's airspeed does not change along
             # the segment: the guess is the root already (to ~1e-15), one step polishes it
             for _ in range(NEWTON if voltage_unknown else 1):
-                zk = newton(zk, q, v_in, rho, p)
+                zk = newton(zk, q, v_in, rho, p, par)
             u, v = split(zk)
         else:
             u, v = ocv, v_in
-        alg = self._algebra(u, v, q, rho, p, dead)
+        alg = self._algebra(u, v, q, rho, p, dead, par)
         out = ca.vertcat(alg["x"], alg["v"], alg["rate"], alg["reached"], alg["idle_excess"],
                          alg["level_residual"], *alg["current"], *alg["voltage"],
                          *alg["power"], alg["thrust"])
-        f = ca.Function(f"instant_{dead}_{int(solve_v)}", [q, v_in, rho, p], [out])
+        f = ca.Function(f"instant_{dead}_{int(solve_v)}", [q, v_in, rho, p, par], [out])
         self._instants[key] = f
         return f
 
@@ -620,7 +675,7 @@ class MissionModel:
         return self._steps[key]
 
     def _step_functions(self, dead: int | None, solve_v: bool, kind: str) -> Any:
-        """RK4 step ``(state, step, p) -> state`` over ``kind`` (time, height), or the aux.
+        """RK4 step ``(state, step, p, par) -> state`` over ``kind`` (time, height), or the aux.
 
         A forced phase (the take-off's roll, rotation and path to the obstacle) is flown in
         time at the airspeeds the take-off analysis gives (``p[6:9]``: at the step's start,
@@ -633,14 +688,15 @@ class MissionModel:
         s = ca.SX.sym("s", ns)
         # p: solve_x, x, rate, from_excess, eas, forced, v0, vmid, v1, v_guess
         p = ca.SX.sym("p", _P_SIZE)
+        par = ca.SX.sym("par", self.n_par)
         step = ca.SX.sym("step")
         instant = self._instant_function(dead, solve_v)
 
         def evaluate(state: Any, v_given: Any) -> Any:
-            rho = self._rho(state[2 * n])
+            rho = self._rho(state[2 * n], par)
             v_free = p[9] if solve_v else true_airspeed_m_s(p[4], rho)
             v_in = ca.if_else(p[5] > 0.5, v_given, v_free)
-            a = instant(state[:n], v_in, rho, p[:4])
+            a = instant(state[:n], v_in, rho, p[:4], par)
             # a forced phase (the take-off) has its height rate given
             return ca.vertcat(a[:2], ca.if_else(p[5] > 0.5, p[2], a[2]), a[3:])
 
@@ -669,23 +725,27 @@ class MissionModel:
             return d / safe
 
         if kind == "aux":
-            return ca.Function("aux", [s, p], [evaluate(s, p[6])])
+            return ca.Function("aux", [s, p, par], [evaluate(s, p[6])])
         derivative = {"time": in_time, "height": in_height}[kind]
-        return ca.Function(f"step_{kind}", [s, step, p], [rk4(derivative)])
+        return ca.Function(f"step_{kind}", [s, step, p, par], [rk4(derivative)])
 
-    def _segment_graph(self, plan: _Plan, state: Any, durations: Any, theta: Any,
-                       nodes_aux: bool = True) -> tuple[list[Any], list[Any], Any]:
+    def _segment_graph(self, plan: _Plan, state: Any, durations: Any, theta: Any, par: Any,
+                       tk: Any, nodes_aux: bool = True) -> tuple[list[Any], list[Any], Any]:
         """One segment flown from ``state`` (MX): its nodes, their aux outputs, the end state.
 
+        ``par`` the sampled parameters, ``tk`` the take-off's step rows (:meth:`_takeoff_rows`).
         Without ``nodes_aux`` only the aux at the segment's end is computed (a list of one).
         """
         import casadi as ca
 
         f_aux = self._stepper(plan.dead, plan.solve_v, "aux")
         if plan.kind == "takeoff":
-            phases: list[tuple[str, Any, Any]] = [
-                (kind, step, ca.DM(rows.T)) for kind, step, rows in self._takeoff_phases(plan)
-            ]
+            phases: list[tuple[str, Any, Any]] = []
+            first = 0
+            for _, cols in self.tk_layout:  # every phase of the take-off flown in time
+                phases.append(("time", tk[_P_SIZE, first:first + cols],
+                               tk[:_P_SIZE, first:first + cols]))
+                first += cols
         else:
             j = 3 * plan.index
             p = ca.vertcat(1.0 if plan.solve_x else 0.0, theta[j], plan.rate,
@@ -695,24 +755,24 @@ class MissionModel:
             if plan.kind == "time":
                 phases = [("time", durations[plan.index] / STEPS, rows)]
             else:
-                phases = [("height", (plan.end_h - plan.start_h) / STEPS, rows)]
+                phases = [("height", ca.MX((plan.end_h - plan.start_h) / STEPS), rows)]
         nodes, auxes = [], []
         for kind, step, p_rows in phases:
             f = self._stepper(plan.dead, plan.solve_v, kind)
             steps = p_rows.shape[1]
-            # a step per row (the roll's, in equal times) or one for all
-            step_row = (ca.DM(step.reshape(1, -1)) if isinstance(step, np.ndarray)
-                        else ca.repmat(step, 1, steps))
-            history = f.mapaccum(steps)(state, step_row, p_rows)
+            # a step per row (the take-off's, from its rows) or one for all
+            step_row = step if step.shape[1] == steps else ca.repmat(step, 1, steps)
+            history = f.mapaccum(steps)(state, step_row, p_rows, ca.repmat(par, 1, steps))
             both = ca.horzcat(state, history)
             # the aux at each node: the airspeed given at a step's start (first node) or end
             after = ca.vertcat(p_rows[:6, :], p_rows[8, :], p_rows[7:, :])
             if nodes_aux:
-                auxes.append(f_aux.map(steps + 1)(both, ca.horzcat(p_rows[:, 0], after)))
+                auxes.append(f_aux.map(steps + 1)(both, ca.horzcat(p_rows[:, 0], after),
+                                                  ca.repmat(par, 1, steps + 1)))
             nodes.append(both)
             state = history[:, -1]
         if not nodes_aux:
-            auxes.append(f_aux(state, after[:, -1]))
+            auxes.append(f_aux(state, after[:, -1], par))
         return nodes, auxes, state
 
     def _segment_function(self, k: int) -> Any:
@@ -720,67 +780,79 @@ class MissionModel:
         import casadi as ca
 
         if k not in self._segments:
-            m = len(self.plans)
             start = ca.MX.sym("start", 2 * self.n + 3)
-            durations, theta = ca.MX.sym("durations", m), ca.MX.sym("theta", 3 * m)
-            _, auxes, end = self._segment_graph(self.plans[k], start, durations, theta,
+            durations, theta, par, tk = self._symbols()
+            _, auxes, end = self._segment_graph(self.plans[k], start, durations, theta, par, tk,
                                                 nodes_aux=False)
             # over the segment's nodes: the least loaded voltage of a live engine and
             # whether the charge stays on the discharge curve (rising, short of the pole):
             # a step too long for the discharge leaps past the knee, where the circuit's
             # voltage rises again, and its end alone would look fine
-            nodes, node_aux, _ = self._segment_graph(self.plans[k], start, durations, theta)
+            nodes, node_aux, _ = self._segment_graph(self.plans[k], start, durations, theta, par,
+                                                     tk)
             states, aux = ca.horzcat(*nodes), ca.horzcat(*node_aux)
             n, dead = self.n, self.plans[k].dead
             live = [i for i in range(n) if i != dead]
             least_v = ca.mmin(ca.vertcat(*(aux[6 + n + i, :].T for i in live)))
             q = states[:n, :]
             fall = ca.mmin(ca.vec(q[:, 1:] - q[:, :-1])) if q.shape[1] > 1 else ca.MX(0.0)
-            self._segments[k] = ca.Function(f"segment_{k}", [start, durations, theta],
+            self._segments[k] = ca.Function(f"segment_{k}", [start, durations, theta, par, tk],
                                             [end, auxes[-1][:, -1], least_v, fall,
                                              ca.mmax(ca.vec(q))])
         return self._segments[k]
 
     def _build(self) -> None:
-        import casadi as ca
-
-        n = self.n
-        durations = ca.MX.sym("durations", len(self.plans))
-        # per segment: throttle, EAS [m/s], airspeed guess [m/s] (inputs, so that a study can
-        # fly the same mission at another throttle without a rebuild)
-        theta = ca.MX.sym("theta", 3 * len(self.plans))
-        state = ca.MX.zeros(2 * n + 3, 1)
-        states, auxes, bounds, ends = [], [], [], []
         self._steps: dict[Any, Any] = {}
         self._segments: dict[int, Any] = {}
-        for plan in self.plans:
-            start = sum(x.shape[1] for x in states)
-            if plan.kind == "event":
-                bounds.append((start, 0))
-                ends.append(None)
-                continue
-            nodes, aux, state = self._segment_graph(plan, state, durations, theta)
-            states.extend(nodes)
-            auxes.extend(aux)
-            bounds.append((start, sum(x.shape[1] for x in states)))
-            ends.append(auxes[-1][6 + n:6 + 2 * n, -1])
-        self.bounds = bounds
-        self._history = ca.Function("mission", [durations, theta],
-                                    [ca.horzcat(*states), ca.horzcat(*auxes)])
-        landing = [1.0 - state[i] / self.capacity_ah for i in range(n)]
-        self._landing = ca.Function("landing", [durations, theta], [ca.vertcat(*landing)])
-        # loaded voltage of each pack at each segment's end (events: the open-circuit value
-        # is irrelevant; they report +inf so a min over them ignores them)
-        end_v = [e if e is not None else ca.MX(ca.DM.inf(n, 1)) for e in ends]
-        self._end_voltage = ca.Function("end_voltage", [durations, theta],
-                                        [ca.horzcat(*end_v)])
+        self.par = self.parameters()
+        self.tk_layout: list[tuple[str, int]] = []
+        self.tk = np.zeros((_P_SIZE + 1, 0))
+        if self.plans and self.plans[0].kind == "takeoff":
+            self.tk_layout, self.tk = self._takeoff_rows(self.plans[0])
+        self._history, self.bounds = self._chain()
         self.durations = np.array([p.duration_s for p in self.plans], dtype=float)
         self.theta = np.array([[p.throttle, p.eas or 0.0, p.v_guess] for p in self.plans],
                               dtype=float).ravel()
 
-    def _takeoff_phases(self, plan: _Plan) -> list[tuple[str, Any, np.ndarray]]:
-        """Ground roll (over the take-off analysis's time), rotation and the airborne part to
-        the obstacle."""
+    def _symbols(self) -> tuple[Any, Any, Any, Any]:
+        """The chained functions' inputs: durations [s], per segment (throttle, EAS [m/s],
+        airspeed guess [m/s]), the sampled parameters and the take-off's step rows."""
+        import casadi as ca
+
+        m = len(self.plans)
+        return (ca.MX.sym("durations", m), ca.MX.sym("theta", 3 * m),
+                ca.MX.sym("par", self.n_par), ca.MX.sym("tk", _P_SIZE + 1, self.tk.shape[1]))
+
+    def _chain(self) -> tuple[Any, list[tuple[int, int]]]:
+        """``(durations, theta, par, tk) -> (states, aux)`` at every node of every segment,
+        and each segment's node range: the whole mission as ONE function."""
+        import casadi as ca
+
+        n = self.n
+        durations, theta, par, tk = self._symbols()
+        state = ca.MX.zeros(2 * n + 3, 1)
+        states: list[Any] = []
+        auxes: list[Any] = []
+        bounds = []
+        for plan in self.plans:
+            start = sum(x.shape[1] for x in states)
+            if plan.kind == "event":
+                bounds.append((start, 0))
+                continue
+            nodes, aux, state = self._segment_graph(plan, state, durations, theta, par, tk)
+            states.extend(nodes)
+            auxes.extend(aux)
+            bounds.append((start, sum(x.shape[1] for x in states)))
+        history = ca.Function("mission", [durations, theta, par, tk],
+                              [ca.horzcat(*states), ca.horzcat(*auxes)])
+        return history, bounds
+
+    def _takeoff_rows(self, plan: _Plan, all_phases: bool = False
+                      ) -> tuple[list[tuple[str, int]], np.ndarray]:
+        """The take-off's phases (name, steps) and their step rows ``(P + 1, columns)``: the
+        ground roll over the take-off analysis's time, the rotation and the airborne part to
+        the obstacle (:func:`takeoff_matrix`); ``all_phases`` keeps a phase of no time too
+        (a batch's rows may need what the nominal case does not)."""
         from tuflexperf.analysis.takeoff import solve_takeoff
 
         result = solve_takeoff(self.case)
@@ -797,54 +869,16 @@ class MissionModel:
         roll_s = float(time[-1]) if time.size > 1 else 0.0
         stage = np.linspace(0.0, roll_s, 2 * STEPS + 1)  # each step's start, middle and end
         at = np.interp(stage, time, speed) if roll_s > 0.0 else np.full(stage.size, v_lo)
-        rows = np.zeros((STEPS, _P_SIZE))
-        rows[:, 1] = 1.0  # full throttle
-        rows[:, 5] = 1.0  # airspeed given, height rate forced (0 on the runway)
-        rows[:, 6], rows[:, 7], rows[:, 8] = at[0:-1:2], at[1::2], at[2::2]
-        phases: list[tuple[str, Any, np.ndarray]] = [("time", roll_s / STEPS, rows)]
-        if result.rotation_time_s > 0:
-            rot = np.zeros((ROTATION_STEPS, _P_SIZE))
-            rot[:, 1], rot[:, 5], rot[:, 6:9] = 1.0, 1.0, v_lo
-            phases.append(("time", result.rotation_time_s / ROTATION_STEPS, rot))
-        if not self.takeoff_to_obstacle:
-            return phases
-        phases.extend(self._airborne_phases(result))
-        return phases
-
-    @staticmethod
-    def _airborne_phases(result: Any) -> list[tuple[str, float, np.ndarray]]:
-        """The take-off's airborne part flown along its path at the transition speed.
-
-        The arc of radius ``R`` at ``V_tr`` (height ``R (1 - cos(V_tr t / R))``) up to the
-        climb angle ``asin(G)`` of the full-throttle gradient ``G``, or up to the obstacle if
-        the arc clears it, then the straight climb at ``V_tr G`` [m/s] to the obstacle height
-        (Anderson, *Aircraft Performance and Design*, 6.7): times from the path's length,
-        not its horizontal distance. Each arc step climbs its exact height difference.
-        """
-        v_tr, radius = result.transition_speed_m_s, result.transition_radius_m
-        height, gradient = result.obstacle_height_m, result.climb_gradient
-        sine = min(gradient, 1.0)  # a gradient of 1 or more climbs vertically (models.aircraft)
-        if result.obstacle_cleared_in_transition:
-            angle, straight_s = math.acos(1.0 - height / radius), 0.0
-        else:
-            # the arc ends at the angle of its own gradient (the climb's, unless packs sag)
-            angle = math.asin(min(result.transition_gradient, 1.0))
-            straight_s = (height - radius * (1.0 - math.cos(angle))) / (v_tr * sine)
-        arc_s = radius * angle / v_tr
-        # each step climbs its chord at a constant rate: the height inside a step (and so the
-        # density the fans see) is off by ~ (dt^2/8) V^2/R; 64 steps keep the charge to 1e-8
-        t = np.linspace(0.0, arc_s, ARC_STEPS + 1)
-        h = radius * (1.0 - np.cos(v_tr * t / radius))
-        arc = np.zeros((ARC_STEPS, _P_SIZE))
-        arc[:, 1], arc[:, 5], arc[:, 6:9] = 1.0, 1.0, v_tr
-        arc[:, 2] = np.diff(h) / (arc_s / ARC_STEPS)
-        phases: list[tuple[str, float, np.ndarray]] = [("time", arc_s / ARC_STEPS, arc)]
-        if straight_s > 0:
-            climb = np.zeros((8, _P_SIZE))
-            climb[:, 1], climb[:, 5], climb[:, 6:9] = 1.0, 1.0, v_tr
-            climb[:, 2] = v_tr * sine
-            phases.append(("time", straight_s / 8, climb))
-        return phases
+        air = None
+        if self.takeoff_to_obstacle:
+            air = airborne_path(*(np.array([float(x)]) for x in (
+                result.transition_speed_m_s, result.transition_radius_m,
+                result.obstacle_height_m, result.climb_gradient, result.transition_gradient)),
+                np.array([bool(result.obstacle_cleared_in_transition)]))
+        layout = takeoff_layout(all_phases or result.rotation_time_s > 0, air, all_phases)
+        rows = takeoff_matrix(layout, at[None, :], np.array([roll_s]),
+                              np.array([float(result.rotation_time_s)]), np.array([v_lo]), air)
+        return layout, rows[0]
 
     # -- flying ---------------------------------------------------------------------------
     def fly(self, durations: np.ndarray | None = None, solved: dict[str, Any] | None = None,
@@ -863,7 +897,8 @@ class MissionModel:
         """
         d = self.durations if durations is None else np.asarray(durations, dtype=float)
         th = self.theta if theta is None else np.asarray(theta, dtype=float)
-        states, aux = (np.asarray(m, dtype=float) for m in self._history(d, th))
+        states, aux = (np.asarray(m, dtype=float)
+                       for m in self._history(d, th, self.par, self.tk))
         return self._result(states, aux, solved, th, d)
 
     def _charge_valid(self, q: np.ndarray, current: np.ndarray) -> np.ndarray:
@@ -899,7 +934,7 @@ class MissionModel:
         def margin(tau: float) -> float:
             d[plan.index] = tau
             end, aux, least_v, fall, most = (np.asarray(v, dtype=float).ravel()
-                                             for v in f(start, d, theta))
+                                             for v in f(start, d, theta, self.par, self.tk))
             q = np.stack([start[:self.n], end[:self.n]], axis=1)
             if not (self._charge_valid(q, aux[6:6 + self.n, None] * np.ones((1, 2))).all()
                     and fall[0] >= -1e-12 and most[0] < pole):
@@ -925,7 +960,8 @@ class MissionModel:
             mid = 0.5 * (low + high)
             low, high = (mid, high) if margin(mid) >= 0 else (low, mid)
         d[plan.index] = low  # the last time still on the right side of the cut-off
-        end, aux = (np.asarray(v_, dtype=float).ravel() for v_ in f(start, d, theta)[:2])
+        end, aux = (np.asarray(v_, dtype=float).ravel()
+                    for v_ in f(start, d, theta, self.par, self.tk)[:2])
         return low, end, aux
 
     def _pack_rating_a(self) -> float | None:
@@ -1235,15 +1271,15 @@ class MissionModel:
         import casadi as ca
 
         if k not in self._suffixes:
-            m, n = len(self.plans), self.n
+            n = self.n
             start = ca.MX.sym("start", 2 * n + 3)
-            durations, theta = ca.MX.sym("durations", m), ca.MX.sym("theta", 3 * m)
+            durations, theta, par, tk = self._symbols()
             state, at_k, nodes, least = start, None, [start], []
             for plan in self.plans[k:]:
                 if plan.kind == "event":
                     continue
-                both, auxes, state = self._segment_graph(plan, state, durations, theta,
-                                                         nodes_aux=plan.index != k)
+                both, auxes, state = self._segment_graph(plan, state, durations, theta, par,
+                                                         tk, nodes_aux=plan.index != k)
                 nodes.extend(both)
                 if plan.index == k:
                     at_k = auxes[-1][:, -1]
@@ -1253,7 +1289,8 @@ class MissionModel:
             # the discharge curve) the charge stops rising and the answer means nothing
             drawn = ca.horzcat(*nodes)
             most = ca.vertcat(*(ca.mmax(drawn[i, :]) for i in range(n)))
-            self._suffixes[k] = ca.Function(f"from_segment_{k}", [start, durations, theta],
+            self._suffixes[k] = ca.Function(f"from_segment_{k}",
+                                            [start, durations, theta, par, tk],
                                             [state, at_k, most, ca.mmin(ca.vertcat(*least))])
         return self._suffixes[k]
 
@@ -1265,7 +1302,7 @@ class MissionModel:
         ----------
         SPEC 4 ("Mission file"): segments flown in order from full packs.
         """
-        states = np.asarray(self._history(durations, theta)[0], dtype=float)
+        states = np.asarray(self._history(durations, theta, self.par, self.tk)[0], dtype=float)
         a = self.bounds[k][0]
         return states[:, a] if a < states.shape[1] else states[:, -1]
 
@@ -1311,7 +1348,7 @@ class MissionModel:
         def evaluate(tau: float) -> tuple[float, float, float]:
             d[k] = tau
             end, aux, most, least = (np.asarray(v, dtype=float).ravel()
-                                     for v in f(x0, d, th))
+                                     for v in f(x0, d, th, self.par, self.tk))
             if not (np.all(np.isfinite(end)) and np.all(most <= end[:n] + 1e-12)
                     and np.all(most < pole)):
                 return -1.0, math.nan, -1.0  # the packs were emptied on the way: beyond
@@ -1488,3 +1525,98 @@ def _flown_up_to(case: Case, mission: MissionFile, min_landing_fraction: float |
     return dataclasses.replace(flown, attainable=False, reason=str(exc),
                                landing_charge_fraction=math.nan,
                                ended_at_s=float(flown.history["time_s"][-1]))
+
+
+STRAIGHT_STEPS = 8  # the take-off's straight climb to the obstacle (constant airspeed and rate)
+
+
+@dataclass(frozen=True)
+class AirbornePath:
+    """The take-off's path from lift-off to the obstacle, one value per row: transition
+    speed [m/s], arc time [s], the arc's climb rates per step ``(B, ARC_STEPS)`` [m/s], the
+    straight climb's time [s] and sine of its angle [-]."""
+
+    speed: np.ndarray
+    arc_s: np.ndarray
+    arc_rates: np.ndarray
+    straight_s: np.ndarray
+    sine: np.ndarray
+
+
+def airborne_path(v_tr: np.ndarray, radius: np.ndarray, height: np.ndarray,
+                  gradient: np.ndarray, arc_gradient: np.ndarray,
+                  cleared: np.ndarray) -> AirbornePath:
+    """The take-off's airborne part flown along its path at the transition speed.
+
+    The arc of radius ``R`` [m] at ``V_tr`` [m/s] (height ``R (1 - cos(V_tr t / R))``) up to
+    the climb angle ``asin(G)`` of the arc's gradient, or up to the obstacle ``height`` [m]
+    if the arc clears it, then the straight climb at ``V_tr G`` [m/s] to the obstacle height
+    (Anderson, *Aircraft Performance and Design*, 6.7): times from the path's length, not its
+    horizontal distance. Each arc step climbs its exact height difference. Arrays ``(B,)``.
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sine = np.minimum(gradient, 1.0)  # a gradient of 1 or more climbs vertically
+        over = np.arccos(1.0 - height / radius)
+        angle = np.arcsin(np.minimum(arc_gradient, 1.0))
+        straight = (height - radius * (1.0 - np.cos(angle))) / (v_tr * sine)
+        angle = np.where(cleared, over, angle)
+        straight_s = np.where(cleared, 0.0, straight)
+        arc_s = radius * angle / v_tr
+        # each step climbs its chord at a constant rate: the height inside a step (and so the
+        # density the fans see) is off by ~ (dt^2/8) V^2/R; 64 steps keep the charge to 1e-8
+        step = arc_s / ARC_STEPS
+        t = np.arange(ARC_STEPS + 1)[None, :] * step[:, None]
+        t[:, -1] = arc_s
+        h = radius[:, None] * (1.0 - np.cos(v_tr[:, None] * t / radius[:, None]))
+        rates = np.diff(h, axis=1) / step[:, None]
+    return AirbornePath(v_tr, arc_s, rates, straight_s, sine)
+
+
+def takeoff_layout(rotation: bool, air: AirbornePath | None,
+                   all_phases: bool = False) -> list[tuple[str, int]]:
+    """The take-off's phases and their steps: roll, rotation (when it takes time), arc and
+    straight climb (when the arc does not clear the obstacle), all of them with ``all_phases``."""
+    layout = [("roll", STEPS)]
+    if rotation:
+        layout.append(("rotation", ROTATION_STEPS))
+    if air is not None:
+        layout.append(("arc", ARC_STEPS))
+        if all_phases or bool(np.any(air.straight_s > 0)):
+            layout.append(("straight", STRAIGHT_STEPS))
+    return layout
+
+
+def takeoff_matrix(layout: list[tuple[str, int]], stages: np.ndarray, roll_s: np.ndarray,
+                   rotation_s: np.ndarray, v_lo: np.ndarray,
+                   air: AirbornePath | None) -> np.ndarray:
+    """The take-off's step rows per row of a batch, ``(B, P + 1, columns)``: per step the
+    parameters of :meth:`MissionModel._step_functions` (full throttle, airspeed given at the
+    step's start, middle and end, height rate) and, last, the step [s].
+
+    ``stages`` ``(B, 2 STEPS + 1)`` the roll's airspeeds [m/s] at each step's start, middle
+    and end; ``roll_s``, ``rotation_s`` [s], ``v_lo`` [m/s] per row. A phase a row does not
+    fly has steps of no time.
+    """
+    size = stages.shape[0]
+    blocks = []
+    for name, cols in layout:
+        block = np.zeros((size, _P_SIZE + 1, cols))
+        block[:, 1, :] = 1.0  # full throttle
+        block[:, 5, :] = 1.0  # airspeed given, height rate forced (0 on the runway)
+        if name == "roll":
+            block[:, 6, :], block[:, 7, :] = stages[:, 0:-1:2], stages[:, 1::2]
+            block[:, 8, :] = stages[:, 2::2]
+            block[:, _P_SIZE, :] = (roll_s / STEPS)[:, None]
+        elif name == "rotation":
+            block[:, 6:9, :] = v_lo[:, None, None]
+            block[:, _P_SIZE, :] = (rotation_s / ROTATION_STEPS)[:, None]
+        elif name == "arc" and air is not None:
+            block[:, 6:9, :] = air.speed[:, None, None]
+            block[:, 2, :] = air.arc_rates
+            block[:, _P_SIZE, :] = (air.arc_s / ARC_STEPS)[:, None]
+        elif air is not None:
+            block[:, 6:9, :] = air.speed[:, None, None]
+            block[:, 2, :] = (air.speed * air.sine)[:, None]
+            block[:, _P_SIZE, :] = (air.straight_s / STRAIGHT_STEPS)[:, None]
+        blocks.append(block)
+    return np.concatenate(blocks, axis=2) if blocks else np.zeros((size, _P_SIZE + 1, 0))
