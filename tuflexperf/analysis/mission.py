@@ -823,6 +823,22 @@ class MissionModel:
         return (ca.MX.sym("durations", m), ca.MX.sym("theta", 3 * m),
                 ca.MX.sym("par", self.n_par), ca.MX.sym("tk", _P_SIZE + 1, self.tk.shape[1]))
 
+    def sampled_chain(self) -> tuple[Any, list[tuple[int, int]], list[tuple[str, int]]]:
+        """The chained function for a batch, expanded to SX (as fast again under ``map``,
+        the same numbers), its node ranges and its take-off's phases: every phase a row may
+        fly (a rotation, a straight climb), each of no time where a row does not."""
+        if getattr(self, "_sampled", None) is None:
+            kept = self.tk_layout, self.tk
+            if self.tk_layout:
+                self.tk_layout = takeoff_layout(True, self.takeoff_to_obstacle, True)
+                self.tk = np.zeros((_P_SIZE + 1, sum(c for _, c in self.tk_layout)))
+            try:
+                history, bounds = self._chain()
+                self._sampled = (history.expand(), bounds, self.tk_layout)
+            finally:
+                self.tk_layout, self.tk = kept
+        return self._sampled
+
     def _chain(self) -> tuple[Any, list[tuple[int, int]]]:
         """``(durations, theta, par, tk) -> (states, aux)`` at every node of every segment,
         and each segment's node range: the whole mission as ONE function."""
@@ -847,12 +863,10 @@ class MissionModel:
                               [ca.horzcat(*states), ca.horzcat(*auxes)])
         return history, bounds
 
-    def _takeoff_rows(self, plan: _Plan, all_phases: bool = False
-                      ) -> tuple[list[tuple[str, int]], np.ndarray]:
+    def _takeoff_rows(self, plan: _Plan) -> tuple[list[tuple[str, int]], np.ndarray]:
         """The take-off's phases (name, steps) and their step rows ``(P + 1, columns)``: the
         ground roll over the take-off analysis's time, the rotation and the airborne part to
-        the obstacle (:func:`takeoff_matrix`); ``all_phases`` keeps a phase of no time too
-        (a batch's rows may need what the nominal case does not)."""
+        the obstacle (:func:`takeoff_matrix`)."""
         from tuflexperf.analysis.takeoff import solve_takeoff
 
         result = solve_takeoff(self.case)
@@ -875,7 +889,8 @@ class MissionModel:
                 result.transition_speed_m_s, result.transition_radius_m,
                 result.obstacle_height_m, result.climb_gradient, result.transition_gradient)),
                 np.array([bool(result.obstacle_cleared_in_transition)]))
-        layout = takeoff_layout(all_phases or result.rotation_time_s > 0, air, all_phases)
+        layout = takeoff_layout(result.rotation_time_s > 0, air is not None,
+                                air is not None and bool(air.straight_s[0] > 0))
         rows = takeoff_matrix(layout, at[None, :], np.array([roll_s]),
                               np.array([float(result.rotation_time_s)]), np.array([v_lo]), air)
         return layout, rows[0]
@@ -1572,16 +1587,15 @@ def airborne_path(v_tr: np.ndarray, radius: np.ndarray, height: np.ndarray,
     return AirbornePath(v_tr, arc_s, rates, straight_s, sine)
 
 
-def takeoff_layout(rotation: bool, air: AirbornePath | None,
-                   all_phases: bool = False) -> list[tuple[str, int]]:
-    """The take-off's phases and their steps: roll, rotation (when it takes time), arc and
-    straight climb (when the arc does not clear the obstacle), all of them with ``all_phases``."""
+def takeoff_layout(rotation: bool, airborne: bool, straight: bool) -> list[tuple[str, int]]:
+    """The take-off's phases and their steps: roll, rotation (when it takes time), arc (to
+    the obstacle) and straight climb (when the arc does not clear the obstacle)."""
     layout = [("roll", STEPS)]
     if rotation:
         layout.append(("rotation", ROTATION_STEPS))
-    if air is not None:
+    if airborne:
         layout.append(("arc", ARC_STEPS))
-        if all_phases or bool(np.any(air.straight_s > 0)):
+        if straight:
             layout.append(("straight", STRAIGHT_STEPS))
     return layout
 

@@ -275,7 +275,45 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range) -> dict[str, A
     out[f"outside:{ENVELOPE_KEY}"] = np.array([np.count_nonzero(crossed)])
     out.update({f"value:{k}": np.where(outside, np.nan, v) for k, v in result.values.items()})
     out.update({f"limit:{k}": v for k, v in result.limits.items()})
+    model = mission_for(case, list(draw.values))
+    if model is not None:
+        from tuflexperf.analysis.mission_samples import sampled_landing
+
+        flown = sampled_landing(model, evaluator_for(case), draw.values, draw.size,
+                                draw.coefficients, draw.extrapolation_n)
+        out[f"value:{MISSION}"] = np.where(outside, np.nan, flown["value"])
+        out[f"limit:{MISSION}"] = flown["limit"]
     return out
+
+
+MISSION = "mission_landing_charge"
+_missions: dict[str, Any] = {}
+
+
+def mission_for(case: Case, keys: list[str]) -> Any:
+    """The case's mission model when the batch flies it for draws of ``keys``
+    (:func:`tuflexperf.analysis.mission_samples.why_not_sampled`), else None; one per case
+    and process, as :func:`evaluator_for`."""
+    if case.requirements.mission is None:
+        return None
+    from tuflexperf.analysis.mission import MissionModel
+    from tuflexperf.analysis.mission_samples import why_not_sampled
+    from tuflexperf.analysis.requirements import mission_path
+    from tuflexperf.errors import NotAttainable
+    from tuflexperf.io.mission import load_mission
+
+    path = mission_path(case)
+    key = fingerprint(case.aircraft, case.propulsion, case.atmosphere, case.requirements,
+                      case.overrides, str(case.battery_path), str(path), file_key(path))
+    if key not in _missions:
+        _missions.clear()
+        try:
+            _missions[key] = MissionModel(case, load_mission(path),
+                                          case.requirements.mission.min_landing_charge_fraction)
+        except NotAttainable:  # the nominal plan cannot be flown: said by the nominal verdict
+            _missions[key] = None
+    model = _missions[key]
+    return None if model is None or why_not_sampled(model, keys) is not None else model
 
 
 DASK_CONNECT_S = 10.0  # connect and handshake: a server that never answers hung for ever
@@ -468,6 +506,7 @@ def run_samples(
     values = {n: np.concatenate([p[f"value:{n}"] for p in parts]) for n in names}
     limits = {n: np.concatenate([p[f"limit:{n}"] for p in parts]) for n in names}
     kinds = {r.name: r.kind for r in evaluator_for(case).requirements}
+    kinds[MISSION] = "min"
     outside = {k.split(":", 1)[1]: int(sum(int(p[k][0]) for p in parts))
                for k in parts[0] if k.startswith("outside:")}
     return SampleSet(plan, values, limits, kinds, outside)
