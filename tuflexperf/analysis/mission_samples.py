@@ -35,7 +35,6 @@ from tuflexperf.analysis.mission import (
     STEPS,
     MissionModel,
     airborne_path,
-    takeoff_layout,
     takeoff_matrix,
 )
 
