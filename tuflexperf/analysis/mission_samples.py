@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from tuflexperf.analysis.mission import (
     BURST_OVER_CONTINUOUS,
     RATING_SEGMENT_S,
+    SECONDS_PER_HOUR,
     STEPS,
     MissionModel,
     airborne_path,
@@ -207,9 +208,17 @@ def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, au
         ok &= rising & np.all(np.isfinite(q) & (q < pole), axis=(0, 2))
         ok &= np.all(np.isfinite(current) & (current >= 0.0), axis=(0, 2))
         if rating is not None and t.shape[1] > 1:
-            end = first_window_beyond(t, q.transpose(1, 0, 2) / per_pack, rating,
-                                      RATING_SEGMENT_S)[0]
-            ok &= ~np.isfinite(end)
+            # a stretch's mean current is a mean of the steps' (charge linear between nodes):
+            # only rows with a step beyond the rating can have a stretch beyond it
+            # (a segment's first node is the last one's end: no time between them, no step)
+            dt = np.broadcast_to(np.diff(t, axis=1), q[:, :, 1:].shape)
+            dq = np.diff(q, axis=2) * SECONDS_PER_HOUR / per_pack
+            steps = np.divide(dq, dt, out=np.where(dq == 0.0, 0.0, np.inf), where=dt > 0)
+            heavy = np.flatnonzero(np.any(~(steps <= rating), axis=(0, 2)))
+            if heavy.size:
+                end = first_window_beyond(t[heavy], q[:, heavy].transpose(1, 0, 2) / per_pack,
+                                          rating, RATING_SEGMENT_S)[0]
+                ok[heavy] &= ~np.isfinite(end)
         for plan, (a, b) in zip(model.plans, bounds, strict=True):
             if plan.kind == "event":
                 continue
