@@ -309,15 +309,13 @@ def test_a_mission_requirement_that_lands_only_nominally_does_not_pass(tmp_path)
     assert row["samples_met"] < 200 and data["passed"] is False
     human = runner.invoke(app, ["check", str(path)])
     assert "overall: FAIL" in human.stdout
-    # a mission the batch does not fly yet (solve_for) is said so, and does not pass
-    solved = tmp_path / "solved.yaml"
-    solved.write_text(mission.read_text() + "solve_for: cruise\n")
-    folder = tmp_path / "solved"
+    # a mission the batch does not fly yet (a battery key drawn) is said so, and does not pass
+    folder = tmp_path / "battery"
     folder.mkdir()
-    solved_case = shipped_with(folder, {
-        "samples": 20, "seed": 1, "parameters": {"aircraft.mass_kg": {"normal": [22.2, 0.1]}},
-    }, {"mission": {"file": str(solved), "min_landing_charge_fraction": 0.2}})
-    out = runner.invoke(app, ["check", str(solved_case), "--json"])
+    drawn = shipped_with(folder, {
+        "samples": 20, "seed": 1, "parameters": {"battery.capacity_ah": {"normal": [5.0, 0.05]}},
+    }, {"mission": {"file": str(mission), "min_landing_charge_fraction": 0.2}})
+    out = runner.invoke(app, ["check", str(drawn), "--json"])
     assert out.stdout, (out.exit_code, out.exception)
     row = json.loads(out.stdout)["results"][0]
     assert row["probability"] is None and "not sampled" in row["probability_note"]

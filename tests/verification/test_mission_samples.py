@@ -48,18 +48,21 @@ def _case(tmp_path: Path, mission: Path, uncertainty: dict | None = None) -> Pat
     return path
 
 
-def _batch_and_single(case_path: Path) -> tuple[np.ndarray, list[float]]:
+def _batch_and_single(case_path: Path, name: str = "mission_landing_charge"
+                      ) -> tuple[np.ndarray, list[float]]:
     case = load_case(case_path)
     values = {k: np.array(v) for k, v in DRAWS.items()}
     model = mission_for(case, list(values))
     assert model is not None
-    batch = sampled_landing(model, evaluator_for(case), values, 3, None, None)["value"]
+    batch = sampled_landing(model, evaluator_for(case), values, 3, None, None)[name][0]
     single = []
     for row in range(3):
         # the --set mechanism: the same dotted keys, validated as the files are
         one = with_values(case, {k: v[row] for k, v in DRAWS.items()})
         flown = solve_mission(one, load_mission(model.mission.path), 0.2)
-        single.append(flown.landing_charge_fraction if flown.attainable else np.nan)
+        value = (flown.landing_charge_fraction if name == "mission_landing_charge"
+                 else flown.solved["time_min"])
+        single.append(value if flown.attainable else np.nan)
     return batch, single
 
 
@@ -87,7 +90,27 @@ def test_a_sample_that_cannot_fly_the_mission_is_not_met_never_dropped(tmp_path)
               "aircraft.cd0": np.array([0.021, 0.021])}
     model = mission_for(case, list(values))
     out = sampled_landing(model, evaluator_for(case), values, 2, None, None)
-    assert np.isfinite(out["value"][0]) and np.isnan(out["value"][1])
+    landing = out["mission_landing_charge"][0]
+    assert np.isfinite(landing[0]) and np.isnan(landing[1])
+
+
+def test_solve_for_per_row_is_the_single_cases_longest_segment(tmp_path) -> None:
+    """solve_for solved over the batch (safeguarded Newton, vectorised) lands each row on
+    the reserve with the single case's own duration; a row that stalls has none."""
+    mission = tmp_path / "airborne.yaml"
+    mission.write_text(AIRBORNE + "solve_for: cruise\n")
+    path = _case(tmp_path, mission)
+    batch, single = _batch_and_single(path, "mission_solved_time")
+    assert np.all(np.isfinite(batch)) and np.all(batch > 10.0)  # the file plans 12 km
+    assert batch == pytest.approx(single, rel=1e-9)
+    landing, _ = _batch_and_single(path)
+    assert landing == pytest.approx([0.2] * 3, abs=1e-11)
+    case = load_case(path)
+    values = {"aircraft.mass_kg": np.array([22.2, 60.0])}
+    out = sampled_landing(mission_for(case, list(values)), evaluator_for(case), values, 2,
+                          None, None)
+    assert np.isfinite(out["mission_solved_time"][0][0])
+    assert np.isnan(out["mission_solved_time"][0][1])
 
 
 def test_check_samples_shows_the_mission_and_workers_give_the_same_numbers(tmp_path) -> None:

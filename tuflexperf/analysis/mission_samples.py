@@ -13,7 +13,8 @@ than full throttle, does not climb, outruns its fans or its pack's rating is not
 
 What the batch does not fly yet is said, not guessed (:func:`why_not_sampled`): battery or
 propulsion keys drawn, a segment whose airspeed is solved (no ``airspeed_m_s``, or a level
-flight at a fixed throttle), a catapult launch, a take-off on sagging packs, ``solve_for``.
+flight at a fixed throttle), a catapult launch, a take-off on sagging packs. ``solve_for``
+is solved per row (:func:`longest_rows`), vectorised over the batch.
 
 References
 ----------
@@ -48,6 +49,8 @@ FLOWN_KEYS = ("aircraft.mass_kg", "aircraft.wing_area_m2", "aircraft.cd0", "airc
 """The drawn keys a sampled mission flies (with ``aircraft.takeoff.*``, through the batch's
 take-off); other requirements' limits leave it alone."""
 ROWS_PER_MAP = 2000  # rows per map call: the history is ~10 kB a row
+MISSION_LANDING = "mission_landing_charge"
+MISSION_SOLVED = "mission_solved_time"
 
 
 def why_not_sampled(model: MissionModel, keys: list[str]) -> str | None:
@@ -62,8 +65,6 @@ def why_not_sampled(model: MissionModel, keys: list[str]) -> str | None:
             return f"{key} is drawn and the sampled mission does not fly it"
     if case.aircraft.launch == "catapult":
         return "a catapult launch is flown for the nominal case only"
-    if model.mission.solve_for is not None:
-        return "solve_for is solved for the nominal case only"
     if any(plan.solve_v for plan in model.plans):
         return "a level flight at a fixed throttle is flown for the nominal case only"
     if any(s.type not in ("takeoff", "engine_failure") and s.airspeed_m_s is None
@@ -119,9 +120,11 @@ def _takeoff_rows(model: MissionModel, m: Any, height: Array, layout: list[tuple
 
 def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Array],
                     size: int, coefficients: Array | None,
-                    extrapolation_n: Array | None) -> dict[str, Array]:
-    """Per row: ``mission_landing_charge`` (the least landing charge fraction, NaN where
-    the mission is not attainable) and its limit (the reserve).
+                    extrapolation_n: Array | None) -> dict[str, tuple[Array, Array]]:
+    """Per requirement its values and limits per row: ``mission_landing_charge`` (the least
+    landing charge fraction, NaN where the mission is not attainable; the reserve) and with
+    ``solve_for`` ``mission_solved_time`` (the longest time of that segment [min], solved
+    per row by :func:`longest_rows`; the file's own).
 
     ``evaluator`` the case's :class:`tuflexperf.analysis.batch.BatchEvaluator` (its rows'
     aircraft, propulsion and density); ``values`` dotted key -> ``(B,)``; thrust
@@ -164,25 +167,159 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
         tk, launched = _takeoff_rows(model, m, height, layout)
         ok &= launched
     theta = np.repeat(model.theta[:, None], size, axis=1)
-    landing = np.full(size, np.nan)
-    for first in range(0, size, ROWS_PER_MAP):
-        rows = slice(first, min(first + ROWS_PER_MAP, size))
-        count = rows.stop - rows.start
-        block = tk[rows]
-        states, aux = (np.asarray(x, dtype=float) for x in history.map(count, "thread", 2)(
-            durations[:, rows], theta[:, rows], par[:, rows],
-            block.transpose(1, 0, 2).reshape(block.shape[1], -1)))
-        nodes = states.shape[1] // count
-        states = states.reshape(states.shape[0], count, nodes)
-        aux = aux.reshape(aux.shape[0], count, nodes)
-        propulsion = evaluator._propulsion(None if coefficients is None
-                                           else coefficients[:, rows, :])
-        flown = _flown(model, bounds, states, aux, propulsion, field_m[rows], dt_k[rows])
-        q_end = states[:model.n, :, -1]
+    k = model.mission.solve_for
+
+    def fly(durations: Array) -> tuple[Array, Array | None]:
+        landing, start = np.full(size, np.nan), None
+        if k is not None:
+            start = np.full((2 * model.n + 3, size), np.nan)
+        for first in range(0, size, ROWS_PER_MAP):
+            rows = slice(first, min(first + ROWS_PER_MAP, size))
+            count = rows.stop - rows.start
+            block = tk[rows]
+            states, aux = (np.asarray(x, dtype=float) for x in history.map(count, "thread", 2)(
+                durations[:, rows], theta[:, rows], par[:, rows],
+                block.transpose(1, 0, 2).reshape(block.shape[1], -1)))
+            nodes = states.shape[1] // count
+            states = states.reshape(states.shape[0], count, nodes)
+            aux = aux.reshape(aux.shape[0], count, nodes)
+            propulsion = evaluator._propulsion(None if coefficients is None
+                                               else coefficients[:, rows, :])
+            flown = _flown(model, bounds, states, aux, propulsion, field_m[rows], dt_k[rows])
+            with np.errstate(invalid="ignore"):
+                value = np.min(1.0 - states[:model.n, :, -1] / model.capacity_ah, axis=0)
+            landing[rows] = np.where(flown & ok[rows], value, np.nan)
+            if start is not None:
+                start[:, rows] = states[:, :, bounds[k][0]]
+        return landing, start
+
+    landing, start = fly(durations)
+    if k is None:
+        return {MISSION_LANDING: (landing, reserve)}
+    written = durations[k] / 60.0
+    with np.errstate(invalid="ignore"):
+        durations[k] = longest_rows(model, k, np.where(ok, 1.0, np.nan) * start, durations,
+                                    theta, par, reserve)
+    landing, _ = fly(durations)
+    solved = np.where(np.isfinite(landing), durations[k] / 60.0, np.nan)
+    return {MISSION_LANDING: (landing, reserve), MISSION_SOLVED: (solved, written)}
+
+
+def longest_rows(model: MissionModel, k: int, start: Array, durations: Array, theta: Array,
+                 par: Array, reserve: Array) -> Array:
+    """Per row, :meth:`MissionModel.longest` of segment ``k`` [s] (NaN where no duration
+    lands): the landing charge on the reserve, or the cut-off first, from where segment
+    ``k`` begins (``start``, ``(state, B)``).
+
+    Vectorised over the rows, never a loop of them: each step evaluates the rows not yet
+    converged at once (the mission from segment ``k`` on, mapped). Newton with the state
+    equations' slope ``-i_j / (3600 Q)`` (exact for the last segment, a close guess before
+    it) from the file's duration, safeguarded by the bracket it keeps (regula falsi,
+    Illinois, where a step leaves it); then, where the packs cut off first, regula falsi on
+    the least loaded voltage over ``[0, T]``. The same roots as the single case's to
+    1e-12 (fraction) and 1e-10 V.
+
+    References
+    ----------
+    Press et al., *Numerical Recipes*, 3rd ed., 9.2 (Illinois), 9.4 (safeguarded Newton).
+    """
+    size = start.shape[1]
+    if not hasattr(model, "_suffix_sx"):
+        model._suffix_sx = {}  # type: ignore[attr-defined]
+    if k not in model._suffix_sx:  # type: ignore[attr-defined]
+        model._suffix_sx[k] = model._suffix_function(k).expand()  # type: ignore[attr-defined]
+    suffix = model._suffix_sx[k]  # type: ignore[attr-defined]
+    n, width = model.n, model.tk.shape[1]
+    pole = model.packs * model.params.max_capacity_ah
+
+    def at(rows: Array, tau: Array) -> tuple[Array, Array, Array]:
+        d = durations[:, rows].copy()
+        d[k] = tau
+        end, aux, most, least = (np.asarray(x, dtype=float) for x in suffix.map(
+            rows.size, "thread", 2)(start[:, rows], d, theta[:, rows], par[:, rows],
+                                    np.zeros((model.tk.shape[0], width * rows.size))))
         with np.errstate(invalid="ignore"):
-            value = np.min(1.0 - q_end / model.capacity_ah, axis=0)
-        landing[rows] = np.where(flown & ok[rows], value, np.nan)
-    return {"value": landing, "limit": reserve}
+            valid = (np.all(np.isfinite(end), axis=0) & np.all(most <= end[:n] + 1e-12, axis=0)
+                     & np.all(most < pole, axis=0))
+            frac = 1.0 - end[:n] / model.capacity_ah
+            j = np.argmin(np.where(np.isfinite(frac), frac, np.inf), axis=0)
+            cols = np.arange(rows.size)
+            g = np.where(valid, frac[j, cols] - reserve[rows], -1.0)
+            slope = np.where(valid, -aux[6 + j, cols] / SECONDS_PER_HOUR / model.capacity_ah,
+                             np.nan)
+            volt = np.where(valid, least[0] - model.cutoff_v, -1.0)
+        return g, slope, volt
+
+    every = np.flatnonzero(np.all(np.isfinite(start), axis=0))
+    tau, g0, v0 = np.full(size, np.nan), np.full(size, np.nan), np.full(size, np.nan)
+    g0[every], _, v0[every] = at(every, np.zeros(every.size))
+    # landing short with none of it, or cut off: no duration lands
+    every = every[(g0[every] >= 0) & (v0[every] >= 0)]
+    tau[every] = _root(lambda rows, x: at(rows, x)[:2], every, g0, durations[k], 1e-12)
+    volts = np.full(size, np.nan)
+    found = every[np.isfinite(tau[every])]
+    volts[found] = at(found, tau[found])[2]
+    cut = found[volts[found] < 0]  # the packs cut off before the reserve: on the voltage
+    if cut.size:
+        tau[cut] = _root(lambda rows, x: (at(rows, x)[2], np.full(rows.size, np.nan)), cut,
+                         v0, tau, 1e-10, high=(tau.copy(), volts))
+    good = np.isfinite(tau) & (tau > 0)
+    checked = np.flatnonzero(good)
+    if checked.size:
+        good[checked] &= at(checked, tau[checked])[0] >= -1e-8
+    return np.where(good, tau, np.nan)
+
+
+def _root(f: Any, rows: Array, at_zero: Array, guess: Array, tolerance: float,
+          high: tuple[Array, Array] | None = None) -> Array:
+    """Per row of ``rows``, the root ``x > 0`` of a falling ``f(rows, x) -> (value, slope)``
+    with ``f(0) = at_zero >= 0``: safeguarded Newton from ``guess`` (slope NaN: regula falsi,
+    Illinois) inside the bracket it keeps, to ``|f| <= tolerance`` or a bracket of 1e-9
+    relative; ``high`` a known point and its value ``f < 0`` per row. Arrays over all rows;
+    NaN where none is found in 200 steps."""
+    size = at_zero.size
+    low, f_low = np.zeros(size), np.array(at_zero, dtype=float)
+    top = np.full(size, np.inf) if high is None else np.array(high[0], dtype=float)
+    f_top = np.full(size, np.nan) if high is None else np.array(high[1], dtype=float)
+    side = np.zeros(size)
+    x = np.maximum(np.asarray(guess, dtype=float) * np.ones(size), 1.0)
+    if high is not None:  # regula falsi on the bracket from the start
+        with np.errstate(invalid="ignore", divide="ignore"):
+            x = top - f_top * top / (f_top - f_low)
+    answer = np.full(size, np.nan)
+    active = np.array(rows)
+    for _ in range(200):
+        if not active.size:
+            break
+        value, slope = f(active, x[active])
+        done = np.abs(value) <= tolerance
+        above = ~done & (value > 0)
+        below = ~done & ~above
+        a, b = active[above], active[below]
+        # Illinois: halve the kept end's value when the same end moves twice
+        f_top[a] = np.where(side[a] == 1, 0.5 * f_top[a], f_top[a])
+        f_low[b] = np.where(side[b] == -1, 0.5 * f_low[b], f_low[b])
+        low[a], f_low[a], side[a] = x[a], value[above], 1
+        top[b], f_top[b], side[b] = x[b], value[below], -1
+        narrow = np.isfinite(top[active]) & (top[active] - low[active] <= 1e-9 * top[active])
+        answer[active[done | narrow]] = x[active[done | narrow]]
+        active, value, slope = (active[~(done | narrow)], value[~(done | narrow)],
+                                slope[~(done | narrow)])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            newton = x[active] - value / slope
+            falsi = top[active] - f_top[active] * (top[active] - low[active]) / (
+                f_top[active] - f_low[active])
+            bounded = np.isfinite(top[active])
+            inside = np.isfinite(newton) & (newton > low[active]) & (
+                newton < np.where(bounded, top[active], np.inf))
+            unbracketed = np.where(np.isfinite(newton) & (newton > low[active]), newton,
+                                   2.0 * np.maximum(x[active], 60.0))
+            step = np.where(inside, newton, np.where(
+                bounded, np.where(np.isfinite(falsi) & (falsi > low[active])
+                                  & (falsi < top[active]), falsi,
+                                  0.5 * (low[active] + top[active])), unbracketed))
+        x[active] = step
+    return answer[rows]
 
 
 def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, aux: Array,

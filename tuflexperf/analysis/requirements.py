@@ -364,10 +364,10 @@ class ProbabilisticVerdict:
         }
 
 
-NOT_SAMPLED = ("not sampled: this mission is flown for the nominal case only (solve_for, an "
-               "airspeed it solves, a catapult launch, a take-off on sagging packs, or battery "
-               "or propulsion keys drawn; analysis.mission_samples), so its P(met) is not "
-               "shown and it does not pass the probabilistic test")
+NOT_SAMPLED = ("not sampled: this mission is flown for the nominal case only (an airspeed it "
+               "solves, a catapult launch, a take-off on sagging packs, or battery or "
+               "propulsion keys drawn; analysis.mission_samples), so its P(met) is not shown "
+               "and it does not pass the probabilistic test")
 
 
 def sampled_result(verdict: Verdict, probabilistic: ProbabilisticVerdict | None) -> dict[str, Any]:

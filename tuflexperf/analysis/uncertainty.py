@@ -281,12 +281,13 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range) -> dict[str, A
 
         flown = sampled_landing(model, evaluator_for(case), draw.values, draw.size,
                                 draw.coefficients, draw.extrapolation_n)
-        out[f"value:{MISSION}"] = np.where(outside, np.nan, flown["value"])
-        out[f"limit:{MISSION}"] = flown["limit"]
+        for name, (value, limit) in flown.items():
+            out[f"value:{name}"] = np.where(outside, np.nan, value)
+            out[f"limit:{name}"] = limit
     return out
 
 
-MISSION = "mission_landing_charge"
+MISSION_KINDS = {"mission_landing_charge": "min", "mission_solved_time": "min"}
 _missions: dict[str, Any] = {}
 
 
@@ -506,7 +507,7 @@ def run_samples(
     values = {n: np.concatenate([p[f"value:{n}"] for p in parts]) for n in names}
     limits = {n: np.concatenate([p[f"limit:{n}"] for p in parts]) for n in names}
     kinds = {r.name: r.kind for r in evaluator_for(case).requirements}
-    kinds[MISSION] = "min"
+    kinds.update(MISSION_KINDS)
     outside = {k.split(":", 1)[1]: int(sum(int(p[k][0]) for p in parts))
                for k in parts[0] if k.startswith("outside:")}
     return SampleSet(plan, values, limits, kinds, outside)
