@@ -126,3 +126,21 @@ def test_check_samples_shows_the_mission_and_workers_give_the_same_numbers(tmp_p
     workers = json.loads(runner.invoke(app, ["check", str(path), "--json", "--workers",
                                              "2"]).stdout)
     assert workers["results"] == data["results"]
+
+
+def test_a_dask_cluster_flies_the_sampled_mission_to_the_same_numbers(tmp_path) -> None:
+    distributed = pytest.importorskip("distributed")
+    from tuflexperf.analysis.uncertainty import plan_for, run_samples
+
+    mission = tmp_path / "airborne.yaml"
+    mission.write_text(AIRBORNE + "solve_for: cruise\n")
+    case = load_case(_case(tmp_path, mission, {
+        "samples": 30, "seed": 2, "parameters": {"aircraft.cd0": {"normal": [0.021, 0.002]}}}))
+    plan = plan_for(case)
+    here = run_samples(case, plan)
+    assert np.isfinite(here.values["mission_solved_time"]).sum() >= 25
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        there = run_samples(case, plan, dask_address=cluster.scheduler_address)
+    for name in ("mission_landing_charge", "mission_solved_time"):
+        np.testing.assert_array_equal(here.values[name], there.values[name])
