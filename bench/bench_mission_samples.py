@@ -73,7 +73,7 @@ def main() -> None:
         cli = [str(Path(sys.executable).parent / "tuflexperf")]
         times = walls({"check": [*cli, "check", str(path), "--json"],
                        "samples": [*cli, "check", str(path), "--json", "--samples", "10000"]},
-                      rounds=3)
+                      rounds=2)
         print(f"check {times['check']:.2f} s, check --samples 10000 {times['samples']:.2f} s: "
               f"ratio {times['samples'] / times['check']:.2f}")
 

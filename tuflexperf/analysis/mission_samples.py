@@ -48,7 +48,7 @@ FLOWN_KEYS = ("aircraft.mass_kg", "aircraft.wing_area_m2", "aircraft.cd0", "airc
               "requirements.takeoff.obstacle_height_m")
 """The drawn keys a sampled mission flies (with ``aircraft.takeoff.*``, through the batch's
 take-off); other requirements' limits leave it alone."""
-ROWS_PER_MAP = 2000  # rows per map call: the history is ~10 kB a row
+ROWS_PER_MAP = 500  # rows per map call: a row's history is ~80 kB (states and aux per node)
 MISSION_LANDING = "mission_landing_charge"
 MISSION_SOLVED = "mission_solved_time"
 

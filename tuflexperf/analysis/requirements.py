@@ -376,8 +376,9 @@ def sampled_result(verdict: Verdict, probabilistic: ProbabilisticVerdict | None)
 
     A ``passed: true`` beside a failed probability read as "met" to any tool that reads
     the results (outside audit): the overall verdict and each result's now agree. A
-    requirement the samples do not evaluate (a mission) has no P(met) to show: it does not
-    pass (a case whose mission lands on the reserve only nominally passed; outside audit).
+    requirement the samples do not evaluate (a mission the batch cannot fly yet,
+    :func:`tuflexperf.analysis.mission_samples.why_not_sampled`) has no P(met) to show: it
+    does not pass (a case whose mission lands on the reserve only nominally passed).
     """
     if probabilistic is None:
         return {**verdict.to_dict(), "probability": None, "probability_note": NOT_SAMPLED,

@@ -19,6 +19,10 @@ covariance is the mean surface's uncertainty only: at 30 m/s it gave 0.21 N wher
 paper's model is off by up to 0.73 N; outside audit), the error beyond the range then
 ``sqrt(extrapolation_sd_n^2 - residual_sd_n^2)`` on top of it, the whole error there.
 
+A mission requirement is flown for every sample by the single case's own chained function
+(:mod:`tuflexperf.analysis.mission_samples`), in the same batches, so it too gives the same
+numbers wherever the batches run; a mission the batch cannot fly yet is said not sampled.
+
 References
 ----------
 Hanson & Beard (2010), "Applying Monte Carlo simulation to launch vehicle design and
