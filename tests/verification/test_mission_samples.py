@@ -32,7 +32,8 @@ segments:
 """
 DRAWS = {"aircraft.mass_kg": [22.2, 24.0, 20.5], "aircraft.cd0": [0.021, 0.018, 0.026],
          "aircraft.k": [0.05, 0.047, 0.055],
-         "atmosphere.temperature_offset_k": [0.0, 15.0, -5.0]}
+         "atmosphere.temperature_offset_k": [0.0, 15.0, -5.0],
+         "battery.cutoff_voltage_per_cell_v": [3.4, 3.45, 3.3]}
 
 
 def _case(tmp_path: Path, mission: Path, uncertainty: dict | None = None) -> Path:
@@ -144,3 +145,23 @@ def test_a_dask_cluster_flies_the_sampled_mission_to_the_same_numbers(tmp_path) 
         there = run_samples(case, plan, dask_address=cluster.scheduler_address)
     for name in ("mission_landing_charge", "mission_solved_time"):
         np.testing.assert_array_equal(here.values[name], there.values[name])
+
+
+def test_solve_for_per_row_ends_at_the_cut_off_where_the_packs_cut_off_first(tmp_path) -> None:
+    """A high cut-off ends the solved cruise before the reserve: the voltage's root per
+    row, the single case's (its 'ends_at: cut-off') to 1e-9."""
+    mission = tmp_path / "airborne.yaml"
+    mission.write_text(AIRBORNE + "solve_for: cruise\n")
+    case = load_case(_case(tmp_path, mission))
+    cutoffs = [3.4, 3.7, 3.8]
+    values = {"battery.cutoff_voltage_per_cell_v": np.array(cutoffs)}
+    out = sampled_landing(mission_for(case, list(values)), evaluator_for(case), values, 3,
+                          None, None)
+    for row, cutoff in enumerate(cutoffs):
+        one = with_values(case, {"battery.cutoff_voltage_per_cell_v": cutoff})
+        flown = solve_mission(one, load_mission(mission), 0.2)
+        assert flown.solved["ends_at"] == ("landing reserve" if row == 0 else "cut-off")
+        assert out["mission_solved_time"][0][row] == pytest.approx(flown.solved["time_min"],
+                                                                   rel=1e-9)
+        assert out["mission_landing_charge"][0][row] == pytest.approx(
+            flown.landing_charge_fraction, rel=1e-9)

@@ -45,7 +45,7 @@ FLOWN_KEYS = ("aircraft.mass_kg", "aircraft.wing_area_m2", "aircraft.cd0", "airc
               "aircraft.cl_max", "atmosphere.altitude_m", "atmosphere.temperature_offset_k",
               "requirements.envelope.stall_margin",
               "requirements.mission.min_landing_charge_fraction",
-              "requirements.takeoff.obstacle_height_m")
+              "requirements.takeoff.obstacle_height_m", "battery.cutoff_voltage_per_cell_v")
 """The drawn keys a sampled mission flies (with ``aircraft.takeoff.*``, through the batch's
 take-off); other requirements' limits leave it alone."""
 ROWS_PER_MAP = 500  # rows per map call: a row's history is ~80 kB (states and aux per node)
@@ -57,6 +57,8 @@ def why_not_sampled(model: MissionModel, keys: list[str]) -> str | None:
     """Why the batch cannot fly ``model``'s mission for draws of ``keys`` (None: it can)."""
     case = model.case
     for key in keys:
+        if key.startswith("battery.mission."):  # the case's requirement holds the reserve
+            continue
         if key.startswith("requirements.") and not key.startswith(("requirements.mission.",
                                                                     "requirements.envelope.",
                                                                     "requirements.takeoff.")):
@@ -145,6 +147,9 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     margin = _column(values, "requirements.envelope.stall_margin", stall_margin_of(case), size)
     reserve = _column(values, "requirements.mission.min_landing_charge_fraction",
                       model.reserve, size)
+    cutoff = model.battery.cells_in_series * _column(
+        values, "battery.cutoff_voltage_per_cell_v", model.battery.cutoff_voltage_per_cell_v,
+        size)
     ok = np.ones(size, dtype=bool)
     stall = margin * np.asarray(stall_speed_eas_m_s(aircraft), dtype=float).reshape(-1)
     durations = np.repeat(model.durations[:, None], size, axis=1)
@@ -185,7 +190,8 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
             aux = aux.reshape(aux.shape[0], count, nodes)
             propulsion = evaluator._propulsion(None if coefficients is None
                                                else coefficients[:, rows, :])
-            flown = _flown(model, bounds, states, aux, propulsion, field_m[rows], dt_k[rows])
+            flown = _flown(model, bounds, states, aux, propulsion, field_m[rows], dt_k[rows],
+                           cutoff[rows])
             with np.errstate(invalid="ignore"):
                 value = np.min(1.0 - states[:model.n, :, -1] / model.capacity_ah, axis=0)
             landing[rows] = np.where(flown & ok[rows], value, np.nan)
@@ -199,17 +205,18 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     written = durations[k] / 60.0
     with np.errstate(invalid="ignore"):
         durations[k] = longest_rows(model, k, np.where(ok, 1.0, np.nan) * start, durations,
-                                    theta, par, reserve)
+                                    theta, par, reserve, cutoff)
     landing, _ = fly(durations)
     solved = np.where(np.isfinite(landing), durations[k] / 60.0, np.nan)
     return {MISSION_LANDING: (landing, reserve), MISSION_SOLVED: (solved, written)}
 
 
 def longest_rows(model: MissionModel, k: int, start: Array, durations: Array, theta: Array,
-                 par: Array, reserve: Array) -> Array:
+                 par: Array, reserve: Array, cutoff: Array) -> Array:
     """Per row, :meth:`MissionModel.longest` of segment ``k`` [s] (NaN where no duration
     lands): the landing charge on the reserve, or the cut-off first, from where segment
-    ``k`` begins (``start``, ``(state, B)``).
+    ``k`` begins (``start``, ``(state, B)``), per row the ``reserve`` [-] and the packs'
+    ``cutoff`` [V].
 
     Vectorised over the rows, never a loop of them: each step evaluates the rows not yet
     converged at once (the mission from segment ``k`` on, mapped). Newton with the state
@@ -247,7 +254,7 @@ def longest_rows(model: MissionModel, k: int, start: Array, durations: Array, th
             g = np.where(valid, frac[j, cols] - reserve[rows], -1.0)
             slope = np.where(valid, -aux[6 + j, cols] / SECONDS_PER_HOUR / model.capacity_ah,
                              np.nan)
-            volt = np.where(valid, least[0] - model.cutoff_v, -1.0)
+            volt = np.where(valid, least[0] - cutoff[rows], -1.0)
         return g, slope, volt
 
     every = np.flatnonzero(np.all(np.isfinite(start), axis=0))
@@ -323,10 +330,11 @@ def _root(f: Any, rows: Array, at_zero: Array, guess: Array, tolerance: float,
 
 
 def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, aux: Array,
-           propulsion: Any, field_m: Array, dt_k: Array) -> NDArray[np.bool_]:
+           propulsion: Any, field_m: Array, dt_k: Array, cutoff: Array) -> NDArray[np.bool_]:
     """Per row: the whole flight is attainable by :meth:`MissionModel._result`'s rules (the
     cut-off, full throttle, the pack's burst and continuous ratings, the fans' jet velocity,
-    climbs that climb and descents that descend). ``states``/``aux`` ``(k, B, nodes)``."""
+    climbs that climb and descents that descend). ``states``/``aux`` ``(k, B, nodes)``; per
+    row the field [m], temperature offset [K] and the packs' cut-off [V]."""
     from tuflexperf.models.atmosphere import isa_density_kg_m3
     from tuflexperf.models.battery import first_window_beyond
     from tuflexperf.models.powertrain import beyond_jet_velocity
@@ -361,7 +369,7 @@ def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, au
                 continue
             live = [i for i in range(n) if i != plan.dead]
             sl = slice(a, b)
-            ok &= np.all(np.min(voltage[live, :, sl], axis=0) >= model.cutoff_v - 1e-9, axis=1)
+            ok &= np.all(np.min(voltage[live, :, sl], axis=0) >= cutoff[:, None] - 1e-9, axis=1)
             ok &= np.all(reached[:, sl] >= 0.5, axis=1)
             if rating is not None and live:
                 peak = np.max(current[live, :, sl], axis=0) / per_pack
