@@ -165,3 +165,13 @@ def test_solve_for_per_row_ends_at_the_cut_off_where_the_packs_cut_off_first(tmp
                                                                    rel=1e-9)
         assert out["mission_landing_charge"][0][row] == pytest.approx(
             flown.landing_charge_fraction, rel=1e-9)
+
+
+def test_what_the_batch_does_not_fly_is_named(tmp_path) -> None:
+    from tuflexperf.analysis.mission_samples import why_not_sampled
+
+    model = mission_for(load_case(_case(tmp_path, SHIPPED_MISSION)), [])
+    assert why_not_sampled(model, ["requirements.takeoff.max_ground_roll_m",
+                                   "requirements.envelope.min_airspeed_m_s",
+                                   "aircraft.cl_max", "battery.mission.pattern_altitude_m"]) is None
+    assert "battery.capacity_ah" in why_not_sampled(model, ["battery.capacity_ah"])
