@@ -33,8 +33,9 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
 CAMPAIGN = ROOT / "data" / "tuflex" / "campaign" / "campaign.yaml"
-BENCHES = ("bench_core", "bench_endurance", "bench_export", "bench_fit", "bench_mission",
-           "bench_performance", "bench_report", "bench_uncertainty")
+BENCHES = ("bench_core", "bench_endurance", "bench_export", "bench_fit", "bench_flightlog",
+           "bench_mission", "bench_mission_samples", "bench_performance", "bench_report",
+           "bench_uncertainty")
 
 # the paper's published values (Testing and modelling of a ducted fan motor for UAV
 # applications, section 4 and Table 1)

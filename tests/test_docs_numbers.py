@@ -64,3 +64,12 @@ def test_replace_rewrites_one_block_only() -> None:
     assert SCRIPT.blocks(out) == {"x": "new\nlines", "y": "keep"}
     with pytest.raises(KeyError):
         SCRIPT.replace(text, "z", "anything")
+
+
+def test_every_bench_script_has_its_block_in_speed_md() -> None:
+    scripts = {p.stem for p in (ROOT / "bench").glob("bench_*.py")}
+    assert scripts == set(SCRIPT.BENCHES), "scripts/docs_numbers.py's BENCHES lacks or names " \
+        f"a bench: {sorted(scripts ^ set(SCRIPT.BENCHES))}"
+    speed = SCRIPT.blocks((ROOT / "docs" / "speed.md").read_text(encoding="utf-8"))
+    missing = [name for name in scripts if f"bench:{name}" not in speed]
+    assert not missing, f"docs/speed.md has no block for {missing}"
