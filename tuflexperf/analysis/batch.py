@@ -215,7 +215,7 @@ class BatchResult:
 
     def met(self, name: str) -> NDArray[np.bool_]:
         """Met per sample, by the verdict rule of :mod:`tuflexperf.analysis.requirements`."""
-        from tuflexperf.analysis.requirements import requirement_met
+        from tuflexperf.analysis.verdict import requirement_met
 
         return requirement_met(self.values[name], self.limits[name], self.kinds[name])
 
@@ -952,7 +952,7 @@ class _Model:
         and, on sagging packs, the climb reaching the obstacle before their cut-off
         (:attr:`packs_beyond`)."""
         from tuflexperf.analysis.batch_endurance import _power_w
-        from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
+        from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
         from tuflexperf.analysis.takeoff import HISTORY_POINTS
 
         prop = self.propulsion

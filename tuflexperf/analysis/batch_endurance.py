@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis import endurance as single
-from tuflexperf.analysis.mission import STEPS
+from tuflexperf.analysis.constants import STEPS
 from tuflexperf.models._math import interp_rows
 from tuflexperf.models.aircraft import climb_sine, level_flight_drag_n
 from tuflexperf.models.battery import (
@@ -534,7 +534,7 @@ def _within_rating(model: Any, launch: _Launch, power_w: Array, start: Array,
     at constant power, its current rising as the pack sags (its heaviest 30 s are its last),
     the current over such a stretch the one at the charge halfway through it (midpoint rule).
     """
-    from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S
+    from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S
 
     battery = model.battery
     if battery.max_discharge_c is None:

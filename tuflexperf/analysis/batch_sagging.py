@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis.batch_endurance import _best_climb, _power_w, illinois
-from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S, STEPS
+from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S, STEPS
 from tuflexperf.analysis.pack_limits import PackRows, operating_point
 from tuflexperf.analysis.takeoff import ROTATION_STEPS
 from tuflexperf.models._math import interp_rows

@@ -361,7 +361,7 @@ def takeoff_beyond_battery(case: Case, side: PackSide, speeds: np.ndarray,
     References
     ----------
     SPEC 3 (thrust and pack voltage); SPEC 5 (not attainable, with the reason)."""
-    from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
+    from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
 
     rating = side.rating_a
     burst = None if rating is None else BURST_OVER_CONTINUOUS * rating

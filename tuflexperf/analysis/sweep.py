@@ -121,7 +121,7 @@ class SweepResult:
 
 def evaluate_rows(case: Case, keys: tuple[str, ...], points: Array) -> dict[str, Array]:
     """One chunk of grid points as one batch (module level: picklable for processes/Dask)."""
-    from tuflexperf.analysis.requirements import requirement_met
+    from tuflexperf.analysis.verdict import requirement_met
     from tuflexperf.analysis.uncertainty import evaluator_for
 
     result = evaluator_for(case).evaluate({k: points[:, j] for j, k in enumerate(keys)},
