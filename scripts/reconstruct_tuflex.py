@@ -172,7 +172,7 @@ def drag_n(k: dict[str, Any], v: Any) -> Any:
 
 def battery_parameters() -> tuple[Any, Any]:
     """The shipped battery file's fitted discharge model and the battery itself."""
-    from tuflexperf.analysis.endurance import characterise_battery
+    from tuflexperf.analysis.battery_fit import characterise_battery
     from tuflexperf.io.battery import load_battery
     from tuflexperf.io.case import load_case
 

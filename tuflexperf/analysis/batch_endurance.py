@@ -144,8 +144,8 @@ def _best_climb(m: Any, v_lo: Array, stall: Array) -> tuple[Array, Array]:
     The rate ``(T - D) V / W`` is unimodal in airspeed: a golden-section search over the
     grid index, then the grid points beside it, pick the same grid point as the full scan.
     """
-    n = single._SPEED_GRID_POINTS
-    top = single._MAX_SPEED_OVER_STALL * stall
+    n = single.SPEED_GRID_POINTS
+    top = single.MAX_SPEED_OVER_STALL * stall
     ceiling = np.asarray(jet_velocity_ceiling_m_s(m.propulsion, m.density),
                          dtype=float).reshape(-1, 1) * np.ones((m.size, 1))
     weight = np.asarray(m.aircraft.weight_n, dtype=float).reshape(-1, 1)
@@ -321,7 +321,7 @@ def _most_excess(m: Any, throttle: Array, least: Array, stall: Array) -> tuple[A
     low = least
     # 8 x the stall, not 8 x the margin's speed: a margin of 2.4 searched to 19 x stall, into
     # an extrapolated rise of thrust the single case never reaches (outside audit)
-    high = single._MAX_SPEED_OVER_STALL * stall
+    high = single.MAX_SPEED_OVER_STALL * stall
     # short of the fans' jet velocity, as the single case: beyond it a fan makes no thrust,
     # whatever the extrapolated polynomial gives
     ceiling = np.asarray(jet_velocity_ceiling_m_s(m.propulsion, m.density),

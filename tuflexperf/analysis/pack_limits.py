@@ -83,7 +83,7 @@ def pack_side(case: Case) -> PackSide | None:
     """The case's packs and power model, or None when the case names no battery file."""
     if case.battery_path is None:
         return None
-    from tuflexperf.analysis.endurance import cached_case_battery, characterise_battery
+    from tuflexperf.analysis.battery_fit import cached_case_battery, characterise_battery
     from tuflexperf.models.powertrain import power_surfaces
 
     battery = cached_case_battery(case)

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tuflexperf.analysis.study import mission_path
+from tuflexperf.analysis.study import mission_path as mission_path  # the commands ask here
 from tuflexperf.analysis.verdict import (
     Verdict,
     mission_verdicts,

@@ -121,8 +121,8 @@ class SweepResult:
 
 def evaluate_rows(case: Case, keys: tuple[str, ...], points: Array) -> dict[str, Array]:
     """One chunk of grid points as one batch (module level: picklable for processes/Dask)."""
-    from tuflexperf.analysis.verdict import requirement_met
     from tuflexperf.analysis.uncertainty import evaluator_for
+    from tuflexperf.analysis.verdict import requirement_met
 
     result = evaluator_for(case).evaluate({k: points[:, j] for j, k in enumerate(keys)},
                                           size=points.shape[0])
