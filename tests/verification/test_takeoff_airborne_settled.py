@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import copy_shipped_case
-from tuflexperf.analysis import takeoff
+from tuflexperf.analysis import airborne as takeoff
 from tuflexperf.analysis.batch import BatchEvaluator
 from tuflexperf.analysis.takeoff import solve_takeoff
 from tuflexperf.cli import load_case_with

@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from tuflexperf.analysis.airborne import obstacle_height_of
 from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.analysis.level_flight import airspeed_grid, airspeed_grids
 from tuflexperf.analysis.pack_limits import (
@@ -56,7 +57,6 @@ from tuflexperf.analysis.pack_limits import (
     sagging_packs,
     within_limits,
 )
-from tuflexperf.analysis.takeoff import obstacle_height_of
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     EAS_REFERENCE_DENSITY_KG_M3,
@@ -104,8 +104,8 @@ def _unit_rule(panels: int) -> tuple[Array, Array]:
 
 _ROLL_PROBES = np.array([0.25, 0.5, 0.75, 0.9])  # three fix a piece's quadratic, one checks it
 _UNIT = {t: {u: float(u == t) for u in POLY22_TERMS} for t in POLY22_TERMS}  # basis picks
-_HISTORY_POINTS = 101  # as analysis.takeoff.HISTORY_POINTS: the time history
-_CHECK_POINTS = 2001  # as analysis.takeoff._CHECK_POINTS: where the net force must be > 0
+_HISTORY_POINTS = 101  # as analysis.ground_roll.HISTORY_POINTS: the time history
+_CHECK_POINTS = 2001  # as analysis.ground_roll._CHECK_POINTS: where the net force must be > 0
 _STEEP_FORCE_SHARE = 0.05  # a least net force below this share of the greatest: a peak
 _FINE_PANELS = 256
 _PEAK_PANELS = 16  # Gauss panels on each monotone half of a piece, in the stretched variable
@@ -631,7 +631,7 @@ class _Model:
     # the take-off on sagging packs (batch_takeoff_packs.RollOnPacks), where one is flown
     packs_roll: Any = None
     # a catapult's level acceleration from release to the transition speed (distance [m],
-    # time [s], charge per fan [Ah] or None, accelerates): takeoff.release_acceleration
+    # time [s], charge per fan [Ah] or None, accelerates): ground_roll.release_acceleration
     release: Any = None
     # the arc and climb to the obstacle on sagging packs [m] (batch_takeoff_packs)
     packs_airborne: Array | None = None
@@ -899,9 +899,9 @@ class _Model:
     def release_run(self, thrust_and_current: Any = None
                     ) -> tuple[Array, Array, Array | None, Array]:
         """A catapult's acceleration after the release per row
-        (:func:`tuflexperf.analysis.takeoff.release_acceleration`): at the model's thrust, or
+        (:func:`tuflexperf.analysis.ground_roll.release_acceleration`): at the model's thrust, or
         at ``thrust_and_current(V)`` (thrust [N], current per fan [A]; on sagging packs)."""
-        from tuflexperf.analysis.takeoff import release_acceleration
+        from tuflexperf.analysis.ground_roll import release_acceleration
 
         release = np.asarray(true_airspeed_m_s(self.aircraft.launch_speed_m_s, self.density),
                              dtype=float).reshape(-1) * np.ones(self.size)
@@ -953,7 +953,7 @@ class _Model:
         (:attr:`packs_beyond`)."""
         from tuflexperf.analysis.batch_endurance import _power_w
         from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
-        from tuflexperf.analysis.takeoff import HISTORY_POINTS
+        from tuflexperf.analysis.ground_roll import HISTORY_POINTS
 
         prop = self.propulsion
         v_tr = self.transition_speed()[:, None]

@@ -34,10 +34,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from tuflexperf.analysis.airborne import ROTATION_STEPS
 from tuflexperf.analysis.batch_endurance import _best_climb, _power_w, illinois
 from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S, STEPS
 from tuflexperf.analysis.pack_limits import PackRows, operating_point
-from tuflexperf.analysis.takeoff import ROTATION_STEPS
 from tuflexperf.models._math import interp_rows
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import SECONDS_PER_HOUR, first_window_beyond

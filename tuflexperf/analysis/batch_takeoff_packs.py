@@ -14,8 +14,8 @@ interval by cubic Hermite interpolation (``dV/dtau = F_ref / m`` at both ends). 
 packs pass through the same airspeeds as the reference roll, only later, so no event is
 needed, and where the net force all but vanishes the reference's long intervals carry it
 (the ratio stays smooth). The rotation and the airborne part follow the single case
-(:data:`~tuflexperf.analysis.takeoff.ROTATION_STEPS` RK4 steps, then
-:func:`~tuflexperf.analysis.takeoff.settle_airborne`).
+(:data:`~tuflexperf.analysis.airborne.ROTATION_STEPS` RK4 steps, then
+:func:`~tuflexperf.analysis.airborne.settle_airborne`).
 
 References
 ----------
@@ -32,13 +32,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from tuflexperf.analysis.airborne import BEYOND_THE_BATTERY_STATUS, rotation_charge, settle_airborne
 from tuflexperf.analysis.batch_sagging import SaggingFlight
 from tuflexperf.analysis.pack_limits import PackRows
-from tuflexperf.analysis.takeoff import (
-    BEYOND_THE_BATTERY_STATUS,
-    rotation_charge,
-    settle_airborne,
-)
 from tuflexperf.models.aircraft import (
     climb_gradient,
     ground_roll_net_force_n,

@@ -58,13 +58,13 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.airborne import ROTATION_STEPS
 from tuflexperf.analysis.constants import (
     BURST_OVER_CONTINUOUS,
     RATING_SEGMENT_S,
     SECONDS_PER_HOUR,
     STEPS,
 )
-from tuflexperf.analysis.takeoff import ROTATION_STEPS
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
 from tuflexperf.io.mission import MissionFile, SegmentSchema
@@ -307,7 +307,7 @@ class MissionModel:
                 if s.type == "takeoff":
                     if i != 0:
                         raise InputError(f"{where}[{i}]: takeoff must be the first segment")
-                    from tuflexperf.analysis.takeoff import obstacle_height_of
+                    from tuflexperf.analysis.airborne import obstacle_height_of
 
                     if self.case.aircraft.launch == "catapult":  # airborne at release, 0 m
                         from tuflexperf.analysis.takeoff import solve_takeoff

@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.airborne import ROTATION_STEPS, obstacle_height_of
 from tuflexperf.analysis.batch import present_requirements
 from tuflexperf.analysis.pack_limits import sagging_packs
-from tuflexperf.analysis.takeoff import ROTATION_STEPS, obstacle_height_of
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     climb_gradient,

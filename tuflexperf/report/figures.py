@@ -676,7 +676,7 @@ def _verdict_passed(analyses: Analyses, name: str) -> bool:
 
 
 def _takeoff_not_attainable(case: Case, analyses: Analyses) -> Any:
-    from tuflexperf.analysis.takeoff import net_force_n
+    from tuflexperf.analysis.ground_roll import net_force_n
     from tuflexperf.models.aircraft import liftoff_speed_m_s
 
     fig = new_figure()
