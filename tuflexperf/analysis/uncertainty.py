@@ -36,7 +36,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tuflexperf.analysis.batch import BatchEvaluator, BatchResult, nominal_engines
+from tuflexperf.analysis.batch import BatchEvaluator, BatchResult
+from tuflexperf.analysis.batch_kernels import nominal_engines
 from tuflexperf.analysis.cache import file_key, fingerprint
 from tuflexperf.analysis.probability import normal_logcdf, normal_ppf_of_log
 from tuflexperf.errors import InputError
