@@ -125,7 +125,7 @@ class BatchResult:
     extrapolated: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
 
     def met(self, name: str) -> NDArray[np.bool_]:
-        """Met per sample, by the verdict rule of :mod:`tuflexperf.analysis.requirements`."""
+        """Met per sample, by the verdict rule of :mod:`tuflexperf.analysis.verdict`."""
         from tuflexperf.analysis.verdict import requirement_met
 
         return requirement_met(self.values[name], self.limits[name], self.kinds[name])

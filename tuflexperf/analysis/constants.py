@@ -6,7 +6,8 @@ the batch evaluators read the same numbers without importing one another.
 
 from __future__ import annotations
 
+from tuflexperf.models.battery import SECONDS_PER_HOUR as SECONDS_PER_HOUR  # one definition
+
 RATING_SEGMENT_S = 30.0  # any stretch of the flight this long keeps its mean current within it
 BURST_OVER_CONTINUOUS = 2.0  # a LiPo's burst rating, the usual twice the continuous one
 STEPS = 64  # RK4 steps per segment: the states are smooth, 64 steps give ~1e-9 relative
-SECONDS_PER_HOUR = 3600.0
