@@ -250,7 +250,7 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
         return measured
 
     from tuflexperf.io.campaign import load_campaign
-    from tuflexperf.reduction.pipeline import fit_campaign
+    from tuflexperf.reduction.campaign_fit import fit_campaign
 
     campaign = load_campaign(source)
     measured.kind = "campaign"
