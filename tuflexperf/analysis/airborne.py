@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.analysis.cache import fingerprint
-from tuflexperf.analysis.ground_roll import HISTORY_POINTS, _cache
+from tuflexperf.analysis.ground_roll import HISTORY_POINTS, TAKEOFF_CACHE
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     DEFAULT_OBSTACLE_HEIGHT_M,
@@ -51,7 +51,7 @@ def rotation_charge(rate: Any, charge_ah: Any, seconds: Any) -> Any:
     return q
 
 
-class _Packs:
+class TakeoffPacks:
     """The take-off on sagging packs (a battery and the propulsion's ``reference_voltage_v``).
 
     Each fan makes ``T (U/U_ref)^k`` at its packs' loaded voltage ``U``, which falls as the
@@ -451,10 +451,10 @@ def settle_airborne(radius_m: Any, speed_m_s: Any, height_m: Any, charge_ah: Any
         straight = np.where(climbed, g_high, np.where(reached, g_arc, np.nan))
     return AirborneOnPacks(g_arc, straight, q_arc, q_mid, q_end, climb_s, status, apex)
 
-_ON_PACKS = " at the packs' loaded voltage"
+ON_PACKS = " at the packs' loaded voltage"
 
 
-def _on_packs_force(case: Case, packs: _Packs, charge_ah: np.ndarray,
+def on_packs_force(case: Case, packs: TakeoffPacks, charge_ah: np.ndarray,
                     speeds: np.ndarray) -> np.ndarray:
     """Full-throttle net force on the runway [N] at ``speeds`` on the sagging packs."""
     thrust = packs.point(charge_ah, speeds)[0]
@@ -462,7 +462,7 @@ def _on_packs_force(case: Case, packs: _Packs, charge_ah: np.ndarray,
                                               case.density_kg_m3), dtype=float)
 
 
-def _packs_note(case: Case, start_v: np.ndarray, liftoff_v: np.ndarray | None,
+def packs_note(case: Case, start_v: np.ndarray, liftoff_v: np.ndarray | None,
                 air: _Airborne) -> str:
     """What the take-off flew on: the packs' least loaded voltage [V] at the brake release
     (a catapult's release), at lift-off and at the obstacle."""
@@ -476,7 +476,7 @@ def _packs_note(case: Case, start_v: np.ndarray, liftoff_v: np.ndarray | None,
                else ""))
 
 
-def _packs_of(case: Case) -> _Packs | None:
+def packs_of(case: Case) -> TakeoffPacks | None:
     """The sagging packs the take-off flies on, or None (no battery, or no reference
     voltage: the thrust model's own thrust)."""
     from tuflexperf.analysis.pack_limits import pack_side, sagging_packs
@@ -486,11 +486,11 @@ def _packs_of(case: Case) -> _Packs | None:
     side = pack_side(case)
     if side is None:
         return None
-    return _cache.get(
+    return TAKEOFF_CACHE.get(
         fingerprint("packs", case.aircraft, case.propulsion, case.density_kg_m3,
                     side.battery, side.params, side.power, side.own_surfaces,
                     side.density_scale),
-        lambda: _Packs(case, side),
+        lambda: TakeoffPacks(case, side),
     )
 
 
@@ -545,7 +545,7 @@ class _Airborne:
         }
 
 
-def _airborne(case: Case, height: float, packs: _Packs | None = None,
+def fly_airborne(case: Case, height: float, packs: TakeoffPacks | None = None,
               charge_ah: np.ndarray | None = None) -> _Airborne:
     """Transition arc at 1.15 V_stall and n, then the full-throttle climb (Anderson 6.7.2);
     on sagging ``packs`` from ``charge_ah`` drawn per engine at the arc's start, each at the

@@ -48,7 +48,7 @@ _ROLL_PROBES = np.array([0.25, 0.5, 0.75, 0.9])  # three fix a piece's quadratic
 
 _HISTORY_POINTS = 101  # as analysis.ground_roll.HISTORY_POINTS: the time history
 
-_CHECK_POINTS = 2001  # as analysis.ground_roll._CHECK_POINTS: where the net force must be > 0
+_CHECK_POINTS = 2001  # as analysis.ground_roll.CHECK_POINTS: where the net force must be > 0
 
 _STEEP_FORCE_SHARE = 0.05  # a least net force below this share of the greatest: a peak
 

@@ -26,9 +26,9 @@ from tuflexperf.models.thrust import (
 
 HISTORY_POINTS = 101
 
-_CHECK_POINTS = 2001
+CHECK_POINTS = 2001
 
-_cache: BoundedCache[Any] = BoundedCache()
+TAKEOFF_CACHE: BoundedCache[Any] = BoundedCache()
 
 
 def net_force_n(
@@ -71,8 +71,8 @@ def build_ground_roll_integrator(
     return ca.Function("ground_roll_history", [v_lo_in], [states])
 
 
-def _integrator_for(case: Case) -> Any:
-    return _cache.get(
+def integrator_for(case: Case) -> Any:
+    return TAKEOFF_CACHE.get(
         fingerprint(case.aircraft, case.propulsion, case.density_kg_m3),
         lambda: build_ground_roll_integrator(case.aircraft, case.propulsion, case.density_kg_m3),
     )

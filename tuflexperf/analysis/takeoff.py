@@ -20,19 +20,19 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.analysis.airborne import (
-    _ON_PACKS,
-    _airborne,
-    _on_packs_force,
-    _Packs,
-    _packs_note,
-    _packs_of,
+    ON_PACKS,
+    TakeoffPacks,
+    fly_airborne,
     obstacle_height_of,
+    on_packs_force,
+    packs_note,
+    packs_of,
 )
 from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.analysis.ground_roll import (
-    _CHECK_POINTS,
+    CHECK_POINTS,
     HISTORY_POINTS,
-    _integrator_for,
+    integrator_for,
     net_force_n,
     release_acceleration,
 )
@@ -146,7 +146,7 @@ class TakeoffResult:
         }
 
 
-def _release_forces(case: Case, packs: _Packs | None) -> Any:
+def _release_forces(case: Case, packs: TakeoffPacks | None) -> Any:
     """``forces`` of :func:`release_acceleration` for the case (on full packs where they
     sag)."""
     aircraft, rho = case.aircraft, case.density_kg_m3
@@ -195,7 +195,7 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
         warnings.append(f"launch_energy_j not given: the catapult's energy is not checked "
                         f"(the release needs m V^2 / 2 = {kinetic:.0f} J)")
     v_tr = float(transition_speed_m_s(aircraft, rho))
-    packs = _packs_of(case)
+    packs = packs_of(case)
     if packs is not None:  # full packs give full throttle at all (else no voltage to fly on)
         _refuse_beyond_battery(case, np.array([release, v_tr]), 0.0, known)
     accelerate, seconds, charge, accelerates = release_acceleration(
@@ -205,7 +205,7 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
             f"after the release at {release:.1f} m/s full throttle does not accelerate to the "
             f"transition speed {v_tr:.1f} m/s ({TRANSITION_SPEED_OVER_STALL:g} x stall): "
             "thrust below the level-flight drag on the way", known)
-    air = _airborne(case, height, packs, None if charge is None else charge[:, 0])
+    air = fly_airborne(case, height, packs, None if charge is None else charge[:, 0])
     _refuse_beyond_battery(case, np.array([release, air.speed_m_s]),
                            float(seconds[0]) + (air.distance_m or 0.0) / air.speed_m_s, known)
     if air.beyond_battery:  # the packs give out in the climb, before the obstacle
@@ -219,7 +219,7 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
                                            max(release, air.speed_m_s))
     warnings.extend(beyond)
     if packs is not None:
-        warnings.append(_packs_note(case, packs.point(np.zeros(packs.n), np.array([release]))[2],
+        warnings.append(packs_note(case, packs.point(np.zeros(packs.n), np.array([release]))[2],
                                     None, air))
     else:
         note = reference_voltage_note(case.propulsion, "the take-off")
@@ -306,16 +306,16 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
             f"{liftoff_speed_eas_m_s(aircraft):.2f} m/s EAS is below the stall speed "
             f"{stall_speed_eas_m_s(aircraft):.2f} m/s EAS"
         )
-    speeds = np.linspace(0.0, v_lo, _CHECK_POINTS)
+    speeds = np.linspace(0.0, v_lo, CHECK_POINTS)
     known = {"liftoff_speed_m_s": v_lo, "stall_speed_m_s": stall}
-    packs = _packs_of(case)
+    packs = packs_of(case)
     if packs is None:
         force = np.asarray(net_force_n(aircraft, propulsion, speeds, rho), dtype=float)
     else:
         # full packs give full throttle over the roll at all (else no voltage to fly on)
-        _refuse_beyond_battery(case, speeds[::(_CHECK_POINTS - 1) // (HISTORY_POINTS - 1)],
+        _refuse_beyond_battery(case, speeds[::(CHECK_POINTS - 1) // (HISTORY_POINTS - 1)],
                                0.0, known)
-        force = _on_packs_force(case, packs, np.zeros((packs.n, 1)), speeds)
+        force = on_packs_force(case, packs, np.zeros((packs.n, 1)), speeds)
     if force[0] <= 0.0:
         raise NotAttainable(
             f"never starts rolling: static thrust does not overcome rolling friction "
@@ -345,14 +345,14 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         # CasADi prints the failed call's inputs (8 lines per try) through Python's stderr:
         # the reason below says what failed, in one line
         with contextlib.redirect_stderr(io.StringIO()):
-            states = np.asarray(_integrator_for(case)(v_lo) if packs is None
+            states = np.asarray(integrator_for(case)(v_lo) if packs is None
                                 else packs.roll(v_lo))
     except RuntimeError:  # CVODES failed: the net force nearly vanishes between check points
         states = np.full((rows, HISTORY_POINTS - 1), np.nan)
     if not np.all(np.isfinite(states)):
         raise NotAttainable(
             f"never reaches lift-off: the net force all but vanishes below the lift-off speed "
-            f"{v_lo:.2f} m/s (least {force.min():.3g} N{_ON_PACKS if packs else ''})", known
+            f"{v_lo:.2f} m/s (least {force.min():.3g} N{ON_PACKS if packs else ''})", known
         )
     distance = np.concatenate([[0.0], states[0, :]])
     time = np.concatenate([[0.0], states[1, :]])
@@ -367,19 +367,19 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         # the force where the packs have sagged (between the history's nodes, its charge
         # interpolated): a roll that stalls as they sag never lifts off
         along = np.stack([np.interp(speeds, history_speed, q) for q in charge])
-        sagged = _on_packs_force(case, packs, along, speeds)
+        sagged = on_packs_force(case, packs, along, speeds)
         if np.any(sagged <= 0.0):
             stuck = float(speeds[int(np.argmax(sagged <= 0.0))])
             raise NotAttainable(
                 f"never reaches lift-off: the net force vanishes at {stuck:.2f} m/s as the "
-                f"packs sag{_ON_PACKS}, below the lift-off speed {v_lo:.2f} m/s", known)
+                f"packs sag{ON_PACKS}, below the lift-off speed {v_lo:.2f} m/s", known)
     history_drag, history_friction = (
         np.broadcast_to(np.asarray(f, dtype=float), history_speed.shape).copy()
         for f in ground_roll_resistance_n(aircraft, history_speed, rho)
     )
     rotation_m = v_lo * to.rotation_time_s  # Raymer 17.8.2: rotation at the lift-off speed
 
-    air = _airborne(case, height, packs, None if packs is None else packs.rotation(
+    air = fly_airborne(case, height, packs, None if packs is None else packs.rotation(
         charge[:, -1], v_lo, to.rotation_time_s))
     airborne_s = (air.distance_m or 0.0) / air.speed_m_s
     _refuse_beyond_battery(case, np.append(history_speed, air.speed_m_s),
@@ -395,7 +395,7 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         if voltage_note:
             warnings.append(voltage_note)
     else:
-        warnings.append(_packs_note(case, history_volts[:, 0], history_volts[:, -1], air))
+        warnings.append(packs_note(case, history_volts[:, 0], history_volts[:, -1], air))
     density_note = unlapsed_density_warning(propulsion, rho)
     if density_note:
         warnings.append(density_note)

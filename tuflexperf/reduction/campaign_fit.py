@@ -26,21 +26,21 @@ from tuflexperf.io.runs import (
 )
 from tuflexperf.reduction.delay import DelayEstimate, estimate_delay
 from tuflexperf.reduction.drag import DragModel, fit_structure_drag
-from tuflexperf.reduction.electrical_fit import ElectricalFits, _electrical, _electrical_fits
+from tuflexperf.reduction.electrical_fit import ElectricalFits, electrical_fits, electrical_means
 from tuflexperf.reduction.filters import movmedian
 from tuflexperf.reduction.fit_checks import (
     DEAD_LOAD_CELL_N,
     MIN_DRAG_SWEEP_AIRSPEED_M_S,
     MIN_DRAG_SWEEP_SPAN_M_S,
     MIN_SWEEP_THROTTLE_SWING,
-    _check_set_points,
-    _deaf_runs,
-    _speeds_by_engine,
+    check_set_points,
+    deaf_runs,
     poor_fit_notes,
     refuse_force_scale_outliers,
     refuse_unphysical_fit,
+    speeds_by_engine,
 )
-from tuflexperf.reduction.fit_output import FitResult, _propulsion_text, _summary, _table_row
+from tuflexperf.reduction.fit_output import FitResult, fit_summary, render_propulsion, table_row
 from tuflexperf.reduction.glauert import glauert_ratio
 from tuflexperf.reduction.poly22fit import Poly22Fit, fit_poly22
 from tuflexperf.reduction.segments import (
@@ -53,13 +53,13 @@ from tuflexperf.reduction.step_runs import (
     Progress,
     StepRunResult,
     SweepRunResult,
-    _finite_or_none,
-    _mean_or_none,
-    _rounded,
-    _run_header,
-    _windows,
     clean_run,
+    filter_windows,
+    finite_or_none,
+    mean_or_none,
     reduce_step_run,
+    rounded,
+    run_header,
 )
 
 # A sine sweep whose delay-and-lag model explains less of the force than this measured no
@@ -128,14 +128,14 @@ def _drag_sweep(campaign: Campaign, run: CampaignRun) -> _DragSweep:
     top = float(np.max(data["airspeed_m_s"]))
     if top < MIN_DRAG_SWEEP_AIRSPEED_M_S:
         return _DragSweep(
-            data, {**_run_header(run, data), "wind": "none"},
+            data, {**run_header(run, data), "wind": "none"},
             f"{run.file}: drag sweep without wind (airspeed at most {top:.2f} m/s): no "
             "structure drag measured, none added",
         )
     span = top - float(np.min(data["airspeed_m_s"]))
     if span < MIN_DRAG_SWEEP_SPAN_M_S:  # one airspeed: a curve in V^2 is not determined
         return _DragSweep(
-            data, {**_run_header(run, data), "wind": "one airspeed"},
+            data, {**run_header(run, data), "wind": "one airspeed"},
             f"{run.file}: drag sweep over {span:.2f} m/s of airspeed only (needs "
             f">= {MIN_DRAG_SWEEP_SPAN_M_S:g}): no drag curve from it, left out",
         )
@@ -143,14 +143,14 @@ def _drag_sweep(campaign: Campaign, run: CampaignRun) -> _DragSweep:
         # the same force at every airspeed: "D = 0 (R^2 nan)" was added to every point
         # unremarked (outside audit)
         return _DragSweep(
-            data, {**_run_header(run, data), "force": "constant"},
+            data, {**run_header(run, data), "force": "constant"},
             f"{run.file}: drag sweep whose force is {float(data['force_n'][0]):.4g} N "
             "throughout (a dead load cell?): no structure drag measured, none added",
         )
     force, replaced = clean_run(campaign, data)
-    _, _, k_med = _windows(campaign, data.sample_rate_hz)
+    _, _, k_med = filter_windows(campaign, data.sample_rate_hz)
     return _DragSweep(
-        data, {**_run_header(run, data), "outliers_replaced": replaced},
+        data, {**run_header(run, data), "outliers_replaced": replaced},
         curve=(movmedian(data["airspeed_m_s"], k_med), force),
     )
 
@@ -191,14 +191,14 @@ def _fit_campaign(
                 f"{run.file}: sine sweep without excitation (throttle swings {swing:.3f}, "
                 f"needs >= {MIN_SWEEP_THROTTLE_SWING}): left out of the delay"
             )
-            run_reports.append({**_run_header(run, data), "excitation": "none"})
+            run_reports.append({**run_header(run, data), "excitation": "none"})
             continue
         if not estimate.r2 >= MIN_SWEEP_R2:  # noise fits some delay too: it measures nothing
             degenerate.append(
                 f"{run.file}: the force does not follow the sine sweep (fit R^2 "
                 f"{estimate.r2:.2f} < {MIN_SWEEP_R2:g}): left out of the delay"
             )
-            run_reports.append({**_run_header(run, data), "response": "none",
+            run_reports.append({**run_header(run, data), "response": "none",
                                 "fit_r2": estimate.r2})
             continue
         sweep_results.append(SweepRunResult(run, data, estimate))
@@ -214,13 +214,13 @@ def _fit_campaign(
         )
         run_reports.append(
             {
-                **_run_header(run, data),
+                **run_header(run, data),
                 "delay_s": estimate.delay_s,
                 "spool_lag_s": estimate.lag_s,
                 "fit_r2": estimate.r2,
             }
         )
-    measured_delay = _mean_or_none([d["delay_s"] for d in delay_runs])
+    measured_delay = mean_or_none([d["delay_s"] for d in delay_runs])
     per_engine: dict[str, float] = {}
     for engine in sorted({str(d["engine"]) for d in delay_runs}):
         # one engine's sweeps measure one ESC: two engines may well differ
@@ -243,13 +243,13 @@ def _fit_campaign(
             f"{measured_delay:.3f} s, which fits neither; is a run's time base off?"
         )
     # the spool lag after the dead time (issue 15): the sweeps' mean, written as lag_s
-    measured_lag = _mean_or_none([d["lag_s"] for d in delay_runs])
+    measured_lag = mean_or_none([d["lag_s"] for d in delay_runs])
     delay = delay_s if delay_s is not None else measured_delay
     # where the steady part of a step starts: the engine's own sweeps if it has any
     onset_delay = {
         str(engine): delay_s
         if delay_s is not None
-        else _mean_or_none([d["delay_s"] for d in delay_runs if d["engine"] == engine])
+        else mean_or_none([d["delay_s"] for d in delay_runs if d["engine"] == engine])
         for engine in {r.engine for r in campaign.runs}
     }
 
@@ -270,7 +270,7 @@ def _fit_campaign(
         onset = onset_delay.get(str(run.engine)) or delay or 0.0
         result = reduce_step_run(campaign, run, read.result(), max(onset, 0.0))
         # the run's test points and their pack voltage and current, while on the worker
-        return result, [(cell, _electrical(result, cell.members))
+        return result, [(cell, electrical_means(result, cell.members))
                         for cell in merge_test_points(result.segments)]
 
     # queued behind every read: a worker waits at most on a read another one is doing
@@ -293,10 +293,10 @@ def _fit_campaign(
     if progress is not None:
         progress(total, total, "fit")
     refuse_force_scale_outliers(campaign, step_results)
-    deaf_notes, deaf = _deaf_runs(step_results)
+    deaf_notes, deaf = deaf_runs(step_results)
     degenerate.extend(deaf_notes)
     # the set points the fit is given: a run left out as deaf gives none
-    degenerate.extend(_check_set_points(
+    degenerate.extend(check_set_points(
         campaign, [r for r in step_results if r.run.file not in deaf]))
     stepped = {str(r.engine) for r in campaign.of_kind("throttle_steps")}
     if delay_s is None and measured_delay is not None:
@@ -336,16 +336,16 @@ def _fit_campaign(
                 Point(
                     engine=str(result.run.engine),
                     run=result.run.file,
-                    throttle=_rounded(cell.throttle),
-                    airspeed_measured_m_s=_rounded(cell.airspeed_m_s),
-                    force_n=_rounded(cell.force_n),
-                    drag_n=_rounded(d),
-                    force_std_n=_rounded(cell.force_std_n),
+                    throttle=rounded(cell.throttle),
+                    airspeed_measured_m_s=rounded(cell.airspeed_m_s),
+                    force_n=rounded(cell.force_n),
+                    drag_n=rounded(d),
+                    force_std_n=rounded(cell.force_std_n),
                     n_samples=cell.n_samples,
                     glauert_ratio=ratio,
-                    airspeed_m_s=_rounded(cell.airspeed_m_s if used_v is None else used_v),
-                    thrust_n=_rounded(thrust),
-                    thrust_at_voltage_n=_rounded(thrust),
+                    airspeed_m_s=rounded(cell.airspeed_m_s if used_v is None else used_v),
+                    thrust_n=rounded(thrust),
+                    thrust_at_voltage_n=rounded(thrust),
                     voltage_v=volts,
                     current_a=amps,
                     electrical_power_w=watts,
@@ -354,7 +354,7 @@ def _fit_campaign(
         point_ratios[index] = ratios
 
     engines = list(dict.fromkeys(str(r.run.engine) for r in step_results))
-    electrical = _electrical_fits(campaign, engines, points, pool)
+    electrical = electrical_fits(campaign, engines, points, pool)
     fits: dict[str, Poly22Fit] = {}
     for engine in engines:
         mine = [p for p in points if p.engine == engine]
@@ -395,7 +395,7 @@ def _fit_campaign(
         at_top = [abs(1 - p.glauert_ratio) for p in valid if p.airspeed_measured_m_s > top - 1.0]
         glauert_report["max_correction_at_top_airspeed_percent"] = 100 * max(at_top)
 
-    speeds = _speeds_by_engine((p.engine, p.airspeed_m_s) for p in points)
+    speeds = speeds_by_engine((p.engine, p.airspeed_m_s) for p in points)
     files = [
         {"file": r.file, "kind": r.kind, "engine": r.engine, "sha256": digest.result()}
         for r, digest in digests
@@ -411,8 +411,8 @@ def _fit_campaign(
         "glauert_applied": glauert,
         "delay_measured_s": measured_delay,
     }
-    table_rows = [_table_row(p) for p in points]
-    summary = _summary(
+    table_rows = [table_row(p) for p in points]
+    summary = fit_summary(
         kind="campaign",
         input_path=campaign.path,
         fits=fits,
@@ -449,8 +449,8 @@ def _fit_campaign(
             entry["power"] = {
                 "model": "poly22",
                 "coefficients": fit.coefficients,
-                "r2": _finite_or_none(fit.r2),
-                "rmse_w": _finite_or_none(fit.rmse_n),
+                "r2": finite_or_none(fit.r2),
+                "rmse_w": finite_or_none(fit.rmse_n),
                 "n_points": fit.n_points,
             }
         if name in electrical.windmilling:
@@ -463,7 +463,7 @@ def _fit_campaign(
     for report in run_reports:
         summary["warnings"].extend(f"{report['file']}: {w}" for w in report.get("warnings", []))
     summary["lag_s"] = measured_lag
-    propulsion = _propulsion_text(
+    propulsion = render_propulsion(
         name=campaign.name,
         fits=fits,
         speeds=speeds,

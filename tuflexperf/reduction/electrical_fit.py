@@ -25,13 +25,13 @@ from tuflexperf.reduction.power import (
     fit_voltage_exponent,
     fit_windmilling,
 )
-from tuflexperf.reduction.step_runs import Point, StepRunResult, _finite_or_none, _rounded
+from tuflexperf.reduction.step_runs import Point, StepRunResult, finite_or_none, rounded
 
 ELECTRICAL_COLUMNS = ("voltage_v", "current_a")
 
 
 # --- electrical: voltage effect, power surface, windmilling (module docstring, step 7) -------
-def _electrical(result: StepRunResult, members: tuple[int, ...]) -> tuple[float, float, float]:
+def electrical_means(result: StepRunResult, members: tuple[int, ...]) -> tuple[float, float, float]:
     """Sample-weighted mean pack voltage (V), current (A) and ``U I`` (W) of a test point.
 
     ``nan`` for all three when the run does not log both columns.
@@ -49,9 +49,9 @@ def _electrical(result: StepRunResult, members: tuple[int, ...]) -> tuple[float,
     if not np.any(ok):
         return math.nan, math.nan, math.nan
     return (
-        _rounded(float(np.mean(u[ok]))),
-        _rounded(float(np.mean(i[ok]))),
-        _rounded(float(np.mean(u[ok] * i[ok]))),
+        rounded(float(np.mean(u[ok]))),
+        rounded(float(np.mean(i[ok]))),
+        rounded(float(np.mean(u[ok] * i[ok]))),
     )
 
 
@@ -81,7 +81,7 @@ class ElectricalFits:
             "voltage_exponent": self.exponent,
             "voltage_fits": {name: f.to_dict() for name, f in self.voltage.items()},
             "power": {
-                name: {"r2": _finite_or_none(f.r2), "rmse_w": _finite_or_none(f.rmse_n),
+                name: {"r2": finite_or_none(f.r2), "rmse_w": finite_or_none(f.rmse_n),
                        "n_points": f.n_points}
                 for name, f in self.power.items()
             },
@@ -90,7 +90,7 @@ class ElectricalFits:
         }
 
 
-def _electrical_fits(
+def electrical_fits(
     campaign: Campaign, engines: list[str], points: list[Point],
     pool: ThreadPoolExecutor | None = None,
 ) -> ElectricalFits:
@@ -177,7 +177,7 @@ def _electrical_fits(
         # every engine uncorrected). Where none determines it, the thrust stays as measured:
         # the voltage then moved with the throttle, and the poly22 holds the two together
         for p in points:
-            p.thrust_n = _rounded(p.thrust_at_voltage_n
+            p.thrust_n = rounded(p.thrust_at_voltage_n
                                   * (out.reference_voltage_v / p.voltage_v) ** exponent)
     for engine in engines:
         mine = [p for p in points if p.engine == engine]
@@ -210,10 +210,10 @@ def _agreement(campaign: Campaign, engine: str, mine: list[Point], out: Electric
         a = power_agreement("", engine, p.throttle, p.airspeed_m_s, p.thrust_at_voltage_n,
                             p.electrical_power_w, campaign.air_density_kg_m3,
                             campaign.fan_area_m2, warn_efficiency=False)
-        p.ideal_power_w = _rounded(a.ideal_power_w) if a.ideal_power_w is not None else math.nan
-        p.figure_of_merit = (_rounded(a.figure_of_merit) if a.figure_of_merit is not None
+        p.ideal_power_w = rounded(a.ideal_power_w) if a.ideal_power_w is not None else math.nan
+        p.figure_of_merit = (rounded(a.figure_of_merit) if a.figure_of_merit is not None
                              else math.nan)
-        p.overall_efficiency = (_rounded(a.overall_efficiency)
+        p.overall_efficiency = (rounded(a.overall_efficiency)
                                 if a.overall_efficiency is not None else math.nan)
     largest = max(p.thrust_at_voltage_n for p in measured)
     working = [p for p in measured if p.thrust_at_voltage_n >= WORKING_THRUST_SHARE * largest]

@@ -36,7 +36,7 @@ SET_POINT_RESOLUTION_M_S = 0.5  # tunnel set points closer than this are one set
 MIN_SET_POINTS = 3  # airspeeds a poly22 surface (quadratic in airspeed) needs
 
 
-def _check_set_points(campaign: Any, step_results: list[Any]) -> list[str]:
+def check_set_points(campaign: Any, step_results: list[Any]) -> list[str]:
     """Bad input: an engine whose step runs cover fewer than 3 airspeed set points; and a
     note per set point an engine has two or more runs at (repeats are fitted together; a run
     labelled with the wrong engine looks the same, and only the user can tell).
@@ -53,7 +53,7 @@ def _check_set_points(campaign: Any, step_results: list[Any]) -> list[str]:
         if not speeds:  # no test point: no airspeed either (it counted as 0 m/s: audit)
             empty.setdefault(str(result.run.engine), []).append(result.run.file)
             continue
-        runs.setdefault(_set_point(float(np.median(speeds))), []).append(result.run.file)
+        runs.setdefault(set_point(float(np.median(speeds))), []).append(result.run.file)
     for engine, points in by_engine.items():
         if len(points) < MIN_SET_POINTS:
             listed = "; ".join(f"{v:g} m/s ({', '.join(files)})" for v, files in
@@ -73,7 +73,7 @@ def _check_set_points(campaign: Any, step_results: list[Any]) -> list[str]:
     ]
 
 
-def _set_point(airspeed_m_s: float) -> float:
+def set_point(airspeed_m_s: float) -> float:
     """The tunnel set point [m/s] an airspeed belongs to (:data:`SET_POINT_RESOLUTION_M_S`)."""
     return round(airspeed_m_s / SET_POINT_RESOLUTION_M_S) * SET_POINT_RESOLUTION_M_S
 
@@ -145,7 +145,7 @@ def refuse_force_scale_outliers(campaign: Any, results: list[StepRunResult]) -> 
             )
 
 
-def _deaf_runs(results: list[StepRunResult]) -> tuple[list[str], set[str]]:
+def deaf_runs(results: list[StepRunResult]) -> tuple[list[str], set[str]]:
     """A note per step run whose force does not follow its throttle (a dead load cell), and
     those runs' files: their points are left out of the fit (fitted, one stuck run brought
     EDF1's surface to R^2 0.78)."""
@@ -231,7 +231,7 @@ def refuse_unphysical_fit(
                          f"({largest:.4g} N): is the drag sweep in other units (mN)?")
 
 
-def _speeds_by_engine(points: Iterable[tuple[str, float]]) -> dict[str, list[float]]:
+def speeds_by_engine(points: Iterable[tuple[str, float]]) -> dict[str, list[float]]:
     """Each engine's tested airspeeds [m/s] from ``(engine, airspeed)`` pairs."""
     speeds: dict[str, list[float]] = {}
     for engine, airspeed in points:
@@ -245,7 +245,7 @@ def _engine_range(speeds: list[float]) -> tuple[float, float]:
     return max(round(min(speeds), 1), 0.0) + 0.0, round(max(speeds), 1) + 0.0
 
 
-def _tested_range(speeds: dict[str, list[float]], where: str) -> list[float]:
+def tested_range(speeds: dict[str, list[float]], where: str) -> list[float]:
     """The airspeed range [m/s] every engine was tested over (the file has one range, and
     each engine's model is flown over all of it: an engine tested to 25 m/s beside one
     tested to 30 m/s was written as tested to 30, its extrapolation never said; outside
@@ -270,7 +270,7 @@ def tested_range_notes(speeds: dict[str, list[float]]) -> list[str]:
     lows, highs = [r[0] for r in ranges.values()], [r[1] for r in ranges.values()]
     if max(lows) - min(lows) <= RANGE_NOTE_M_S and max(highs) - min(highs) <= RANGE_NOTE_M_S:
         return []
-    return [  # the range they share, as _tested_range writes it
+    return [  # the range they share, as tested_range writes it
         "the engines were tested over different airspeeds ("
         + ", ".join(f"{e} {r[0]:g}-{r[1]:g} m/s" for e, r in ranges.items())
         + f"): the file's tested_airspeed_m_s is the range they share, "

@@ -18,9 +18,9 @@ from tuflexperf.errors import InputError
 from tuflexperf.io.files import FIT_PROPULSION_HEADER
 from tuflexperf.models.thrust import POLY22_TERMS
 from tuflexperf.reduction.electrical_fit import ElectricalFits
-from tuflexperf.reduction.fit_checks import _tested_range, tested_range_notes
+from tuflexperf.reduction.fit_checks import tested_range, tested_range_notes
 from tuflexperf.reduction.poly22fit import Poly22Fit
-from tuflexperf.reduction.step_runs import Point, StepRunResult, SweepRunResult, _finite_or_none
+from tuflexperf.reduction.step_runs import Point, StepRunResult, SweepRunResult, finite_or_none
 
 
 @dataclass
@@ -36,7 +36,7 @@ class FitResult:
     sweep_runs: list[SweepRunResult] = field(default_factory=list)
 
 
-def _table_row(p: Point) -> dict[str, Any]:
+def table_row(p: Point) -> dict[str, Any]:
     return {
         "engine": p.engine,
         "throttle": p.throttle,
@@ -66,7 +66,7 @@ def _table_row(p: Point) -> dict[str, Any]:
     }
 
 
-def _summary(
+def fit_summary(
     kind: str,
     input_path: Path,
     fits: dict[str, Poly22Fit],
@@ -79,9 +79,9 @@ def _summary(
             {
                 "name": name,
                 "coefficients": fit.coefficients,
-                "r2": _finite_or_none(fit.r2),
-                "rmse_n": _finite_or_none(fit.rmse_n),
-                "standard_errors": {k: _finite_or_none(v) for k, v in fit.standard_errors.items()},
+                "r2": finite_or_none(fit.r2),
+                "rmse_n": finite_or_none(fit.rmse_n),
+                "standard_errors": {k: finite_or_none(v) for k, v in fit.standard_errors.items()},
                 "n_points": fit.n_points,
                 **{k: v for k, v in _uncertainty_entry(fit).items() if k != "covariance"},
                 "residuals_n": [float(r) for r in fit.residuals_n],
@@ -96,12 +96,12 @@ def _summary(
         "engines": engines,
         "delay_s": delay,
         "lag_s": None,
-        "tested_airspeed_m_s": _tested_range(speeds, str(input_path)),
+        "tested_airspeed_m_s": tested_range(speeds, str(input_path)),
         "warnings": tested_range_notes(speeds),
     }
 
 
-def _propulsion_text(
+def render_propulsion(
     name: str,
     fits: dict[str, Poly22Fit],
     speeds: dict[str, list[float]],
@@ -118,7 +118,7 @@ def _propulsion_text(
     document: dict[str, Any] = {
         "name": name,
         "model": "poly22",
-        "tested_airspeed_m_s": _tested_range(speeds, name),
+        "tested_airspeed_m_s": tested_range(speeds, name),
     }
     if delay is not None:
         document["delay_s"] = max(float(delay), 0.0)

@@ -43,12 +43,12 @@ from tuflexperf.reduction.campaign_fit import fit_campaign
 from tuflexperf.reduction.delay import MAX_DELAY_S
 from tuflexperf.reduction.fit_checks import (
     MIN_SET_POINTS,
-    _set_point,
-    _speeds_by_engine,
     poor_fit_notes,
     refuse_unphysical_fit,
+    set_point,
+    speeds_by_engine,
 )
-from tuflexperf.reduction.fit_output import FitResult, _propulsion_text, _summary, write_files
+from tuflexperf.reduction.fit_output import FitResult, fit_summary, render_propulsion, write_files
 from tuflexperf.reduction.poly22fit import fit_poly22
 from tuflexperf.reduction.step_runs import Progress
 
@@ -66,7 +66,7 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
     for engine in table.engines():
         # a surface in airspeed needs airspeeds: as a campaign's step runs must cover three
         # set points, a table's rows must (counted at the set-point resolution)
-        points = {_set_point(float(v)) for v in table.select(engine)[1]}
+        points = {set_point(float(v)) for v in table.select(engine)[1]}
         if len(points) < MIN_SET_POINTS:
             raise InputError(
                 f"{table.path}: {engine}: the rows cover only {len(points)} airspeed set "
@@ -77,15 +77,16 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
         for engine in table.engines()
     }
     refuse_unphysical_fit(str(table.path), fits)
-    speeds = _speeds_by_engine(zip(table.engine, table.airspeed_m_s, strict=True))
+    speeds = speeds_by_engine(zip(table.engine, table.airspeed_m_s, strict=True))
     source = {
         "tool": "tuflexperf fit",
         "input": str(Path(path).resolve()),
         "input_sha256": sha256_of(Path(path)),
     }
-    summary = _summary(kind="table", input_path=Path(path), fits=fits, delay=delay_s, speeds=speeds)
+    summary = fit_summary(kind="table", input_path=Path(path), fits=fits, delay=delay_s,
+                          speeds=speeds)
     summary["warnings"].extend(poor_fit_notes(fits))
-    propulsion = _propulsion_text(
+    propulsion = render_propulsion(
         name=f"poly22 fit of {Path(path).name}",
         fits=fits,
         speeds=speeds,

@@ -86,7 +86,7 @@ class SweepRunResult:
 
 
 # --- run reduction --------------------------------------------------------------------------
-def _windows(campaign: Campaign, sample_rate_hz: float) -> tuple[int, float, int]:
+def filter_windows(campaign: Campaign, sample_rate_hz: float) -> tuple[int, float, int]:
     f = campaign.filters
     return (
         window_samples(f.outlier_window_s, sample_rate_hz),
@@ -100,12 +100,12 @@ def clean_run(campaign: Campaign, run: Run, column: str = "force_n") -> tuple[np
 
     Returns the cleaned column and how many outliers were replaced.
     """
-    k_out, threshold, k_med = _windows(campaign, run.sample_rate_hz)
+    k_out, threshold, k_med = filter_windows(campaign, run.sample_rate_hz)
     filled, replaced = filloutliers_movmean(run[column], k_out, threshold)
     return movmedian(filled, k_med), replaced
 
 
-def _run_header(run: CampaignRun, data: Run) -> dict[str, Any]:
+def run_header(run: CampaignRun, data: Run) -> dict[str, Any]:
     return {
         "file": run.file,
         "engine": run.engine,
@@ -124,8 +124,8 @@ def reduce_step_run(
     """Steady segment means of one throttle-step run (module docstring, step 4)."""
     fs = data.sample_rate_hz
     t = data.time_s
-    k_out, threshold, k_med = _windows(campaign, fs)
-    report = _run_header(run, data)
+    k_out, threshold, k_med = filter_windows(campaign, fs)
+    report = run_header(run, data)
     warnings: list[str] = report["warnings"]
 
     plateaus = throttle_plateaus(data["throttle"], fs, min_duration_s=MIN_SEGMENT_S)
@@ -218,14 +218,14 @@ def reduce_step_run(
     )
 
 
-def _mean_or_none(values: list[float]) -> float | None:
+def mean_or_none(values: list[float]) -> float | None:
     return float(np.mean(values)) if values else None
 
 
-def _rounded(value: float) -> float:
+def rounded(value: float) -> float:
     return float(format_number(float(value)))
 
 
 # --- rendering --------------------------------------------------------------------------------
-def _finite_or_none(value: float) -> float | None:
+def finite_or_none(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None

@@ -76,23 +76,23 @@ def new_figure(size: tuple[float, float] = LANDSCAPE_IN) -> Any:
     return Figure(figsize=size, layout="constrained")
 
 
-def _page_margins(fig: Any) -> None:
+def page_margins(fig: Any) -> None:
     """Margins of a printed page for text and table pages (an axes without decorations
     would otherwise reach the paper's edge)."""
     fig.get_layout_engine().set(w_pad=TEXT_PAGE_MARGIN_IN, h_pad=TEXT_PAGE_MARGIN_IN / 2)
 
 
-def _style(meaning: str, **override: Any) -> dict[str, Any]:
+def style_of(meaning: str, **override: Any) -> dict[str, Any]:
     """``STYLE[meaning]`` with a few keys changed (a second curve of the same meaning)."""
     return {**STYLE[meaning], **override}
 
 
-def _legend(ax: Any, **kwargs: Any) -> Any:
+def page_legend(ax: Any, **kwargs: Any) -> Any:
     """The report's legend: right of the axes (:func:`legend_outside`), never over data."""
     return legend_outside(ax, **kwargs)
 
 
-def _note(ax: Any, text: str) -> None:
+def note_box(ax: Any, text: str) -> None:
     ax.text(
         0.5,
         0.5,
@@ -108,13 +108,13 @@ def _note(ax: Any, text: str) -> None:
     ax.set_yticks([])
 
 
-def _wrap(text: str, width: int) -> str:
+def wrap_text(text: str, width: int) -> str:
     import textwrap
 
     return "\n".join(textwrap.wrap(text, width))
 
 
-def _label_line_ends(ax: Any, ends: list[tuple[float, str, Any]], fontsize: float = 8.0) -> None:
+def label_line_ends(ax: Any, ends: list[tuple[float, str, Any]], fontsize: float = 8.0) -> None:
     """Label lines in the margin right of the axes, spread so no two labels touch.
 
     ``ends`` holds (y at the right edge [data], text, colour). A label outside the axes
@@ -169,7 +169,7 @@ def text_page(
     import textwrap
 
     fig = new_figure(size)
-    _page_margins(fig)
+    page_margins(fig)
     ax = fig.add_subplot()
     ax.axis("off")
     fig.suptitle(title, fontsize=15, weight="bold")

@@ -24,8 +24,8 @@ from typing import Any
 from tuflexperf.io.case import Case
 from tuflexperf.report.canvas import (
     LIMIT_COLOUR,
-    _page_margins,
     new_figure,
+    page_margins,
     preload,
     text_page,
     use_agg,
@@ -61,7 +61,7 @@ _REQUIREMENT_TEXT_COLUMNS = 128
 def requirement_table(case: Case, analyses: Analyses) -> Any:
     """The verdicts of ``check``: value, limit, margin, PASS/FAIL, colour-coded."""
     fig = new_figure()
-    _page_margins(fig)
+    page_margins(fig)
     ax = fig.add_subplot()
     ax.axis("off")
     verdicts = analyses.verdicts

@@ -25,11 +25,11 @@ from tuflexperf.models.thrust import (
 from tuflexperf.report.canvas import (
     AVAILABLE_COLOUR,
     LEGEND_FONT,
-    _label_line_ends,
-    _legend,
-    _style,
-    _wrap,
+    label_line_ends,
     new_figure,
+    page_legend,
+    style_of,
+    wrap_text,
 )
 from tuflexperf.report.data import (  # noqa: F401 - dynamic_thrust_n, model_force_n: API
     Analyses,
@@ -149,7 +149,7 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
         x = trim.min_throttle
         t = np.asarray(total_thrust_n(propulsion, x, v, rho), dtype=float)
         va = trim.airspeed_at_min_throttle_m_s
-        ax.plot(v, t, **_style("trim", linestyle="-."),
+        ax.plot(v, t, **style_of("trim", linestyle="-."),
                 label=f"least trim throttle {100 * x:.1f} %, all engines (dot: {va:.1f} m/s)")
         ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], **POINT["least"],
                 markerfacecolor=STYLE["trim"]["color"])
@@ -168,7 +168,7 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
                 total_thrust_n(propulsion, x, v, rho, index, oei.dead_engine_mode), dtype=float
             )
             va = worst.airspeed_at_min_throttle_m_s
-            ax.plot(v, t, **_style("oei", linestyle="-."),
+            ax.plot(v, t, **style_of("oei", linestyle="-."),
                     label=f"OEI least throttle {100 * x:.1f} % (dot: {va:.1f} m/s)")
             ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], **POINT["least"],
                     markerfacecolor=STYLE["oei"]["color"])
@@ -178,7 +178,7 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
     if drag.size:
         top = max(top, 1.08 * float(drag.max()))
     ax.set_ylim(0, top)
-    _label_line_ends(ax, ends)
+    label_line_ends(ax, ends)
     ax.set_xlabel("true airspeed V (m/s)")
     ax.set_ylabel("thrust, drag (N)")
     fig.suptitle(
@@ -207,7 +207,7 @@ def _takeoff_not_attainable(case: Case, analyses: Analyses) -> Any:
     an = fig.add_subplot(gs[0])
     ad = fig.add_subplot(gs[1])
     an.axis("off")
-    an.text(0.0, 0.5, _wrap(f"take-off not attainable: {analyses.takeoff_note}", 50),
+    an.text(0.0, 0.5, wrap_text(f"take-off not attainable: {analyses.takeoff_note}", 50),
             transform=an.transAxes, ha="left", va="center", fontsize=11, color="0.3")
     rho = case.density_kg_m3
     v_lo = float(liftoff_speed_m_s(case.aircraft, rho))
@@ -220,7 +220,7 @@ def _takeoff_not_attainable(case: Case, analyses: Analyses) -> Any:
     ad.set_ylabel("net force on the runway (N)")
     ad.set_title("why: the net force on the runway", fontsize=10)
     ad.grid(alpha=0.3)
-    _legend(ad)
+    page_legend(ad)
     fig.suptitle(f"Take-off of {case.name}: not attainable")
     return fig
 
@@ -242,7 +242,7 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     if not catapult:
         av.plot(s, v, **STYLE["takeoff"], label=f"ground run, full throttle ({t[-1]:.1f} s)")
     if result.rotation_distance_m > 0:
-        av.plot([s_acc, roll], [v_lo, v_lo], **_style("takeoff", linestyle="-.", linewidth=3.0),
+        av.plot([s_acc, roll], [v_lo, v_lo], **style_of("takeoff", linestyle="-.", linewidth=3.0),
                 label=f"rotation at the lift-off speed ({result.rotation_time_s:.2f} s)")
     av.plot([roll], [v_lo], **POINT["least"],
             label=f"catapult release at {v_lo:.1f} m/s (no runway)" if catapult else
@@ -307,12 +307,12 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
         af.text(0.5, 0.5, "catapult launch: no ground run (the catapult's energy, not the "
                 "battery's, brings the aircraft to its release speed)", transform=af.transAxes,
                 ha="center", va="center", fontsize=10)
-    _legend(av)
-    _legend(af)
+    page_legend(av)
+    page_legend(af)
     start = (f"catapult release at {v_lo:.1f} m/s, no ground roll" if catapult else
              f"ground roll {roll:.1f} m to lift-off at {v_lo:.1f} m/s")
     # the obstacle's reason may be long (never cleared, and why): wrapped, not cut at the edges
-    fig.suptitle(_wrap(
+    fig.suptitle(wrap_text(
         f"Take-off of {case.name} at full throttle: {start}"
         + (f", {obstacle:.1f} m to the {result.obstacle_height_m:g} m obstacle"
            if obstacle is not None else f"; {result.obstacle_reason}"), 140))
@@ -373,7 +373,7 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
             requirement is not None
             and abs(requirement.max_throttle - envelope.max_trim_throttle) > 1e-9
         ):
-            ax.axhline(requirement.max_throttle, **_style("limit", linewidth=2.2),
+            ax.axhline(requirement.max_throttle, **style_of("limit", linewidth=2.2),
                        label=f"limit: OEI max throttle {requirement.max_throttle:g}")
     runs = _reason_runs(trim.reasons, trim.throttle)
     for k, (a, b, why) in enumerate(runs):
@@ -389,7 +389,7 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
     ax.set_ylabel("least throttle for level flight x (fraction)")
     fig.suptitle(f"Trim and one-engine-inoperative throttle over the envelope, {case.name}")
     ax.grid(alpha=0.3)
-    _legend(ax)
+    page_legend(ax)
     return fig
 
 
@@ -414,7 +414,7 @@ def endurance(case: Case, analyses: Analyses) -> Any:
         m_t, data_v, model_v = decimated(minutes, run.voltage_v, model)
         label = f"{run.path.name} (throttle {run.throttle_setting:.2f})"
         av.plot(m_t, data_v, color=colour, linewidth=3.0, alpha=0.35, label=f"data: {label}")
-        av.plot(m_t, model_v, **_style("model", linestyle="--", linewidth=1.0),
+        av.plot(m_t, model_v, **style_of("model", linestyle="--", linewidth=1.0),
                 label="model (fitted equivalent circuit)" if k == 0 else None)
     flown = analyses.battery if analyses.battery is not None else ch.battery
     runs_to = ("" if flown.cutoff_voltage_v == ch.battery.cutoff_voltage_v
@@ -425,17 +425,17 @@ def endurance(case: Case, analyses: Analyses) -> Any:
     av.set_ylabel("pack terminal voltage U (V)")
     av.set_title(f"discharge runs, one pack; model rms error {ch.fit.rms_v:.3f} V", fontsize=10)
     av.grid(alpha=0.3)
-    _legend(av)
+    page_legend(av)
     curve = analyses.endurance_curve
     if curve:
         x = np.array([c[0] for c in curve])
         flight = np.array([c[1].flight_endurance_min for c in curve])
         pack = np.array([c[1].battery_endurance_min for c in curve])
         speeds = np.array([c[1].airspeed_m_s for c in curve])
-        af.plot(x, flight, **_style("mission", linewidth=2.0),
+        af.plot(x, flight, **style_of("mission", linewidth=2.0),
                 label=f"flight ({ch.battery.packs_in_parallel_per_engine} packs per fan, "
                 "launch and landing reserve)")
-        af.plot(x, pack, **_style("full_throttle", linestyle="-", linewidth=1.4),
+        af.plot(x, pack, **style_of("full_throttle", linestyle="-", linewidth=1.4),
                 label="one pack on one fan, full to cut-off")
         tested_high = case.propulsion.tested_airspeed_m_s[1]
         envelope = case.requirements.envelope
@@ -478,7 +478,7 @@ def endurance(case: Case, analyses: Analyses) -> Any:
     if requirement is not None:
         af.axhline(requirement.min_flight_time_min, **STYLE["limit"],
                    label=f"limit: flight time ≥ {requirement.min_flight_time_min:g} min")
-        af.axvline(requirement.throttle, **_style("limit", linestyle=":"),
+        af.axvline(requirement.throttle, **style_of("limit", linestyle=":"),
                    label=f"at the required throttle {requirement.throttle:g}")
         if result is not None:
             met = _verdict_passed(analyses, "flight_endurance")
@@ -490,6 +490,6 @@ def endurance(case: Case, analyses: Analyses) -> Any:
     af.set_title("level flight: endurance against throttle", fontsize=10)
     af.set_ylim(bottom=0)
     af.grid(alpha=0.3)
-    _legend(af)
+    page_legend(af)
     fig.suptitle(f"Endurance of {case.name} with {flown.title}")
     return fig

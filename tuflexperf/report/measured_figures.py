@@ -19,11 +19,11 @@ from tuflexperf.models.thrust import (
 from tuflexperf.report.canvas import (
     ACCURACY_GOAL_N,
     LEGEND_FONT,
-    _legend,
-    _note,
-    _style,
-    _wrap,
     new_figure,
+    note_box,
+    page_legend,
+    style_of,
+    wrap_text,
 )
 from tuflexperf.report.data import (  # noqa: F401 - dynamic_thrust_n, model_force_n: API
     Analyses,
@@ -73,7 +73,7 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
         reason = measured.notes[0] if measured.notes else "no measured points"
         if measured.points is not None:
             reason = f"the measured data name no engine {engine.name!r}"
-        _note(ax_r, "No measured points for this engine:\n" + _wrap(reason, 38))
+        note_box(ax_r, "No measured points for this engine:\n" + wrap_text(reason, 38))
         ax_r.axis("off")  # a note, not an empty plot
         ax3.set_title(title + " (model alone)")
         fig.suptitle(f"{title}; no measured data to compare (paper Figs. 11-12)")
@@ -114,7 +114,7 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
     ax_r.grid(alpha=0.3)
     span = max(float(np.max(np.abs(residual))), ACCURACY_GOAL_N)
     ax_r.set_ylim(-1.15 * span, 1.15 * span)
-    _legend(ax_r)
+    page_legend(ax_r)
     source = measured.source.name if measured.source is not None else "?"
     fig.suptitle(f"{title} with the measured points from {source} (paper Figs. 11-12)")
     return fig
@@ -159,7 +159,7 @@ def run_processing(run: ProcessedRun) -> Any:
                    label="detected change point" if k == 0 else None)
     ax.set_ylabel("balance force F (N)")
     ax.grid(alpha=0.3)
-    _legend(ax)
+    page_legend(ax)
     ax.tick_params(labelbottom=False)
     ts, x = decimated(t, run.throttle)
     axt.plot(ts, x, **STYLE["command"], label="throttle command")
@@ -183,7 +183,7 @@ def _model_styles(dynamics: list[tuple[str, float, float]]) -> list[dict[str, An
     """Purple for every model; the one with a spool lag solid, the others dashed."""
     lagged = [k for k, (_, _, lag) in enumerate(dynamics) if lag > 0]
     main = lagged[-1] if lagged else 0
-    return [STYLE["model"] if k == main else _style("model", linestyle="--", linewidth=1.1)
+    return [STYLE["model"] if k == main else style_of("model", linestyle="--", linewidth=1.1)
             for k in range(len(dynamics))]
 
 
@@ -226,17 +226,17 @@ def sine_sweep(measured: Measured, case: Case) -> Any:
     ax.set_xlabel("time t (s)")
     ax.set_ylabel("balance force F (N)")
     ax.grid(alpha=0.3)
-    _legend(ax)
+    page_legend(ax)
     az.set_ylabel("balance force F (N)")
     az.set_title("end of the sweep (highest frequency)", fontsize=10)
     az.grid(alpha=0.3)
     az.tick_params(labelbottom=False)
-    _legend(az)
+    page_legend(az)
     ac.plot(t[end], sweep.throttle[end], **STYLE["command"], label="throttle command")
     ac.set_xlabel("time t (s)")
     ac.set_ylabel("throttle x (fraction)")
     ac.grid(alpha=0.3)
-    _legend(ac)
+    page_legend(ac)
     parts = [f"this sweep: dead time {1000 * sweep.delay_s:.0f} ms, spool lag "
              f"{1000 * sweep.lag_s:.0f} ms" if math.isfinite(sweep.delay_s)
              else "this sweep: delay not estimated"]
@@ -275,7 +275,7 @@ def model_vs_measured(case: Case, measured: Measured) -> Any:
         ae.grid(alpha=0.3)
         models = [model_force_n(case, measured, run, delay, lag) for _, delay, lag in dynamics]
         if models[0] is None:
-            _note(ae, f"the case's propulsion has no engine {run.engine!r}")
+            note_box(ae, f"the case's propulsion has no engine {run.engine!r}")
             handles.update(zip(*reversed(ax.get_legend_handles_labels()), strict=True))
             continue
         for (label, delay, lag), style, model in zip(dynamics, styles, models, strict=True):
