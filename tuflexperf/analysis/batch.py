@@ -29,6 +29,10 @@ perturbed per sample: coefficients ``(E, B, 6)`` and an extrapolation error ``(E
 ``tests/verification/test_batch_equals_deterministic.py`` holds this module to the
 deterministic analyses.
 
+This module holds the requirements' registry of the batch and :class:`BatchEvaluator`;
+the rows' physics is :class:`~tuflexperf.analysis.batch_model.BatchModel`, its take-off
+:mod:`.batch_roll`, the helpers they share :mod:`.batch_kernels`.
+
 References
 ----------
 Raymer, *Aircraft Design*, 17.8 (ground roll); Anderson, *Aircraft Performance and

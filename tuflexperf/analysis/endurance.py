@@ -32,6 +32,9 @@ case and battery and called per throttle; the constant-power closed form of step
 starts the Newton iteration of step 5 (exact without a voltage effect, so it converges at
 once). ``--best`` solves two small IPOPT NLPs: the throttle and airspeed of longest
 flight, and of longest cruise distance (constant-power cruise, no voltage effect).
+
+Steps 1-2 live in :mod:`.battery_fit`, the flight of step 5 as a mission in
+:mod:`.endurance_plan`; this module holds :class:`EnduranceModel` and its results.
 """
 
 from __future__ import annotations

@@ -7,6 +7,10 @@ CasADi's CVODES from 0 to the lift-off true airspeed (no wind, level runway). Ro
 adds ``V_LO t_R`` (Raymer 17.8.2); the airborne part is an arc at ``1.15 V_stall`` and
 load factor ``n`` followed by the full-throttle straight climb (Anderson, *Aircraft
 Performance and Design*, 6.7.2).
+
+The roll's force and integrator live in :mod:`.ground_roll`, the rotation and the arc (on
+sagging packs too) in :mod:`.airborne`; this module holds the result and the catapult and
+puts the three together in :func:`solve_takeoff`.
 """
 
 from __future__ import annotations
