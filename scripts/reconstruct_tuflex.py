@@ -426,10 +426,10 @@ def landed_values() -> dict[str, float]:
     """Every published number recomputed by the tool's own analyses from the shipped files."""
     from tuflexperf.analysis.endurance import solve_endurance
     from tuflexperf.analysis.oei import solve_oei
-    from tuflexperf.analysis.powertrain import power_agreement
     from tuflexperf.analysis.takeoff import solve_takeoff
     from tuflexperf.analysis.trim import solve_trim
     from tuflexperf.io.case import load_case
+    from tuflexperf.models.agreement import power_agreement
     from tuflexperf.models.battery import time_to_cutoff_s
     from tuflexperf.models.powertrain import engine_power_w
     from tuflexperf.models.thrust import engine_thrust_n

@@ -21,6 +21,7 @@ NEVER = [
     ("tuflexperf.models", "tuflexperf.report"),
     ("tuflexperf.analysis", "tuflexperf.report"),
     ("tuflexperf.analysis", "tuflexperf.cli"),
+    ("tuflexperf.reduction", "tuflexperf.analysis"),
     ("tuflexperf.reduction", "tuflexperf.report"),
     ("tuflexperf.reduction", "tuflexperf.cli"),
     ("tuflexperf.analysis.study", "tuflexperf.analysis.requirements"),

@@ -376,7 +376,7 @@ def _impossible_cruise(m: Any, throttle: Array, speed: Array, power_w: Array) ->
     or electrical power is not positive there (``MissionModel._braking_engine``), or whose
     power is under 1/``IMPOSSIBLE_FIGURE_OF_MERIT`` of momentum theory's ideal power for its
     thrust (``EnduranceModel._result``: no fan flies on it); each engine's own power surface
-    where it has one, else the per-fan ``power_w`` [W], as ``analysis.powertrain.agreement_at``."""
+    where it has one, else the per-fan ``power_w`` [W], as ``models.agreement.agreement_at``."""
     area = m.propulsion.fan_area_m2
     impossible = np.zeros(m.size, dtype=bool)
     scale = density_ratio(m.propulsion, m.density)

@@ -60,12 +60,12 @@ from tuflexperf.analysis.endurance_plan import (
     endurance_mission_model,
     launch_of,
 )
-from tuflexperf.analysis.powertrain import PowerAgreement, agreement_at
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.battery import (
     Battery,
 )
 from tuflexperf.io.case import Case
+from tuflexperf.models.agreement import PowerAgreement, agreement_at
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.battery import (
     current_at_power_a,
@@ -305,7 +305,7 @@ class EnduranceModel:
         (thrust less the rig's drag, a lower bound on thrust) against its power goes
         through the thrust/power agreement check.
         """
-        from tuflexperf.analysis.powertrain import power_agreement
+        from tuflexperf.models.agreement import power_agreement
 
         warnings: list[str] = []
         engines = {e.name: e for e in self.case.propulsion.engines}

@@ -201,7 +201,7 @@ WORKING_THRUST_SHARE = 0.1
 
 def _agreement(campaign: Campaign, engine: str, mine: list[Point], out: ElectricalFits) -> None:
     """Measured thrust against measured ``U I`` at the engine's working points (SPEC 3)."""
-    from tuflexperf.analysis.powertrain import power_agreement
+    from tuflexperf.models.agreement import power_agreement
 
     measured = [p for p in mine if math.isfinite(p.electrical_power_w)]
     if not measured:
