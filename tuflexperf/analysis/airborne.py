@@ -15,8 +15,15 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.attainable import BEYOND_THE_BATTERY
 from tuflexperf.analysis.cache import fingerprint
 from tuflexperf.analysis.ground_roll import HISTORY_POINTS, TAKEOFF_CACHE
+from tuflexperf.analysis.pack_limits import (
+    full_throttle_on_packs,
+    pack_side,
+    sagging_packs,
+    within_limits,
+)
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     DEFAULT_OBSTACLE_HEIGHT_M,
@@ -64,8 +71,6 @@ class TakeoffPacks:
 
     def __init__(self, case: Case, side: Any) -> None:
         import casadi as ca
-
-        from tuflexperf.analysis.pack_limits import full_throttle_on_packs
 
         aircraft, rho = case.aircraft, case.density_kg_m3
         n = len(case.propulsion.engines)
@@ -248,8 +253,6 @@ def settle_airborne(radius_m: Any, speed_m_s: Any, height_m: Any, charge_ah: Any
     (thrust and pack voltage; take-off to the obstacle); Press et al., *Numerical
     Recipes*, 9.1 and 10.2 (bisection, golden-section search).
     """
-    from tuflexperf.analysis.pack_limits import within_limits
-
     q0 = np.asarray(charge_ah, dtype=float)
     rows = q0.shape[1]
     radius = np.asarray(radius_m, dtype=float) * np.ones(rows)
@@ -479,8 +482,6 @@ def packs_note(case: Case, start_v: np.ndarray, liftoff_v: np.ndarray | None,
 def packs_of(case: Case) -> TakeoffPacks | None:
     """The sagging packs the take-off flies on, or None (no battery, or no reference
     voltage: the thrust model's own thrust)."""
-    from tuflexperf.analysis.pack_limits import pack_side, sagging_packs
-
     if not sagging_packs(case):
         return None
     side = pack_side(case)
@@ -594,8 +595,6 @@ def _not_reached(status: int, height: float, speed: float, gradient: float, apex
     """Why the climb on sagging packs does not reach the obstacle (:func:`settle_airborne`'s
     status; "" where it does, or no climb at all: the caller says that), the obstacle height
     and the apex [m], the airspeed [m/s], the arc's gradient [-], the cut-off [V]."""
-    from tuflexperf.analysis.attainable import BEYOND_THE_BATTERY
-
     if status == TOPS_OUT:
         return (f"the {height:g} m obstacle is never cleared: the full-throttle climb gradient "
                 f"at {speed:.1f} m/s falls from {gradient:.3f} at the arc's end as the packs "

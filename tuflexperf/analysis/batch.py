@@ -58,6 +58,7 @@ from tuflexperf.analysis.pack_limits import (
     pack_side,
     sagging_packs,
 )
+from tuflexperf.analysis.verdict import requirement_met
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     EAS_REFERENCE_DENSITY_KG_M3,
@@ -130,8 +131,6 @@ class BatchResult:
 
     def met(self, name: str) -> NDArray[np.bool_]:
         """Met per sample, by the verdict rule of :mod:`tuflexperf.analysis.verdict`."""
-        from tuflexperf.analysis.verdict import requirement_met
-
         return requirement_met(self.values[name], self.limits[name], self.kinds[name])
 
 

@@ -32,8 +32,9 @@ from tuflexperf.analysis.batch_kernels import (
     bracketed_root,
     fan_power_rows,
     golden_section_max,
+    stall_speed,
 )
-from tuflexperf.analysis.constants import STEPS
+from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S, STEPS
 from tuflexperf.models._math import interp_rows
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import (
@@ -292,8 +293,6 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     """Flight endurance [min] per row, NaN where the single-case analysis says not
     attainable, the level-flight airspeed [m/s] on full packs (the result's) and the
     launch's climb airspeed [m/s]."""
-    from tuflexperf.analysis.batch_kernels import stall_speed
-
     stall = stall_speed(m)
     from tuflexperf.analysis.pack_limits import pack_rows
 
@@ -407,8 +406,6 @@ def _within_rating(model: Any, launch: _Launch, power_w: Array, start: Array,
     at constant power, its current rising as the pack sags (its heaviest 30 s are its last),
     the current over such a stretch the one at the charge halfway through it (midpoint rule).
     """
-    from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S
-
     battery = model.battery
     if battery.max_discharge_c is None:
         return np.ones(np.shape(power_w), dtype=bool)

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tuflexperf.analysis.batch_kernels import stall_speed
+from tuflexperf.analysis.batch_kernels import fan_power_rows, stall_speed
 from tuflexperf.analysis.batch_roll import GroundRollRows
 from tuflexperf.analysis.pack_limits import (
     least_throttle_where,
@@ -284,8 +284,6 @@ class BatchModel(GroundRollRows):
         power its packs give at the landing reserve (``pack_limits.power_limit_w``; power
         is quadratic in throttle for a surface, monotone for the fan law, so the ends and
         the vertex bound it). A row whose answer is NaN binds nothing."""
-        from tuflexperf.analysis.batch_kernels import fan_power_rows
-
         if self.propulsion.reference_voltage_v is not None:
             return False
         limit = power_limit_w(packs, battery)[:, None]
@@ -315,8 +313,6 @@ class BatchModel(GroundRollRows):
         Every airspeed of every row is solved (no candidates): where the packs bind depends
         on the power, not only on the throttle.
         """
-        from tuflexperf.analysis.batch_kernels import fan_power_rows
-
         prop = self.propulsion
         terms = self._grid_terms(grid)
         live = [j for j in range(len(prop.engines)) if j != dead]

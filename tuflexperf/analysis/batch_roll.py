@@ -15,7 +15,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tuflexperf.analysis.batch_kernels import stall_speed
+from tuflexperf.analysis.batch_kernels import fan_power_rows, stall_speed
+from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
+from tuflexperf.analysis.ground_roll import HISTORY_POINTS, release_acceleration
 from tuflexperf.analysis.pack_limits import (
     operating_point,
     pack_rows,
@@ -321,8 +323,6 @@ class GroundRollRows:
         """A catapult's acceleration after the release per row
         (:func:`tuflexperf.analysis.ground_roll.release_acceleration`): at the model's thrust, or
         at ``thrust_and_current(V)`` (thrust [N], current per fan [A]; on sagging packs)."""
-        from tuflexperf.analysis.ground_roll import release_acceleration
-
         release = np.asarray(true_airspeed_m_s(self.aircraft.launch_speed_m_s, self.density),
                              dtype=float).reshape(-1) * np.ones(self.size)
         v_tr = self.transition_speed()
@@ -371,10 +371,6 @@ class GroundRollRows:
         the loaded voltage at or above the cut-off and each pack within its burst rating;
         and, on sagging packs, the climb reaching the obstacle before their cut-off
         (:attr:`packs_beyond`)."""
-        from tuflexperf.analysis.batch_kernels import fan_power_rows
-        from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
-        from tuflexperf.analysis.ground_roll import HISTORY_POINTS
-
         prop = self.propulsion
         v_tr = self.transition_speed()[:, None]
         airborne = self.airborne_m(height)

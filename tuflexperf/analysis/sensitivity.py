@@ -24,6 +24,7 @@ import numpy as np
 
 from tuflexperf.analysis.airborne import ROTATION_STEPS, obstacle_height_of
 from tuflexperf.analysis.batch import present_requirements
+from tuflexperf.analysis.constants import STEPS
 from tuflexperf.analysis.pack_limits import sagging_packs
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
@@ -215,7 +216,6 @@ def _endurance_value(s: _Symbolic) -> Any:
     # the launch's RK4 in the single case's mission's steps: STEPS of equal time along the
     # roll's history, ROTATION_STEPS at the lift-off speed, STEPS of the climb; power looked
     # up as the nominal does; a catapult launch has no roll
-    from tuflexperf.analysis.constants import STEPS
 
     rotation: Any = 0.0 if catapult else ac.takeoff.rotation_time_s
     roll_only = 0.0 if catapult else t_hist[count - 1]

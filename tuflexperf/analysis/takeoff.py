@@ -40,6 +40,7 @@ from tuflexperf.analysis.ground_roll import (
     net_force_n,
     release_acceleration,
 )
+from tuflexperf.analysis.pack_limits import pack_side, takeoff_beyond_battery
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
@@ -252,8 +253,6 @@ def _refuse_beyond_battery(case: Case, speeds: np.ndarray, seconds: float,
     """Full throttle on the packs over these airspeeds [m/s] for ``seconds``, or not
     attainable (:func:`tuflexperf.analysis.pack_limits.takeoff_beyond_battery`; no battery:
     nothing)."""
-    from tuflexperf.analysis.pack_limits import pack_side, takeoff_beyond_battery
-
     side = pack_side(case)
     why = None if side is None else takeoff_beyond_battery(case, side, speeds, seconds)
     if why is not None:
