@@ -34,7 +34,12 @@ from tuflexperf.analysis.batch_kernels import (
     golden_section_max,
     stall_speed,
 )
-from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S, STEPS
+from tuflexperf.analysis.constants import (
+    BURST_OVER_CONTINUOUS,
+    MAX_SPEED_OVER_STALL,
+    RATING_SEGMENT_S,
+    STEPS,
+)
 from tuflexperf.models._math import interp_rows
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import (
@@ -247,7 +252,7 @@ def _most_excess(m: Any, throttle: Array, least: Array, stall: Array) -> tuple[A
     low = least
     # 8 x the stall, not 8 x the margin's speed: a margin of 2.4 searched to 19 x stall, into
     # an extrapolated rise of thrust the single case never reaches (outside audit)
-    high = single.MAX_SPEED_OVER_STALL * stall
+    high = MAX_SPEED_OVER_STALL * stall
     # short of the fans' jet velocity, as the single case: beyond it a fan makes no thrust,
     # whatever the extrapolated polynomial gives
     ceiling = np.asarray(jet_velocity_ceiling_m_s(m.propulsion, m.density),

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tuflexperf.analysis.endurance_plan import MAX_SPEED_OVER_STALL, SPEED_GRID_POINTS
+from tuflexperf.analysis.constants import MAX_SPEED_OVER_STALL, SPEED_GRID_POINTS
 from tuflexperf.models.aircraft import climb_sine, level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.powertrain import (
     PowerSurfaces,

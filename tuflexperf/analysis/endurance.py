@@ -53,13 +53,8 @@ from tuflexperf.analysis.battery_fit import (
     characterise_battery,
 )
 from tuflexperf.analysis.cache import BoundedCache, file_key, fingerprint
-from tuflexperf.analysis.endurance_plan import (
-    MAX_SPEED_OVER_STALL,
-    SPEED_GRID_POINTS,
-    LaunchBudget,
-    endurance_mission_model,
-    launch_of,
-)
+from tuflexperf.analysis.constants import MAX_SPEED_OVER_STALL, SPEED_GRID_POINTS
+from tuflexperf.analysis.endurance_plan import LaunchBudget, endurance_mission_model, launch_of
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.battery import (
     Battery,

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.constants import MAX_SPEED_OVER_STALL, SPEED_GRID_POINTS
 from tuflexperf.errors import NotAttainable
 from tuflexperf.io.battery import (
     Battery,
@@ -25,10 +26,6 @@ from tuflexperf.models.battery import (
 from tuflexperf.models.thrust import (
     total_thrust_n,
 )
-
-MAX_SPEED_OVER_STALL = 8.0
-
-SPEED_GRID_POINTS = 4001
 
 
 # --- launch: ground roll + climb at full throttle -------------------------------------------
