@@ -33,7 +33,7 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
 CAMPAIGN = ROOT / "data" / "tuflex" / "campaign" / "campaign.yaml"
-BENCHES = ("bench_core", "bench_endurance", "bench_export", "bench_fit", "bench_flightlog",
+BENCHES = ("bench_backend", "bench_core", "bench_endurance", "bench_export", "bench_fit", "bench_flightlog",
            "bench_mission", "bench_mission_samples", "bench_performance", "bench_report",
            "bench_uncertainty")
 
