@@ -57,3 +57,17 @@ def test_readme_lists_every_command() -> None:
     names = [c.name or c.callback.__name__ for c in app.registered_commands]
     missing = [n for n in names if f"`tuflexperf {n}" not in text]
     assert not missing, f"README's command table lacks {missing}"
+
+
+@pytest.mark.parametrize("path", [README, *DOCS], ids=lambda p: p.name)
+def test_named_files_exist(path: Path) -> None:
+    # a test, script or bench the docs point to must be there (files are split and renamed)
+    text = path.read_text(encoding="utf-8")
+    missing = []
+    for name in set(re.findall(r"`((?:tests|scripts|bench)/[\w/*.-]+\.py)`", text)):
+        if not list(ROOT.glob(name)):
+            missing.append(name)
+    for name in set(re.findall(r"`(test_[\w*]+\.py)`", text)):
+        if not list(ROOT.glob(f"tests/**/{name}")):
+            missing.append(name)
+    assert not missing, f"{path.name} names files that do not exist: {sorted(missing)}"
