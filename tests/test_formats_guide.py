@@ -24,6 +24,7 @@ from tuflexperf.io import vendor
 from tuflexperf.io.battery import BatterySchema, load_battery
 from tuflexperf.io.campaign import CampaignSchema, load_campaign
 from tuflexperf.io.case import AircraftSchema, CaseSchema, PropulsionSchema, load_case
+from tuflexperf.io.datasheet import DatasheetSchema
 from tuflexperf.io.discharge import DISCHARGE_COLUMNS
 from tuflexperf.io.mission import _ALLOWED, MissionFileSchema, load_mission
 from tuflexperf.io.proptables import PropellerTablesSchema, read_propeller_tables
@@ -92,6 +93,7 @@ SECTIONS: dict[type[BaseModel], str] = {
     MissionFileSchema: "mission",
     CampaignSchema: "campaign",
     PropellerTablesSchema: "proptables",
+    DatasheetSchema: "datasheet",
 }
 
 
@@ -121,7 +123,7 @@ def schema_keys() -> list[Key]:
                     walk(sub, section, f"{path}{suffix}.")
 
     for model in (CaseSchema, AircraftSchema, PropulsionSchema, BatterySchema,
-                  MissionFileSchema, CampaignSchema, PropellerTablesSchema):
+                  MissionFileSchema, CampaignSchema, PropellerTablesSchema, DatasheetSchema):
         walk(model, SECTIONS[model], "")
     unique: dict[tuple[str, str], Key] = {}
     for key in keys:
@@ -219,7 +221,7 @@ def examples(text: str) -> dict[str, str]:
 def test_every_file_has_a_minimal_and_a_full_example() -> None:
     found = examples(_text())
     for name in ("case", "uncertainty", "aircraft", "propulsion", "battery", "mission",
-                 "campaign", "run", "table", "vendor", "proptables"):
+                 "campaign", "run", "table", "vendor", "proptables", "datasheet"):
         for kind in ("minimal", "full"):
             assert f"{name} {kind}" in found, f"docs/formats.md: no example '{name} {kind}'"
 
@@ -227,7 +229,7 @@ def test_every_file_has_a_minimal_and_a_full_example() -> None:
 @pytest.mark.parametrize(("name", "schema"), [
     ("case", CaseSchema), ("aircraft", AircraftSchema), ("propulsion", PropulsionSchema),
     ("battery", BatterySchema), ("mission", MissionFileSchema), ("campaign", CampaignSchema),
-    ("proptables", PropellerTablesSchema),
+    ("proptables", PropellerTablesSchema), ("datasheet", DatasheetSchema),
 ])
 @pytest.mark.parametrize("kind", ["minimal", "full"])
 def test_yaml_examples_validate(tmp_path: Path, name: str, schema: type[BaseModel],
