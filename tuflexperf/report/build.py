@@ -260,16 +260,23 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     if measured.comparisons:
         measured_pages["06_model_vs_measured"] = lambda: fg.model_vs_measured(case, measured)
     measured_pages["06b_thrust_band"] = lambda: af.thrust_band(case, analyses, measured)
-    _start_helper(_draw_pages, (list(measured_pages.items())[::-1], folder, kept), writers)
-
     named = sorted({**analysis_pages, **measured_pages}.items())  # the report's page order
     notes = measured.notes + analyses.notes
-    step.total = step.done + len(named) + 3
     from tuflexperf import __version__
     from tuflexperf.report.data import inputs_digest
     from tuflexperf.report.first_page import first_page, timestamp
 
+    # The page count is known now: every page's footer is written down for the writers,
+    # who stamp each page they draw from here on (and those drawn before) and render its PNG.
     now = timestamp()  # one date for the first page and every footer
+    hashed = input_hashes(case, measured)
+    digest = inputs_digest([h for h, _, _ in hashed])
+    order = ["_title", *(name for name, _ in named), *(["_notes"] if notes else []), "_hashes"]
+    texts = {name: footer_texts(case, k, len(order), digest, __version__, now)
+             for k, name in enumerate(order, start=1)}
+    _write_footers(kept, texts)
+    _start_helper(_draw_pages, (list(measured_pages.items())[::-1], folder, kept), writers)
+    step.total = step.done + len(named) + 2
     # the title page carries the PDF's metadata: the assembled PDF keeps the first page's
     _save_pdf_pages(
         [first_page(case, measured, analyses, now,
@@ -277,35 +284,34 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
         kept / "_title.pdf",
         metadata={"Title": f"Design review: {case.name}", "Creator": f"tuflexperf {__version__}"},
     )
+    _stamp_page(kept, "_title", [texts["_title"]]).close()
     step("title page")
     _draw_pages(named, folder, kept, step)  # what the writers have not claimed yet
     # the inputs' sha256 last, as the title page says, after what the report leaves out
-    hashed = input_hashes(case, measured)
     end = [fg.text_page("What this report leaves out, and why", [f"- {n}" for n in notes])
            ] if notes else []
     end.append(_hash_page(case, measured, hashed))
     for fig in end:
         reserve(fig)
     _save_pdf_pages(end, kept / "_end.pdf")
+    _stamp_page(kept, "_end", [texts[n] for n in order[len(named) + 1:]]).close()
     for writer in writers:
         writer.join()
     # never a report without its figures: a page a writer did not finish is drawn here
+    for part in folder.glob("*.part"):
+        part.unlink()
     for name, draw in named:
         if not (kept / f"{name}.pdf").is_file():
             _draw_page(name, draw, folder, kept)
+        if not (kept / f"{name}.footed.pdf").is_file() or not (folder / f"{name}.png").is_file():
+            _finish_page(name, folder, kept, texts[name])
     raise_if_interrupted()
     pdf_path = folder / PDF_NAME
-    digest = inputs_digest([h for h, _, _ in hashed])
     page_count = _assemble_pdf(
-        [kept / "_title.pdf", *(kept / f"{name}.pdf" for name, _ in named), kept / "_end.pdf"],
+        [kept / f"{name}.footed.pdf" for name in ("_title", *(n for n, _ in named), "_end")],
         pdf_path,
-        footer=lambda k, n: footer_texts(case, k, n, digest, __version__, now),
     )
     step("review.pdf")
-    # each PNG is its page of the PDF, footer and all (page 1 is the title page)
-    _rasterise_pages(pdf_path, [(k, folder / f"{name}.png") for k, (name, _) in
-                                enumerate(named, start=1)], writers)
-    step("figures as PNG")
     return ReportResult(
         out_dir=folder,
         files=[*(folder / f"{name}.png" for name, _ in named), pdf_path],
@@ -383,20 +389,22 @@ def _save_pdf_pages(figures: list[Any], path: Path,
     os.replace(staged, path)
 
 
-def rasterise_page(pdf_page: Path, png: Path, index: int = 0) -> None:
-    """Page ``index`` of ``pdf_page`` as a PNG at :data:`PNG_DPI` (PDFium)."""
+def rasterise_page(pdf_page: Any, png: Path, index: int = 0) -> None:
+    """Page ``index`` of ``pdf_page`` (a path or an open pypdfium2 document) as a PNG at
+    :data:`PNG_DPI` (PDFium)."""
     import pypdfium2
     from PIL.PngImagePlugin import PngInfo
 
     from tuflexperf import __version__
 
-    if not png.parent.is_dir():  # no folder any more: the report was stopped
-        return
-    document = pypdfium2.PdfDocument(pdf_page)
-    try:
-        image = document[index].render(scale=PNG_DPI / 72.0).to_pil()
-    finally:
-        document.close()
+    if isinstance(pdf_page, pypdfium2.PdfDocument):
+        image = pdf_page[index].render(scale=PNG_DPI / 72.0).to_pil()
+    else:
+        document = pypdfium2.PdfDocument(pdf_page)
+        try:
+            image = document[index].render(scale=PNG_DPI / 72.0).to_pil()
+        finally:
+            document.close()
     info = PngInfo()
     info.add_text("Software", f"tuflexperf {__version__}")  # whose file it is (SPEC 5)
     staged = png.with_name(png.name + ".part")
@@ -407,36 +415,66 @@ def rasterise_page(pdf_page: Path, png: Path, index: int = 0) -> None:
 
 def _draw_page(name: str, draw: Callable[[], Any], folder: Path, kept: Path) -> None:
     """One page drawn once: ``kept/NAME.pdf`` (vector), with the footer's strip kept free;
-    its PNG (``folder/NAME.png``) is rendered from the assembled PDF, footer and all."""
+    once the footers are known it is stamped and rendered (:func:`_finish_pages`)."""
     fig = draw()
     reserve(fig)
     _save_pdf_pages([fig], kept / f"{name}.pdf")
 
 
-def _rasterise_pages(pdf: Path, pngs: list[tuple[int, Path]], helpers: list[Any]) -> None:
-    """Pages of ``pdf`` (0-based index, PNG) rendered as PNGs, every other one by a forked
-    helper; a PNG the helper did not write is rendered here."""
-    from tuflexperf.io.files import raise_if_interrupted
-
-    _start_helper(_rasterise_each, (pdf, pngs[1::2]), helpers)
-    _rasterise_each(pdf, pngs[::2])
-    for helper in helpers:
-        helper.join()
-    raise_if_interrupted()
-    for part in pdf.parent.glob("*.part"):  # a helper stopped half-way
-        part.unlink()
-    _rasterise_each(pdf, [(k, png) for k, png in pngs if not png.is_file()])
+FOOTERS = "_footers.json"
 
 
-def _rasterise_each(pdf: Path, pngs: list[tuple[int, Path]]) -> None:
-    for index, png in pngs:
-        rasterise_page(pdf, png, index)
+def _write_footers(kept: Path, texts: dict[str, Any]) -> None:
+    """Every page's footer (left, right), by page name, for the forked writers."""
+    import json
+
+    staged = kept / (FOOTERS + ".part")
+    staged.write_text(json.dumps(texts), encoding="utf-8")
+    os.replace(staged, kept / FOOTERS)  # never read half-written
 
 
-def _assemble_pdf(pages: list[Path], path: Path,
-                  footer: Callable[[int, int], tuple[str, str]] | None = None) -> int:
-    """The one-page PDFs put together in order (PDFium), each page stamped with
-    ``footer(k, n)`` (left and right text of page k of n); returns the page count."""
+def _stamp_page(kept: Path, name: str, texts: list[Any]) -> Any:
+    """``kept/NAME.pdf`` with its footers stamped, as ``kept/NAME.footed.pdf``; returns the
+    stamped document (open: the caller closes it)."""
+    import pypdfium2
+
+    document = pypdfium2.PdfDocument(kept / f"{name}.pdf")
+    try:
+        stamp(document, [tuple(t) for t in texts])
+        staged = kept / f"{name}.footed.pdf.part"
+        document.save(staged)
+        os.replace(staged, kept / f"{name}.footed.pdf")
+    except BaseException:
+        document.close()
+        raise
+    return document
+
+
+def _finish_page(name: str, folder: Path, kept: Path, text: Any) -> None:
+    """A drawn page stamped with its footer, and its PNG rendered from the stamped page."""
+    document = _stamp_page(kept, name, [text])
+    try:
+        rasterise_page(document, folder / f"{name}.png")
+    finally:
+        document.close()
+
+
+def _finish_pages(names: list[str], folder: Path, kept: Path) -> None:
+    """Stamp and render each drawn page of ``names`` that this process claims first, once
+    the footers are known (before that: nothing)."""
+    import json
+
+    if not (kept / FOOTERS).is_file():
+        return
+    texts = json.loads((kept / FOOTERS).read_text(encoding="utf-8"))
+    for name in names:
+        if (kept / f"{name}.pdf").is_file() and _claim(kept, f"{name}.footer"):
+            _finish_page(name, folder, kept, texts[name])
+
+
+def _assemble_pdf(pages: list[Path], path: Path) -> int:
+    """The PDFs (each page stamped with its footer) put together in order (PDFium); returns
+    the page count."""
     import pypdfium2
 
     document = pypdfium2.PdfDocument(pages[0])
@@ -448,8 +486,6 @@ def _assemble_pdf(pages: list[Path], path: Path,
             finally:
                 part.close()
         count = len(document)
-        if footer is not None:
-            stamp(document, [footer(k, count) for k in range(1, count + 1)])
         document.save(path)
     finally:
         document.close()
@@ -467,15 +503,19 @@ def _claim(keep: Path, name: str) -> bool:
 
 def _draw_pages(named: list[tuple[str, Callable[[], Any]]], folder: Path, keep: Path,
                 step: Callable[[str], None] | None = None) -> None:
-    """Draw each page that this process claims (:func:`_draw_page`)."""
+    """Draw each page that this process claims (:func:`_draw_page`), then stamp and render
+    each drawn page it claims (:func:`_finish_pages`), as soon as the footers are known."""
     from tuflexperf.io.files import raise_if_interrupted
 
     for name, draw in named:
         raise_if_interrupted()
         if _claim(keep, name):
             _draw_page(name, draw, folder, keep)
+            _finish_pages([name], folder, keep)
         if step is not None:
             step(name)
+    raise_if_interrupted()
+    _finish_pages([name for name, _ in named], folder, keep)  # those drawn before the count
 
 
 def _start_helper(target: Callable[..., None], args: tuple[Any, ...],

@@ -638,8 +638,8 @@ def input_caveats(case: Case, measured: Measured) -> list[str]:
     for role, path in files:
         said = provenance_class(path)
         if said in CAVEAT_CLASSES:
-            caveats.append(f"{role} {path.name}: {said}, as its header says (not measured): "
-                           "the results are only as good as it")
+            caveats.append(f"{role} {path.name}: {said} (its header says so), not measured: "
+                           "the verdicts above rest on it")
     return caveats + list(getattr(measured, "provenance", []))
 
 

@@ -78,7 +78,9 @@ def verdict_lines(verdicts: list[Any], width: int,
     header = (f"{'requirement':<{w}}{'value':>10}{'limit':>10}{'unit':>10}{'margin':>10}"
               f"{'P(meet)':>9}  verdict")
     lines: list[Line] = [(Segment(header, bold=True),), (Segment("-" * len(header), QUIET),)]
-    for v in verdicts:
+    for k, v in enumerate(verdicts):
+        if k:
+            lines.append(())
         word = verdict_word(v)
         p = (probabilities or {}).get(v.name)
         chance = "-" if p is None else f"{p.probability:.4f}"
@@ -87,12 +89,26 @@ def verdict_lines(verdicts: list[Any], width: int,
                f"{_cell(fmt(v.margin))}{_cell(chance, 9)}  ")
         lines.append((Segment(row, FAIL_COLOUR if failed else PLAIN, failed),
                       Segment(word, _word_colour(word), True, len(row))))
-        if v.reason:
-            reason = f"reason: {v.reason}" if failed else v.reason
-            lines += _wrapped(reason, width, 2, FAIL_COLOUR if failed else QUIET, failed)
+        if failed:
+            lines += _wrapped(failure_reason(v), width, 2, FAIL_COLOUR, True)
+        elif v.reason:
+            lines += _wrapped(v.reason, width, 2, QUIET)
         for warning in v.details.get("warnings", []):
             lines += _wrapped(f"caveat: {warning}", width, 2, CAVEAT_COLOUR)
     return lines
+
+
+def failure_reason(verdict: Any) -> str:
+    """Why a requirement failed, in the verdict's own words: its value against its limit
+    (or "not attainable"), then the reason line ``check`` prints."""
+    unit = f" {verdict.unit}" if verdict.unit else ""
+    if verdict.value is None:
+        said = verdict.reason or "no value"
+        return "reason: " + (said if said.startswith("not attainable") else
+                             f"not attainable: {said}")
+    side = "above the maximum" if verdict.kind == "max" else "below the minimum"
+    head = f"reason: {fmt(verdict.value)}{unit} is {side} {fmt(verdict.limit)}{unit}"
+    return f"{head}; {verdict.reason}" if verdict.reason else head
 
 
 def _cell(text: str, width: int = 10) -> str:
@@ -129,7 +145,7 @@ def sampling_lines(case: Any, probabilities: dict[str, Any] | None, width: int) 
     why = ("the case's uncertainty block is sampled by `tuflexperf check`, not by this report"
            if block else "the case has no uncertainty block; `tuflexperf check --samples N` "
            "samples one")
-    return _wrapped(f"P(meet): not sampled ({why}): each verdict above is the nominal one",
+    return [()] + _wrapped(f"P(meet): not sampled ({why}): each verdict above is the nominal one",
                     width, 0, QUIET)
 
 
