@@ -165,3 +165,45 @@ def test_each_png_carries_its_page_footer(shipped):
             np.testing.assert_array_equal(written[-45:], strip)
     finally:
         document.close()
+
+
+def test_page_one_of_a_crowded_case_keeps_every_note_on_the_page(tmp_path):
+    """At a 3.7 V cell cut-off the trim and OEI fail on the battery and the cruise ends at
+    the cut-off before the reserve: twelve notes. Page 1 (drawn alone, read back by PDFium)
+    holds each of them, every reason, and nothing runs off the page or into the footer."""
+    import pypdfium2
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    from tuflexperf.analysis.study import Study
+    from tuflexperf.io.case import load_case
+    from tuflexperf.io.dotted import with_values
+    from tuflexperf.report.data import load_measured, run_analyses
+    from tuflexperf.report.first_page import first_page, timestamp
+    from tuflexperf.report.footer import FOOTER_IN
+
+    sets = ["--set", "battery.cutoff_voltage_per_cell_v=3.7"]
+    check = _check(sets)
+    assert any("cut-off with" in note and "reserve" in note for note in check["notes"])
+    case = with_values(load_case(None), {"battery.cutoff_voltage_per_cell_v": 3.7})
+    fig = first_page(case, load_measured(case, None), run_analyses(Study(case)), timestamp())
+    with PdfPages(tmp_path / "first.pdf") as pdf:
+        pdf.savefig(fig)
+    document = pypdfium2.PdfDocument(tmp_path / "first.pdf")
+    try:
+        page = document[0]
+        width, height = page.get_size()
+        text = page.get_textpage().get_text_range()
+        boxes = [obj.get_bounds() for obj in page.get_objects()
+                 if obj.type == pypdfium2.raw.FPDF_PAGEOBJ_TEXT]
+    finally:
+        document.close()
+    assert _page_rows(text) == check["rows"]
+    flat = _flat(text)
+    for name, reason in check["reasons"].items():
+        assert _flat(reason) in flat, (name, reason)
+    for note in check["notes"]:
+        assert _flat(note) in flat, note
+    assert len(boxes) > 40  # each line's text is an object of its own
+    for left, bottom, right, top in boxes:
+        assert left >= 0 and right <= width and top <= height, (left, right, top)
+        assert bottom >= FOOTER_IN * 72, bottom  # clear of the footer's strip

@@ -179,7 +179,7 @@ def page_lines(case: Any, measured: Any, analyses: Any, width: int, now: str,
     right += [()] + _wrapped(f"case {case.path}", half, 0, QUIET)
     if getattr(case, "overrides", ()):  # the figures are of the changed case, not the files'
         right += _wrapped("with --set " + ", ".join(f"{k}={v:g}" for k, v in case.overrides),
-                          half, 2, FAIL_COLOUR, True)
+                          half, 2, CAVEAT_COLOUR, True)
     from tuflexperf import __version__
 
     right += _wrapped(f"tuflexperf {__version__}, {now}; every input file with its sha256 on "
