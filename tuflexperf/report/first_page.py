@@ -182,8 +182,8 @@ def page_lines(case: Any, measured: Any, analyses: Any, width: int, now: str,
                           half, 2, CAVEAT_COLOUR, True)
     from tuflexperf import __version__
 
-    right += _wrapped(f"tuflexperf {__version__}, {now}; every input file with its sha256 on "
-                      "the last page", half, 0, QUIET)
+    right += _wrapped(f"tuflexperf {__version__}, {now};", half, 0, QUIET)
+    right += _wrapped("every input file with its sha256 on the last page", half, 0, QUIET)
     return top, left, right
 
 
