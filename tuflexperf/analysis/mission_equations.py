@@ -23,6 +23,12 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.analysis.airborne import ROTATION_STEPS
+from tuflexperf.analysis.constants import (  # re-exported: the mission's own names
+    BURST_OVER_CONTINUOUS as BURST_OVER_CONTINUOUS,
+)
+from tuflexperf.analysis.constants import (
+    RATING_SEGMENT_S as RATING_SEGMENT_S,
+)
 from tuflexperf.analysis.constants import (
     SECONDS_PER_HOUR,
     STEPS,
