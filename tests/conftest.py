@@ -24,6 +24,72 @@ ROOT = Path(__file__).resolve().parent.parent
 SHIPPED_CASE = ROOT / "requirements" / "tuflex.yaml"
 
 
+class Ran(NamedTuple):
+    """What a run of the command line gave: as ``subprocess.CompletedProcess`` names it."""
+
+    args: list[str]
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def tuflexperf(*args: str, cwd: Path | str | None = None, warnings_shown: bool = True) -> Ran:
+    """``tuflexperf ARGS`` run in this process, as the console script runs it: through
+    :func:`tuflexperf.cli.main`, its exit status as :mod:`tuflexperf.entry` makes it, and
+    stdout and stderr captured as byte streams (no terminal) in the working folder ``cwd``.
+
+    A subprocess costs ~0.3 s of CPU for imports alone; what only a process shows (signals,
+    the entry point's own exit, bytes that are no UTF-8, file modes, resource limits, what
+    forked helpers print) stays in a real one. An exception the command lets out (a
+    traceback and exit 1 in a process) is raised here, so the test fails on it. Warnings
+    print to the captured stderr as in a fresh interpreter (Python's default filters), or,
+    with ``warnings_shown=False``, not at all (``PYTHONWARNINGS=ignore``).
+    """
+    import io
+    import os
+    import signal
+    import sys
+    import warnings
+
+    from tuflexperf.cli import main
+    from tuflexperf.entry import exit_status
+    from tuflexperf.io.files import INTERRUPT_SIGNALS
+
+    out = io.TextIOWrapper(io.BytesIO(), encoding="utf-8", errors="surrogateescape",
+                           write_through=True)
+    err = io.TextIOWrapper(io.BytesIO(), encoding="utf-8", errors="backslashreplace",
+                           write_through=True)
+    saved_streams = sys.stdout, sys.stderr
+    saved_handlers = {signum: signal.getsignal(signum) for signum in INTERRUPT_SIGNALS}
+    saved_hook, saved_cwd = sys.unraisablehook, os.getcwd()
+    code = 0
+    try:
+        if cwd is not None:
+            os.chdir(cwd)
+        sys.stdout, sys.stderr = out, err
+        with warnings.catch_warnings():
+            warnings.resetwarnings()  # a fresh interpreter's filters, not pytest's
+            warnings.showwarning = warnings._showwarning_orig  # type: ignore[attr-defined]
+            if warnings_shown:
+                for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning,
+                                 ResourceWarning):
+                    warnings.simplefilter("ignore", category)
+            else:
+                warnings.simplefilter("ignore")
+            try:
+                main(list(args))
+            except SystemExit as done:
+                code = exit_status(done.code)
+    finally:
+        sys.stdout, sys.stderr = saved_streams
+        for signum, handler in saved_handlers.items():
+            signal.signal(signum, handler)
+        sys.unraisablehook = saved_hook
+        os.chdir(saved_cwd)
+    return Ran(list(args), code, out.buffer.getvalue().decode("utf-8", "surrogateescape"),
+               err.buffer.getvalue().decode("utf-8", "replace"))
+
+
 def copy_shipped_case(folder: Path) -> Path:
     """The shipped case (its requirements/ and data/ folders) copied into ``folder``;
     returns the copy's case file."""
@@ -88,21 +154,33 @@ class ShippedReport(NamedTuple):
 
 @pytest.fixture(scope="session")
 def shipped_report(tmp_path_factory: pytest.TempPathFactory) -> ShippedReport:
-    """``tuflexperf report --out .../review --json`` of the shipped case, run once per session
-    in a subprocess as a user runs it. Tests read it, never change it; one that needs an
-    earlier report to protect copies it (``shutil.copytree``) instead of drawing its own."""
+    """``tuflexperf report --out .../review --json`` of the shipped case, run once per test
+    run in a subprocess as a user runs it, and shared by every xdist worker (the first to
+    ask draws it under a file lock; a report is ~10 s of CPU). Tests read it, never change
+    it; one that needs an earlier report to protect copies it (``shutil.copytree``) instead
+    of drawing its own."""
+    import fcntl
     import json
     import os
     import subprocess
     import sys
 
-    parent = tmp_path_factory.mktemp("shipped_report")
-    out = parent / "review"
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", "report", "--out", str(out),
-                           "--json"], cwd=parent, capture_output=True, text=True, timeout=300,
-                          env={**os.environ, "PYTHONWARNINGS": "ignore"})
-    assert done.returncode == 0, done.stderr
-    return ShippedReport(parent, out, json.loads(done.stdout))
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent  # the run's temporary root, which every worker's folder is in
+    parent, answer = root / "shipped_report", root / "shipped_report.json"
+    with open(root / "shipped_report.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not answer.exists():
+            parent.mkdir(exist_ok=True)
+            done = subprocess.run([sys.executable, "-m", "tuflexperf", "report", "--out",
+                                   str(parent / "review"), "--json"], cwd=parent,
+                                  capture_output=True, text=True, timeout=300,
+                                  env={**os.environ, "PYTHONWARNINGS": "ignore"})
+            assert done.returncode == 0, done.stderr
+            answer.with_suffix(".part").write_text(done.stdout)
+            answer.with_suffix(".part").replace(answer)
+    return ShippedReport(parent, parent / "review", json.loads(answer.read_text()))
 
 
 def write_case(
