@@ -33,6 +33,15 @@ class Ran(NamedTuple):
     stderr: str
 
 
+def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  file: Any = None, line: str | None = None) -> None:
+    """Python's own display of a warning: on (the captured) stderr."""
+    import sys
+    import warnings
+
+    sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
+
+
 def tuflexperf(*args: str, cwd: Path | str | None = None, warnings_shown: bool = True) -> Ran:
     """``tuflexperf ARGS`` run in this process, as the console script runs it: through
     :func:`tuflexperf.cli.main`, its exit status as :mod:`tuflexperf.entry` makes it, and
@@ -69,7 +78,7 @@ def tuflexperf(*args: str, cwd: Path | str | None = None, warnings_shown: bool =
         sys.stdout, sys.stderr = out, err
         with warnings.catch_warnings():
             warnings.resetwarnings()  # a fresh interpreter's filters, not pytest's
-            warnings.showwarning = warnings._showwarning_orig  # type: ignore[attr-defined]
+            warnings.showwarning = _show_warning  # on stderr, not into pytest's record
             if warnings_shown:
                 for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning,
                                  ResourceWarning):
