@@ -44,59 +44,81 @@ def _show_warning(message: Warning | str, category: type[Warning], filename: str
 
 def tuflexperf(*args: str, cwd: Path | str | None = None, warnings_shown: bool = True) -> Ran:
     """``tuflexperf ARGS`` run in this process, as the console script runs it: through
-    :func:`tuflexperf.cli.main`, its exit status as :mod:`tuflexperf.entry` makes it, and
-    stdout and stderr captured as byte streams (no terminal) in the working folder ``cwd``.
+    :func:`tuflexperf.cli.main`, its exit status as :mod:`tuflexperf.entry` makes it, in the
+    working folder ``cwd``, with descriptors 1 and 2 on files (no terminal) and
+    ``sys.stdout``/``sys.stderr`` unbuffered on them: what Python, a C library (CasADi) or a
+    forked helper writes is captured, in the order written, as a process's pipes get it.
 
     A subprocess costs ~0.3 s of CPU for imports alone; what only a process shows (signals,
-    the entry point's own exit, bytes that are no UTF-8, file modes, resource limits, what
-    forked helpers print) stays in a real one. An exception the command lets out (a
+    the entry point's own exit, bytes that are no UTF-8, file modes, resource limits, a
+    FIFO that would block) stays in a real one. An exception the command lets out (a
     traceback and exit 1 in a process) is raised here, so the test fails on it. Warnings
     print to the captured stderr as in a fresh interpreter (Python's default filters), or,
     with ``warnings_shown=False``, not at all (``PYTHONWARNINGS=ignore``).
     """
-    import io
+    import contextlib
     import os
     import signal
     import sys
+    import tempfile
     import warnings
 
     from tuflexperf.cli import main
     from tuflexperf.entry import exit_status
     from tuflexperf.io.files import INTERRUPT_SIGNALS
 
-    out = io.TextIOWrapper(io.BytesIO(), encoding="utf-8", errors="surrogateescape",
-                           write_through=True)
-    err = io.TextIOWrapper(io.BytesIO(), encoding="utf-8", errors="backslashreplace",
-                           write_through=True)
     saved_streams = sys.stdout, sys.stderr
     saved_handlers = {signum: signal.getsignal(signum) for signum in INTERRUPT_SIGNALS}
     saved_hook, saved_cwd = sys.unraisablehook, os.getcwd()
     code = 0
-    try:
-        if cwd is not None:
-            os.chdir(cwd)
-        sys.stdout, sys.stderr = out, err
-        with warnings.catch_warnings():
-            warnings.resetwarnings()  # a fresh interpreter's filters, not pytest's
-            warnings.showwarning = _show_warning  # on stderr, not into pytest's record
-            if warnings_shown:
-                for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning,
-                                 ResourceWarning):
-                    warnings.simplefilter("ignore", category)
-            else:
-                warnings.simplefilter("ignore")
-            try:
-                main(list(args))
-            except SystemExit as done:
-                code = exit_status(done.code)
-    finally:
-        sys.stdout, sys.stderr = saved_streams
-        for signum, handler in saved_handlers.items():
-            signal.signal(signum, handler)
-        sys.unraisablehook = saved_hook
-        os.chdir(saved_cwd)
-    return Ran(list(args), code, out.buffer.getvalue().decode("utf-8", "surrogateescape"),
-               err.buffer.getvalue().decode("utf-8", "replace"))
+    with contextlib.ExitStack() as stack:
+        files = {fd: stack.enter_context(tempfile.TemporaryFile()) for fd in (1, 2)}
+        for stream in saved_streams:
+            with contextlib.suppress(OSError, ValueError, AttributeError):
+                stream.flush()  # what this process printed before is not the command's
+        saved_fds = {fd: os.dup(fd) for fd in files}
+        try:
+            for fd, file in files.items():
+                os.dup2(file.fileno(), fd)
+            sys.stdout, sys.stderr = (
+                open(fd, "w", encoding="utf-8", errors=errors, buffering=1,  # noqa: SIM115
+                     closefd=False)
+                for fd, errors in ((1, "surrogateescape"), (2, "backslashreplace")))
+            sys.stdout.reconfigure(write_through=True)
+            sys.stderr.reconfigure(write_through=True)
+            if cwd is not None:
+                os.chdir(cwd)
+            with warnings.catch_warnings():
+                warnings.resetwarnings()  # a fresh interpreter's filters, not pytest's
+                warnings.showwarning = _show_warning  # on stderr, not into pytest's record
+                if warnings_shown:
+                    for category in (DeprecationWarning, PendingDeprecationWarning,
+                                     ImportWarning, ResourceWarning):
+                        warnings.simplefilter("ignore", category)
+                else:
+                    warnings.simplefilter("ignore")
+                try:
+                    main(list(args))
+                except SystemExit as done:
+                    code = exit_status(done.code)
+        finally:
+            for stream in (sys.stdout, sys.stderr):
+                with contextlib.suppress(OSError, ValueError, AttributeError):
+                    stream.flush()
+            sys.stdout, sys.stderr = saved_streams
+            for fd, saved in saved_fds.items():
+                os.dup2(saved, fd)
+                os.close(saved)
+            for signum, handler in saved_handlers.items():
+                signal.signal(signum, handler)
+            sys.unraisablehook = saved_hook
+            os.chdir(saved_cwd)
+        written = {}
+        for fd, file in files.items():
+            file.seek(0)
+            written[fd] = file.read()
+    return Ran(list(args), code, written[1].decode("utf-8", "surrogateescape"),
+               written[2].decode("utf-8", "replace"))
 
 
 def copy_shipped_case(folder: Path) -> Path:

@@ -57,3 +57,29 @@ def test_a_warning_the_command_lets_out_is_on_its_stderr(monkeypatch) -> None:
     monkeypatch.setattr(cli, "main", warned)
     assert "UserWarning: a stray warning" in tuflexperf("check").stderr
     assert tuflexperf("check", warnings_shown=False).stderr == ""
+
+
+def test_what_a_c_library_or_a_forked_helper_writes_is_captured(monkeypatch) -> None:
+    """CasADi writes to descriptor 2 itself and the report's helpers are forked: in a
+    process both reach the pipe, so here both reach the captured stderr too."""
+    import os
+
+    from tuflexperf import cli
+
+    main = cli.main
+
+    def noisy(argv):
+        os.write(2, b"written to descriptor 2\n")
+        child = os.fork()
+        if child == 0:  # as a forked helper writes
+            sys.stderr.write("a forked helper's line\n")
+            sys.stderr.flush()
+            os._exit(0)
+        os.waitpid(child, 0)
+        main(argv)
+
+    monkeypatch.setattr(cli, "main", noisy)
+    done = tuflexperf("check", "nowhere.yaml")
+    assert done.stderr.splitlines() == ["written to descriptor 2", "a forked helper's line",
+                                        "tuflexperf: error: nowhere.yaml: file not found"]
+    assert done.returncode == 2 and done.stdout == ""
