@@ -23,7 +23,10 @@ def test_readme_is_short_and_keeps_the_two_commands() -> None:
     assert len(text.splitlines()) <= 300
     assert SETUP in text
     assert TESTS in text
-    assert TESTS in (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    # CI runs the README's test command (its two halves may stand on two lines)
+    head, _, tail = TESTS.rpartition(" && ")
+    assert head in ci and tail in ci
 
 
 @pytest.mark.parametrize("path", [README, *DOCS], ids=lambda p: p.name)
