@@ -21,6 +21,13 @@ from pathlib import Path
 from typing import Any
 
 from tuflexperf.errors import InputError
+from tuflexperf.io.inputs import (  # noqa: F401 - re-exported: every reader's, named here too
+    MAX_RUN_BYTES,
+    MAX_TABLE_BYTES,
+    MAX_YAML_BYTES,
+    check_input_file,
+    why_not_a_file,
+)
 
 MARKER = ".tuflexperf-output.json"  # written into every folder a command writes whole
 
@@ -52,51 +59,6 @@ def seal_intact(data: bytes) -> bool:
     cut = data.rfind(b"\n", 0, len(data) - 1) + 1
     digest = hashlib.sha256(data[:cut]).hexdigest()
     return data[cut:-1] == f"{SEAL}{digest}".encode()
-
-
-MAX_YAML_BYTES = 16 << 20  # a case, aircraft, propulsion, battery or mission file
-MAX_RUN_BYTES = 2 << 30  # one run file (the paper's rig: 1 kHz for minutes, a few MB)
-MAX_TABLE_BYTES = 64 << 20  # a thrust table: one row per test point (~1 M rows)
-
-
-def check_input_file(path: Path | str, what: str = "file", max_bytes: int = MAX_YAML_BYTES) -> Path:
-    """``path`` if it is a regular, readable file of at most ``max_bytes``; else bad input.
-
-    Refuses what would hang or exhaust memory before a byte is read: a FIFO (blocks
-    forever), a device such as /dev/zero (endless), a symlink loop, a name too long.
-    """
-    import stat
-
-    path = Path(path)
-    try:
-        info = path.stat()
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except OSError as exc:
-        why = {errno.ELOOP: "symbolic link loop", errno.ENAMETOOLONG: "file name too long"}
-        raise InputError(f"{path}: cannot read: {why.get(exc.errno, exc.strerror)}") from None
-    if stat.S_ISDIR(info.st_mode):
-        raise InputError(f"{path}: is a directory, expected a {what}")
-    if not stat.S_ISREG(info.st_mode):
-        raise InputError(f"{path}: not a regular file (a pipe or device?), expected a {what}")
-    if info.st_size > max_bytes:
-        raise InputError(
-            f"{path}: {info.st_size / 2**20:.0f} MiB is larger than a {what} can be "
-            f"({max_bytes / 2**20:.0f} MiB)"
-        )
-    return path
-
-
-def why_not_a_file(path: Path | str) -> str:
-    """Why ``path`` is no input file: ``file not found``, or what it is instead (a directory,
-    a pipe or device) — "file not found" of a folder sent the user looking for a missing file
-    (outside audit)."""
-    path = Path(path)
-    if path.is_dir():
-        return "a directory, not a file"
-    if path.exists():
-        return "not a regular file (a pipe or device?)"
-    return "file not found"
 
 
 def user_umask() -> int:
