@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from tuflexperf.errors import InputError
+from tuflexperf.io import swap
 from tuflexperf.io.inputs import (  # noqa: F401 - re-exported: every reader's, named here too
     MAX_RUN_BYTES,
     MAX_TABLE_BYTES,
@@ -159,6 +160,9 @@ def written_mark(path: Path) -> str | None:
         return None if exc.errno == errno.ENODATA else _UNKNOWN
 
 
+_CLOEXEC = getattr(os, "O_CLOEXEC", 0)
+
+
 def write_files_atomically(files: dict[Path, bytes | str]) -> None:
     """Write several files all-or-nothing: every temporary file first, then the renames.
 
@@ -169,9 +173,6 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
     comes meanwhile puts every earlier file back (a Ctrl-C between two renames left a new
     output beside the earlier table; outside audit) and is then raised.
     """
-    import secrets  # lazy, with tempfile: `check` writes nothing
-    import tempfile
-
     staged: list[tuple[str, Path]] = []
     created: list[Path] = []
     mode = 0o666 & ~user_umask()
@@ -180,8 +181,9 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
         for path, data in files.items():
             current = output_path(path)
             created += _make_folders(current.parent)
-            fd, tmp = tempfile.mkstemp(prefix=f".{_short(current.name)}.", suffix=".tmp",
-                                       dir=current.parent)
+            swap.clean_stale(current, _short(current.name))  # a killed run's, beside it
+            tmp = str(current.parent / swap.hidden_name(_short(current.name), "tmp"))
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _CLOEXEC, 0o600)
             staged.append((tmp, current))
             raw = data.encode("utf-8") if isinstance(data, str) else data
             with os.fdopen(fd, "wb") as handle:
@@ -205,8 +207,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
                     if target.exists():
                         # a second name for the earlier file, which stays where it is until
                         # the new one replaces it in one rename (no moment without it)
-                        old = target.parent / (f".{_short(target.name)}.old-"
-                                               f"{secrets.token_hex(6)}")
+                        old = target.parent / swap.hidden_name(_short(target.name), "old")
                         try:
                             os.link(target, old)
                         except OSError:  # a file system without hard links
@@ -836,6 +837,48 @@ def interrupted() -> bool:
     return bool(_signals_received)
 
 
+def _commit_or_back(held: Path, out: Path, shown: Path, command: str,
+                    earlier: list[Path | None], staging: Path | None = None) -> None:
+    """The earlier output, now at ``held``, is checked again where nothing reaches it by
+    its name (a note the user put into it while this run worked was deleted with it;
+    audit), then removed; on a failure or an interrupt it goes back to ``out``.
+
+    ``staging`` None: ``out`` holds the new output already (exchanged); else ``out`` is
+    free and the new output moves in from ``staging``. ``earlier[0]`` follows where the
+    earlier output is, None once it is back at ``out`` or committed to go.
+    """
+    import shutil
+
+    def back() -> None:
+        if staging is None:
+            if not swap.exchange(held, out):
+                raise OSError(errno.EINVAL, "the exchange was refused", os.fsdecode(out))
+        else:
+            if os.path.lexists(out):
+                os.replace(out, staging)
+            os.replace(held, out)
+        earlier[0] = None
+
+    try:
+        if held.is_symlink() or not held.is_dir():
+            raise InputError(f"--out: {shown} became a file or a link while this run "
+                             "worked; refusing to replace it")
+        _refuse_unless_earlier_output(held, shown, command)
+        if staging is not None:
+            os.replace(staging, out)
+    except BaseException:
+        back()
+        raise
+    if _signals_received:
+        # interrupted before the swap was done: the earlier output stays (SPEC 5); the new
+        # one goes back to the staging, which the unwinding removes
+        back()
+        return
+    _committed[0] = True
+    earlier[0] = None
+    shutil.rmtree(held, ignore_errors=True)
+
+
 @contextlib.contextmanager
 def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> Iterator[Path]:
     """Stage a folder beside ``out``, yield it, then move it into place whole.
@@ -847,16 +890,18 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
     time before the swap) the staging folder is removed and ``out`` is untouched; after
     the swap the run is done, and an interrupt is no longer noted.
     """
-    import secrets  # lazy, with shutil: only the commands that write a folder need them
-    import shutil
+    import shutil  # lazy: only the commands that write a folder need it
 
+    target = output_path(out)
+    swap.clean_stale(target, _short(target.name))  # what a killed run left beside `out`
     check_output_dir(out, command, inputs)
-    shown, out = Path(out), output_path(out)
+    shown, out = Path(out), target
     try:
         created = _make_folders(out.parent)
     except OSError as exc:
         raise InputError(f"--out: cannot create {exc.filename}: {exc.strerror}") from None
-    staging = out.parent / f".{_short(out.name)}.tmp-{secrets.token_hex(6)}"
+    staging = out.parent / swap.hidden_name(_short(out.name), "tmp")
+    earlier: list[Path | None] = [None]  # where the earlier output is while not at `out`
     try:
         staging.mkdir(mode=0o777 & ~user_umask())
     except OSError as exc:
@@ -876,34 +921,21 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
         except OSError as exc:
             raise _os_error(staging / MARKER, exc) from None
         # the swap and the earlier output's removal run to their end: an interrupt there
-        # would leave `out` missing between the renames, or the earlier output behind as
-        # a hidden folder; it is raised when they are done
+        # would leave the earlier output behind as a hidden folder; it is raised when
+        # they are done
         with interrupts_held():
             raise_if_interrupted()  # one a library dropped earlier: the run was interrupted
             if out.exists() or out.is_symlink():
-                old = out.parent / f".{_short(out.name)}.old-{secrets.token_hex(6)}"
-                os.replace(out, old)
-                # checked again where nothing reaches it by its name: a note the user put
-                # into the earlier output while this run worked was deleted with it (audit)
-                try:
-                    if old.is_symlink() or not old.is_dir():
-                        raise InputError(f"--out: {shown} became a file or a link while "
-                                         "this run worked; refusing to replace it")
-                    _refuse_unless_earlier_output(old, shown, command)
-                except BaseException:
-                    os.replace(old, out)
-                    raise
                 with contextlib.suppress(OSError):  # the folder's mode stays the user's
-                    os.chmod(staging, stat.S_IMODE(old.stat().st_mode))
-                os.replace(staging, out)
-                if _signals_received:
-                    # interrupted before the swap was done: the earlier output stays (SPEC 5);
-                    # the new one goes back to the staging, which the unwinding removes
-                    os.replace(out, staging)
-                    os.replace(old, out)
-                else:
-                    _committed[0] = True
-                    shutil.rmtree(old, ignore_errors=True)
+                    os.chmod(staging, stat.S_IMODE(out.lstat().st_mode))
+                if swap.exchange(staging, out):  # `out` is the new output, at once
+                    earlier[0] = staging
+                    _commit_or_back(staging, out, shown, command, earlier)
+                else:  # no exchange here (swap's docstring): two renames, a moment apart
+                    old = out.parent / swap.hidden_name(_short(out.name), "old")
+                    os.replace(out, old)
+                    earlier[0] = old
+                    _commit_or_back(old, out, shown, command, earlier, staging)
             else:
                 os.replace(staging, out)
                 if _signals_received:
@@ -911,9 +943,14 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
                 else:
                     _committed[0] = True
     except BaseException as exc:
+        kept = earlier[0]
         with _cleanup():
-            shutil.rmtree(staging, ignore_errors=True)
+            if kept is None:
+                shutil.rmtree(staging, ignore_errors=True)
             _remove_folders(created)
+        if kept is not None:  # putting the earlier output back failed: it stays, named
+            raise InputError(f"--out: {shown}: the earlier output could not be put back "
+                             f"({exc}); it is {kept}") from None
         if isinstance(exc, OSError):
             raise _staged_os_error(exc, staging, out) from None
         raise
