@@ -16,6 +16,7 @@ import json
 import os
 import signal
 import stat
+import sys
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -728,8 +729,6 @@ def install_interrupt_handlers() -> None:
     dropped with an "Exception ignored" traceback on stderr; it is noted already, and raised
     again later (:func:`raise_if_interrupted`, the CLI's exit), so that traceback goes.
     """
-    import sys
-
     # a new run (the CLI's main may run many times in one process, as in tests)
     _signals_received.clear()
     _committed[0] = False
@@ -791,20 +790,33 @@ def start_helper(target: Callable[..., None], args: tuple[Any, ...],
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
     with interrupts_held():
         helper = multiprocessing.get_context(method).Process(
-            target=_helper_body, args=(target, args), daemon=True
+            target=_helper_body, args=(target, args, os.getpid()), daemon=True
         )
         helper.start()
         helpers.append(helper)
     return helper
 
 
-def _helper_body(target: Callable[..., None], args: tuple[Any, ...]) -> None:
+def _helper_body(target: Callable[..., None], args: tuple[Any, ...], parent: int) -> None:
     release_interrupts()
+    _die_with(parent)
     try:
         target(*args)
     except Exception:  # noqa: BLE001 - said once, by the parent
         # the parent does again what a helper left undone, and reports an error there in
         # one line (a full disk printed the helper's 35-line traceback as well; audit)
+        os._exit(1)
+
+
+def _die_with(parent: int) -> None:
+    """End this helper when its parent dies, however (Linux): a SIGKILLed report's page
+    writers ran on into a staging folder the next run was removing as debris."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    if os.getppid() != parent:  # it died before that took hold
         os._exit(1)
 
 
