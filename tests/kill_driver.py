@@ -28,6 +28,7 @@ from typing import Any
 
 def _run_child(args: list[str], log: Path, inject: list[Any] | None,
                refuse_exchange: bool) -> int:
+    log.touch()  # there even when the kill lands before the child opens it
     pid = os.fork()
     if pid:
         return pid

@@ -92,8 +92,9 @@ def test_sigkill_anywhere_in_export_fit_and_sweep_loses_nothing(tmp_path: Path) 
 def test_sigkill_anywhere_in_report_loses_nothing(tmp_path: Path) -> None:
     _thrust_table(tmp_path / "table.csv")
     report = ["report", "--case", CASE, "--campaign", "table.csv", "--out", "R"]
+    # few: a report takes seconds; the swap steps are export's, which has many more kills
     result = _drive(tmp_path, [{"name": "report", "variants": [report], "outputs": ["R"],
-                                "kills": 4, "inject": SWAP_STEPS[:3]}])
+                                "kills": 2, "inject": SWAP_STEPS[1:3]}])
     _assert_nothing_lost(result)
 
 

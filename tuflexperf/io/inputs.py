@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import stat
 from pathlib import Path
 
@@ -39,6 +40,53 @@ def path_text(path: Path | str | bytes) -> str:
         return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
     except UnicodeEncodeError:  # a surrogate no file name has: its code point
         return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+NAME_ERRORS = "tuflexperf.names"
+"""The codec error handler that writes a lone surrogate as :func:`path_text` does."""
+
+
+def _escape_names(error: UnicodeError) -> tuple[str, int]:
+    if not isinstance(error, UnicodeEncodeError):
+        raise error
+    bad = error.object[error.start:error.end]
+    return "".join(f"\\x{ord(c) - 0xDC00:02x}" if "\udc80" <= c <= "\udcff"
+                   else c.encode("ascii", "backslashreplace").decode("ascii")
+                   for c in bad), error.end
+
+
+def register_name_errors() -> str:
+    """Register :data:`NAME_ERRORS` (idempotent) and return its name: a stream that would
+    raise on a file name's bytes (stdout in a UTF-8 locale) writes them escaped instead."""
+    import codecs
+
+    codecs.register_error(NAME_ERRORS, _escape_names)
+    return NAME_ERRORS
+
+
+def cut_middle(text: str, limit: int, keep: int = 60) -> str:
+    """``text`` within about ``limit`` characters, cut in the middle of its longest words
+    (runs without a space: a path, a quoted garbage), each keeping ``keep`` characters
+    (its two ends), longest first; the words around them stay whole. Only if that is not
+    enough, the middle of the text goes, keeping its first third and last two thirds."""
+    if len(text) <= limit:
+        return text
+    words = re.split(r"(\s+)", text)
+    excess = len(text) - limit
+    for index in sorted(range(len(words)), key=lambda k: -len(words[k])):
+        word = words[index]
+        if excess <= 0 or len(word) <= keep or word.isspace():
+            break
+        cut = min(len(word) - keep, excess + 24)  # + the mark's own length
+        head = (len(word) - cut) // 2
+        mark = f"...({cut} characters)..."
+        words[index] = word[:head] + mark + word[head + cut:]
+        excess -= cut - len(mark)
+    text = "".join(words)
+    if len(text) <= limit + 24:
+        return text
+    head, tail = limit // 3, limit - limit // 3
+    return f"{text[:head]}...({len(text) - head - tail} characters)...{text[-tail:]}"
 
 
 def check_input_file(path: Path | str, what: str = "file", max_bytes: int = MAX_YAML_BYTES) -> Path:

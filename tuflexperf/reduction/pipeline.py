@@ -39,6 +39,7 @@ import yaml
 from tuflexperf.errors import InputError
 from tuflexperf.io.campaign import Campaign, CampaignRun, load_campaign
 from tuflexperf.io.files import FIT_PROPULSION_HEADER, sealed, sha256_of
+from tuflexperf.io.inputs import path_text
 from tuflexperf.io.runs import (
     REFIT_TABLE_EXTRA_COLUMNS,
     TABLE_EXTRA_COLUMNS,
@@ -711,7 +712,7 @@ def _fit_campaign(
     ]
     source = {
         "tool": "tuflexperf fit",
-        "input": str(campaign.path.resolve()),
+        "input": path_text(campaign.path.resolve()),  # a name of bytes no UTF-8 takes: escaped
         "input_sha256": sha256_of(campaign.path),
         "campaign": campaign.name,
         "files": files,
@@ -1215,13 +1216,13 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
     speeds = _speeds_by_engine(zip(table.engine, table.airspeed_m_s, strict=True))
     source = {
         "tool": "tuflexperf fit",
-        "input": str(Path(path).resolve()),
+        "input": path_text(Path(path).resolve()),
         "input_sha256": sha256_of(Path(path)),
     }
     summary = _summary(kind="table", input_path=Path(path), fits=fits, delay=delay_s, speeds=speeds)
     summary["warnings"].extend(poor_fit_notes(fits))
     propulsion = _propulsion_text(
-        name=f"poly22 fit of {Path(path).name}",
+        name=f"poly22 fit of {path_text(Path(path).name)}",
         fits=fits,
         speeds=speeds,
         delay=delay_s,
