@@ -76,3 +76,78 @@ def test_path_text_escapes_only_the_bytes_that_are_no_utf8() -> None:
     assert path_text("plain ü") == "plain ü"
     name = os.fsdecode(b"/x\xfc")
     assert one_line(f"{name}: file not found") == "/x\\xfc: file not found"
+
+
+@pytest.fixture(scope="module")
+def latin1_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The shipped case and data copied under a folder whose name is no UTF-8."""
+    folder = tmp_path_factory.mktemp("names") / LATIN_1
+    for name in ("requirements", "data"):
+        shutil.copytree(ROOT / name, folder / name)
+    return folder
+
+
+def _commands(folder: Path) -> list[tuple[list[str], list[Path]]]:
+    """Every command on the copied case, each writing its outputs into ``folder/out``."""
+    case = str(folder / "requirements" / "tuflex.yaml")
+    data, out = folder / "data" / "tuflex", folder / "out"
+    flight = str(data / "missions" / "test_flight.yaml")
+    formats = [(["export", "--case", case, "--out", str(out / f"e-{f}"), "--format", f],
+                [out / f"e-{f}"]) for f in ("c", "casadi", "json", "jsbsim", "fmu")]
+    return [
+        (["check", case], []),
+        (["takeoff", "--case", case], []),
+        (["trim", "--case", case], []),
+        (["oei", "--case", case], []),
+        (["endurance", "--case", case, "--throttle", "0.6"], []),
+        (["performance", "--case", case], []),
+        (["mission", flight, "--case", case, "--csv", str(out / "m.csv")], [out / "m.csv"]),
+        (["sweep", "--case", case, "--vary", "aircraft.mass_kg=20:30:3", "--csv",
+          str(out / "s.csv"), "--plot", str(out / "s.png")], [out / "s.csv", out / "s.png"]),
+        (["margins", "--case", case], []),
+        (["fit", str(data / "campaign" / "campaign.yaml"), "--out", str(out / "p.yaml"),
+          "--table", str(out / "t.csv")], [out / "p.yaml", out / "t.csv"]),
+        (["fit", str(out / "t.csv"), "--out", str(out / "p2.yaml")], [out / "p2.yaml"]),
+        (["fit", str(data / "battery.yaml"), "--out", str(out / "b.yaml")], [out / "b.yaml"]),
+        *formats,
+    ]
+
+
+def test_every_command_runs_under_a_folder_whose_name_is_no_utf8(latin1_folder: Path,
+                                                                 capsys) -> None:
+    """In-process as the console runs it (stdout strict UTF-8, as in a UTF-8 locale), text
+    and --json; the fitted file names its source with the byte escaped (\\xfc) and is
+    sealed."""
+    from tuflexperf.cli import main
+    from tuflexperf.io.files import seal_intact
+
+    for args, outputs in _commands(latin1_folder):
+        for json_flag in ([], ["--json"]):
+            with pytest.raises(SystemExit) as done:
+                main([*args, *json_flag])
+            printed = capsys.readouterr()
+            assert done.value.code == 0, (args, printed.err[-2000:])
+            for output in outputs:
+                assert output.exists(), output
+            if json_flag:
+                text = json.dumps(json.loads(printed.out))
+                text.encode("utf-8")
+                assert "\\udcfc" not in text, args  # no lone surrogate: any reader takes it
+    fitted = (latin1_folder / "out" / "p.yaml").read_bytes()
+    assert seal_intact(fitted)
+    source = yaml.safe_load(fitted)["source"]["input"]
+    assert f"{os.sep}archiv-\\xfc{os.sep}" in source
+
+
+def test_report_runs_under_a_folder_whose_name_is_no_utf8(latin1_folder: Path) -> None:
+    """As a user runs it, with stdout strict UTF-8 (a UTF-8 locale): the page writers, the
+    campaign's reduction and the title page all name the folder."""
+    out = latin1_folder / "review"
+    done = subprocess.run(
+        [sys.executable, "-m", "tuflexperf", "report", "--case",
+         str(latin1_folder / "requirements" / "tuflex.yaml"), "--out", str(out)],
+        capture_output=True, timeout=600,
+        env={**os.environ, "PYTHONIOENCODING": "utf-8", "PYTHONWARNINGS": "ignore"})
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert b"archiv-\\xfc" in done.stdout  # the escaped name, not a lone surrogate's bytes
+    assert (out / "review.pdf").stat().st_size > 0

@@ -501,6 +501,7 @@ def key_figures(analyses: Any) -> list[str]:
 def title_lines(case: Any, measured: Any, analyses: Any) -> list[str]:
     """The first page: verdicts with value, limit and margin, key figures, provenance, tool."""
     from tuflexperf import __version__
+    from tuflexperf.io.inputs import path_text
     from tuflexperf.report.data import provenance_class
 
     verdicts = analyses.verdicts
@@ -533,12 +534,13 @@ def title_lines(case: Any, measured: Any, analyses: Any) -> list[str]:
         lines.append("  with --set " + ", ".join(f"{k}={v:g}" for k, v in case.overrides))
     lines += [f"tuflexperf {__version__}, {now}; "
               "every input file with its sha256 on the last page"]
-    return lines
+    return [path_text(line) for line in lines]  # a name's bytes no UTF-8 font takes: \xfc
 
 
 def hash_lines(case: Any, measured: Any) -> list[str]:
     """Every input of the report with its sha256 (the last page)."""
     from tuflexperf.io.files import sha256_of
+    from tuflexperf.io.inputs import path_text
     from tuflexperf.report.data import input_files
 
     lines = []
@@ -548,5 +550,5 @@ def hash_lines(case: Any, measured: Any) -> list[str]:
             shown = os.path.relpath(path, root)
         except ValueError:
             shown = str(path)
-        lines.append(f"  {sha256_of(path)}  {role:<13} {shown}")
+        lines.append(f"  {sha256_of(path)}  {role:<13} {path_text(shown)}")
     return lines
