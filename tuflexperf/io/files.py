@@ -644,10 +644,13 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
 
     The staging folder gets the user's umask and, on success, the marker naming
     ``command`` and the files written. An earlier output at ``out`` (checked by
-    :func:`check_output_dir` against the command's ``inputs``) is swapped out and removed
-    only after the new one is in place. On any failure or interrupt (one that came at any
-    time before the swap) the staging folder is removed and ``out`` is untouched; after
-    the swap the run is done, and an interrupt is no longer noted.
+    :func:`check_output_dir` against the command's ``inputs``) is exchanged with the new
+    one in one step (:func:`tuflexperf.io.swap.exchange`; two renames only where the file
+    system refuses that) and removed only after the new one is in place; what a killed
+    run left beside ``out`` is cleaned first (:func:`tuflexperf.io.swap.clean_stale`).
+    On any failure or interrupt (one that came at any time before the swap) the staging
+    folder is removed and ``out`` is untouched; after the swap the run is done, and an
+    interrupt is no longer noted.
     """
     import shutil  # lazy: only the commands that write a folder need it
 

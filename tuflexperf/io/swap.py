@@ -30,6 +30,8 @@ import stat
 import sys
 from pathlib import Path
 
+from tuflexperf.io.inputs import path_text
+
 RENAME_EXCHANGE = 2  # linux/fs.h
 _AT_FDCWD = -100
 # renameat2's system call number where the C library has no wrapper (glibc < 2.28)
@@ -190,5 +192,5 @@ def clean_stale(out: Path, short: str) -> None:
             said.append(f"removed {done[0]}" + (f" and {len(done) - 1} more" if len(done) > 1
                                                  else ""))
         with contextlib.suppress(OSError, ValueError):
-            sys.stderr.write(f"tuflexperf: note: {'; '.join(said)} beside {out.name}, left by "
-                             "a run that was killed\n")
+            sys.stderr.write(f"tuflexperf: note: {path_text('; '.join(said))} beside "
+                             f"{path_text(out.name)}, left by a run that was killed\n")
