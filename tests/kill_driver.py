@@ -170,8 +170,13 @@ def main() -> None:
             })
         for args in variants:  # the next runs: each completes and cleans what was left
             complete(name, args)
+        import tempfile
+
+        scratch = sorted(p.name for p in Path(tempfile.gettempdir()).iterdir()
+                         if p.name.startswith("tuflexperf-"))  # killed runs' scratch folders
         report.setdefault("after", {})[name] = {
-            "states": {o: _state(cwd / o) for o in outputs}, "hidden": _hidden(cwd, outputs)}
+            "states": {o: _state(cwd / o) for o in outputs}, "hidden": _hidden(cwd, outputs),
+            "scratch": scratch}
     print(json.dumps(report))
 
 

@@ -44,8 +44,10 @@ def _drive(folder: Path, jobs: list[dict], refuse_exchange: bool = False) -> dic
     config = folder / "config.json"
     config.write_text(json.dumps({"cwd": str(folder), "seed": 46, "jobs": jobs,
                                   "refuse_exchange": refuse_exchange}))
+    scratch = folder / "scratch"  # the temporary directory: what killed runs left there
+    scratch.mkdir()
     done = subprocess.run([sys.executable, DRIVER, str(config)], capture_output=True,
-                          text=True, timeout=600)
+                          text=True, timeout=600, env={**os.environ, "TMPDIR": str(scratch)})
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout)
 
@@ -58,6 +60,7 @@ def _assert_nothing_lost(result: dict) -> None:
     for job, after in result["after"].items():
         assert set(after["states"].values()) == {"whole"}, job
         assert after["hidden"] == {}, (job, after)  # the next run cleaned what kills left
+        assert after["scratch"] == [], (job, after)
 
 
 def test_sigkill_anywhere_in_export_fit_and_sweep_loses_nothing(tmp_path: Path) -> None:
@@ -114,7 +117,7 @@ def test_where_the_exchange_is_refused_the_earlier_output_is_whole_and_put_back(
         if trial["states"]["E"] != "whole":
             old = {name: state for name, state in trial["hidden"].items() if ".old-" in name}
             assert list(old.values()) == ["whole"], trial
-    assert result["after"]["export"] == {"states": {"E": "whole"}, "hidden": {}}
+    assert result["after"]["export"] == {"states": {"E": "whole"}, "hidden": {}, "scratch": []}
     logs = (tmp_path / "logs").glob("*.txt")
     assert any("put the earlier output back" in p.read_text() for p in logs)
 

@@ -29,6 +29,7 @@ import secrets
 import stat
 import sys
 from pathlib import Path
+from typing import Any
 
 from tuflexperf.io.inputs import path_text
 
@@ -194,3 +195,28 @@ def clean_stale(out: Path, short: str) -> None:
         with contextlib.suppress(OSError, ValueError):
             sys.stderr.write(f"tuflexperf: note: {path_text('; '.join(said))} beside "
                              f"{path_text(out.name)}, left by a run that was killed\n")
+
+
+# ---- scratch folders in the temporary directory ---------------------------------------------
+_SCRATCH = re.compile(r"tuflexperf-[a-z]+-([0-9a-f]{8})-([0-9]+)-([0-9]+)-[a-z0-9_]+")
+
+
+def scratch(kind: str) -> Any:
+    """``tempfile.TemporaryDirectory`` for ``kind`` (``report``, ``export``), its name saying
+    who made it like :func:`hidden_name`; the scratch folders of killed runs (SIGKILL leaves
+    them) are removed first, silently: nothing in them was ever the user's."""
+    import shutil
+    import tempfile
+
+    folder = Path(tempfile.gettempdir())
+    with contextlib.suppress(OSError):
+        for entry in os.scandir(folder):
+            found = _SCRATCH.fullmatch(entry.name)
+            if (found is None or found.group(1) != _machine()
+                    or not _gone(int(found.group(2)), int(found.group(3)))):
+                continue
+            with contextlib.suppress(OSError):
+                if entry.stat(follow_symlinks=False).st_uid == os.getuid() and entry.is_dir(
+                        follow_symlinks=False):
+                    shutil.rmtree(entry.path)
+    return tempfile.TemporaryDirectory(prefix=f"tuflexperf-{kind}-{_owner_tag()}-")

@@ -15,7 +15,6 @@ import math
 import os
 import re
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -24,6 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tuflexperf.errors import InputError
+from tuflexperf.io import swap
 
 if TYPE_CHECKING:
     from tuflexperf.io.case import Case
@@ -135,7 +135,7 @@ def build_report(
     if campaign_path is not None:
         _check_campaign(campaign_path)  # before any step is shown or anything is written
     with (staged_directory(out, "report", _report_inputs(case, campaign_path)) as staging,
-          tempfile.TemporaryDirectory(prefix="tuflexperf-report-") as kept):
+          swap.scratch("report") as kept):
         result = _render(case, staging, campaign_path, StepCounter(stream, progress),
                          Path(kept))
     files = [out / p.name for p in result.files]
