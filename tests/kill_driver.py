@@ -76,8 +76,10 @@ def _inject(target: str, call: int, when: str) -> None:
     setattr(module, name, wrapped)
 
 
-def _warm(args: list[str], log: Path) -> None:
-    """Run the command once here: its modules imported before the children fork."""
+def _warm(args: list[str], log: Path) -> tuple[float, int]:
+    """Run the command once here: its modules imported before the children fork; returns
+    the seconds it took and its exit status."""
+    start, code = time.monotonic(), 0
     saved = os.dup(1), os.dup(2)
     fd = os.open(log, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
     os.dup2(fd, 1)
@@ -86,8 +88,8 @@ def _warm(args: list[str], log: Path) -> None:
         from tuflexperf.cli import main
 
         main(args)
-    except SystemExit:
-        pass
+    except SystemExit as done:
+        code = done.code if isinstance(done.code, int) else 1
     finally:
         sys.stdout.flush()
         sys.stderr.flush()
@@ -95,6 +97,7 @@ def _warm(args: list[str], log: Path) -> None:
         os.dup2(saved[1], 2)
         for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):  # the driver's own
             signal.signal(signum, signal.SIG_DFL)
+    return time.monotonic() - start, code
 
 
 def _state(path: Path) -> str:
@@ -147,8 +150,12 @@ def main() -> None:
 
     for job in config["jobs"]:
         name, variants, outputs = job["name"], job["variants"], job["outputs"]
-        _warm(variants[0], logs / f"{name}-warm.txt")
-        durations = [complete(name, args) for args in variants]  # warm, and the earlier output
+        # the first variant here (imports and all: its time is an upper bound), the others
+        # in children; each leaves the earlier output the next kill must keep
+        seconds, code = _warm(variants[0], logs / f"{name}-warm.txt")
+        report["complete"].append({"job": name, "status": code,
+                                   "log": (logs / f"{name}-warm.txt").read_text()})
+        durations = [seconds, *(complete(name, args) for args in variants[1:])]
         trials: list[tuple[str, Any, list[str]]] = [
             ("random", rng.uniform(0.0, 1.1 * durations[k % len(variants)]),
              variants[k % len(variants)]) for k in range(job.get("kills", 0))]
