@@ -1334,6 +1334,9 @@ def _refuse_empty(args: list[str]) -> None:
         sys.exit(2)
 
 
+from tuflexperf.commands_flightlog import flightlog_command  # noqa: E402 (issue 45)
+
+app.command("flightlog")(flightlog_command)
 for _info in app.registered_commands:  # every command above, whichever section wrote it
     _info.callback = _guarded(_info.callback)
 

@@ -26,6 +26,8 @@ from tuflexperf.io.artefacts import (  # noqa: F401 - re-exported: the writers' 
     _UNKNOWN,
     ARTEFACT_WRITERS,
     FIT_PROPULSION_HEADER,
+    FLIGHT_CSV_COLUMNS,
+    FLIGHT_PNG_SOFTWARE,
     MISSION_CSV_COLUMNS,
     MISSION_CSV_ENGINE_COLUMNS,
     PNG_SOFTWARE,
