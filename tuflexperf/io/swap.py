@@ -25,7 +25,6 @@ import contextlib
 import errno
 import os
 import re
-import secrets
 import stat
 import sys
 from pathlib import Path
@@ -131,7 +130,7 @@ def _owner_tag() -> str:
 def hidden_name(short: str, kind: str) -> str:
     """A hidden name beside an output whose name begins with ``short``: ``kind`` is
     ``tmp`` (the new output being staged) or ``old`` (the earlier one on its way out)."""
-    return f".{short}.{kind}-{_owner_tag()}-{secrets.token_hex(6)}"
+    return f".{short}.{kind}-{_owner_tag()}-{os.urandom(6).hex()}"
 
 
 _HIDDEN = re.compile(r"(tmp|old)-([0-9a-f]{8})-([0-9]+)-([0-9]+)-[0-9a-f]{12}")
