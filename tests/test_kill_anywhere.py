@@ -232,3 +232,25 @@ def test_an_earlier_output_left_only_under_its_old_name_is_put_back(tmp_path: Pa
 def test_a_hidden_name_fits_beside_the_longest_output_name() -> None:
     name = swap.hidden_name(files._short("x" * 255), "tmp")
     assert len(os.fsencode(name)) <= 255
+
+
+def test_the_system_call_serves_where_the_c_library_has_no_wrapper(tmp_path: Path) -> None:
+    """glibc before 2.28 has no renameat2(): the system call by its number does the same."""
+    import ctypes
+
+    machine = os.uname().machine
+    if not sys.platform.startswith("linux") or machine not in swap._SYS_RENAMEAT2:
+        pytest.skip("the system call numbers are Linux's, per machine")
+
+    class WithoutWrapper:
+        syscall = ctypes.CDLL(None, use_errno=True).syscall
+
+    call = swap._from_libc(WithoutWrapper(), machine)
+    assert call is not None
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    (tmp_path / "a" / "in_a").write_text("")
+    assert call(os.fsencode(tmp_path / "a"), os.fsencode(tmp_path / "b"),
+                swap.RENAME_EXCHANGE) == 0
+    assert [p.name for p in (tmp_path / "b").iterdir()] == ["in_a"]
+    assert not any((tmp_path / "a").iterdir())

@@ -27,6 +27,7 @@ import os
 import re
 import stat
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -40,32 +41,39 @@ _SYS_RENAMEAT2 = {"x86_64": 316, "aarch64": 276, "riscv64": 276, "i686": 353, "i
 # what a kernel or file system without the exchange answers: fall back to two renames
 REFUSED = frozenset({errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP,
                      getattr(errno, "ENOTSUP", errno.EOPNOTSUPP)})
-_call: list[object] = []  # the C function found once (None: none on this platform)
+Exchange = Callable[[bytes, bytes, int], int]  # (old, new, flags) -> 0, or -1 with errno
+_call: list[Exchange | None] = []  # the C function found once (None: none on this platform)
 
 
-def _renameat2() -> object:
-    """A callable ``(old, new, flags) -> int`` (0, or -1 with errno) for renameat2, or None."""
-    if _call:
-        return _call[0]
-    found: object = None
-    if sys.platform.startswith("linux"):
-        import ctypes
+def _from_libc(libc: Any, machine: str) -> Exchange | None:
+    """renameat2 of the C library ``libc`` (ctypes), or its system call (number by
+    ``machine``) where the library has no wrapper; None where neither is known."""
+    import ctypes
 
-        with contextlib.suppress(OSError):
-            libc = ctypes.CDLL(None, use_errno=True)
-            wrapper = getattr(libc, "renameat2", None)
-            if wrapper is not None:
-                wrapper.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int,
-                                    ctypes.c_char_p, ctypes.c_uint]
-                found = lambda a, b, flags: wrapper(_AT_FDCWD, a, _AT_FDCWD, b, flags)  # noqa: E731
-            elif os.uname().machine in _SYS_RENAMEAT2:
-                number = _SYS_RENAMEAT2[os.uname().machine]
-                syscall = libc.syscall
-                found = lambda a, b, flags: syscall(  # noqa: E731
-                    ctypes.c_long(number), ctypes.c_int(_AT_FDCWD), ctypes.c_char_p(a),
-                    ctypes.c_int(_AT_FDCWD), ctypes.c_char_p(b), ctypes.c_uint(flags))
-    _call.append(found)
-    return found
+    wrapper = getattr(libc, "renameat2", None)
+    if wrapper is not None:
+        wrapper.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
+                            ctypes.c_uint]
+        return lambda a, b, flags: int(wrapper(_AT_FDCWD, a, _AT_FDCWD, b, flags))
+    if machine not in _SYS_RENAMEAT2:
+        return None
+    number, syscall = _SYS_RENAMEAT2[machine], libc.syscall
+    return lambda a, b, flags: int(syscall(
+        ctypes.c_long(number), ctypes.c_int(_AT_FDCWD), ctypes.c_char_p(a),
+        ctypes.c_int(_AT_FDCWD), ctypes.c_char_p(b), ctypes.c_uint(flags)))
+
+
+def _renameat2() -> Exchange | None:
+    """:func:`_from_libc` of this process's C library, found once; None off Linux."""
+    if not _call:
+        found = None
+        if sys.platform.startswith("linux"):
+            import ctypes
+
+            with contextlib.suppress(OSError):
+                found = _from_libc(ctypes.CDLL(None, use_errno=True), os.uname().machine)
+        _call.append(found)
+    return _call[0]
 
 
 def exchange(a: Path, b: Path) -> bool:
@@ -80,7 +88,7 @@ def exchange(a: Path, b: Path) -> bool:
     call = _renameat2()
     if call is None:
         return False
-    if call(os.fsencode(a), os.fsencode(b), RENAME_EXCHANGE) == 0:  # type: ignore[operator]
+    if call(os.fsencode(a), os.fsencode(b), RENAME_EXCHANGE) == 0:
         return True
     code = ctypes.get_errno()
     if code in REFUSED:
