@@ -18,7 +18,7 @@ import numpy as np
 import typer
 
 from tuflexperf.errors import InputError, NotAttainable
-from tuflexperf.io.inputs import path_text
+from tuflexperf.io.inputs import cut_middle, path_text
 
 app = typer.Typer(
     add_completion=False,
@@ -165,8 +165,6 @@ def one_line(text: str, limit: int | None = _MAX_MESSAGE) -> str:
     no UTF-8 as ``\\xfc``. What is cut is the middle of the longest words (a long path, a
     binary file's garbage quoted: one was 5,091 characters), never the key, the value or
     the reason around them: a cut at the end removed those from a long path's message."""
-    from tuflexperf.io.inputs import cut_middle
-
     text = path_text(text.replace("\r", "\\r").replace("\n", "\\n"))
     return text if limit is None else cut_middle(text, limit)
 
