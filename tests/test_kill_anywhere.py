@@ -254,3 +254,26 @@ def test_the_system_call_serves_where_the_c_library_has_no_wrapper(tmp_path: Pat
                 swap.RENAME_EXCHANGE) == 0
     assert [p.name for p in (tmp_path / "b").iterdir()] == ["in_a"]
     assert not any((tmp_path / "a").iterdir())
+
+
+def test_a_killed_runs_folder_holding_more_than_its_marker_lists_stays(tmp_path: Path,
+                                                                        capsys) -> None:
+    """Killed right after the exchange, before the earlier output (now under the hidden
+    name) was checked: a note the user put into it during the run is theirs; that folder
+    stays. The same folder as written goes."""
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    machine = swap.hidden_name("R", "tmp").split("-")[1]
+    (tmp_path / "R").mkdir()
+    names = []
+    for k, note in enumerate((False, True)):
+        with files.staged_directory(tmp_path / f"e{k}", "probe") as staging:
+            (staging / "page.png").write_bytes(b"earlier")
+        if note:
+            (tmp_path / f"e{k}" / "NOTES.txt").write_text("mine")
+        names.append(f".R.tmp-{machine}-{int(dead.stdout)}-5-{k:012x}")
+        os.rename(tmp_path / f"e{k}", tmp_path / names[-1])
+    swap.clean_stale(tmp_path / "R", "R")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["R", names[1]])
+    assert (tmp_path / names[1] / "NOTES.txt").read_text() == "mine"
+    assert "removed" in capsys.readouterr().err

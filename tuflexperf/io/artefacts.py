@@ -18,6 +18,8 @@ from pathlib import Path
 from tuflexperf.errors import InputError
 from tuflexperf.io.inputs import MAX_YAML_BYTES
 
+MARKER = ".tuflexperf-output.json"  # written into every folder a command writes whole
+
 
 def sha256_of(path: Path | str) -> str:
     """Hex sha256 of a file's bytes, read in 1 MiB chunks."""

@@ -28,6 +28,7 @@ from tuflexperf.io.artefacts import (  # noqa: F401 - re-exported: the writers' 
     FIT_PROPULSION_HEADER,
     FLIGHT_CSV_COLUMNS,
     FLIGHT_PNG_SOFTWARE,
+    MARKER,
     MISSION_CSV_COLUMNS,
     MISSION_CSV_ENGINE_COLUMNS,
     PNG_SOFTWARE,
@@ -52,8 +53,6 @@ from tuflexperf.io.inputs import (  # noqa: F401 - re-exported: every reader's, 
     check_input_file,
     why_not_a_file,
 )
-
-MARKER = ".tuflexperf-output.json"  # written into every folder a command writes whole
 
 
 def user_umask() -> int:

@@ -158,6 +158,36 @@ def _gone(pid: int, start: int) -> bool:
     return start != 0 and now is not None and now != start  # the PID was given again
 
 
+def _only_the_tools(tree: Path) -> bool:
+    """True where a folder a killed run left holds nothing but what the tool wrote: no
+    marker yet (a staging folder, killed while being written), or each file as its marker
+    lists it. An earlier output exchanged out of the way holds a note the user added to it
+    during the run until the check that refuses the swap: such a folder stays."""
+    import hashlib
+    import json
+
+    from tuflexperf.io.artefacts import MARKER
+
+    marker = tree / MARKER
+    if not marker.is_file():
+        return not marker.is_symlink()
+    try:
+        data = json.loads(marker.read_text(encoding="utf-8"))
+        hashes, listed = data["sha256"], set(data["files"])
+        for path in tree.rglob("*"):
+            name = path.relative_to(tree).as_posix()
+            if name == MARKER or (path.is_dir() and not path.is_symlink()):
+                continue
+            if path.is_symlink() or not path.is_file():
+                if name not in listed:
+                    return False
+            elif hashes.get(name) != hashlib.sha256(path.read_bytes()).hexdigest():
+                return False
+    except (OSError, ValueError, KeyError, TypeError):
+        return False
+    return True
+
+
 def clean_stale(out: Path, short: str) -> None:
     """Remove what killed runs of the tool left beside ``out`` under its hidden names
     (module docstring), and put an earlier output found only under its ``.old-`` name
@@ -188,6 +218,8 @@ def clean_stale(out: Path, short: str) -> None:
                 restored = name
                 continue
             if stat.S_ISDIR(info.st_mode):
+                if not _only_the_tools(path):
+                    continue
                 shutil.rmtree(path)
             else:
                 path.unlink()
