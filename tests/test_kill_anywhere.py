@@ -92,6 +92,7 @@ def test_sigkill_anywhere_in_export_fit_and_sweep_loses_nothing(tmp_path: Path) 
     assert any("left by a run that was killed" in log for log in logs)
 
 
+@pytest.mark.slow  # the swap is export's (many more kills above); a report takes seconds
 def test_sigkill_anywhere_in_report_loses_nothing(tmp_path: Path) -> None:
     _thrust_table(tmp_path / "table.csv")
     report = ["report", "--case", CASE, "--campaign", "table.csv", "--out", "R"]
