@@ -22,15 +22,9 @@ from tuflexperf.analysis.attainable import (
     stall_bounded,
     stall_margin_of,
 )
-from tuflexperf.analysis.cache import BoundedCache, fingerprint
-from tuflexperf.analysis.level_flight import (
-    LeastThrottleSolver,
-    ThrottleSweep,
-    airspeed_grid,
-    least_throttle_solver,
-)
+from tuflexperf.analysis.level_flight import ThrottleSweep, airspeed_grid
 from tuflexperf.analysis.pack_limits import with_packs
-from tuflexperf.analysis.trim import envelope_of, extrapolation_note
+from tuflexperf.analysis.trim import envelope_of, extrapolation_note, level_flight_rows
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
@@ -43,22 +37,6 @@ from tuflexperf.models.thrust import (
     unlapsed_density_warning,
     windmilling_thrust_n,
 )
-
-_cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
-
-
-def oei_solver(case: Case, dead_engine: int, mode: DeadEngineMode) -> LeastThrottleSolver:
-    """Least-throttle solver with engine ``dead_engine`` out, built once per case."""
-    aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
-
-    def build() -> LeastThrottleSolver:
-        def excess(throttle: Any, airspeed: Any) -> Any:
-            thrust = total_thrust_n(propulsion, throttle, airspeed, rho, dead_engine, mode)
-            return thrust - level_flight_drag_n(aircraft, airspeed, rho)
-
-        return least_throttle_solver(excess)
-
-    return _cache.get(fingerprint(aircraft, propulsion, rho, dead_engine, mode), build)
 
 
 @dataclass(frozen=True)
@@ -139,10 +117,12 @@ def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
     least = least_airspeed_m_s(case)
     aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
 
+    rows, grid = level_flight_rows(case), speeds[None, :]
+    terms = rows._grid_terms(grid)  # the live engines' thrusts, shared by every dead one
     cases, pack_notes = [], []
     for index, engine in enumerate(propulsion.engines):
-        throttle, reasons = stall_bounded(speeds, oei_solver(case, index, mode)(speeds), least,
-                                          case)
+        throttle = rows.least_throttle(grid, index, mode, terms)[0]
+        throttle, reasons = stall_bounded(speeds, throttle, least, case)
 
         def full_throttle_excess(v: np.ndarray, dead: int = index) -> np.ndarray:
             thrust = total_thrust_n(propulsion, 1.0, v, rho, dead, mode)

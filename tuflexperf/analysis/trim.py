@@ -21,13 +21,7 @@ from tuflexperf.analysis.attainable import (
     stall_bounded,
     stall_margin_of,
 )
-from tuflexperf.analysis.cache import BoundedCache, fingerprint
-from tuflexperf.analysis.level_flight import (
-    LeastThrottleSolver,
-    ThrottleSweep,
-    airspeed_grid,
-    least_throttle_solver,
-)
+from tuflexperf.analysis.level_flight import LevelFlightRows, ThrottleSweep, airspeed_grid
 from tuflexperf.analysis.pack_limits import with_packs
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
@@ -37,8 +31,6 @@ from tuflexperf.models.thrust import (
     total_thrust_n,
     unlapsed_density_warning,
 )
-
-_cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
 
 
 def envelope_of(case: Case, density_kg_m3: float | None = None) -> tuple[float, float]:
@@ -78,19 +70,11 @@ def extrapolation_note(case: Case, airspeeds_m_s: np.ndarray) -> tuple[bool, lis
     ]
 
 
-def trim_solver(case: Case) -> LeastThrottleSolver:
-    """Least-throttle solver for level flight on all engines, built once per case."""
-    aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
-
-    def build() -> LeastThrottleSolver:
-        def excess(throttle: Any, airspeed: Any) -> Any:
-            return total_thrust_n(propulsion, throttle, airspeed, rho) - level_flight_drag_n(
-                aircraft, airspeed, rho
-            )
-
-        return least_throttle_solver(excess)
-
-    return _cache.get(fingerprint(aircraft, propulsion, rho), build)
+def level_flight_rows(case: Case) -> LevelFlightRows:
+    """The case as one row of :class:`LevelFlightRows`: the batch's least level-flight
+    throttle, which ``--samples``, ``sweep`` and ``margins`` run on many rows."""
+    return LevelFlightRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1,
+                           stall_margin_of(case))
 
 
 @dataclass(frozen=True)
@@ -142,7 +126,8 @@ def solve_trim(case: Case) -> TrimResult:
     v_min, v_max = envelope_of(case)
     speeds = airspeed_grid(v_min, v_max)
     least = least_airspeed_m_s(case)
-    throttle, reasons = stall_bounded(speeds, trim_solver(case)(speeds), least, case)
+    throttle = level_flight_rows(case).least_throttle(speeds[None, :])[0]
+    throttle, reasons = stall_bounded(speeds, throttle, least, case)
     extrapolated, warnings = extrapolation_note(case, speeds)
     stall = float(stall_speed_m_s(case.aircraft, case.density_kg_m3))
     aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
