@@ -56,8 +56,8 @@ from tuflexperf.analysis.batch_model import BatchModel
 from tuflexperf.analysis.level_flight import airspeed_grid, airspeed_grids
 from tuflexperf.analysis.pack_limits import (
     pack_rows,
-    power_limit_w,
     pack_side,
+    power_limit_w,
     sagging_packs,
 )
 from tuflexperf.analysis.verdict import requirement_met
