@@ -32,9 +32,8 @@ requirements verification", NASA/TP-2010-216447; O'Neill (2015), "PCG" / numpy
 
 from __future__ import annotations
 
-import contextlib
 import math
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -45,6 +44,7 @@ from tuflexperf.analysis.batch import BatchEvaluator, BatchResult
 from tuflexperf.analysis.batch_kernels import nominal_engines
 from tuflexperf.analysis.cache import file_key, fingerprint
 from tuflexperf.analysis.probability import normal_logcdf, normal_ppf_of_log
+from tuflexperf.analysis.runtime import freed_arrays_kept, one_blas_thread
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import MAX_SAMPLES, Case, UncertaintySchema
 from tuflexperf.io.dotted import value_bounds
@@ -502,7 +502,7 @@ def run_samples(
     ----------
     Hanson & Beard (2010), NASA/TP-2010-216447 (Monte Carlo requirement verification).
     """
-    with freed_arrays_kept():
+    with freed_arrays_kept(), one_blas_thread():
         parts = run_chunks(
             evaluate_batch,
             [(case, plan, chunks) for chunks in batches(plan)],
@@ -517,54 +517,6 @@ def run_samples(
     outside = {k.split(":", 1)[1]: int(sum(int(p[k][0]) for p in parts))
                for k in parts[0] if k.startswith("outside:")}
     return SampleSet(plan, values, limits, kinds, outside)
-
-
-# glibc's mallopt parameters (malloc.h) and what the batch sets them to
-_M_TRIM_THRESHOLD, _M_TOP_PAD, _M_MMAP_THRESHOLD = -1, -2, -3
-_KEPT = {_M_MMAP_THRESHOLD: 32 << 20, _M_TRIM_THRESHOLD: 1 << 30, _M_TOP_PAD: 64 << 20}
-_DEFAULTS = {_M_MMAP_THRESHOLD: 128 << 10, _M_TRIM_THRESHOLD: 128 << 10, _M_TOP_PAD: 128 << 10}
-
-
-@contextlib.contextmanager
-def freed_arrays_kept() -> Iterator[None]:
-    """Within: the process keeps the memory of freed row arrays (up to 32 MB each) for the
-    next ones, instead of handing it back to the system and taking it again page by page.
-
-    A batch of 10,000 rows makes and drops thousands of arrays of a few MB; glibc maps
-    each in fresh pages (or trims its heap), and the page faults were ~20 % of
-    ``check --samples 10000`` (measured: whole process 0.68 -> 0.54 s). The numbers are
-    the same; afterwards the defaults are set again and the kept memory released. Not
-    glibc (macOS, Windows, musl): nothing changes.
-    """
-    libc = _glibc()
-    if libc is None:
-        yield
-        return
-    for option, value in _KEPT.items():
-        libc.mallopt(option, value)
-    try:
-        yield
-    finally:
-        for option, value in _DEFAULTS.items():
-            libc.mallopt(option, value)
-        libc.malloc_trim(0)
-
-
-def _glibc() -> Any:
-    """The C library when it is glibc (it has ``mallopt`` and ``malloc_trim``), else None."""
-    import sys
-
-    if not sys.platform.startswith("linux"):
-        return None
-    import ctypes
-
-    try:
-        libc = ctypes.CDLL(None)
-        libc.mallopt.argtypes = [ctypes.c_int, ctypes.c_int]
-        libc.malloc_trim.argtypes = [ctypes.c_size_t]
-    except (OSError, AttributeError):  # musl and others: no mallopt
-        return None
-    return libc
 
 
 def as_batch(samples: SampleSet) -> BatchResult:
