@@ -11,7 +11,8 @@
 * ``--workers 2`` (whole process, 40,000 samples) vs in-process, for the record
   (``--full``).
 
-Run: ``python bench/bench_uncertainty.py [PAIRS] [--full]``
+Run: ``python bench/bench_uncertainty.py [PAIRS] [--full] [--whole]`` (``--whole``: the
+paired whole processes alone)
 """
 
 from __future__ import annotations
@@ -46,6 +47,24 @@ TUFLEXPERF = str(Path(sys.executable).with_name("tuflexperf"))
 
 def main() -> None:
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    if "--whole" not in sys.argv[1:]:
+        in_process()
+    pairs = int(args[0]) if args else 7
+    det, mc = paired([TUFLEXPERF, "check"], [TUFLEXPERF, "check", "--samples", "10000"], pairs)
+    ratios = [b / a for a, b in zip(det, mc, strict=True)]
+    print(f"whole process, {pairs} pairs taking turns: check {statistics.median(det):.2f} s, "
+          f"check --samples 10000 {statistics.median(mc):.2f} s (medians); ratio median "
+          f"{statistics.median(ratios):.2f}x, range {min(ratios):.2f}-{max(ratios):.2f}x "
+          "(target <= 1.5x)")
+    if "--full" in sys.argv[1:]:
+        t_mc40 = wall([TUFLEXPERF, "check", "--samples", "40000"], 3)
+        t_mc40_w2 = wall([TUFLEXPERF, "check", "--samples", "40000", "--workers", "2"], 3)
+        print(f"whole process, 40,000 samples: in-process {t_mc40:.2f} s, --workers 2 "
+              f"{t_mc40_w2:.2f} s ({t_mc40 / t_mc40_w2:.2f}x; 2 cores shared with others)")
+
+
+def in_process() -> None:
+    """Samples per second in process, and against the per-sample loop."""
     case = load_case()
     plan = SamplingPlan(10_000, 1, 0.95, PARAMETERS, True, True)
     run_samples(case, plan)  # build once (the CLI's deterministic check builds the same)
@@ -78,18 +97,6 @@ def main() -> None:
           "samples/s (target >= 20,000/s)")
     print(f"per-sample loop of single-case analyses: {t_loop:.1f} s for 10,000 "
           f"(measured on {loop_n}); batched is {t_loop / t_batch:.0f}x faster (target >= 100x)")
-    pairs = int(args[0]) if args else 7
-    det, mc = paired([TUFLEXPERF, "check"], [TUFLEXPERF, "check", "--samples", "10000"], pairs)
-    ratios = [b / a for a, b in zip(det, mc, strict=True)]
-    print(f"whole process, {pairs} pairs taking turns: check {statistics.median(det):.2f} s, "
-          f"check --samples 10000 {statistics.median(mc):.2f} s (medians); ratio median "
-          f"{statistics.median(ratios):.2f}x, range {min(ratios):.2f}-{max(ratios):.2f}x "
-          "(target <= 1.5x)")
-    if "--full" in sys.argv[1:]:
-        t_mc40 = wall([TUFLEXPERF, "check", "--samples", "40000"], 3)
-        t_mc40_w2 = wall([TUFLEXPERF, "check", "--samples", "40000", "--workers", "2"], 3)
-        print(f"whole process, 40,000 samples: in-process {t_mc40:.2f} s, --workers 2 "
-              f"{t_mc40_w2:.2f} s ({t_mc40 / t_mc40_w2:.2f}x; 2 cores shared with others)")
 
 
 def paired(first: list[str], second: list[str], pairs: int) -> tuple[list[float], list[float]]:
