@@ -18,6 +18,7 @@ import numpy as np
 import typer
 
 from tuflexperf.errors import InputError, NotAttainable
+from tuflexperf.io.inputs import cut_middle, path_text
 
 app = typer.Typer(
     add_completion=False,
@@ -133,14 +134,17 @@ def _json_default(value: Any) -> Any:
     if hasattr(value, "tolist"):
         return value.tolist()
     if isinstance(value, Path):
-        return str(value)
+        return path_text(value)
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
 
 def _clean(value: Any) -> Any:
-    """NaN/inf become null so the JSON stays standard."""
+    """NaN/inf become null and a file name's bytes that are no UTF-8 ``\\xfc``, so the JSON
+    stays standard (a lone surrogate is no Unicode text)."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
+    if isinstance(value, str):
+        return path_text(value)
     if isinstance(value, dict):
         return {k: _clean(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -156,13 +160,13 @@ _MAX_MESSAGE = 1000  # characters of one error message (a file's garbage quoted 
 
 
 def one_line(text: str, limit: int | None = _MAX_MESSAGE) -> str:
-    """``text`` as one line of at most ``limit`` characters (SPEC 5: one line):
-    a newline in a path is shown escaped (it made two lines), and a message quoting a
-    binary file's garbage is cut (one was 5,091 characters; outside audit)."""
-    text = text.replace("\r", "\\r").replace("\n", "\\n")
-    if limit is None or len(text) <= limit:
-        return text
-    return f"{text[:limit]}... ({len(text) - limit} more characters)"
+    """``text`` as one line of at most about ``limit`` characters (SPEC 5: one line), a
+    newline in a path shown escaped (it made two lines), and a file name's bytes that are
+    no UTF-8 as ``\\xfc``. What is cut is the middle of the longest words (a long path, a
+    binary file's garbage quoted: one was 5,091 characters), never the key, the value or
+    the reason around them: a cut at the end removed those from a long path's message."""
+    text = path_text(text.replace("\r", "\\r").replace("\n", "\\n"))
+    return text if limit is None else cut_middle(text, limit)
 
 
 def fail_input(message: str) -> None:
