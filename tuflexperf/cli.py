@@ -18,6 +18,7 @@ import numpy as np
 import typer
 
 from tuflexperf.errors import InputError, NotAttainable
+from tuflexperf.messages import one_line
 
 app = typer.Typer(
     add_completion=False,
@@ -150,19 +151,6 @@ def _clean(value: Any) -> Any:
 
 def emit_json(payload: dict[str, Any]) -> None:
     sys.stdout.write(json.dumps(_clean(payload), default=_json_default, indent=2) + "\n")
-
-
-_MAX_MESSAGE = 1000  # characters of one error message (a file's garbage quoted is cut)
-
-
-def one_line(text: str, limit: int | None = _MAX_MESSAGE) -> str:
-    """``text`` as one line of at most ``limit`` characters (SPEC 5: one line):
-    a newline in a path is shown escaped (it made two lines), and a message quoting a
-    binary file's garbage is cut (one was 5,091 characters; outside audit)."""
-    text = text.replace("\r", "\\r").replace("\n", "\\n")
-    if limit is None or len(text) <= limit:
-        return text
-    return f"{text[:limit]}... ({len(text) - limit} more characters)"
 
 
 def fail_input(message: str) -> None:
