@@ -71,7 +71,8 @@ def guarded(callback: Any) -> Any:
             return callback(*args, **kwargs)
         except InputError as exc:
             _unless_interrupted()
-            sys.stderr.write(f"tuflexperf: error: {one_line(str(exc))}\n")
+            for problem in exc.problems:  # every problem found, each on its own line
+                sys.stderr.write(f"tuflexperf: error: {one_line(problem)}\n")
             raise typer.Exit(2) from None
         except BrokenPipeError:  # a pipe of the command's own (io.streams guards stdout):
             # no verdict was given, so none is claimed (exit 0 here "passed" `check | head`)

@@ -7,8 +7,9 @@ here too, where every reader has imported them from.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.schemas import (
@@ -37,7 +38,7 @@ if TYPE_CHECKING:
 __all__ = [
     "ABSURD_THRUST_TO_WEIGHT", "MAX_SAMPLES", "MAX_SOURCE_VALUES", "AircraftSchema",
     "AtmosphereSchema", "Case", "CaseSchema", "OeiRequirement", "PropulsionSchema",
-    "Requirements", "TakeoffSchema", "UncertaintySchema", "aircraft_from_schema",
+    "Requirements", "TakeoffSchema", "UncertaintySchema", "FILE_KEYS", "aircraft_from_schema",
     "case_files", "load_aircraft", "load_case", "load_propulsion", "propulsion_from_schema",
     "refuse_absurd_propulsion", "shipped_case_path",
 ]
@@ -75,38 +76,105 @@ def shipped_case_path() -> Path:
     raise InputError("the shipped TU-Flex case is missing from this installation; pass a CASE")
 
 
-def load_case(path: Path | str | None = None) -> Case:
-    """Load a requirement file and the aircraft/propulsion files it names (paths relative to it)."""
+# the files a case names that a flag may replace for one run (--aircraft, --propulsion,
+# --battery), in the order their problems are reported
+FILE_KEYS = ("battery", "aircraft", "propulsion")
+
+
+def _named_files(case_path: Path) -> dict[str, str]:
+    """The file names a case that its schema refused writes (its other problems are said
+    already): each named file is still checked, so one run reports them all."""
+    from tuflexperf.io.yamlio import read_yaml
+
+    try:
+        data = read_yaml(case_path)
+    except InputError:
+        return {}
+    if not isinstance(data, dict):
+        return {}
+    return {key: data[key] for key in FILE_KEYS if isinstance(data.get(key), str) and data[key]}
+
+
+def _given(value: Path, flag: str) -> Path:
+    """A file given by a flag (relative to the working directory), resolved."""
+    target = Path(value).resolve()
+    if not target.is_file():
+        from tuflexperf.io.files import why_not_a_file
+
+        raise InputError(f"{flag}: {why_not_a_file(target)}: {value}")
+    return target
+
+
+def _validate_battery(path: Path) -> None:
+    from tuflexperf.io.battery import load_battery  # validate now: bad keys fail early
+
+    load_battery(path)
+
+
+def load_case(path: Path | str | None = None,
+              replace: Mapping[str, Path] | None = None) -> Case:
+    """Load a requirement file and the aircraft/propulsion files it names (paths relative to it).
+
+    ``replace`` maps ``aircraft``, ``propulsion`` or ``battery`` to a file (relative to the
+    working directory) read instead of the one the case names, for this run: the
+    ``--aircraft``, ``--propulsion`` and ``--battery`` flags, which its problems name.
+
+    Raises one :class:`InputError` holding every problem of the case and of every file it
+    names (three misspelt keys in one file and a bad value in another: four lines).
+    """
     case_path = Path(path) if path is not None else shipped_case_path()
     if case_path.is_dir():
         raise InputError(f"{case_path}: is a directory, expected a requirement file (.yaml)")
-    schema = load_model(case_path, CaseSchema)
-    aircraft_path = _resolve(case_path, "aircraft", schema.aircraft)
-    propulsion_path = _resolve(case_path, "propulsion", schema.propulsion)
-    battery_path = _resolve(case_path, "battery", schema.battery) if schema.battery else None
-    if battery_path is not None:
-        from tuflexperf.io.battery import load_battery  # validate now: bad keys fail early
-
-        load_battery(battery_path)
-    aircraft = load_aircraft(aircraft_path)
-    propulsion_schema = load_model(propulsion_path, PropulsionSchema)
-    propulsion = propulsion_from_schema(propulsion_schema)
+    replace = dict(replace or {})
+    problems: list[str] = []
+    schema: CaseSchema | None = None
+    try:
+        schema = load_model(case_path, CaseSchema)
+        named = {key: getattr(schema, key) for key in FILE_KEYS if getattr(schema, key)}
+    except InputError as exc:
+        problems.extend(exc.problems)
+        named = _named_files(case_path)
+    paths: dict[str, Path] = {}
+    for key in FILE_KEYS:
+        try:
+            if key in replace:
+                paths[key] = _given(replace[key], f"--{key}")
+            elif key in named:
+                paths[key] = _resolve(case_path, key, named[key])
+        except InputError as exc:
+            problems.extend(exc.problems)
+    loaders = {"battery": _validate_battery, "aircraft": load_aircraft,
+               "propulsion": lambda p: load_model(p, PropulsionSchema)}
+    loaded: dict[str, Any] = {}
+    for key, target in paths.items():
+        try:
+            loaded[key] = loaders[key](target)
+        except InputError as exc:
+            flag = f"--{key}: " if key in replace else ""
+            problems.extend(flag + problem for problem in exc.problems)
+    if problems or schema is None:
+        raise InputError.of(problems)
+    propulsion_schema = loaded["propulsion"]
     case = Case(
         name=schema.name,
         path=case_path,
-        aircraft=aircraft,
-        propulsion=propulsion,
+        aircraft=loaded["aircraft"],
+        propulsion=propulsion_from_schema(propulsion_schema),
         atmosphere=schema.atmosphere,
         requirements=schema.requirements,
-        aircraft_path=aircraft_path,
-        propulsion_path=propulsion_path,
-        battery_path=battery_path,
+        aircraft_path=paths["aircraft"],
+        propulsion_path=paths["propulsion"],
+        battery_path=paths.get("battery"),
         uncertainty=schema.uncertainty,
         propulsion_schema=propulsion_schema,
     )
     if not math.isfinite(case.density_kg_m3) or case.density_kg_m3 <= 0:
         raise InputError(f"{case_path}: atmosphere: gives no valid density")
-    refuse_absurd_propulsion(case)
+    try:
+        refuse_absurd_propulsion(case)
+    except InputError as exc:
+        raise InputError(("--propulsion: " if "propulsion" in replace else "") + str(exc)
+                         ) from None
     if schema.uncertainty is not None:
         from tuflexperf.io.dotted import check_key  # only a case that samples needs it
 
