@@ -11,9 +11,12 @@ import typer
 
 from tuflexperf.cli import render
 from tuflexperf.cli.inputs import (
+    AircraftFileOption,
+    BatteryFileOption,
     CaseOption,
     DaskOption,
     JsonOption,
+    PropulsionFileOption,
     SamplesOption,
     SeedOption,
     SetOption,
@@ -23,6 +26,7 @@ from tuflexperf.cli.inputs import (
     load_case_with,
     output_file,
     refuse_empty_address,
+    replaced,
     scaled_pack_notes,
     set_keys,
     sweep_case,
@@ -40,6 +44,9 @@ def check(
     seed: int | None = SeedOption,
     workers: int | None = WorkersOption,
     dask: str | None = DaskOption,
+    aircraft: Path | None = AircraftFileOption,
+    propulsion: Path | None = PropulsionFileOption,
+    battery: Path | None = BatteryFileOption,
 ) -> None:
     """Verify every requirement in the case: value, limit, margin, PASS/FAIL."""
     from tuflexperf.analysis.requirements import CHECKS, check_case, sampled_result
@@ -48,7 +55,7 @@ def check(
         fail_input("--case: give the case once, as the argument or as --case, not both")
     case_file = case_file if case_file is not None else case_option
 
-    case = load_case_with(case_file, sets)
+    case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
     if workers is not None and workers < 1:
         fail_input(f"--workers: must be at least 1, got {workers}")
     if seed is not None and seed < 0:
@@ -95,11 +102,14 @@ def margins(
     case_file: Path | None = CaseOption,
     as_json: bool = JsonOption,
     sets: list[str] | None = SetOption,
+    aircraft: Path | None = AircraftFileOption,
+    propulsion: Path | None = PropulsionFileOption,
+    battery: Path | None = BatteryFileOption,
 ) -> None:
     """Per requirement and parameter: the value where it just holds, and d(value)/d(parameter)."""
     from tuflexperf.analysis.margins import extrapolation_notes, solve_margins
 
-    case = load_case_with(case_file, sets)
+    case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
     rows = solve_margins(case)
     notes = (extrapolation_notes(rows, case.propulsion.tested_airspeed_m_s)
              + batch_notes(case, [], None) + scaled_pack_notes({m.parameter for m in rows}))
@@ -117,6 +127,9 @@ def sweep(
                                          help="Write a carpet plot (PNG) here."),
     workers: int | None = WorkersOption,
     dask: str | None = DaskOption,
+    aircraft: Path | None = AircraftFileOption,
+    propulsion: Path | None = PropulsionFileOption,
+    battery: Path | None = BatteryFileOption,
 ) -> None:
     """Every requirement over a grid of parameter values."""
     from tuflexperf.analysis.sweep import run_sweep
@@ -126,7 +139,7 @@ def sweep(
         fail_input(f"--workers: must be at least 1, got {workers}")
     refuse_empty_address(dask)
     csv_out, plot = output_file(csv_text, "--csv"), output_file(plot_text, "--plot")
-    case, axes = sweep_case(case_file, sets, vary)
+    case, axes = sweep_case(case_file, sets, vary, replaced(aircraft, propulsion, battery))
     outputs = {flag: target for flag, target in (("--csv", csv_out), ("--plot", plot))
                if target is not None}
     if plot is not None and plot.suffix.lower() != ".png":
@@ -156,12 +169,15 @@ def takeoff(
     case_file: Path | None = CaseOption,
     as_json: bool = JsonOption,
     sets: list[str] | None = SetOption,
+    aircraft: Path | None = AircraftFileOption,
+    propulsion: Path | None = PropulsionFileOption,
+    battery: Path | None = BatteryFileOption,
 ) -> None:
     """Take-off at full throttle: ground roll, rotation, transition arc, climb to the obstacle."""
     from tuflexperf.analysis.requirements import takeoff_verdicts
     from tuflexperf.analysis.takeoff import solve_takeoff
 
-    case = load_case_with(case_file, sets)
+    case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
     result = solve_takeoff(case)
     requirement = case.requirements.takeoff
     verdicts = takeoff_verdicts(requirement, result) if requirement is not None else []
@@ -177,12 +193,15 @@ def trim(
     table: bool = typer.Option(
         False, "--table", metavar="", help="Print the throttle at every airspeed."
     ),
+    aircraft: Path | None = AircraftFileOption,
+    propulsion: Path | None = PropulsionFileOption,
+    battery: Path | None = BatteryFileOption,
 ) -> None:
     """Least throttle for level flight at each airspeed of the envelope (0.5 m/s grid)."""
     from tuflexperf.analysis.requirements import trim_verdict
     from tuflexperf.analysis.trim import solve_trim
 
-    case = load_case_with(case_file, sets)
+    case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
     result = solve_trim(case)
     if case.requirements.envelope is None:
         fail_input(f"{case.path}: requirements.envelope: trim needs the envelope requirement")
@@ -199,6 +218,9 @@ def oei(
     dead_engine: str | None = typer.Option(
         None, "--dead-engine", help="windmilling or zero (default: the case's oei block)."
     ),
+    aircraft: Path | None = AircraftFileOption,
+    propulsion: Path | None = PropulsionFileOption,
+    battery: Path | None = BatteryFileOption,
 ) -> None:
     """Level flight with one engine inoperative; each engine dead in turn, worse case."""
     from tuflexperf.analysis.oei import solve_oei
@@ -207,7 +229,7 @@ def oei(
     dead_engine = dead_engine.lower() if dead_engine is not None else None
     if dead_engine is not None and dead_engine not in ("windmilling", "zero"):
         fail_input(f"--dead-engine: must be windmilling or zero, got {dead_engine!r}")
-    case = load_case_with(case_file, sets)
+    case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
     result = solve_oei(case, dead_engine)  # type: ignore[arg-type]
     requirement = case.requirements.oei
     limit = requirement.max_throttle if requirement is not None else 1.0
@@ -220,11 +242,14 @@ def performance(
     case_file: Path | None = CaseOption,
     as_json: bool = JsonOption,
     sets: list[str] | None = SetOption,
+    aircraft: Path | None = AircraftFileOption,
+    propulsion: Path | None = PropulsionFileOption,
+    battery: Path | None = BatteryFileOption,
 ) -> None:
     """Point performance: stall, V_md, level speeds, climb (Vx, Vy), ceilings, OEI, obstacle."""
     from tuflexperf.analysis.performance import solve_performance
 
-    case = load_case_with(case_file, sets)
+    case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
     result = solve_performance(case)
     attainable = result.min_level_speed_m_s is not None
     render.show_performance(case, result, attainable, as_json)

@@ -10,12 +10,16 @@ import typer
 
 from tuflexperf.cli import render
 from tuflexperf.cli.inputs import (
+    AircraftFileOption,
+    BatteryFileOption,
     CaseOption,
     JsonOption,
+    PropulsionFileOption,
     SetOption,
     load_case_with,
     output_file,
     refuse_dash,
+    replaced,
 )
 
 
@@ -67,12 +71,16 @@ def report_command(
     ),
     as_json: bool = JsonOption,
     sets: list[str] | None = SetOption,
+    aircraft: Path | None = AircraftFileOption,
+    propulsion: Path | None = PropulsionFileOption,
+    battery: Path | None = BatteryFileOption,
 ) -> None:
     """Design-review figures (PNG, 150 dpi) and one multi-page PDF, review.pdf."""
     from tuflexperf.report import build_report  # lazy: matplotlib stays out of `check`
 
     refuse_dash(out_text, "--out")
-    case = load_case_with(case_file, sets) if sets else case_file
+    replace = replaced(aircraft, propulsion, battery)
+    case = load_case_with(case_file, sets, replace) if sets or replace else case_file
     result = build_report(case, Path(out_text), campaign=campaign)
     render.show_report(result, as_json)
 
@@ -87,10 +95,15 @@ def export_command(
     out_text: str = typer.Option(..., "--out", metavar="<path>",
                                  help="Directory to write the model files into."),
     as_json: bool = JsonOption,
+    aircraft: Path | None = AircraftFileOption,
+    propulsion: Path | None = PropulsionFileOption,
+    battery: Path | None = BatteryFileOption,
 ) -> None:
     """The thrust model for simulation and flight software: C99, CasADi, JSON, JSBSim, FMU."""
     from tuflexperf.export import export_model, parse_formats
 
     refuse_dash(out_text, "--out")
-    result = export_model(case_file, parse_formats(formats), Path(out_text))
+    replace = replaced(aircraft, propulsion, battery)
+    case = load_case_with(case_file, None, replace) if replace else case_file
+    result = export_model(case, parse_formats(formats), Path(out_text))
     render.show_export(result, as_json)

@@ -11,12 +11,16 @@ import typer
 
 from tuflexperf.cli import render
 from tuflexperf.cli.inputs import (
+    AircraftFileOption,
+    BatteryFileOption,
     CaseOption,
     JsonOption,
+    PropulsionFileOption,
     SetOption,
     fail_input,
     load_case_with,
     output_file,
+    replaced,
 )
 from tuflexperf.errors import NotAttainable
 
@@ -30,6 +34,9 @@ def mission(
                                         help="Write the time history to this CSV."),
     as_json: bool = JsonOption,
     sets: list[str] | None = SetOption,
+    aircraft: Path | None = AircraftFileOption,
+    propulsion: Path | None = PropulsionFileOption,
+    battery: Path | None = BatteryFileOption,
 ) -> None:
     """Fly a mission with the battery model; charge at landing against the reserve."""
     from tuflexperf.analysis.mission import solve_mission
@@ -37,7 +44,7 @@ def mission(
     from tuflexperf.io.mission import load_mission
 
     csv = output_file(csv_text, "--csv")
-    case = load_case_with(case_file, sets)
+    case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
     requirement = case.requirements.mission
     if mission_file is None:
         if requirement is None:
@@ -76,6 +83,9 @@ def endurance(
         False, "--best", metavar="",
         help="Also the throttle/airspeed of longest flight and of best range.",
     ),
+    aircraft: Path | None = AircraftFileOption,
+    propulsion: Path | None = PropulsionFileOption,
+    battery: Path | None = BatteryFileOption,
 ) -> None:
     """Level-flight airspeed, electrical power, pack and flight endurance at a throttle."""
     from tuflexperf.analysis.endurance import solve_best, solve_endurance
@@ -88,7 +98,7 @@ def endurance(
         hint = (f" (did you mean {throttle / 100:g}? throttle is a fraction, not percent)"
                 if math.isfinite(throttle) and 2.0 <= throttle <= 100.0 else "")
         fail_input(f"--throttle: must be a fraction in [0, 1], got {throttle!r}{hint}")
-    case = load_case_with(case_file, sets)
+    case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
     # the throttle asked for first: its own reason, not one of the best search's throttles
     asked = solve_endurance(case, throttle) if throttle is not None else None
     best_result = solve_best(case) if best else None

@@ -32,6 +32,26 @@ WorkersOption = typer.Option(
 DaskOption = typer.Option(
     None, "--dask", help="Send sample/sweep chunks to a Dask scheduler (tcp://HOST:PORT)."
 )
+# a file the case names, replaced for this run (relative to the working directory)
+AircraftFileOption = typer.Option(
+    None, "--aircraft", metavar="<path>",
+    help="Aircraft file to use instead of the one the case names (this run only).",
+)
+PropulsionFileOption = typer.Option(
+    None, "--propulsion", metavar="<path>",
+    help="Propulsion file to use instead of the one the case names (this run only).",
+)
+BatteryFileOption = typer.Option(
+    None, "--battery", metavar="<path>",
+    help="Battery file to use instead of the one the case names (this run only).",
+)
+
+
+def replaced(aircraft: Path | None, propulsion: Path | None, battery: Path | None
+             ) -> dict[str, Path]:
+    """The files ``--aircraft``, ``--propulsion`` and ``--battery`` give, by the case's key."""
+    given = (("aircraft", aircraft), ("propulsion", propulsion), ("battery", battery))
+    return {key: path for key, path in given if path is not None}
 
 
 def fail_input(message: str) -> None:
@@ -103,11 +123,13 @@ def refuse_dash(value: str, flag: str) -> None:
                    f"is missing?); for a file of that name give ./{one_line(value)}")
 
 
-def load_case_with(case_file: Path | None, sets: list[str] | None) -> Any:
-    """The case, with every ``--set KEY=VALUE`` applied and validated by the schemas."""
+def load_case_with(case_file: Path | None, sets: list[str] | None,
+                   replace: dict[str, Path] | None = None) -> Any:
+    """The case, with the files ``replace`` gives (:func:`replaced`) read instead of the ones
+    it names, and every ``--set KEY=VALUE`` applied and validated by the schemas."""
     from tuflexperf.io.case import load_case
 
-    case = load_case(case_file)
+    case = load_case(case_file, replace)
     if not sets:
         return case
     from tuflexperf.io.dotted import with_values
@@ -116,8 +138,8 @@ def load_case_with(case_file: Path | None, sets: list[str] | None) -> Any:
 
 
 
-def sweep_case(case_file: Path | None, sets: list[str] | None, vary: list[str]
-                ) -> tuple[Any, list[tuple[str, Any]]]:
+def sweep_case(case_file: Path | None, sets: list[str] | None, vary: list[str],
+               replace: dict[str, Path] | None = None) -> tuple[Any, list[tuple[str, Any]]]:
     """The sweep's nominal case and its axes.
 
     The grid gives a varied key its values: a ``--set`` of that key is not used (a note says
@@ -130,7 +152,7 @@ def sweep_case(case_file: Path | None, sets: list[str] | None, vary: list[str]
     from tuflexperf.io.dotted import with_values
 
     values = parse_sets(sets)
-    base = load_case(case_file)
+    base = load_case(case_file, replace)
     axes = [parse_vary(base, spec) for spec in vary]
     if not values:
         return base, axes
