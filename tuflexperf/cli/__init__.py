@@ -63,6 +63,7 @@ for _callback in (commands_core.check, commands_core.margins, commands_core.swee
 app.command("fit")(commands_data.fit_command)
 app.command("report")(commands_data.report_command)
 app.command("export")(commands_data.export_command)
+app.command("init")(commands_data.init_command)
 
 for _info in app.registered_commands:  # every command above, whichever module wrote it
     _info.callback = guarded(_info.callback)

@@ -1,5 +1,6 @@
 """The data commands: ``fit`` (raw runs to a propulsion or battery file), ``report``
-(figures and a PDF) and ``export`` (the thrust model for simulators). Each parses its
+(figures and a PDF), ``export`` (the thrust model for simulators) and ``init`` (a starter
+case). Each parses its
 flags, calls the work and hands the result to :mod:`tuflexperf.cli.render`."""
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from tuflexperf.cli.inputs import (
     JsonOption,
     PropulsionFileOption,
     SetOption,
+    fail_input,
     load_case_with,
     output_file,
     refuse_dash,
@@ -107,3 +109,93 @@ def export_command(
     case = load_case_with(case_file, None, replace) if replace else case_file
     result = export_model(case, parse_formats(formats), Path(out_text))
     render.show_export(result, as_json)
+
+
+def init_command(
+    folder: Path = typer.Argument(
+        ..., help="Folder for the starter case (made if missing; nothing in it is replaced)."
+    ),
+    from_datasheet: bool = typer.Option(
+        False, "--from-datasheet", metavar="",
+        help="Build propulsion and battery from datasheet numbers (the flags below, or "
+        "--datasheet FILE) instead of typical values.",
+    ),
+    datasheet: Path | None = typer.Option(
+        None, "--datasheet", metavar="<path>",
+        help="YAML of datasheet numbers, keys as the flags (static_thrust_n, ...).",
+    ),
+    static_thrust_n: float | None = typer.Option(
+        None, "--static-thrust-n", help="Full-throttle static thrust of one fan [N]."),
+    max_power_w: float | None = typer.Option(
+        None, "--max-power-w", help="Full-throttle electrical power of one fan [W]."),
+    fan_diameter_m: float | None = typer.Option(
+        None, "--fan-diameter-m", help="Fan (duct) diameter [m]."),
+    engines: int | None = typer.Option(None, "--engines", help="Number of fans (default 2)."),
+    cells: int | None = typer.Option(None, "--cells", help="Cells in series of one pack."),
+    capacity_ah: float | None = typer.Option(
+        None, "--capacity-ah", help="Capacity of one pack [Ah]."),
+    c_rating: float | None = typer.Option(
+        None, "--c-rating", help="Continuous discharge rating of one pack [C]."),
+    internal_resistance: float | None = typer.Option(
+        None, "--internal-resistance-ohm",
+        help="Internal resistance per cell [Ohm] (default: the shipped pack's, scaled to the "
+        "capacity)."),
+    example: str | None = typer.Option(
+        None, "--example", metavar="NAME", help="Copy a shipped example instead: tuflex."),
+    as_json: bool = JsonOption,
+) -> None:
+    """Write a commented starter case that check runs at once, for you to edit."""
+    from tuflexperf.io.datasheet import TYPICAL
+    from tuflexperf.io.starter import copy_example, write_starter
+
+    flags = {"static_thrust_n": static_thrust_n, "max_power_w": max_power_w,
+             "fan_diameter_m": fan_diameter_m, "engines": engines, "cells": cells,
+             "capacity_ah": capacity_ah, "c_rating": c_rating,
+             "internal_resistance_ohm_per_cell": internal_resistance}
+    given = {key: value for key, value in flags.items() if value is not None}
+    if example is not None:
+        if from_datasheet or given or datasheet is not None:
+            fail_input("--example: copies the shipped example; give no datasheet flags with it")
+        result = copy_example(folder, example)
+    else:
+        if (given or datasheet is not None) and not from_datasheet:
+            fail_input("--from-datasheet: give it to build the case from datasheet numbers")
+        sheet = read_datasheet(datasheet, given) if from_datasheet else dict(TYPICAL)
+        result = write_starter(folder, validated_datasheet(sheet, datasheet), from_datasheet)
+    render.show_init(result, as_json)
+
+
+def read_datasheet(path: Path | None, given: dict[str, float]) -> dict[str, object]:
+    """The datasheet numbers: the file's, each flag given replacing its key."""
+    from tuflexperf.io.datasheet import DATASHEET_KEYS
+    from tuflexperf.io.yamlio import read_yaml
+
+    data: dict[str, object] = {}
+    if path is not None:
+        read = read_yaml(path)
+        if not isinstance(read, dict):
+            fail_input(f"--datasheet: {path}: expected a mapping of keys at the top level")
+        data = dict(read)
+    data.update(given)
+    missing = [key for key in ("static_thrust_n", "max_power_w", "fan_diameter_m", "cells",
+                               "capacity_ah", "c_rating") if key not in data]
+    if missing:
+        flags = ", ".join("--" + key.replace("_", "-") for key in missing)
+        fail_input(f"--from-datasheet: missing {flags} (or those keys in --datasheet FILE; "
+                   f"keys: {', '.join(DATASHEET_KEYS)})")
+    return data
+
+
+def validated_datasheet(data: dict[str, object], path: Path | None) -> object:
+    """``data`` validated as a datasheet; problems name the file or the flags."""
+    from pydantic import ValidationError
+
+    from tuflexperf.errors import InputError
+    from tuflexperf.io.datasheet import DatasheetSchema
+    from tuflexperf.io.yamlio import validation_problems
+
+    try:
+        return DatasheetSchema.model_validate(data)
+    except ValidationError as exc:
+        where = f"--datasheet {path}" if path is not None else "--from-datasheet"
+        raise InputError.of(validation_problems(where, exc, DatasheetSchema)) from None

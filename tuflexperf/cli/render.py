@@ -665,3 +665,25 @@ class FitProgress:
 
     def __exit__(self, *exc: object) -> None:
         self._bar.__exit__(*exc)
+
+
+def show_init(result: Any, as_json: bool) -> None:
+    """``init``: the files written, what the datasheet gave, and the next command."""
+    if as_json:
+        emit_json(result.to_dict())
+        return
+    typer.echo(f"wrote {len(result.files)} files to {result.folder}")
+    if len(result.files) <= 12:
+        for path in result.files:
+            typer.echo(f"  {path}")
+    m = result.model
+    if m is not None:
+        typer.echo(
+            f"  propulsion: momentum theory from {m.sheet.static_thrust_n:g} N, "
+            f"{m.sheet.max_power_w:g} W, {m.sheet.fan_diameter_m:g} m: jet velocity "
+            f"{m.jet_velocity_m_s:.1f} m/s, figure of merit {m.figure_of_merit:.2f}, thrust "
+            f"+- {m.thrust_sd_n:.3g} N (1 sd)")
+        typer.echo(f"  battery: stand-in discharge runs of the datasheet's circuit, "
+                   f"{1000 * m.resistance_per_cell_ohm:.3g} mOhm per cell, "
+                   f"{m.packs_in_parallel} pack(s) per fan")
+    typer.echo(f"next: tuflexperf check {result.case}")
