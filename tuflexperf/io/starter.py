@@ -114,7 +114,10 @@ def _q(text: str) -> str:
 
 
 def case_text(m: StarterModel) -> str:
-    """The starter case: its files and requirements, endurance included."""
+    """The starter case: its files and requirements, endurance included (OEI with two or
+    more engines)."""
+    oei = ("  oei: {dead_engine: windmilling, max_throttle: 1.0}   # one engine out, level "
+           "flight\n" if m.sheet.engines >= 2 else "")
     return f"""\
 # Starter case written by `tuflexperf init`: edit every value for your aircraft.
 # Run it with `tuflexperf check case.yaml`; docs/formats.md lists every key.
@@ -126,8 +129,7 @@ atmosphere: {{altitude_m: 0, temperature_offset_k: 0}}   # ISA day at the airfie
 requirements:
   takeoff: {{max_ground_roll_m: 40}}                      # runway length you have [m]
   envelope: {{min_airspeed_m_s: 14, max_airspeed_m_s: 30, max_trim_throttle: 1.0}}  # EAS
-  oei: {{dead_engine: windmilling, max_throttle: 1.0}}   # one engine out, level flight
-  endurance: {{throttle: 0.5, min_flight_time_min: 10}}  # flight time at this throttle
+{oei}  endurance: {{throttle: 0.5, min_flight_time_min: 10}}  # flight time at this throttle
 """
 
 
