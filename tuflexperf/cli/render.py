@@ -511,20 +511,27 @@ def echo_electrical(electrical: dict[str, Any] | None) -> None:
 
 
 def print_fit(summary: dict[str, Any]) -> None:
+    """``fit``'s table: each engine's poly22, its quality, and the full-throttle thrust at
+    rest and at the top of the tested airspeeds."""
     typer.echo(f"poly22 fit of {summary['input']} ({summary['kind']})")
+    top = float((summary.get("tested_airspeed_m_s") or [0.0, 30.0])[1])
+    label = f"T(1,{top:g})"
+    width = max(8, len(label) + 1)
     header = (
         f"{'engine':<8}{'n':>4}{'p00':>9}{'p10':>9}{'p01':>9}{'p20':>9}{'p11':>9}{'p02':>11}"
-        f"{'R^2':>9}{'RMSE N':>8}{'T(1,0)':>8}{'T(1,30)':>8}"
+        f"{'R^2':>9}{'RMSE N':>8}{'T(1,0)':>8}{label:>{width}}"
     )
     typer.echo(header)
     typer.echo("-" * len(header))
     for e in summary["engines"]:
         c = e["coefficients"]
         full = e["full_throttle_thrust_n"]
+        at_top = (c["p00"] + c["p10"] + c["p20"] + (c["p01"] + c["p11"]) * top
+                  + c["p02"] * top * top)
         typer.echo(
             f"{e['name']:<8}{e['n_points']:>4}{c['p00']:>9.4f}{c['p10']:>9.4f}{c['p01']:>9.4f}"
             f"{c['p20']:>9.4f}{c['p11']:>9.4f}{c['p02']:>11.3e}{fmt(e['r2'], 5):>9}"
-            f"{fmt(e['rmse_n']):>8}{full['0']:>8.2f}{full['30']:>8.2f}"
+            f"{fmt(e['rmse_n']):>8}{full['0']:>8.2f}{at_top:>{width}.2f}"
         )
     delay = summary.get("delay_s")
     runs = summary.get("delay_runs", [])
