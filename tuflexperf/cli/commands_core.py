@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import typer
 
 from tuflexperf.cli import render
@@ -130,8 +131,17 @@ def sweep(
     aircraft: Path | None = AircraftFileOption,
     propulsion: Path | None = PropulsionFileOption,
     battery: Path | None = BatteryFileOption,
+    fail_on_fail: bool = typer.Option(
+        False, "--fail-on-fail", metavar="",
+        help="Exit 1 when any grid point FAILs a requirement.",
+    ),
 ) -> None:
-    """Every requirement over a grid of parameter values."""
+    """Every requirement over a grid of parameter values.
+
+    Exit code: 0 once the grid is computed, whatever its verdicts (a sweep explores).
+
+    With --fail-on-fail: 1 when any grid point FAILs. Bad input: 2.
+    """
     from tuflexperf.analysis.sweep import run_sweep
     from tuflexperf.io.files import write_files_atomically
 
@@ -163,6 +173,8 @@ def sweep(
     if written:  # both or neither: an interrupt between them left a new plot by an old CSV
         write_files_atomically(written)
     render.show_sweep(case, result, notes, (csv_out, plot), as_json)
+    if fail_on_fail and not all(bool(np.all(met)) for met in result.met.values()):
+        raise typer.Exit(1)
 
 
 def takeoff(
