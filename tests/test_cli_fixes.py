@@ -73,3 +73,26 @@ def test_the_shipped_mission_lands():
     assert flown.exit_code == 0 and data["passed"]
     assert data["segments"][-1]["altitude_m"] == 0.0
     assert not any("above the field" in w for w in data["warnings"])
+
+
+def test_verdicts_are_coloured_on_a_terminal_only(monkeypatch):
+    import sys
+
+    from tuflexperf.cli import render
+
+    monkeypatch.delenv("NO_COLOR", raising=False)
+    monkeypatch.setenv("TERM", "xterm")
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: True, raising=False)
+    coloured = render.verdict_word(False)
+    assert "\x1b[" in coloured and "FAIL" in coloured
+    monkeypatch.setenv("NO_COLOR", "1")
+    assert render.verdict_word(False) == "FAIL"
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: False, raising=False)
+    monkeypatch.delenv("NO_COLOR")
+    assert render.verdict_word(True) == "PASS"
+
+
+def test_help_shows_no_type_for_the_help_flag():
+    shown = run("check", "-h").stdout
+    line = next(row for row in shown.splitlines() if "--help" in row)
+    assert "<bool>" not in line and "-h" in line

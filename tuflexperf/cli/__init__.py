@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import os
 import sys
+from typing import Any
 
 import typer
+from typer.core import TyperCommand, TyperGroup
 
 from tuflexperf.cli import commands_core, commands_data, commands_flight
 from tuflexperf.cli.guard import (
@@ -27,7 +29,26 @@ from tuflexperf.messages import one_line
 
 __all__ = ["app", "load_case_with", "main", "parse_sets"]
 
+class _HelpWithoutType:
+    """``-h`` is a flag: its help row shows no value type (it showed ``<bool>``)."""
+
+    def get_help_option(self, ctx: Any) -> Any:
+        option = super().get_help_option(ctx)  # type: ignore[misc]
+        if option is not None:
+            option.metavar = ""
+        return option
+
+
+class _Command(_HelpWithoutType, TyperCommand):
+    pass
+
+
+class _Group(_HelpWithoutType, TyperGroup):
+    pass
+
+
 app = typer.Typer(
+    cls=_Group,
     add_completion=False,
     context_settings={"help_option_names": ["-h", "--help"]},
     no_args_is_help=True,
@@ -59,11 +80,11 @@ for _callback in (commands_core.check, commands_core.margins, commands_core.swee
                   commands_core.takeoff, commands_core.trim, commands_core.oei,
                   commands_core.performance, commands_flight.mission,
                   commands_flight.endurance):
-    app.command()(_callback)
-app.command("fit")(commands_data.fit_command)
-app.command("report")(commands_data.report_command)
-app.command("export")(commands_data.export_command)
-app.command("init")(commands_data.init_command)
+    app.command(cls=_Command)(_callback)
+app.command("fit", cls=_Command)(commands_data.fit_command)
+app.command("report", cls=_Command)(commands_data.report_command)
+app.command("export", cls=_Command)(commands_data.export_command)
+app.command("init", cls=_Command)(commands_data.init_command)
 
 for _info in app.registered_commands:  # every command above, whichever module wrote it
     _info.callback = guarded(_info.callback)

@@ -53,6 +53,26 @@ def print_warnings(warnings: list[str]) -> None:
         typer.echo(f"  note: {line}")
 
 
+def _colours() -> bool:
+    """Whether verdicts are coloured: on a terminal only, unless NO_COLOR is set."""
+    import os
+
+    return (sys.stdout.isatty() and "NO_COLOR" not in os.environ
+            and os.environ.get("TERM") != "dumb")
+
+
+def verdict_word(passed: bool) -> str:
+    """PASS or FAIL; on a terminal green or red (rich's styles), elsewhere plain text."""
+    word = "PASS" if passed else "FAIL"
+    if not _colours():
+        return word
+    from rich.color import ColorSystem
+    from rich.style import Style
+
+    return Style(color="green" if passed else "red", bold=True).render(
+        word, color_system=ColorSystem.STANDARD)
+
+
 def cell(text: str, width: int = 10) -> str:
     """Right-aligned in ``width``; a longer value keeps a space before it (never run on)."""
     return text.rjust(width) if len(text) < width else " " + text
@@ -88,7 +108,7 @@ def show_check(case: Any, verdicts: list[Any], results: list[dict[str, Any]], pa
     for v in verdicts:
         typer.echo(
             f"{v.name:<{w}}{cell(fmt(v.value))}{cell(fmt(v.limit))}{cell(v.unit)}"
-            f"{cell(fmt(v.margin))}  {'PASS' if v.passed else 'FAIL'}"
+            f"{cell(fmt(v.margin))}  {verdict_word(v.passed)}"
         )
         typer.echo(f"  {v.reason}")
         print_warnings(v.details.get("warnings", []))
@@ -113,7 +133,7 @@ def show_check(case: Any, verdicts: list[Any], results: list[dict[str, Any]], pa
             typer.echo(f"  note: {count} samples {what}")
         for note in sample_notes:
             typer.echo(f"  note: {note}")
-    typer.echo(f"overall: {'PASS' if passed else 'FAIL'}")
+    typer.echo(f"overall: {verdict_word(passed)}")
 
 
 def print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
@@ -133,7 +153,7 @@ def print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
         typer.echo(
             f"{name:<{w}}{p.probability:>8.4f}{f'[{low:.4f}, {high:.4f}]':>17}{fmt(p05):>10}"
             f"{fmt(p50):>10}{fmt(p95):>10}{p.not_attainable:>7}  "
-            f"{'PASS' if p.passed else 'FAIL'}"
+            f"{verdict_word(p.passed)}"
         )
     typer.echo("  (n/a: samples where the requirement is not attainable; they count as not met "
                "and as the worst value, so a percentile that falls on them shows n/a)")
@@ -200,7 +220,8 @@ def show_sweep(case: Any, result: Any, notes: list[str], written: Iterable[Path 
         for n in names:
             value = result.values[n][i]
             text = "not attainable" if not np.isfinite(value) else f"{value:.4g}"
-            cells += f"{text + (' PASS' if result.met[n][i] else ' FAIL'):>30}"
+            # padded as plain text: a colour's escape codes take no column
+            cells += f"{text + ' PASS':>30}"[:-4] + verdict_word(bool(result.met[n][i]))
         typer.echo(cells)
     for target in written:
         if target is not None:
@@ -260,7 +281,7 @@ def show_takeoff(case: Any, result: Any, requirement: Any, verdicts: list[Any], 
     for v in verdicts:
         typer.echo(
             f"  {v.name:<30} {fmt(v.value, 2)} <= {v.limit:g} m  "
-            f"{'PASS' if v.passed else 'FAIL'}"
+            f"{verdict_word(v.passed)}"
         )
 
 
@@ -306,7 +327,7 @@ def show_trim(case: Any, result: Any, verdict: Any, limit: float, table: bool,
     # the verdict and why, as take-off and OEI print theirs (SPEC 5: exit 1 says why)
     why = (verdict.reason if verdict.value is None else
            f"highest throttle {verdict.value:.3f} above the limit {limit:g}")
-    typer.echo(f"  {verdict.name}: {'PASS' if met else 'FAIL'}"
+    typer.echo(f"  {verdict.name}: {verdict_word(met)}"
                + ("" if met else f" ({why})"))
 
 
@@ -336,7 +357,7 @@ def show_oei(case: Any, result: Any, limit: float, met: bool, as_json: bool) -> 
         f"  worse case: {worst.dead_engine} dead, "
         + ("not attainable" if worst.min_throttle is None
            else f"throttle {fmt(worst.min_throttle)}")
-        + f" (limit {limit:g})  {'PASS' if met else 'FAIL'}"
+        + f" (limit {limit:g})  {verdict_word(met)}"
     )
     print_warnings(data["warnings"])
 
@@ -405,11 +426,11 @@ def show_mission(case: Any, result: Any, verdicts: list[Any], csv: Path | None,
     for note in result.warnings:  # the JSON's "warnings": said in the text too
         typer.echo(f"  note: {note}")
     landing, *solved = verdicts
-    typer.echo(f"  {result.reason}  {'PASS' if landing.passed else 'FAIL'}")
+    typer.echo(f"  {result.reason}  {verdict_word(landing.passed)}")
     for verdict in solved:  # solve_for: the longest segment against the file's own
         value = "not attainable" if verdict.value is None else f"{verdict.value:.2f} min"
         typer.echo(f"  solve_for: {value}, {verdict.reason}  "
-                   f"{'PASS' if verdict.passed else 'FAIL'}")
+                   f"{verdict_word(verdict.passed)}")
     if csv is not None:
         typer.echo(f"  wrote {csv}")
 
@@ -458,7 +479,7 @@ def show_endurance(case: Any, result: Any, best_result: Any, requirement: Any, j
     if judged:
         typer.echo(
             f"  requirement: >= {requirement.min_flight_time_min:g} min  "
-            f"{'PASS' if met else 'FAIL'}"
+            f"{verdict_word(met)}"
         )
     if best_result is not None:
         b = best_result.to_dict()
