@@ -112,6 +112,9 @@ def test_aircraft_and_battery_flags_replace_those_files(tmp_path):
     edited = json.loads(run("check", str(_shipped_copy(tmp_path, aircraft=lighter)),
                             "--json").stdout)
     shipped = json.loads(run("check", "--json").stdout)
+    assert flagged["files_replaced"] == {"battery": str(battery.resolve()),
+                                         "aircraft": str(lighter.resolve())}
+    assert "files_replaced" not in edited
     values = {r["name"]: r["value"] for r in flagged["results"]}
     assert values == {r["name"]: r["value"] for r in edited["results"]}
     assert values != {r["name"]: r["value"] for r in shipped["results"]}

@@ -83,6 +83,11 @@ def name_width(names: Iterable[str]) -> int:
     return max([22, *(len(n) + 2 for n in names)])
 
 
+def replaced_files(case: Any) -> dict[str, str]:
+    """The files a flag replaced for this run, by the case's key."""
+    return {key: str(getattr(case, f"{key}_path")) for key in case.replaced}
+
+
 def show_check(case: Any, verdicts: list[Any], results: list[dict[str, Any]], passed: bool,
                plan: Any, probabilistic: dict[str, Any], outside: dict[str, int],
                sample_notes: list[str], as_json: bool) -> None:
@@ -97,9 +102,13 @@ def show_check(case: Any, verdicts: list[Any], results: list[dict[str, Any]], pa
         if plan is not None:
             payload["uncertainty"] = {**plan.to_dict(), "samples_outside_bounds": outside,
                                       "notes": sample_notes}
+        if case.replaced:  # said only when a flag replaced a file
+            payload["files_replaced"] = replaced_files(case)
         emit_json(payload)
         return
     typer.echo(f"{case.name}  ({case.path})")
+    for key, path in replaced_files(case).items():
+        typer.echo(f"  {key}: {path} (--{key}, instead of the case's)")
     w = name_width(v.name for v in verdicts)
     header = (f"{'requirement':<{w}}{'value':>10}{'limit':>10}{'unit':>10}{'margin':>10}"
               "  verdict")

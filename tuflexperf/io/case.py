@@ -167,6 +167,7 @@ def load_case(path: Path | str | None = None,
         battery_path=paths.get("battery"),
         uncertainty=schema.uncertainty,
         propulsion_schema=propulsion_schema,
+        replaced=tuple(key for key in FILE_KEYS if key in replace),
     )
     if not math.isfinite(case.density_kg_m3) or case.density_kg_m3 <= 0:
         raise InputError(f"{case_path}: atmosphere: gives no valid density")

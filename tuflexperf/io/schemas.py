@@ -463,6 +463,8 @@ class Case:
     propulsion_schema: PropulsionSchema | None = None
     # keys changed for this run by ``--set`` (dotted key, value): the files say otherwise
     overrides: tuple[tuple[str, float], ...] = ()
+    # the files a flag replaced for this run (--aircraft, --propulsion, --battery): their keys
+    replaced: tuple[str, ...] = ()
 
     @property
     def density_kg_m3(self) -> float:
