@@ -208,6 +208,15 @@ def show_margins(case: Any, rows: list[Any], notes: list[str], as_json: bool) ->
         typer.echo(f"note: {note}")
 
 
+def column_decimals(values: np.ndarray, significant: int = 4) -> int:
+    """Decimals (0-6) that give a column's largest finite magnitude ``significant`` digits."""
+    finite = np.abs(values[np.isfinite(values)])
+    top = float(finite.max()) if finite.size else 0.0
+    if top == 0.0:
+        return significant - 1
+    return int(min(6, max(0, significant - 1 - math.floor(math.log10(top)))))
+
+
 def show_sweep(case: Any, result: Any, notes: list[str], written: Iterable[Path | None],
                as_json: bool) -> None:
     """``sweep``: one row per grid point, each requirement's value and verdict."""
@@ -224,11 +233,15 @@ def show_sweep(case: Any, result: Any, notes: list[str], written: Iterable[Path 
     typer.echo(f"{case.name}  ({case.path}): {result.points.shape[0]} grid points")
     typer.echo(header)
     typer.echo("-" * len(header))
+    # fixed decimals per column: the decimal points of a column line up
+    shown = [column_decimals(result.points[:, k], 5) for k in range(len(widths))]
+    decimals = {n: column_decimals(np.asarray(result.values[n], dtype=float)) for n in names}
     for i in range(result.points.shape[0]):
-        cells = "".join(f"{v:>{w}.5g}" for v, w in zip(result.points[i], widths, strict=True))
+        cells = "".join(f"{v:>{w}.{d}f}" for v, w, d in zip(result.points[i], widths, shown,
+                                                             strict=True))
         for n in names:
             value = result.values[n][i]
-            text = "not attainable" if not np.isfinite(value) else f"{value:.4g}"
+            text = "not attainable" if not np.isfinite(value) else f"{value:.{decimals[n]}f}"
             # padded as plain text: a colour's escape codes take no column
             cells += f"{text + ' PASS':>30}"[:-4] + verdict_word(bool(result.met[n][i]))
         typer.echo(cells)
