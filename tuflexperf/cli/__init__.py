@@ -25,6 +25,7 @@ from tuflexperf.cli.guard import (
     refuse_repeated,
 )
 from tuflexperf.cli.inputs import load_case_with, parse_sets
+from tuflexperf.commands_flightlog import flightlog_command
 from tuflexperf.messages import one_line
 
 __all__ = ["app", "load_case_with", "main", "parse_sets"]
@@ -84,6 +85,7 @@ for _callback in (commands_core.check, commands_core.margins, commands_core.swee
 app.command("fit", cls=_Command)(commands_data.fit_command)
 app.command("report", cls=_Command)(commands_data.report_command)
 app.command("export", cls=_Command)(commands_data.export_command)
+app.command("flightlog", cls=_Command)(flightlog_command)  # issue 45
 app.command("init", cls=_Command)(commands_data.init_command)
 
 for _info in app.registered_commands:  # every command above, whichever module wrote it

@@ -320,6 +320,10 @@ REQUIREMENT_NAMES = frozenset({  # check's result names (analysis/requirements.p
 })
 PNG_SOFTWARE = "tuflexperf"  # the PNG text chunk 'Software' of a report page: + " VERSION"
 SWEEP_PNG_SOFTWARE = "tuflexperf sweep"  # ... and of sweep's carpet plot
+FLIGHT_PNG_SOFTWARE = "tuflexperf flightlog"  # ... and of flightlog's power plot
+# flightlog's --csv header (the aligned series; tuflexperf.analysis.flown)
+FLIGHT_CSV_COLUMNS = ("time_s", "airspeed_m_s", "power_w", "throttle", "altitude_m",
+                      "climb_rate_m_s", "airborne")
 
 
 def _is_mission_history(columns: list[str]) -> bool:
@@ -366,7 +370,7 @@ def _png_software(head: bytes) -> str | None:
 ARTEFACT_WRITERS = {
     "propulsion file": "fit", "battery file": "fit", "thrust table": "fit",
     "mission history": "mission", "sweep grid": "sweep", "sweep plot": "sweep",
-    "report page": "report",
+    "report page": "report", "flight series": "flightlog", "flight plot": "flightlog",
 }
 """Each single-file artefact of the tool and the command that writes it."""
 
@@ -388,6 +392,8 @@ def artefact_of(head: bytes) -> str | None:
         return fit_yaml_kind(head) + " file"
     if head.startswith(b"\x89PNG"):
         software = _png_software(head) or ""
+        if software == FLIGHT_PNG_SOFTWARE:
+            return "flight plot"
         if software in (SWEEP_PNG_SOFTWARE, PNG_SOFTWARE):  # the bare name: earlier sweeps'
             return "sweep plot"
         return "report page" if software.startswith(PNG_SOFTWARE + " ") else None
@@ -398,6 +404,8 @@ def artefact_of(head: bytes) -> str | None:
     except UnicodeDecodeError:
         return None
     columns = header.split(",")
+    if header == ",".join(FLIGHT_CSV_COLUMNS):
+        return "flight series"
     if header in _thrust_table_headers():
         return "thrust table"
     if _is_mission_history(columns):

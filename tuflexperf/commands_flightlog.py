@@ -1,0 +1,198 @@
+"""``tuflexperf flightlog``: the flown side of a PX4 or ArduPilot log, and the case beside it.
+
+The body of the command; :mod:`tuflexperf.cli` registers it. It imports nothing of the CLI
+(bad input is an :class:`InputError`, which the CLI's guard turns into exit 2), and pyulog,
+pymavlink and matplotlib only when it runs.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+import typer
+
+from tuflexperf.errors import InputError
+
+
+def flightlog_command(
+    log_path: Path = typer.Argument(..., metavar="LOG",
+                                    help="PX4 .ulg, a ulog2csv folder, or an ArduPilot .bin."),
+    case_file: Path | None = typer.Option(
+        None, "--case", help="Requirement file: compare the model's power with the flown."),
+    mass_kg: float | None = typer.Option(
+        None, "--mass", help="Aircraft mass in kg (default: the case's)."),
+    airborne_airspeed: float | None = typer.Option(
+        None, "--airborne-airspeed",
+        help="Airspeed in m/s of the airborne rule (default 1.1x the case's stall speed, "
+        "or 8 m/s without a case)."),
+    airborne_height: float = typer.Option(
+        3.0, "--airborne-height", help="Height above ground in m of the airborne rule."),
+    efficiency: float = typer.Option(
+        0.5, "--efficiency",
+        help="Electrical-to-climb-power efficiency of the climb correction."),
+    as_json: bool = typer.Option(False, "--json", metavar="",
+                                 help="Print one JSON object on stdout."),
+    csv_text: str | None = typer.Option(None, "--csv", metavar="<path>",
+                                        help="Write the aligned time series as CSV here."),
+    plot_text: str | None = typer.Option(None, "--plot", metavar="<path>",
+                                         help="Write flown power against airspeed (PNG) here."),
+) -> None:
+    """The flown side of a flight log (energy, power against airspeed); with --case, the model."""
+    from tuflexperf.analysis.flown import reduce_flight
+    from tuflexperf.io.flightlog import read_flight_log
+
+    csv_out, plot = _output(csv_text, "--csv"), _output(plot_text, "--plot")
+    for flag, value in (("--mass", mass_kg), ("--airborne-airspeed", airborne_airspeed)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise InputError(f"{flag}: must be a positive number, got {value:g}")
+    if not (math.isfinite(airborne_height) and airborne_height >= 0):
+        raise InputError(f"--airborne-height: must be >= 0, got {airborne_height:g}")
+    if not (math.isfinite(efficiency) and 0 < efficiency <= 1):
+        raise InputError(f"--efficiency: must be in (0, 1], got {efficiency:g}")
+    if plot is not None and plot.suffix.lower() != ".png":
+        raise InputError(f"--plot {plot}: the figure is written as PNG (use .png)")
+    case = None
+    if case_file is not None:
+        from tuflexperf.io.case import load_case
+
+        case = load_case(case_file)
+    outputs = {f: p for f, p in (("--csv", csv_out), ("--plot", plot)) if p is not None}
+    if outputs:
+        from tuflexperf.io.files import guard_outputs
+
+        inputs = [log_path]
+        if case is not None:
+            from tuflexperf.io.case import case_files
+
+            inputs += [p for _, p in case_files(case)]
+        guard_outputs(outputs, inputs, "flightlog",
+                      {"--csv": "flight series", "--plot": "flight plot"})
+    log = read_flight_log(log_path)
+    mass = mass_kg if mass_kg is not None else (case.aircraft.mass_kg if case else None)
+    threshold = airborne_airspeed
+    if threshold is None:
+        threshold = _default_threshold(case)
+    flown = reduce_flight(log, threshold, airborne_height, mass, efficiency)
+    comparison = None
+    if case is not None:
+        from tuflexperf.analysis.flown_compare import compare_with_case
+
+        comparison = compare_with_case(case, log, flown, mass)
+    written: dict[Path, bytes | str] = {}
+    if csv_out is not None:
+        from tuflexperf.analysis.flown import series_csv
+
+        written[csv_out] = series_csv(flown.series)
+    if plot is not None:
+        from tuflexperf.report.flight_plot import flight_png
+
+        written[plot] = flight_png(flown, comparison, f"{Path(log_path).name}")
+    if written:
+        from tuflexperf.io.files import write_files_atomically
+
+        write_files_atomically(written)
+    payload: dict[str, Any] = {"command": "flightlog", "log": str(log_path), "format": log.kind,
+                               "sources": _sources(log), **flown.to_dict()}
+    if comparison is not None:
+        payload["comparison"] = comparison.to_dict()
+        payload["notes"] = payload["notes"] + list(comparison.notes)
+    if as_json:
+        sys.stdout.write(json.dumps(_clean(payload), indent=2) + "\n")
+        return
+    _print_text(payload, [p for p in (csv_out, plot) if p is not None])
+
+
+def _default_threshold(case: Any) -> float:
+    from tuflexperf.analysis.flown import DEFAULT_AIRBORNE_AIRSPEED_M_S
+
+    if case is None:
+        return DEFAULT_AIRBORNE_AIRSPEED_M_S
+    from tuflexperf.models.aircraft import stall_speed_eas_m_s
+
+    # the log's calibrated airspeed is (near the ground) the equivalent airspeed
+    return 1.1 * float(stall_speed_eas_m_s(case.aircraft))
+
+
+def _output(value: str | None, flag: str) -> Path | None:
+    if value is None:
+        return None
+    if value == "-" or value.startswith("-"):
+        raise InputError(f"{flag}: {value!r} is no file name (an option, or stdout); give a "
+                         "path")
+    if value.endswith(("/", "\\")) or value in ("", ".", ".."):
+        raise InputError(f"{flag}: {value!r} names a folder; give a file name")
+    return Path(value)
+
+
+def _sources(log: Any) -> dict[str, Any]:
+    def src(stream: Any) -> str | None:
+        return None if stream is None else stream.source
+
+    return {"batteries": [b.source for b in log.batteries], "airspeed": src(log.airspeed),
+            "baro": src(log.baro), "climb": src(log.climb), "throttle": src(log.throttle),
+            "land_detector": src(log.landed)}
+
+
+def _clean(value: Any) -> Any:
+    """NaN/inf as null (standard JSON), numpy scalars as Python numbers."""
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if hasattr(value, "item") and not hasattr(value, "__len__"):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _num(value: float | None, digits: int = 1) -> str:
+    return "n/a" if value is None or value != value else f"{value:.{digits}f}"
+
+
+def _print_text(p: dict[str, Any], written: list[Path]) -> None:
+    echo = typer.echo
+    echo(f"{p['log']} ({p['format']})")
+    echo(f"airborne: {_num(p['airborne_s'])} s ({_num(p['airborne_start_s'], 2)} to "
+         f"{_num(p['airborne_end_s'], 2)} s), {p['airborne_rule']}")
+    echo(f"energy: {_num(p['energy_wh'], 3)} Wh; charge {_num(p['charge_mah'])} mAh "
+         f"(log counter), {_num(p['integrated_charge_mah'])} mAh (integrated current); "
+         f"mean power {_num(p['mean_power_w'])} W")
+    comparison = p.get("comparison")
+    predicted = {b["airspeed_m_s"]: b for b in comparison["bins"]} if comparison else {}
+    # the model (level flight) stands beside the bins it was compared with
+    compared = (p["level_bins"] if comparison and comparison["bins"]
+                and comparison["bins"][0]["bins"] == "level-flight" else p["bins"])
+    for title, key, bins in (
+        (f"power against {p['airspeed_kind']} airspeed (bins of 1 m/s, >= "
+         f"{p['min_bin_time_s']:g} s each)", "flown_power_w", p["bins"]),
+        (f"level flight (|climb rate| < {p['level_climb_rate_m_s']:g} m/s)", "flown_power_w",
+         p["level_bins"]),
+        (f"climb-corrected (P - m g dh/dt / {p['climb_efficiency']:g}, m = "
+         f"{_num(p['mass_kg'])} kg)", "corrected_power_w", p["climb_corrected_bins"]),
+    ):
+        if not bins:
+            continue
+        echo(title)
+        head = f"  {'V m/s':>6}{'time s':>8}{'P W':>9}{'sd W':>8}{'throttle':>10}"
+        echo(head + (f"{'model W':>9}{'ratio':>7}{'model thr':>10}" if predicted and
+                     bins is compared else ""))
+        for b in bins:
+            row = (f"  {b['airspeed_m_s']:>6.0f}{b['time_s']:>8.1f}{_num(b[key]):>9}"
+                   f"{_num(b['power_std_w']):>8}{_num(b['throttle'], 3):>10}")
+            if predicted and bins is compared:
+                m = predicted.get(b["airspeed_m_s"], {})
+                row += (f"{_num(m.get('predicted_power_w')):>9}{_num(m.get('ratio'), 2):>7}"
+                        f"{_num(m.get('predicted_throttle'), 3):>10}")
+            echo(row)
+    if comparison:
+        for line in comparison["summary"]:
+            echo(line)
+    for path in written:
+        echo(f"wrote {path}")
+    for note in p["notes"]:
+        echo(f"  note: {note}")
