@@ -113,7 +113,8 @@ def export_command(
 
 def init_command(
     folder: Path = typer.Argument(
-        ..., help="Folder for the starter case (made if missing; nothing in it is replaced)."
+        ..., metavar="DIR",
+        help="Folder for the starter case (made if missing; nothing in it is replaced).",
     ),
     from_datasheet: bool = typer.Option(
         False, "--from-datasheet", metavar="",
@@ -125,20 +126,20 @@ def init_command(
         help="YAML of datasheet numbers, keys as the flags (static_thrust_n, ...).",
     ),
     static_thrust_n: float | None = typer.Option(
-        None, "--static-thrust-n", help="Full-throttle static thrust of one fan [N]."),
+        None, "--static-thrust-n", help="Full-throttle static thrust of one fan, in N."),
     max_power_w: float | None = typer.Option(
-        None, "--max-power-w", help="Full-throttle electrical power of one fan [W]."),
+        None, "--max-power-w", help="Full-throttle electrical power of one fan, in W."),
     fan_diameter_m: float | None = typer.Option(
-        None, "--fan-diameter-m", help="Fan (duct) diameter [m]."),
+        None, "--fan-diameter-m", help="Fan (duct) diameter, in m."),
     engines: int | None = typer.Option(None, "--engines", help="Number of fans (default 2)."),
     cells: int | None = typer.Option(None, "--cells", help="Cells in series of one pack."),
     capacity_ah: float | None = typer.Option(
-        None, "--capacity-ah", help="Capacity of one pack [Ah]."),
+        None, "--capacity-ah", help="Capacity of one pack, in Ah."),
     c_rating: float | None = typer.Option(
-        None, "--c-rating", help="Continuous discharge rating of one pack [C]."),
+        None, "--c-rating", help="Continuous discharge rating of one pack, in C."),
     internal_resistance: float | None = typer.Option(
         None, "--internal-resistance-ohm",
-        help="Internal resistance per cell [Ohm] (default: the shipped pack's, scaled to the "
+        help="Internal resistance per cell, in Ohm (default: the shipped pack's, scaled to the "
         "capacity)."),
     example: str | None = typer.Option(
         None, "--example", metavar="NAME", help="Copy a shipped example instead: tuflex."),
