@@ -364,8 +364,10 @@ class ProbabilisticVerdict:
         }
 
 
-NOT_SAMPLED = ("not sampled: a mission is flown for the nominal case only, so its P(met) is "
-               "not shown and it does not pass the probabilistic test")
+NOT_SAMPLED = ("not sampled: this mission is flown for the nominal case only (an airspeed it "
+               "solves, a catapult launch, a take-off on sagging packs, or battery or "
+               "propulsion keys drawn; analysis.mission_samples), so its P(met) is not shown "
+               "and it does not pass the probabilistic test")
 
 
 def sampled_result(verdict: Verdict, probabilistic: ProbabilisticVerdict | None) -> dict[str, Any]:
@@ -374,8 +376,9 @@ def sampled_result(verdict: Verdict, probabilistic: ProbabilisticVerdict | None)
 
     A ``passed: true`` beside a failed probability read as "met" to any tool that reads
     the results (outside audit): the overall verdict and each result's now agree. A
-    requirement the samples do not evaluate (a mission) has no P(met) to show: it does not
-    pass (a case whose mission lands on the reserve only nominally passed; outside audit).
+    requirement the samples do not evaluate (a mission the batch cannot fly yet,
+    :func:`tuflexperf.analysis.mission_samples.why_not_sampled`) has no P(met) to show: it
+    does not pass (a case whose mission lands on the reserve only nominally passed).
     """
     if probabilistic is None:
         return {**verdict.to_dict(), "probability": None, "probability_note": NOT_SAMPLED,

@@ -19,6 +19,10 @@ covariance is the mean surface's uncertainty only: at 30 m/s it gave 0.21 N wher
 paper's model is off by up to 0.73 N; outside audit), the error beyond the range then
 ``sqrt(extrapolation_sd_n^2 - residual_sd_n^2)`` on top of it, the whole error there.
 
+A mission requirement is flown for every sample by the single case's own chained function
+(:mod:`tuflexperf.analysis.mission_samples`), in the same batches, so it too gives the same
+numbers wherever the batches run; a mission the batch cannot fly yet is said not sampled.
+
 References
 ----------
 Hanson & Beard (2010), "Applying Monte Carlo simulation to launch vehicle design and
@@ -275,7 +279,46 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range) -> dict[str, A
     out[f"outside:{ENVELOPE_KEY}"] = np.array([np.count_nonzero(crossed)])
     out.update({f"value:{k}": np.where(outside, np.nan, v) for k, v in result.values.items()})
     out.update({f"limit:{k}": v for k, v in result.limits.items()})
+    model = mission_for(case, list(draw.values))
+    if model is not None:
+        from tuflexperf.analysis.mission_samples import sampled_landing
+
+        flown = sampled_landing(model, evaluator_for(case), draw.values, draw.size,
+                                draw.coefficients, draw.extrapolation_n)
+        for name, (value, limit) in flown.items():
+            out[f"value:{name}"] = np.where(outside, np.nan, value)
+            out[f"limit:{name}"] = limit
     return out
+
+
+MISSION_KINDS = {"mission_landing_charge": "min", "mission_solved_time": "min"}
+_missions: dict[str, Any] = {}
+
+
+def mission_for(case: Case, keys: list[str]) -> Any:
+    """The case's mission model when the batch flies it for draws of ``keys``
+    (:func:`tuflexperf.analysis.mission_samples.why_not_sampled`), else None; one per case
+    and process, as :func:`evaluator_for`."""
+    if case.requirements.mission is None:
+        return None
+    from tuflexperf.analysis.mission import MissionModel
+    from tuflexperf.analysis.mission_samples import why_not_sampled
+    from tuflexperf.analysis.requirements import mission_path
+    from tuflexperf.errors import NotAttainable
+    from tuflexperf.io.mission import load_mission
+
+    path = mission_path(case)
+    key = fingerprint(case.aircraft, case.propulsion, case.atmosphere, case.requirements,
+                      case.overrides, str(case.battery_path), str(path), file_key(path))
+    if key not in _missions:
+        _missions.clear()
+        try:
+            _missions[key] = MissionModel(case, load_mission(path),
+                                          case.requirements.mission.min_landing_charge_fraction)
+        except NotAttainable:  # the nominal plan cannot be flown: said by the nominal verdict
+            _missions[key] = None
+    model = _missions[key]
+    return None if model is None or why_not_sampled(model, keys) is not None else model
 
 
 DASK_CONNECT_S = 10.0  # connect and handshake: a server that never answers hung for ever
@@ -468,6 +511,7 @@ def run_samples(
     values = {n: np.concatenate([p[f"value:{n}"] for p in parts]) for n in names}
     limits = {n: np.concatenate([p[f"limit:{n}"] for p in parts]) for n in names}
     kinds = {r.name: r.kind for r in evaluator_for(case).requirements}
+    kinds.update(MISSION_KINDS)
     outside = {k.split(":", 1)[1]: int(sum(int(p[k][0]) for p in parts))
                for k in parts[0] if k.startswith("outside:")}
     return SampleSet(plan, values, limits, kinds, outside)

@@ -1,0 +1,177 @@
+"""Sampled missions: each batch row is the single case flown with the sample's --set values."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from tests.conftest import SHIPPED_CASE
+from tuflexperf.analysis.mission import solve_mission
+from tuflexperf.analysis.mission_samples import sampled_landing
+from tuflexperf.analysis.uncertainty import evaluator_for, mission_for
+from tuflexperf.cli import app
+from tuflexperf.io.case import load_case
+from tuflexperf.io.dotted import with_values
+from tuflexperf.io.mission import load_mission
+
+ROOT = SHIPPED_CASE.parent.parent
+SHIPPED_MISSION = ROOT / "data" / "tuflex" / "missions" / "test_flight.yaml"
+AIRBORNE = """\
+name: airborne
+segments:
+  - {type: climb, to_altitude_m: 150, airspeed_m_s: 22, climb_rate_m_s: 2.0}
+  - {type: cruise, airspeed_m_s: 26, distance_km: 12}
+  - {type: engine_failure, engine: EDF2}
+  - {type: loiter, airspeed_m_s: 21, time_min: 2}
+  - {type: descent, to_altitude_m: 0, airspeed_m_s: 20, throttle: 0.1}
+"""
+DRAWS = {"aircraft.mass_kg": [22.2, 24.0, 20.5], "aircraft.cd0": [0.021, 0.018, 0.026],
+         "aircraft.k": [0.05, 0.047, 0.055],
+         "atmosphere.temperature_offset_k": [0.0, 15.0, -5.0],
+         "battery.cutoff_voltage_per_cell_v": [3.4, 3.45, 3.3]}
+
+
+def _case(tmp_path: Path, mission: Path, uncertainty: dict | None = None) -> Path:
+    data = yaml.safe_load(SHIPPED_CASE.read_text())
+    for key in ("aircraft", "propulsion", "battery"):
+        data[key] = str((SHIPPED_CASE.parent / data[key]).resolve())
+    data["requirements"]["mission"] = {"file": str(mission),
+                                       "min_landing_charge_fraction": 0.2}
+    if uncertainty is not None:
+        data["uncertainty"] = uncertainty
+    path = tmp_path / "case.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def _batch_and_single(case_path: Path, name: str = "mission_landing_charge"
+                      ) -> tuple[np.ndarray, list[float]]:
+    case = load_case(case_path)
+    values = {k: np.array(v) for k, v in DRAWS.items()}
+    model = mission_for(case, list(values))
+    assert model is not None
+    batch = sampled_landing(model, evaluator_for(case), values, 3, None, None)[name][0]
+    single = []
+    for row in range(3):
+        # the --set mechanism: the same dotted keys, validated as the files are
+        one = with_values(case, {k: v[row] for k, v in DRAWS.items()})
+        flown = solve_mission(one, load_mission(model.mission.path), 0.2)
+        value = (flown.landing_charge_fraction if name == "mission_landing_charge"
+                 else flown.solved["time_min"])
+        single.append(value if flown.attainable else np.nan)
+    return batch, single
+
+
+def test_an_airborne_mission_row_is_the_single_case_flown_with_its_values(tmp_path) -> None:
+    """No take-off: the batch runs the single case's very function, to rounding."""
+    mission = tmp_path / "airborne.yaml"
+    mission.write_text(AIRBORNE)
+    batch, single = _batch_and_single(_case(tmp_path, mission))
+    assert np.all(np.isfinite(batch)) and len(set(np.round(batch, 6))) == 3
+    assert batch == pytest.approx(single, rel=1e-9)
+
+
+def test_a_mission_with_a_takeoff_row_is_the_single_case_to_the_batch_takeoff(tmp_path) -> None:
+    """The take-off's airspeed history per row is the batch's closed form (held to CVODES at
+    1e-6 in test_batch_equals_deterministic), the rest the single case's function."""
+    batch, single = _batch_and_single(_case(tmp_path, SHIPPED_MISSION))
+    assert np.all(np.isfinite(batch))
+    assert batch == pytest.approx(single, rel=1e-7)
+
+
+def test_a_sample_that_cannot_fly_the_mission_is_not_met_never_dropped(tmp_path) -> None:
+    case = load_case(_case(tmp_path, SHIPPED_MISSION))
+    # 20 m/s EAS segments below stall for a heavy aircraft; an empty-ish pack for a draggy one
+    values = {"aircraft.mass_kg": np.array([22.2, 60.0]),
+              "aircraft.cd0": np.array([0.021, 0.021])}
+    model = mission_for(case, list(values))
+    out = sampled_landing(model, evaluator_for(case), values, 2, None, None)
+    landing = out["mission_landing_charge"][0]
+    assert np.isfinite(landing[0]) and np.isnan(landing[1])
+
+
+def test_solve_for_per_row_is_the_single_cases_longest_segment(tmp_path) -> None:
+    """solve_for solved over the batch (safeguarded Newton, vectorised) lands each row on
+    the reserve with the single case's own duration; a row that stalls has none."""
+    mission = tmp_path / "airborne.yaml"
+    mission.write_text(AIRBORNE + "solve_for: cruise\n")
+    path = _case(tmp_path, mission)
+    batch, single = _batch_and_single(path, "mission_solved_time")
+    assert np.all(np.isfinite(batch)) and np.all(batch > 10.0)  # the file plans 12 km
+    assert batch == pytest.approx(single, rel=1e-9)
+    landing, _ = _batch_and_single(path)
+    assert landing == pytest.approx([0.2] * 3, abs=1e-11)
+    case = load_case(path)
+    values = {"aircraft.mass_kg": np.array([22.2, 60.0])}
+    out = sampled_landing(mission_for(case, list(values)), evaluator_for(case), values, 2,
+                          None, None)
+    assert np.isfinite(out["mission_solved_time"][0][0])
+    assert np.isnan(out["mission_solved_time"][0][1])
+
+
+def test_check_samples_shows_the_mission_and_workers_give_the_same_numbers(tmp_path) -> None:
+    runner = CliRunner()
+    path = _case(tmp_path, SHIPPED_MISSION, {
+        "samples": 40, "seed": 3, "parameters": {"aircraft.mass_kg": {"normal": [22.2, 0.5]}}})
+    here = runner.invoke(app, ["check", str(path), "--json"])
+    data = json.loads(here.stdout)
+    row = next(r for r in data["results"] if r["name"] == "mission_landing_charge")
+    assert row["probability"] is not None and row["samples"] == 40
+    assert row["p05"] <= row["p50"] <= row["p95"]
+    assert 0 <= row["probability_ci"][0] <= row["probability"] <= row["probability_ci"][1] <= 1
+    workers = json.loads(runner.invoke(app, ["check", str(path), "--json", "--workers",
+                                             "2"]).stdout)
+    assert workers["results"] == data["results"]
+
+
+def test_a_dask_cluster_flies_the_sampled_mission_to_the_same_numbers(tmp_path) -> None:
+    distributed = pytest.importorskip("distributed")
+    from tuflexperf.analysis.uncertainty import plan_for, run_samples
+
+    mission = tmp_path / "airborne.yaml"
+    mission.write_text(AIRBORNE + "solve_for: cruise\n")
+    case = load_case(_case(tmp_path, mission, {
+        "samples": 30, "seed": 2, "parameters": {"aircraft.cd0": {"normal": [0.021, 0.002]}}}))
+    plan = plan_for(case)
+    here = run_samples(case, plan)
+    assert np.isfinite(here.values["mission_solved_time"]).sum() >= 25
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        there = run_samples(case, plan, dask_address=cluster.scheduler_address)
+    for name in ("mission_landing_charge", "mission_solved_time"):
+        np.testing.assert_array_equal(here.values[name], there.values[name])
+
+
+def test_solve_for_per_row_ends_at_the_cut_off_where_the_packs_cut_off_first(tmp_path) -> None:
+    """A high cut-off ends the solved cruise before the reserve: the voltage's root per
+    row, the single case's (its 'ends_at: cut-off') to 1e-9."""
+    mission = tmp_path / "airborne.yaml"
+    mission.write_text(AIRBORNE + "solve_for: cruise\n")
+    case = load_case(_case(tmp_path, mission))
+    cutoffs = [3.4, 3.7, 3.8]
+    values = {"battery.cutoff_voltage_per_cell_v": np.array(cutoffs)}
+    out = sampled_landing(mission_for(case, list(values)), evaluator_for(case), values, 3,
+                          None, None)
+    for row, cutoff in enumerate(cutoffs):
+        one = with_values(case, {"battery.cutoff_voltage_per_cell_v": cutoff})
+        flown = solve_mission(one, load_mission(mission), 0.2)
+        assert flown.solved["ends_at"] == ("landing reserve" if row == 0 else "cut-off")
+        assert out["mission_solved_time"][0][row] == pytest.approx(flown.solved["time_min"],
+                                                                   rel=1e-9)
+        assert out["mission_landing_charge"][0][row] == pytest.approx(
+            flown.landing_charge_fraction, rel=1e-9)
+
+
+def test_what_the_batch_does_not_fly_is_named(tmp_path) -> None:
+    from tuflexperf.analysis.mission_samples import why_not_sampled
+
+    model = mission_for(load_case(_case(tmp_path, SHIPPED_MISSION)), [])
+    assert why_not_sampled(model, ["requirements.takeoff.max_ground_roll_m",
+                                   "requirements.envelope.min_airspeed_m_s",
+                                   "aircraft.cl_max", "battery.mission.pattern_altitude_m"]) is None
+    assert "battery.capacity_ah" in why_not_sampled(model, ["battery.capacity_ah"])

@@ -1,0 +1,403 @@
+"""A mission flown for a batch of sampled parameter sets: the single case's own function.
+
+The chained CasADi function of :class:`tuflexperf.analysis.mission.MissionModel` takes the
+sampled parameters (:meth:`MissionModel.parameters`) and the take-off's step rows as inputs,
+so a batch is that same function, expanded to SX and evaluated with ``Function.map(B,
+"thread", 2)``; the nominal case is a batch of one with the case's own numbers. Per row
+the take-off's airspeed history, rotation and path to the obstacle come from the batch's
+take-off (:class:`tuflexperf.analysis.batch._Model`, the closed forms held to the single
+case in ``tests/verification/test_batch_equals_deterministic.py``), and the flight's checks
+are :meth:`MissionModel._result`'s, vectorised: a row that stalls, cuts off, needs more
+than full throttle, does not climb, outruns its fans or its pack's rating is not met
+(NaN), never dropped.
+
+What the batch does not fly yet is said, not guessed (:func:`why_not_sampled`): battery or
+propulsion keys drawn, a segment whose airspeed is solved (no ``airspeed_m_s``, or a level
+flight at a fixed throttle), a catapult launch, a take-off on sagging packs. ``solve_for``
+is solved per row (:func:`longest_rows`), vectorised over the batch.
+
+References
+----------
+Andersson et al. (2019), "CasADi", Math. Prog. Comp. 11 (``Function.map``); SPEC 4
+(uncertainty block, mission file).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tuflexperf.analysis.mission import (
+    BURST_OVER_CONTINUOUS,
+    RATING_SEGMENT_S,
+    SECONDS_PER_HOUR,
+    STEPS,
+    MissionModel,
+    airborne_path,
+    takeoff_matrix,
+)
+
+Array = NDArray[np.float64]
+FLOWN_KEYS = ("aircraft.mass_kg", "aircraft.wing_area_m2", "aircraft.cd0", "aircraft.k",
+              "aircraft.cl_max", "atmosphere.altitude_m", "atmosphere.temperature_offset_k",
+              "requirements.envelope.stall_margin",
+              "requirements.mission.min_landing_charge_fraction",
+              "requirements.takeoff.obstacle_height_m", "battery.cutoff_voltage_per_cell_v")
+"""The drawn keys a sampled mission flies (with ``aircraft.takeoff.*``, through the batch's
+take-off); other requirements' limits leave it alone."""
+ROWS_PER_MAP = 500  # rows per map call: a row's history is ~80 kB (states and aux per node)
+MISSION_LANDING = "mission_landing_charge"
+MISSION_SOLVED = "mission_solved_time"
+
+
+def why_not_sampled(model: MissionModel, keys: list[str]) -> str | None:
+    """Why the batch cannot fly ``model``'s mission for draws of ``keys`` (None: it can)."""
+    case = model.case
+    for key in keys:
+        # the case's requirement holds the reserve; of the requirements' numbers the mission
+        # reads only FLOWN_KEYS' (the others are other requirements' limits)
+        if key.startswith(("battery.mission.", "requirements.")):
+            continue
+        if key not in FLOWN_KEYS and not key.startswith("aircraft.takeoff."):
+            return f"{key} is drawn and the sampled mission does not fly it"
+    if case.aircraft.launch == "catapult":
+        return "a catapult launch is flown for the nominal case only"
+    if any(plan.solve_v for plan in model.plans):
+        return "a level flight at a fixed throttle is flown for the nominal case only"
+    if any(s.type not in ("takeoff", "engine_failure") and s.airspeed_m_s is None
+           for s in model.mission.segments):
+        return "a segment without airspeed_m_s is flown for the nominal case only"
+    if model.tk_layout and case.propulsion.reference_voltage_v is not None:
+        return "a take-off on sagging packs is flown for the nominal case only"
+    return None
+
+
+def _column(values: Mapping[str, Array], key: str, nominal: Any, size: int) -> Array:
+    return np.broadcast_to(np.asarray(values.get(key, nominal), dtype=float).reshape(-1),
+                           (size,)).copy()
+
+
+def _takeoff_rows(model: MissionModel, m: Any, height: Array, layout: list[tuple[str, int]]
+                  ) -> tuple[Array, NDArray[np.bool_]]:
+    """The take-off's step rows per row ``(B, P + 1, columns)`` from the batch's take-off
+    ``m``, and where the take-off reaches the obstacle."""
+    from tuflexperf.models._math import interp_rows
+    from tuflexperf.models.aircraft import (
+        climb_gradient,
+        obstacle_distances_m,
+        transition_beyond_cl_max,
+        transition_radius_m,
+    )
+
+    size = m.size
+    _, time, v_lo, ok = m.ground_roll()
+    ok = ok > 0.5
+    rotation = _column({}, "", m.aircraft.takeoff.rotation_time_s, size)
+    roll_s = np.where(ok, time - rotation, 0.0)
+    t_hist = np.where(ok[:, None], m.roll_history(ok), 0.0)
+    v_hist = np.where(ok, v_lo, 0.0)[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
+    stage_t = roll_s[:, None] / (2 * STEPS) * np.arange(2 * STEPS + 1)[None, :]
+    stage_t[:, -1] = roll_s
+    stages = interp_rows(stage_t, t_hist, v_hist)
+    v_tr = m.transition_speed()
+    load = _column({}, "", m.aircraft.takeoff.transition_load_factor, size)
+    radius = np.asarray(transition_radius_m(v_tr, load), dtype=float)
+    thrust = np.asarray(m.thrust(1.0, v_tr[:, None]), dtype=float).reshape(-1)
+    gradient = np.asarray(climb_gradient(m.aircraft, thrust[:, None], v_tr[:, None],
+                                         m.density), dtype=float).reshape(-1) * np.ones(size)
+    arc, climb, top = (np.asarray(x, dtype=float).reshape(-1) * np.ones(size)
+                       for x in obstacle_distances_m(radius, gradient, height))
+    air = None
+    if model.takeoff_to_obstacle:
+        air = airborne_path(v_tr, radius, height, gradient, gradient, top >= height)
+        ok &= np.isfinite(arc + climb) & ~np.asarray(transition_beyond_cl_max(load), dtype=bool)
+    rows = takeoff_matrix(layout, stages, roll_s, rotation, np.where(ok, v_lo, 0.0), air)
+    return np.where(ok[:, None, None], rows, 0.0), ok
+
+
+def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Array],
+                    size: int, coefficients: Array | None,
+                    extrapolation_n: Array | None) -> dict[str, tuple[Array, Array]]:
+    """Per requirement its values and limits per row: ``mission_landing_charge`` (the least
+    landing charge fraction, NaN where the mission is not attainable; the reserve) and with
+    ``solve_for`` ``mission_solved_time`` (the longest time of that segment [min], solved
+    per row by :func:`longest_rows`; the file's own).
+
+    ``evaluator`` the case's :class:`tuflexperf.analysis.batch.BatchEvaluator` (its rows'
+    aircraft, propulsion and density); ``values`` dotted key -> ``(B,)``; thrust
+    ``coefficients`` ``(E, B, 6)`` and ``extrapolation_n`` ``(E, B)`` [N] as drawn.
+    """
+    from tuflexperf.analysis.attainable import stall_margin_of
+    from tuflexperf.analysis.batch import _Model
+    from tuflexperf.analysis.takeoff import obstacle_height_of
+    from tuflexperf.models.aircraft import stall_speed_eas_m_s, true_airspeed_m_s
+    from tuflexperf.models.atmosphere import isa_density_kg_m3
+
+    case = model.case
+    aircraft = evaluator._aircraft(values, size)
+    atmosphere = case.atmosphere
+    field_m = _column(values, "atmosphere.altitude_m", atmosphere.altitude_m, size)
+    dt_k = _column(values, "atmosphere.temperature_offset_k",
+                   atmosphere.temperature_offset_k, size)
+    margin = _column(values, "requirements.envelope.stall_margin", stall_margin_of(case), size)
+    reserve = _column(values, "requirements.mission.min_landing_charge_fraction",
+                      model.reserve, size)
+    cutoff = model.battery.cells_in_series * _column(
+        values, "battery.cutoff_voltage_per_cell_v", model.battery.cutoff_voltage_per_cell_v,
+        size)
+    ok = np.ones(size, dtype=bool)
+    stall = margin * np.asarray(stall_speed_eas_m_s(aircraft), dtype=float).reshape(-1)
+    durations = np.repeat(model.durations[:, None], size, axis=1)
+    for plan, segment in zip(model.plans, model.mission.segments, strict=True):
+        if plan.eas is not None:  # below stall: the plan itself is not attainable
+            ok &= ~(plan.eas < stall * (1 - 1e-12))
+            if plan.kind == "time" and segment.distance_km is not None:
+                rho = np.asarray(isa_density_kg_m3(field_m + plan.start_h, dt_k), dtype=float)
+                durations[plan.index] = 1000.0 * segment.distance_km / np.asarray(
+                    true_airspeed_m_s(plan.eas, rho), dtype=float)
+    history, bounds, layout = model.sampled_chain()
+    par = model.parameters(aircraft, (field_m, dt_k), coefficients, extrapolation_n, size)
+    tk = np.zeros((size, model.tk.shape[0], 0))
+    if layout:
+        m = _Model(aircraft=aircraft, propulsion=evaluator._propulsion(coefficients),
+                   density=evaluator._density(values, size), extrapolation_n=extrapolation_n,
+                   size=size, stall_margin=margin)
+        height = _column(values, "requirements.takeoff.obstacle_height_m",
+                         obstacle_height_of(case), size)
+        tk, launched = _takeoff_rows(model, m, height, layout)
+        ok &= launched
+    theta = np.repeat(model.theta[:, None], size, axis=1)
+    k = model.mission.solve_for
+
+    def fly(durations: Array) -> tuple[Array, Array | None]:
+        landing, start = np.full(size, np.nan), None
+        if k is not None:
+            start = np.full((2 * model.n + 3, size), np.nan)
+        for first in range(0, size, ROWS_PER_MAP):
+            rows = slice(first, min(first + ROWS_PER_MAP, size))
+            count = rows.stop - rows.start
+            block = tk[rows]
+            states, aux = (np.asarray(x, dtype=float) for x in _mapped(history, count)(
+                durations[:, rows], theta[:, rows], par[:, rows],
+                block.transpose(1, 0, 2).reshape(block.shape[1], -1)))
+            nodes = states.shape[1] // count
+            states = states.reshape(states.shape[0], count, nodes)
+            aux = aux.reshape(aux.shape[0], count, nodes)
+            propulsion = evaluator._propulsion(None if coefficients is None
+                                               else coefficients[:, rows, :])
+            flown = _flown(model, bounds, states, aux, propulsion, field_m[rows], dt_k[rows],
+                           cutoff[rows])
+            with np.errstate(invalid="ignore"):
+                value = np.min(1.0 - states[:model.n, :, -1] / model.capacity_ah, axis=0)
+            landing[rows] = np.where(flown & ok[rows], value, np.nan)
+            if start is not None:
+                start[:, rows] = states[:, :, bounds[k][0]]
+        return landing, start
+
+    landing, start = fly(durations)
+    if k is None:
+        return {MISSION_LANDING: (landing, reserve)}
+    written = durations[k] / 60.0
+    with np.errstate(invalid="ignore"):
+        durations[k] = longest_rows(model, k, np.where(ok, 1.0, np.nan) * start, durations,
+                                    theta, par, reserve, cutoff)
+    landing, _ = fly(durations)
+    solved = np.where(np.isfinite(landing), durations[k] / 60.0, np.nan)
+    return {MISSION_LANDING: (landing, reserve), MISSION_SOLVED: (solved, written)}
+
+
+def longest_rows(model: MissionModel, k: int, start: Array, durations: Array, theta: Array,
+                 par: Array, reserve: Array, cutoff: Array) -> Array:
+    """Per row, :meth:`MissionModel.longest` of segment ``k`` [s] (NaN where no duration
+    lands): the landing charge on the reserve, or the cut-off first, from where segment
+    ``k`` begins (``start``, ``(state, B)``), per row the ``reserve`` [-] and the packs'
+    ``cutoff`` [V].
+
+    Vectorised over the rows, never a loop of them: each step evaluates the rows not yet
+    converged at once (the mission from segment ``k`` on, mapped). Newton with the state
+    equations' slope ``-i_j / (3600 Q)`` (exact for the last segment, a close guess before
+    it) from the file's duration, safeguarded by the bracket it keeps (regula falsi,
+    Illinois, where a step leaves it); then, where the packs cut off first, regula falsi on
+    the least loaded voltage over ``[0, T]``. The same roots as the single case's to
+    1e-12 (fraction) and 1e-10 V.
+
+    References
+    ----------
+    Press et al., *Numerical Recipes*, 3rd ed., 9.2 (Illinois), 9.4 (safeguarded Newton).
+    """
+    size = start.shape[1]
+    if not hasattr(model, "_suffix_sx"):
+        model._suffix_sx = {}  # type: ignore[attr-defined]
+    if k not in model._suffix_sx:  # type: ignore[attr-defined]
+        model._suffix_sx[k] = model._suffix_function(k).expand()  # type: ignore[attr-defined]
+    suffix = model._suffix_sx[k]  # type: ignore[attr-defined]
+    n, width = model.n, model.tk.shape[1]
+    pole = model.packs * model.params.max_capacity_ah
+
+    def at(rows: Array, tau: Array) -> tuple[Array, Array, Array]:
+        d = durations[:, rows].copy()
+        d[k] = tau
+        end, aux, most, least = (np.asarray(x, dtype=float) for x in _mapped(suffix, rows.size)(
+            start[:, rows], d, theta[:, rows], par[:, rows],
+            np.zeros((model.tk.shape[0], width * rows.size))))
+        with np.errstate(invalid="ignore"):
+            valid = (np.all(np.isfinite(end), axis=0) & np.all(most <= end[:n] + 1e-12, axis=0)
+                     & np.all(most < pole, axis=0))
+            frac = 1.0 - end[:n] / model.capacity_ah
+            j = np.argmin(np.where(np.isfinite(frac), frac, np.inf), axis=0)
+            cols = np.arange(rows.size)
+            g = np.where(valid, frac[j, cols] - reserve[rows], -1.0)
+            slope = np.where(valid, -aux[6 + j, cols] / SECONDS_PER_HOUR / model.capacity_ah,
+                             np.nan)
+            volt = np.where(valid, least[0] - cutoff[rows], -1.0)
+        return g, slope, volt
+
+    every = np.flatnonzero(np.all(np.isfinite(start), axis=0))
+    tau, g0, v0 = np.full(size, np.nan), np.full(size, np.nan), np.full(size, np.nan)
+    g0[every], _, v0[every] = at(every, np.zeros(every.size))
+    # landing short with none of it, or cut off: no duration lands
+    every = every[(g0[every] >= 0) & (v0[every] >= 0)]
+    tau[every] = _root(lambda rows, x: at(rows, x)[:2], every, g0, durations[k], 1e-12)
+    volts = np.full(size, np.nan)
+    found = every[np.isfinite(tau[every])]
+    volts[found] = at(found, tau[found])[2]
+    cut = found[volts[found] < 0]  # the packs cut off before the reserve: on the voltage
+    if cut.size:
+        tau[cut] = _root(lambda rows, x: (at(rows, x)[2], np.full(rows.size, np.nan)), cut,
+                         v0, tau, 1e-10, high=(tau.copy(), volts))
+    good = np.isfinite(tau) & (tau > 0)
+    checked = np.flatnonzero(good)
+    if checked.size:
+        good[checked] &= at(checked, tau[checked])[0] >= -1e-8
+    return np.where(good, tau, np.nan)
+
+
+def _root(f: Any, rows: Array, at_zero: Array, guess: Array, tolerance: float,
+          high: tuple[Array, Array] | None = None) -> Array:
+    """Per row of ``rows``, the root ``x > 0`` of a falling ``f(rows, x) -> (value, slope)``
+    with ``f(0) = at_zero >= 0``: safeguarded Newton from ``guess`` (slope NaN: regula falsi,
+    Illinois) inside the bracket it keeps, to ``|f| <= tolerance`` or a bracket of 1e-9
+    relative; ``high`` a known point and its value ``f < 0`` per row. Arrays over all rows;
+    NaN where none is found in 200 steps."""
+    size = at_zero.size
+    low, f_low = np.zeros(size), np.array(at_zero, dtype=float)
+    top = np.full(size, np.inf) if high is None else np.array(high[0], dtype=float)
+    f_top = np.full(size, np.nan) if high is None else np.array(high[1], dtype=float)
+    side = np.zeros(size)
+    x = np.maximum(np.asarray(guess, dtype=float) * np.ones(size), 1.0)
+    if high is not None:  # regula falsi on the bracket from the start
+        with np.errstate(invalid="ignore", divide="ignore"):
+            x = top - f_top * top / (f_top - f_low)
+    answer = np.full(size, np.nan)
+    active = np.array(rows)
+    for _ in range(200):
+        if not active.size:
+            break
+        value, slope = f(active, x[active])
+        done = np.abs(value) <= tolerance
+        above = ~done & (value > 0)
+        below = ~done & ~above
+        a, b = active[above], active[below]
+        # Illinois: halve the kept end's value when the same end moves twice
+        f_top[a] = np.where(side[a] == 1, 0.5 * f_top[a], f_top[a])
+        f_low[b] = np.where(side[b] == -1, 0.5 * f_low[b], f_low[b])
+        low[a], f_low[a], side[a] = x[a], value[above], 1
+        top[b], f_top[b], side[b] = x[b], value[below], -1
+        narrow = np.isfinite(top[active]) & (top[active] - low[active] <= 1e-9 * top[active])
+        answer[active[done | narrow]] = x[active[done | narrow]]
+        active, value, slope = (active[~(done | narrow)], value[~(done | narrow)],
+                                slope[~(done | narrow)])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            newton = x[active] - value / slope
+            falsi = top[active] - f_top[active] * (top[active] - low[active]) / (
+                f_top[active] - f_low[active])
+            bounded = np.isfinite(top[active])
+            inside = np.isfinite(newton) & (newton > low[active]) & (
+                newton < np.where(bounded, top[active], np.inf))
+            unbracketed = np.where(np.isfinite(newton) & (newton > low[active]), newton,
+                                   2.0 * np.maximum(x[active], 60.0))
+            step = np.where(inside, newton, np.where(
+                bounded, np.where(np.isfinite(falsi) & (falsi > low[active])
+                                  & (falsi < top[active]), falsi,
+                                  0.5 * (low[active] + top[active])), unbracketed))
+        x[active] = step
+    return answer[rows]
+
+
+_MAPS: dict[tuple[int, int], Any] = {}
+
+
+def _mapped(function: Any, count: int) -> Any:
+    """``function.map(count, "thread", 2)``, built once per function and count (a map of the
+    expanded mission takes ~0.4 s to build, as long as flying 100 rows)."""
+    key = (id(function), count)
+    if key not in _MAPS:
+        if len(_MAPS) > 16:  # a process flies one case's mission at a time
+            _MAPS.clear()
+        _MAPS[key] = (function, function.map(count, "thread", 2))
+    return _MAPS[key][1]
+
+
+def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, aux: Array,
+           propulsion: Any, field_m: Array, dt_k: Array, cutoff: Array) -> NDArray[np.bool_]:
+    """Per row: the whole flight is attainable by :meth:`MissionModel._result`'s rules (the
+    cut-off, full throttle, the pack's burst and continuous ratings, the fans' jet velocity,
+    climbs that climb and descents that descend). ``states``/``aux`` ``(k, B, nodes)``; per
+    row the field [m], temperature offset [K] and the packs' cut-off [V]."""
+    from tuflexperf.models.atmosphere import isa_density_kg_m3
+    from tuflexperf.models.battery import first_window_beyond
+    from tuflexperf.models.powertrain import beyond_jet_velocity
+
+    n = model.n
+    q, h, t = states[:n], states[2 * n], states[2 * n + 2]
+    v, rate, reached, idle = aux[1], aux[2], aux[3], aux[4]
+    current, voltage, thrust = aux[6:6 + n], aux[6 + n:6 + 2 * n], aux[6 + 3 * n]
+    size = q.shape[1]
+    ok = np.ones(size, dtype=bool)
+    pole = model.packs * model.params.max_capacity_ah
+    rating = model._pack_rating_a()
+    per_pack = model.battery.packs_in_parallel_per_engine
+    with np.errstate(invalid="ignore", over="ignore"):
+        rising = np.all(np.diff(q, axis=2) >= -1e-12, axis=(0, 2))
+        ok &= rising & np.all(np.isfinite(q) & (q < pole), axis=(0, 2))
+        ok &= np.all(np.isfinite(current) & (current >= 0.0), axis=(0, 2))
+        if rating is not None and t.shape[1] > 1:
+            # a stretch's mean current is a mean of the steps' (charge linear between nodes):
+            # only rows with a step beyond the rating can have a stretch beyond it
+            # (a segment's first node is the last one's end: no time between them, no step)
+            dt = np.broadcast_to(np.diff(t, axis=1), q[:, :, 1:].shape)
+            dq = np.diff(q, axis=2) * SECONDS_PER_HOUR / per_pack
+            steps = np.divide(dq, dt, out=np.where(dq == 0.0, 0.0, np.inf), where=dt > 0)
+            heavy = np.flatnonzero(np.any(~(steps <= rating), axis=(0, 2)))
+            if heavy.size:
+                end = first_window_beyond(t[heavy], q[:, heavy].transpose(1, 0, 2) / per_pack,
+                                          rating, RATING_SEGMENT_S)[0]
+                ok[heavy] &= ~np.isfinite(end)
+        for plan, (a, b) in zip(model.plans, bounds, strict=True):
+            if plan.kind == "event":
+                continue
+            live = [i for i in range(n) if i != plan.dead]
+            sl = slice(a, b)
+            ok &= np.all(np.min(voltage[live, :, sl], axis=0) >= cutoff[:, None] - 1e-9, axis=1)
+            ok &= np.all(reached[:, sl] >= 0.5, axis=1)
+            if rating is not None and live:
+                peak = np.max(current[live, :, sl], axis=0) / per_pack
+                ok &= ~np.any(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9), axis=1)
+            if plan.kind != "takeoff":
+                rho = (np.full(h[:, sl].shape, model.fixed_density)
+                       if model.fixed_density is not None
+                       else isa_density_kg_m3(field_m[:, None] + h[:, sl], dt_k[:, None]))
+                fast = np.asarray(beyond_jet_velocity(propulsion, v[:, sl], rho), dtype=bool)
+                ok &= ~np.any(fast & (thrust[:, sl] > 0.0), axis=1)
+            if plan.kind == "height":
+                climbing = plan.end_h > plan.start_h
+                wrong = (rate[:, sl] <= 0) if climbing else (rate[:, sl] >= 0)
+                ok &= ~np.any(wrong, axis=1)
+                if plan.solve_x:
+                    ok &= ~np.any(abs(plan.rate) >= v[:, sl], axis=1)
+                    if not climbing:
+                        ok &= ~np.any(idle[:, sl] > 1e-9, axis=1)
+    return ok
