@@ -21,8 +21,9 @@ from pathlib import Path
 import numpy as np
 from timing import per_call, wall, walls  # noqa: E402
 
+from tuflexperf.analysis.ground_roll import net_force_n
 from tuflexperf.analysis.oei import solve_oei
-from tuflexperf.analysis.takeoff import net_force_n, solve_takeoff
+from tuflexperf.analysis.takeoff import solve_takeoff
 from tuflexperf.analysis.trim import solve_trim
 from tuflexperf.io.case import load_case
 from tuflexperf.models.aircraft import level_flight_drag_n, liftoff_speed_m_s

@@ -19,10 +19,11 @@ import numpy as np
 
 from tuflexperf.io.campaign import load_campaign
 from tuflexperf.io.runs import read_run
+from tuflexperf.reduction.campaign_fit import fit_campaign
 from tuflexperf.reduction.changepoints import force_changepoints, throttle_plateaus
 from tuflexperf.reduction.delay import estimate_delay
 from tuflexperf.reduction.filters import filloutliers_movmean, movmedian, window_samples
-from tuflexperf.reduction.pipeline import fit_campaign, reduce_step_run
+from tuflexperf.reduction.step_runs import reduce_step_run
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGN = ROOT / "data" / "tuflex" / "campaign" / "campaign.yaml"

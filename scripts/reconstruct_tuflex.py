@@ -172,7 +172,7 @@ def drag_n(k: dict[str, Any], v: Any) -> Any:
 
 def battery_parameters() -> tuple[Any, Any]:
     """The shipped battery file's fitted discharge model and the battery itself."""
-    from tuflexperf.analysis.endurance import characterise_battery
+    from tuflexperf.analysis.battery_fit import characterise_battery
     from tuflexperf.io.battery import load_battery
     from tuflexperf.io.case import load_case
 
@@ -426,10 +426,10 @@ def landed_values() -> dict[str, float]:
     """Every published number recomputed by the tool's own analyses from the shipped files."""
     from tuflexperf.analysis.endurance import solve_endurance
     from tuflexperf.analysis.oei import solve_oei
-    from tuflexperf.analysis.powertrain import power_agreement
     from tuflexperf.analysis.takeoff import solve_takeoff
     from tuflexperf.analysis.trim import solve_trim
     from tuflexperf.io.case import load_case
+    from tuflexperf.models.agreement import power_agreement
     from tuflexperf.models.battery import time_to_cutoff_s
     from tuflexperf.models.powertrain import engine_power_w
     from tuflexperf.models.thrust import engine_thrust_n

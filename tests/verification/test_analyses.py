@@ -87,7 +87,7 @@ def test_ground_roll_never_lifts_off(tmp_path):
 
     from scipy.optimize import brentq
 
-    from tuflexperf.analysis.takeoff import net_force_n
+    from tuflexperf.analysis.ground_roll import net_force_n
     from tuflexperf.models.aircraft import liftoff_speed_m_s
 
     case = _quadratic_thrust_case(tmp_path, 40.0, 0.3, liftoff=15.0)

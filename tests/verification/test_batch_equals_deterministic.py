@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from tests.conftest import MADE_UP_AIRCRAFT, SHIPPED_CASE, copy_shipped_case, write_case
-from tuflexperf.analysis.batch import BatchEvaluator, nominal_engines
+from tuflexperf.analysis.batch import BatchEvaluator
+from tuflexperf.analysis.batch_kernels import nominal_engines
 from tuflexperf.analysis.requirements import check_case
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import load_case

@@ -14,12 +14,10 @@ import pytest
 
 from tests.conftest import SHIPPED_CASE
 from tuflexperf.analysis import batch_endurance
-from tuflexperf.analysis.batch import (
-    _STEEP_FORCE_SHARE,
-    BatchEvaluator,
-    _Model,
-    nominal_engines,
-)
+from tuflexperf.analysis.batch import BatchEvaluator
+from tuflexperf.analysis.batch_kernels import nominal_engines
+from tuflexperf.analysis.batch_model import BatchModel
+from tuflexperf.analysis.batch_roll import _STEEP_FORCE_SHARE
 from tuflexperf.io.case import load_case
 from tuflexperf.models._math import interp_rows
 
@@ -44,8 +42,8 @@ def _hostile_batch(seed: int) -> tuple[dict[str, np.ndarray], np.ndarray, np.nda
     return values, coefficients, extrapolation
 
 
-def _model(evaluator: BatchEvaluator, values, coefficients, extrapolation) -> _Model:
-    return _Model(
+def _model(evaluator: BatchEvaluator, values, coefficients, extrapolation) -> BatchModel:
+    return BatchModel(
         aircraft=evaluator._aircraft(values, ROWS),
         propulsion=evaluator._propulsion(coefficients),
         density=evaluator._density(values, ROWS),

@@ -73,15 +73,16 @@ def _assert_close(got: object, want: object, where: str = "") -> None:
 
 
 def test_check_neither_reads_nor_fits_the_discharge_runs(monkeypatch: pytest.MonkeyPatch) -> None:
+    import tuflexperf.analysis.battery_fit as battery_fit
     import tuflexperf.analysis.endurance as endurance
     import tuflexperf.reduction.battery as fits
 
     def forbidden(*args: object, **kwargs: object) -> None:
         raise AssertionError("check read or fitted the discharge runs")
 
-    monkeypatch.setattr(endurance, "read_discharge_run", forbidden)
+    monkeypatch.setattr(battery_fit, "read_discharge_run", forbidden)
     monkeypatch.setattr(fits, "fit_discharge", forbidden)
-    endurance._characterisation_cache = endurance.BoundedCache()
+    battery_fit._characterisation_cache = battery_fit.BoundedCache()
     endurance._model_cache = endurance.BoundedCache()
     verdicts = check_case(load_case(None))
     assert any(v.name == "flight_endurance" and v.passed for v in verdicts)

@@ -13,6 +13,7 @@ import pytest
 from scipy.optimize import brentq
 
 from tuflexperf.analysis.level_flight import least_throttle_solver
+from tuflexperf.analysis.requirements import study_verdicts
 from tuflexperf.analysis.study import Study
 from tuflexperf.errors import NotAttainable
 from tuflexperf.io.case import load_case
@@ -55,7 +56,7 @@ def test_study_solves_each_analysis_once_and_shares_results() -> None:
     from tuflexperf.report.data import run_analyses
 
     study = Study(load_case(None))
-    verdicts = study.verdicts()
+    verdicts = study_verdicts(study)
     analyses = run_analyses(study)
     assert analyses.verdicts is verdicts
     assert analyses.takeoff is study.takeoff()
@@ -74,5 +75,5 @@ def test_study_keeps_not_attainable_and_raises_it_again() -> None:
         study.takeoff()
     assert first.value is second.value
     assert study.solved.count("takeoff") == 1
-    verdict = {v.name: v for v in study.verdicts()}["takeoff_ground_roll"]
+    verdict = {v.name: v for v in study_verdicts(study)}["takeoff_ground_roll"]
     assert verdict.value is None and not verdict.passed

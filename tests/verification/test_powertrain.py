@@ -13,7 +13,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from tuflexperf.analysis.powertrain import agreement_at, power_agreement
+from tuflexperf.models.agreement import agreement_at, power_agreement
 from tuflexperf.models.powertrain import (
     engine_power_w,
     exit_velocity_m_s,

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import copy_shipped_case
-from tuflexperf.analysis import takeoff
+from tuflexperf.analysis import airborne as takeoff
 from tuflexperf.analysis.batch import BatchEvaluator
 from tuflexperf.analysis.takeoff import solve_takeoff
 from tuflexperf.cli import load_case_with
@@ -113,7 +113,7 @@ def test_the_settled_charge_satisfies_its_own_equations(tmp_path, k) -> None:
     result = solve_takeoff(case)
     assert result.distance_to_obstacle_m is not None
     assert not result.obstacle_cleared_in_transition
-    packs = takeoff._packs_of(case)
+    packs = takeoff.packs_of(case)
     aircraft, rho = case.aircraft, case.density_kg_m3
     v, radius = result.transition_speed_m_s, result.transition_radius_m
     v_lo = result.liftoff_speed_m_s

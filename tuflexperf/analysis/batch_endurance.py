@@ -19,8 +19,6 @@ Anderson, *Aircraft Performance and Design*, 5.10 (climb).
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,9 +26,22 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis import endurance as single
-from tuflexperf.analysis.mission import STEPS
+from tuflexperf.analysis.batch_kernels import (
+    GOLDEN_STEPS,
+    best_climb,
+    bracketed_root,
+    fan_power_rows,
+    golden_section_max,
+    stall_speed,
+)
+from tuflexperf.analysis.constants import (
+    BURST_OVER_CONTINUOUS,
+    MAX_SPEED_OVER_STALL,
+    RATING_SEGMENT_S,
+    STEPS,
+)
 from tuflexperf.models._math import interp_rows
-from tuflexperf.models.aircraft import climb_sine, level_flight_drag_n
+from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import (
     SECONDS_PER_HOUR,
     current_at_power_a,
@@ -48,24 +59,6 @@ from tuflexperf.models.powertrain import (
 from tuflexperf.models.thrust import density_ratio, engine_thrust_n
 
 Array = NDArray[np.float64]
-
-
-def _power_w(model: Any, m: Any, throttle: Any, speed: Any, engine: Any = None) -> Array:
-    """Per-fan electrical power [W] per row: the nominal model's power (the largest fan's),
-    or ``engine``'s own surface, a propulsion power surface rescaled to the row's density
-    (``rho / rho_ref``, as the single case does)."""
-    if not isinstance(model.power, PowerSurfaces):
-        return np.asarray(model.power.electrical_power_w(throttle, speed), dtype=float)
-    if engine is None:
-        power = np.asarray(model.power.electrical_power_w(throttle, speed), dtype=float)
-    else:
-        power = model.power.density_scale * np.asarray(engine_power_w(engine, throttle, speed),
-                                                       dtype=float)
-    ratio = np.asarray(density_ratio(m.propulsion, m.density), dtype=float)
-    ratio = ratio / model.power.density_scale
-    if ratio.size == 1 or power.ndim == 0:
-        return power * ratio.reshape(-1)[0] if ratio.size == 1 else power * ratio.reshape(-1)
-    return power * ratio.reshape(-1, *([1] * (power.ndim - 1)))
 
 
 def battery_side(case: Any) -> Any:
@@ -101,74 +94,12 @@ def battery_side(case: Any) -> Any:
             power=surfaces if surfaces is not None else characterised.power.model)
 
 
-_GOLDEN_STEPS = 25
-_BISECTIONS = 60
 _ROLL_STEPS = 16  # RK4 steps of a roll along its history: 1e-8 of the mission's 64 ...
 _DWELL_ROLL_STEPS = STEPS  # ... where the force all but vanishes and 16 were 5e-5 off
 _DWELL_FORCE_SHARE = 0.2  # a least net force below this share of the greatest: dwelling
 _ROTATION_STEPS = 2
 _CLIMB_STEPS = 8  # RK4 steps of a climb drawing at most _LONG_CLIMB_SHARE of the packs
 _LONG_CLIMB_SHARE = 0.1  # 8 steps are ~1e-9 of the 64 up to it (a 300 m climb here)
-
-
-def _golden_section_max(
-    f: Callable[[Array], Array], a: Array, b: Array,
-    done: Callable[[Array, Array, int], bool],
-) -> tuple[Array, Array]:
-    """The bracket ``[a, b]`` per row around the maximum of a unimodal ``f`` (vectorised
-    golden-section search, one evaluation of ``f`` per step) once ``done(a, b, steps)``.
-
-    References
-    ----------
-    Kiefer, "Sequential minimax search for a maximum", Proc. AMS 4 (1953).
-    """
-    golden = (math.sqrt(5.0) - 1.0) / 2.0
-    c, d = b - golden * (b - a), a + golden * (b - a)
-    fc, fd = f(c), f(d)
-    steps = 0
-    while not done(a, b, steps):
-        left = fc >= fd
-        a, b = np.where(left, a, c), np.where(left, d, b)
-        c_new = np.where(left, b - golden * (b - a), d)
-        d_new = np.where(left, c, a + golden * (b - a))
-        fp = f(np.where(left, c_new, d_new))
-        fc, fd = np.where(left, fp, fd), np.where(left, fc, fp)
-        c, d = c_new, d_new
-        steps += 1
-    return a, b
-
-
-def _best_climb(m: Any, v_lo: Array, stall: Array) -> tuple[Array, Array]:
-    """Best-rate airspeed and rate per row on the 4001-point grid of ``endurance._best_climb``.
-
-    The rate ``(T - D) V / W`` is unimodal in airspeed: a golden-section search over the
-    grid index, then the grid points beside it, pick the same grid point as the full scan.
-    """
-    n = single._SPEED_GRID_POINTS
-    top = single._MAX_SPEED_OVER_STALL * stall
-    ceiling = np.asarray(jet_velocity_ceiling_m_s(m.propulsion, m.density),
-                         dtype=float).reshape(-1, 1) * np.ones((m.size, 1))
-    weight = np.asarray(m.aircraft.weight_n, dtype=float).reshape(-1, 1)
-
-    def rate_at(index: Array) -> tuple[Array, Array]:
-        speed = v_lo[:, None] + (top - v_lo)[:, None] * index / (n - 1)
-        excess = m.thrust(1.0, speed) - np.asarray(
-            level_flight_drag_n(m.aircraft, speed, m.density), dtype=float)
-        # no climb at or beyond the jet velocity (the grid's first point excepted)
-        rate = np.where((speed >= ceiling) & (index > 0), -np.inf,
-                        np.asarray(climb_sine(excess / weight), dtype=float) * speed)
-        return rate, speed
-
-    a, _ = _golden_section_max(
-        lambda index: rate_at(index[:, None])[0][:, 0],
-        np.zeros(m.size), np.full(m.size, float(n - 1)),
-        lambda a, b, _: not np.any(b - a > 4.0),
-    )
-    near = np.clip(np.floor(a)[:, None] + np.arange(-2, 8)[None, :], 0, n - 1)
-    rate, speed = rate_at(near)
-    best = np.argmax(rate, axis=1)
-    rows = np.arange(m.size)
-    return speed[rows, best], rate[rows, best]
 
 
 @dataclass(frozen=True)
@@ -220,7 +151,7 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     :class:`_Launch`; NaN if impossible, the packs' cut-off ``cutoff_v`` [V] reached on the
     way included. The fans are integrated together, as ``(fans, rows)`` arrays."""
     _, roll_time, v_lo, ok = roll
-    climb_speed, climb_rate = _best_climb(m, v_lo, stall)
+    climb_speed, climb_rate = best_climb(m, v_lo, stall)
     ok = (ok > 0.5) & ~((height > 0) & (climb_rate <= 0))
     # the mission flies no climb below the envelope's stall margin (its segment is not
     # attainable there): the batch flew it (outside audit, a false PASS)
@@ -237,7 +168,7 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     params = model.params
 
     def power(throttle: float, speed: Array) -> Array:
-        return np.stack([_power_w(model, m, throttle, speed, engine) for engine in engines])
+        return np.stack([fan_power_rows(model, m, throttle, speed, engine) for engine in engines])
 
     # the roll along its airspeed history, as many steps for a roll of hours as of seconds
     # (steps of 0.5 s made one such row stall a whole chunk; outside audit): the mission's 64
@@ -304,8 +235,8 @@ def _one_fan_draws_most(model: Any, m: Any, launch: _Launch, throttle: Array,
     every point the launch and the cruise took power at: that fan's packs end the flight,
     and the largest fan's power (one integration) is exactly its own."""
     def top(x: Any, v: Array) -> Array:
-        return np.argmax(np.stack([_power_w(model, m, x, v, e) for e in m.propulsion.engines]),
-                         axis=0)
+        return np.argmax(np.stack([fan_power_rows(model, m, x, v, e)
+                                   for e in m.propulsion.engines]), axis=0)
 
     at_full = top(1.0, launch.full_throttle_speeds_m_s)
     cruising = top(throttle, speed)
@@ -321,7 +252,7 @@ def _most_excess(m: Any, throttle: Array, least: Array, stall: Array) -> tuple[A
     low = least
     # 8 x the stall, not 8 x the margin's speed: a margin of 2.4 searched to 19 x stall, into
     # an extrapolated rise of thrust the single case never reaches (outside audit)
-    high = single._MAX_SPEED_OVER_STALL * stall
+    high = MAX_SPEED_OVER_STALL * stall
     # short of the fans' jet velocity, as the single case: beyond it a fan makes no thrust,
     # whatever the extrapolated polynomial gives
     ceiling = np.asarray(jet_velocity_ceiling_m_s(m.propulsion, m.density),
@@ -337,9 +268,9 @@ def _most_excess(m: Any, throttle: Array, least: Array, stall: Array) -> tuple[A
     rows = np.arange(m.size)
     a = grid[rows, np.maximum(k - 1, 0)]
     b = grid[rows, np.minimum(k + 1, grid.shape[1] - 1)]
-    a, b = _golden_section_max(
+    a, b = golden_section_max(
         lambda speed: short_of_jet(_excess(m, throttle, speed), speed), a, b,
-        lambda _a, _b, steps: steps >= _GOLDEN_STEPS)
+        lambda _a, _b, steps: steps >= GOLDEN_STEPS)
     speed = 0.5 * (a + b)
     most = short_of_jet(_excess(m, throttle, speed), speed)
     # a maximum at the least airspeed itself (the excess falling from there): golden section
@@ -347,58 +278,6 @@ def _most_excess(m: Any, throttle: Array, least: Array, stall: Array) -> tuple[A
     at_least = short_of_jet(_excess(m, throttle, low), low)
     better = at_least >= most
     return np.where(better, at_least, most), np.where(better, low, speed)
-
-
-def _bracketed_root(f: Any, low: Array, high: Array) -> Array:
-    """Root of ``f`` per row in [low, high] with ``f(low) >= 0 > f(high)`` (vectorised).
-
-    Bisection to a 1/4096 bracket, then the Illinois variant of regula falsi, which keeps
-    the bracket and converges superlinearly (Dahlquist & Bjorck, *Numerical Methods*, 6.2).
-    Rows whose bracket is not one come out somewhere inside it; callers mask them.
-    """
-    f_low, f_high = f(low), f(high)
-    for _ in range(12):
-        mid = 0.5 * (low + high)
-        f_mid = f(mid)
-        up = f_mid >= 0.0
-        low, f_low = np.where(up, mid, low), np.where(up, f_mid, f_low)
-        high, f_high = np.where(up, high, mid), np.where(up, f_high, f_mid)
-    low, high, f_low, f_high = illinois(f, low, high, f_low, f_high,
-                                        np.ones(np.shape(low), dtype=bool))
-    return np.where(np.abs(f_low) <= np.abs(f_high), low, high)
-
-
-def illinois(f: Any, low: Array, high: Array, f_low: Array, f_high: Array,
-             going: NDArray[np.bool_], steps: int = _BISECTIONS
-             ) -> tuple[Array, Array, Array, Array]:
-    """The Illinois variant of regula falsi on the brackets ``[low, high]`` with
-    ``f(low) >= 0 > f(high)`` of the rows ``going`` (vectorised): the brackets and their
-    values once each row has converged (to 1e-13 relative, or a zero) or after ``steps``.
-
-    A row stops at its own convergence: its root is the same whatever rows share its batch.
-
-    References
-    ----------
-    Dahlquist & Bjorck, *Numerical Methods*, 6.2.
-    """
-    going = going.copy()
-    for _ in range(steps):
-        with np.errstate(invalid="ignore", divide="ignore"):
-            trial = high - f_high * (high - low) / (f_high - f_low)
-        trial = np.where(np.isfinite(trial) & (trial > low) & (trial < high), trial,
-                         0.5 * (low + high))
-        f_trial = f(trial)
-        up = going & (f_trial >= 0.0)
-        down = going & ~(f_trial >= 0.0)
-        # Illinois: halve the value kept at the end that did not move
-        f_high = np.where(up, 0.5 * f_high, f_high)
-        f_low = np.where(down, 0.5 * f_low, f_low)
-        low, f_low = np.where(up, trial, low), np.where(up, f_trial, f_low)
-        high, f_high = np.where(down, trial, high), np.where(down, f_trial, f_high)
-        going &= ~((high - low) <= 1e-13 * np.maximum(np.abs(high), 1.0)) & (f_trial != 0)
-        if not going.any():
-            break
-    return low, high, f_low, f_high
 
 
 def _excess_grid(m: Any, throttle: Array, speed: Array) -> Array:
@@ -419,8 +298,6 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     """Flight endurance [min] per row, NaN where the single-case analysis says not
     attainable, the level-flight airspeed [m/s] on full packs (the result's) and the
     launch's climb airspeed [m/s]."""
-    from tuflexperf.analysis.batch import stall_speed
-
     stall = stall_speed(m)
     from tuflexperf.analysis.pack_limits import pack_rows
 
@@ -442,13 +319,13 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
             break
         guess = np.where(found, guess, guess * 1.25)
     ok &= found
-    speed = _bracketed_root(
+    speed = bracketed_root(
         lambda v: _excess(m, throttle, v), np.where(ok, least_speed, 1.0), np.where(ok, guess, 2.0)
     )
     # a cruise at or beyond the fans' jet velocity flies on no thrust (the mission's rule)
     density = np.asarray(m.density, dtype=float).reshape(-1, 1)
     ok &= ~beyond_jet_velocity(m.propulsion, speed[:, None], density)[:, 0]
-    power_w = _power_w(model, m, throttle, speed)
+    power_w = fan_power_rows(model, m, throttle, speed)
     ok &= ~_impossible_cruise(m, throttle, speed, power_w)
     params = model.params
     # the packs in parallel per fan fly, not one of them alone (EnduranceModel.solve)
@@ -471,8 +348,8 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     climb = np.where(height > 0, launch.full_throttle_speeds_m_s[:, -1], np.nan)
     ok &= np.all(np.isfinite(launch.charge_ah), axis=0)
     # every fan at once, as (fans, rows)
-    own = np.stack([_power_w(model, m, throttle, speed, engine) for engine in engines])
-    q_cut = _bracketed_root(
+    own = np.stack([fan_power_rows(model, m, throttle, speed, engine) for engine in engines])
+    q_cut = bracketed_root(
         lambda q: np.asarray(cutoff_residual_v(params, q, own, cutoff, packs), dtype=float),
         np.zeros(own.shape),
         np.broadcast_to(packs * params.max_capacity_ah * (1.0 - 1e-12), own.shape).copy(),
@@ -503,7 +380,7 @@ def _impossible_cruise(m: Any, throttle: Array, speed: Array, power_w: Array) ->
     or electrical power is not positive there (``MissionModel._braking_engine``), or whose
     power is under 1/``IMPOSSIBLE_FIGURE_OF_MERIT`` of momentum theory's ideal power for its
     thrust (``EnduranceModel._result``: no fan flies on it); each engine's own power surface
-    where it has one, else the per-fan ``power_w`` [W], as ``analysis.powertrain.agreement_at``."""
+    where it has one, else the per-fan ``power_w`` [W], as ``models.agreement.agreement_at``."""
     area = m.propulsion.fan_area_m2
     impossible = np.zeros(m.size, dtype=bool)
     scale = density_ratio(m.propulsion, m.density)
@@ -534,8 +411,6 @@ def _within_rating(model: Any, launch: _Launch, power_w: Array, start: Array,
     at constant power, its current rising as the pack sags (its heaviest 30 s are its last),
     the current over such a stretch the one at the charge halfway through it (midpoint rule).
     """
-    from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S
-
     battery = model.battery
     if battery.max_discharge_c is None:
         return np.ones(np.shape(power_w), dtype=bool)

@@ -34,10 +34,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tuflexperf.analysis.batch_endurance import _best_climb, _power_w, illinois
-from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S, STEPS
+from tuflexperf.analysis.airborne import ROTATION_STEPS
+from tuflexperf.analysis.batch_kernels import best_climb, fan_power_rows, illinois
+from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S, STEPS
 from tuflexperf.analysis.pack_limits import PackRows, operating_point
-from tuflexperf.analysis.takeoff import ROTATION_STEPS
 from tuflexperf.models._math import interp_rows
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import SECONDS_PER_HOUR, first_window_beyond
@@ -89,7 +89,7 @@ class _Nodes:
 class SaggingFlight:
     """Launch and cruise of a batch's rows with each fan at its packs' loaded voltage.
 
-    ``m`` the batch's physics (``analysis.batch._Model``), ``model`` its battery side
+    ``m`` the batch's physics (``analysis.batch_model.BatchModel``), ``model`` its battery side
     (``batch_endurance.battery_side``), ``rows`` the rows' packs, ``engines`` the fans
     flown (``(None,)``: one power model for all, so one set of packs stands for each).
     """
@@ -121,7 +121,7 @@ class SaggingFlight:
         """At ``throttle`` [-] and true airspeed ``speed`` [m/s] per row with ``charge`` [Ah]
         drawn per fan ``(fans, rows)``: the live thrust [N] per row, and per fan the loaded
         voltage [V], the current through its packs [A] and the electrical power [W]."""
-        power = np.stack([np.asarray(_power_w(self.model, self.m, throttle, speed, e),
+        power = np.stack([np.asarray(fan_power_rows(self.model, self.m, throttle, speed, e),
                                      dtype=float) * np.ones(self.m.size) for e in self.engines])
         rows = self.rows
         u, per_pack, factor = operating_point(self.model.params, charge, power,
@@ -520,7 +520,7 @@ def flight_on_sagging_packs(m: Any, model: Any, rows: PackRows, throttle: Array,
     if isinstance(model.power, PowerSurfaces) and len(m.propulsion.engines) > 1:
         engines = m.propulsion.engines  # each fan on its own packs, at its own voltage
     _, _, v_lo, rolled = roll
-    climb_speed, climb_rate = _best_climb(m, v_lo, stall)
+    climb_speed, climb_rate = best_climb(m, v_lo, stall)
     ok = ok & (rolled > 0.5) & ~((height > 0) & (climb_rate <= 0))
     ok &= ~((height > 0) & (climb_speed < m.least_airspeed() * (1.0 - 1e-12)))
     flight = SaggingFlight(m, model, rows, engines)

@@ -5,7 +5,7 @@ obstacle with each fan's thrust ``T (U/U_ref)^k`` at its packs' loaded voltage `
 (:func:`tuflexperf.analysis.takeoff.solve_takeoff`): CVODES over the airspeed with the
 charge drawn per engine beside the distance and the time. Here the same roll is flown per
 row, vectorised, in the reference roll's own time ``tau`` (the batch's exact quadrature of
-``m / F_ref``, :meth:`tuflexperf.analysis.batch._Model.roll_history`):
+``m / F_ref``, :meth:`tuflexperf.analysis.batch_roll.GroundRollRows.roll_history`):
 
 ``dt/dtau = F_ref(V) / F(V, q)``, ``ds/dtau = V dt/dtau``, ``dq/dtau = I(V, q) / 3600 dt/dtau``,
 
@@ -14,8 +14,8 @@ interval by cubic Hermite interpolation (``dV/dtau = F_ref / m`` at both ends). 
 packs pass through the same airspeeds as the reference roll, only later, so no event is
 needed, and where the net force all but vanishes the reference's long intervals carry it
 (the ratio stays smooth). The rotation and the airborne part follow the single case
-(:data:`~tuflexperf.analysis.takeoff.ROTATION_STEPS` RK4 steps, then
-:func:`~tuflexperf.analysis.takeoff.settle_airborne`).
+(:data:`~tuflexperf.analysis.airborne.ROTATION_STEPS` RK4 steps, then
+:func:`~tuflexperf.analysis.airborne.settle_airborne`).
 
 References
 ----------
@@ -32,13 +32,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from tuflexperf.analysis.airborne import BEYOND_THE_BATTERY_STATUS, rotation_charge, settle_airborne
 from tuflexperf.analysis.batch_sagging import SaggingFlight
 from tuflexperf.analysis.pack_limits import PackRows
-from tuflexperf.analysis.takeoff import (
-    BEYOND_THE_BATTERY_STATUS,
-    rotation_charge,
-    settle_airborne,
-)
 from tuflexperf.models.aircraft import (
     climb_gradient,
     ground_roll_net_force_n,
@@ -64,7 +60,7 @@ class RollOnPacks:
     charge_ah: Array
 
     def as_roll(self) -> tuple[Array, Array, Array, Array]:
-        """The batch's roll tuple (:meth:`tuflexperf.analysis.batch._Model.ground_roll`)."""
+        """The batch's roll tuple (:meth:`.GroundRollRows.ground_roll`)."""
         return self.distance, self.time, self.v_lo, self.ok
 
 
@@ -76,7 +72,7 @@ def _flight(m: Any, packs: Any, rows: PackRows) -> SaggingFlight:
 def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
     """The ground roll and rotation of each row on its sagging packs (see the module).
 
-    ``m`` the batch's physics (``analysis.batch._Model``), ``packs`` the case's
+    ``m`` the batch's physics (``analysis.batch_model.BatchModel``), ``packs`` the case's
     :class:`~tuflexperf.analysis.pack_limits.PackSide`, ``rows`` the rows' packs.
     """
     flight = _flight(m, packs, rows)
@@ -138,7 +134,7 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
 
 def release_on_packs(m: Any, packs: Any, rows: PackRows) -> tuple[Array, Array, Array, Array]:
     """A catapult's acceleration after the release on full packs, per row
-    (:meth:`tuflexperf.analysis.batch._Model.release_run`; the charge per fan flown)."""
+    (:meth:`.GroundRollRows.release_run`; the charge per fan flown)."""
     flight = _flight(m, packs, rows)
     full = np.zeros((len(flight.engines), m.size))
 

@@ -32,6 +32,9 @@ case and battery and called per throttle; the constant-power closed form of step
 starts the Newton iteration of step 5 (exact without a voltage effect, so it converges at
 once). ``--best`` solves two small IPOPT NLPs: the throttle and airspeed of longest
 flight, and of longest cruise distance (constant-power cruise, no voltage effect).
+
+Steps 1-2 live in :mod:`.battery_fit`, the flight of step 5 as a mission in
+:mod:`.endurance_plan`; this module holds :class:`EnduranceModel` and its results.
 """
 
 from __future__ import annotations
@@ -43,346 +46,45 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.analysis.attainable import least_airspeed_m_s
+from tuflexperf.analysis.battery_fit import (
+    RUN_POWER_TOLERANCE,
+    BatteryCharacterisation,
+    cached_case_battery,
+    characterise_battery,
+)
 from tuflexperf.analysis.cache import BoundedCache, file_key, fingerprint
-from tuflexperf.analysis.powertrain import PowerAgreement, agreement_at
+from tuflexperf.analysis.constants import MAX_SPEED_OVER_STALL, SPEED_GRID_POINTS
+from tuflexperf.analysis.endurance_plan import LaunchBudget, endurance_mission_model, launch_of
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.battery import (
     Battery,
-    case_battery,
-    load_battery,
-    refuse_contradicted_capacity,
 )
 from tuflexperf.io.case import Case
-from tuflexperf.io.discharge import (
-    DischargeRun,
-    read_discharge_run,
-)
-from tuflexperf.models.aircraft import climb_sine, level_flight_drag_n, stall_speed_m_s
+from tuflexperf.models.agreement import PowerAgreement, agreement_at
+from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.battery import (
-    DischargeParameters,
     current_at_power_a,
     cutoff_residual_v,
     discharge_time_s,
-    published_static_power_w,
 )
 from tuflexperf.models.powertrain import PowerSurfaces, engine_power_w, power_surfaces
 from tuflexperf.models.thrust import (
-    engine_thrust_n,
     is_extrapolated,
     least_throttle_of,
     outside_tested_range,
     total_thrust_n,
     unlapsed_density_warning,
 )
-from tuflexperf.reduction.battery import (
-    DischargeFit,
-    PowerFit,
-    fit_fan_power,
-    refuse_unreproduced_runs,
-)
 
 # Level flight is searched between the stall speed and this multiple of it.
 # A figure of merit beyond this (ideal power over electrical) is no measurement error: the
 # power model gives less than half what momentum theory needs for the thrust
 IMPOSSIBLE_FIGURE_OF_MERIT = 2.0
-_MAX_SPEED_OVER_STALL = 8.0
-_SPEED_GRID_POINTS = 4001
 # Least airspeed for the --best NLPs: the usual 20 % margin over the 1-g stall speed.
 BEST_MIN_AIRSPEED_OVER_STALL = 1.2
 # RK4 step of the batch evaluator's launch (batch_endurance.py keeps the earlier scheme)
 _LAUNCH_STEP_S = 0.25
-# A discharge run's measured power further than this from the power model is a warning.
-RUN_POWER_TOLERANCE = 0.10
-_characterisation_cache: BoundedCache[BatteryCharacterisation] = BoundedCache()
 _model_cache: BoundedCache[EnduranceModel] = BoundedCache()
-_battery_cache: BoundedCache[Battery] = BoundedCache()
-
-
-# --- battery characterisation (fit + cross-validation + power), cached per file contents ---
-@dataclass(frozen=True)
-class CrossValidation:
-    """A model fitted on one run predicting another run's time to cut-off."""
-
-    fitted_on: str
-    predicted_run: str
-    observed_min: float
-    predicted_min: float
-
-    @property
-    def error_percent(self) -> float:
-        return 100.0 * (self.predicted_min - self.observed_min) / self.observed_min
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "fitted_on": self.fitted_on,
-            "predicted_run": self.predicted_run,
-            "observed_min": self.observed_min,
-            "predicted_min": self.predicted_min,
-            "error_percent": self.error_percent,
-        }
-
-
-@dataclass(frozen=True)
-class BatteryCharacterisation:
-    """Everything the discharge runs give: pack model, its validation, fan power model."""
-
-    battery: Battery
-    runs: tuple[Any, ...]  # DischargeRun, or the RunSummary a fitted battery file stores
-    fit: DischargeFit
-    power: PowerFit
-    # each run's model predicting every other run's time to cut-off (stored by ``fit``)
-    cross_validation: tuple[CrossValidation, ...] = ()
-
-    def discharge_runs(self) -> tuple[DischargeRun, ...]:
-        """The runs themselves (read on demand: the report draws them, check does not)."""
-        return tuple(r if isinstance(r, DischargeRun) else read_discharge_run(r.path)
-                     for r in self.runs)
-
-
-def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisation:
-    """Fit the pack model to all runs and fit the fan power (cross-validation on demand).
-
-    The full-throttle static power is the published range interpolated at the static
-    thrust of the runs' engine (the first engine when the runs name none).
-    Cached on the battery file, the run files and the propulsion model. A battery with keys
-    changed by ``--set`` is characterised as its file reads (:attr:`Battery.as_read`): the
-    runs are checked against the file, the what-if flies the pack they give.
-    """
-    battery = battery.as_read
-    key = fingerprint(
-        file_key(battery.path),
-        [file_key(r.path) for r in battery.runs],
-        battery,
-        case.propulsion,
-    )
-    return _characterisation_cache.get(key, lambda: _characterise(battery, case))
-
-
-def _stored_fit(battery: Battery) -> tuple[tuple[Any, ...], DischargeFit, tuple[Any, ...]]:
-    """The pack model a fitted battery file carries (written by ``fit``; nothing is read)."""
-    from tuflexperf.io.discharge import RunSummary
-    from tuflexperf.io.files import sha256_of
-
-    stored = battery.fitted
-    assert stored is not None
-    for ref, r in zip(battery.runs, stored.runs, strict=True):
-        if sha256_of(ref.path) != r.sha256:  # the fit no longer describes this run
-            raise InputError(
-                f"{battery.path}: fit.runs: {ref.path.name} changed since the pack model was "
-                f"fitted (sha256 differs); fit it again (tuflexperf fit {battery.path.name} "
-                "--out ...)"
-            )
-    summaries = tuple(
-        RunSummary(ref.path, r.sha256, r.throttle, r.airspeed_m_s, r.mean_power_w,
-                   r.mean_force_n, r.start_charge_ah, r.time_to_cutoff_s, r.charge_drawn_ah)
-        for ref, r in zip(battery.runs, stored.runs, strict=True)
-    )
-    fit = DischargeFit(
-        DischargeParameters(**stored.parameters.model_dump()), stored.rms_v, stored.max_abs_v,
-        stored.n_points, tuple(s.path.name for s in summaries),
-    )
-    checks = tuple(CrossValidation(c.fitted_on, c.predicted_run, c.observed_min,
-                                   c.predicted_min) for c in stored.cross_validation)
-    return summaries, fit, checks
-
-
-def _characterise(battery: Battery, case: Case) -> BatteryCharacterisation:
-    if battery.fitted is None:
-        # SPEC 4: check, endurance and report read the pack model and never fit it
-        raise InputError(
-            f"{battery.path}: no fitted pack model (its 'fit:' block); write one with "
-            f"`tuflexperf fit {battery.path.name} --out FILE` and name FILE in the case"
-        )
-    runs, fit, stored_checks = _stored_fit(battery)
-    drawn_of = [r.charge_drawn_ah for r in runs]
-    # one pack per run: it cannot give more than it holds (issue 10)
-    refuse_contradicted_capacity(
-        battery, [(run.path.name, drawn) for run, drawn in zip(runs, drawn_of, strict=True)]
-    )
-    refuse_unreproduced_runs(battery, fit.parameters, runs)
-    engine_name = next((r.engine for r in battery.runs if r.engine), None)
-    engines = {e.name: e for e in case.propulsion.engines}
-    if engine_name is not None and engine_name not in engines:
-        raise InputError(
-            f"{battery.path}: runs: engine {engine_name!r} is not in the propulsion file "
-            f"(engines: {', '.join(engines)})"
-        )
-    engine = engines[engine_name] if engine_name else case.propulsion.engines[0]
-    static_n = float(engine_thrust_n(engine, 1.0, 0.0))
-    if static_n <= 0:
-        raise InputError(
-            f"{case.propulsion_path}: {engine.name}: no static thrust at full throttle"
-        )
-    static_w = published_static_power_w(
-        static_n, battery.published_power_range_w, battery.published_static_thrust_range_n
-    )
-    power = fit_fan_power(runs, static_w, battery.jet_velocity_m_s)
-    return BatteryCharacterisation(battery, runs, fit, power, stored_checks)
-
-
-# --- launch: ground roll + climb at full throttle -------------------------------------------
-@dataclass(frozen=True)
-class LaunchBudget:
-    """Charge and energy per fan for the ground roll and the climb to pattern altitude."""
-
-    ground_roll_time_s: float
-    liftoff_speed_m_s: float
-    climb_airspeed_m_s: float
-    climb_rate_m_s: float
-    climb_time_s: float
-    pattern_altitude_m: float
-    charge_ah: float
-    energy_wh: float
-
-    def to_dict(self) -> dict[str, float]:
-        return dict(self.__dict__)
-
-
-def _best_climb(case: Case) -> tuple[float, float]:
-    """Airspeed (m/s) and rate (m/s) of the best full-throttle climb, ``(T - D) V / W``
-    (at most ``V``: a vertical climb, :func:`~tuflexperf.models.aircraft.climb_sine`).
-
-    Small-angle climb with ``L = W`` (Anderson, *Aircraft Performance and Design*, 5.10).
-    Searched from the lift-off speed to 8 x stall, short of the fans' jet velocity (beyond
-    it a fan makes no thrust, :func:`jet_velocity_ceiling_m_s`).
-    """
-    from tuflexperf.models.aircraft import liftoff_speed_m_s
-    from tuflexperf.models.powertrain import jet_velocity_ceiling_m_s
-
-    aircraft, rho = case.aircraft, case.density_kg_m3
-    low = float(liftoff_speed_m_s(aircraft, rho))
-    if aircraft.launch == "catapult":  # the climb starts from the release speed
-        from tuflexperf.models.aircraft import true_airspeed_m_s
-
-        low = float(true_airspeed_m_s(aircraft.launch_speed_m_s, rho))
-    speeds = np.linspace(low, _MAX_SPEED_OVER_STALL * float(stall_speed_m_s(aircraft, rho)),
-                         _SPEED_GRID_POINTS)
-    thrust = total_thrust_n(case.propulsion, 1.0, speeds, rho)
-    excess = np.asarray(thrust - level_flight_drag_n(aircraft, speeds, rho), dtype=float)
-    rate = np.asarray(climb_sine(excess / aircraft.weight_n), dtype=float) * speeds
-    # at or beyond the jet velocity no climb (the first grid point stays: a lift-off there
-    # is refused by the take-off)
-    beyond = speeds[1:] >= float(jet_velocity_ceiling_m_s(case.propulsion, rho))
-    rate[1:] = np.where(beyond, -np.inf, rate[1:])
-    best = int(np.argmax(rate))
-    return float(speeds[best]), float(rate[best])
-
-
-def endurance_mission(case: Case, battery: Battery, throttle: float = 0.5) -> Any:
-    """The endurance flight as a mission: take off, climb to the pattern, cruise at ``throttle``.
-
-    Segments (SPEC 4 mission types): the full-throttle take-off to lift-off (runway; a
-    catapult starts airborne), a full-throttle climb at the best-rate airspeed
-    (:func:`_best_climb`) to the battery file's pattern altitude, and a level cruise at
-    ``throttle`` whose airspeed follows (its duration is solved, see
-    :meth:`EnduranceModel.solve`).
-
-    References
-    ----------
-    Paper section 4 (the launch, then cruise); Anderson, *Aircraft Performance and
-    Design*, 5.10 (climb).
-    """
-    from tuflexperf.io.mission import MissionFile, SegmentSchema
-
-    height = battery.pattern_altitude_m
-    segments = [SegmentSchema(type="takeoff")]
-    if height > 0:
-        climb_speed, climb_rate = _best_climb(case)
-        if climb_rate <= 0:
-            raise NotAttainable("cannot climb at full throttle: no excess power after lift-off")
-        eas = climb_speed * math.sqrt(case.density_kg_m3 / 1.225)  # flown at the case's rho
-        from pydantic import ValidationError
-
-        try:
-            segments.append(SegmentSchema(type="climb", to_altitude_m=height,
-                                          airspeed_m_s=eas, throttle=1.0))
-        except ValidationError as exc:  # e.g. a stall near Mach 1: no climb a mission flies
-            raise NotAttainable(
-                f"the best-rate climb at {eas:.0f} m/s EAS cannot be flown: "
-                f"{exc.errors()[0]['msg'].lower()} m/s"
-            ) from None
-    segments.append(SegmentSchema(type="cruise", throttle=throttle, time_min=1.0))
-    return MissionFile("endurance", case.path, tuple(segments), None)
-
-
-def endurance_mission_model(case: Case, battery: Battery, throttle: float = 0.5) -> Any:
-    """The endurance mission built once (:class:`MissionModel`; the throttle is an input).
-
-    ``throttle`` [fraction] only plans the cruise (it must hold level flight); each solve
-    flies the cruise at its own throttle.
-
-    The endurance figure is the case's point performance: the whole flight is flown at
-    the case's density (the climb's height costs energy, not density), the take-off to
-    lift-off (the climb starts from the runway), the cruise to the battery file's landing
-    reserve.
-
-    References
-    ----------
-    Paper section 4 (endurance estimate); SPEC 4 ("Mission file").
-    """
-    from tuflexperf.analysis.mission import MissionModel
-
-    mission = endurance_mission(case, battery, throttle)
-    return MissionModel(case, mission, battery.landing_reserve_fraction,
-                        fixed_density_kg_m3=case.density_kg_m3, takeoff_to_obstacle=False,
-                        battery=battery)
-
-
-def _launch_of(model: Any) -> LaunchBudget:
-    """The launch segments of a flown endurance mission (per fan: the larger engine's)."""
-    flown = model.fly()
-    case = model.case
-    takeoff = getattr(model, "takeoff", None)
-    climb = next((s for s in flown.segments if s.type == "climb"), None)
-    if case.aircraft.launch == "catapult":
-        from tuflexperf.models.aircraft import true_airspeed_m_s
-
-        lift_off = float(true_airspeed_m_s(case.aircraft.launch_speed_m_s, case.density_kg_m3))
-        roll_s = 0.0
-    else:
-        lift_off, roll_s = float(takeoff.liftoff_speed_m_s), float(takeoff.time_s)
-    launch = [s for s in flown.segments if s.type in ("takeoff", "climb")]
-    charge = [sum(s.charge_ah[i] for s in launch) for i in range(model.n)]
-    energy = [sum(s.energy_wh[i] for s in launch) for i in range(model.n)]
-    worst = int(np.argmax(charge))
-    height = model.battery.pattern_altitude_m
-    climb_time = climb.time_s if climb is not None else 0.0
-    climb_speed = (float(flown.history["airspeed_m_s"][model.bounds[climb.index][0]])
-                   if climb is not None else lift_off)
-    return LaunchBudget(
-        ground_roll_time_s=roll_s,
-        liftoff_speed_m_s=lift_off,
-        climb_airspeed_m_s=climb_speed,
-        climb_rate_m_s=height / climb_time if climb_time > 0 else 0.0,
-        climb_time_s=climb_time,
-        pattern_altitude_m=height,
-        charge_ah=charge[worst],
-        energy_wh=energy[worst],
-    )
-
-
-def launch_budget(
-    case: Case, battery: Battery, params: DischargeParameters | None = None, power: Any = None
-) -> LaunchBudget:
-    """Charge drawn per fan (its ``n`` parallel packs) by the take-off and the climb.
-
-    The launch segments of :func:`endurance_mission` flown by the mission integrator
-    (CasADi RK4, :mod:`tuflexperf.analysis.mission`): ground roll at full throttle along the
-    airspeed history of :func:`solve_takeoff`, rotation, then the full-throttle climb at
-    the best-rate airspeed to the pattern altitude, each fan drawing its own power (its
-    power surface, else the battery file's fan-power law) at the loaded pack voltage.
-    The fan that draws most sets the budget. ``params`` and ``power`` are accepted for
-    compatibility: the pack model and the power model are the case's own (the same that
-    :class:`EnduranceModel` uses). Raises :class:`NotAttainable` when the aircraft cannot
-    take off or climb.
-
-    References
-    ----------
-    Raymer, *Aircraft Design*, 17.8 (take-off); Anderson, *Aircraft Performance and
-    Design*, 5.10 (rate of climb).
-    """
-    del params, power
-    return _launch_of(endurance_mission_model(case, battery))
 
 
 # --- results --------------------------------------------------------------------------------
@@ -532,7 +234,7 @@ class EnduranceModel:
         # the flight: take-off, climb, cruise at a throttle, flown by the mission integrator
         self.mission = self._planned_mission(case, battery)
         self._cruise = len(self.mission.plans) - 1
-        self.launch = _launch_of(self.mission)
+        self.launch = launch_of(self.mission)
         # the cruise starts where the launch ends, whatever its throttle
         self._cruise_start = self.mission.start_state(self._cruise, self.mission.durations,
                                                       self.mission.theta)
@@ -598,7 +300,7 @@ class EnduranceModel:
         (thrust less the rig's drag, a lower bound on thrust) against its power goes
         through the thrust/power agreement check.
         """
-        from tuflexperf.analysis.powertrain import power_agreement
+        from tuflexperf.models.agreement import power_agreement
 
         warnings: list[str] = []
         engines = {e.name: e for e in self.case.propulsion.engines}
@@ -677,8 +379,8 @@ class EnduranceModel:
 
         # short of the fans' jet velocity: beyond it a fan makes no thrust
         ceiling = float(jet_velocity_ceiling_m_s(propulsion, rho))
-        speeds = np.linspace(self.least_m_s, _MAX_SPEED_OVER_STALL * self.stall_m_s,
-                             _SPEED_GRID_POINTS)
+        speeds = np.linspace(self.least_m_s, MAX_SPEED_OVER_STALL * self.stall_m_s,
+                             SPEED_GRID_POINTS)
         for _ in range(6):
             values = np.where(speeds < ceiling, required(speeds), np.inf)
             k = int(np.argmin(values))
@@ -932,7 +634,7 @@ class EnduranceModel:
     def best_airspeed_bounds(self) -> tuple[float, float]:
         """Airspeed range (m/s) for ``--best``: the case's envelope, never below 1.2 V_stall."""
         low = BEST_MIN_AIRSPEED_OVER_STALL * self.stall_m_s
-        high = _MAX_SPEED_OVER_STALL * self.stall_m_s
+        high = MAX_SPEED_OVER_STALL * self.stall_m_s
         envelope = self.case.requirements.envelope
         if envelope is not None:
             least, greatest = envelope.bounds_m_s(self.case.density_kg_m3)
@@ -970,13 +672,6 @@ class EnduranceModel:
             least_airspeed_is=(f"{BEST_MIN_AIRSPEED_OVER_STALL:g} x stall"
                                if v_low == stall_bound else "the envelope's least airspeed"),
         )
-
-
-def cached_case_battery(case: Case) -> Battery:
-    """:func:`case_battery`, its YAML parsed once per file version, not per call (the
-    endurance and the point analyses' packs read it)."""
-    return case_battery(case, lambda path: _battery_cache.get(
-        fingerprint(file_key(path)), lambda: load_battery(path)))
 
 
 def endurance_model(case: Case) -> EnduranceModel:

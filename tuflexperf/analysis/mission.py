@@ -97,7 +97,7 @@ class MissionModel(SegmentEquations, MissionPlanning, FlightChecks, SolveFor):
     def __init__(self, case: Case, mission: MissionFile, min_landing_fraction: float | None,
                  *, fixed_density_kg_m3: float | None = None,
                  takeoff_to_obstacle: bool = True, battery: Any = None) -> None:
-        from tuflexperf.analysis.endurance import characterise_battery
+        from tuflexperf.analysis.battery_fit import characterise_battery
         from tuflexperf.io.battery import case_battery
 
         if case.battery_path is None:

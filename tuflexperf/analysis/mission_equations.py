@@ -22,8 +22,18 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.airborne import ROTATION_STEPS
+from tuflexperf.analysis.constants import (  # re-exported: the mission's own names
+    BURST_OVER_CONTINUOUS as BURST_OVER_CONTINUOUS,
+)
+from tuflexperf.analysis.constants import (
+    RATING_SEGMENT_S as RATING_SEGMENT_S,
+)
+from tuflexperf.analysis.constants import (
+    SECONDS_PER_HOUR,
+    STEPS,
+)
 from tuflexperf.analysis.mission_plan import _Plan
-from tuflexperf.analysis.takeoff import ROTATION_STEPS
 from tuflexperf.models.aircraft import (
     climb_sine,
     level_flight_drag_n,
@@ -42,10 +52,6 @@ from tuflexperf.models.thrust import (
     windmilling_thrust_n,
 )
 
-RATING_SEGMENT_S = 30.0  # any stretch of the flight this long keeps its mean current within it
-BURST_OVER_CONTINUOUS = 2.0  # a LiPo's burst rating, the usual twice the continuous one
-STEPS = 64  # RK4 steps per segment: the states are smooth, 64 steps give ~1e-9 relative
-SECONDS_PER_HOUR = 3600.0
 ARC_STEPS = 64  # the take-off's transition arc (see MissionModel._airborne_phases)
 # unrolled Newton steps on the loaded voltage (and a fixed throttle's airspeed): from the
 # open-circuit voltage (a few % off) quadratic convergence reaches rounding in 4; 5 for margin

@@ -84,7 +84,7 @@ class MissionResult:
     def passed(self) -> bool:
         """Every verdict of the flight holds (:func:`~tuflexperf.analysis.requirements.
         mission_verdicts`: the landing charge, and with ``solve_for`` the file's own time)."""
-        from tuflexperf.analysis.requirements import mission_verdicts
+        from tuflexperf.analysis.verdict import mission_verdicts
 
         return all(v.passed for v in mission_verdicts(self))
 

@@ -5,7 +5,7 @@ sampled parameters (:meth:`MissionModel.parameters`) and the take-off's step row
 so a batch is that same function, expanded to SX and evaluated with ``Function.map(B,
 "thread", 2)``; the nominal case is a batch of one with the case's own numbers. Per row
 the take-off's airspeed history, rotation and path to the obstacle come from the batch's
-take-off (:class:`tuflexperf.analysis.batch._Model`, the closed forms held to the single
+take-off (:class:`tuflexperf.analysis.batch_model.BatchModel`, the closed forms held to the single
 case in ``tests/verification/test_batch_equals_deterministic.py``), and the flight's checks
 are :meth:`MissionModel._result`'s, vectorised: a row that stalls, cuts off, needs more
 than full throttle, does not climb, outruns its fans or its pack's rating is not met
@@ -130,9 +130,9 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     aircraft, propulsion and density); ``values`` dotted key -> ``(B,)``; thrust
     ``coefficients`` ``(E, B, 6)`` and ``extrapolation_n`` ``(E, B)`` [N] as drawn.
     """
+    from tuflexperf.analysis.airborne import obstacle_height_of
     from tuflexperf.analysis.attainable import stall_margin_of
-    from tuflexperf.analysis.batch import _Model
-    from tuflexperf.analysis.takeoff import obstacle_height_of
+    from tuflexperf.analysis.batch_model import BatchModel as _Model
     from tuflexperf.models.aircraft import stall_speed_eas_m_s, true_airspeed_m_s
     from tuflexperf.models.atmosphere import isa_density_kg_m3
 

@@ -29,6 +29,7 @@ from tuflexperf.analysis.level_flight import (
     airspeed_grid,
     least_throttle_solver,
 )
+from tuflexperf.analysis.pack_limits import with_packs
 from tuflexperf.analysis.trim import envelope_of, extrapolation_note
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
@@ -137,7 +138,6 @@ def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
     speeds = airspeed_grid(v_min, v_max)
     least = least_airspeed_m_s(case)
     aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
-    from tuflexperf.analysis.pack_limits import with_packs
 
     cases, pack_notes = [], []
     for index, engine in enumerate(propulsion.engines):

@@ -33,7 +33,13 @@ from typing import Any
 
 import numpy as np
 
-from tuflexperf.analysis.attainable import BEYOND_THE_BATTERY, AttainableRange
+from tuflexperf.analysis.attainable import (
+    BELOW_STALL,
+    BEYOND_JET_VELOCITY,
+    BEYOND_THE_BATTERY,
+    AttainableRange,
+)
+from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
 from tuflexperf.io.case import Case
 from tuflexperf.models._math import fmax, is_symbolic
 from tuflexperf.models.aircraft import level_flight_drag_n
@@ -83,7 +89,7 @@ def pack_side(case: Case) -> PackSide | None:
     """The case's packs and power model, or None when the case names no battery file."""
     if case.battery_path is None:
         return None
-    from tuflexperf.analysis.endurance import cached_case_battery, characterise_battery
+    from tuflexperf.analysis.battery_fit import cached_case_battery, characterise_battery
     from tuflexperf.models.powertrain import power_surfaces
 
     battery = cached_case_battery(case)
@@ -361,8 +367,6 @@ def takeoff_beyond_battery(case: Case, side: PackSide, speeds: np.ndarray,
     References
     ----------
     SPEC 3 (thrust and pack voltage); SPEC 5 (not attainable, with the reason)."""
-    from tuflexperf.analysis.mission import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
-
     rating = side.rating_a
     burst = None if rating is None else BURST_OVER_CONTINUOUS * rating
     v = np.asarray(speeds, dtype=float)
@@ -416,7 +420,6 @@ def with_packs(case: Case, what: str, speeds: np.ndarray, throttle: np.ndarray,
 
         note = reference_voltage_note(case.propulsion, what)
         return throttle, reasons, attainable, [note] if note else []
-    from tuflexperf.analysis.attainable import BELOW_STALL, BEYOND_JET_VELOCITY
 
     flyable = np.array([r not in (BELOW_STALL, BEYOND_JET_VELOCITY) for r in reasons])
     on = level_flight_on_packs(case, side, speeds, throttle, flyable, dead, mode)

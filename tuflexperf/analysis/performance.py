@@ -494,7 +494,8 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
     Anderson, *Aircraft Performance and Design*, ch. 5 (5.4 max speed, 5.10 climb,
     5.11 ceilings) and 6.7 (take-off to the obstacle).
     """
-    from tuflexperf.analysis.takeoff import obstacle_height_of, solve_takeoff
+    from tuflexperf.analysis.airborne import obstacle_height_of
+    from tuflexperf.analysis.takeoff import solve_takeoff
 
     p = problems if problems is not None else PerformanceProblems(case)
     ac, prop = case.aircraft, case.propulsion

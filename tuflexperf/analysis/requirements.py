@@ -6,71 +6,22 @@ limits (ground roll, throttle), ``value - limit`` for lower limits (endurance).
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
 
+from tuflexperf.analysis.verdict import (
+    Verdict,
+    mission_verdicts,
+    requirement_met,
+)
 from tuflexperf.errors import NotAttainable
 from tuflexperf.io.case import Case
+from tuflexperf.io.mission import mission_path as mission_path  # the commands ask here
 
 if TYPE_CHECKING:
-    from tuflexperf.analysis.mission import MissionResult
     from tuflexperf.analysis.study import Study
-
-MARGIN_TOLERANCE = 1e-12
-
-
-def requirement_met(values: ArrayLike, limits: ArrayLike, kind: str) -> NDArray[np.bool_]:
-    """Met per element by the same rule as :attr:`Verdict.passed`; NaN (not attainable) is not.
-
-    ``kind`` "max": ``value <= limit``; "min": ``value >= limit`` (margin >= -1e-12).
-    """
-    v = np.asarray(values, dtype=float)
-    limit = np.asarray(limits, dtype=float)
-    margin = limit - v if kind == "max" else v - limit
-    with np.errstate(invalid="ignore"):
-        return np.isfinite(v) & (margin >= -MARGIN_TOLERANCE)
-
-
-@dataclass(frozen=True)
-class Verdict:
-    """One requirement: ``value`` is ``None`` when the analysis found it not attainable."""
-
-    name: str
-    value: float | None
-    limit: float
-    unit: str
-    kind: str  # "max" (value <= limit) or "min" (value >= limit)
-    reason: str = ""
-    details: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def margin(self) -> float | None:
-        if self.value is None:
-            return None
-        return self.limit - self.value if self.kind == "max" else self.value - self.limit
-
-    @property
-    def passed(self) -> bool:
-        # a non-finite value (an endless endurance from a pack the runs contradict, a
-        # diverged solve) never passes (SPEC: never a false PASS)
-        return (self.margin is not None and math.isfinite(self.margin)
-                and self.margin >= -MARGIN_TOLERANCE)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "name": self.name,
-            "value": self.value,
-            "limit": self.limit,
-            "unit": self.unit,
-            "margin": self.margin,
-            "passed": self.passed,
-            "reason": self.reason,
-            **self.details,
-        }
 
 
 def _takeoff(study: Study) -> list[Verdict]:
@@ -252,46 +203,6 @@ def _mission(study: Study) -> Verdict | list[Verdict]:
     return mission_verdicts(result)
 
 
-def mission_verdicts(result: MissionResult) -> list[Verdict]:
-    """A flown mission's verdicts: the landing charge against the reserve, and with
-    ``solve_for`` the longest time of that segment against the file's own (the solved flight
-    lands on the reserve by construction: alone it passed a plan that cannot be flown)."""
-    value = result.landing_charge_fraction if result.attainable else None
-    verdicts = [Verdict(
-        "mission_landing_charge", value, result.min_landing_charge_fraction, "fraction",
-        "min", f"{result.name}: {result.reason}", {"warnings": list(result.warnings)},
-    )]
-    solved = result.solved
-    if solved is not None:
-        segment, written = solved["segment"], solved["written_time_min"]
-        planned = (f"{solved['written_distance_km']:g} km ({written:.2f} min)"
-                   if "written_distance_km" in solved else f"{written:g} min")
-        bound = ("that lands on the reserve" if solved.get("ends_at") != "cut-off"
-                 else "before the packs' cut-off")
-        verdicts.append(Verdict(
-            "mission_solved_time", solved["time_min"] if result.attainable else None, written,
-            "min", "min",
-            f"the longest {segment} (segment {solved['index'] + 1}) {bound}, against the "
-            f"{planned} the mission file plans",
-        ))
-    return verdicts
-
-
-def mission_path(case: Case) -> Any:
-    """The case's mission file, resolved relative to the case file (SPEC 4)."""
-    from pathlib import Path
-
-    from tuflexperf.errors import InputError
-
-    target = (Path(case.path).parent / case.requirements.mission.file).resolve()
-    if not target.is_file():
-        from tuflexperf.io.files import why_not_a_file
-
-        raise InputError(f"{case.path}: requirements.mission.file: {why_not_a_file(target)}: "
-                         f"{case.requirements.mission.file}")
-    return target
-
-
 CHECKS = {"takeoff": _takeoff, "envelope": _trim, "oei": _oei, "endurance": _endurance,
           "mission": _mission}
 
@@ -302,6 +213,10 @@ def study_verdicts(study: Study) -> list[Verdict]:
     Each verdict reads the study's memoised result, so a command or figure that asks the
     same study again gets the very result the verdict was made from.
     """
+    return study.once("verdicts", lambda: _judge(study))
+
+
+def _judge(study: Study) -> list[Verdict]:
     requirements = study.case.requirements
     verdicts: list[Verdict] = []
     for name, check in CHECKS.items():
@@ -315,7 +230,7 @@ def check_case(case: Case) -> list[Verdict]:
     """Verdicts for every requirement block present in ``case`` (a fresh :class:`Study`)."""
     from tuflexperf.analysis.study import Study
 
-    return Study(case).verdicts()
+    return study_verdicts(Study(case))
 
 
 # --- probabilistic verdicts (check --samples, SPEC 4 uncertainty block) --------------------

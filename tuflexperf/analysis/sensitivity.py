@@ -22,9 +22,10 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.airborne import ROTATION_STEPS, obstacle_height_of
 from tuflexperf.analysis.batch import present_requirements
+from tuflexperf.analysis.constants import MAX_SPEED_OVER_STALL, SPEED_GRID_POINTS, STEPS
 from tuflexperf.analysis.pack_limits import sagging_packs
-from tuflexperf.analysis.takeoff import ROTATION_STEPS, obstacle_height_of
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     climb_gradient,
@@ -202,12 +203,12 @@ def _endurance_value(s: _Symbolic) -> Any:
         v_hist = nodes
     # best climb on the same grid point as the nominal
     stall = stall_speed_m_s(ac, rho)
-    n = single._SPEED_GRID_POINTS
+    n = SPEED_GRID_POINTS
     low0 = launch.liftoff_speed_m_s
-    top0 = single._MAX_SPEED_OVER_STALL * float(stall_speed_m_s(s.case.aircraft,
+    top0 = MAX_SPEED_OVER_STALL * float(stall_speed_m_s(s.case.aircraft,
                                                                   s.case.density_kg_m3))
     k = round((launch.climb_airspeed_m_s - low0) / (top0 - low0) * (n - 1))
-    v_climb = v_lo + (single._MAX_SPEED_OVER_STALL * stall - v_lo) * k / (n - 1)
+    v_climb = v_lo + (MAX_SPEED_OVER_STALL * stall - v_lo) * k / (n - 1)
     rate = (s.thrust(1.0, v_climb) - level_flight_drag_n(ac, v_climb, rho)) * v_climb \
         / ac.weight_n
     height = s.symbols.get("battery.mission.pattern_altitude_m", battery.pattern_altitude_m)
@@ -215,7 +216,6 @@ def _endurance_value(s: _Symbolic) -> Any:
     # the launch's RK4 in the single case's mission's steps: STEPS of equal time along the
     # roll's history, ROTATION_STEPS at the lift-off speed, STEPS of the climb; power looked
     # up as the nominal does; a catapult launch has no roll
-    from tuflexperf.analysis.mission import STEPS
 
     rotation: Any = 0.0 if catapult else ac.takeoff.rotation_time_s
     roll_only = 0.0 if catapult else t_hist[count - 1]

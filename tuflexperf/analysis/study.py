@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from tuflexperf.errors import NotAttainable
 from tuflexperf.io.case import Case
+from tuflexperf.io.mission import mission_path
 
 if TYPE_CHECKING:  # the analyses are imported when first asked for: `check` stays lean
     from tuflexperf.analysis.endurance import BestResult, EnduranceModel, EnduranceResult
@@ -26,7 +27,6 @@ if TYPE_CHECKING:  # the analyses are imported when first asked for: `check` sta
     from tuflexperf.analysis.mission import MissionResult
     from tuflexperf.analysis.oei import OeiResult
     from tuflexperf.analysis.performance import PerformanceResult
-    from tuflexperf.analysis.requirements import Verdict
     from tuflexperf.analysis.takeoff import TakeoffResult
     from tuflexperf.analysis.trim import TrimResult
 
@@ -54,7 +54,8 @@ class Study:
         self._memo: dict[Hashable, tuple[bool, Any]] = {}
         self.solved: list[Hashable] = []
 
-    def _once(self, key: Hashable, compute: Callable[[], T]) -> T:
+    def once(self, key: Hashable, compute: Callable[[], T]) -> T:
+        """``compute()`` the first time ``key`` is asked for, its result (or failure) after."""
         if key not in self._memo:
             try:
                 self._memo[key] = (True, compute())
@@ -71,13 +72,13 @@ class Study:
         """Take-off to the obstacle at full throttle (:func:`solve_takeoff`)."""
         from tuflexperf.analysis.takeoff import solve_takeoff
 
-        return self._once("takeoff", lambda: solve_takeoff(self.case))
+        return self.once("takeoff", lambda: solve_takeoff(self.case))
 
     def trim(self) -> TrimResult:
         """Least trim throttle over the envelope (:func:`solve_trim`)."""
         from tuflexperf.analysis.trim import solve_trim
 
-        return self._once("trim", lambda: solve_trim(self.case))
+        return self.once("trim", lambda: solve_trim(self.case))
 
     def oei(self, dead_engine: str | None = None) -> OeiResult:
         """One engine inoperative; ``dead_engine`` the SPEC mode, else the requirement's."""
@@ -85,38 +86,37 @@ class Study:
 
         if dead_engine is None and self.case.requirements.oei is not None:
             dead_engine = self.case.requirements.oei.dead_engine
-        return self._once(("oei", dead_engine),
+        return self.once(("oei", dead_engine),
                           lambda: solve_oei(self.case, dead_engine))  # type: ignore[arg-type]
 
     def endurance_model(self) -> EnduranceModel:
         """The endurance problem of the case's battery (built once)."""
         from tuflexperf.analysis.endurance import endurance_model
 
-        return self._once("endurance_model", lambda: endurance_model(self.case))
+        return self.once("endurance_model", lambda: endurance_model(self.case))
 
     def endurance(self, throttle: float) -> EnduranceResult:
         """Flight endurance at a fixed cruise throttle [fraction]."""
         from tuflexperf.analysis.endurance import solve_endurance
 
-        return self._once(("endurance", float(throttle)),
+        return self.once(("endurance", float(throttle)),
                           lambda: solve_endurance(self.case, float(throttle)))
 
     def best_endurance(self) -> BestResult:
         """Best-endurance and best-range airspeeds (IPOPT)."""
         from tuflexperf.analysis.endurance import solve_best
 
-        return self._once("best", lambda: solve_best(self.case))
+        return self.once("best", lambda: solve_best(self.case))
 
     def performance(self) -> PerformanceResult:
         """Point performance: stall, speeds, climb, ceilings, OEI gradient."""
         from tuflexperf.analysis.performance import solve_performance
 
-        return self._once("performance", lambda: solve_performance(self.case))
+        return self.once("performance", lambda: solve_performance(self.case))
 
     def mission(self) -> MissionResult:
         """The case's mission requirement flown (requires ``requirements.mission``)."""
         from tuflexperf.analysis.mission import solve_mission
-        from tuflexperf.analysis.requirements import mission_path
         from tuflexperf.io.mission import load_mission
 
         requirement = self.case.requirements.mission
@@ -127,24 +127,18 @@ class Study:
             mission = load_mission(mission_path(self.case))
             return solve_mission(self.case, mission, requirement.min_landing_charge_fraction)
 
-        return self._once("mission", fly)
+        return self.once("mission", fly)
 
     def tornado(self, requirement: str) -> Tornado:
         """A requirement's value with each parameter moved -/+ 10 % (:func:`tornado`)."""
         from tuflexperf.analysis.margins import tornado
 
-        return self._once(("tornado", requirement), lambda: tornado(self.case, requirement))
+        return self.once(("tornado", requirement), lambda: tornado(self.case, requirement))
 
     def limit_values(self) -> dict[tuple[str, str], tuple[float | None, str, tuple[float, float]]]:
         """(requirement, parameter) -> the parameter's value where the requirement just
         holds, how it binds, and the search range (:func:`limit_values`)."""
         from tuflexperf.analysis.margins import limit_values
 
-        return self._once("limit_values", lambda: limit_values(self.case))
+        return self.once("limit_values", lambda: limit_values(self.case))
 
-    # --- the verdicts ---------------------------------------------------------------------
-    def verdicts(self) -> list[Verdict]:
-        """Every requirement's verdict, from the results above (the only rule: requirements)."""
-        from tuflexperf.analysis.requirements import study_verdicts
-
-        return self._once("verdicts", lambda: study_verdicts(self))

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from tuflexperf.analysis.verdict import requirement_met
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.io.dotted import check_value
@@ -121,7 +122,6 @@ class SweepResult:
 
 def evaluate_rows(case: Case, keys: tuple[str, ...], points: Array) -> dict[str, Array]:
     """One chunk of grid points as one batch (module level: picklable for processes/Dask)."""
-    from tuflexperf.analysis.requirements import requirement_met
     from tuflexperf.analysis.uncertainty import evaluator_for
 
     result = evaluator_for(case).evaluate({k: points[:, j] for j, k in enumerate(keys)},

@@ -28,6 +28,7 @@ from tuflexperf.analysis.level_flight import (
     airspeed_grid,
     least_throttle_solver,
 )
+from tuflexperf.analysis.pack_limits import with_packs
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import MAX_AIRSPEED_M_S, level_flight_drag_n, stall_speed_m_s
@@ -153,7 +154,6 @@ def solve_trim(case: Case) -> TrimResult:
     attainable = attainable_range(full_throttle_excess, least, v_min,
                                   min(v_max, jet_ceiling_m_s(case)))
     warnings.extend(jet_ceiling_note(case, speeds))
-    from tuflexperf.analysis.pack_limits import with_packs
 
     throttle, reasons, attainable, notes = with_packs(case, "trim", speeds, throttle, reasons,
                                                       attainable)

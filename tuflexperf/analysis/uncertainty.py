@@ -40,7 +40,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tuflexperf.analysis.batch import BatchEvaluator, BatchResult, nominal_engines
+from tuflexperf.analysis.batch import BatchEvaluator, BatchResult
+from tuflexperf.analysis.batch_kernels import nominal_engines
 from tuflexperf.analysis.cache import file_key, fingerprint
 from tuflexperf.analysis.probability import normal_logcdf, normal_ppf_of_log
 from tuflexperf.errors import InputError
@@ -303,9 +304,8 @@ def mission_for(case: Case, keys: list[str]) -> Any:
         return None
     from tuflexperf.analysis.mission import MissionModel
     from tuflexperf.analysis.mission_samples import why_not_sampled
-    from tuflexperf.analysis.requirements import mission_path
     from tuflexperf.errors import NotAttainable
-    from tuflexperf.io.mission import load_mission
+    from tuflexperf.io.mission import load_mission, mission_path
 
     path = mission_path(case)
     key = fingerprint(case.aircraft, case.propulsion, case.atmosphere, case.requirements,

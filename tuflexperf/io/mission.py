@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, ClassVar, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import Field, model_validator
 
@@ -138,3 +138,17 @@ def load_mission(path: Path | str) -> MissionFile:
             )
         solve_index = matches[0]
     return MissionFile(schema.name, path, segments, solve_index)
+
+
+def mission_path(case: Any) -> Path:
+    """The case's mission file (a :class:`tuflexperf.io.case.Case`'s ``requirements.mission.file``),
+    resolved relative to the case file (SPEC 4)."""
+    from tuflexperf.errors import InputError
+
+    target = (Path(case.path).parent / case.requirements.mission.file).resolve()
+    if not target.is_file():
+        from tuflexperf.io.files import why_not_a_file
+
+        raise InputError(f"{case.path}: requirements.mission.file: {why_not_a_file(target)}: "
+                         f"{case.requirements.mission.file}")
+    return target

@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.io.case import Case
+from tuflexperf.report.canvas import new_figure
 from tuflexperf.report.data import Analyses, Measured
-from tuflexperf.report.figures import new_figure
 from tuflexperf.report.style import (
     CYAN,
     EXTRAPOLATED_FILL,

@@ -250,7 +250,7 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
         return measured
 
     from tuflexperf.io.campaign import load_campaign
-    from tuflexperf.reduction.pipeline import fit_campaign
+    from tuflexperf.reduction.campaign_fit import fit_campaign
 
     campaign = load_campaign(source)
     measured.kind = "campaign"
@@ -468,12 +468,13 @@ BAND_STEP_M_S = 0.5
 def run_analyses(study: Study | Case) -> Analyses:
     """Every analysis the case allows, read from its :class:`Study` (solved once, shared
     with the verdicts); "not attainable" becomes a note, never a crash."""
+    from tuflexperf.analysis.requirements import study_verdicts
     from tuflexperf.analysis.study import Study
 
     if not isinstance(study, Study):
         study = Study(study)
     case = study.case
-    verdicts = study.verdicts()
+    verdicts = study_verdicts(study)
     notes: list[str] = []
     takeoff, takeoff_note = None, None
     try:

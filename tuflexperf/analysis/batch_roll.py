@@ -1,0 +1,499 @@
+"""The batch's take-off, row by row: the ground roll's quadrature, the release and the arc.
+
+The roll time and distance integral m V / F dV and integral m / F dV from rest to
+lift-off are composite Gauss-Legendre sums over the pieces where the net force
+:meth:`BatchModel.net_force` is smooth (a stretched rule near a force peak), the very
+integrals :func:`tuflexperf.analysis.ground_roll.build_ground_roll_integrator` solves for
+one case. :class:`GroundRollRows` holds them for
+:class:`tuflexperf.analysis.batch_model.BatchModel`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tuflexperf.analysis.batch_kernels import fan_power_rows, stall_speed
+from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
+from tuflexperf.analysis.ground_roll import HISTORY_POINTS, release_acceleration
+from tuflexperf.analysis.pack_limits import (
+    operating_point,
+    pack_rows,
+    within_limits,
+)
+from tuflexperf.models.aircraft import (
+    catapult_energy_shortfall,
+    climb_gradient,
+    level_flight_drag_n,
+    obstacle_distances_m,
+    transition_beyond_cl_max,
+    transition_radius_m,
+    true_airspeed_m_s,
+)
+from tuflexperf.models.powertrain import beyond_jet_velocity
+
+Array = NDArray[np.float64]
+
+_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(16)
+
+_PANELS = 4  # composite rule: 4 panels x 16 nodes per smooth piece
+
+
+def _unit_rule(panels: int) -> tuple[Array, Array]:
+    """Composite Gauss-Legendre nodes and weights on [0, 1], ``(1, panels x 16)`` each."""
+    nodes = ((np.arange(panels)[:, None] + 0.5 * (_GL_NODES + 1.0)) / panels).reshape(1, -1)
+    return nodes, np.tile(_GL_WEIGHTS, panels)[None, :] * 0.5 / panels
+
+_ROLL_PROBES = np.array([0.25, 0.5, 0.75, 0.9])  # three fix a piece's quadratic, one checks it
+
+_HISTORY_POINTS = 101  # as analysis.ground_roll.HISTORY_POINTS: the time history
+
+_CHECK_POINTS = 2001  # as analysis.ground_roll.CHECK_POINTS: where the net force must be > 0
+
+_STEEP_FORCE_SHARE = 0.05  # a least net force below this share of the greatest: a peak
+
+_FINE_PANELS = 256
+
+_PEAK_PANELS = 16  # Gauss panels on each monotone half of a piece, in the stretched variable
+
+
+# the roll's quadrature on each piece's own coordinate (as _integrate places its nodes)
+_ROLL_RULE, _PEAK_RULE = _unit_rule(_PANELS), _unit_rule(_PEAK_PANELS)
+
+
+def roll_integrals_near_a_peak(low: Array, width: Array, c0: Array, c1: Array, c2: Array,
+                               mass: Array, rule: tuple[Array, Array] = _PEAK_RULE
+                               ) -> tuple[Array, Array]:
+    """``integral m V / F dV`` [m] and ``integral m / F dV`` [s] per row over one piece of
+    airspeed ``V = low + width (s + 1/2)``, ``s`` in [-1/2, 1/2], whose net force is the
+    positive quadratic ``F = c0 + c1 s + c2 s^2`` [N] however nearly it vanishes.
+
+    Where ``F`` all but vanishes ``1/F`` is a spike as narrow as ``F_min / |F'|`` (or
+    ``sqrt(F_min / c2)`` at a vertex): fixed nodes miss it (4,096 of them gave a roll 40 %
+    short; outside audit). Each half of the piece on which ``F`` is monotone (split at the
+    vertex) is stretched about its least force ``F*`` at ``s*``, ``s = s* +- w sinh(t)``
+    with ``w`` the spike's width, so the integrand in ``t`` is smooth and bounded (``w /
+    (F* cosh t)`` for the vertex's Lorentzian) and a composite Gauss rule on ``t`` is exact
+    to ~1e-12 for any ``F* > 0``; where nothing vanishes ``w`` is the half's length and
+    the stretch is mild.
+
+    References
+    ----------
+    Davis & Rabinowitz, *Methods of Numerical Integration*, 2nd ed., 3.9 (a change of
+    variable that removes a near-singularity).
+    """
+    u, weights = rule
+    distance = np.zeros(np.shape(c0)[0])
+    time = np.zeros(np.shape(c0)[0])
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        vertex = -c1 / (2.0 * c2)
+    split = np.where(np.isfinite(vertex) & (np.abs(vertex) < 0.5), vertex, 0.0)
+    for a, b in ((np.full_like(split, -0.5), split), (split, np.full_like(split, 0.5))):
+        f_a, f_b = c0 + a * (c1 + a * c2), c0 + b * (c1 + b * c2)
+        at_a = f_a <= f_b
+        s_least = np.where(at_a, a, b)
+        f_least = np.minimum(f_a, f_b)
+        slope = c1 + 2.0 * c2 * s_least
+        length = b - a
+        with np.errstate(divide="ignore", invalid="ignore"):
+            width_of_spike = f_least / np.maximum(
+                np.abs(slope), np.sqrt(np.abs(f_least * c2)))
+        stretch = np.maximum(np.minimum(np.nan_to_num(width_of_spike, nan=np.inf), length),
+                             1e-300)
+        span = np.arcsinh(length / stretch)
+        t = span * u
+        offset = np.where(at_a, 1.0, -1.0) * stretch * np.sinh(t)  # s - s*
+        # about s*, where the force is least: its cancellation is not repeated node by node
+        force = f_least + offset * (slope + offset * c2)
+        ds = stretch * np.cosh(t) * span * weights
+        speed = low + width * (s_least + offset + 0.5)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            over = ds * width * mass / force
+            distance = distance + np.sum(over * speed, axis=1)
+            time = time + np.sum(over, axis=1)
+    return distance, time
+
+
+class GroundRollRows:
+    """The ground roll, release and arc of a batch: mixed into :class:`BatchModel`, whose thrust,
+    net force and speeds they read."""
+
+    def _breaks(self, v_lo: Array) -> list[Array]:
+        """Where the integrand kinks in [0, V_LO]: friction clamp (L = W), tested range end."""
+        to = self.aircraft.takeoff
+        with np.errstate(divide="ignore", invalid="ignore"):
+            clamp = np.sqrt(2.0 * self.aircraft.weight_n
+                            / (self.density * self.aircraft.wing_area_m2 * to.cl_ground))
+        clamp = np.where(np.isfinite(clamp), clamp, np.inf) * np.ones_like(v_lo)
+        edge = np.full_like(v_lo, self.propulsion.tested_airspeed_m_s[1])
+        first = np.minimum(np.minimum(clamp, edge), v_lo)
+        second = np.minimum(np.maximum(clamp, edge), v_lo)
+        return [np.zeros_like(v_lo), first, second, v_lo]
+
+    def _integrate(self, low: Array, high: Array, panels: int) -> tuple[Array, Array]:
+        """Composite Gauss-Legendre of ``m V / F`` and ``m / F`` over [low, high] per row
+        (the force evaluated node by node: the fallback of :meth:`_roll_pieces`)."""
+        width = (high - low) / panels
+        starts = low + width * np.arange(panels)[None, :]
+        nodes = (starts[:, :, None] + 0.5 * width[:, :, None] * (_GL_NODES + 1.0)).reshape(
+            self.size, -1)
+        weights = np.tile(_GL_WEIGHTS, panels)[None, :] * 0.5 * width
+        force = self.net_force(nodes)
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            distance = np.sum(weights * mass * nodes / force, axis=1)
+            time = np.sum(weights * mass / force, axis=1)
+        return distance, time
+
+    def _roll_pieces(self) -> tuple[list[Array], list[tuple[Array, ...]]] | None:
+        """The net force on each smooth piece of [0, V_LO] as a quadratic (memoised).
+
+        Between the kinks of :meth:`_breaks` the full-throttle net force is quadratic in
+        airspeed (poly22 thrust at a fixed throttle, drag, lift and wheel load all ~V^2, the
+        extrapolation error constant), so three values of :meth:`net_force` per piece give
+        it exactly, as ``c0 + c1 s + c2 s^2`` with ``s = u - 1/2`` and ``u`` the piece's own
+        coordinate in [0, 1] (Lagrange through u = 1/4, 1/2, 3/4). A fourth value checks it;
+        where it does not hold (a model that is not quadratic, a jump inside a piece) the
+        force is evaluated node by node instead (None).
+        """
+        if self._pieces is not None:
+            return self._pieces or None
+        low_edge = self.propulsion.tested_airspeed_m_s[0]
+        if self.extrapolation_n is not None and low_edge > 0.0:
+            self._pieces = False  # a jump at the low edge lies inside the first piece
+            return None
+        breaks = self._breaks(self.liftoff_speed())
+        fits = []
+        ok = True
+        for low, high in zip(breaks[:-1], breaks[1:], strict=True):
+            width = high - low
+            f = self.net_force(low + width * _ROLL_PROBES[None, :])
+            c0 = f[:, 1:2]
+            c1 = 2.0 * (f[:, 2:3] - f[:, 0:1])
+            c2 = 8.0 * (f[:, 0:1] - 2.0 * f[:, 1:2] + f[:, 2:3])
+            s = _ROLL_PROBES[3] - 0.5
+            predicted = c0 + s * (c1 + s * c2)
+            scale = np.max(np.abs(f), axis=1, keepdims=True) + 1.0
+            with np.errstate(invalid="ignore"):
+                ok = ok and bool(np.all((np.abs(predicted - f[:, 3:4]) <= 1e-9 * scale)
+                                        | ~np.isfinite(f[:, 3:4])))
+            fits.append((low, width, c0, c1, c2))
+        self._pieces = (breaks, fits) if ok else False
+        return self._pieces or None
+
+    def _integrate_piece(self, piece: tuple[Array, ...]) -> tuple[Array, Array]:
+        """:meth:`_integrate` on one piece of :meth:`_roll_pieces`: the same nodes, the force
+        from the piece's quadratic."""
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
+        low, width, c0, c1, c2 = piece
+        u, w = _ROLL_RULE
+        s = u - 0.5
+        force = c0 + s * (c1 + s * c2)
+        speed = low + width * u
+        weights = w * width
+        with np.errstate(divide="ignore", invalid="ignore"):
+            over = weights * mass / force
+            return np.sum(over * speed, axis=1), np.sum(over, axis=1)
+
+    def _integrate_piece_near_a_peak(self, piece: tuple[Array, ...], rows: Array
+                                     ) -> tuple[Array, Array]:
+        """:func:`roll_integrals_near_a_peak` on one piece of :meth:`_roll_pieces`, ``rows``
+        (indices) only."""
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
+        low, width, c0, c1, c2 = (a[rows] for a in piece)
+        return roll_integrals_near_a_peak(low, width, c0, c1, c2, mass[rows])
+
+    def force_range(self) -> tuple[Array, Array]:
+        """Least and greatest full-throttle net force [N] per row from rest to lift-off.
+
+        On the quadratic pieces of :meth:`_roll_pieces` both are exact (each piece's ends and
+        vertex), so a dip between any check points counts; node by node, the single case's
+        2001 equally spaced airspeeds (``analysis.takeoff``). Memoised: the roll, its
+        history and the launch ask for it.
+        """
+        if self._force_range is None:
+            self._force_range = self._least_and_greatest_force()
+        return self._force_range
+
+    def _least_and_greatest_force(self) -> tuple[Array, Array]:
+        pieces = self._roll_pieces()
+        if pieces is None:
+            speeds = self.liftoff_speed() * np.linspace(0.0, 1.0, _CHECK_POINTS)[None, :]
+            force = self.net_force(speeds)
+            return np.min(force, axis=1), np.max(force, axis=1)
+        least = np.full(self.size, np.inf)
+        most = np.full(self.size, -np.inf)
+        for _, width, c0, c1, c2 in pieces[1]:
+            # s in [-1/2, 1/2]: the ends, and the vertex where it lies inside
+            ends = (c0 - 0.5 * c1 + 0.25 * c2, c0 + 0.5 * c1 + 0.25 * c2)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                vertex = -c1 / (2.0 * c2)
+                inside = (np.abs(vertex) <= 0.5) & (c2 != 0.0)
+                top = c0 - c1 * c1 / (4.0 * c2)
+            used = (np.asarray(width) > 0.0).reshape(-1)
+            low = np.minimum(np.minimum(*ends), np.where(inside, top, np.inf)).reshape(-1)
+            high = np.maximum(np.maximum(*ends), np.where(inside, top, -np.inf)).reshape(-1)
+            least = np.where(used, np.minimum(least, low), least)
+            most = np.where(used, np.maximum(most, high), most)
+        return least, most
+
+    def uniform_force(self) -> Array:
+        """Net force [N] at 101 equally spaced airspeeds from rest to V_LO (memoised)."""
+        if self._uniform is None:
+            v_lo = self.liftoff_speed()
+            speeds = v_lo * np.linspace(0.0, 1.0, _HISTORY_POINTS)[None, :]
+            pieces = self._roll_pieces()
+            if pieces is None:
+                self._uniform = self.net_force(speeds)
+                return self._uniform
+            breaks, fits = pieces
+            # a roll that is one smooth piece (no kink before lift-off): the airspeeds' own
+            # coordinate on it is k/100
+            u = np.linspace(0.0, 1.0, _HISTORY_POINTS)[None, :] - 0.5
+            _, _, c0, c1, c2 = fits[0]
+            force = c0 + u * (c1 + u * c2)
+            kinked = np.flatnonzero(breaks[1][:, 0] < v_lo[:, 0])
+            if kinked.size:
+                # each airspeed on its piece; an airspeed within 1e-9 above the tested
+                # range's end still counts as tested, as the thrust model decides (thrust)
+                edge = self.propulsion.tested_airspeed_m_s[1]
+                at = speeds[kinked]
+                index = sum((at > np.where(b[kinked] == edge, b[kinked] + 1e-9, b[kinked]))
+                            .astype(np.intp) for b in breaks[1:3])
+                low, width, c0, c1, c2 = (np.take_along_axis(
+                    np.concatenate([f[i][kinked] for f in fits], axis=1), index, axis=1)
+                    for i in range(5))
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    s = (at - low) / width - 0.5
+                force[kinked] = c0 + s * (c1 + s * c2)
+            self._uniform = force
+        return self._uniform
+
+    def ground_roll(self) -> tuple[Array, Array, Array, Array]:
+        """Ground roll [m], time [s], lift-off speed [m/s], and attainable (1/0) per row.
+
+        Not attainable where the net force is not positive on the 101-point check grid
+        from rest to the lift-off speed (a vanishing force means no lift-off).
+        """
+        v_lo = self.liftoff_speed()
+        # a sampled lift-off speed below stall cannot lift off (bad input for one case)
+        stall = stall_speed(self)[:, None]
+        least, most = self.force_range()
+        attainable = (least > 0.0) & (v_lo >= stall * (1.0 - 1e-12))[:, 0]
+        # beyond the fans' jet velocity an extrapolated thrust model is not physics (as
+        # solve_takeoff says); v_lo is a column, as the jet velocity of sampled rows is
+        attainable &= ~beyond_jet_velocity(self.propulsion, v_lo, self.density)[:, 0]
+        pieces = self._roll_pieces()
+        breaks = self._breaks(v_lo) if pieces is None else pieces[0]
+        distance = np.zeros(self.size)
+        time = np.zeros(self.size)
+        # 1/F peaks where the force all but vanishes: 64 nodes a piece missed it by 17 % (a
+        # roll of 812 m for 976; outside audit); such rows take 64 times the panels
+        with np.errstate(divide="ignore", invalid="ignore"):
+            steep = attainable & (least < _STEEP_FORCE_SHARE * most)
+        for k, (low, high) in enumerate(zip(breaks[:-1], breaks[1:], strict=True)):
+            if np.all(high <= low):
+                continue  # this kink lies beyond lift-off for every row
+            d, t = (self._integrate(low, high, _PANELS) if pieces is None
+                    else self._integrate_piece(pieces[1][k]))
+            if steep.any() and pieces is None:
+                fine = self._integrate(low, high, _FINE_PANELS)
+                d, t = np.where(steep, fine[0], d), np.where(steep, fine[1], t)
+            elif steep.any():  # the spike-resolving rule on those rows alone
+                rows = np.flatnonzero(steep)
+                d, t = d.copy(), t.copy()
+                d[rows], t[rows] = self._integrate_piece_near_a_peak(pieces[1][k], rows)
+            distance, time = distance + d, time + t
+        # a sum over 1/F is no roll unless it is positive (a force negative between check
+        # points summed to -796 m and passed; outside audit)
+        ok = attainable & (distance > 0.0) & (time > 0.0) & np.isfinite(distance) \
+            & np.isfinite(time)
+        # rotation on the ground at the lift-off speed (Raymer 17.8.2: S_R = V_LO t_R)
+        rotation = np.asarray(self.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
+            * np.ones(self.size)
+        distance = distance + v_lo[:, 0] * rotation
+        time = time + rotation
+        return (np.where(ok, distance, np.nan), np.where(ok, time, np.nan), v_lo[:, 0],
+                ok.astype(float))
+
+    def release_run(self, thrust_and_current: Any = None
+                    ) -> tuple[Array, Array, Array | None, Array]:
+        """A catapult's acceleration after the release per row
+        (:func:`tuflexperf.analysis.ground_roll.release_acceleration`): at the model's thrust, or
+        at ``thrust_and_current(V)`` (thrust [N], current per fan [A]; on sagging packs)."""
+        release = np.asarray(true_airspeed_m_s(self.aircraft.launch_speed_m_s, self.density),
+                             dtype=float).reshape(-1) * np.ones(self.size)
+        v_tr = self.transition_speed()
+
+        def forces(speed: Array) -> tuple[Array, Array | None]:
+            drag = np.asarray(level_flight_drag_n(self.aircraft, speed, self.density),
+                              dtype=float)
+            if thrust_and_current is None:
+                return self.thrust(1.0, speed) - drag, None
+            thrust, current = thrust_and_current(speed)
+            return thrust - drag, current
+
+        return release_acceleration(self.aircraft.mass_kg, release, v_tr, forces)
+
+    def catapult_release(self) -> tuple[Array, Array, Array, Array]:
+        """A catapult launch as :meth:`ground_roll` reports a roll: no distance, no time, the
+        release true airspeed [m/s] (``launch_speed_m_s`` is an EAS) and attainable (1/0).
+
+        The catapult's energy is the ground equipment's, not the battery's (SPEC 4): the
+        flight starts airborne at the release speed, which must not be below stall (bad input
+        for one case; not attainable for a sampled mass or ``cl_max`` that raises the stall),
+        and which the catapult's ``launch_energy_j`` must give the mass (m V^2 / 2).
+        """
+        release = np.asarray(true_airspeed_m_s(self.aircraft.launch_speed_m_s, self.density),
+                             dtype=float).reshape(-1) * np.ones(self.size)
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float).reshape(-1) * np.ones(self.size)
+        energy = self.aircraft.launch_energy_j
+        short = catapult_energy_shortfall(
+            mass, release, None if energy is None else np.asarray(energy, dtype=float).reshape(-1))
+        ok = (release >= stall_speed(self) * (1.0 - 1e-12)) & ~short
+        # no thrust to climb away beyond the fans' jet velocity (solve_takeoff)
+        density = np.asarray(self.density, dtype=float).reshape(-1, 1)
+        ok &= ~np.asarray(beyond_jet_velocity(self.propulsion, release[:, None], density),
+                          dtype=bool).reshape(-1)
+        zero = np.zeros(self.size)
+        return zero, zero, release, ok.astype(float)
+
+    def launch_within_packs(self, roll: tuple[Array, Array, Array, Array], height: Any,
+                            catapult: bool, packs: Any, battery: dict[str, Array]
+                            ) -> NDArray[np.bool_]:
+        """Per row: the packs give full throttle over the take-off, as the single case
+        checks it (:func:`tuflexperf.analysis.pack_limits.takeoff_beyond_battery`): over the
+        roll's 101 history airspeeds (a catapult: its release) and the transition speed, on
+        full packs and after the charge the most current for the whole take-off (roll,
+        rotation, and the arc and climb to the obstacle at the transition speed) would draw,
+        the loaded voltage at or above the cut-off and each pack within its burst rating;
+        and, on sagging packs, the climb reaching the obstacle before their cut-off
+        (:attr:`packs_beyond`)."""
+        prop = self.propulsion
+        v_tr = self.transition_speed()[:, None]
+        airborne = self.airborne_m(height)
+        airborne = np.where(np.isfinite(airborne), airborne, 0.0)
+        seconds = np.nan_to_num(roll[1]) + airborne / v_tr[:, 0]
+        if catapult:  # and its level acceleration after the release, as the single case
+            seconds = seconds + np.nan_to_num(self.release[1])
+        v_lo = np.nan_to_num(roll[2]).reshape(-1, 1)
+        along = (v_lo if catapult else
+                 v_lo * np.linspace(0.0, 1.0, HISTORY_POINTS)[None, :])
+        speeds = np.concatenate([along * np.ones((self.size, 1)), v_tr], axis=1)
+        rows = pack_rows(packs.battery, battery)
+        circuit, cutoff = rows.circuit_packs[:, None], rows.cutoff_v[:, None]
+        burst = (None if rows.rating_a is None
+                 else BURST_OVER_CONTINUOUS * rows.rating_a[:, None])
+        ok = np.ones(self.size, dtype=bool)
+        for engine in prop.engines if packs.own_surfaces else (None,):
+            power = np.maximum(fan_power_rows(packs, self, 1.0, speeds, engine), 0.0)
+            power = power * np.ones_like(speeds)
+            charge = np.zeros((self.size, 1))
+            for _ in range(2):
+                _, current, _ = point = operating_point(
+                    packs.params, charge, power, circuit, rows.packs_per_engine,
+                    prop.reference_voltage_v, prop.voltage_exponent)
+                ok &= np.all(within_limits(point[0], current, cutoff, burst), axis=1)
+                charge = (np.max(current, axis=1) * rows.packs_per_engine * seconds
+                          / SECONDS_PER_HOUR)[:, None]
+        if self.packs_beyond is not None:  # the packs give out in the climb (solve_takeoff)
+            ok &= ~self.packs_beyond
+        return ok
+
+    def airborne_m(self, height: Any) -> Array:
+        """Transition arc + climb to the obstacle [m] per row (``inf`` where never cleared):
+        on the sagging packs where they were flown (:attr:`packs_airborne`), else at the
+        model's thrust (as :func:`solve_takeoff`)."""
+        if self.packs_airborne is not None:
+            return self.packs_airborne
+        v_tr = self.transition_speed()[:, None]
+        radius = transition_radius_m(v_tr, self.aircraft.takeoff.transition_load_factor)
+        gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
+        arc, climb, _ = obstacle_distances_m(radius, gradient, height)
+        return (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
+
+    def distance_to_obstacle(self, roll: tuple[Array, Array, Array, Array],
+                             height: Any) -> Array:
+        """Ground roll + transition arc + climb to the obstacle [m] (as :func:`solve_takeoff`),
+        a catapult's level acceleration after the release included."""
+        airborne = self.airborne_m(height)
+        if self.release is not None:
+            airborne = airborne + self.release[0]
+        total = roll[0] + airborne
+        # a launch that is not attainable (a catapult's "roll" of 0 m included) reaches nothing;
+        # nor does an arc that needs more than cl_max (solve_takeoff)
+        flown = ~np.asarray(transition_beyond_cl_max(np.asarray(
+            self.aircraft.takeoff.transition_load_factor, dtype=float)), dtype=bool).reshape(-1)
+        return np.where(np.isfinite(total) & (roll[3] > 0.5) & flown, total, np.nan)
+
+    def roll_history(self, wanted: NDArray[np.bool_] | None = None) -> Array:
+        """Time [s] at 101 equally spaced airspeeds from rest to V_LO (as the CVODES history);
+        only the ``wanted`` rows exactly where the force all but vanishes (the others are
+        not flown: a chunk of them cost 2.5 s; outside audit).
+
+        Cumulative integral of ``m / F`` on the uniform nodes by the four-point rule
+        ``h/24 (-g_{i-1} + 13 g_i + 13 g_{i+1} - g_{i+2})`` (trapezoid-corrected, O(h^5) per
+        panel; one-sided at the ends), from the same force values as the check grid.
+        """
+        v_lo = self.liftoff_speed()
+        h = v_lo / (_HISTORY_POINTS - 1)
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float).reshape(-1, 1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g = mass / self.uniform_force()
+        left = np.concatenate([2 * g[:, :1] - g[:, 1:2], g[:, :-2]], axis=1)
+        right = np.concatenate([g[:, 2:], 2 * g[:, -1:] - g[:, -2:-1]], axis=1)
+        pieces = h / 24.0 * (-left + 13.0 * g[:, :-1] + 13.0 * g[:, 1:] - right)
+        history = np.concatenate([np.zeros((self.size, 1)), np.cumsum(pieces, axis=1)], axis=1)
+        least, most = self.force_range()
+        with np.errstate(invalid="ignore"):
+            steep = (least > 0.0) & (least < _STEEP_FORCE_SHARE * most)
+        steep = np.flatnonzero(steep if wanted is None else steep & wanted)
+        if steep.size and self._roll_pieces() is not None:
+            # where the force all but vanishes the four-point rule misses the peak of 1/F
+            # (and the launch's airspeed follows this history): each interval exactly
+            history[steep] = self._exact_history(steep, most[steep])
+        return history
+
+    def _exact_history(self, rows: Array, most: Array) -> Array:
+        """:meth:`roll_history` of ``rows`` (indices) by the pieces' quadratics: each of its
+        100 intervals cut at the pieces' kinks, each part's ``integral m / F dV`` by 16 Gauss
+        nodes, or by :func:`roll_integrals_near_a_peak` where its least force is below
+        ``_STEEP_FORCE_SHARE`` of the roll's greatest ``most`` [N]."""
+        breaks, fits = self._roll_pieces()  # type: ignore[misc]
+        v_lo = self.liftoff_speed()[rows]
+        nodes = v_lo * np.linspace(0.0, 1.0, _HISTORY_POINTS)[None, :]
+        start, end = nodes[:, :-1], nodes[:, 1:]
+        kinks = [np.clip(b[rows], start, end) for b in breaks[1:3]]
+        cuts = np.sort(np.stack([start, *kinks, end], axis=-1), axis=-1)
+        a, b = cuts[..., :-1], cuts[..., 1:]  # (rows, 100, 3): each part on one piece
+        middle = 0.5 * (a + b)
+        which = sum((middle > k[..., None]) for k in (breaks[1][rows], breaks[2][rows]))
+        low, width, c0, c1, c2 = (np.take_along_axis(
+            np.concatenate([f[i][rows] for f in fits], axis=1)[:, None, :],
+            which.astype(np.intp), axis=2) for i in range(5))
+
+        def force(speed: Array) -> Array:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                s = (speed - low) / width - 0.5
+            return c0 + s * (c1 + s * c2)
+
+        f_a, f_m, f_b = force(a), force(middle), force(b)
+        # each part's own quadratic on its own coordinate in [-1/2, 1/2]
+        local = (a, b - a, f_m, f_b - f_a, 2.0 * (f_a - 2.0 * f_m + f_b))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vertex = -local[3] / (2.0 * local[4])
+            top = np.where(np.abs(vertex) < 0.5, f_m - local[3] ** 2 / (4.0 * local[4]),
+                           np.inf)
+        peaked = np.minimum(np.minimum(f_a, f_b), top) < _STEEP_FORCE_SHARE * most[:, None, None]
+        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
+        mass = np.broadcast_to(mass[rows][:, :, None], a.shape)
+        time = np.zeros(a.shape)
+        for chosen, rule in ((~peaked, _unit_rule(1)), (peaked, _PEAK_RULE)):
+            if chosen.any():
+                _, time[chosen] = roll_integrals_near_a_peak(
+                    *(part[chosen][:, None] for part in local), mass[chosen][:, None], rule)
+        time = np.where(b > a, time, 0.0)
+        return np.concatenate([np.zeros((rows.size, 1)), np.cumsum(time.sum(axis=2), axis=1)],
+                              axis=1)

@@ -1,0 +1,193 @@
+"""The endurance flight planned: the mission it flies and the launch's energy budget.
+
+Step 5 of :mod:`tuflexperf.analysis.endurance`: "take off, climb to the pattern altitude,
+cruise at the throttle until the reserve" written as a mission (:func:`endurance_mission`)
+for the one mission integrator, and the climb of best rate it starts with.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tuflexperf.analysis.constants import MAX_SPEED_OVER_STALL, SPEED_GRID_POINTS
+from tuflexperf.errors import NotAttainable
+from tuflexperf.io.battery import (
+    Battery,
+)
+from tuflexperf.io.case import Case
+from tuflexperf.models.aircraft import climb_sine, level_flight_drag_n, stall_speed_m_s
+from tuflexperf.models.battery import (
+    DischargeParameters,
+)
+from tuflexperf.models.thrust import (
+    total_thrust_n,
+)
+
+
+# --- launch: ground roll + climb at full throttle -------------------------------------------
+@dataclass(frozen=True)
+class LaunchBudget:
+    """Charge and energy per fan for the ground roll and the climb to pattern altitude."""
+
+    ground_roll_time_s: float
+    liftoff_speed_m_s: float
+    climb_airspeed_m_s: float
+    climb_rate_m_s: float
+    climb_time_s: float
+    pattern_altitude_m: float
+    charge_ah: float
+    energy_wh: float
+
+    def to_dict(self) -> dict[str, float]:
+        return dict(self.__dict__)
+
+
+def _best_climb(case: Case) -> tuple[float, float]:
+    """Airspeed (m/s) and rate (m/s) of the best full-throttle climb, ``(T - D) V / W``
+    (at most ``V``: a vertical climb, :func:`~tuflexperf.models.aircraft.climb_sine`).
+
+    Small-angle climb with ``L = W`` (Anderson, *Aircraft Performance and Design*, 5.10).
+    Searched from the lift-off speed to 8 x stall, short of the fans' jet velocity (beyond
+    it a fan makes no thrust, :func:`jet_velocity_ceiling_m_s`).
+    """
+    from tuflexperf.models.aircraft import liftoff_speed_m_s
+    from tuflexperf.models.powertrain import jet_velocity_ceiling_m_s
+
+    aircraft, rho = case.aircraft, case.density_kg_m3
+    low = float(liftoff_speed_m_s(aircraft, rho))
+    if aircraft.launch == "catapult":  # the climb starts from the release speed
+        from tuflexperf.models.aircraft import true_airspeed_m_s
+
+        low = float(true_airspeed_m_s(aircraft.launch_speed_m_s, rho))
+    speeds = np.linspace(low, MAX_SPEED_OVER_STALL * float(stall_speed_m_s(aircraft, rho)),
+                         SPEED_GRID_POINTS)
+    thrust = total_thrust_n(case.propulsion, 1.0, speeds, rho)
+    excess = np.asarray(thrust - level_flight_drag_n(aircraft, speeds, rho), dtype=float)
+    rate = np.asarray(climb_sine(excess / aircraft.weight_n), dtype=float) * speeds
+    # at or beyond the jet velocity no climb (the first grid point stays: a lift-off there
+    # is refused by the take-off)
+    beyond = speeds[1:] >= float(jet_velocity_ceiling_m_s(case.propulsion, rho))
+    rate[1:] = np.where(beyond, -np.inf, rate[1:])
+    best = int(np.argmax(rate))
+    return float(speeds[best]), float(rate[best])
+
+
+def endurance_mission(case: Case, battery: Battery, throttle: float = 0.5) -> Any:
+    """The endurance flight as a mission: take off, climb to the pattern, cruise at ``throttle``.
+
+    Segments (SPEC 4 mission types): the full-throttle take-off to lift-off (runway; a
+    catapult starts airborne), a full-throttle climb at the best-rate airspeed
+    (:func:`_best_climb`) to the battery file's pattern altitude, and a level cruise at
+    ``throttle`` whose airspeed follows (its duration is solved, see
+    :meth:`EnduranceModel.solve`).
+
+    References
+    ----------
+    Paper section 4 (the launch, then cruise); Anderson, *Aircraft Performance and
+    Design*, 5.10 (climb).
+    """
+    from tuflexperf.io.mission import MissionFile, SegmentSchema
+
+    height = battery.pattern_altitude_m
+    segments = [SegmentSchema(type="takeoff")]
+    if height > 0:
+        climb_speed, climb_rate = _best_climb(case)
+        if climb_rate <= 0:
+            raise NotAttainable("cannot climb at full throttle: no excess power after lift-off")
+        eas = climb_speed * math.sqrt(case.density_kg_m3 / 1.225)  # flown at the case's rho
+        from pydantic import ValidationError
+
+        try:
+            segments.append(SegmentSchema(type="climb", to_altitude_m=height,
+                                          airspeed_m_s=eas, throttle=1.0))
+        except ValidationError as exc:  # e.g. a stall near Mach 1: no climb a mission flies
+            raise NotAttainable(
+                f"the best-rate climb at {eas:.0f} m/s EAS cannot be flown: "
+                f"{exc.errors()[0]['msg'].lower()} m/s"
+            ) from None
+    segments.append(SegmentSchema(type="cruise", throttle=throttle, time_min=1.0))
+    return MissionFile("endurance", case.path, tuple(segments), None)
+
+
+def endurance_mission_model(case: Case, battery: Battery, throttle: float = 0.5) -> Any:
+    """The endurance mission built once (:class:`MissionModel`; the throttle is an input).
+
+    ``throttle`` [fraction] only plans the cruise (it must hold level flight); each solve
+    flies the cruise at its own throttle.
+
+    The endurance figure is the case's point performance: the whole flight is flown at
+    the case's density (the climb's height costs energy, not density), the take-off to
+    lift-off (the climb starts from the runway), the cruise to the battery file's landing
+    reserve.
+
+    References
+    ----------
+    Paper section 4 (endurance estimate); SPEC 4 ("Mission file").
+    """
+    from tuflexperf.analysis.mission import MissionModel
+
+    mission = endurance_mission(case, battery, throttle)
+    return MissionModel(case, mission, battery.landing_reserve_fraction,
+                        fixed_density_kg_m3=case.density_kg_m3, takeoff_to_obstacle=False,
+                        battery=battery)
+
+
+def launch_of(model: Any) -> LaunchBudget:
+    """The launch segments of a flown endurance mission (per fan: the larger engine's)."""
+    flown = model.fly()
+    case = model.case
+    takeoff = getattr(model, "takeoff", None)
+    climb = next((s for s in flown.segments if s.type == "climb"), None)
+    if case.aircraft.launch == "catapult":
+        from tuflexperf.models.aircraft import true_airspeed_m_s
+
+        lift_off = float(true_airspeed_m_s(case.aircraft.launch_speed_m_s, case.density_kg_m3))
+        roll_s = 0.0
+    else:
+        lift_off, roll_s = float(takeoff.liftoff_speed_m_s), float(takeoff.time_s)
+    launch = [s for s in flown.segments if s.type in ("takeoff", "climb")]
+    charge = [sum(s.charge_ah[i] for s in launch) for i in range(model.n)]
+    energy = [sum(s.energy_wh[i] for s in launch) for i in range(model.n)]
+    worst = int(np.argmax(charge))
+    height = model.battery.pattern_altitude_m
+    climb_time = climb.time_s if climb is not None else 0.0
+    climb_speed = (float(flown.history["airspeed_m_s"][model.bounds[climb.index][0]])
+                   if climb is not None else lift_off)
+    return LaunchBudget(
+        ground_roll_time_s=roll_s,
+        liftoff_speed_m_s=lift_off,
+        climb_airspeed_m_s=climb_speed,
+        climb_rate_m_s=height / climb_time if climb_time > 0 else 0.0,
+        climb_time_s=climb_time,
+        pattern_altitude_m=height,
+        charge_ah=charge[worst],
+        energy_wh=energy[worst],
+    )
+
+
+def launch_budget(
+    case: Case, battery: Battery, params: DischargeParameters | None = None, power: Any = None
+) -> LaunchBudget:
+    """Charge drawn per fan (its ``n`` parallel packs) by the take-off and the climb.
+
+    The launch segments of :func:`endurance_mission` flown by the mission integrator
+    (CasADi RK4, :mod:`tuflexperf.analysis.mission`): ground roll at full throttle along the
+    airspeed history of :func:`solve_takeoff`, rotation, then the full-throttle climb at
+    the best-rate airspeed to the pattern altitude, each fan drawing its own power (its
+    power surface, else the battery file's fan-power law) at the loaded pack voltage.
+    The fan that draws most sets the budget. ``params`` and ``power`` are accepted for
+    compatibility: the pack model and the power model are the case's own (the same that
+    :class:`EnduranceModel` uses). Raises :class:`NotAttainable` when the aircraft cannot
+    take off or climb.
+
+    References
+    ----------
+    Raymer, *Aircraft Design*, 17.8 (take-off); Anderson, *Aircraft Performance and
+    Design*, 5.10 (rate of climb).
+    """
+    del params, power
+    return launch_of(endurance_mission_model(case, battery))
