@@ -24,6 +24,103 @@ ROOT = Path(__file__).resolve().parent.parent
 SHIPPED_CASE = ROOT / "requirements" / "tuflex.yaml"
 
 
+class Ran(NamedTuple):
+    """What a run of the command line gave: as ``subprocess.CompletedProcess`` names it."""
+
+    args: list[str]
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  file: Any = None, line: str | None = None) -> None:
+    """Python's own display of a warning: on (the captured) stderr."""
+    import sys
+    import warnings
+
+    sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
+
+
+def tuflexperf(*args: str, cwd: Path | str | None = None, warnings_shown: bool = True) -> Ran:
+    """``tuflexperf ARGS`` run in this process, as the console script runs it: through
+    :func:`tuflexperf.cli.main`, its exit status as :mod:`tuflexperf.entry` makes it, in the
+    working folder ``cwd``, with descriptors 1 and 2 on files (no terminal) and
+    ``sys.stdout``/``sys.stderr`` unbuffered on them: what Python, a C library (CasADi) or a
+    forked helper writes is captured, in the order written, as a process's pipes get it.
+
+    A subprocess costs ~0.3 s of CPU for imports alone; what only a process shows (signals,
+    the entry point's own exit, bytes that are no UTF-8, file modes, resource limits, a
+    FIFO that would block) stays in a real one. An exception the command lets out (a
+    traceback and exit 1 in a process) is raised here, so the test fails on it. Warnings
+    print to the captured stderr as in a fresh interpreter (Python's default filters), or,
+    with ``warnings_shown=False``, not at all (``PYTHONWARNINGS=ignore``).
+    """
+    import contextlib
+    import os
+    import signal
+    import sys
+    import tempfile
+    import warnings
+
+    from tuflexperf.cli import main
+    from tuflexperf.entry import exit_status
+    from tuflexperf.io.files import INTERRUPT_SIGNALS
+
+    saved_streams = sys.stdout, sys.stderr
+    saved_handlers = {signum: signal.getsignal(signum) for signum in INTERRUPT_SIGNALS}
+    saved_hook, saved_cwd = sys.unraisablehook, os.getcwd()
+    code = 0
+    with contextlib.ExitStack() as stack:
+        files = {fd: stack.enter_context(tempfile.TemporaryFile()) for fd in (1, 2)}
+        for stream in saved_streams:
+            with contextlib.suppress(OSError, ValueError, AttributeError):
+                stream.flush()  # what this process printed before is not the command's
+        saved_fds = {fd: os.dup(fd) for fd in files}
+        try:
+            for fd, file in files.items():
+                os.dup2(file.fileno(), fd)
+            sys.stdout, sys.stderr = (
+                open(fd, "w", encoding="utf-8", errors=errors, buffering=1,  # noqa: SIM115
+                     closefd=False)
+                for fd, errors in ((1, "surrogateescape"), (2, "backslashreplace")))
+            sys.stdout.reconfigure(write_through=True)
+            sys.stderr.reconfigure(write_through=True)
+            if cwd is not None:
+                os.chdir(cwd)
+            with warnings.catch_warnings():
+                warnings.resetwarnings()  # a fresh interpreter's filters, not pytest's
+                warnings.showwarning = _show_warning  # on stderr, not into pytest's record
+                if warnings_shown:
+                    for category in (DeprecationWarning, PendingDeprecationWarning,
+                                     ImportWarning, ResourceWarning):
+                        warnings.simplefilter("ignore", category)
+                else:
+                    warnings.simplefilter("ignore")
+                try:
+                    main(list(args))
+                except SystemExit as done:
+                    code = exit_status(done.code)
+        finally:
+            for stream in (sys.stdout, sys.stderr):
+                with contextlib.suppress(OSError, ValueError, AttributeError):
+                    stream.flush()
+            sys.stdout, sys.stderr = saved_streams
+            for fd, saved in saved_fds.items():
+                os.dup2(saved, fd)
+                os.close(saved)
+            for signum, handler in saved_handlers.items():
+                signal.signal(signum, handler)
+            sys.unraisablehook = saved_hook
+            os.chdir(saved_cwd)
+        written = {}
+        for fd, file in files.items():
+            file.seek(0)
+            written[fd] = file.read()
+    return Ran(list(args), code, written[1].decode("utf-8", "surrogateescape"),
+               written[2].decode("utf-8", "replace"))
+
+
 def copy_shipped_case(folder: Path) -> Path:
     """The shipped case (its requirements/ and data/ folders) copied into ``folder``;
     returns the copy's case file."""
@@ -88,21 +185,33 @@ class ShippedReport(NamedTuple):
 
 @pytest.fixture(scope="session")
 def shipped_report(tmp_path_factory: pytest.TempPathFactory) -> ShippedReport:
-    """``tuflexperf report --out .../review --json`` of the shipped case, run once per session
-    in a subprocess as a user runs it. Tests read it, never change it; one that needs an
-    earlier report to protect copies it (``shutil.copytree``) instead of drawing its own."""
+    """``tuflexperf report --out .../review --json`` of the shipped case, run once per test
+    run in a subprocess as a user runs it, and shared by every xdist worker (the first to
+    ask draws it under a file lock; a report is ~10 s of CPU). Tests read it, never change
+    it; one that needs an earlier report to protect copies it (``shutil.copytree``) instead
+    of drawing its own."""
+    import fcntl
     import json
     import os
     import subprocess
     import sys
 
-    parent = tmp_path_factory.mktemp("shipped_report")
-    out = parent / "review"
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", "report", "--out", str(out),
-                           "--json"], cwd=parent, capture_output=True, text=True, timeout=300,
-                          env={**os.environ, "PYTHONWARNINGS": "ignore"})
-    assert done.returncode == 0, done.stderr
-    return ShippedReport(parent, out, json.loads(done.stdout))
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent  # the run's temporary root, which every worker's folder is in
+    parent, answer = root / "shipped_report", root / "shipped_report.json"
+    with open(root / "shipped_report.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not answer.exists():
+            parent.mkdir(exist_ok=True)
+            done = subprocess.run([sys.executable, "-m", "tuflexperf", "report", "--out",
+                                   str(parent / "review"), "--json"], cwd=parent,
+                                  capture_output=True, text=True, timeout=300,
+                                  env={**os.environ, "PYTHONWARNINGS": "ignore"})
+            assert done.returncode == 0, done.stderr
+            answer.with_suffix(".part").write_text(done.stdout)
+            answer.with_suffix(".part").replace(answer)
+    return ShippedReport(parent, parent / "review", json.loads(answer.read_text()))
 
 
 def write_case(

@@ -17,12 +17,18 @@ DENSIFY = 24  # points per segment: a line crossing a legend between two vertice
 
 
 def renderer_of(fig: Any) -> Any:
-    """Draw ``fig`` on an Agg canvas (as the PNG writer does) and return the renderer."""
+    """Draw ``fig`` on an Agg canvas (as the PNG writer does) and return the renderer.
+
+    A figure unchanged since this drew it (matplotlib marks every change ``stale``) is not
+    drawn again: each check asks, and a draw of a page is ~0.1 s.
+    """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     if not isinstance(fig.canvas, FigureCanvasAgg):
         FigureCanvasAgg(fig)
-    fig.canvas.draw()
+    if fig.stale or getattr(fig, "_layout_checks_drawn", None) is not fig.canvas:
+        fig.canvas.draw()
+        fig._layout_checks_drawn = fig.canvas
     return fig.canvas.get_renderer()
 
 

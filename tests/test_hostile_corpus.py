@@ -1,8 +1,11 @@
 """Hostile inputs, table-driven (issue 10): every case ends as SPEC 5 says.
 
-Each case runs the real CLI in a subprocess inside a private copy of the shipped data and
-checks: the exit code; on exit 2 exactly one stderr line that names the file, key or flag;
-no traceback; no file of the user's changed; no staging or temporary debris left behind.
+Each case runs the CLI's entry (``tests.conftest.tuflexperf``, in this process) inside a
+private copy of the shipped data and checks: the exit code; on exit 2 exactly one stderr
+line that names the file, key or flag; no traceback; no file of the user's changed; no
+staging or temporary debris left behind. What only a process shows runs in one: signals to
+the report and its forked helpers, a full stdout device, a memory limit, FIFOs and devices
+as input (a regression would block or fill memory here), the umask of files written.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import copy_shipped_case
+from tests.conftest import Ran, copy_shipped_case, tuflexperf
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -32,7 +35,11 @@ def _tree(folder: Path) -> dict[str, str]:
     }
 
 
-def _run(folder: Path, *args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
+def _run(folder: Path, *args: str) -> Ran:
+    return tuflexperf(*args, cwd=folder, warnings_shown=False)
+
+
+def _process(folder: Path, *args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "tuflexperf", *args], cwd=folder, capture_output=True,
         text=True, timeout=timeout, env={**os.environ, "PYTHONWARNINGS": "ignore"},
@@ -108,6 +115,7 @@ class Case:
     exit_code: int
     names: str  # what the stderr line must mention (exit 2) or stdout must hold
     setup: Callable[[Path], None] | None = None
+    process: bool = False  # run in a subprocess (a regression would block or fill memory)
 
 
 def _typo(w: Path) -> None:
@@ -132,7 +140,7 @@ def _notes(w: Path) -> None:
 
 CASES = [
     Case("misspelt requirement key", ("check", "requirements/tuflex.yaml"), 2,
-         "did you mean 'max_ground_roll_m'", _typo),
+         "did you mean 'max_ground_roll_m'", _typo, process=True),  # as the console runs it
     Case("exponent notation is a number", ("check", "--case", "requirements/tuflex.yaml"), 0,
          "overall", _exponent),
     Case("check --case", ("check", "--case", "requirements/tuflex.yaml"), 0, "overall"),
@@ -174,7 +182,7 @@ def test_hostile_case(workdir: Path, case: Case) -> None:
     if case.setup is not None:
         case.setup(workdir)
     before = _tree(workdir)
-    result = _run(workdir, *case.args)
+    result = (_process if case.process else _run)(workdir, *case.args)
     assert result.returncode == case.exit_code, (result.stdout, result.stderr)
     assert "Traceback" not in result.stderr
     if case.exit_code == 2:
@@ -215,11 +223,17 @@ def test_sigterm_during_report_leaves_earlier_output_intact(workdir: Path,
 _BY_SIGINT = {130, -signal.SIGINT}
 
 
+_EVERY_ONE = pytest.mark.slow  # each a report process; one early and one late run by default
+
+
 @pytest.mark.parametrize(("signum", "when", "codes"), [
-    (signal.SIGINT, "*.png", {130}), (signal.SIGTERM, "*.png", {130}),
-    (signal.SIGINT, "", _BY_SIGINT), (signal.SIGTERM, "", {130}),
+    (signal.SIGINT, "*.png", {130}),
+    pytest.param(signal.SIGTERM, "*.png", {130}, marks=_EVERY_ONE),
+    pytest.param(signal.SIGINT, "", _BY_SIGINT, marks=_EVERY_ONE),
+    (signal.SIGTERM, "", {130}),
     # a closed terminal or a dropped ssh session: it had left the staging behind (audit)
-    (signal.SIGHUP, "*.png", {130}), (signal.SIGHUP, "", {130}),
+    pytest.param(signal.SIGHUP, "*.png", {130}, marks=_EVERY_ONE),
+    pytest.param(signal.SIGHUP, "", {130}, marks=_EVERY_ONE),
 ])
 def test_interrupting_the_whole_report_process_group(workdir: Path, shipped_report,
                                                      signum: int, when: str,
@@ -292,7 +306,7 @@ def test_an_error_after_an_interrupt_is_the_interrupt(monkeypatch, capsys) -> No
 
 
 def test_fit_writes_with_the_users_umask(workdir: Path) -> None:
-    result = _run(workdir, "fit", "data/tuflex/campaign/campaign.yaml", "--out", "p.yaml")
+    result = _process(workdir, "fit", "data/tuflex/campaign/campaign.yaml", "--out", "p.yaml")
     assert result.returncode == 0, result.stderr
     mask = os.umask(0o022)
     os.umask(mask)
@@ -325,8 +339,8 @@ def test_yaml_anchor_bomb_in_provenance_costs_nothing(workdir: Path) -> None:
 
 MORE = [
     Case("fifo as case", ("check", "fifo.yaml"), 2, "not a regular file",
-         lambda w: os.mkfifo(w / "fifo.yaml")),
-    Case("/dev/zero as case", ("check", "/dev/zero"), 2, "/dev/zero"),
+         lambda w: os.mkfifo(w / "fifo.yaml"), process=True),
+    Case("/dev/zero as case", ("check", "/dev/zero"), 2, "/dev/zero", process=True),
     Case("symlink loop", ("check", "loop1"), 2, "symbolic link loop",
          lambda w: ((w / "loop1").symlink_to("loop2"), (w / "loop2").symlink_to("loop1"))),
     Case("300-character name", ("check", "a" * 300 + ".yaml"), 2, "aaaa"),
@@ -506,7 +520,8 @@ def test_report_with_a_corrupt_run_names_it_from_the_forked_reduction(workdir: P
     line naming the run (exit 2), with no traceback from either process and no output."""
     (workdir / "data/tuflex/campaign/runs/edf1_v15p0.csv.gz").write_bytes(b"not gzip at all")
     before = _tree(workdir)
-    result = _run(workdir, "report", "--case", "requirements/tuflex.yaml", "--out", "review")
+    result = _process(workdir, "report", "--case", "requirements/tuflex.yaml", "--out",
+                      "review")  # in a process: the forked helper's stderr is seen too
     assert result.returncode == 2, (result.stdout, result.stderr)
     assert "Traceback" not in result.stderr
     errors = [line for line in result.stderr.splitlines() if "error" in line]

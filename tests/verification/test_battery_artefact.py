@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tests.conftest import copy_shipped_case
+from tests.conftest import Ran, copy_shipped_case, tuflexperf
 from tuflexperf.analysis.requirements import check_case
 from tuflexperf.io.battery import load_battery
 from tuflexperf.io.case import load_case
@@ -20,6 +20,11 @@ from tuflexperf.reduction.battery import fit_battery_block
 
 ROOT = Path(__file__).resolve().parents[2]
 BATTERY = ROOT / "data" / "tuflex" / "battery.yaml"
+
+
+def _tool(*args: str, cwd: Path | None = None) -> Ran:
+    """The CLI in this process (``tests.conftest.tuflexperf``): its exit status and output."""
+    return tuflexperf(*args, cwd=cwd)
 
 
 def test_shipped_fit_block_is_a_refit_of_the_shipped_runs() -> None:
@@ -98,18 +103,17 @@ def test_an_unfitted_battery_is_bad_input_and_fit_makes_it_whole(tmp_path: Path)
     data.pop("fit")
     path.write_text(yaml.safe_dump(data))
     case_file = tmp_path / "requirements" / "tuflex.yaml"
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", "check", str(case_file)],
-                          capture_output=True, text=True)
+    done = _tool("check", str(case_file))
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.count("\n") == 1
     assert "battery.yaml: no fitted pack model" in done.stderr and "tuflexperf fit" in done.stderr
     fitted = tmp_path / "data" / "tuflex" / "battery_fitted.yaml"
-    written = subprocess.run([sys.executable, "-m", "tuflexperf", "fit", str(path), "--out",
-                              str(fitted)], capture_output=True, text=True)
+    written = _tool("fit", str(path), "--out",
+                              str(fitted))
     assert written.returncode == 0, written.stderr
     case_file.write_text(case_file.read_text().replace("battery.yaml", "battery_fitted.yaml"))
-    again = subprocess.run([sys.executable, "-m", "tuflexperf", "check", str(case_file),
-                            "--json"], capture_output=True, text=True)
+    again = _tool("check", str(case_file),
+                            "--json")
     assert again.returncode == 0, again.stderr
     endurance = next(r for r in json.loads(again.stdout)["results"]
                      if r["name"] == "flight_endurance")
@@ -129,16 +133,14 @@ def test_a_capacity_label_far_above_what_the_runs_drew_is_bad_input(tmp_path: Pa
     path.write_text(text.replace("capacity_ah: 5.0 ", "capacity_ah: 10.0", 1))
     args = (["check", str(tmp_path / "requirements" / "tuflex.yaml")] if command == "check"
             else ["fit", str(path), "--out", str(tmp_path / "b.yaml")])
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", *args], capture_output=True,
-                          text=True)
+    done = _tool(*args)
     assert done.returncode == 2 and done.stdout == ""
     if command == "fit":
         assert ("capacity_ah: 10 Ah is more than 1.5 x the most any discharge run drew"
                 in done.stderr)
         # 1.36 x: within that rule, but beyond the 5.54 Ah the fitted circuit holds (below)
         path.write_text(text.replace("capacity_ah: 5.0 ", "capacity_ah: 5.5", 1))
-        done = subprocess.run([sys.executable, "-m", "tuflexperf", *args],
-                              capture_output=True, text=True)
+        done = _tool(*args)
         assert done.returncode == 0, done.stderr
     else:  # check reads the fit, which was fitted with 5 Ah: any other label is refused
         assert "was fitted with capacity_ah 5 Ah" in done.stderr
@@ -162,8 +164,7 @@ def test_a_capacity_label_edited_after_the_fit_is_bad_input(tmp_path: Path, comm
     text = path.read_text()
     assert yaml.safe_load(text)["fit"]["capacity_ah"] == 5.0  # written by the fit
     path.write_text(text.replace("capacity_ah: 5.0 ", "capacity_ah: 6.0 ", 1))
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", *command, "--case", case],
-                          capture_output=True, text=True)
+    done = _tool(*command, "--case", case)
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.count("\n") == 1 and str(path) in done.stderr
     assert ("capacity_ah: 6 Ah, but the pack model in `fit:` was fitted with capacity_ah "
@@ -171,8 +172,7 @@ def test_a_capacity_label_edited_after_the_fit_is_bad_input(tmp_path: Path, comm
     # an older fit block (no capacity_ah of its own) keeps the earlier, looser rule
     path.write_text(text.replace("fit:\n  capacity_ah: 5.0\n", "fit:\n", 1))
     assert "capacity_ah" not in yaml.safe_load(path.read_text())["fit"]
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", *command, "--case", case],
-                          capture_output=True, text=True)
+    done = _tool(*command, "--case", case)
     assert done.returncode in (0, 1), done.stderr
 
 
@@ -187,8 +187,8 @@ def test_a_label_beyond_the_fitted_pack_is_refused_by_fit_as_by_check(tmp_path: 
     holds = yaml.safe_load(text)["fit"]["parameters"]["max_capacity_ah"]
     assert 5.5 < holds < 6.0
     (folder / "battery.yaml").write_text(text.replace("capacity_ah: 5.0 ", "capacity_ah: 6.0 ", 1))
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", "fit", "battery.yaml", "--out",
-                           "refit.yaml"], cwd=folder, capture_output=True, text=True)
+    done = _tool("fit", "battery.yaml", "--out",
+                           "refit.yaml", cwd=folder)
     assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
     assert f"capacity_ah: 6 Ah is more than the fitted pack holds ({holds:.2f} Ah" in done.stderr
     assert not (folder / "refit.yaml").exists()
@@ -216,8 +216,7 @@ def test_cells_edited_after_the_fit_are_bad_input(tmp_path: Path) -> None:
         .replace("nominal_voltage_v: 44.4 ", "nominal_voltage_v: 37.0 ", 1))
     for args in (["check", str(case)], ["fit", str(folder / "battery.yaml"), "--out",
                                         str(tmp_path / "refit.yaml")]):
-        done = subprocess.run([sys.executable, "-m", "tuflexperf", *args], capture_output=True,
-                              text=True)
+        done = _tool(*args)
         assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
         assert ("cells_in_series: 10, but the pack model in `fit:` was fitted with "
                 "cells_in_series 12" if args[0] == "check" else "short of the cut-off") \
@@ -240,17 +239,16 @@ def test_a_cutoff_below_the_runs_says_the_pack_model_is_extrapolated(tmp_path: P
                                                           "cutoff_voltage_per_cell_v: 3.0 ", 1))
     else:
         sets += ["--set", "battery.cutoff_voltage_per_cell_v=3.0"]
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", "check", case, *sets],
-                          capture_output=True, text=True)
+    done = _tool("check", case, *sets)
     assert done.returncode in (0, 1), done.stderr
     assert ("trim: the packs fly down to 40.66 V, below the discharge runs' cut-off 40.80 V: "
             "the pack model is extrapolated there") in done.stdout
     assert ("cutoff_voltage_per_cell_v 3 V: the discharge runs were measured down to their "
             "cut-off 40.80 V") in done.stdout
     if how == "file":
-        refit = subprocess.run([sys.executable, "-m", "tuflexperf", "fit",
+        refit = _tool("fit",
                                 str(folder / "battery.yaml"), "--out",
-                                str(tmp_path / "refit.yaml")], capture_output=True, text=True)
+                                str(tmp_path / "refit.yaml"))
         assert refit.returncode == 2 and "short of the cut-off 36.00 V" in refit.stderr
 
 
@@ -266,8 +264,8 @@ def test_a_discharge_run_whose_voltage_rises_is_bad_input(tmp_path: Path) -> Non
     frame = pd.read_csv(run)
     frame["voltage_v"] = np.linspace(40.0, 46.0, len(frame))
     frame.to_csv(run, index=False)
-    done = subprocess.run([sys.executable, "-m", "tuflexperf", "fit", "battery.yaml", "--out",
-                           "refit.yaml"], cwd=folder, capture_output=True, text=True)
+    done = _tool("fit", "battery.yaml", "--out",
+                           "refit.yaml", cwd=folder)
     assert done.returncode == 2, done.stderr
     assert "edf1_endurance_50.csv: its loaded voltage goes from" in done.stderr
     assert done.stderr.count("\n") == 1 and not (folder / "refit.yaml").exists()

@@ -11,7 +11,6 @@ Progress goes to stderr as a step counter; stdout stays for the result.
 
 from __future__ import annotations
 
-import math
 import os
 import re
 import sys
@@ -19,11 +18,11 @@ import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tuflexperf.errors import InputError
+from tuflexperf.report.footer import footer_texts, reserve, stamp
 
 if TYPE_CHECKING:
     from tuflexperf.io.case import Case
@@ -261,37 +260,55 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     if measured.comparisons:
         measured_pages["06_model_vs_measured"] = lambda: fg.model_vs_measured(case, measured)
     measured_pages["06b_thrust_band"] = lambda: af.thrust_band(case, analyses, measured)
-    _start_helper(_draw_pages, (list(measured_pages.items())[::-1], folder, kept), writers)
-
     named = sorted({**analysis_pages, **measured_pages}.items())  # the report's page order
     notes = measured.notes + analyses.notes
-    step.total = step.done + len(named) + 2
     from tuflexperf import __version__
+    from tuflexperf.report.data import inputs_digest
+    from tuflexperf.report.first_page import first_page, timestamp
 
+    # The page count is known now: every page's footer is written down for the writers,
+    # who stamp each page they draw from here on (and those drawn before) and render its PNG.
+    now = timestamp()  # one date for the first page and every footer
+    hashed = input_hashes(case, measured)
+    digest = inputs_digest([h for h, _, _ in hashed])
+    order = ["_title", *(name for name, _ in named), *(["_notes"] if notes else []), "_hashes"]
+    texts = {name: footer_texts(case, k, len(order), digest, __version__, now)
+             for k, name in enumerate(order, start=1)}
+    _write_footers(kept, texts)
+    _start_helper(_draw_pages, (list(measured_pages.items())[::-1], folder, kept), writers)
+    step.total = step.done + len(named) + 2
     # the title page carries the PDF's metadata: the assembled PDF keeps the first page's
     _save_pdf_pages(
-        [_title_page(case, measured, analyses)], kept / "_title.pdf",
+        [first_page(case, measured, analyses, now,
+                    notes_page=len(named) + 2 if notes else None)],
+        kept / "_title.pdf",
         metadata={"Title": f"Design review: {case.name}", "Creator": f"tuflexperf {__version__}"},
     )
+    _stamp_page(kept, "_title", [texts["_title"]]).close()
     step("title page")
     _draw_pages(named, folder, kept, step)  # what the writers have not claimed yet
     # the inputs' sha256 last, as the title page says, after what the report leaves out
     end = [fg.text_page("What this report leaves out, and why", [f"- {n}" for n in notes])
            ] if notes else []
-    end.append(_hash_page(case, measured))
+    end.append(_hash_page(case, measured, hashed))
+    for fig in end:
+        reserve(fig)
     _save_pdf_pages(end, kept / "_end.pdf")
+    _stamp_page(kept, "_end", [texts[n] for n in order[len(named) + 1:]]).close()
     for writer in writers:
         writer.join()
     # never a report without its figures: a page a writer did not finish is drawn here
     for part in folder.glob("*.part"):
         part.unlink()
     for name, draw in named:
-        if not (kept / f"{name}.pdf").is_file() or not (folder / f"{name}.png").is_file():
+        if not (kept / f"{name}.pdf").is_file():
             _draw_page(name, draw, folder, kept)
+        if not (kept / f"{name}.footed.pdf").is_file() or not (folder / f"{name}.png").is_file():
+            _finish_page(name, folder, kept, texts[name])
     raise_if_interrupted()
     pdf_path = folder / PDF_NAME
     page_count = _assemble_pdf(
-        [kept / "_title.pdf", *(kept / f"{name}.pdf" for name, _ in named), kept / "_end.pdf"],
+        [kept / f"{name}.footed.pdf" for name in ("_title", *(n for n, _ in named), "_end")],
         pdf_path,
     )
     step("review.pdf")
@@ -372,18 +389,22 @@ def _save_pdf_pages(figures: list[Any], path: Path,
     os.replace(staged, path)
 
 
-def rasterise_page(pdf_page: Path, png: Path) -> None:
-    """The first page of ``pdf_page`` as a PNG at :data:`PNG_DPI` (PDFium)."""
+def rasterise_page(pdf_page: Any, png: Path, index: int = 0) -> None:
+    """Page ``index`` of ``pdf_page`` (a path or an open pypdfium2 document) as a PNG at
+    :data:`PNG_DPI` (PDFium)."""
     import pypdfium2
     from PIL.PngImagePlugin import PngInfo
 
     from tuflexperf import __version__
 
-    document = pypdfium2.PdfDocument(pdf_page)
-    try:
-        image = document[0].render(scale=PNG_DPI / 72.0).to_pil()
-    finally:
-        document.close()
+    if isinstance(pdf_page, pypdfium2.PdfDocument):
+        image = pdf_page[index].render(scale=PNG_DPI / 72.0).to_pil()
+    else:
+        document = pypdfium2.PdfDocument(pdf_page)
+        try:
+            image = document[index].render(scale=PNG_DPI / 72.0).to_pil()
+        finally:
+            document.close()
     info = PngInfo()
     info.add_text("Software", f"tuflexperf {__version__}")  # whose file it is (SPEC 5)
     staged = png.with_name(png.name + ".part")
@@ -393,13 +414,67 @@ def rasterise_page(pdf_page: Path, png: Path) -> None:
 
 
 def _draw_page(name: str, draw: Callable[[], Any], folder: Path, kept: Path) -> None:
-    """One page drawn once: ``kept/NAME.pdf`` (vector), then ``folder/NAME.png`` from it."""
-    _save_pdf_pages([draw()], kept / f"{name}.pdf")
-    rasterise_page(kept / f"{name}.pdf", folder / f"{name}.png")
+    """One page drawn once: ``kept/NAME.pdf`` (vector), with the footer's strip kept free;
+    once the footers are known it is stamped and rendered (:func:`_finish_pages`)."""
+    fig = draw()
+    reserve(fig)
+    _save_pdf_pages([fig], kept / f"{name}.pdf")
+
+
+FOOTERS = "_footers.json"
+
+
+def _write_footers(kept: Path, texts: dict[str, Any]) -> None:
+    """Every page's footer (left, right), by page name, for the forked writers."""
+    import json
+
+    staged = kept / (FOOTERS + ".part")
+    staged.write_text(json.dumps(texts), encoding="utf-8")
+    os.replace(staged, kept / FOOTERS)  # never read half-written
+
+
+def _stamp_page(kept: Path, name: str, texts: list[Any]) -> Any:
+    """``kept/NAME.pdf`` with its footers stamped, as ``kept/NAME.footed.pdf``; returns the
+    stamped document (open: the caller closes it)."""
+    import pypdfium2
+
+    document = pypdfium2.PdfDocument(kept / f"{name}.pdf")
+    try:
+        stamp(document, [tuple(t) for t in texts])
+        staged = kept / f"{name}.footed.pdf.part"
+        document.save(staged)
+        os.replace(staged, kept / f"{name}.footed.pdf")
+    except BaseException:
+        document.close()
+        raise
+    return document
+
+
+def _finish_page(name: str, folder: Path, kept: Path, text: Any) -> None:
+    """A drawn page stamped with its footer, and its PNG rendered from the stamped page."""
+    document = _stamp_page(kept, name, [text])
+    try:
+        rasterise_page(document, folder / f"{name}.png")
+    finally:
+        document.close()
+
+
+def _finish_pages(names: list[str], folder: Path, kept: Path) -> None:
+    """Stamp and render each drawn page of ``names`` that this process claims first, once
+    the footers are known (before that: nothing)."""
+    import json
+
+    if not (kept / FOOTERS).is_file():
+        return
+    texts = json.loads((kept / FOOTERS).read_text(encoding="utf-8"))
+    for name in names:
+        if (kept / f"{name}.pdf").is_file() and _claim(kept, f"{name}.footer"):
+            _finish_page(name, folder, kept, texts[name])
 
 
 def _assemble_pdf(pages: list[Path], path: Path) -> int:
-    """The one-page PDFs put together in order (PDFium); returns the page count."""
+    """The PDFs (each page stamped with its footer) put together in order (PDFium); returns
+    the page count."""
     import pypdfium2
 
     document = pypdfium2.PdfDocument(pages[0])
@@ -428,15 +503,19 @@ def _claim(keep: Path, name: str) -> bool:
 
 def _draw_pages(named: list[tuple[str, Callable[[], Any]]], folder: Path, keep: Path,
                 step: Callable[[str], None] | None = None) -> None:
-    """Draw each page that this process claims (:func:`_draw_page`)."""
+    """Draw each page that this process claims (:func:`_draw_page`), then stamp and render
+    each drawn page it claims (:func:`_finish_pages`), as soon as the footers are known."""
     from tuflexperf.io.files import raise_if_interrupted
 
     for name, draw in named:
         raise_if_interrupted()
         if _claim(keep, name):
             _draw_page(name, draw, folder, keep)
+            _finish_pages([name], folder, keep)
         if step is not None:
             step(name)
+    raise_if_interrupted()
+    _finish_pages([name for name, _ in named], folder, keep)  # those drawn before the count
 
 
 def _start_helper(target: Callable[..., None], args: tuple[Any, ...],
@@ -451,102 +530,46 @@ def _start_helper(target: Callable[..., None], args: tuple[Any, ...],
     return start_helper(target, args, helpers)
 
 
-def _title_page(case: Any, measured: Any, analyses: Any) -> Any:
+def _hash_page(case: Any, measured: Any, hashed: list[tuple[str, str, str]]) -> Any:
     from tuflexperf.report import figures as fg
 
-    return fg.text_page(f"Design review: {case.name}", title_lines(case, measured, analyses),
-                        font_size=12.5)
-
-
-def _hash_page(case: Any, measured: Any) -> Any:
-    from tuflexperf.report import figures as fg
-
-    return fg.text_page("Inputs of this report (sha256)", hash_lines(case, measured))
-
-
-def _fmt(value: Any, unit: str = "", digits: int = 3) -> str:
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "not attainable"
-    return f"{value:.{digits}f}{(' ' + unit) if unit else ''}"
-
-
-def key_figures(analyses: Any) -> list[str]:
-    """The numbers a reviewer asks for first, from the analyses already run (no physics)."""
-    lines = []
-    t = analyses.takeoff
-    if t is not None:
-        lines.append(f"  stall speed          {_fmt(t.stall_speed_m_s, 'm/s', 2)} (TAS)")
-        lines.append(f"  lift-off speed       {_fmt(t.liftoff_speed_m_s, 'm/s', 2)} "
-                     f"({_fmt(t.liftoff_speed_eas_m_s, 'm/s', 2)} EAS)")
-        lines.append(f"  ground roll          {_fmt(t.ground_roll_m, 'm', 1)}; to the "
-                     f"{t.obstacle_height_m:g} m obstacle {_fmt(t.distance_to_obstacle_m, 'm', 1)}")
-    else:
-        import textwrap
-
-        note = textwrap.shorten(str(analyses.takeoff_note), 70, placeholder=" ...")
-        lines.append(f"  take-off             not attainable: {note}")
-    if analyses.trim is not None:
-        lines.append(f"  least trim throttle  {_fmt(analyses.trim.min_throttle)}")
-    if analyses.oei is not None:
-        worst = analyses.oei.critical
-        lines.append(f"  OEI least throttle   {_fmt(worst.min_throttle)} "
-                     f"({worst.dead_engine} dead)")
-    e = analyses.endurance_at_requirement
-    if e is not None:
-        lines.append(f"  flight endurance     {_fmt(e.flight_endurance_min, 'min', 1)} at "
-                     f"throttle {e.throttle:g}, {_fmt(e.airspeed_m_s, 'm/s', 1)}")
-    return lines
+    return fg.text_page("Inputs of this report (sha256)", hash_lines(case, measured, hashed))
 
 
 def title_lines(case: Any, measured: Any, analyses: Any) -> list[str]:
-    """The first page: verdicts with value, limit and margin, key figures, provenance, tool."""
-    from tuflexperf import __version__
-    from tuflexperf.report.data import provenance_class
+    """The first page's text (:mod:`tuflexperf.report.first_page`) without its colours:
+    verdicts with value, limit, margin, reason and caveats, key figures, provenance, tool."""
+    from tuflexperf.report.first_page import page_lines, plain_text, timestamp
 
-    verdicts = analyses.verdicts
-    failed = sum(not v.passed for v in verdicts)
-    now = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    verdict = ("no requirements stated" if not verdicts else "ALL REQUIREMENTS MET"
-               if not failed else f"{failed} OF {len(verdicts)} REQUIREMENTS NOT MET")
-    lines = [f"VERDICT: {verdict}", "",
-             f"  {'requirement':<26}{'value':>16}{'limit':>10}{'unit':>10}{'margin':>16}  verdict"]
-    for v in verdicts:
-        lines.append(f"  {v.name:<26}{_fmt(v.value):>16}{v.limit:>10g}{v.unit:>10}"
-                     f"{_fmt(v.margin):>16}  {'PASS' if v.passed else 'FAIL'}")
-    lines += ["", "KEY FIGURES", *key_figures(analyses), "", "INPUTS AND THEIR PROVENANCE"]
-    lines.append(f"  aircraft     {case.aircraft.name}, {case.aircraft.mass_kg:g} kg: "
-                 f"{provenance_class(case.aircraft_path)}")
-    lines.append(f"  propulsion   {case.propulsion.name}: "
-                 f"{provenance_class(case.propulsion_path)}")
-    if case.battery_path is not None:
-        lines.append(f"  battery      {provenance_class(case.battery_path)}")
-    if measured.source is not None:
-        lines.append(f"  test data    {measured.kind} {measured.source.name}: "
-                     f"{provenance_class(measured.source)}")
-    else:
-        lines.append("  test data    none (the thrust model is drawn alone)")
-    lines.append(f"  atmosphere   ISA {case.atmosphere.altitude_m:g} m, "
-                 f"dT {case.atmosphere.temperature_offset_k:+g} K, "
-                 f"rho = {case.density_kg_m3:.4f} kg/m\u00b3")
-    lines += ["", f"case {case.path}"]
-    if case.overrides:  # the figures are of the changed case, not of the files alone
-        lines.append("  with --set " + ", ".join(f"{k}={v:g}" for k, v in case.overrides))
-    lines += [f"tuflexperf {__version__}, {now}; "
-              "every input file with its sha256 on the last page"]
-    return lines
+    top, left, right = page_lines(case, measured, analyses, 150, timestamp())
+    return plain_text(top) + plain_text(left) + plain_text(right)
 
 
-def hash_lines(case: Any, measured: Any) -> list[str]:
-    """Every input of the report with its sha256 (the last page)."""
+def input_hashes(case: Any, measured: Any) -> list[tuple[str, str, str]]:
+    """(sha256, role, path as shown) of every input of the report, in the last page's order."""
     from tuflexperf.io.files import sha256_of
     from tuflexperf.report.data import input_files
 
-    lines = []
+    hashed = []
     root = case.path.parent
     for role, path in input_files(case, measured):
         try:
             shown = os.path.relpath(path, root)
         except ValueError:
             shown = str(path)
-        lines.append(f"  {sha256_of(path)}  {role:<13} {shown}")
+        hashed.append((sha256_of(path), role, shown))
+    return hashed
+
+
+def hash_lines(case: Any, measured: Any,
+               hashed: list[tuple[str, str, str]] | None = None) -> list[str]:
+    """Every input of the report with its sha256 (the last page), and how the footer's
+    short hash is made from them."""
+    from tuflexperf.report.data import inputs_digest
+
+    hashed = input_hashes(case, measured) if hashed is None else hashed
+    lines = [f"  {digest}  {role:<13} {shown}" for digest, role, shown in hashed]
+    lines += ["", f"inputs {inputs_digest([h for h, _, _ in hashed])} in every page's footer: "
+              "the first 8 hex digits of the sha256 of the hashes above, each followed by a "
+              "newline, in this order"]
     return lines

@@ -105,6 +105,9 @@ class Measured:
     drag_c1_c2: tuple[float, float] | None = None
     files: list[Path] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    # the measured data are not those the propulsion file was fitted to (provenance_notes):
+    # caveats of the first page as well as notes
+    provenance: list[str] = field(default_factory=list)
     # (run file, delay s, lag s) -> the model's balance force over that run [N]
     model_force: dict[tuple[str, float, float], np.ndarray | None] = field(
         default_factory=dict
@@ -213,7 +216,8 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
     """Measured points, one processed run, one sweep and two model comparisons."""
     source = find_measured_source(case, explicit)
     measured = Measured(source=source)
-    measured.notes.extend(provenance_notes(case, source))
+    measured.provenance = provenance_notes(case, source)
+    measured.notes.extend(measured.provenance)
     if source is None:
         measured.notes.append(
             "no measured data for this propulsion model (no --campaign, no source.input in "
@@ -616,3 +620,33 @@ def provenance_class(path: Path) -> str:
         if word in head:
             return word
     return "as given (no provenance stated)"
+
+
+CAVEAT_CLASSES = ("synthetic", "reconstructed", "estimated")
+
+
+def input_caveats(case: Case, measured: Measured) -> list[str]:
+    """The inputs' own caveats, in words, for the first page: each case file or measured
+    source whose header says it is synthetic, reconstructed or estimated
+    (:func:`provenance_class`), then the measured data that are not the fit's
+    (:func:`provenance_notes`, kept by :func:`load_measured`)."""
+    from tuflexperf.io.case import case_files
+
+    files = [(role, path) for role, path in case_files(case) if role != "discharge run"]
+    if measured.source is not None:
+        files.append(("test data", measured.source))
+    caveats = []
+    for role, path in files:
+        said = provenance_class(path)
+        if said in CAVEAT_CLASSES:
+            caveats.append(f"{role} {path.name}: {said} (its header says so), not measured: "
+                           "the verdicts above rest on it")
+    return caveats + list(getattr(measured, "provenance", []))
+
+
+def inputs_digest(hashes: list[str]) -> str:
+    """The inputs' short hash of the footer: the first 8 hex digits of the sha256 of the
+    inputs' sha256 (the last page's, in its order), one per line."""
+    import hashlib
+
+    return hashlib.sha256("".join(f"{h}\n" for h in hashes).encode("ascii")).hexdigest()[:8]
