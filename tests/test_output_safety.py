@@ -202,14 +202,19 @@ def _stage_new_output_interrupted(tmp_path: Path, monkeypatch) -> None:
         signal.signal(signal.SIGINT, previous)
 
 
-def test_an_interrupt_during_the_renames_keeps_the_earlier_output(tmp_path, monkeypatch):
+@pytest.mark.parametrize("exchange", [True, False])
+def test_an_interrupt_during_the_renames_keeps_the_earlier_output(tmp_path, monkeypatch,
+                                                                  exchange):
     """SIGINT a few ms after report's last page landed while the folders were renamed: the
     new output replaced the earlier one and the run still said "aborted" (outside audit).
-    Interrupted before the swap is done, the earlier output is put back."""
+    Interrupted before the swap is done, the earlier output is put back: after the one
+    exchange, or between the two renames where the file system has no exchange."""
+    from tuflexperf.io import swap
+
     with files.staged_directory(tmp_path / "out", "probe") as staging:
         (staging / "old.txt").write_text("earlier")
     before = _tree(tmp_path / "out")
-    real_replace = os.replace
+    real_replace, real_exchange = os.replace, swap.exchange
     calls = []
 
     def interrupted_replace(src, dst):
@@ -218,8 +223,20 @@ def test_an_interrupt_during_the_renames_keeps_the_earlier_output(tmp_path, monk
             os.kill(os.getpid(), signal.SIGINT)
         real_replace(src, dst)
 
-    monkeypatch.setattr(files.os, "replace", interrupted_replace)
+    def interrupted_exchange(a, b):
+        calls.append(Path(b).name)
+        done = real_exchange(a, b)
+        if len(calls) == 1:  # the new output is in: the interrupt lands right there
+            os.kill(os.getpid(), signal.SIGINT)
+        return done
+
+    if exchange:
+        monkeypatch.setattr(swap, "exchange", interrupted_exchange)
+    else:
+        monkeypatch.setattr(swap, "exchange", lambda a, b: False)
+        monkeypatch.setattr(files.os, "replace", interrupted_replace)
     _stage_new_output_interrupted(tmp_path, monkeypatch)
+    assert len(calls) == 2 if exchange else len(calls) == 4  # there, and back
     assert _tree(tmp_path / "out") == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no .old-*, no .tmp-*
 
@@ -250,7 +267,7 @@ def test_an_interrupt_after_the_swap_leaves_the_new_output_whole_and_the_run_don
         assert files.output_committed() and not files.interrupted()
     finally:
         signal.signal(signal.SIGINT, previous)
-    assert removed and removed[0].startswith(".out.old-")
+    assert removed and removed[0].startswith((".out.old-", ".out.tmp-"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no .old-*, no .tmp-*
     assert _tree(tmp_path / "out").keys() == {"new.txt", files.MARKER}
 

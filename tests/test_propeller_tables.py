@@ -191,3 +191,62 @@ def test_report_draws_a_propeller_manifest_as_measured_points(tmp_path: Path) ->
     table = read_propeller_tables(manifest)
     np.testing.assert_array_equal(measured.points.thrust_n, table.thrust_n)
     assert "propeller tables" in measured.notes[0]
+
+
+# Each was accepted silently (a negative J flipped the coefficients' signs and the fit went
+# on) or named the manifest, not the table (a NaN): issue 46
+_APC_ROW_2000 = ("         6.0        0.32      0.5326      0.1046      0.0622       0.004"
+                 "       0.126       0.133")
+
+
+@pytest.mark.parametrize(("row", "after", "column"), [
+    (_APC_ROW_2000.replace("6.0 ", "-6.0 ", 1), 0, "V (mph)"),
+    (_APC_ROW_2000.replace("0.32", "-0.32", 1), 0, "J"),
+    (_APC_ROW_2000.replace("0.32", "0.90", 1), 1, "J"),  # then 0.63 follows: J falls
+    (_APC_ROW_2000.replace("0.133", "nan", 1), 0, "Thrust (Lbf)"),
+    (_APC_ROW_2000.replace("0.32", "nan", 1), 0, "J"),
+])
+def test_an_apc_row_with_a_bad_sign_order_or_nan_is_refused_by_line_and_column(
+        tmp_path: Path, row: str, after: int, column: str) -> None:
+    line = APC_10X7E.splitlines().index(_APC_ROW_2000) + 1 + after
+    manifest = _manifest(tmp_path)
+    table = tmp_path / "PER3_10x7E.dat"
+    text = APC_10X7E.replace(_APC_ROW_2000, row)
+    assert text != APC_10X7E
+    table.write_text(text)
+    with pytest.raises(InputError) as caught:
+        read_apc_per3(table)
+    assert str(caught.value).startswith(f"{table}: line {line}: column {column}: ")
+    result = runner.invoke(app, ["fit", str(manifest), "--out", str(tmp_path / "o.yaml")])
+    assert result.exit_code == 2
+    assert f"PER3_10x7E.dat: line {line}: column {column}" in result.stderr
+    assert not (tmp_path / "o.yaml").exists()
+
+
+@pytest.mark.parametrize(("row", "line", "column"), [
+    ("-0.162   0.0936   0.0465   0.327", 2, "J"),
+    ("0.262   0.0936   0.0465   0.327", 3, "J"),  # then 0.200: J falls
+    ("0.162   nan   0.0465   0.327", 2, "CT"),
+    ("inf   0.0936   0.0465   0.327", 2, "J"),
+])
+def test_a_uiuc_row_with_a_bad_sign_order_or_nan_is_refused_by_line_and_column(
+        tmp_path: Path, row: str, line: int, column: str) -> None:
+    table = tmp_path / "apcsf_9x4.7_kt1033_4008.txt"
+    table.write_text(UIUC_9X47_4008.replace("0.162   0.0936   0.0465   0.327", row))
+    with pytest.raises(InputError) as caught:
+        read_uiuc(table, diameter_m=9 * 0.0254, rpm=4008, density_kg_m3=1.225)
+    assert str(caught.value).startswith(f"{table}: line {line}: column {column}: ")
+
+
+def test_line_numbers_count_blank_lines(tmp_path: Path) -> None:
+    table = tmp_path / "t.txt"
+    table.write_text("J CT CP eta\n\n0.1 0.09 0.04 0.3\n\n0.05 0.09 0.04 0.3\n")
+    with pytest.raises(InputError, match=r"t\.txt: line 5: column J: advance ratio 0.05"):
+        read_uiuc(table, diameter_m=0.2, rpm=4000, density_kg_m3=1.225)
+
+
+def test_j_starts_again_in_each_rpm_block(tmp_path: Path) -> None:
+    """Each block of an APC file runs from J = 0 again: no fall across a block's start."""
+    table = tmp_path / "PER3_10x7E.dat"
+    table.write_text(APC_10X7E)
+    assert len(read_apc_per3(table)) == 3

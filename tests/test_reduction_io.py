@@ -259,7 +259,7 @@ def test_a_compressed_run_that_unpacks_beyond_the_cap_is_refused(tmp_path, monke
     import gzip
 
     from tuflexperf.errors import InputError
-    from tuflexperf.io import files
+    from tuflexperf.io import inputs
     from tuflexperf.io.runs import read_run
 
     path = tmp_path / "bomb.csv.gz"
@@ -267,7 +267,7 @@ def test_a_compressed_run_that_unpacks_beyond_the_cap_is_refused(tmp_path, monke
         handle.write(b"time_s,throttle,airspeed_m_s,force_n\n")
         handle.write(b"".join(b"%d,1,1,1\n" % i for i in range(200_000)))
     assert read_run(path).n_samples == 200_000  # within the cap: read as before
-    monkeypatch.setattr(files, "MAX_RUN_BYTES", 1 << 20)
+    monkeypatch.setattr(inputs, "MAX_RUN_BYTES", 1 << 20)
     with pytest.raises(InputError, match="unpacks to more than"):
         read_run(path)
 

@@ -251,28 +251,32 @@ def test_percent_throttle_file_gives_the_same_answers(tmp_path):
     )
 
 
-def test_least_throttle_solver_on_random_surfaces_equals_exact_roots():
-    """Seeded random poly22-like surfaces, convex and concave in throttle, against closed form."""
-    from tuflexperf.analysis.level_flight import least_throttle_solver
+def test_least_throttle_on_random_surfaces_equals_exact_roots():
+    """Seeded random poly22 surfaces, convex and concave in throttle, against closed form:
+    each surface one row of one batch (the code trim and OEI fly on one row)."""
+    from tests.verification.test_least_throttle_and_study import made_up_rows
+    from tuflexperf.models.thrust import POLY22_TERMS
 
     rng = np.random.default_rng(20261122)
     speeds = airspeed_grid(10.0, 45.0)
-    checked = 0
+    surfaces = []
     for _ in range(60):
         p00, p10, p01 = rng.uniform(-1, 1), rng.uniform(0, 60), rng.uniform(-0.3, 0.0)
         p20, p11, p02 = rng.uniform(-40, 60), rng.uniform(-0.8, 0.1), rng.uniform(-2e-3, 2e-3)
-        d0 = rng.uniform(2.0, 40.0)
-
-        def drag(v, d0=d0):
-            return d0 * (0.5 + (v / 30.0) ** 2)
-
-        def excess(x, v, c=(p00, p10, p01, p20, p11, p02), drag=drag):
-            return c[0] + c[1] * x + c[2] * v + c[3] * x * x + c[4] * x * v + c[5] * v * v - drag(v)
-
-        got = least_throttle_solver(excess)(speeds)
-        for v, x in zip(speeds, got, strict=True):
+        d0 = rng.uniform(2.0, 40.0)  # drag d0 ((V/30)^2 + (30/V)^2) / 2 [N], least d0 at 30 m/s
+        surfaces.append(((p00, p10, p01, p20, p11, p02), d0 / 1800.0, 450.0 * d0))
+    coefficients = {t: np.array([[s[0][i]] for s in surfaces])
+                    for i, t in enumerate(("p00", "p10", "p01", "p20", "p11", "p02"))}
+    assert set(coefficients) == set(POLY22_TERMS)
+    rows = made_up_rows(coefficients, np.array([[s[1]] for s in surfaces]),
+                        np.array([[s[2]] for s in surfaces]))
+    got = rows.least_throttle(speeds[None, :])
+    checked = 0
+    for (c, parasite, induced), row in zip(surfaces, got, strict=True):
+        for v, x in zip(speeds, row, strict=True):
+            drag = parasite * v * v + induced / (v * v)
             expected = _exact_least_throttle(
-                p20, p10 + p11 * v, p00 + p01 * v + p02 * v * v - drag(v)
+                c[3], c[1] + c[4] * v, c[0] + c[2] * v + c[5] * v * v - drag
             )
             assert math.isnan(x) == math.isnan(expected), (v, x, expected)
             if not math.isnan(expected):

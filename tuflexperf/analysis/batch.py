@@ -51,11 +51,13 @@ from numpy.typing import NDArray
 
 from tuflexperf.analysis.airborne import obstacle_height_of
 from tuflexperf.analysis.attainable import stall_margin_of
+from tuflexperf.analysis.batch_kernels import fan_power_rows
 from tuflexperf.analysis.batch_model import BatchModel
 from tuflexperf.analysis.level_flight import airspeed_grid, airspeed_grids
 from tuflexperf.analysis.pack_limits import (
     pack_rows,
     pack_side,
+    power_limit_w,
     sagging_packs,
 )
 from tuflexperf.analysis.verdict import requirement_met
@@ -335,7 +337,8 @@ class BatchEvaluator:
                 beyond[requirement.name] = airborne_beyond(roll)
             elif requirement.block == "envelope":
                 value = model.trim_max_throttle(grid, self._candidates()[0])
-                if self._packs is not None and not model.packs_never_bind(
+                if self._packs is not None and not packs_surely_never_bind(
+                        model, grid, self._packs, battery, value) and not model.packs_never_bind(
                         grid, self._packs, battery, value):
                     value = model.over_grid_on_packs(grid, None, "windmilling", self._packs,
                                                      battery)
@@ -343,8 +346,10 @@ class BatchEvaluator:
             elif requirement.block == "oei":
                 mode = self.case.requirements.oei.dead_engine
                 value = model.oei_min_throttle(grid, mode, self._candidates()[1])
-                if self._packs is not None and not model.packs_never_bind(
-                        grid, self._packs, battery, np.ones(size)):
+                if self._packs is not None and not packs_surely_never_bind(
+                        model, grid, self._packs, battery, np.ones(size)) \
+                        and not model.packs_never_bind(grid, self._packs, battery,
+                                                       np.ones(size)):
                     worst = np.full(size, -np.inf)
                     for dead in range(len(self.case.propulsion.engines)):
                         worst = np.maximum(worst, model.over_grid_on_packs(
@@ -405,7 +410,9 @@ class BatchEvaluator:
 
         def beside(index: int) -> Array:
             near = np.arange(index - _CANDIDATE_HALF_WIDTH, index + _CANDIDATE_HALF_WIDTH + 1)
-            return np.unique(np.clip(np.concatenate([near, [0, last]]), 0, last))
+            # sorted(set()), not np.unique: numpy >= 2.3's unique imports numpy.ma (~20 ms)
+            return np.array(sorted({int(i) for i in np.clip(np.concatenate([near, [0, last]]),
+                                                                0, last)}), dtype=np.intp)
 
         terms = model._grid_terms(grid)
         above = model._flyable(grid)[0]
@@ -519,3 +526,56 @@ class BatchEvaluator:
         return airspeed_grids(low, high), none
 
 
+
+
+_SURE_MARGIN = 1e-6
+"""Relative slack of :func:`packs_surely_never_bind`'s bound: far above its rounding."""
+
+
+def packs_surely_never_bind(model: BatchModel, grid: Array, packs: Any,
+                            battery: dict[str, Array], top_throttle: Array) -> bool:
+    """True when one bound shared by every row already shows what
+    ``BatchModel.packs_never_bind`` would find row by row: each fan's power [W] over the
+    grid and throttles in ``[0, max top_throttle]`` at the batch's densest air, within
+    every row's least pack power limit. False means "not sure" (ask the row-by-row test),
+    so the answer is the same, for a fraction of its work on ``(B, K)`` arrays.
+
+    The per-fan power scales with ``rho / rho_ref`` (a positive factor, rising with the
+    density) on a surface shared by the rows (nominal power coefficients); the maximum of a
+    quadratic in throttle over ``[0, T]`` is at the ends or the vertex, and ``[0, T]``
+    holds every row's ``[0, top]``.
+    """
+    if model.propulsion.reference_voltage_v is not None or np.shape(grid)[0] != 1:
+        return False
+    limit = np.asarray(power_limit_w(packs, battery), dtype=float)
+    tops = np.nan_to_num(np.asarray(top_throttle, dtype=float))
+    if tops.size == 0 or float(np.min(tops)) < 0.0:  # a throttle below idle: row by row
+        return False
+    top = float(np.max(tops))
+    densest = float(np.max(np.asarray(model.density, dtype=float)))
+    if not (limit.size and np.isfinite(densest) and densest > 0.0 and np.isfinite(top)):
+        return False
+    shared = _DensestAir(model.propulsion, densest)
+    engines = model.propulsion.engines if packs.own_surfaces else (None,)
+    least_limit = float(np.min(limit)) * (1.0 - 1e-9)
+    for engine in engines:
+        p0, ph, p1 = (np.asarray(fan_power_rows(packs, shared, x, grid, engine), dtype=float)
+                      for x in (0.0, 0.5 * top, top))
+        curvature = 2.0 * (p1 - 2.0 * ph + p0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            vertex = np.clip(0.5 - (p1 - p0) / (2.0 * curvature), 0.0, 1.0)
+        vertex = np.where(np.isfinite(vertex), vertex, 0.0)
+        pv = np.asarray(fan_power_rows(packs, shared, vertex * top, grid, engine), dtype=float)
+        most = float(np.max(np.maximum(np.maximum(p0, p1), np.maximum(pv, 0.0))))
+        if not (np.isfinite(most) and most * (1.0 + _SURE_MARGIN) + _SURE_MARGIN
+                <= least_limit):
+            return False
+    return True
+
+
+@dataclass(frozen=True)
+class _DensestAir:
+    """The rows' propulsion at one density [kg/m^3], for :func:`fan_power_rows`."""
+
+    propulsion: Propulsion
+    density: float

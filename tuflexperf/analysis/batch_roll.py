@@ -390,6 +390,11 @@ class GroundRollRows:
         for engine in prop.engines if packs.own_surfaces else (None,):
             power = np.maximum(fan_power_rows(packs, self, 1.0, speeds, engine), 0.0)
             power = power * np.ones_like(speeds)
+            if prop.reference_voltage_v is None and packs.params.resistance_ohm > 0.0 \
+                    and np.all(circuit > 0.0):
+                # at a fixed power the loaded voltage falls and the current rises with the
+                # power (each rounded step monotone too): a row's most power decides both
+                power = np.max(power, axis=1, keepdims=True)
             charge = np.zeros((self.size, 1))
             for _ in range(2):
                 _, current, _ = point = operating_point(

@@ -1,8 +1,8 @@
 """Predicted against flown: the case's level-flight power at each flown airspeed bin.
 
 The predicted side is the project's own models, composed, no new physics: the least level
-throttle (:func:`tuflexperf.analysis.level_flight.least_throttle_solver` on
-``total_thrust_n - level_flight_drag_n``) at the bin's true airspeed, the log's density and
+throttle (:meth:`tuflexperf.analysis.level_flight.LevelFlightRows.least_throttle`, the
+one ``trim`` flies) at the bin's true airspeed, the log's density and
 the case's mass (or ``--mass``), and the electrical power of that throttle from the
 propulsion file's power surfaces (:func:`tuflexperf.models.powertrain.power_surfaces`) or,
 without them, the battery file's fan-power law, as ``endurance`` uses them.
@@ -77,14 +77,12 @@ def compare_with_case(case: Any, log: FlightLog, flown: FlownResult,
     mass_kg : float or None
         Mass [kg]; ``None`` takes the case's.
     """
-    from tuflexperf.analysis.level_flight import least_throttle_solver
+    from tuflexperf.analysis.level_flight import LevelFlightRows
     from tuflexperf.models.aircraft import (
-        level_flight_drag_n,
         stall_speed_m_s,
         true_airspeed_m_s,
     )
     from tuflexperf.models.powertrain import power_surfaces
-    from tuflexperf.models.thrust import total_thrust_n
 
     notes: list[str] = []
     mass = float(mass_kg if mass_kg is not None else case.aircraft.mass_kg)
@@ -92,10 +90,6 @@ def compare_with_case(case: Any, log: FlightLog, flown: FlownResult,
     rho, rho_source = log_density(log, flown, case.density_kg_m3)
     propulsion = case.propulsion
     n = len(propulsion.engines)
-
-    def excess(throttle: Any, airspeed: Any) -> Any:
-        return (total_thrust_n(propulsion, throttle, airspeed, rho)
-                - level_flight_drag_n(aircraft, airspeed, rho))
 
     surfaces = power_surfaces(propulsion, rho)
     if surfaces is not None:
@@ -128,7 +122,8 @@ def compare_with_case(case: Any, log: FlightLog, flown: FlownResult,
                      "the all-flight bins")
     eas = np.array([b.airspeed_m_s for b in bins], dtype=float)
     v_true = np.asarray(true_airspeed_m_s(eas, rho), dtype=float)
-    throttle = least_throttle_solver(excess)(v_true) if eas.size else eas
+    rows = LevelFlightRows(aircraft, propulsion, rho, None, 1)
+    throttle = rows.least_throttle(v_true[None, :])[0] if eas.size else eas
     # SPEC 3: stall bounds everything; below it the model has no level flight to offer
     stall = float(stall_speed_m_s(aircraft, rho))
     below = v_true < stall

@@ -15,50 +15,27 @@ import numpy as np
 
 from tuflexperf.analysis.attainable import (
     AttainableRange,
-    attainable_range,
-    jet_ceiling_m_s,
     jet_ceiling_note,
-    least_airspeed_m_s,
-    stall_bounded,
     stall_margin_of,
 )
-from tuflexperf.analysis.cache import BoundedCache, fingerprint
-from tuflexperf.analysis.level_flight import (
-    LeastThrottleSolver,
-    ThrottleSweep,
-    airspeed_grid,
-    least_throttle_solver,
+from tuflexperf.analysis.level_flight import ThrottleSweep, airspeed_grid
+from tuflexperf.analysis.trim import (
+    envelope_of,
+    extrapolation_note,
+    level_flight_over,
+    level_flight_rows,
 )
-from tuflexperf.analysis.pack_limits import with_packs
-from tuflexperf.analysis.trim import envelope_of, extrapolation_note
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
-from tuflexperf.models.aircraft import level_flight_drag_n, stall_speed_m_s
+from tuflexperf.models.aircraft import stall_speed_m_s
 from tuflexperf.models.thrust import (
     DeadEngineMode,
     Propulsion,
     density_ratio,
     engine_thrust_n,
-    total_thrust_n,
     unlapsed_density_warning,
     windmilling_thrust_n,
 )
-
-_cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
-
-
-def oei_solver(case: Case, dead_engine: int, mode: DeadEngineMode) -> LeastThrottleSolver:
-    """Least-throttle solver with engine ``dead_engine`` out, built once per case."""
-    aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
-
-    def build() -> LeastThrottleSolver:
-        def excess(throttle: Any, airspeed: Any) -> Any:
-            thrust = total_thrust_n(propulsion, throttle, airspeed, rho, dead_engine, mode)
-            return thrust - level_flight_drag_n(aircraft, airspeed, rho)
-
-        return least_throttle_solver(excess)
-
-    return _cache.get(fingerprint(aircraft, propulsion, rho, dead_engine, mode), build)
 
 
 @dataclass(frozen=True)
@@ -134,24 +111,13 @@ def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
     refuse_one_engine(case)
     if mode is None:
         mode = case.requirements.oei.dead_engine if case.requirements.oei else "windmilling"
-    v_min, v_max = envelope_of(case)
-    speeds = airspeed_grid(v_min, v_max)
-    least = least_airspeed_m_s(case)
-    aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
-
+    speeds = airspeed_grid(*envelope_of(case))
+    propulsion, rho = case.propulsion, case.density_kg_m3
+    rows, grid = level_flight_rows(case), speeds[None, :]
     cases, pack_notes = [], []
     for index, engine in enumerate(propulsion.engines):
-        throttle, reasons = stall_bounded(speeds, oei_solver(case, index, mode)(speeds), least,
-                                          case)
-
-        def full_throttle_excess(v: np.ndarray, dead: int = index) -> np.ndarray:
-            thrust = total_thrust_n(propulsion, 1.0, v, rho, dead, mode)
-            return thrust - level_flight_drag_n(aircraft, v, rho)
-
-        attainable = attainable_range(full_throttle_excess, least, v_min,
-                                      min(v_max, jet_ceiling_m_s(case)))
-        throttle, reasons, attainable, notes = with_packs(
-            case, f"OEI ({engine.name} dead)", speeds, throttle, reasons, attainable, index, mode)
+        throttle, reasons, attainable, notes = level_flight_over(
+            case, rows, grid, f"OEI ({engine.name} dead)", index, mode)
         pack_notes.extend(notes)
         cases.append(DeadEngineCase(speeds, throttle, engine.name, reasons, attainable))
     extrapolated, warnings = extrapolation_note(case, speeds)
@@ -162,7 +128,7 @@ def solve_oei(case: Case, mode: DeadEngineMode | None = None) -> OeiResult:
         warnings.append(density_note)
     if mode == "windmilling":
         warnings.extend(windmilling_notes(propulsion, rho))
-    stall = float(stall_speed_m_s(aircraft, rho))
+    stall = float(stall_speed_m_s(case.aircraft, rho))
     return OeiResult(mode, tuple(cases), extrapolated, tuple(warnings), stall,
                      stall_margin_of(case))
 

@@ -21,24 +21,17 @@ from tuflexperf.analysis.attainable import (
     stall_bounded,
     stall_margin_of,
 )
-from tuflexperf.analysis.cache import BoundedCache, fingerprint
-from tuflexperf.analysis.level_flight import (
-    LeastThrottleSolver,
-    ThrottleSweep,
-    airspeed_grid,
-    least_throttle_solver,
-)
+from tuflexperf.analysis.level_flight import LevelFlightRows, ThrottleSweep, airspeed_grid
 from tuflexperf.analysis.pack_limits import with_packs
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import MAX_AIRSPEED_M_S, level_flight_drag_n, stall_speed_m_s
 from tuflexperf.models.thrust import (
+    DeadEngineMode,
     outside_tested_range,
     total_thrust_n,
     unlapsed_density_warning,
 )
-
-_cache: BoundedCache[LeastThrottleSolver] = BoundedCache()
 
 
 def envelope_of(case: Case, density_kg_m3: float | None = None) -> tuple[float, float]:
@@ -78,19 +71,11 @@ def extrapolation_note(case: Case, airspeeds_m_s: np.ndarray) -> tuple[bool, lis
     ]
 
 
-def trim_solver(case: Case) -> LeastThrottleSolver:
-    """Least-throttle solver for level flight on all engines, built once per case."""
-    aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
-
-    def build() -> LeastThrottleSolver:
-        def excess(throttle: Any, airspeed: Any) -> Any:
-            return total_thrust_n(propulsion, throttle, airspeed, rho) - level_flight_drag_n(
-                aircraft, airspeed, rho
-            )
-
-        return least_throttle_solver(excess)
-
-    return _cache.get(fingerprint(aircraft, propulsion, rho), build)
+def level_flight_rows(case: Case) -> LevelFlightRows:
+    """The case as one row of :class:`LevelFlightRows`: the batch's least level-flight
+    throttle, which ``--samples``, ``sweep`` and ``margins`` run on many rows."""
+    return LevelFlightRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1,
+                           stall_margin_of(case))
 
 
 @dataclass(frozen=True)
@@ -137,30 +122,58 @@ class TrimResult(ThrottleSweep):
         }
 
 
-def solve_trim(case: Case) -> TrimResult:
-    """Least level-flight throttle at every airspeed of the case's envelope grid."""
-    v_min, v_max = envelope_of(case)
-    speeds = airspeed_grid(v_min, v_max)
+def level_flight_over(case: Case, rows: LevelFlightRows, grid: np.ndarray, what: str,
+                      dead: int | None = None, mode: DeadEngineMode = "windmilling"
+                      ) -> tuple[np.ndarray, tuple[str | None, ...], AttainableRange, list[str]]:
+    """Level flight over the case's envelope grid, all engines (``dead`` None) or one dead.
+
+    Parameters
+    ----------
+    rows : LevelFlightRows
+        The case as one row (:func:`level_flight_rows`).
+    grid : ndarray ``(1, K)``
+        The envelope's airspeeds [m/s] (:func:`airspeed_grid`), the same object for every
+        dead engine (the engines' thrusts there are computed once).
+    what : str
+        What the pack notes call it (``trim``, ``OEI (fan 1 dead)``).
+    dead, mode
+        The inoperative engine and its drag (``windmilling`` or ``zero``).
+
+    Returns
+    -------
+    throttle, reasons, attainable, notes
+        The least throttle per airspeed [fraction] (NaN where not attainable, with the
+        reason), the exact attainable range [m/s] and the packs' notes
+        (:func:`~tuflexperf.analysis.pack_limits.with_packs`).
+    """
+    speeds = grid[0]
     least = least_airspeed_m_s(case)
-    throttle, reasons = stall_bounded(speeds, trim_solver(case)(speeds), least, case)
-    extrapolated, warnings = extrapolation_note(case, speeds)
-    stall = float(stall_speed_m_s(case.aircraft, case.density_kg_m3))
+    throttle = rows.least_throttle(grid, dead, mode, rows._grid_terms(grid))[0]
+    throttle, reasons = stall_bounded(speeds, throttle, least, case)
     aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
 
     def full_throttle_excess(v: np.ndarray) -> np.ndarray:
-        thrust = total_thrust_n(propulsion, 1.0, v, rho)
+        thrust = total_thrust_n(propulsion, 1.0, v, rho, dead, mode)
         return thrust - level_flight_drag_n(aircraft, v, rho)
 
-    attainable = attainable_range(full_throttle_excess, least, v_min,
-                                  min(v_max, jet_ceiling_m_s(case)))
-    warnings.extend(jet_ceiling_note(case, speeds))
+    # the grid's ends are the envelope's bounds exactly (airspeed_grid)
+    attainable = attainable_range(full_throttle_excess, least, float(speeds[0]),
+                                  min(float(speeds[-1]), jet_ceiling_m_s(case)))
+    return with_packs(case, what, speeds, throttle, reasons, attainable, dead, mode)
 
-    throttle, reasons, attainable, notes = with_packs(case, "trim", speeds, throttle, reasons,
-                                                      attainable)
+
+def solve_trim(case: Case) -> TrimResult:
+    """Least level-flight throttle at every airspeed of the case's envelope grid."""
+    speeds = airspeed_grid(*envelope_of(case))
+    throttle, reasons, attainable, notes = level_flight_over(
+        case, level_flight_rows(case), speeds[None, :], "trim")
+    extrapolated, warnings = extrapolation_note(case, speeds)
+    warnings.extend(jet_ceiling_note(case, speeds))
     warnings.extend(notes)
-    density_note = unlapsed_density_warning(propulsion, rho)
+    density_note = unlapsed_density_warning(case.propulsion, case.density_kg_m3)
     if density_note:
         warnings.append(density_note)
+    stall = float(stall_speed_m_s(case.aircraft, case.density_kg_m3))
     return TrimResult(
         speeds, throttle, stall, extrapolated, tuple(warnings), stall_margin_of(case), reasons,
         attainable,

@@ -44,6 +44,11 @@ from tuflexperf.analysis.batch import BatchEvaluator, BatchResult
 from tuflexperf.analysis.batch_kernels import nominal_engines
 from tuflexperf.analysis.cache import file_key, fingerprint
 from tuflexperf.analysis.probability import normal_logcdf, normal_ppf_of_log
+from tuflexperf.analysis.runtime import (
+    earlier_objects_frozen,
+    freed_arrays_kept,
+    one_blas_thread,
+)
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import MAX_SAMPLES, Case, UncertaintySchema
 from tuflexperf.io.dotted import value_bounds
@@ -501,12 +506,13 @@ def run_samples(
     ----------
     Hanson & Beard (2010), NASA/TP-2010-216447 (Monte Carlo requirement verification).
     """
-    parts = run_chunks(
-        evaluate_batch,
-        [(case, plan, chunks) for chunks in batches(plan)],
-        workers,
-        dask_address,
-    )
+    with earlier_objects_frozen(), freed_arrays_kept(), one_blas_thread():
+        parts = run_chunks(
+            evaluate_batch,
+            [(case, plan, chunks) for chunks in batches(plan)],
+            workers,
+            dask_address,
+        )
     names = [k.split(":", 1)[1] for k in parts[0] if k.startswith("value:")]
     values = {n: np.concatenate([p[f"value:{n}"] for p in parts]) for n in names}
     limits = {n: np.concatenate([p[f"limit:{n}"] for p in parts]) for n in names}

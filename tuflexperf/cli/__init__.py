@@ -28,7 +28,7 @@ from tuflexperf.cli.inputs import load_case_with, parse_sets
 from tuflexperf.commands_flightlog import flightlog_command
 from tuflexperf.messages import one_line
 
-__all__ = ["app", "load_case_with", "main", "parse_sets"]
+__all__ = ["app", "load_case_with", "main", "one_line", "parse_sets"]
 
 class _HelpWithoutType:
     """``-h`` is a flag: its help row shows no value type (it showed ``<bool>``)."""

@@ -16,19 +16,24 @@ from typing import Any
 import numpy as np
 import typer
 
+from tuflexperf.io.inputs import path_text
+
 
 def _json_default(value: Any) -> Any:
     if hasattr(value, "tolist"):
         return value.tolist()
     if isinstance(value, Path):
-        return str(value)
+        return path_text(value)
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
 
 def _clean(value: Any) -> Any:
-    """NaN/inf become null so the JSON stays standard."""
+    """NaN/inf become null and a file name's bytes that are no UTF-8 ``\\xfc``, so the JSON
+    stays standard (a lone surrogate is no Unicode text)."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
+    if isinstance(value, str):
+        return path_text(value)
     if isinstance(value, dict):
         return {k: _clean(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):

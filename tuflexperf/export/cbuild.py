@@ -11,11 +11,11 @@ import os
 import shutil
 import signal
 import subprocess
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
 from tuflexperf.export.c_code import DELAY_CAPACITY
+from tuflexperf.io import swap
 
 #: Stricter than the contract's ``-std=c99 -Wall -Werror``: the generated code must pass these.
 STRICT_CFLAGS: tuple[str, ...] = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2")
@@ -61,7 +61,7 @@ def compile_shared(
     library = Path(library)
     command = [compiler, *cflags, "-shared", "-fPIC", "-o", str(library)]
     command += [str(s) for s in sources] + ["-lm"]
-    with tempfile.TemporaryDirectory() as scratch:
+    with swap.scratch("export") as scratch:
         done = run_compiler(command, scratch)
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed:\n{done.stdout}{done.stderr}")

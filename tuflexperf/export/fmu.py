@@ -30,7 +30,6 @@ import io
 import os
 import platform
 import shutil
-import tempfile
 import zipfile
 from pathlib import Path
 from xml.sax.saxutils import escape, quoteattr
@@ -44,6 +43,7 @@ from tuflexperf.export.model import (
     model_notes,
     xml_comment,
 )
+from tuflexperf.io import swap
 
 FMU_NAME = "tfp_thrust.fmu"
 MODEL_IDENTIFIER = "tfp_thrust"
@@ -495,7 +495,7 @@ def build_fmu(model: ExportModel, target: Path) -> Path:
     here = Path(__file__).resolve().parent / "fmi2"
     for name in FMI_HEADERS:
         files[f"sources/{name}"] = (here / name).read_bytes()
-    with tempfile.TemporaryDirectory() as tmp:
+    with swap.scratch("export") as tmp:
         build = Path(tmp)
         for name, data in files.items():
             if name.startswith("sources/"):

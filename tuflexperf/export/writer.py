@@ -83,9 +83,9 @@ def _save_function(function: Any, path: Path) -> None:
     """``function.save`` to ``path``, by way of a plain temporary name: CasADi opens the file
     itself, and a path of bytes that are no UTF-8 reached it as '' (a traceback; outside
     audit)."""
-    import tempfile
+    from tuflexperf.io import swap
 
-    with tempfile.TemporaryDirectory() as scratch:
+    with swap.scratch("export") as scratch:
         plain = Path(scratch) / "function.casadi"
         function.save(str(plain))
         path.write_bytes(plain.read_bytes())

@@ -11,92 +11,48 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import hashlib
 import json
 import os
 import signal
 import stat
+import sys
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
 from tuflexperf.errors import InputError
-
-MARKER = ".tuflexperf-output.json"  # written into every folder a command writes whole
-
-
-def sha256_of(path: Path | str) -> str:
-    """Hex sha256 of a file's bytes, read in 1 MiB chunks."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for chunk in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
-
-
-# fit's YAML ends with this comment and the sha256 of every byte before it, so a later fit
-# replaces it only as written: a hand edit (a tweaked coefficient, a note) is the user's work
-SEAL = "# sha256 of the lines above: "
-
-
-def sealed(text: str) -> str:
-    """``text`` (YAML) with a last comment line holding the sha256 of the text before it."""
-    body = text if text.endswith("\n") else text + "\n"
-    return f"{body}{SEAL}{hashlib.sha256(body.encode('utf-8')).hexdigest()}\n"
-
-
-def seal_intact(data: bytes) -> bool:
-    """Whether ``data`` ends with a seal (see :func:`sealed`) matching what precedes it."""
-    if not data.endswith(b"\n"):
-        return False
-    cut = data.rfind(b"\n", 0, len(data) - 1) + 1
-    digest = hashlib.sha256(data[:cut]).hexdigest()
-    return data[cut:-1] == f"{SEAL}{digest}".encode()
-
-
-MAX_YAML_BYTES = 16 << 20  # a case, aircraft, propulsion, battery or mission file
-MAX_RUN_BYTES = 2 << 30  # one run file (the paper's rig: 1 kHz for minutes, a few MB)
-MAX_TABLE_BYTES = 64 << 20  # a thrust table: one row per test point (~1 M rows)
-
-
-def check_input_file(path: Path | str, what: str = "file", max_bytes: int = MAX_YAML_BYTES) -> Path:
-    """``path`` if it is a regular, readable file of at most ``max_bytes``; else bad input.
-
-    Refuses what would hang or exhaust memory before a byte is read: a FIFO (blocks
-    forever), a device such as /dev/zero (endless), a symlink loop, a name too long.
-    """
-    import stat
-
-    path = Path(path)
-    try:
-        info = path.stat()
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except OSError as exc:
-        why = {errno.ELOOP: "symbolic link loop", errno.ENAMETOOLONG: "file name too long"}
-        raise InputError(f"{path}: cannot read: {why.get(exc.errno, exc.strerror)}") from None
-    if stat.S_ISDIR(info.st_mode):
-        raise InputError(f"{path}: is a directory, expected a {what}")
-    if not stat.S_ISREG(info.st_mode):
-        raise InputError(f"{path}: not a regular file (a pipe or device?), expected a {what}")
-    if info.st_size > max_bytes:
-        raise InputError(
-            f"{path}: {info.st_size / 2**20:.0f} MiB is larger than a {what} can be "
-            f"({max_bytes / 2**20:.0f} MiB)"
-        )
-    return path
-
-
-def why_not_a_file(path: Path | str) -> str:
-    """Why ``path`` is no input file: ``file not found``, or what it is instead (a directory,
-    a pipe or device) — "file not found" of a folder sent the user looking for a missing file
-    (outside audit)."""
-    path = Path(path)
-    if path.is_dir():
-        return "a directory, not a file"
-    if path.exists():
-        return "not a regular file (a pipe or device?)"
-    return "file not found"
+from tuflexperf.io import swap
+from tuflexperf.io.artefacts import (  # noqa: F401 - re-exported: the writers' checks
+    _UNKNOWN,
+    ARTEFACT_WRITERS,
+    FIT_PROPULSION_HEADER,
+    FLIGHT_CSV_COLUMNS,
+    FLIGHT_PNG_SOFTWARE,
+    MARKER,
+    MISSION_CSV_COLUMNS,
+    MISSION_CSV_ENGINE_COLUMNS,
+    PNG_SOFTWARE,
+    REQUIREMENT_NAMES,
+    SEAL,
+    SWEEP_PNG_SOFTWARE,
+    WRITTEN_XATTR,
+    _mark_written,
+    artefact_of,
+    fit_yaml_kind,
+    output_path,
+    refuse_foreign_files,
+    seal_intact,
+    sealed,
+    sha256_of,
+    written_mark,
+)
+from tuflexperf.io.inputs import (  # noqa: F401 - re-exported: every reader's, named here too
+    MAX_RUN_BYTES,
+    MAX_TABLE_BYTES,
+    MAX_YAML_BYTES,
+    check_input_file,
+    why_not_a_file,
+)
 
 
 def user_umask() -> int:
@@ -122,19 +78,6 @@ def _staged_os_error(exc: OSError, staging: Path, out: Path) -> InputError:
         if not (path == staging or staging in path.parents):
             return InputError(f"{path}: cannot read: {exc.strerror or exc}")
     return _os_error(out, exc)
-
-
-def output_path(out: Path | str) -> Path:
-    """Where an output named ``out`` lands: its folder resolved as the OS resolves it once the
-    missing folders exist, its own name kept (a symbolic link there is still seen as one).
-
-    ``missing/../folder`` is ``folder``: checked as written, nothing was there, the missing
-    folder was made and the write replaced the user's folder (outside audit).
-    """
-    out = Path(out)
-    if out.name in ("", ".", ".."):
-        return Path(os.path.realpath(out))
-    return Path(os.path.realpath(out.parent)) / out.name
 
 
 def _short(name: str) -> str:
@@ -168,33 +111,7 @@ def _remove_folders(made: list[Path]) -> None:
             folder.rmdir()
 
 
-# Each single file the tool writes carries the sha256 of its bytes in an extended attribute:
-# metadata of the file itself (no second file), which a copy (`cp`) or an editor's new file
-# drops and an edit in place outdates. A later run replaces a CSV or PNG only as written (its
-# header alone let a user's edited copy be replaced; outside audit). Where the file system
-# keeps no extended attributes, how the file begins is all there is to go by.
-WRITTEN_XATTR = "user.tuflexperf.sha256"
-_UNKNOWN = "unknown"  # no extended attributes here: whether we wrote it cannot be told
-
-
-def _mark_written(path: str | Path, data: bytes) -> None:
-    """Give ``path`` the sha256 of ``data`` (its bytes) in :data:`WRITTEN_XATTR`, where the
-    platform and file system keep extended attributes."""
-    with contextlib.suppress(OSError, AttributeError):  # AttributeError: no os.setxattr
-        os.setxattr(path, WRITTEN_XATTR, hashlib.sha256(data).hexdigest().encode("ascii"))
-
-
-def written_mark(path: Path) -> str | None:
-    """The sha256 ``path`` was written with (:data:`WRITTEN_XATTR`), None where it has no
-    mark, or :data:`_UNKNOWN` where the file system keeps no extended attributes."""
-    import errno
-
-    try:
-        return os.getxattr(path, WRITTEN_XATTR).decode("ascii", "replace")
-    except AttributeError:  # a platform without os.getxattr
-        return _UNKNOWN
-    except OSError as exc:
-        return None if exc.errno == errno.ENODATA else _UNKNOWN
+_CLOEXEC = getattr(os, "O_CLOEXEC", 0)
 
 
 def write_files_atomically(files: dict[Path, bytes | str]) -> None:
@@ -207,9 +124,6 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
     comes meanwhile puts every earlier file back (a Ctrl-C between two renames left a new
     output beside the earlier table; outside audit) and is then raised.
     """
-    import secrets  # lazy, with tempfile: `check` writes nothing
-    import tempfile
-
     staged: list[tuple[str, Path]] = []
     created: list[Path] = []
     mode = 0o666 & ~user_umask()
@@ -218,8 +132,9 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
         for path, data in files.items():
             current = output_path(path)
             created += _make_folders(current.parent)
-            fd, tmp = tempfile.mkstemp(prefix=f".{_short(current.name)}.", suffix=".tmp",
-                                       dir=current.parent)
+            swap.clean_stale(current, _short(current.name))  # a killed run's, beside it
+            tmp = str(current.parent / swap.hidden_name(_short(current.name), "tmp"))
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _CLOEXEC, 0o600)
             staged.append((tmp, current))
             raw = data.encode("utf-8") if isinstance(data, str) else data
             with os.fdopen(fd, "wb") as handle:
@@ -243,8 +158,7 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
                     if target.exists():
                         # a second name for the earlier file, which stays where it is until
                         # the new one replaces it in one rename (no moment without it)
-                        old = target.parent / (f".{_short(target.name)}.old-"
-                                               f"{secrets.token_hex(6)}")
+                        old = target.parent / swap.hidden_name(_short(target.name), "old")
                         try:
                             os.link(target, old)
                         except OSError:  # a file system without hard links
@@ -295,216 +209,6 @@ def same_file(a: Path, b: Path) -> bool:
         return a.exists() and b.exists() and os.path.samefile(a, b)
     except OSError:
         return False
-
-
-# How each single-file output of the tool begins (the folders carry MARKER instead): an
-# existing file is replaced only when it begins exactly like one of these, i.e. an earlier
-# output. A user's file that merely looks alike (an extra column) is never replaced.
-def _thrust_table_headers() -> tuple[str, ...]:
-    from tuflexperf.io.runs import REFIT_TABLE_EXTRA_COLUMNS, TABLE_COLUMNS, TABLE_EXTRA_COLUMNS
-
-    # fit's thrust table from a campaign (SPEC 4's four columns, then the reduction's), and
-    # refitted from a table (then the model and its misfit); never the four alone, which is
-    # the input format a user's own table has
-    return (",".join((*TABLE_COLUMNS, *TABLE_EXTRA_COLUMNS)),
-            ",".join((*TABLE_COLUMNS, *REFIT_TABLE_EXTRA_COLUMNS)))
-
-
-MISSION_CSV_COLUMNS = ("time_s", "segment", "altitude_m", "distance_m", "airspeed_m_s",
-                       "airspeed_eas_m_s", "throttle", "climb_rate_m_s")
-MISSION_CSV_ENGINE_COLUMNS = ("current_a", "voltage_v", "charge_ah", "charge_fraction",
-                              "power_w", "energy_wh")  # each + "_<engine>", per engine
-REQUIREMENT_NAMES = frozenset({  # check's result names (analysis/requirements.py)
-    "takeoff_ground_roll", "takeoff_distance_to_obstacle", "trim_throttle_max",
-    "oei_min_throttle", "flight_endurance", "mission_landing_charge", "mission_solved_time",
-})
-PNG_SOFTWARE = "tuflexperf"  # the PNG text chunk 'Software' of a report page: + " VERSION"
-SWEEP_PNG_SOFTWARE = "tuflexperf sweep"  # ... and of sweep's carpet plot
-FLIGHT_PNG_SOFTWARE = "tuflexperf flightlog"  # ... and of flightlog's power plot
-# flightlog's --csv header (the aligned series; tuflexperf.analysis.flown)
-FLIGHT_CSV_COLUMNS = ("time_s", "airspeed_m_s", "power_w", "throttle", "altitude_m",
-                      "climb_rate_m_s", "airborne")
-
-
-def _is_mission_history(columns: list[str]) -> bool:
-    fixed, rest = columns[: len(MISSION_CSV_COLUMNS)], columns[len(MISSION_CSV_COLUMNS):]
-    width = len(MISSION_CSV_ENGINE_COLUMNS)
-    if tuple(fixed) != MISSION_CSV_COLUMNS or not rest or len(rest) % width:
-        return False
-    for start in range(0, len(rest), width):
-        group = rest[start : start + width]
-        engine = group[0].removeprefix(MISSION_CSV_ENGINE_COLUMNS[0] + "_")
-        if group != [f"{name}_{engine}" for name in MISSION_CSV_ENGINE_COLUMNS]:
-            return False
-    return True
-
-
-def _is_sweep_grid(columns: list[str]) -> bool:
-    """The varied dotted keys, then ``<requirement>_value, _limit, _passed`` per requirement."""
-    keys = [c for c in columns if "." in c]
-    tail = columns[len(keys):]
-    if not keys or columns[: len(keys)] != keys or not tail or len(tail) % 3:
-        return False
-    for start in range(0, len(tail), 3):
-        name = tail[start].removesuffix("_value")
-        if name not in REQUIREMENT_NAMES or tail[start : start + 3] != [
-                f"{name}_value", f"{name}_limit", f"{name}_passed"]:
-            return False
-    return True
-
-
-def _png_software(head: bytes) -> str | None:
-    """The text of a PNG's ``Software`` chunk among ``head``'s chunks (None without one)."""
-    at = 8  # past the signature
-    while at + 8 <= len(head):
-        length = int.from_bytes(head[at:at + 4], "big")
-        kind, body = head[at + 4:at + 8], head[at + 8:at + 8 + length]
-        if kind == b"IDAT" or len(body) < length:  # metadata comes before the image
-            return None
-        if kind == b"tEXt" and body.startswith(b"Software\x00"):
-            return body.removeprefix(b"Software\x00").decode("latin-1")
-        at += 12 + length
-    return None
-
-
-ARTEFACT_WRITERS = {
-    "propulsion file": "fit", "battery file": "fit", "thrust table": "fit",
-    "mission history": "mission", "sweep grid": "sweep", "sweep plot": "sweep",
-    "report page": "report", "flight series": "flightlog", "flight plot": "flightlog",
-}
-"""Each single-file artefact of the tool and the command that writes it."""
-
-
-def artefact_of(head: bytes) -> str | None:
-    """Which of the tool's artefacts (:data:`ARTEFACT_WRITERS`) a file that begins with
-    ``head`` is (None: not this tool's).
-
-    YAML written by ``fit`` says ``written by `tuflexperf ...``` on its first comment line
-    (the propulsion model's line names poly22); a PNG carries ``Software: tuflexperf sweep``
-    (the carpet plot) or ``tuflexperf VERSION`` (a report page); each CSV has its own
-    header, matched whole: fit's thrust table, a mission's history (its columns, then six
-    per engine), a sweep's grid (the varied keys, then ``<requirement>_value, _limit,
-    _passed`` per requirement).
-    """
-    first_line = head.split(b"\n", 1)[0]
-    # fit's YAML (thrust model, battery) says so on its first comment line
-    if first_line.startswith(b"#") and b"written by `tuflexperf fit" in first_line.lower():
-        return fit_yaml_kind(head) + " file"
-    if head.startswith(b"\x89PNG"):
-        software = _png_software(head) or ""
-        if software == FLIGHT_PNG_SOFTWARE:
-            return "flight plot"
-        if software in (SWEEP_PNG_SOFTWARE, PNG_SOFTWARE):  # the bare name: earlier sweeps'
-            return "sweep plot"
-        return "report page" if software.startswith(PNG_SOFTWARE + " ") else None
-    if b"\n" not in head:  # a header is a whole first line
-        return None
-    try:
-        header = first_line.decode("utf-8").strip()
-    except UnicodeDecodeError:
-        return None
-    columns = header.split(",")
-    if header == ",".join(FLIGHT_CSV_COLUMNS):
-        return "flight series"
-    if header in _thrust_table_headers():
-        return "thrust table"
-    if _is_mission_history(columns):
-        return "mission history"
-    return "sweep grid" if _is_sweep_grid(columns) else None
-
-
-FIT_PROPULSION_HEADER = "# Written by `tuflexperf fit` (poly22"  # the propulsion file's
-
-
-def fit_yaml_kind(head: bytes) -> str:
-    """Which YAML ``fit`` wrote, by its first line: ``"propulsion"`` or ``"battery"``."""
-    first = head.split(b"\n", 1)[0]
-    return "propulsion" if first.startswith(FIT_PROPULSION_HEADER.encode()) else "battery"
-
-
-def refuse_foreign_files(outputs: dict[str, Path], command: str,
-                         kinds: dict[str, str] | None = None) -> None:
-    """Refuse (exit 2) to replace an existing file that ``command`` did not write (SPEC 5:
-    a fitted model is not a mission's to overwrite, nor a report page a sweep's), or that
-    is another artefact than the one its flag writes (``kinds``: flag -> artefact of
-    :data:`ARTEFACT_WRITERS`): fit's ``--table`` replaced a fitted propulsion model with a
-    CSV, and sweep's ``--csv`` its own carpet plot, with exit 0 (outside audit)."""
-    for flag, out in outputs.items():
-        out, target = Path(out), output_path(out)
-        if target.is_symlink():  # replacing it would replace the user's link, not write through
-            raise InputError(f"{flag}: {out} is a symbolic link; give the file it points to, "
-                             "or another path")
-        if not os.path.lexists(target) or target.is_dir():
-            continue
-        if not target.is_file():  # a FIFO blocked the read below for ever (outside audit)
-            raise InputError(f"{flag}: {out} is not a regular file; refusing to replace it, "
-                             "choose another path")
-        try:
-            with open(target, "rb") as handle:
-                # a mission history's header grows with its engines' names: 4 KiB cut one
-                # of four 200-character names, refused as "not an earlier output" (audit)
-                head = handle.read(1 << 16)
-        except OSError:
-            head = None
-        found = artefact_of(head) if head is not None else None
-        if found is None:
-            raise InputError(
-                f"{flag}: {out} exists and is not an earlier output of tuflexperf; refusing "
-                "to replace it, choose another path"
-            )
-        writer = ARTEFACT_WRITERS[found]
-        if writer != command:
-            raise InputError(
-                f"{flag}: {out} was written by `tuflexperf {writer}`, not by `tuflexperf "
-                f"{command}`; refusing to replace it, choose another path"
-            )
-        wanted = (kinds or {}).get(flag)
-        if wanted is not None and found != wanted:
-            raise InputError(
-                f"{flag}: {out} is a {found} written by `tuflexperf {writer}`, not a "
-                f"{wanted}; refusing to replace it, choose another path")
-        if found.endswith(" file"):  # fit's YAML: replaced only as fit wrote it
-            _refuse_unsealed(flag, out, target)
-        else:
-            _refuse_unmarked(flag, out, target, found, writer)
-
-
-def _refuse_unmarked(flag: str, shown: Path, target: Path, found: str, writer: str) -> None:
-    """Refuse to replace a CSV or PNG at ``target`` unless it is as the tool wrote it there
-    (:func:`written_mark`; where the file system cannot say, its beginning was enough)."""
-    mark = written_mark(target)
-    if mark == _UNKNOWN:
-        return
-    if mark is None:
-        raise InputError(
-            f"{flag}: {shown} looks like a {found} of `tuflexperf {writer}` but was not written "
-            "there by it (a copy, a file saved anew, or an earlier version's output): whether "
-            "it is yours cannot be told; refusing to replace it, move it away or choose "
-            "another path")
-    try:
-        same = sha256_of(target) == mark
-    except OSError:
-        same = False
-    if not same:
-        raise InputError(
-            f"{flag}: {shown} was written by `tuflexperf {writer}` and changed since; refusing "
-            "to replace it, move it away or choose another path")
-
-
-def _refuse_unsealed(flag: str, shown: Path, target: Path) -> None:
-    """Refuse to replace fit's YAML at ``target`` unless it is byte for byte as fit wrote it."""
-    try:
-        with open(target, "rb") as handle:
-            data = handle.read(MAX_YAML_BYTES + 1)
-    except OSError:
-        data = b""
-    if len(data) <= MAX_YAML_BYTES and seal_intact(data):
-        return
-    raise InputError(
-        f"{flag}: {shown} was written by `tuflexperf fit` and changed since (or by a version "
-        "that did not seal it): whether you edited it cannot be told; refusing to replace it, "
-        "move it away or choose another path"
-    )
 
 
 _guarded: dict[Path, tuple[str, Path, tuple[int, int, int] | None]] = {}
@@ -773,8 +477,6 @@ def install_interrupt_handlers() -> None:
     dropped with an "Exception ignored" traceback on stderr; it is noted already, and raised
     again later (:func:`raise_if_interrupted`, the CLI's exit), so that traceback goes.
     """
-    import sys
-
     # a new run (the CLI's main may run many times in one process, as in tests)
     _signals_received.clear()
     _committed[0] = False
@@ -836,20 +538,33 @@ def start_helper(target: Callable[..., None], args: tuple[Any, ...],
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
     with interrupts_held():
         helper = multiprocessing.get_context(method).Process(
-            target=_helper_body, args=(target, args), daemon=True
+            target=_helper_body, args=(target, args, os.getpid()), daemon=True
         )
         helper.start()
         helpers.append(helper)
     return helper
 
 
-def _helper_body(target: Callable[..., None], args: tuple[Any, ...]) -> None:
+def _helper_body(target: Callable[..., None], args: tuple[Any, ...], parent: int) -> None:
     release_interrupts()
+    _die_with(parent)
     try:
         target(*args)
     except Exception:  # noqa: BLE001 - said once, by the parent
         # the parent does again what a helper left undone, and reports an error there in
         # one line (a full disk printed the helper's 35-line traceback as well; audit)
+        os._exit(1)
+
+
+def _die_with(parent: int) -> None:
+    """End this helper when its parent dies, however (Linux): a SIGKILLed report's page
+    writers ran on into a staging folder the next run was removing as debris."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    if os.getppid() != parent:  # it died before that took hold
         os._exit(1)
 
 
@@ -882,27 +597,74 @@ def interrupted() -> bool:
     return bool(_signals_received)
 
 
+def _commit_or_back(held: Path, out: Path, shown: Path, command: str,
+                    earlier: list[Path | None], staging: Path | None = None) -> None:
+    """The earlier output, now at ``held``, is checked again where nothing reaches it by
+    its name (a note the user put into it while this run worked was deleted with it;
+    audit), then removed; on a failure or an interrupt it goes back to ``out``.
+
+    ``staging`` None: ``out`` holds the new output already (exchanged); else ``out`` is
+    free and the new output moves in from ``staging``. ``earlier[0]`` follows where the
+    earlier output is, None once it is back at ``out`` or committed to go.
+    """
+    import shutil
+
+    def back() -> None:
+        if staging is None:
+            if not swap.exchange(held, out):
+                raise OSError(errno.EINVAL, "the exchange was refused", os.fsdecode(out))
+        else:
+            if os.path.lexists(out):
+                os.replace(out, staging)
+            os.replace(held, out)
+        earlier[0] = None
+
+    try:
+        if held.is_symlink() or not held.is_dir():
+            raise InputError(f"--out: {shown} became a file or a link while this run "
+                             "worked; refusing to replace it")
+        _refuse_unless_earlier_output(held, shown, command)
+        if staging is not None:
+            os.replace(staging, out)
+    except BaseException:
+        back()
+        raise
+    if _signals_received:
+        # interrupted before the swap was done: the earlier output stays (SPEC 5); the new
+        # one goes back to the staging, which the unwinding removes
+        back()
+        return
+    _committed[0] = True
+    earlier[0] = None
+    shutil.rmtree(held, ignore_errors=True)
+
+
 @contextlib.contextmanager
 def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> Iterator[Path]:
     """Stage a folder beside ``out``, yield it, then move it into place whole.
 
     The staging folder gets the user's umask and, on success, the marker naming
     ``command`` and the files written. An earlier output at ``out`` (checked by
-    :func:`check_output_dir` against the command's ``inputs``) is swapped out and removed
-    only after the new one is in place. On any failure or interrupt (one that came at any
-    time before the swap) the staging folder is removed and ``out`` is untouched; after
-    the swap the run is done, and an interrupt is no longer noted.
+    :func:`check_output_dir` against the command's ``inputs``) is exchanged with the new
+    one in one step (:func:`tuflexperf.io.swap.exchange`; two renames only where the file
+    system refuses that) and removed only after the new one is in place; what a killed
+    run left beside ``out`` is cleaned first (:func:`tuflexperf.io.swap.clean_stale`).
+    On any failure or interrupt (one that came at any time before the swap) the staging
+    folder is removed and ``out`` is untouched; after the swap the run is done, and an
+    interrupt is no longer noted.
     """
-    import secrets  # lazy, with shutil: only the commands that write a folder need them
-    import shutil
+    import shutil  # lazy: only the commands that write a folder need it
 
+    target = output_path(out)
+    swap.clean_stale(target, _short(target.name))  # what a killed run left beside `out`
     check_output_dir(out, command, inputs)
-    shown, out = Path(out), output_path(out)
+    shown, out = Path(out), target
     try:
         created = _make_folders(out.parent)
     except OSError as exc:
         raise InputError(f"--out: cannot create {exc.filename}: {exc.strerror}") from None
-    staging = out.parent / f".{_short(out.name)}.tmp-{secrets.token_hex(6)}"
+    staging = out.parent / swap.hidden_name(_short(out.name), "tmp")
+    earlier: list[Path | None] = [None]  # where the earlier output is while not at `out`
     try:
         staging.mkdir(mode=0o777 & ~user_umask())
     except OSError as exc:
@@ -922,34 +684,21 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
         except OSError as exc:
             raise _os_error(staging / MARKER, exc) from None
         # the swap and the earlier output's removal run to their end: an interrupt there
-        # would leave `out` missing between the renames, or the earlier output behind as
-        # a hidden folder; it is raised when they are done
+        # would leave the earlier output behind as a hidden folder; it is raised when
+        # they are done
         with interrupts_held():
             raise_if_interrupted()  # one a library dropped earlier: the run was interrupted
             if out.exists() or out.is_symlink():
-                old = out.parent / f".{_short(out.name)}.old-{secrets.token_hex(6)}"
-                os.replace(out, old)
-                # checked again where nothing reaches it by its name: a note the user put
-                # into the earlier output while this run worked was deleted with it (audit)
-                try:
-                    if old.is_symlink() or not old.is_dir():
-                        raise InputError(f"--out: {shown} became a file or a link while "
-                                         "this run worked; refusing to replace it")
-                    _refuse_unless_earlier_output(old, shown, command)
-                except BaseException:
-                    os.replace(old, out)
-                    raise
                 with contextlib.suppress(OSError):  # the folder's mode stays the user's
-                    os.chmod(staging, stat.S_IMODE(old.stat().st_mode))
-                os.replace(staging, out)
-                if _signals_received:
-                    # interrupted before the swap was done: the earlier output stays (SPEC 5);
-                    # the new one goes back to the staging, which the unwinding removes
-                    os.replace(out, staging)
-                    os.replace(old, out)
-                else:
-                    _committed[0] = True
-                    shutil.rmtree(old, ignore_errors=True)
+                    os.chmod(staging, stat.S_IMODE(out.lstat().st_mode))
+                if swap.exchange(staging, out):  # `out` is the new output, at once
+                    earlier[0] = staging
+                    _commit_or_back(staging, out, shown, command, earlier)
+                else:  # no exchange here (swap's docstring): two renames, a moment apart
+                    old = out.parent / swap.hidden_name(_short(out.name), "old")
+                    os.replace(out, old)
+                    earlier[0] = old
+                    _commit_or_back(old, out, shown, command, earlier, staging)
             else:
                 os.replace(staging, out)
                 if _signals_received:
@@ -957,9 +706,14 @@ def staged_directory(out: Path, command: str, inputs: Iterable[Path] = ()) -> It
                 else:
                     _committed[0] = True
     except BaseException as exc:
+        kept = earlier[0]
         with _cleanup():
-            shutil.rmtree(staging, ignore_errors=True)
+            if kept is None:
+                shutil.rmtree(staging, ignore_errors=True)
             _remove_folders(created)
+        if kept is not None:  # putting the earlier output back failed: it stays, named
+            raise InputError(f"--out: {shown}: the earlier output could not be put back "
+                             f"({exc}); it is {kept}") from None
         if isinstance(exc, OSError):
             raise _staged_os_error(exc, staging, out) from None
         raise

@@ -35,6 +35,13 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
+from tuflexperf.io.inputs import (
+    MAX_TABLE_BYTES,
+    MAX_YAML_BYTES,
+    check_input_file,
+    path_text,
+    why_not_a_file,
+)
 from tuflexperf.io.runs import ThrustTable
 from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, load_model
 
@@ -77,8 +84,6 @@ def is_propeller_manifest(path: Path) -> bool:
     ----------
     SPEC 4 (inputs of ``fit``); this module's docstring (the manifest).
     """
-    from tuflexperf.io.files import MAX_YAML_BYTES
-
     if path.suffix.lower() not in (".yaml", ".yml") or not path.is_file():
         return False
     try:
@@ -105,19 +110,24 @@ def read_uiuc(path: Path, diameter_m: float, rpm: float, density_kg_m3: float) -
     McCormick, *Aerodynamics, Aeronautics and Flight Mechanics*, 2nd ed., ch. 6 (J, CT).
     """
     lines = _lines(path)
-    header = lines[0].split() if lines else []
+    header = lines[0][1].split() if lines else []
     if [h.lower() for h in header[:2]] != ["j", "ct"]:
-        raise InputError(f"{path}: expected the UIUC header 'J CT CP eta', found {lines[:1]}")
+        raise InputError(f"{path_text(path)}: expected the UIUC header 'J CT CP eta', found "
+                         f"{[text for _, text in lines[:1]]}")
     n = rpm / 60.0
     rows = []
-    for number, line in enumerate(lines[1:], start=2):
+    previous_j = None
+    for number, line in lines[1:]:
         values = _numbers(line)
         if values is None or len(values) < 2:
-            raise InputError(f"{path}: line {number}: expected numbers J CT ..., got {line!r}")
+            raise InputError(f"{path_text(path)}: line {number}: expected numbers J CT ..., got "
+                             f"{line!r}")
         j, ct = values[0], values[1]
+        _refuse_row(path, number, {"J": j, "CT": ct}, "J", j, previous_j)
+        previous_j = j
         rows.append((j * n * diameter_m, ct * density_kg_m3 * n * n * diameter_m**4))
     if not rows:
-        raise InputError(f"{path}: no data rows")
+        raise InputError(f"{path_text(path)}: no data rows")
     return np.array(rows)
 
 
@@ -129,7 +139,8 @@ def read_apc_per3(path: Path) -> list[tuple[float, np.ndarray]]:
     APC Propellers, *Performance data* (PER3_*.dat files, one block per ``PROP RPM``).
     """
     blocks: list[tuple[float, list[tuple[float, float]]]] = []
-    for line in _lines(path):
+    previous_j: float | None = None
+    for number, line in _lines(path):
         found = _RPM.search(line)
         if found:
             try:
@@ -138,30 +149,56 @@ def read_apc_per3(path: Path) -> list[tuple[float, np.ndarray]]:
                 rpm = math.nan
             # 'PROP RPM = .' gave a traceback, '= 0' a division by zero (outside audit)
             if not (math.isfinite(rpm) and rpm > 0):
-                raise InputError(f"{path}: 'PROP RPM = {found.group(1)}' is no speed (a "
-                                 "positive number of rpm)")
+                raise InputError(f"{path_text(path)}: line {number}: 'PROP RPM = "
+                                 f"{found.group(1)}' is no speed (a positive number of rpm)")
             blocks.append((rpm, []))
+            previous_j = None
             continue
         values = _numbers(line)
         if not blocks or values is None or len(values) < 8:
             continue  # titles, definitions, column headers and units
-        thrust = values[10] if len(values) >= 15 else values[7] * LBF_N
+        wide = len(values) >= 15  # the newer files: thrust in N (column 11)
+        thrust_name, thrust = (("Thrust (N)", values[10]) if wide
+                               else ("Thrust (Lbf)", values[7] * LBF_N))
+        _refuse_row(path, number, {"V (mph)": values[0], "J": values[1], thrust_name: thrust},
+                    "J", values[1], previous_j, airspeed=("V (mph)", values[0]))
+        previous_j = values[1]
         blocks[-1][1].append((values[0] * MPH_M_S, thrust))
     blocks = [(rpm, rows) for rpm, rows in blocks if rows]
     if not blocks:
-        raise InputError(f"{path}: no 'PROP RPM =' block with data rows (not an APC PER3 file?)")
+        raise InputError(f"{path_text(path)}: no 'PROP RPM =' block with data rows (not an APC "
+                         "PER3 file?)")
     return [(rpm, np.array(rows)) for rpm, rows in blocks]
 
 
-def _lines(path: Path) -> list[str]:
-    from tuflexperf.io.files import MAX_TABLE_BYTES, check_input_file
+def _refuse_row(path: Path, number: int, used: dict[str, float], j_name: str, j: float,
+                previous_j: float | None, airspeed: tuple[str, float] | None = None) -> None:
+    """Bad input naming the file, line and column: a NaN or infinity in a column used, a
+    negative airspeed or advance ratio, or an advance ratio below the row before it in
+    the same rpm block. Each was accepted: a negative J flipped the coefficients' signs and
+    the fit went on; a NaN was named by the manifest, not the table (outside audit)."""
+    where = f"{path_text(path)}: line {number}"
+    for name, value in used.items():
+        if not math.isfinite(value):
+            raise InputError(f"{where}: column {name}: {value} is no number")
+    if airspeed is not None and airspeed[1] < 0:
+        raise InputError(f"{where}: column {airspeed[0]}: negative airspeed {airspeed[1]:g}")
+    if j < 0:
+        raise InputError(f"{where}: column {j_name}: negative advance ratio {j:g}")
+    if previous_j is not None and j < previous_j:
+        raise InputError(f"{where}: column {j_name}: advance ratio {j:g} below the row "
+                         f"before ({previous_j:g}); J must increase down one rpm block")
 
+
+def _lines(path: Path) -> list[tuple[int, str]]:
+    """The file's non-blank lines, stripped, with their line numbers (1-based)."""
     check_input_file(path, "propeller table", MAX_TABLE_BYTES)
     try:
         text = path.read_text(encoding="latin-1")
     except OSError as exc:
-        raise InputError(f"{path}: cannot read: {exc.strerror}") from None
-    return [line.strip() for line in text.splitlines() if line.strip()]
+        raise InputError(f"{path_text(path)}: cannot read: {exc.strerror}") from None
+    return [(number, line.strip()) for number, line in enumerate(text.splitlines(), start=1)
+            if line.strip()]
 
 
 def read_propeller_tables(path: Path | str) -> ThrustTable:
@@ -187,8 +224,6 @@ def read_propeller_tables(path: Path | str) -> ThrustTable:
     for index, entry in enumerate(schema.tables):
         file = (path.parent / entry.file).resolve()
         if not file.is_file():
-            from tuflexperf.io.files import why_not_a_file
-
             raise InputError(f"{path}: tables[{index}].file: {why_not_a_file(file)}: "
                              f"{entry.file}")
         if entry.format == "uiuc":

@@ -161,7 +161,7 @@ def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
     """Numeric columns, and for each column with a non-numeric cell its (line, text)."""
     import pandas as pd
 
-    from tuflexperf.io.files import MAX_RUN_BYTES
+    from tuflexperf.io.inputs import MAX_RUN_BYTES
 
     source: Any = path
     if path.name.lower().endswith(".gz"):
@@ -213,7 +213,7 @@ def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
 def _read_mat_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tuple[int, str]]]:
     import scipy.io
 
-    from tuflexperf.io.files import MAX_RUN_BYTES
+    from tuflexperf.io.inputs import MAX_RUN_BYTES
 
     try:  # scipy's word for a file it may not open was "Reader needs file name" (audit)
         open(path, "rb").close()
@@ -319,7 +319,7 @@ def read_run(
         Columns as float64 arrays; the sample rate in Hz is ``1 / median(diff(time_s))``
         (never assumed: the paper's rig logged 1 kHz, others do not).
     """
-    from tuflexperf.io.files import MAX_RUN_BYTES, check_input_file
+    from tuflexperf.io.inputs import MAX_RUN_BYTES, check_input_file
 
     path = check_input_file(path, "run file", MAX_RUN_BYTES)
     suffix = _suffix(path)
@@ -464,7 +464,7 @@ def read_thrust_table(path: Path | str) -> ThrustTable:
     table sees exactly the numbers in the file. Extra columns (the reduction writes
     a few diagnostics) are ignored; the four SPEC columns are required.
     """
-    from tuflexperf.io.files import MAX_TABLE_BYTES, check_input_file
+    from tuflexperf.io.inputs import MAX_TABLE_BYTES, check_input_file
     from tuflexperf.io.yamlio import engine_name_problem
 
     # a FIFO hung it, /dev/zero filled the memory, 3 GB gave a traceback (outside audit)

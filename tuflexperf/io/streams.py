@@ -79,5 +79,12 @@ def guard_standard_streams() -> None:
                 os.dup2(devnull, fd)
                 os.close(devnull)
             stream = open(fd, "w", encoding="utf-8", closefd=False)  # noqa: SIM115
+        if getattr(stream, "errors", None) == "strict":
+            # a file name's bytes that are no UTF-8 (a Latin-1 folder) in a line of output
+            # raised UnicodeEncodeError in a UTF-8 locale: written escaped, as \xfc
+            from tuflexperf.io.inputs import register_name_errors
+
+            with contextlib.suppress(AttributeError, ValueError):
+                stream.reconfigure(errors=register_name_errors())
         setattr(sys, name, ReaderTolerantStream(
             stream, OSError if name == "stderr" else BrokenPipeError))

@@ -233,7 +233,7 @@ def count_values(value: Any, limit: int) -> int:
 
 def read_yaml(path: Path) -> Any:
     """Parse a YAML file; any problem becomes an :class:`InputError` naming the file."""
-    from tuflexperf.io.files import check_input_file
+    from tuflexperf.io.inputs import check_input_file
 
     check_input_file(path, "YAML file")
     try:

@@ -15,6 +15,7 @@ import numpy as np
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.discharge import DischargeRun
+from tuflexperf.io.inputs import path_text
 from tuflexperf.models.battery import (
     FIT_BLOCK_S,
     PARAMETER_NAMES,
@@ -400,13 +401,15 @@ def fitted_battery_text(battery_path: Any, out_path: Any) -> tuple[str, dict[str
         if kept and "written by `tuflexperf fit`" in kept[0]:
             kept = kept[1:]
         # first line says who wrote it, so a later fit may replace it (SPEC 5, nothing is lost)
-        text = (f"# {battery.name}: written by `tuflexperf fit` from {battery_path.name}\n"
+        text = (f"# {battery.name}: written by `tuflexperf fit` from "
+                f"{path_text(battery_path.name)}\n"
                 + "".join(kept).rstrip("\n") + "\n" + header + dumped)
     else:
         data = read_yaml(battery_path)
         for entry in data.get("runs", []):
             entry["file"] = os.path.relpath(battery_path.parent / entry["file"], folder)
         data["fit"] = block
-        text = (f"# {battery.name}: written by `tuflexperf fit` from {battery_path.name}\n"
+        text = (f"# {battery.name}: written by `tuflexperf fit` from "
+                f"{path_text(battery_path.name)}\n"
                 + yaml.safe_dump(data, sort_keys=False, width=100))
     return text, block

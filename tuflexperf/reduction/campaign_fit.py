@@ -19,6 +19,7 @@ import numpy as np
 from tuflexperf.errors import InputError
 from tuflexperf.io.campaign import Campaign, CampaignRun, load_campaign
 from tuflexperf.io.files import sha256_of
+from tuflexperf.io.inputs import path_text
 from tuflexperf.io.runs import (
     TABLE_EXTRA_COLUMNS,
     Run,
@@ -407,7 +408,7 @@ def _fit_campaign(
     ]
     source = {
         "tool": "tuflexperf fit",
-        "input": str(campaign.path.resolve()),
+        "input": path_text(campaign.path.resolve()),  # a name's bytes no UTF-8 takes: escaped
         "input_sha256": sha256_of(campaign.path),
         "campaign": campaign.name,
         "files": files,

@@ -33,6 +33,7 @@ import numpy as np
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.files import sealed, sha256_of
+from tuflexperf.io.inputs import path_text
 from tuflexperf.io.runs import (
     REFIT_TABLE_EXTRA_COLUMNS,
     ThrustTable,
@@ -80,14 +81,14 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
     speeds = speeds_by_engine(zip(table.engine, table.airspeed_m_s, strict=True))
     source = {
         "tool": "tuflexperf fit",
-        "input": str(Path(path).resolve()),
+        "input": path_text(Path(path).resolve()),
         "input_sha256": sha256_of(Path(path)),
     }
     summary = fit_summary(kind="table", input_path=Path(path), fits=fits, delay=delay_s,
                           speeds=speeds)
     summary["warnings"].extend(poor_fit_notes(fits))
     propulsion = render_propulsion(
-        name=f"poly22 fit of {Path(path).name}",
+        name=f"poly22 fit of {path_text(Path(path).name)}",
         fits=fits,
         speeds=speeds,
         delay=delay_s,

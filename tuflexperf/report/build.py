@@ -14,7 +14,6 @@ from __future__ import annotations
 import os
 import re
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -22,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tuflexperf.errors import InputError
+from tuflexperf.io import swap
 from tuflexperf.report.footer import footer_texts, reserve, stamp
 
 if TYPE_CHECKING:
@@ -134,7 +134,7 @@ def build_report(
     if campaign_path is not None:
         _check_campaign(campaign_path)  # before any step is shown or anything is written
     with (staged_directory(out, "report", _report_inputs(case, campaign_path)) as staging,
-          tempfile.TemporaryDirectory(prefix="tuflexperf-report-") as kept):
+          swap.scratch("report") as kept):
         result = _render(case, staging, campaign_path, StepCounter(stream, progress),
                          Path(kept))
     files = [out / p.name for p in result.files]
@@ -548,6 +548,7 @@ def title_lines(case: Any, measured: Any, analyses: Any) -> list[str]:
 def input_hashes(case: Any, measured: Any) -> list[tuple[str, str, str]]:
     """(sha256, role, path as shown) of every input of the report, in the last page's order."""
     from tuflexperf.io.files import sha256_of
+    from tuflexperf.io.inputs import path_text
     from tuflexperf.report.data import input_files
 
     hashed = []
@@ -557,7 +558,7 @@ def input_hashes(case: Any, measured: Any) -> list[tuple[str, str, str]]:
             shown = os.path.relpath(path, root)
         except ValueError:
             shown = str(path)
-        hashed.append((sha256_of(path), role, shown))
+        hashed.append((sha256_of(path), role, path_text(shown)))  # \xfc: fonts take it
     return hashed
 
 

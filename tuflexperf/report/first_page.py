@@ -17,6 +17,8 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from typing import Any
 
+from tuflexperf.io.inputs import path_text
+
 PAGE_IN = (11.69, 8.27)  # A4 landscape, as every page of the review
 MARGIN_IN = 0.6  # left and right: a printer's edge plus room to staple
 TOP_IN = 0.45
@@ -176,7 +178,8 @@ def page_lines(case: Any, measured: Any, analyses: Any, width: int, now: str,
     right = [(Segment("INPUTS AND THEIR PROVENANCE", bold=True),)]
     for text in provenance_lines(case, measured):
         right += _wrapped(text.strip(), half, 2, PLAIN)
-    right += [()] + _wrapped(f"case {case.path}", half, 0, QUIET)
+    # a folder's bytes that are no UTF-8 as \xfc: the font raised on them (issue 46)
+    right += [()] + _wrapped(f"case {path_text(case.path)}", half, 0, QUIET)
     if getattr(case, "overrides", ()):  # the figures are of the changed case, not the files'
         right += _wrapped("with --set " + ", ".join(f"{k}={v:g}" for k, v in case.overrides),
                           half, 2, CAVEAT_COLOUR, True)
@@ -222,7 +225,7 @@ def provenance_lines(case: Any, measured: Any) -> list[str]:
     if case.battery_path is not None:
         lines.append(f"  battery      {provenance_class(case.battery_path)}")
     if measured.source is not None:
-        lines.append(f"  test data    {measured.kind} {measured.source.name}: "
+        lines.append(f"  test data    {measured.kind} {path_text(measured.source.name)}: "
                      f"{provenance_class(measured.source)}")
     else:
         lines.append("  test data    none (the thrust model is drawn alone)")
