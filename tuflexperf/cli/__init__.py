@@ -17,6 +17,7 @@ import typer
 from typer.core import TyperCommand, TyperGroup
 
 from tuflexperf.cli import commands_core, commands_data, commands_flight
+from tuflexperf.cli.commands_flightlog import flightlog_command
 from tuflexperf.cli.guard import (
     case_hint,
     guarded,
@@ -25,7 +26,6 @@ from tuflexperf.cli.guard import (
     refuse_repeated,
 )
 from tuflexperf.cli.inputs import load_case_with, parse_sets
-from tuflexperf.commands_flightlog import flightlog_command
 from tuflexperf.messages import one_line
 
 __all__ = ["app", "load_case_with", "main", "one_line", "parse_sets"]

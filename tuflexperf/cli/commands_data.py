@@ -147,7 +147,7 @@ def init_command(
 ) -> None:
     """Write a commented starter case that check runs at once, for you to edit."""
     from tuflexperf.io.datasheet import TYPICAL
-    from tuflexperf.io.starter import copy_example, write_starter
+    from tuflexperf.reduction.starter import copy_example, write_starter
 
     flags = {"static_thrust_n": static_thrust_n, "max_power_w": max_power_w,
              "fan_diameter_m": fan_diameter_m, "engines": engines, "cells": cells,
