@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tuflexperf.io.case import PropulsionSchema, load_case, propulsion_from_schema
+from tuflexperf.io.case import Case, PropulsionSchema, load_case, propulsion_from_schema
 from tuflexperf.io.files import sha256_of
 from tuflexperf.io.yamlio import load_model
 from tuflexperf.models.thrust import (
@@ -124,12 +124,13 @@ class ExportModel:
         return next(f.sha256 for f in self.files if f.role == "propulsion")
 
 
-def load_export_model(case_path: Path | str | None = None) -> ExportModel:
-    """Load and validate a case (default: the shipped TU-Flex case) and describe its propulsion.
+def load_export_model(case_path: Case | Path | str | None = None) -> ExportModel:
+    """Load and validate a case (default: the shipped TU-Flex case) and describe its propulsion;
+    a loaded :class:`Case` (one whose files a flag replaced) is taken as it is.
 
     Raises :class:`~tuflexperf.errors.InputError` (exit 2) on any bad input.
     """
-    case = load_case(case_path)
+    case = case_path if isinstance(case_path, Case) else load_case(case_path)
     # the Case already validated the propulsion file: use its objects, never parse it again
     schema = case.propulsion_schema
     if schema is None:  # a Case built by hand, not by load_case

@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tuflexperf.errors import InputError
 from tuflexperf.export.model import (
@@ -23,6 +23,9 @@ from tuflexperf.export.model import (
     thrust_step_function,
 )
 from tuflexperf.io.files import check_output_dir, staged_directory
+
+if TYPE_CHECKING:
+    from tuflexperf.io.case import Case
 
 FORMATS: tuple[str, ...] = ("c", "casadi", "json", "jsbsim", "fmu")
 
@@ -121,7 +124,7 @@ def _write_format(model: ExportModel, fmt: str, directory: Path) -> None:
 
 
 def export_model(
-    case_path: Path | str | None, formats: tuple[str, ...], out_dir: Path | str
+    case_path: Case | Path | str | None, formats: tuple[str, ...], out_dir: Path | str
 ) -> ExportResult:
     """Export the case's propulsion model in ``formats`` into ``out_dir``.
 

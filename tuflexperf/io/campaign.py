@@ -3,7 +3,7 @@
 ```yaml
 name: ...
 fan_area_m2: 0.0068          # fan cross-section A, for the Glauert check
-tunnel_area_m2: 0.16         # tunnel cross-section C
+tunnel_area_m2: 0.16         # tunnel cross-section C (leave out for a static stand)
 air_density_kg_m3: 1.19      # optional: test-day density (default 1.225, ISA sea level)
 filters:                     # optional: the paper's filter settings (section 4)
   outlier_window_s: 2.0
@@ -97,7 +97,8 @@ class CampaignSchema(ThrustStandKeys):
     # a fan of 3.6 mm to a tunnel of 100 m x 100 m: 1e-300 m^2 was fitted with a figure of
     # merit 130 digits long (outside audit)
     fan_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=MAX_FAN_AREA_M2)]
-    tunnel_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=1.0e4)]
+    # a static thrust stand has no tunnel: no blockage to correct, nothing to give
+    tunnel_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=1.0e4)] | None = None
     # a tunnel's air: from a hot day at altitude to a cold pressurised one (0.01 scaled
     # the fitted thrust x122 as the reference density and let everything pass)
     air_density_kg_m3: Annotated[float, Field(ge=0.3, le=2.0)] | None = None
@@ -106,7 +107,7 @@ class CampaignSchema(ThrustStandKeys):
 
     @model_validator(mode="after")
     def _check(self) -> CampaignSchema:
-        if not self.fan_area_m2 < self.tunnel_area_m2:
+        if self.tunnel_area_m2 is not None and not self.fan_area_m2 < self.tunnel_area_m2:
             raise ValueError(
                 f"fan_area_m2 ({self.fan_area_m2}) must be smaller than "
                 f"tunnel_area_m2 ({self.tunnel_area_m2})"
@@ -157,7 +158,7 @@ class Campaign:
     path: Path
     name: str
     fan_area_m2: float
-    tunnel_area_m2: float
+    tunnel_area_m2: float | None  # None: a static stand, no tunnel
     air_density_kg_m3: float
     density_given: bool
     filters: FilterSettings

@@ -1,536 +1,47 @@
-"""Schemas and loaders for the case (requirement file), aircraft and propulsion files (SPEC 4)."""
+"""Loaders of the case (requirement file) and the aircraft and propulsion files it names.
+
+The schemas and the loaded :class:`Case` are in :mod:`tuflexperf.io.schemas`; they are named
+here too, where every reader has imported them from.
+"""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Annotated, Any, ClassVar, Literal
-
-import numpy as np
-from pydantic import BeforeValidator, Field, field_validator, model_validator
+from typing import TYPE_CHECKING, Any
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, count_values, load_model
-from tuflexperf.models._math import Vectorizable, is_symbolic
-from tuflexperf.models.aircraft import (
-    DEFAULT_LIFTOFF_SPEED_FACTOR,
-    DEFAULT_OBSTACLE_HEIGHT_M,
-    DEFAULT_TRANSITION_LOAD_FACTOR,
-    EAS_REFERENCE_DENSITY_KG_M3,
-    MAX_AIRSPEED_M_S,
-    Aircraft,
-    TakeoffConfig,
-    true_airspeed_m_s,
+from tuflexperf.io.schemas import (
+    ABSURD_THRUST_TO_WEIGHT,
+    MAX_SAMPLES,
+    MAX_SOURCE_VALUES,
+    AircraftSchema,
+    AtmosphereSchema,
+    Case,
+    CaseSchema,
+    OeiRequirement,
+    PropulsionSchema,
+    Requirements,
+    TakeoffSchema,
+    UncertaintySchema,
+    aircraft_from_schema,
+    propulsion_from_schema,
+    refuse_absurd_propulsion,
 )
-from tuflexperf.models.atmosphere import G0_M_S2, isa_density_kg_m3
-from tuflexperf.models.thrust import (
-    DEFAULT_VOLTAGE_EXPONENT,
-    MAX_DELAY_S,
-    MAX_FAN_AREA_M2,
-    MIN_FAN_AREA_M2,
-    POLY22_TERMS,
-    Engine,
-    Propulsion,
-)
-
-Positive = Annotated[float, Field(gt=0)]
-NonNegative = Annotated[float, Field(ge=0)]
-Fraction = Annotated[float, Field(ge=0, le=1)]
-
-
-# Most Monte Carlo samples one check draws (block or --samples): ~1e8 already takes hours
-MAX_SAMPLES = 100_000_000
-
-# --- aircraft -------------------------------------------------------------------------------
-# Highest cl_max a wing reaches (flapped and slotted ~3; beyond 5 only blown lift, which the
-# drag polar does not model)
-MAX_CL_MAX = 5.0
-# Highest obstacle of the take-off [m]: the climb to it is flown at the field's density and
-# gradient (FAR 23/25: 15 m or 10.7 m)
-MAX_OBSTACLE_HEIGHT_M = 100.0
-# Highest pack voltage [V] a propulsion file may name (electric aircraft run up to ~800 V)
-MAX_REFERENCE_VOLTAGE_V = 1000.0
-# Largest exponent of thrust on the voltage ratio, either sign (2 by rpm ~ U; fit searches
-# -2..6)
-MAX_VOLTAGE_EXPONENT = 10.0
-
-class TakeoffSchema(StrictModel):
-    # the ground-roll attitude's lift coefficient is below the wing's most (cl_max's bound):
-    # 1e308 gave "the net force vanishes at nan m/s" (outside audit)
-    cl_ground: Annotated[float, Field(ge=0, le=MAX_CL_MAX)]
-    rolling_friction: Annotated[float, Field(ge=0, le=1)] = 0.04
-    liftoff_speed_m_s: Positive | None = None  # EAS; replaces the factor
-    liftoff_speed_factor: Annotated[float, Field(ge=1, le=3)] = DEFAULT_LIFTOFF_SPEED_FACTOR
-    rotation_time_s: Annotated[float, Field(ge=0, le=30)] = 0.0
-    # above 1.15^2 the arc is beyond cl_max: the obstacle distance says so (not attainable)
-    transition_load_factor: Annotated[float, Field(gt=1, le=5)] = DEFAULT_TRANSITION_LOAD_FACTOR
-    cd0_ground: Positive | None = None
-    k_ground: NonNegative | None = None
-
-
-# a thousand tonnes: beyond any aircraft a ducted fan flies (from ~1e154 kg the weight's
-# square overflows: a traceback, outside audit)
-MAX_MASS_KG = 1.0e6
-
-
-MAX_WING_AREA_M2 = 1.0e4  # ten times an A380's: a 1e300 m^2 wing lifted off at 0 m/s
-
-
-class AircraftSchema(StrictModel):
-    file_kind: ClassVar[str] = "aircraft"  # named when another kind of file is given
-    name: Name
-    mass_kg: Annotated[float, Field(gt=0, le=MAX_MASS_KG)]
-    wing_area_m2: Annotated[float, Field(gt=0, le=MAX_WING_AREA_M2)]
-    cd0: Positive
-    k: Positive
-    cl_max: Annotated[float, Field(gt=0, le=MAX_CL_MAX)]
-    takeoff: TakeoffSchema
-    launch: Literal["runway", "catapult"] = "runway"
-    # EAS at the end of the catapult stroke; below Mach 1 (400 m/s "flew"; outside audit)
-    launch_speed_m_s: Annotated[float, Field(gt=0, le=MAX_AIRSPEED_M_S)] | None = None
-    launch_energy_j: Annotated[float, Field(ge=0)] | None = None  # from ground equipment
-
-    @model_validator(mode="after")
-    def _check(self) -> AircraftSchema:
-        stall_eas = math.sqrt(
-            2.0 * self.mass_kg * G0_M_S2
-            / (EAS_REFERENCE_DENSITY_KG_M3 * self.wing_area_m2 * self.cl_max)
-        )
-        if stall_eas > MAX_AIRSPEED_M_S:  # a 1e-300 m^2 wing "flew" at 1e150 m/s (audit)
-            raise ValueError(
-                f"stall speed {stall_eas:.3g} m/s EAS is beyond the speed of sound: check "
-                "mass_kg, wing_area_m2 and cl_max"
-            )
-        if self.launch == "catapult":
-            if self.launch_speed_m_s is None:
-                raise ValueError("launch_speed_m_s: required with launch: catapult (EAS)")
-            if self.launch_speed_m_s < stall_eas:
-                raise ValueError(
-                    f"launch_speed_m_s: {self.launch_speed_m_s:g} m/s (EAS) is below the stall "
-                    f"speed {stall_eas:.2f} m/s EAS; a catapult must launch at or above stall"
-                )
-        elif self.launch_speed_m_s is not None or self.launch_energy_j is not None:
-            raise ValueError("launch_speed_m_s/launch_energy_j: only with launch: catapult")
-        elif self.takeoff.cl_ground > self.cl_max:  # it would hold the weight below stall
-            raise ValueError(
-                f"takeoff.cl_ground: {self.takeoff.cl_ground:g} is above cl_max "
-                f"{self.cl_max:g}; on the runway too the wing lifts at most cl_max"
-            )
-        # the stall EAS is the same at every density, so the check belongs to the file
-        liftoff = self.takeoff.liftoff_speed_m_s
-        if liftoff is not None:
-            stall = math.sqrt(
-                2.0 * self.mass_kg * G0_M_S2
-                / (EAS_REFERENCE_DENSITY_KG_M3 * self.wing_area_m2 * self.cl_max)
-            )
-            if liftoff < stall:
-                raise ValueError(
-                    f"takeoff.liftoff_speed_m_s: {liftoff:g} m/s (EAS) is below the stall speed "
-                    f"{stall:.2f} m/s EAS (mass_kg, wing_area_m2, cl_max); lift-off needs >= stall"
-                )
-        return self
-
-
-# --- propulsion -----------------------------------------------------------------------------
-class Poly22Schema(StrictModel):
-    p00: float
-    p10: float
-    p01: float
-    p20: float
-    p11: float
-    p02: float
-
-
-class PowerSurfaceSchema(StrictModel):
-    """Electrical power of one fan, W, vs throttle fraction and airspeed (SPEC 4)."""
-
-    model: Literal["poly22"]
-    coefficients: Poly22Schema
-    r2: float | None = None
-    rmse_w: NonNegative | None = None
-    n_points: Annotated[int, Field(ge=0)] | None = None
-
-
-class EngineSchema(StrictModel):
-    name: EngineName
-    coefficients: Poly22Schema
-    r2: float | None = None
-    rmse_n: NonNegative | None = None
-    standard_errors: Poly22Schema | None = None
-    n_points: Annotated[int, Field(ge=0)] | None = None
-    covariance: list[list[float]] | None = None  # of p00..p02 (POLY22_TERMS order) [N^2]
-    residual_sd_n: NonNegative | None = None
-    extrapolation_sd_n: NonNegative | None = None
-
-    @model_validator(mode="after")
-    def _check_covariance(self) -> EngineSchema:
-        if self.covariance is None:
-            return self
-        matrix = self.covariance
-        if len(matrix) != len(POLY22_TERMS) or any(len(r) != len(POLY22_TERMS) for r in matrix):
-            raise ValueError("covariance: must be a 6x6 matrix (p00, p10, p01, p20, p11, p02)")
-        values = [v for row in matrix for v in row]
-        if not all(math.isfinite(v) for v in values):
-            raise ValueError("covariance: must be finite")
-        array = np.asarray(matrix, dtype=float)
-        scale = max(float(np.abs(array).max()), 1e-300)
-        if not np.allclose(array, array.T, rtol=1e-6, atol=1e-9 * scale):
-            raise ValueError("covariance: must be symmetric")
-        if float(np.linalg.eigvalsh(array).min()) < -1e-9 * scale:
-            raise ValueError("covariance: must be positive semi-definite")
-        return self
-    windmilling_drag_coefficient: NonNegative | None = None
-    power: PowerSurfaceSchema | None = None
-
-
-# fit's own provenance holds ~9 values per run (~150 for the shipped campaign): a million is
-# a campaign of 100,000 runs, and far below what an alias bomb expands to (9^10)
-MAX_SOURCE_VALUES = 1_000_000
-
-
-# beyond any subsonic airframe's speed (a textbook jet's table may reach past Mach 1 at
-# altitude's lower speed of sound, so not MAX_AIRSPEED_M_S)
-MAX_TESTED_AIRSPEED_M_S = 1000.0
-
-
-class PropulsionSchema(StrictModel):
-    file_kind: ClassVar[str] = "propulsion"  # named when another kind of file is given
-    name: Name
-    model: Literal["poly22"]
-    # airspeeds tested in the tunnel: none negative (a range of [-30, 30] was taken)
-    tested_airspeed_m_s: Annotated[list[Annotated[float, Field(ge=0)]],
-                                   Field(min_length=2, max_length=2)]
-    # a dead time or lag beyond MAX_DELAY_S is no fan's (1e9 s was taken; outside audit)
-    delay_s: Annotated[float, Field(ge=0.0, le=MAX_DELAY_S)] = 0.0
-    lag_s: Annotated[float, Field(ge=0.0, le=MAX_DELAY_S)] = 0.0  # spool lag after delay_s
-    # the test day's air: a test stand or tunnel is on the ground (ISA 11 km is 0.36; the
-    # coldest sea-level air ~1.5); 1e-9 scaled the thrust 1e9-fold into a PASS (outside audit)
-    reference_density_kg_m3: Annotated[float, Field(ge=0.3, le=2.0)] | None = None
-    # a pack of any aircraft a ducted fan flies, and thrust ~ U^2 (rpm ~ U); beyond these the
-    # powers of the voltage ratio overflowed with a message naming no key (outside audit)
-    reference_voltage_v: Annotated[float, Field(gt=0, le=MAX_REFERENCE_VOLTAGE_V)] | None = None
-    voltage_exponent: Annotated[float, Field(ge=-MAX_VOLTAGE_EXPONENT, le=MAX_VOLTAGE_EXPONENT)] = \
-        DEFAULT_VOLTAGE_EXPONENT
-    fan_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=MAX_FAN_AREA_M2)] | None = None
-    throttle_unit: Literal["fraction", "percent"] = "fraction"
-    engines: Annotated[list[EngineSchema], Field(min_length=1)]
-    source: dict[str, Any] | None = None  # free-form provenance written by `fit`
-
-    @field_validator("source", mode="before")
-    @classmethod
-    def _bounded_source(cls, value: Any) -> Any:
-        # YAML aliases share one object many times: nine levels of nine expand to 4e8 values
-        # that the exports wrote out until memory ran out (outside audit); count, then stop
-        if count_values(value, MAX_SOURCE_VALUES) > MAX_SOURCE_VALUES:
-            raise ValueError(f"more than {MAX_SOURCE_VALUES} values once its aliases are "
-                             "expanded: write the provenance out plainly")
-        return value
-
-    @model_validator(mode="after")
-    def _check(self) -> PropulsionSchema:
-        low, high = self.tested_airspeed_m_s
-        if not low < high:
-            raise ValueError(f"tested_airspeed_m_s: low {low} must be below high {high}")
-        if not (-MAX_TESTED_AIRSPEED_M_S <= low and high <= MAX_TESTED_AIRSPEED_M_S):
-            # [0, 1e308] silenced every extrapolation note and the exports' airspeed clip
-            raise ValueError(f"tested_airspeed_m_s: [{low:g}, {high:g}] m/s is no range a "
-                             f"thrust model was measured over (at most "
-                             f"{MAX_TESTED_AIRSPEED_M_S:g} m/s)")
-        names = [engine.name for engine in self.engines]
-        if len(set(names)) != len(names):
-            raise ValueError(f"engines: duplicate engine names {names}")
-        for engine in self.engines:
-            if engine.windmilling_drag_coefficient is not None and self.fan_area_m2 is None:
-                raise ValueError(
-                    f"engines: {engine.name}: windmilling_drag_coefficient needs fan_area_m2"
-                )
-        return self
-
-
-# --- case -----------------------------------------------------------------------------------
-class AtmosphereSchema(StrictModel):
-    altitude_m: Annotated[float, Field(ge=-1000, le=20000)] = 0.0
-    temperature_offset_k: Annotated[float, Field(ge=-80, le=80)] = 0.0
-
-
-class TakeoffRequirement(StrictModel):
-    max_ground_roll_m: Positive | None = None
-    max_distance_to_obstacle_m: Positive | None = None
-    obstacle_height_m: Annotated[
-        float, Field(gt=0, le=MAX_OBSTACLE_HEIGHT_M)
-    ] = DEFAULT_OBSTACLE_HEIGHT_M  # FAR 23: 50 ft
-
-    @model_validator(mode="after")
-    def _check(self) -> TakeoffRequirement:
-        if self.max_ground_roll_m is None and self.max_distance_to_obstacle_m is None:
-            raise ValueError(
-                "give max_ground_roll_m and/or max_distance_to_obstacle_m (nothing to check)"
-            )
-        return self
-
-
-Airspeed = Annotated[float, Field(gt=0, le=MAX_AIRSPEED_M_S)]  # below Mach 1: poly22 at low speed
-
-
-class EnvelopeRequirement(StrictModel):
-    """The airspeeds trim and OEI are solved over: each bound a true airspeed (``..._m_s``)
-    or an equivalent one (``..._eas_m_s``, SPEC 3: true airspeed unless a key says ``_eas``)."""
-
-    min_airspeed_m_s: Positive | None = None
-    max_airspeed_m_s: Airspeed | None = None
-    min_airspeed_eas_m_s: Positive | None = None
-    max_airspeed_eas_m_s: Airspeed | None = None
-    max_trim_throttle: Fraction = 1.0
-    stall_margin: Annotated[float, Field(ge=1, le=3)] = 1.0  # level flight needs V >= this x stall
-
-    @model_validator(mode="after")
-    def _check(self) -> EnvelopeRequirement:
-        for end in ("min", "max"):
-            true, equivalent = (getattr(self, f"{end}_airspeed_m_s"),
-                                getattr(self, f"{end}_airspeed_eas_m_s"))
-            if (true is None) == (equivalent is None):
-                raise ValueError(
-                    f"give {end}_airspeed_m_s (true airspeed) or {end}_airspeed_eas_m_s "
-                    f"(equivalent airspeed), {'not both' if true is not None else 'one of them'}"
-                )
-        for suffix in ("m_s", "eas_m_s"):  # bounds of one kind compare at any density
-            low = getattr(self, f"min_airspeed_{suffix}")
-            high = getattr(self, f"max_airspeed_{suffix}")
-            if low is not None and high is not None and not low < high:
-                raise ValueError(f"min_airspeed_{suffix} ({low}) must be below "
-                                 f"max_airspeed_{suffix} ({high})")
-        return self
-
-    @property
-    def in_eas(self) -> bool:
-        """Whether a bound is an equivalent airspeed (its true airspeed follows the density)."""
-        return self.min_airspeed_eas_m_s is not None or self.max_airspeed_eas_m_s is not None
-
-    def bounds_m_s(self, density_kg_m3: Vectorizable) -> tuple[Any, Any]:
-        """The envelope's (least, greatest) true airspeed [m/s] at ``density_kg_m3`` [kg/m^3].
-
-        Floats for a float density; a symbolic density (CasADi, the sensitivities) gives an
-        equivalent-airspeed bound as the expression that moves with it.
-
-        References
-        ----------
-        SPEC 3 (airspeeds the pilot sets are EAS; envelope bounds true unless ``_eas``).
-        """
-        def true(tas: float | None, eas: float | None) -> Any:
-            if tas is not None:
-                return float(tas)
-            speed = true_airspeed_m_s(float(eas), density_kg_m3)  # type: ignore[arg-type]
-            return speed if is_symbolic(speed) else float(speed)
-
-        return (true(self.min_airspeed_m_s, self.min_airspeed_eas_m_s),
-                true(self.max_airspeed_m_s, self.max_airspeed_eas_m_s))
-
-
-class OeiRequirement(StrictModel):
-    dead_engine: Literal["windmilling", "zero"] = "windmilling"
-    max_throttle: Fraction = 1.0
-
-
-class EnduranceRequirement(StrictModel):
-    throttle: Fraction
-    min_flight_time_min: Positive
-
-
-class MissionRequirement(StrictModel):
-    """A mission file (path relative to the case) and the charge to land with (SPEC 4)."""
-
-    file: FileName
-    min_landing_charge_fraction: Annotated[float, Field(ge=0, lt=1)] = 0.2
-
-
-def refuse_null_block(value: Any, what: str, hint: str) -> Any:
-    """``value`` unless it is null (a bare ``key:``), which drops a block without a word."""
-    if value is None:
-        raise ValueError(f"{what} is empty (null): leave it out, or give its keys{hint}")
-    return value
-
-
-class Requirements(StrictModel):
-    takeoff: TakeoffRequirement | None = None
-    envelope: EnvelopeRequirement | None = None
-    oei: OeiRequirement | None = None
-    endurance: EnduranceRequirement | None = None
-    mission: MissionRequirement | None = None
-
-    @field_validator("*", mode="before")
-    @classmethod
-    def _no_null_block(cls, value: Any) -> Any:
-        # `takeoff: null` (or a bare `takeoff:`) dropped the requirement without a word, and
-        # check passed without it (outside audit): leave a block out, or give its keys
-        return refuse_null_block(value, "the requirement block", "")
-
-
-class DistributionSchema(StrictModel):
-    """Exactly one of: ``normal: [mean, sd]``, ``uniform: [low, high]``,
-    ``truncated_normal: [mean, sd, low, high]``."""
-
-    normal: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
-    uniform: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
-    truncated_normal: Annotated[list[float], Field(min_length=4, max_length=4)] | None = None
-
-    @model_validator(mode="after")
-    def _check(self) -> DistributionSchema:
-        given = [k for k in ("normal", "uniform", "truncated_normal") if getattr(self, k)]
-        if len(given) != 1:
-            raise ValueError("give exactly one of normal, uniform, truncated_normal")
-        values = getattr(self, given[0])
-        if not all(math.isfinite(v) for v in values):
-            raise ValueError(f"{given[0]}: values must be finite")
-        if given[0] == "normal" and values[1] < 0:
-            raise ValueError("normal: [mean, sd] needs sd >= 0")
-        if given[0] == "uniform" and not values[0] <= values[1]:
-            raise ValueError("uniform: [low, high] needs low <= high")
-        if given[0] == "truncated_normal" and not (values[1] > 0 and values[2] < values[3]):
-            raise ValueError("truncated_normal: [mean, sd, low, high] needs sd > 0, low < high")
-        return self
-
-    @property
-    def kind(self) -> str:
-        return next(k for k in ("normal", "uniform", "truncated_normal") if getattr(self, k))
-
-    @property
-    def arguments(self) -> list[float]:
-        return list(getattr(self, self.kind))
-
-
-class PropulsionUncertaintySchema(StrictModel):
-    covariance: bool = True
-    extrapolation: bool = True
-    # the fit's residual_sd_n as the model's own error at a point (the paper's +-0.5 N):
-    # the coefficients' covariance is the mean surface's uncertainty alone
-    residual: bool = True
-
-
-def _whole_number(value: Any) -> Any:
-    """``1e5`` is how a count is often written, and YAML reads it as a float: a whole one is
-    the integer (``1e9`` then names the cap, not "not a valid integer"); 2.5 stays refused."""
-    if isinstance(value, float) and value.is_integer() and abs(value) < 2.0 ** 63:
-        return int(value)
-    return value
-
-
-class UncertaintySchema(StrictModel):
-    samples: Annotated[int, BeforeValidator(_whole_number), Field(ge=1, le=MAX_SAMPLES)] = 10_000
-    seed: Annotated[int, BeforeValidator(_whole_number), Field(ge=0)] = 1
-    # below 1: the lower confidence bound of P(met) never reaches 1 with finite samples
-    required_probability: Annotated[float, Field(gt=0, lt=1)] = 0.95
-    propulsion: PropulsionUncertaintySchema = PropulsionUncertaintySchema()
-    parameters: dict[str, DistributionSchema] = {}
-
-
-class CaseSchema(StrictModel):
-    file_kind: ClassVar[str] = "case"  # named when another kind of file is given
-    name: Name
-    aircraft: FileName
-    propulsion: FileName
-    battery: FileName | None = None
-    atmosphere: AtmosphereSchema = AtmosphereSchema()
-    requirements: Requirements = Requirements()
-    uncertainty: UncertaintySchema | None = None
-
-    @field_validator("uncertainty", mode="before")
-    @classmethod
-    def _no_null_uncertainty(cls, value: Any) -> Any:
-        # a bare `uncertainty:` turned the probabilistic check off without a word (outside
-        # audit), as an empty requirement block dropped the requirement
-        return refuse_null_block(value, "the uncertainty block", " ({} for the defaults)")
-
-
-# --- loaded objects -------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Case:
-    """A loaded, validated case: the model objects plus the requirement blocks."""
-
-    name: str
-    path: Path
-    aircraft: Aircraft
-    propulsion: Propulsion
-    atmosphere: AtmosphereSchema
-    requirements: Requirements
-    aircraft_path: Path
-    propulsion_path: Path
-    battery_path: Path | None
-    uncertainty: UncertaintySchema | None = None
-    # the validated file behind ``propulsion`` (fit statistics, provenance) for the exports
-    propulsion_schema: PropulsionSchema | None = None
-    # keys changed for this run by ``--set`` (dotted key, value): the files say otherwise
-    overrides: tuple[tuple[str, float], ...] = ()
-
-    @property
-    def density_kg_m3(self) -> float:
-        """ISA density at the case's altitude and temperature offset."""
-        return float(
-            isa_density_kg_m3(self.atmosphere.altitude_m, self.atmosphere.temperature_offset_k)
-        )
-
-
-def aircraft_from_schema(schema: AircraftSchema) -> Aircraft:
-    to = schema.takeoff
-    return Aircraft(
-        name=schema.name,
-        mass_kg=schema.mass_kg,
-        wing_area_m2=schema.wing_area_m2,
-        cd0=schema.cd0,
-        k=schema.k,
-        cl_max=schema.cl_max,
-        takeoff=TakeoffConfig(
-            cl_ground=to.cl_ground,
-            rolling_friction=to.rolling_friction,
-            liftoff_speed_m_s=to.liftoff_speed_m_s,
-            cd0_ground=to.cd0_ground,
-            k_ground=to.k_ground,
-            liftoff_speed_factor=to.liftoff_speed_factor,
-            rotation_time_s=to.rotation_time_s,
-            transition_load_factor=to.transition_load_factor,
-        ),
-        launch=schema.launch,
-        launch_speed_m_s=schema.launch_speed_m_s,
-        launch_energy_j=schema.launch_energy_j,
-    )
-
-
-def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
-    scale = 100.0 if schema.throttle_unit == "percent" else 1.0
-    engines = tuple(
-        Engine(
-            name=e.name,
-            coefficients={term: getattr(e.coefficients, term) for term in POLY22_TERMS},
-            throttle_scale=scale,
-            covariance=(
-                tuple(tuple(float(c) for c in row) for row in e.covariance)
-                if e.covariance is not None
-                else None
-            ),
-            residual_sd_n=e.residual_sd_n,
-            extrapolation_sd_n=e.extrapolation_sd_n,
-            windmilling_drag_coefficient=e.windmilling_drag_coefficient,
-            power_coefficients=(
-                {term: getattr(e.power.coefficients, term) for term in POLY22_TERMS}
-                if e.power is not None
-                else None
-            ),
-        )
-        for e in schema.engines
-    )
-    low, high = schema.tested_airspeed_m_s
-    return Propulsion(
-        name=schema.name,
-        engines=engines,
-        tested_airspeed_m_s=(low, high),
-        delay_s=schema.delay_s,
-        lag_s=schema.lag_s,
-        reference_density_kg_m3=schema.reference_density_kg_m3,
-        metadata={"source": schema.source} if schema.source else {},
-        fan_area_m2=schema.fan_area_m2,
-        reference_voltage_v=schema.reference_voltage_v,
-        voltage_exponent=schema.voltage_exponent,
-    )
+from tuflexperf.io.yamlio import load_model
+
+if TYPE_CHECKING:
+    from tuflexperf.models.aircraft import Aircraft
+    from tuflexperf.models.thrust import Propulsion
+
+__all__ = [
+    "ABSURD_THRUST_TO_WEIGHT", "MAX_SAMPLES", "MAX_SOURCE_VALUES", "AircraftSchema",
+    "AtmosphereSchema", "Case", "CaseSchema", "OeiRequirement", "PropulsionSchema",
+    "Requirements", "TakeoffSchema", "UncertaintySchema", "FILE_KEYS", "aircraft_from_schema",
+    "case_files", "load_aircraft", "load_case", "load_propulsion", "propulsion_from_schema",
+    "refuse_absurd_propulsion", "shipped_case_path",
+]
 
 
 def load_aircraft(path: Path) -> Aircraft:
@@ -565,79 +76,108 @@ def shipped_case_path() -> Path:
     raise InputError("the shipped TU-Flex case is missing from this installation; pass a CASE")
 
 
-# Static thrust beyond this many times the aircraft's weight per engine is no fan for this
-# aircraft: most likely coefficients read in the wrong throttle unit (fraction vs percent).
-ABSURD_THRUST_TO_WEIGHT = 10.0
+# the files a case names that a flag may replace for one run (--aircraft, --propulsion,
+# --battery), in the order their problems are reported
+FILE_KEYS = ("battery", "aircraft", "propulsion")
 
 
-def refuse_absurd_propulsion(case: Case) -> None:
-    """Bad input: a model whose full-throttle static thrust, at the case's air density (as
-    every analysis scales it), is not positive or absurd."""
-    from tuflexperf.models.thrust import density_ratio, engine_thrust_n
+def _named_files(case_path: Path) -> dict[str, str]:
+    """The file names a case that its schema refused writes (its other problems are said
+    already): each named file is still checked, so one run reports them all."""
+    from tuflexperf.io.yamlio import read_yaml
 
-    weight = case.aircraft.weight_n
-    scale = density_ratio(case.propulsion, case.density_kg_m3)
-    low, high = case.propulsion.tested_airspeed_m_s
-    throttle, airspeed = np.meshgrid(np.linspace(0.0, 1.0, 11), np.linspace(low, high, 13))
-    for index, engine in enumerate(case.propulsion.engines):
-        static = float(engine_thrust_n(engine, 1.0, 0.0, scale))
-        where = f"{case.propulsion_path}: engines[{index}] ({engine.name})"
-        if not static > 0:
-            raise InputError(f"{where}: full-throttle static thrust {static:.3g} N is not "
-                             "positive; check the coefficients and throttle_unit")
-        if static > ABSURD_THRUST_TO_WEIGHT * weight:
-            raise InputError(
-                f"{where}: full-throttle static thrust {static:.4g} N is {static / weight:.3g} "
-                f"x the aircraft's weight ({weight:.3g} N): physically absurd; is throttle_unit "
-                "right (fraction vs percent)?"
-            )
-        # inside the tested range the model is the measurement: a p02 of 1e300 PASSed trim
-        # at throttle 0 (outside audit)
-        with np.errstate(over="ignore", invalid="ignore"):
-            thrust = np.asarray(engine_thrust_n(engine, throttle, airspeed, scale), dtype=float)
-        worst = np.unravel_index(np.argmax(np.abs(np.nan_to_num(thrust, nan=np.inf))),
-                                 thrust.shape)
-        if not abs(thrust[worst]) <= ABSURD_THRUST_TO_WEIGHT * weight:
-            raise InputError(
-                f"{where}: thrust {thrust[worst]:.4g} N at throttle {throttle[worst]:.1f}, "
-                f"{airspeed[worst]:.3g} m/s (inside the tested range) is beyond "
-                f"{ABSURD_THRUST_TO_WEIGHT:g} x the aircraft's weight: check the coefficients")
+    try:
+        data = read_yaml(case_path)
+    except InputError:
+        return {}
+    if not isinstance(data, dict):
+        return {}
+    return {key: data[key] for key in FILE_KEYS if isinstance(data.get(key), str) and data[key]}
 
 
-def load_case(path: Path | str | None = None) -> Case:
-    """Load a requirement file and the aircraft/propulsion files it names (paths relative to it)."""
+def _given(value: Path, flag: str) -> Path:
+    """A file given by a flag (relative to the working directory), resolved."""
+    target = Path(value).resolve()
+    if not target.is_file():
+        from tuflexperf.io.files import why_not_a_file
+
+        raise InputError(f"{flag}: {why_not_a_file(target)}: {value}")
+    return target
+
+
+def _validate_battery(path: Path) -> None:
+    from tuflexperf.io.battery import load_battery  # validate now: bad keys fail early
+
+    load_battery(path)
+
+
+def load_case(path: Path | str | None = None,
+              replace: Mapping[str, Path] | None = None) -> Case:
+    """Load a requirement file and the aircraft/propulsion files it names (paths relative to it).
+
+    ``replace`` maps ``aircraft``, ``propulsion`` or ``battery`` to a file (relative to the
+    working directory) read instead of the one the case names, for this run: the
+    ``--aircraft``, ``--propulsion`` and ``--battery`` flags, which its problems name.
+
+    Raises one :class:`InputError` holding every problem of the case and of every file it
+    names (three misspelt keys in one file and a bad value in another: four lines).
+    """
     case_path = Path(path) if path is not None else shipped_case_path()
     if case_path.is_dir():
         raise InputError(f"{case_path}: is a directory, expected a requirement file (.yaml)")
-    schema = load_model(case_path, CaseSchema)
-    aircraft_path = _resolve(case_path, "aircraft", schema.aircraft)
-    propulsion_path = _resolve(case_path, "propulsion", schema.propulsion)
-    battery_path = _resolve(case_path, "battery", schema.battery) if schema.battery else None
-    if battery_path is not None:
-        from tuflexperf.io.battery import load_battery  # validate now: bad keys fail early
-
-        load_battery(battery_path)
-    aircraft = load_aircraft(aircraft_path)
-    propulsion_schema = load_model(propulsion_path, PropulsionSchema)
-    propulsion = propulsion_from_schema(propulsion_schema)
+    replace = dict(replace or {})
+    problems: list[str] = []
+    schema: CaseSchema | None = None
+    try:
+        schema = load_model(case_path, CaseSchema)
+        named = {key: getattr(schema, key) for key in FILE_KEYS if getattr(schema, key)}
+    except InputError as exc:
+        problems.extend(exc.problems)
+        named = _named_files(case_path)
+    paths: dict[str, Path] = {}
+    for key in FILE_KEYS:
+        try:
+            if key in replace:
+                paths[key] = _given(replace[key], f"--{key}")
+            elif key in named:
+                paths[key] = _resolve(case_path, key, named[key])
+        except InputError as exc:
+            problems.extend(exc.problems)
+    loaders = {"battery": _validate_battery, "aircraft": load_aircraft,
+               "propulsion": lambda p: load_model(p, PropulsionSchema)}
+    loaded: dict[str, Any] = {}
+    for key, target in paths.items():
+        try:
+            loaded[key] = loaders[key](target)
+        except InputError as exc:
+            flag = f"--{key}: " if key in replace else ""
+            problems.extend(flag + problem for problem in exc.problems)
+    if problems or schema is None:
+        raise InputError.of(problems)
+    propulsion_schema = loaded["propulsion"]
     case = Case(
         name=schema.name,
         path=case_path,
-        aircraft=aircraft,
-        propulsion=propulsion,
+        aircraft=loaded["aircraft"],
+        propulsion=propulsion_from_schema(propulsion_schema),
         atmosphere=schema.atmosphere,
         requirements=schema.requirements,
-        aircraft_path=aircraft_path,
-        propulsion_path=propulsion_path,
-        battery_path=battery_path,
+        aircraft_path=paths["aircraft"],
+        propulsion_path=paths["propulsion"],
+        battery_path=paths.get("battery"),
         uncertainty=schema.uncertainty,
         propulsion_schema=propulsion_schema,
+        replaced=tuple(key for key in FILE_KEYS if key in replace),
     )
     if not math.isfinite(case.density_kg_m3) or case.density_kg_m3 <= 0:
         raise InputError(f"{case_path}: atmosphere: gives no valid density")
-    refuse_absurd_propulsion(case)
+    try:
+        refuse_absurd_propulsion(case)
+    except InputError as exc:
+        raise InputError(("--propulsion: " if "propulsion" in replace else "") + str(exc)
+                         ) from None
     if schema.uncertainty is not None:
-        from tuflexperf.io.dotted import check_key  # dotted keys need the loaded case
+        from tuflexperf.io.dotted import check_key  # only a case that samples needs it
 
         for key in schema.uncertainty.parameters:
             check_key(case, key, f"{case_path}: uncertainty.parameters")

@@ -17,7 +17,7 @@ from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.battery import BATTERY_FIELDS
-from tuflexperf.io.case import AircraftSchema, Case, Requirements, refuse_absurd_propulsion
+from tuflexperf.io.schemas import AircraftSchema, Case, Requirements, refuse_absurd_propulsion
 from tuflexperf.models.aircraft import Aircraft
 
 if TYPE_CHECKING:
@@ -83,7 +83,7 @@ def unset_optional_keys(case: Case) -> set[str]:
     """
     import typing
 
-    from tuflexperf.io.case import AtmosphereSchema, TakeoffSchema
+    from tuflexperf.io.schemas import AtmosphereSchema, TakeoffSchema
 
     def numeric_optional(annotation: Any) -> bool:
         stack, kinds = [annotation], set()
@@ -158,7 +158,7 @@ def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
 
 
 def _schema_field(case: Case, key: str) -> Any:
-    from tuflexperf.io.case import AtmosphereSchema, TakeoffSchema
+    from tuflexperf.io.schemas import AtmosphereSchema, TakeoffSchema
 
     head, *rest = key.split(".")
     if head == "battery":

@@ -319,38 +319,65 @@ def validation_message(
     An unknown key (a misspelt one) is reported before anything else, with the closest
     valid key at that place: a misspelt requirement must never pass silently.
     """
+    problems = validation_problems(path, error, model)
+    more = len(problems) - 1
+    tail = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
+    return problems[0] + tail
+
+
+def validation_problems(
+    path: Path | str, error: ValidationError, model: type[BaseModel] | None = None
+) -> list[str]:
+    """Every problem of ``error``, one line each naming the file, the key and the reason.
+
+    Unknown keys (misspelt ones) come first, each with the closest valid key at its place;
+    a required key that a misspelling left missing beside it is said once, by the
+    misspelling ("did you mean"), not a second time as missing.
+    """
     errors = sorted(error.errors(), key=lambda e: e["type"] != "extra_forbidden")
-    first = errors[0]
-    loc = format_location(tuple(first["loc"]))
-    kind = first["type"]
+    explained: set[tuple[Any, ...]] = set()  # missing keys a misspelling accounts for
+    problems = []
+    for e in errors:
+        loc = tuple(e["loc"])
+        if e["type"] == "missing" and loc in explained:
+            continue
+        problem, meant = _problem(e, errors, model)
+        if meant is not None:
+            explained.add((*loc[:-1], meant))
+        problems.append(f"{path}: {format_location(loc)}: {problem}")
+    return problems
+
+
+def _problem(
+    e: Any, errors: list[Any], model: type[BaseModel] | None
+) -> tuple[str, str | None]:
+    """What is wrong in one pydantic error, and the key a misspelt one most likely meant."""
+    kind = e["type"]
     if kind == "extra_forbidden":
-        key = str(first["loc"][-1])
-        parent = tuple(first["loc"][:-1])
+        key = str(e["loc"][-1])
+        parent = tuple(e["loc"][:-1])
         # a misspelt required key leaves that key missing beside it: the missing one is
         # the likelier meaning ('p12' for a missing 'p11', not the present 'p20')
-        missing = [str(e["loc"][-1]) for e in errors
-                   if e["type"] == "missing" and tuple(e["loc"][:-1]) == parent]
+        missing = [str(m["loc"][-1]) for m in errors
+                   if m["type"] == "missing" and tuple(m["loc"][:-1]) == parent]
         close = (difflib.get_close_matches(key, missing, n=1, cutoff=0.3)
-                 or difflib.get_close_matches(key, _valid_keys(model, tuple(first["loc"])), n=1))
+                 or difflib.get_close_matches(key, _valid_keys(model, tuple(e["loc"])), n=1))
         hint = f" (did you mean {close[0]!r}?)" if close else ""
-        problem = f"unknown key {key!r}{hint}"
-    elif kind == "missing":
-        problem = "required key is missing"
-    elif isinstance(first.get("input"), AmbiguousNumber):
-        value = first["input"]
-        problem = f"{value.problem()}, e.g. {_decimal_hint(value)}"
-    else:
-        problem = str(first["msg"]).splitlines()[0].removeprefix("Value error, ")
-        value = first.get("input")
-        if value is None and "null" not in problem:
-            problem += " (got null)"  # YAML's word for it
-        elif value is not None and not isinstance(value, (dict, list)):
-            shown = value.item() if hasattr(value, "item") else value
-            text = repr(shown)
-            problem += f" (got {text[:60] + '...' if len(text) > 60 else text})"
-    more = len(errors) - 1
-    tail = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
-    return f"{path}: {loc}: {problem}{tail}"
+        return f"unknown key {key!r}{hint}", (close[0] if close else None)
+    if kind == "missing":
+        return "required key is missing", None
+    if isinstance(e.get("input"), AmbiguousNumber):
+        value = e["input"]
+        return f"{value.problem()}, e.g. {_decimal_hint(value)}", None
+    problem = str(e["msg"]).splitlines()[0].removeprefix("Value error, ")
+    value = e.get("input")
+    if value is None and "null" not in problem:
+        problem += " (got null)"  # YAML's word for it
+    elif value is not None and not isinstance(value, (dict, list)):
+        shown = value.item() if hasattr(value, "item") else value
+        text = repr(shown)
+        problem += f" (got {text[:60] + '...' if len(text) > 60 else text})"
+    return problem, None
 
 
 def _decimal_hint(value: str) -> str:
@@ -415,4 +442,4 @@ def load_model(path: Path, model: type[M]) -> M:
             wanted = model.file_kind  # type: ignore[attr-defined]
             raise InputError(f"{path}: this is {_article(kind)} file, not {_article(wanted)} "
                              f"file (its keys are {_article(kind)} file's)") from None
-        raise InputError(validation_message(path, exc, model)) from None
+        raise InputError.of(validation_problems(path, exc, model)) from None

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.errors import InputError
 from tuflexperf.io.campaign import Campaign, CampaignRun, load_campaign
 from tuflexperf.io.files import sha256_of
 from tuflexperf.io.inputs import path_text
@@ -84,6 +85,9 @@ def fit_campaign(
 ) -> FitResult:
     """Reduce a campaign and fit the poly22 per engine (module docstring)."""
     campaign = load_campaign(Path(manifest))
+    if glauert and campaign.tunnel_area_m2 is None:
+        raise InputError(f"--glauert: {campaign.path}: tunnel_area_m2 is not given (a static "
+                         "stand has no tunnel walls to correct for)")
     pool = ThreadPoolExecutor(max_workers=_workers(), thread_name_prefix="tuflexperf-fit")
     try:
         # every run is read, and each sweep reduced, as soon as a worker is free; the results
@@ -319,7 +323,8 @@ def _fit_campaign(
         for cell, (volts, amps, watts) in cells_of[index]:
             d = float(drag.drag_n(cell.airspeed_m_s)) if drag is not None else 0.0
             thrust = cell.force_n + d
-            ratio = float(
+            # no tunnel (a static stand): no walls, no blockage to correct
+            ratio = math.nan if campaign.tunnel_area_m2 is None else float(
                 glauert_ratio(
                     thrust,
                     cell.airspeed_m_s,
