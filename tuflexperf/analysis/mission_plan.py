@@ -77,7 +77,7 @@ class MissionPlanning:
                     if dead is not None:  # SPEC 3: one engine inoperative, not two
                         raise InputError(
                             f"{where}[{i}]: a second engine_failure ({s.engine}): "
-                            f"{self.engines[dead]} has already failed and the SPEC's OEI rule "
+                            f"{self.engines[dead]} has already failed and the OEI rule "
                             "flies on one engine inoperative"
                         )
                     if self.n < 2:

@@ -165,6 +165,6 @@ def windmilling_notes(propulsion: Propulsion, density_kg_m3: float) -> list[str]
                 f"{engine.windmilling_drag_coefficient:g} drags {by_coefficient:.2f} N at "
                 f"{top:g} m/s, its own thrust model at throttle 0 {by_model:.2f} N there "
                 f"({by_model / max(by_coefficient, 1e-12):.1f}x): a dead {engine.name} is "
-                "flown with the coefficient's drag (SPEC 3); the data disagree"
+                "flown with the coefficient's drag (the propulsion file's rule); the data disagree"
             )
     return notes

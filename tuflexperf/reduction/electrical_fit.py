@@ -169,7 +169,7 @@ def electrical_fits(
                 f"{campaign.path}: engine {name}: voltage exponent not determined by the runs "
                 f"({fit.reason}); " + (f"the other engines' {exponent:.3g} applies"
                                        if exponent is not None else
-                                       f"the SPEC default {DEFAULT_VOLTAGE_EXPONENT:g} applies")
+                                       f"the default {DEFAULT_VOLTAGE_EXPONENT:g} applies")
             )
     if exponent is not None and out.reference_voltage_v is not None:
         # every engine's thrust at U_ref with the one exponent the file states: an engine
