@@ -411,9 +411,12 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
                    hatch=_REASON_HATCH.get(why), zorder=0,
                    label=f"trim not attainable: {why}"
                    if all(w != why for _, _, w in runs[:k]) else None)
-    _mark_trim_failures(ax, trim, envelope.max_trim_throttle, runs)
+    failures = _mark_trim_failures(ax, trim, envelope.max_trim_throttle, runs)
     if oei is not None:
-        _mark_oei_failure(ax, oei.critical, case.requirements.oei)
+        failures += _mark_oei_failure(ax, oei.critical, case.requirements.oei)
+    if failures:  # above the axes, in red: never over a curve, whatever the case
+        ax.set_title("\n".join(wrap_text(f, 80) for f in failures), color=STYLE["limit"]["color"],
+                     fontsize=10, fontweight="bold")
     ax.axvline(stall, **STYLE["stall"], label=f"stall speed {stall:.1f} m/s")
     _envelope_lines(ax, case)
     ax.set_xlim(left, right)
@@ -427,49 +430,44 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
 
 
 def _mark_trim_failures(ax: Any, trim: Any, limit: float,
-                        runs: list[tuple[int, int, str]]) -> None:
-    """Red crosses on the limit at each airspeed trim cannot fly, red squares where its
-    throttle is above the limit, each set labelled with its airspeeds and why."""
+                        runs: list[tuple[int, int, str]]) -> list[str]:
+    """Red crosses on the limit at each airspeed trim cannot fly, red dots where its
+    throttle is above the limit, each set labelled; returns the failures in words."""
     speeds = np.asarray(trim.airspeed_m_s, dtype=float)
+    said = []
     for a, b, why in runs:
         span = (f"{speeds[a]:.1f} m/s" if a == b else f"{speeds[a]:.1f}-{speeds[b]:.1f} m/s")
         ax.plot(speeds[a:b + 1], np.full(b + 1 - a, limit), **style_of(
             "limit", linestyle="none", marker="X", markersize=11, zorder=6, clip_on=False),
             label=f"FAIL: trim not attainable at {span} ({why})")
-        ax.annotate(f"trim FAIL: not attainable\nat {span}: {why}", (speeds[b], limit),
-                    xytext=(12, -28), textcoords="offset points", color=STYLE["limit"]["color"],
-                    fontsize=9, fontweight="bold", ha="left", va="top",
-                    arrowprops={"arrowstyle": "-", "color": STYLE["limit"]["color"]})
+        said.append(f"trim FAIL: not attainable at {span} ({why})")
     throttle = np.asarray(trim.throttle, dtype=float)
     over = np.isfinite(throttle) & (throttle > limit)
     if over.any():
-        worst = int(np.nanargmax(np.where(over, throttle, -np.inf)))
+        span = f"{speeds[over].min():.1f}-{speeds[over].max():.1f} m/s"
         ax.plot(speeds[over], throttle[over], **style_of(
             "limit", linestyle="none", marker="o", markersize=5, zorder=6),
-            label=f"FAIL: trim throttle above the limit {limit:g} at "
-            f"{speeds[over].min():.1f}-{speeds[over].max():.1f} m/s")
-        ax.annotate(f"trim FAIL: {100 * throttle[worst]:.1f} % > {100 * limit:g} %",
-                    (speeds[worst], throttle[worst]), xytext=(-16, -22),
-                    textcoords="offset points", color=STYLE["limit"]["color"], fontsize=9,
-                    fontweight="bold", ha="right", va="top",
-                    bbox={"boxstyle": "round", "facecolor": "white", "edgecolor": "none"})
+            label=f"FAIL: trim throttle above the limit {limit:g} at {span}")
+        said.append(f"trim FAIL: throttle up to {100 * float(throttle[over].max()):.1f} % "
+                    f"> {100 * limit:g} % at {span}")
+    return said
 
 
-def _mark_oei_failure(ax: Any, worst: Any, requirement: Any) -> None:
+def _mark_oei_failure(ax: Any, worst: Any, requirement: Any) -> list[str]:
     """The OEI verdict's point in red and labelled when its least throttle is above the
-    limit (or nowhere attainable: said in words on the axes)."""
+    limit; returns the failure in words (also when nowhere attainable)."""
     if requirement is None:
-        return
+        return []
     limit = requirement.max_throttle
     if worst.min_throttle is None:
-        ax.text(0.5, 0.5, "OEI FAIL: level flight with one engine out attainable nowhere in "
-                "the envelope", transform=ax.transAxes, ha="center", va="center",
-                color=STYLE["limit"]["color"], fontsize=11, fontweight="bold")
-    elif worst.min_throttle > limit:
-        ax.plot([worst.airspeed_at_min_throttle_m_s], [worst.min_throttle], **style_of(
-            "limit", linestyle="none", marker="X", markersize=11, zorder=6),
-            label=f"FAIL: OEI least throttle {100 * worst.min_throttle:.1f} % above the "
-            f"limit {limit:g}")
+        return ["OEI FAIL: level flight with one engine out attainable nowhere in the envelope"]
+    if worst.min_throttle <= limit:
+        return []
+    ax.plot([worst.airspeed_at_min_throttle_m_s], [worst.min_throttle], **style_of(
+        "limit", linestyle="none", marker="X", markersize=11, zorder=6),
+        label=f"FAIL: OEI least throttle {100 * worst.min_throttle:.1f} % above the "
+        f"limit {limit:g}")
+    return [f"OEI FAIL: least throttle {100 * worst.min_throttle:.1f} % > {100 * limit:g} %"]
 
 
 # --- 10. endurance --------------------------------------------------------------------------
