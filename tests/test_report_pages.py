@@ -417,6 +417,6 @@ def test_trim_below_stall_is_drawn_as_below_stall_and_five_tornadoes_stay_on_the
     assert "trim not attainable: below stall" in labels
     assert not any(label.startswith("trim not attainable: needs") for label in labels)
     tornado = figures["tornado"]
-    assert len([ax for ax in tornado.axes if ax.get_visible()]) == 5
+    assert len([ax for ax in tornado.axes if ax.get_visible() and ax.get_label() != "legend"]) == 5
     assert text_overlaps(tornado) == []
     assert texts_off_the_page(tornado) == []

@@ -16,6 +16,7 @@ from typing import Any
 import typer
 
 from tuflexperf.io.inputs import path_text
+from tuflexperf.messages import CEILING_RULE, ceiling_text
 
 
 def _json_default(value: Any) -> Any:
@@ -334,8 +335,12 @@ def show_performance(case: Any, result: Any, attainable: bool, as_json: bool) ->
     ]
     if r.jet_velocity_ceiling_m_s is not None:  # the fans make no thrust from there on
         rows.append(("fans' static jet velocity", r.jet_velocity_ceiling_m_s, "m/s"))
+    ceilings = {"service ceiling (0.5 m/s)", "absolute ceiling"}
     for label, value, unit in rows:
-        typer.echo(f"  {label:<36}{fmt(value, 3 if unit == '-' else 2):>10} {unit}")
+        shown = (ceiling_text(value) if label in ceilings and value is not None
+                 else fmt(value, 3 if unit == '-' else 2))
+        typer.echo(f"  {label:<36}{shown:>10} {unit}")
+    typer.echo(f"  ({CEILING_RULE})")
     worst = r.oei_critical
     if worst is not None:
         typer.echo(f"  (OEI worse case: {worst.dead_engine} dead)")
