@@ -87,7 +87,10 @@ def check(
                          "(the deterministic value uses --set)"
                          for key in set_keys(sets) if key in drawn]
         sample_notes += scaled_pack_notes([*drawn, *set_keys(sets)])
-        sample_set = run_samples(case, plan, workers, dask)
+        from tuflexperf.cli.progress import TerminalProgress
+
+        with TerminalProgress("samples") as bar:
+            sample_set = run_samples(case, plan, workers, dask, bar)
         probabilistic = probabilistic_verdicts(sample_set)
         outside = {k: n for k, n in sample_set.outside_bounds.items() if n}
     # with samples, each result's verdict is the nominal one and P(met) shown together
@@ -167,7 +170,10 @@ def sweep(
 
         guard_outputs(outputs, [path for _, path in case_files(case)], "sweep",
                       {"--csv": "sweep grid", "--plot": "sweep plot"})
-    result = run_sweep(case, axes, workers, dask)
+    from tuflexperf.cli.progress import TerminalProgress
+
+    with TerminalProgress("sweep") as bar:
+        result = run_sweep(case, axes, workers, dask, bar)
     notes = (result.extrapolation_notes(case.propulsion.tested_airspeed_m_s)
              + batch_notes(case, [key for key, _ in axes], sets))
     written: dict[Path, bytes | str] = {}
