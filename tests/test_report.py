@@ -366,12 +366,29 @@ def test_console_script_keeps_stdout_for_json_and_progress_on_stderr(made_up, tm
     )
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["pdf"] == str(out / "review.pdf")
-    assert re.search(r"report \[\d+/\d+\]", proc.stderr)
-    # one total, given once it is known, and reached by the last step ([1/18] then [3/17])
-    steps = [(int(k), n) for k, n in re.findall(r"report \[(\d+)(?:/(\d+))?\]", proc.stderr)]
+    # stderr is no terminal here: no progress at all (a bar only on a terminal, issue 47)
+    assert "report [" not in proc.stderr and "\u2501" not in proc.stderr, proc.stderr
+
+
+def test_the_step_counter_numbers_its_steps_once_the_total_is_known() -> None:
+    """The library's step lines (build_report(progress=True)): one total, given once it is
+    known, and reached by the last step ([1] then [3/17]); a bar sees the same steps."""
+    import io
+
+    from tuflexperf.report.build import StepCounter
+
+    stream, seen = io.StringIO(), []
+    step = StepCounter(stream, True, lambda done, total, label: seen.append((done, total)))
+    step("analyses")
+    step("measured data")
+    step.total = 4
+    step("page a")
+    step("page b")
+    steps = [(int(k), n) for k, n in re.findall(r"report \[(\d+)(?:/(\d+))?\]",
+                                                stream.getvalue())]
     assert [k for k, _ in steps] == list(range(1, len(steps) + 1))
-    totals = {n for _, n in steps if n}
-    assert totals == {str(len(steps))}
+    assert {n for _, n in steps if n} == {str(len(steps))}
+    assert seen == [(1, None), (2, None), (3, 4), (4, 4)]
 
 
 def test_a_failing_case_is_still_reported_with_its_reasons(tmp_path):

@@ -19,3 +19,13 @@ def one_line(text: str, limit: int | None = _MAX_MESSAGE) -> str:
 
     text = path_text(text.replace("\r", "\\r").replace("\n", "\\n"))
     return text if limit is None else cut_middle(text, limit)
+
+
+CEILING_RULE = "ceilings to 10 m, below 1000 m to 1 m"
+
+
+def ceiling_text(value_m: float) -> str:
+    """A ceiling as shown [m]: to 10 m at 1000 m and above, to 1 m below (its root-find and
+    the model's own accuracy make a tenth of a metre noise); the JSON keeps every digit."""
+    step = 10.0 if abs(value_m) >= 1000.0 else 1.0
+    return f"{step * round(value_m / step):.0f}"

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -161,7 +162,8 @@ def _refuse_what_check_refuses(case: Case, keys: tuple[str, ...], points: Array)
 
 
 def run_sweep(case: Case, axes: list[tuple[str, Array]], workers: int | None = None,
-              dask_address: str | None = None) -> SweepResult:
+              dask_address: str | None = None,
+              progress: Callable[[int, int], None] | None = None) -> SweepResult:
     """Every requirement at every grid point (first axis slowest), as batches.
 
     References
@@ -182,7 +184,8 @@ def run_sweep(case: Case, axes: list[tuple[str, Array]], workers: int | None = N
     points = np.array(list(itertools.product(*[a for _, a in axes])), dtype=float)
     _refuse_what_check_refuses(case, keys, points)
     chunks = [points[i:i + CHUNK_ROWS] for i in range(0, count, CHUNK_ROWS)]
-    parts = run_chunks(evaluate_rows, [(case, keys, c) for c in chunks], workers, dask_address)
+    parts = run_chunks(evaluate_rows, [(case, keys, c) for c in chunks], workers, dask_address,
+                       progress)
     names = [k.split(":", 1)[1] for k in parts[0] if k.startswith("value:")]
 
     def join(prefix: str, name: str) -> Any:

@@ -394,22 +394,36 @@ def run_chunks(
     arguments: Sequence[tuple[Any, ...]],
     workers: int | None = None,
     dask_address: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> list[dict[str, Array]]:
-    """``function(*a)`` for each argument tuple, in order: here, in processes, or on Dask."""
+    """``function(*a)`` for each argument tuple, in order: here, in processes, or on Dask;
+    ``progress(done, total)`` after each (on Dask once, at the end)."""
+    def done(count: int) -> None:
+        if progress is not None:
+            progress(count, len(arguments))
+
+    done(0)
     if dask_address:
         client = dask_client(dask_address)
         try:
             futures = [client.submit(function, *a, pure=False) for a in arguments]
-            return list(client.gather(futures))
+            results = list(client.gather(futures))
+            done(len(arguments))
+            return results
         finally:
             client.close()
     if workers is not None and workers > 1 and len(arguments) > 1:
-        return _in_processes(function, arguments, workers)
-    return [function(*a) for a in arguments]
+        return _in_processes(function, arguments, workers, done)
+    here = []
+    for a in arguments:
+        here.append(function(*a))
+        done(len(here))
+    return here
 
 
 def _in_processes(
-    function: Callable[..., dict[str, Array]], arguments: Sequence[tuple[Any, ...]], workers: int
+    function: Callable[..., dict[str, Array]], arguments: Sequence[tuple[Any, ...]], workers: int,
+    done: Callable[[int], None] | None = None,
 ) -> list[dict[str, Array]]:
     """``function(*a)`` for each argument tuple in ``workers`` local processes, in order.
 
@@ -451,6 +465,8 @@ def _in_processes(
                 if isinstance(outcome, BaseException):
                     raise outcome
                 results[index] = outcome
+                if done is not None:
+                    done(sum(r is not None for r in results))
                 owed[reader] -= 1
                 if not owed[reader]:
                     del owed[reader]
@@ -499,6 +515,7 @@ def run_samples(
     plan: SamplingPlan,
     workers: int | None = None,
     dask_address: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> SampleSet:
     """All chunks of ``plan`` for ``case``; the same numbers wherever the chunks run.
 
@@ -512,6 +529,7 @@ def run_samples(
             [(case, plan, chunks) for chunks in batches(plan)],
             workers,
             dask_address,
+            progress,
         )
     names = [k.split(":", 1)[1] for k in parts[0] if k.startswith("value:")]
     values = {n: np.concatenate([p[f"value:{n}"] for p in parts]) for n in names}

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import typer
 
-from tuflexperf.cli import render
+from tuflexperf.cli import render, render_tables
 from tuflexperf.cli.inputs import (
     AircraftFileOption,
     BatteryFileOption,
@@ -87,7 +87,10 @@ def check(
                          "(the deterministic value uses --set)"
                          for key in set_keys(sets) if key in drawn]
         sample_notes += scaled_pack_notes([*drawn, *set_keys(sets)])
-        sample_set = run_samples(case, plan, workers, dask)
+        from tuflexperf.cli.progress import TerminalProgress
+
+        with TerminalProgress("samples") as bar:
+            sample_set = run_samples(case, plan, workers, dask, bar)
         probabilistic = probabilistic_verdicts(sample_set)
         outside = {k: n for k, n in sample_set.outside_bounds.items() if n}
     # with samples, each result's verdict is the nominal one and P(met) shown together
@@ -107,14 +110,21 @@ def margins(
     propulsion: Path | None = PropulsionFileOption,
     battery: Path | None = BatteryFileOption,
 ) -> None:
-    """Per requirement and parameter: the value where it just holds, and d(value)/d(parameter)."""
+    """Per requirement and parameter: the value where it just holds, and d(value)/d(parameter).
+
+    Grouped by requirement, the binding parameters first.
+
+    Order: smallest |limit value - nominal| / |nominal| first (nominal 0: over the range).
+
+    The parameters that never bind come last. --json keeps the analysis' order.
+    """
     from tuflexperf.analysis.margins import extrapolation_notes, solve_margins
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
     rows = solve_margins(case)
     notes = (extrapolation_notes(rows, case.propulsion.tested_airspeed_m_s)
              + batch_notes(case, [], None) + scaled_pack_notes({m.parameter for m in rows}))
-    render.show_margins(case, rows, notes, as_json)
+    render_tables.show_margins(case, rows, notes, as_json)
 
 
 def sweep(
@@ -160,7 +170,10 @@ def sweep(
 
         guard_outputs(outputs, [path for _, path in case_files(case)], "sweep",
                       {"--csv": "sweep grid", "--plot": "sweep plot"})
-    result = run_sweep(case, axes, workers, dask)
+    from tuflexperf.cli.progress import TerminalProgress
+
+    with TerminalProgress("sweep") as bar:
+        result = run_sweep(case, axes, workers, dask, bar)
     notes = (result.extrapolation_notes(case.propulsion.tested_airspeed_m_s)
              + batch_notes(case, [key for key, _ in axes], sets))
     written: dict[Path, bytes | str] = {}
@@ -172,7 +185,7 @@ def sweep(
         written[csv_out] = result.to_csv()
     if written:  # both or neither: an interrupt between them left a new plot by an old CSV
         write_files_atomically(written)
-    render.show_sweep(case, result, notes, (csv_out, plot), as_json)
+    render_tables.show_sweep(case, result, notes, (csv_out, plot), as_json)
     if fail_on_fail and not all(bool(np.all(met)) for met in result.met.values()):
         raise typer.Exit(1)
 

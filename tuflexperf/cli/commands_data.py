@@ -83,7 +83,12 @@ def report_command(
     refuse_dash(out_text, "--out")
     replace = replaced(aircraft, propulsion, battery)
     case = load_case_with(case_file, sets, replace) if sets or replace else case_file
-    result = build_report(case, Path(out_text), campaign=campaign)
+    from tuflexperf.cli.progress import TerminalProgress
+
+    # the steps as a bar on a terminal; elsewhere nothing (stderr keeps notes and errors)
+    with TerminalProgress("report") as bar:
+        result = build_report(case, Path(out_text), campaign=campaign, progress=False,
+                              bar=bar if bar.enabled else None)
     render.show_report(result, as_json)
 
 

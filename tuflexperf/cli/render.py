@@ -13,10 +13,10 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import typer
 
 from tuflexperf.io.inputs import path_text
+from tuflexperf.messages import CEILING_RULE, ceiling_text
 
 
 def _json_default(value: Any) -> Any:
@@ -171,90 +171,6 @@ def print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
         )
     typer.echo("  (n/a: samples where the requirement is not attainable; they count as not met "
                "and as the worst value, so a percentile that falls on them shows n/a)")
-
-
-def show_margins(case: Any, rows: list[Any], notes: list[str], as_json: bool) -> None:
-    """``margins``: per requirement, each parameter's limit value and sensitivity."""
-    if as_json:
-        emit_json({"case": case.name, "case_file": str(case.path),
-                   "margins": [m.to_dict() for m in rows], "notes": notes})
-        return
-    typer.echo(f"{case.name}  ({case.path})")
-    typer.echo("limit value: the parameter's value (others nominal) where the requirement "
-               "just holds, nearest the nominal; sensitivity by CasADi AD")
-    header = (f"{'requirement':<30}{'parameter':<40}{'nominal':>11}{'limit value':>13}"
-              f"{'sensitivity':>13}")
-    current = None
-    for m in rows:
-        if m.requirement != current:
-            current = m.requirement
-            typer.echo("")
-            typer.echo(header)
-            typer.echo("-" * len(header))
-        if m.limit_value is None:
-            limit = "none"
-        else:
-            limit = f"{m.limit_value:.5g}" + {"not attainable": "*", "envelope ends": "^",
-                                               "aircraft refused": "#"}.get(m.binds, "")
-        slope = "n/a" if m.sensitivity is None else f"{m.sensitivity:.4g}"
-        typer.echo(f"{m.requirement:<30}{m.parameter:<40}{m.value:>11.5g}{limit:>13}"
-                   f"{slope:>13}")
-    typer.echo("")
-    typer.echo("none: never binds in the searched range (0.5x-2x the nominal; altitude "
-               "-500..5000 m, temperature offset -50..50 K); *: binds by becoming not attainable")
-    if any(m.binds == "aircraft refused" for m in rows):
-        typer.echo("#: where check refuses the aircraft as bad input (a lift-off or catapult "
-                   "release below stall, a stall beyond the speed of sound, thrust above 10 x "
-                   "the weight, cl_ground above cl_max): the search ends there")
-    if any(m.binds == "envelope ends" for m in rows):
-        typer.echo("^: where the envelope's bounds cross (an equivalent-airspeed bound at that "
-                   "density): beyond it the case has no envelope to fly")
-    for note in notes:
-        typer.echo(f"note: {note}")
-
-
-def column_decimals(values: np.ndarray, significant: int = 4) -> int:
-    """Decimals (0-6) that give a column's largest finite magnitude ``significant`` digits."""
-    finite = np.abs(values[np.isfinite(values)])
-    top = float(finite.max()) if finite.size else 0.0
-    if top == 0.0:
-        return significant - 1
-    return int(min(6, max(0, significant - 1 - math.floor(math.log10(top)))))
-
-
-def show_sweep(case: Any, result: Any, notes: list[str], written: Iterable[Path | None],
-               as_json: bool) -> None:
-    """``sweep``: one row per grid point, each requirement's value and verdict."""
-    if as_json:
-        emit_json({"case": case.name, "case_file": str(case.path), **result.to_dict(),
-                   "notes": notes})
-        return
-    names = list(result.values)
-    # each parameter column as wide as its name and a space (max_airspeed_m_s ran into the next)
-    widths = [max(16, len(k.split(".")[-1]) + 2) for k in result.parameters]
-    header = "".join(f"{k.split('.')[-1]:>{w}}" for k, w in zip(result.parameters, widths,
-                                                                 strict=True)) + "".join(
-        f"{n:>30}" for n in names)
-    typer.echo(f"{case.name}  ({case.path}): {result.points.shape[0]} grid points")
-    typer.echo(header)
-    typer.echo("-" * len(header))
-    # fixed decimals per column: the decimal points of a column line up
-    shown = [column_decimals(result.points[:, k], 5) for k in range(len(widths))]
-    decimals = {n: column_decimals(np.asarray(result.values[n], dtype=float)) for n in names}
-    for i in range(result.points.shape[0]):
-        cells = "".join(f"{v:>{w}.{d}f}" for v, w, d in zip(result.points[i], widths, shown,
-                                                             strict=True))
-        for n in names:
-            value = result.values[n][i]
-            text = "not attainable" if not np.isfinite(value) else f"{value:.{decimals[n]}f}"
-            # padded as plain text: a colour's escape codes take no column
-            cells += f"{text + ' PASS':>30}"[:-4] + verdict_word(bool(result.met[n][i]))
-        typer.echo(cells)
-    for target in written:
-        if target is not None:
-            typer.echo(f"wrote {target}")
-    for note in notes:
-        typer.echo(f"  note: {note}")
 
 
 def show_takeoff(case: Any, result: Any, requirement: Any, verdicts: list[Any], met: bool,
@@ -419,8 +335,12 @@ def show_performance(case: Any, result: Any, attainable: bool, as_json: bool) ->
     ]
     if r.jet_velocity_ceiling_m_s is not None:  # the fans make no thrust from there on
         rows.append(("fans' static jet velocity", r.jet_velocity_ceiling_m_s, "m/s"))
+    ceilings = {"service ceiling (0.5 m/s)", "absolute ceiling"}
     for label, value, unit in rows:
-        typer.echo(f"  {label:<36}{fmt(value, 3 if unit == '-' else 2):>10} {unit}")
+        shown = (ceiling_text(value) if label in ceilings and value is not None
+                 else fmt(value, 3 if unit == '-' else 2))
+        typer.echo(f"  {label:<36}{shown:>10} {unit}")
+    typer.echo(f"  ({CEILING_RULE})")
     worst = r.oei_critical
     if worst is not None:
         typer.echo(f"  (OEI worse case: {worst.dead_engine} dead)")

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.io.case import Case
+from tuflexperf.messages import CEILING_RULE, ceiling_text
 from tuflexperf.report.canvas import new_figure
 from tuflexperf.report.data import Analyses, Measured
 from tuflexperf.report.style import (
@@ -185,10 +186,10 @@ def _performance_table(ax: Any, perf: Any) -> None:
         ["best climb gradient (at Vx)",
          f"{100 * perf.max_climb_gradient:.1f} % at {perf.best_climb_angle_speed_m_s:.2f} m/s",
          oei_grad],
-        ["service ceiling (0.5 m/s) / absolute ceiling",
-         (f"{perf.service_ceiling_m:.0f} m" if perf.service_ceiling_m is not None else ceiling)
-         + " / "
-         + (f"{perf.absolute_ceiling_m:.0f} m" if perf.absolute_ceiling_m is not None
+        [f"service ceiling (0.5 m/s) / absolute ceiling ({CEILING_RULE})",
+         (f"{ceiling_text(perf.service_ceiling_m)} m" if perf.service_ceiling_m is not None
+          else ceiling) + " / "
+         + (f"{ceiling_text(perf.absolute_ceiling_m)} m" if perf.absolute_ceiling_m is not None
             else ceiling), ""],
         [f"take-off distance to the {perf.takeoff_obstacle_height_m:g} m obstacle",
          _fmt(perf.takeoff_distance_to_obstacle_m, "m", 1), ""],
@@ -348,7 +349,13 @@ def tornado(case: Case, analyses: Analyses) -> Any:
     # limit values on the right
     cols = 1 if n == 1 else 2
     rows = math.ceil(n / cols)
-    axes = fig.subplots(rows, cols, squeeze=False).ravel()
+    # the legend has a row of its own: a figure legend "outside" is placed by the figure's
+    # edge, not the layout's rectangle, and ran over the footer's strip
+    grid = fig.add_gridspec(rows + 1, cols, height_ratios=[1.0] * rows + [0.1])
+    axes = np.array([fig.add_subplot(grid[r, c]) for r in range(rows) for c in range(cols)])
+    key = fig.add_subplot(grid[rows, :])
+    key.axis("off")
+    key.set_label("legend")  # no tornado panel: the page's key
     limits = analyses.limit_values or {}
     for ax, t in zip(axes, tornadoes, strict=False):
         verdict = _verdict(analyses, t.requirement)
@@ -375,8 +382,15 @@ def tornado(case: Case, analyses: Analyses) -> Any:
         lo, hi = min([*ends, base, t.limit]), max([*ends, base, t.limit])
         pad = 0.08 * ((hi - lo) or abs(base) or 1.0)
         lo, hi = lo - pad, hi + pad
-        # not attainable: a cross near the bad end, inside the axes
-        missing_x = hi - 0.4 * pad if kind == "max" else lo + 0.4 * pad
+        # not attainable: a cross in a strip of its own past the bad end, inside the axes
+        # (on the edge it sat half across the spine, off its axis)
+        if any(v is None for b in bars for v in (b.value_at_low, b.value_at_high)):
+            if kind == "max":
+                missing_x, hi = hi + pad, hi + 2.0 * pad
+            else:
+                missing_x, lo = lo - pad, lo - 2.0 * pad
+        else:
+            missing_x = hi
         for i, bar in enumerate(bars):
             for value, colour in ((bar.value_at_low, _DECREASED),
                                   (bar.value_at_high, _INCREASED)):
@@ -413,7 +427,7 @@ def tornado(case: Case, analyses: Analyses) -> Any:
         Line2D([], [], **{**POINT["not_attainable"], "markersize": 7},
                label="not attainable there (upper: lowered, lower: raised)"),
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=8)
+    key.legend(handles=handles, loc="center", ncols=3, fontsize=8)
     missing = [v.name for v in analyses.verdicts
                if v.name not in {t.requirement for t in tornadoes}]
     extra = f"; not varied: {', '.join(missing)}" if missing else ""

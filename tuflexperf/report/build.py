@@ -64,14 +64,17 @@ class StepCounter:
     give): until then a step is ``[k]``, never a guessed total that later changes.
     """
 
-    def __init__(self, stream: Any = None, enabled: bool = True) -> None:
+    def __init__(self, stream: Any = None, enabled: bool = True,
+                 bar: Callable[[int, int | None, str], None] | None = None) -> None:
         self.total: int | None = None
-        self.done, self.enabled = 0, enabled
+        self.done, self.enabled, self.bar = 0, enabled, bar
         self.stream = stream if stream is not None else sys.stderr
         self.started = time.perf_counter()
 
     def __call__(self, label: str) -> None:
         self.done += 1
+        if self.bar is not None:  # a terminal's bar (cli/progress.py) instead of lines
+            self.bar(self.done, self.total, label)
         if self.enabled:
             elapsed = time.perf_counter() - self.started
             of = f"/{self.total}" if self.total is not None else ""
@@ -100,6 +103,7 @@ def build_report(
     campaign: Path | str | None = None,
     progress: bool = True,
     stream: Any = None,
+    bar: Callable[[int, int | None, str], None] | None = None,
 ) -> ReportResult:
     """Build the design-review report for a case (``None``: the shipped TU-Flex case).
 
@@ -114,6 +118,8 @@ def build_report(
         :func:`tuflexperf.report.data.find_measured_source`).
     progress : bool
         Write the step counter to ``stream`` (stderr).
+    bar : callable or None
+        ``bar(done, total, label)`` after each step (the command line's progress bar).
 
     Returns
     -------
@@ -135,7 +141,7 @@ def build_report(
         _check_campaign(campaign_path)  # before any step is shown or anything is written
     with (staged_directory(out, "report", _report_inputs(case, campaign_path)) as staging,
           swap.scratch("report") as kept):
-        result = _render(case, staging, campaign_path, StepCounter(stream, progress),
+        result = _render(case, staging, campaign_path, StepCounter(stream, progress, bar),
                          Path(kept))
     files = [out / p.name for p in result.files]
     return ReportResult(

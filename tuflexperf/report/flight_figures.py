@@ -273,6 +273,20 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
             ax.axvline(limit, **STYLE["limit"],
                        label=f"runway limit {limit:g} m ({'PASS' if met else 'FAIL'})")
             right = max(right, limit)
+    if limit is not None and not catapult and roll > limit:
+        _mark_beyond(av, limit, roll, v_lo, f"ground roll FAIL: {roll:.1f} m, "
+                     f"{roll - limit:.1f} m beyond the {limit:g} m limit")
+    far = requirement.max_distance_to_obstacle_m if requirement is not None else None
+    if far is not None:
+        av.axvline(far, **style_of("limit", linestyle="-."),
+                   label=f"obstacle distance limit {far:g} m ("
+                   + ("PASS" if _verdict_passed(analyses, "takeoff_distance_to_obstacle")
+                      else "FAIL") + ")")
+        right = max(right, far)
+        if obstacle is not None and obstacle > far:
+            _mark_beyond(av, far, obstacle, result.transition_speed_m_s,
+                         f"obstacle FAIL: {obstacle:.1f} m, {obstacle - far:.1f} m beyond the "
+                         f"{far:g} m limit")
     av.set_xlim(0, 1.04 * right)
     # the forces end at lift-off: their panel spans the runway, not the airborne part
     af.set_xlim(0, 1.1 * (roll if limit is None else max(roll, limit)))
@@ -317,6 +331,19 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
         + (f", {obstacle:.1f} m to the {result.obstacle_height_m:g} m obstacle"
            if obstacle is not None else f"; {result.obstacle_reason}"), 140))
     return fig
+
+
+def _mark_beyond(ax: Any, limit: float, reached: float, speed: float, text: str) -> None:
+    """A distance beyond its limit: the stretch shaded red, a red cross where it ends and
+    the words beside it."""
+    ax.axvspan(limit, reached, color=FAIL_FILL, alpha=0.6, zorder=0)
+    ax.plot([reached], [speed], **style_of("limit", linestyle="none", marker="X",
+                                           markersize=12, zorder=6), label=text)
+    ax.annotate(text, (reached, speed), xytext=(8, -60), textcoords="offset points",
+                color=STYLE["limit"]["color"], fontsize=9, fontweight="bold", ha="left",
+                va="top", arrowprops={"arrowstyle": "-", "color": STYLE["limit"]["color"]},
+                bbox={"boxstyle": "round", "facecolor": "white", "edgecolor": "none"},
+                zorder=7)
 
 
 # --- 9. trim and OEI throttle -----------------------------------------------------------------
@@ -376,11 +403,20 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
             ax.axhline(requirement.max_throttle, **style_of("limit", linewidth=2.2),
                        label=f"limit: OEI max throttle {requirement.max_throttle:g}")
     runs = _reason_runs(trim.reasons, trim.throttle)
+    speeds = np.asarray(trim.airspeed_m_s, dtype=float)
+    half = 0.5 * float(np.diff(speeds).min()) if speeds.size > 1 else 0.25
     for k, (a, b, why) in enumerate(runs):
-        ax.axvspan(trim.airspeed_m_s[a], trim.airspeed_m_s[b], color=FAIL_FILL, alpha=0.6,
+        # half a grid step either side: one unattainable airspeed was a span of no width
+        ax.axvspan(speeds[a] - half, speeds[b] + half, color=FAIL_FILL, alpha=0.6,
                    hatch=_REASON_HATCH.get(why), zorder=0,
                    label=f"trim not attainable: {why}"
                    if all(w != why for _, _, w in runs[:k]) else None)
+    failures = _mark_trim_failures(ax, trim, envelope.max_trim_throttle, runs)
+    if oei is not None:
+        failures += _mark_oei_failure(ax, oei.critical, case.requirements.oei)
+    if failures:  # above the axes, in red: never over a curve, whatever the case
+        ax.set_title("\n".join(wrap_text(f, 80) for f in failures), color=STYLE["limit"]["color"],
+                     fontsize=10, fontweight="bold")
     ax.axvline(stall, **STYLE["stall"], label=f"stall speed {stall:.1f} m/s")
     _envelope_lines(ax, case)
     ax.set_xlim(left, right)
@@ -391,6 +427,47 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
     ax.grid(alpha=0.3)
     page_legend(ax)
     return fig
+
+
+def _mark_trim_failures(ax: Any, trim: Any, limit: float,
+                        runs: list[tuple[int, int, str]]) -> list[str]:
+    """Red crosses on the limit at each airspeed trim cannot fly, red dots where its
+    throttle is above the limit, each set labelled; returns the failures in words."""
+    speeds = np.asarray(trim.airspeed_m_s, dtype=float)
+    said = []
+    for a, b, why in runs:
+        span = (f"{speeds[a]:.1f} m/s" if a == b else f"{speeds[a]:.1f}-{speeds[b]:.1f} m/s")
+        ax.plot(speeds[a:b + 1], np.full(b + 1 - a, limit), **style_of(
+            "limit", linestyle="none", marker="X", markersize=11, zorder=6, clip_on=False),
+            label=f"FAIL: trim not attainable at {span} ({why})")
+        said.append(f"trim FAIL: not attainable at {span} ({why})")
+    throttle = np.asarray(trim.throttle, dtype=float)
+    over = np.isfinite(throttle) & (throttle > limit)
+    if over.any():
+        span = f"{speeds[over].min():.1f}-{speeds[over].max():.1f} m/s"
+        ax.plot(speeds[over], throttle[over], **style_of(
+            "limit", linestyle="none", marker="o", markersize=5, zorder=6),
+            label=f"FAIL: trim throttle above the limit {limit:g} at {span}")
+        said.append(f"trim FAIL: throttle up to {100 * float(throttle[over].max()):.1f} % "
+                    f"> {100 * limit:g} % at {span}")
+    return said
+
+
+def _mark_oei_failure(ax: Any, worst: Any, requirement: Any) -> list[str]:
+    """The OEI verdict's point in red and labelled when its least throttle is above the
+    limit; returns the failure in words (also when nowhere attainable)."""
+    if requirement is None:
+        return []
+    limit = requirement.max_throttle
+    if worst.min_throttle is None:
+        return ["OEI FAIL: level flight with one engine out attainable nowhere in the envelope"]
+    if worst.min_throttle <= limit:
+        return []
+    ax.plot([worst.airspeed_at_min_throttle_m_s], [worst.min_throttle], **style_of(
+        "limit", linestyle="none", marker="X", markersize=11, zorder=6),
+        label=f"FAIL: OEI least throttle {100 * worst.min_throttle:.1f} % above the "
+        f"limit {limit:g}")
+    return [f"OEI FAIL: least throttle {100 * worst.min_throttle:.1f} % > {100 * limit:g} %"]
 
 
 # --- 10. endurance --------------------------------------------------------------------------
