@@ -12,14 +12,6 @@ from typing import Any
 
 import numpy as np
 
-from tuflexperf.report.data import (  # noqa: F401 - dynamic_thrust_n, model_force_n: API
-    Analyses,
-    Measured,
-    ProcessedRun,
-    dynamic_thrust_n,
-    model_dynamics,
-    model_force_n,
-)
 from tuflexperf.report.style import (
     EXTRAPOLATED_FILL,
     FAIL_FILL,

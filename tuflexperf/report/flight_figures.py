@@ -31,14 +31,7 @@ from tuflexperf.report.canvas import (
     style_of,
     wrap_text,
 )
-from tuflexperf.report.data import (  # noqa: F401 - dynamic_thrust_n, model_force_n: API
-    Analyses,
-    Measured,
-    ProcessedRun,
-    dynamic_thrust_n,
-    model_dynamics,
-    model_force_n,
-)
+from tuflexperf.report.data import Analyses
 from tuflexperf.report.decimate import envelope as decimated
 from tuflexperf.report.style import (
     EXTRAPOLATED_FILL,

@@ -25,11 +25,9 @@ from tuflexperf.report.canvas import (
     style_of,
     wrap_text,
 )
-from tuflexperf.report.data import (  # noqa: F401 - dynamic_thrust_n, model_force_n: API
-    Analyses,
+from tuflexperf.report.data import (
     Measured,
     ProcessedRun,
-    dynamic_thrust_n,
     model_dynamics,
     model_force_n,
 )
