@@ -1,0 +1,19 @@
+"""Every reading of a case's disputed evidence, from the providers that make them.
+
+The providers sit beside the analyses they bear on; this module only gathers them, so
+that the registry asks one place (:func:`case_readings`).
+"""
+
+from __future__ import annotations
+
+from tuflexperf.analysis.power_reading import measured_power_readings
+from tuflexperf.analysis.readings import Provider, Reading
+from tuflexperf.io.case import Case
+
+PROVIDERS: tuple[Provider, ...] = (measured_power_readings,)
+
+
+def case_readings(case: Case, blocks: frozenset[str] | None = None) -> tuple[Reading, ...]:
+    """Every reading of ``case`` (those bearing on ``blocks`` only, when given)."""
+    out = [r for provider in PROVIDERS for r in provider(case)]
+    return tuple(r for r in out if blocks is None or r.affects & blocks)
