@@ -291,21 +291,27 @@ def test_a_mission_requirement_that_lands_only_nominally_does_not_pass(tmp_path)
     """A case whose mission lands on the reserve only nominally printed 'overall: PASS' with
     an empty Monte Carlo table (outside audit; 200 replayed draws gave P = 0.60). The samples
     fly the mission: its P(met) is shown and short of the required; sweep and margins say it
-    is left out of their batch."""
+    is left out of their batch. The mission loses EDF2, whose windmilling coefficient and
+    thrust model disagree: the reserve 0.47 is met nominally on both readings (0.497 and
+    0.477), and the samples are judged on both too (the worse decides)."""
     mission = SHIPPED_CASE.parent.parent / "data" / "tuflex" / "missions" / "test_flight.yaml"
     path = shipped_with(tmp_path, {
         "samples": 200, "seed": 1, "required_probability": 0.95,
         "parameters": {"aircraft.mass_kg": {"normal": [26.7064, 1.5]}},
     }, {"endurance": {"throttle": 0.5, "min_flight_time_min": 15},
-        "mission": {"file": str(mission), "min_landing_charge_fraction": 0.49}})
+        "mission": {"file": str(mission), "min_landing_charge_fraction": 0.47}})
     result = runner.invoke(app, ["check", str(path), "--json"])
     assert result.exit_code == 1, result.stdout
     data = json.loads(result.stdout)
     endurance, row = data["results"]
     assert endurance["passed"] is True and endurance["probability"] is not None
     assert row["name"] == "mission_landing_charge" and row["nominal_passed"] is True
-    # sampled now (analysis.mission_samples): the draws that land short are not met
+    assert [r["key"] for r in row["readings"]] == ["nominal", "windmilling_model_drag"]
+    # sampled now (analysis.mission_samples): the draws that land short are not met, on the
+    # worse reading; the coefficient's reading alone meets more of them
     assert row["passed"] is False and 0.3 < row["probability"] < 0.9, row
+    by_reading = {r["key"]: r["probability"] for r in row["probability_readings"]}
+    assert by_reading["nominal"] > by_reading["windmilling_model_drag"] == row["probability"]
     assert row["samples_met"] < 200 and data["passed"] is False
     human = runner.invoke(app, ["check", str(path)])
     assert "overall: FAIL" in human.stdout

@@ -130,6 +130,11 @@ class BatchResult:
     # rows whose answer flies the thrust model outside its tested airspeeds, as the single
     # case's `extrapolated` (SPEC: extrapolation is said; a sweep said nothing)
     extrapolated: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    # where readings of disputed evidence bear on a requirement (analysis.batch_readings):
+    # ``values`` are then the worse reading's, ``reading_values`` each reading's ("nominal"
+    # first) and ``disputed`` the rows met on some reading but not on another (UNPROVEN)
+    reading_values: dict[str, dict[str, Array]] = field(default_factory=dict)
+    disputed: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
 
     def met(self, name: str) -> NDArray[np.bool_]:
         """Met per sample, by the verdict rule of :mod:`tuflexperf.analysis.verdict`."""
@@ -152,16 +157,19 @@ class BatchEvaluator:
         The nominal case; its keys not in a batch keep their nominal values.
     """
 
-    def __init__(self, case: Case) -> None:
+    def __init__(self, case: Case, blocks: frozenset[str] | None = None) -> None:
         self.case = case
-        self.requirements = present_requirements(case)
+        # ``blocks``: only these requirement blocks (a reading's case evaluates the ones it
+        # bears on; analysis.batch_readings)
+        self.requirements = [r for r in present_requirements(case)
+                             if blocks is None or r.block in blocks]
         if any(r.block == "oei" for r in self.requirements):
             # as solve_oei refuses it (the sweep tabulated "not attainable" for every point)
             from tuflexperf.analysis.oei import refuse_one_engine
 
             refuse_one_engine(case)
         self._endurance: Any = None
-        if case.requirements.endurance is not None:
+        if any(r.block == "endurance" for r in self.requirements):
             from tuflexperf.analysis.batch_endurance import battery_side
 
             self._endurance = battery_side(case)
