@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tuflexperf.analysis.batch import BatchEvaluator, BatchResult
+from tuflexperf.analysis.batch import BatchResult
 from tuflexperf.analysis.readings import Reading
 from tuflexperf.analysis.verdict import requirement_met
 from tuflexperf.io.case import Case
@@ -92,9 +92,8 @@ class ReadingsEvaluator:
         # every reading (a mission's too: the samples fly it beside the batch)
         self.all_readings = tuple(r for r in case_readings(case)
                                   if not (drawn and r.key == DRAWN_BY_SAMPLES))
-        self.readings: list[tuple[Reading, BatchEvaluator]] = [
-            (r, evaluator_for(r.case, r.affects & blocks))
-            for r in self.all_readings if r.affects & blocks]
+        self.readings: list[tuple[Reading, frozenset[str]]] = [
+            (r, r.affects & blocks) for r in self.all_readings if r.affects & blocks]
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.nominal, name)
@@ -106,9 +105,21 @@ class ReadingsEvaluator:
         result = self.nominal.evaluate(values, size, coefficients, extrapolation_n)
         if not self.readings:
             return result
+        from tuflexperf.analysis.evaluators import evaluator_for
+
         rows = next(iter(result.values.values())).shape[0] if result.values else size
-        theirs = [(r, e.evaluate(values, rows, coefficients, extrapolation_n).values)
-                  for r, e in self.readings]
+        theirs = []
+        for reading, blocks in self.readings:
+            if reading.key == DRAWN_BY_SAMPLES:
+                # the bound moves thrust beyond the tested airspeeds only: a block no row of
+                # which flies there is the nominal's (its evaluation saved)
+                blocks = frozenset(r.block for r in self.requirements
+                                   if r.block in blocks and r.name in result.extrapolated
+                                   and result.extrapolated[r.name].any())
+            if blocks:
+                evaluator = evaluator_for(reading.case, blocks)
+                theirs.append((reading, evaluator.evaluate(values, rows, coefficients,
+                                                           extrapolation_n).values))
         worse, disputed, by_reading = combine_rows(result.values, result.limits,
                                                    result.kinds, theirs)
         return dataclasses.replace(result, values=worse, disputed=disputed,

@@ -14,7 +14,7 @@ from tuflexperf.io.case import Case
 
 _evaluators: dict[str, BatchEvaluator] = {}
 #: evaluators kept per process: a case and the readings of its disputed evidence
-EVALUATORS_KEPT = 4
+EVALUATORS_KEPT = 8
 
 
 def evaluator_for(case: Case, blocks: frozenset[str] | None = None) -> BatchEvaluator:
