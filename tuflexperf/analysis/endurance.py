@@ -409,6 +409,16 @@ class EnduranceModel:
                 high = mid
         return 0.5 * (low + high)
 
+    def level_airspeed_m_s(self, throttle: float) -> float:
+        """The level-flight (front side) airspeed [m/s] at ``throttle`` [-], without flying."""
+        self.check_throttle(throttle)
+        guess = self._speed_guess(throttle)
+        speed = float(self._rf_level(guess, throttle))
+        if not (abs(float(self.excess(throttle, speed))) < 1e-6
+                and speed >= self.min_throttle_airspeed - 1e-6):
+            speed = self._fast_root_fallback(throttle, guess)
+        return speed
+
     def check_throttle(self, throttle: float) -> None:
         """Raise :class:`NotAttainable` if ``throttle`` cannot hold level flight."""
         if not math.isfinite(self.min_throttle):
