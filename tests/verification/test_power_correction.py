@@ -317,3 +317,27 @@ def test_check_opens_no_discharge_run(monkeypatch: pytest.MonkeyPatch) -> None:
                 or name.endswith((".csv", ".csv.gz", ".mat"))]
     assert any("fit.runs: edf1_endurance_50.csv: measured 1328 W" in w
                for w in result.warnings)
+
+
+def test_fit_propulsion_names_the_model_the_correction_is_fitted_against(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from tuflexperf.cli import app
+
+    copy_shipped_case(tmp_path)
+    folder = tmp_path / "data" / "tuflex"
+    moved = tmp_path / "elsewhere.yaml"
+    (folder / "propulsion.yaml").rename(moved)
+    out = folder / "refit.yaml"
+    done = CliRunner().invoke(app, ["fit", str(folder / "battery.yaml"), "--out", str(out),
+                                    "--propulsion", str(moved)])
+    assert done.exit_code == 0, done.output
+    assert "measured power correction (linear in throttle)" in done.stdout
+    block = yaml.safe_load(out.read_text())["fit"]["power_correction"]
+    assert block["propulsion"] == "../../elsewhere.yaml"
+    shipped = yaml.safe_load(BATTERY.read_text())["fit"]["power_correction"]
+    assert block["constant"] == pytest.approx(shipped["constant"], rel=1e-9)
+    wrong = CliRunner().invoke(app, ["fit", str(tmp_path / "data" / "tuflex" / "campaign"
+                                                / "campaign.yaml"), "--out",
+                                     str(tmp_path / "p.yaml"), "--propulsion", str(moved)])
+    assert wrong.exit_code == 2 and "--propulsion: only for a battery file" in wrong.output
