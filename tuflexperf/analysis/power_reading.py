@@ -120,7 +120,7 @@ def with_power_correction(case: Case, correction: PowerCorrection) -> Case:
                                                                     engines=engines))
 
 
-def _flown_point(case: Case) -> tuple[float, float] | None:
+def flown_point(case: Case) -> tuple[float, float] | None:
     """The endurance requirement's cruise throttle [-] and its level-flight airspeed [m/s]
     (the thrust model sets it, the same on either power), or None."""
     from tuflexperf.analysis.endurance import endurance_model
@@ -143,7 +143,7 @@ def measured_power_readings(case: Case) -> tuple[Reading, ...]:
         return ()
     law = measured.correction
     name, x, v, p_run, p_model = max(measured.runs, key=lambda r: abs(math.log(r[3] / r[4])))
-    point = _flown_point(case)
+    point = flown_point(case)
     flown = ""
     outside: list[str] = []
     if point is not None:

@@ -61,14 +61,16 @@ class PowerCorrection:
         v = fmin(fmax(airspeed_m_s, self.airspeed_span_m_s[0]), self.airspeed_span_m_s[1])
         return self.constant + self.per_throttle * x + self.per_airspeed_s_m * v
 
-    def extrapolates(self, throttle: float, airspeed_m_s: float) -> list[str]:
-        """What of ``(throttle, airspeed_m_s)`` lies outside the tested span, in words."""
+    def extrapolates(self, throttle: float, airspeed_m_s: float,
+                     source: str = "the runs'") -> list[str]:
+        """What of ``(throttle, airspeed_m_s)`` lies outside the tested span, in words
+        (``source`` names whose span it is)."""
         said: list[str] = []
         (x0, x1), (v0, v1) = self.throttle_span, self.airspeed_span_m_s
         if not x0 - 1e-9 <= throttle <= x1 + 1e-9:
-            said.append(f"throttle {throttle:.2f} outside the runs' {_span(x0, x1, '.2f')}")
+            said.append(f"throttle {throttle:.2f} outside {source} {_span(x0, x1, '.2f')}")
         if not v0 - 0.05 <= airspeed_m_s <= v1 + 0.05:
-            said.append(f"{airspeed_m_s:.1f} m/s outside the runs' "
+            said.append(f"{airspeed_m_s:.1f} m/s outside {source} "
                         f"{_span(v0, v1, '.1f')} m/s")
         return said
 
