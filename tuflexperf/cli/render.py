@@ -554,6 +554,14 @@ def show_fit(summary: dict[str, Any], as_json: bool) -> None:
         for c in fit["cross_validation"]:
             typer.echo(f"  fitted on {c['fitted_on']}: {c['predicted_run']} cut-off "
                        f"{c['predicted_min']:.2f} min vs {c['observed_min']:.2f} measured")
+        correction = fit.get("power_correction")
+        if correction is None:
+            typer.echo("  no measured power correction (no propulsion.yaml beside the file)")
+        else:
+            ratios = ", ".join(f"{Path(r['file']).name} x{r['ratio']:.3f}"
+                               for r in correction["runs"])
+            typer.echo(f"  measured power correction ({correction['form']}) against "
+                       f"{correction['model']} ({correction['propulsion']}): {ratios}")
         typer.echo(f"wrote {summary['out']}")
     else:
         print_fit(summary)

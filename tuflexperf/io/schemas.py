@@ -426,6 +426,14 @@ class UncertaintySchema(StrictModel):
     parameters: dict[str, DistributionSchema] = {}
 
 
+class ValidationSchema(StrictModel):
+    """Flown evidence the case is held to (issue 45 item 3)."""
+
+    # flight summaries written by `flightlog LOG --case CASE --summary FILE`, relative to
+    # the case file: check reads them and never the logs
+    flights: Annotated[list[FileName], Field(min_length=1)]
+
+
 class CaseSchema(StrictModel):
     file_kind: ClassVar[str] = "case"  # named when another kind of file is given
     name: Name
@@ -435,6 +443,7 @@ class CaseSchema(StrictModel):
     atmosphere: AtmosphereSchema = AtmosphereSchema()
     requirements: Requirements = Requirements()
     uncertainty: UncertaintySchema | None = None
+    validation: ValidationSchema | None = None
 
     @field_validator("uncertainty", mode="before")
     @classmethod
@@ -465,6 +474,8 @@ class Case:
     overrides: tuple[tuple[str, float], ...] = ()
     # the files a flag replaced for this run (--aircraft, --propulsion, --battery): their keys
     replaced: tuple[str, ...] = ()
+    # flight summaries under validation.flights (absolute paths; io.flight_summary)
+    validation_flights: tuple[Path, ...] = ()
 
     @property
     def density_kg_m3(self) -> float:
