@@ -186,6 +186,65 @@ class EngineSchema(StrictModel):
     power: PowerSurfaceSchema | None = None
 
 
+# --- rig systematic errors (issue 44) ---------------------------------------------------------
+# Stated defaults for a rig that declares none (standard deviations; docs/formats.md says why):
+# a pitot-static tunnel speed calibrated to ~1 % of 20-30 m/s; a load cell calibrated with dead
+# weights to ~0.5 % plus ~0.5-1 % from the balance's mounting; a balance zero that drifts by a
+# few hundredths of a newton between tare and run; a pack voltage read by an ADC to ~0.2 %.
+RIG_UNCERTAINTY_DEFAULTS: dict[str, float] = {
+    "airspeed_bias_sd_m_s": 0.2,
+    "thrust_scale_sd": 0.01,
+    "balance_zero_sd_n": 0.05,
+    "voltage_sd_v": 0.1,
+}
+# Beyond these a standard deviation is no calibrated rig's but a typo (or the wrong unit):
+# a tunnel speed off by 5 m/s, a balance off by a quarter of its reading
+MAX_AIRSPEED_BIAS_SD_M_S = 5.0
+MAX_THRUST_SCALE_SD = 0.25
+MAX_BALANCE_ZERO_SD_N = 100.0
+MAX_VOLTAGE_SD_V = 50.0
+
+
+class RigUncertaintySchema(StrictModel):
+    """Systematic errors of the test rig, standard deviations (issue 44): the tunnel's airspeed
+    calibration [m/s], the balance's scale (a fraction of the thrust) and zero [N], and the
+    pack voltage [V]. A key left out takes :data:`RIG_UNCERTAINTY_DEFAULTS` (stated, never 0)."""
+
+    airspeed_bias_sd_m_s: Annotated[float, Field(ge=0, le=MAX_AIRSPEED_BIAS_SD_M_S)] | None = None
+    thrust_scale_sd: Annotated[float, Field(ge=0, le=MAX_THRUST_SCALE_SD)] | None = None
+    balance_zero_sd_n: Annotated[float, Field(ge=0, le=MAX_BALANCE_ZERO_SD_N)] | None = None
+    voltage_sd_v: Annotated[float, Field(ge=0, le=MAX_VOLTAGE_SD_V)] | None = None
+
+    def resolved(self) -> dict[str, float]:
+        """Every key's standard deviation: the stated one, else the default."""
+        return {key: (RIG_UNCERTAINTY_DEFAULTS[key] if getattr(self, key) is None
+                      else float(getattr(self, key))) for key in RIG_UNCERTAINTY_DEFAULTS}
+
+    def declared(self) -> tuple[str, ...]:
+        """The keys the file states (the others are defaults)."""
+        return tuple(key for key in RIG_UNCERTAINTY_DEFAULTS if getattr(self, key) is not None)
+
+
+def rig_uncertainty_problems(
+    rig: RigUncertaintySchema, largest_airspeed_m_s: float | None,
+    largest_thrust_n: float | None, voltage_v: float | None,
+) -> list[str]:
+    """Where a stated systematic error is larger than the quantity it is an error of [one line
+    each, naming the key]: the highest airspeed [m/s], the largest thrust [N], the pack
+    voltage [V] (None: not known here, not checked)."""
+    values = rig.resolved()
+    problems = []
+    for key, quantity, what in (
+        ("airspeed_bias_sd_m_s", largest_airspeed_m_s, "the highest airspeed tested"),
+        ("balance_zero_sd_n", largest_thrust_n, "the largest thrust"),
+        ("voltage_sd_v", voltage_v, "the pack voltage"),
+    ):
+        if quantity is not None and quantity > 0 and values[key] >= quantity:
+            problems.append(f"rig_uncertainty.{key}: {values[key]:g} is not below {what} "
+                            f"({quantity:.4g}): a systematic error larger than the quantity")
+    return problems
+
+
 # fit's own provenance holds ~9 values per run (~150 for the shipped campaign): a million is
 # a campaign of 100,000 runs, and far below what an alias bomb expands to (9^10)
 MAX_SOURCE_VALUES = 1_000_000
@@ -218,6 +277,8 @@ class PropulsionSchema(StrictModel):
     throttle_unit: Literal["fraction", "percent"] = "fraction"
     engines: Annotated[list[EngineSchema], Field(min_length=1)]
     source: dict[str, Any] | None = None  # free-form provenance written by `fit`
+    # the rig's systematic errors (issue 44): written by `fit`, sampled by --samples
+    rig_uncertainty: RigUncertaintySchema | None = None
 
     @field_validator("source", mode="before")
     @classmethod
@@ -247,6 +308,14 @@ class PropulsionSchema(StrictModel):
                 raise ValueError(
                     f"engines: {engine.name}: windmilling_drag_coefficient needs fan_area_m2"
                 )
+        if self.rig_uncertainty is not None:
+            full = 100.0 if self.throttle_unit == "percent" else 1.0  # full throttle, static
+            static = min(c.p00 + c.p10 * full + c.p20 * full * full
+                         for c in (engine.coefficients for engine in self.engines))
+            problems = rig_uncertainty_problems(self.rig_uncertainty, high, static,
+                                                self.reference_voltage_v)
+            if problems:
+                raise ValueError("; ".join(problems))
         return self
 
 
