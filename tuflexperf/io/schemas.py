@@ -154,6 +154,36 @@ class PowerSurfaceSchema(StrictModel):
     n_points: Annotated[int, Field(ge=0)] | None = None
 
 
+Probability = Annotated[float, Field(ge=0, le=1)]
+Count = Annotated[int, Field(ge=0)]
+
+
+class BestAlternativeSchema(StrictModel):
+    """The form that fits the data best among those `fit` compares (not poly22)."""
+
+    form: Name
+    f_statistic: NonNegative | None = None
+    p_value: Probability | None = None
+    model_form_rms_n: NonNegative | None = None
+    in_propulsion_file: bool = False
+
+
+class LackOfFitSchema(StrictModel):
+    """`fit`'s lack-of-fit test of an engine's surface (issue 43 item 4)."""
+
+    f_statistic: NonNegative | None = None
+    p_value: Probability | None = None
+    model_form_rms_n: NonNegative | None = None  # the surface's bias beyond the holds' noise
+    pure_error_rms_n: NonNegative | None = None  # one hold mean's repeatability
+    dof_lack_of_fit: Count
+    dof_pure_error: Count
+    worst_throttle: Annotated[float, Field(ge=0)] | None = None
+    worst_airspeed_m_s: Annotated[float, Field(ge=0, le=MAX_AIRSPEED_M_S)] | None = None
+    worst_residual_n: float | None = None
+    pure_error_basis: Literal["replicate_holds", "within_hold"] = "within_hold"
+    best_alternative: BestAlternativeSchema | None = None
+
+
 class EngineSchema(StrictModel):
     name: EngineName
     coefficients: Poly22Schema
@@ -184,6 +214,7 @@ class EngineSchema(StrictModel):
         return self
     windmilling_drag_coefficient: NonNegative | None = None
     power: PowerSurfaceSchema | None = None
+    lack_of_fit: LackOfFitSchema | None = None
 
 
 # --- rig systematic errors (issue 44) ---------------------------------------------------------
