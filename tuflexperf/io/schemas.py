@@ -178,7 +178,9 @@ class LackOfFitSchema(StrictModel):
     dof_lack_of_fit: Count
     dof_pure_error: Count
     worst_throttle: Annotated[float, Field(ge=0)] | None = None
-    worst_airspeed_m_s: Annotated[float, Field(ge=0, le=MAX_AIRSPEED_M_S)] | None = None
+    # a set point: a static hold whose pitot reads a little below 0 may be at -0.5 m/s
+    worst_airspeed_m_s: Annotated[float, Field(ge=-MAX_AIRSPEED_M_S,
+                                               le=MAX_AIRSPEED_M_S)] | None = None
     worst_residual_n: float | None = None
     pure_error_basis: Literal["replicate_holds", "within_hold"] = "within_hold"
     best_alternative: BestAlternativeSchema | None = None

@@ -52,6 +52,7 @@ from tuflexperf.reduction.lack_of_fit import (
     lack_of_fit_note,
 )
 from tuflexperf.reduction.poly22fit import Poly22Fit, fit_poly22
+from tuflexperf.reduction.rig import IDLE_THROTTLE, rig_uncertainty
 from tuflexperf.reduction.segments import (
     TestPoint,
     merge_test_points,
@@ -435,6 +436,16 @@ def _fit_campaign(
         glauert_report["max_correction_at_top_airspeed_percent"] = 100 * max(at_top)
 
     speeds = speeds_by_engine((p.engine, p.airspeed_m_s) for p in points)
+    volts = [p.voltage_v for p in points if math.isfinite(p.voltage_v)]
+    rig = rig_uncertainty(
+        str(campaign.path), campaign.rig_uncertainty,
+        [d for r in step_results if r.run.file not in deaf
+         for d in [_idle_drift(r, fits[str(r.run.engine)], drag, electrical)] if d is not None],
+        max((p.airspeed_measured_m_s for p in points), default=0.0),
+        max((p.thrust_n for p in points), default=0.0),
+        float(np.mean(volts)) if volts else None,
+    )
+    degenerate.extend(rig.notes)
     files = [
         {"file": r.file, "kind": r.kind, "engine": r.engine, "sha256": digest.result()}
         for r, digest in digests
@@ -449,6 +460,7 @@ def _fit_campaign(
         "structure_drag": drag.as_dict() if drag else None,
         "glauert_applied": glauert,
         "delay_measured_s": measured_delay,
+        "rig_uncertainty_basis": rig.basis,
     }
     table_rows = [table_row(p) for p in points]
     summary = fit_summary(
@@ -471,6 +483,7 @@ def _fit_campaign(
             ],
             "points": table_rows,
             "electrical": electrical.summary(),
+            "rig_uncertainty": rig.summary(),
         }
     )
     summary["warnings"].extend(electrical.warnings)
@@ -514,6 +527,7 @@ def _fit_campaign(
         electrical=electrical,
         fan_area_m2=campaign.fan_area_m2,
         lack_of_fit=lack,
+        rig_uncertainty=rig.values,
     )
     table = render_thrust_table(table_rows, TABLE_EXTRA_COLUMNS)
     return FitResult(
@@ -525,6 +539,28 @@ def _fit_campaign(
         step_runs=step_results,
         sweep_runs=sweep_results,
     )
+
+
+def _idle_drift(result: StepRunResult, fit: Poly22Fit, drag: DragModel | None,
+                electrical: ElectricalFits) -> float | None:
+    """How far a run's idle hold at its end reads from the one at its start [N], beyond what
+    the model expects from their airspeeds and pack voltages (:mod:`.rig`); None: the run
+    does not start and end idle."""
+    segments = result.segments
+    if len(segments) < 2 or max(abs(segments[0].throttle), abs(segments[-1].throttle)) > \
+            IDLE_THROTTLE:
+        return None
+    exponent, reference = electrical.exponent, electrical.reference_voltage_v
+    residuals = []
+    for segment in (segments[0], segments[-1]):
+        model = float(fit.predict([0.0], [segment.airspeed_m_s])[0])
+        if exponent is not None and reference is not None and "voltage_v" in result.data.columns:
+            volts = float(np.nanmean(result.data["voltage_v"][segment.start:segment.stop]))
+            model *= (volts / reference) ** exponent
+        if drag is not None:
+            model -= float(drag.drag_n(segment.airspeed_m_s))
+        residuals.append(segment.force_n - model)
+    return residuals[1] - residuals[0]
 
 
 def _validation(

@@ -115,6 +115,7 @@ def render_propulsion(
     electrical: ElectricalFits | None = None,
     fan_area_m2: float | None = None,
     lack_of_fit: dict[str, EngineLackOfFit | None] | None = None,
+    rig_uncertainty: dict[str, float] | None = None,
 ) -> str:
     """The propulsion file (SPEC 4), validated against the schema ``check`` loads."""
     from tuflexperf.io.case import PropulsionSchema
@@ -169,6 +170,8 @@ def render_propulsion(
             if math.isfinite(power.rmse_n):
                 entry["power"]["rmse_w"] = power.rmse_n
         document["engines"].append(entry)
+    if rig_uncertainty is not None:
+        document["rig_uncertainty"] = {k: float(v) for k, v in rig_uncertainty.items()}
     document["source"] = source
     header = (
         f"{FIT_PROPULSION_HEADER} by ordinary least squares, paper section 4).\n"
