@@ -197,6 +197,7 @@ class EngineLackOfFit:
 
     poly22: LackOfFit
     alternatives: tuple[LackOfFit, ...]
+    largest_thrust_n: float = math.nan  # of the holds: the error's size in proportion
 
     @property
     def best_alternative(self) -> LackOfFit | None:
@@ -264,7 +265,7 @@ def engine_lack_of_fit(
         return None
     others = tuple(t for t in (test(f, d) for f, d in ALTERNATIVE_FORMS.items())
                    if t is not None and t.dof_lack_of_fit > 0)
-    return EngineLackOfFit(base, others)
+    return EngineLackOfFit(base, others, float(np.max(np.abs(y))))
 
 
 def lack_of_fit_note(engine: str, result: EngineLackOfFit) -> str | None:
@@ -278,7 +279,9 @@ def lack_of_fit_note(engine: str, result: EngineLackOfFit) -> str | None:
              else "each hold's own scatter, autocorrelation-corrected")
     text = (f"{engine}: the poly22 surface does not fit its data (lack of fit F = "
             f"{lof.f_statistic:.3g}, {p}): model-form error {lof.model_form_rms_n:.3g} N rms "
-            f"against {lof.pure_error_rms_n:.2g} N pure error ({basis}), {ratio:.3g}x; worst "
+            f"against {lof.pure_error_rms_n:.2g} N pure error ({basis}), {ratio:.3g}x, "
+            f"{100 * lof.model_form_rms_n / result.largest_thrust_n:.2g} % of the largest "
+            f"thrust; worst "
             f"at throttle {lof.worst_throttle:.2f}, {lof.worst_airspeed_m_s:.1f} m/s "
             f"({lof.worst_residual_n:+.3g} N measured minus surface)")
     best = result.best_alternative
