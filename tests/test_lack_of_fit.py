@@ -141,3 +141,20 @@ def test_a_table_with_repeated_rows_is_tested_on_them(tmp_path: Path) -> None:
     assert single.exit_code == 0, single.output
     assert "lack of fit E1: not tested" in single.output
     assert "lack_of_fit" not in (tmp_path / "s.yaml").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("seed", [6, 7, 8])
+def test_near_replicates_are_tested_net_of_the_surfaces_slope_between_them(seed: int) -> None:
+    # a tunnel's repeat: the same set points, the airspeed 0.05 m/s (sd) off the first run's;
+    # the thrust's slope over that gap (~0.4 N per m/s) is no scatter of the repeats
+    rng = np.random.default_rng(seed)
+    x, v = (np.tile(a.ravel(), 2) for a in np.meshgrid(np.round(np.arange(0, 1.01, 0.1), 1),
+                                                       [0.0, 15.0, 20.0, 25.0, 30.0]))
+    measured = v + rng.normal(0, 0.05, v.size) * (v > 0)
+    y = poly22(x, measured, COEFFICIENTS) + rng.normal(0, 0.01, x.size)
+    result = engine_lack_of_fit(x, measured, y, v)
+    assert result is not None and result.poly22.basis == "replicate_holds"
+    assert result.poly22.fits and result.poly22.f_statistic > 0.3  # not the degenerate 0
+    assert result.poly22.pure_error_rms_n == pytest.approx(0.01, rel=0.3)
+    bent = poly22(x**0.8, measured, COEFFICIENTS) + rng.normal(0, 0.01, x.size)
+    assert not engine_lack_of_fit(x, measured, bent, v).poly22.fits

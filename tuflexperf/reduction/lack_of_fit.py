@@ -128,7 +128,11 @@ def replicate_test(design: ArrayLike, y: ArrayLike, groups: ArrayLike, throttle:
 
     ``SS_PE = sum (y_ij - ybar_i)^2`` on ``n - m`` dof, ``SS_LOF = SSE - SS_PE`` on ``m - p``;
     the model-form rms is ``sqrt(max(SS_LOF - (m - p) MS_PE, 0) / n)`` (the expectation of
-    ``SS_LOF`` is ``(m - p) sigma^2 + sum n_i bias_i^2``).
+    ``SS_LOF`` is ``(m - p) sigma^2 + sum n_i bias_i^2``). A tunnel's repeat is a near
+    replicate (its airspeed a few 0.01 m/s off the other's): the pure error is then the
+    residual of the surface *plus* one mean per condition, so that the surface's own slope
+    between the repeats is not counted as their scatter (the extra-sum-of-squares form of the
+    same test, Draper & Smith sec. 6.1; for exact replicates it is the textbook split).
     """
     X = np.asarray(design, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -136,17 +140,19 @@ def replicate_test(design: ArrayLike, y: ArrayLike, groups: ArrayLike, throttle:
     residual, hat = _least_squares(X, y)
     p = int(round(hat.sum()))  # the fit's rank
     m = int(label.max()) + 1
-    counts = np.bincount(label)
-    group_mean = np.bincount(label, y) / counts
-    ss_pe = float(np.sum((y - group_mean[label]) ** 2))
+    indicators = (label[:, None] == np.arange(m)).astype(float)
+    pure, full_hat = _least_squares(np.column_stack([X, indicators]), y)
+    rank = int(round(full_hat.sum()))
+    ss_pe = float(pure @ pure)
     sse = float(residual @ residual)
     ss_lof = max(sse - ss_pe, 0.0)
-    dof_lof, dof_pe = m - p, y.size - m
+    dof_lof, dof_pe = rank - p, y.size - rank
     ms_pe = ss_pe / dof_pe if dof_pe > 0 else math.nan
     f = (ss_lof / dof_lof) / ms_pe if dof_lof > 0 and ms_pe > 0 else math.nan
+    counts = np.bincount(label)
     group_residual = np.bincount(label, residual) / counts  # condition mean minus surface
     worst = int(np.argmax(np.abs(group_residual)))
-    first = np.argmax(label[:, None] == np.arange(m), axis=0)  # a point of each condition
+    first = np.argmax(indicators, axis=0)  # a point of each condition
     return LackOfFit(
         form=form, f_statistic=f, p_value=_p_value(f, dof_lof, dof_pe),
         model_form_rms_n=math.sqrt(max(ss_lof - dof_lof * ms_pe, 0.0) / y.size)
