@@ -62,3 +62,20 @@ def test_bad_values_are_refused_naming_the_key(tmp_path: Path, key: str, value: 
         load_model(_propulsion(tmp_path, {key: value}), PropulsionSchema)
     assert f"rig_uncertainty.{key}" in str(caught.value)
     assert says in str(caught.value)
+
+
+@pytest.mark.parametrize(("matrix", "says"), [
+    ([[1, 0], [0, 1]], "4x4"),
+    ([[1, 0.5, 0, 0], [0.4, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], "symmetric"),
+    ([[1, 0.9, 0.9, 0], [0.9, 1, -0.9, 0], [0.9, -0.9, 1, 0], [0, 0, 0, 1]], "semi-definite"),
+    ([[2, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], "within [-1, 1]"),
+])
+def test_a_correlation_no_errors_can_have_is_refused(tmp_path: Path, matrix, says) -> None:
+    with pytest.raises(InputError) as caught:
+        load_model(_propulsion(tmp_path, {"correlation": matrix}), PropulsionSchema)
+    assert "rig_uncertainty.correlation" in str(caught.value) and says in str(caught.value)
+
+
+def test_a_valid_correlation_loads() -> None:
+    matrix = [[1, 0.5, 0, 0], [0.5, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+    assert RigUncertaintySchema(correlation=matrix).correlation == matrix

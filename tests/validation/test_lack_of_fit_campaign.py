@@ -120,8 +120,10 @@ def _manifest(tmp_path: Path, rig: str) -> Path:
 
 
 def test_a_declared_rig_is_written_as_declared(tmp_path: Path) -> None:
+    correlation = [[1, 0, 0, 0], [0, 1, 0.5, 0], [0, 0.5, 1, 0], [0, 0, 0, 1]]
     manifest = _manifest(tmp_path, "rig_uncertainty: {airspeed_bias_sd_m_s: 0.3, "
-                         "thrust_scale_sd: 0.02, balance_zero_sd_n: 0.04, voltage_sd_v: 0.2}")
+                         "thrust_scale_sd: 0.02, balance_zero_sd_n: 0.04, voltage_sd_v: 0.2, "
+                         f"correlation: {correlation}}}")
     result = runner.invoke(app, ["fit", str(manifest), "--out", str(tmp_path / "p.yaml"),
                                  "--json"])
     assert result.exit_code == 0, result.output
@@ -129,7 +131,8 @@ def test_a_declared_rig_is_written_as_declared(tmp_path: Path) -> None:
     assert set(rig["basis"].values()) == {"declared"}
     written = yaml.safe_load((tmp_path / "p.yaml").read_text())["rig_uncertainty"]
     assert written == {"airspeed_bias_sd_m_s": 0.3, "thrust_scale_sd": 0.02,
-                       "balance_zero_sd_n": 0.04, "voltage_sd_v": 0.2}
+                       "balance_zero_sd_n": 0.04, "voltage_sd_v": 0.2,
+                       "correlation": correlation}
 
 
 @pytest.mark.parametrize(("rig", "key"), [

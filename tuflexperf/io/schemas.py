@@ -247,6 +247,28 @@ class RigUncertaintySchema(StrictModel):
     thrust_scale_sd: Annotated[float, Field(ge=0, le=MAX_THRUST_SCALE_SD)] | None = None
     balance_zero_sd_n: Annotated[float, Field(ge=0, le=MAX_BALANCE_ZERO_SD_N)] | None = None
     voltage_sd_v: Annotated[float, Field(ge=0, le=MAX_VOLTAGE_SD_V)] | None = None
+    # where two errors share a cause (4x4, the order of RIG_UNCERTAINTY_DEFAULTS); None: none
+    correlation: list[list[float]] | None = None
+
+    @field_validator("correlation")
+    @classmethod
+    def _check_correlation(cls, matrix: list[list[float]] | None) -> list[list[float]] | None:
+        if matrix is None:
+            return matrix
+        n = len(RIG_UNCERTAINTY_DEFAULTS)
+        if len(matrix) != n or any(len(row) != n for row in matrix):
+            raise ValueError(f"must be a {n}x{n} matrix ({', '.join(RIG_UNCERTAINTY_DEFAULTS)})")
+        array = np.asarray(matrix, dtype=float)
+        if not np.all(np.isfinite(array)) or np.any(np.abs(array) > 1.0):
+            raise ValueError("every entry must be finite and within [-1, 1]")
+        if not np.allclose(np.diag(array), 1.0):
+            raise ValueError("the diagonal must be 1")
+        if not np.allclose(array, array.T, atol=1e-12):
+            raise ValueError("must be symmetric")
+        if float(np.linalg.eigvalsh(array).min()) < -1e-9:
+            raise ValueError("must be positive semi-definite (no set of errors has these "
+                             "correlations)")
+        return matrix
 
     def resolved(self) -> dict[str, float]:
         """Every key's standard deviation: the stated one, else the default."""
@@ -266,13 +288,15 @@ def rig_uncertainty_problems(
     each, naming the key]: the highest airspeed [m/s], the largest thrust [N], the pack
     voltage [V] (None: not known here, not checked)."""
     values = rig.resolved()
+    declared = rig.declared()  # a default is never the user's mistake to be named
     problems = []
     for key, quantity, what in (
         ("airspeed_bias_sd_m_s", largest_airspeed_m_s, "the highest airspeed tested"),
         ("balance_zero_sd_n", largest_thrust_n, "the largest thrust"),
         ("voltage_sd_v", voltage_v, "the pack voltage"),
     ):
-        if quantity is not None and quantity > 0 and values[key] >= quantity:
+        if key in declared and quantity is not None and quantity > 0 and \
+                values[key] >= quantity:
             problems.append(f"rig_uncertainty.{key}: {values[key]:g} is not below {what} "
                             f"({quantity:.4g}): a systematic error larger than the quantity")
     return problems

@@ -527,7 +527,7 @@ def _fit_campaign(
         electrical=electrical,
         fan_area_m2=campaign.fan_area_m2,
         lack_of_fit=lack,
-        rig_uncertainty=rig.values,
+        rig_uncertainty=rig.document(),
     )
     table = render_thrust_table(table_rows, TABLE_EXTRA_COLUMNS)
     return FitResult(

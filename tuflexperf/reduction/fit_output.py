@@ -115,7 +115,7 @@ def render_propulsion(
     electrical: ElectricalFits | None = None,
     fan_area_m2: float | None = None,
     lack_of_fit: dict[str, EngineLackOfFit | None] | None = None,
-    rig_uncertainty: dict[str, float] | None = None,
+    rig_uncertainty: dict[str, Any] | None = None,
 ) -> str:
     """The propulsion file (SPEC 4), validated against the schema ``check`` loads."""
     from tuflexperf.io.case import PropulsionSchema
@@ -171,7 +171,7 @@ def render_propulsion(
                 entry["power"]["rmse_w"] = power.rmse_n
         document["engines"].append(entry)
     if rig_uncertainty is not None:
-        document["rig_uncertainty"] = {k: float(v) for k, v in rig_uncertainty.items()}
+        document["rig_uncertainty"] = rig_uncertainty
     document["source"] = source
     header = (
         f"{FIT_PROPULSION_HEADER} by ordinary least squares, paper section 4).\n"

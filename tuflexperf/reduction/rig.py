@@ -44,6 +44,14 @@ class RigUncertainty:
     basis: dict[str, str]  # key -> "declared" | "estimated" | "default"
     estimates: dict[str, dict[str, Any]]  # key -> {"value", "runs"}: what the runs measured
     notes: tuple[str, ...]
+    correlation: list[list[float]] | None = None  # as declared (None: independent)
+
+    def document(self) -> dict[str, Any]:
+        """The propulsion file's ``rig_uncertainty`` block."""
+        block: dict[str, Any] = {key: float(value) for key, value in self.values.items()}
+        if self.correlation is not None:
+            block["correlation"] = [[float(c) for c in row] for row in self.correlation]
+        return block
 
     def summary(self) -> dict[str, Any]:
         return {"values": dict(self.values), "basis": dict(self.basis),
@@ -95,4 +103,4 @@ def rig_uncertainty(
         notes.append("rig uncertainty not declared in the manifest, stated defaults used: "
                      + ", ".join(f"{key} {values[key]:g}" for key in defaulted)
                      + " (docs/formats.md, campaign manifest)")
-    return RigUncertainty(values, basis, estimates, tuple(notes))
+    return RigUncertainty(values, basis, estimates, tuple(notes), rig.correlation)
