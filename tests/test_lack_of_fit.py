@@ -158,3 +158,10 @@ def test_near_replicates_are_tested_net_of_the_surfaces_slope_between_them(seed:
     assert result.poly22.pure_error_rms_n == pytest.approx(0.01, rel=0.3)
     bent = poly22(x**0.8, measured, COEFFICIENTS) + rng.normal(0, 0.01, x.size)
     assert not engine_lack_of_fit(x, measured, bent, v).poly22.fits
+
+
+def test_holds_without_scatter_show_nothing_and_are_not_flagged() -> None:
+    x, v, y, var = _grid(lambda x, v: poly22(x**0.8, v, COEFFICIENTS), 0.0, 1)
+    result = engine_lack_of_fit(x, v, y, v, np.zeros_like(var), 150)
+    assert result is not None and math.isnan(result.poly22.p_value)
+    assert result.poly22.fits and result.best_alternative is None

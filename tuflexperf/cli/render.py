@@ -489,14 +489,14 @@ def echo_lack_of_fit(summary: dict[str, Any]) -> None:
         p = lof["p_value"]
         basis = "replicate holds" if lof["pure_error_basis"] == "replicate_holds" else \
             "within-hold scatter"
-        fits = p is None or p >= 0.01
         typer.echo(
             f"lack of fit {e['name']}: F {fmt(lof['f_statistic'], 2)} on {lof['dof_lack_of_fit']}"
             f"/{lof['dof_pure_error']} dof, p {'n/a' if p is None else f'{p:.2g}'}; model-form "
             f"{fmt(lof['model_form_rms_n'])} N rms vs pure error {fmt(lof['pure_error_rms_n'])} N "
             f"({basis}); worst x {lof['worst_throttle']:.2f}, {lof['worst_airspeed_m_s']:.1f} m/s "
             f"({lof['worst_residual_n']:+.3f} N): "
-            + ("fits" if fits else "DOES NOT FIT its data")
+            + ("no F (the pure error is 0)" if p is None else "fits" if p >= 0.01
+               else "DOES NOT FIT its data")
         )
     rig = summary.get("rig_uncertainty")
     if rig:

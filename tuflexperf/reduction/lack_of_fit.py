@@ -62,8 +62,9 @@ class LackOfFit:
 
     @property
     def fits(self) -> bool:
-        """Whether the form fits its data (p at least :data:`LACK_OF_FIT_P`)."""
-        return self.p_value >= LACK_OF_FIT_P
+        """Whether the form fits its data: not shown otherwise (p below :data:`LACK_OF_FIT_P`;
+        a NaN p, e.g. holds without scatter, shows nothing)."""
+        return not self.p_value < LACK_OF_FIT_P
 
     def as_dict(self) -> dict[str, Any]:
         return {
