@@ -158,3 +158,23 @@ def test_the_shipped_generator_still_writes_the_shipped_campaign(tmp_path: Path)
         if path.is_file():
             assert (tmp_path / path.relative_to(SHIPPED)).read_bytes() == path.read_bytes(), path
     shutil.rmtree(tmp_path / "runs")
+
+
+def test_a_balance_zero_that_drifts_is_estimated_from_the_idle_holds(tmp_path: Path) -> None:
+    import pandas as pd
+
+    folder = tmp_path / "campaign"
+    shutil.copytree(SHIPPED, folder)
+    for name in ("edf1_v15p0", "edf1_v20p0", "edf1_v25p0", "edf1_v30p0"):
+        path = folder / "runs" / f"{name}.csv.gz"
+        run = pd.read_csv(path)
+        t = run["time_s"]
+        run["force_n"] = run["force_n"] + 0.2 * (t - t.min()) / (t.max() - t.min())
+        run.to_csv(path, index=False, compression={"method": "gzip", "compresslevel": 1})
+    result = runner.invoke(app, ["fit", str(folder / "campaign.yaml"), "--out",
+                                 str(tmp_path / "p.yaml"), "--json"])
+    assert result.exit_code == 0, result.output
+    rig = json.loads(result.stdout)["rig_uncertainty"]
+    # 0.2 N in 4 of 14 runs: rms(drift) / sqrt(2) = sqrt(4 x 0.04 / 14 / 2) = 0.076 N
+    assert rig["basis"]["balance_zero_sd_n"] == "estimated"
+    assert rig["values"]["balance_zero_sd_n"] == pytest.approx(0.076, rel=0.15)

@@ -500,7 +500,10 @@ def echo_lack_of_fit(summary: dict[str, Any]) -> None:
         )
     rig = summary.get("rig_uncertainty")
     if rig:
-        parts = [f"{key} {rig['values'][key]:g} ({rig['basis'][key]})" for key in rig["values"]]
+        runs = {k: f", {e['runs']} runs' idle holds" for k, e in rig["estimates"].items()}
+        parts = [f"{key} {rig['values'][key]:.3g} ({rig['basis'][key]}"
+                 f"{runs.get(key, '') if rig['basis'][key] == 'estimated' else ''})"
+                 for key in rig["values"]]
         typer.echo("rig uncertainty (sd): " + ", ".join(parts))
 
 
