@@ -50,6 +50,7 @@ from tuflexperf.reduction.fit_checks import (
     speeds_by_engine,
 )
 from tuflexperf.reduction.fit_output import FitResult, fit_summary, render_propulsion, write_files
+from tuflexperf.reduction.lack_of_fit import engine_lack_of_fit, lack_of_fit_note
 from tuflexperf.reduction.poly22fit import fit_poly22
 from tuflexperf.reduction.step_runs import Progress
 
@@ -78,6 +79,9 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
         for engine in table.engines()
     }
     refuse_unphysical_fit(str(table.path), fits)
+    # a table holds no samples: only repeated rows (same throttle and set point) test the fit
+    lack = {engine: engine_lack_of_fit(x, v, t, [set_point(float(s)) for s in v])
+            for engine in table.engines() for x, v, t in [table.select(engine)]}
     speeds = speeds_by_engine(zip(table.engine, table.airspeed_m_s, strict=True))
     source = {
         "tool": "tuflexperf fit",
@@ -85,8 +89,10 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
         "input_sha256": sha256_of(Path(path)),
     }
     summary = fit_summary(kind="table", input_path=Path(path), fits=fits, delay=delay_s,
-                          speeds=speeds)
+                          speeds=speeds, lack_of_fit=lack)
     summary["warnings"].extend(poor_fit_notes(fits))
+    summary["warnings"].extend(note for engine, result in lack.items() if result is not None
+                               for note in [lack_of_fit_note(engine, result)] if note)
     propulsion = render_propulsion(
         name=f"poly22 fit of {path_text(Path(path).name)}",
         fits=fits,
@@ -94,6 +100,7 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
         delay=delay_s,
         density=None,
         source=source,
+        lack_of_fit=lack,
     )
     rows = []
     for e, x, v, t in zip(table.engine, table.throttle, table.airspeed_m_s, table.thrust_n,
