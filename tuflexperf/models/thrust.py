@@ -65,6 +65,9 @@ class Engine:
     # moved by the offset (the extrapolation reading's bound, analysis.extrapolation_reading);
     # None: the polynomial as fitted
     extrapolation_offset: tuple[float, float, float] | None = None
+    # measured over modelled power (models.power_correction.PowerCorrection), multiplying
+    # the power surface; None: the surface as fitted
+    power_correction: Any = None
 
 
 # SPEC 3: rpm follows duty cycle times voltage, thrust rpm^2
