@@ -15,6 +15,7 @@ from tuflexperf.analysis.mission import solve_mission
 from tuflexperf.analysis.mission_samples import sampled_landing
 from tuflexperf.analysis.uncertainty import evaluator_for, mission_for
 from tuflexperf.cli import app
+from tuflexperf.errors import NotAttainable
 from tuflexperf.io.case import load_case
 from tuflexperf.io.dotted import with_values
 from tuflexperf.io.mission import load_mission
@@ -175,3 +176,62 @@ def test_what_the_batch_does_not_fly_is_named(tmp_path) -> None:
                                    "requirements.envelope.min_airspeed_m_s",
                                    "aircraft.cl_max", "battery.mission.pattern_altitude_m"]) is None
     assert "battery.capacity_ah" in why_not_sampled(model, ["battery.capacity_ah"])
+
+
+def _variant(tmp_path: Path, file_key: str, changes: dict, mission: Path = SHIPPED_MISSION
+             ) -> Path:
+    """The mission case with the aircraft or propulsion file changed by ``changes``."""
+    path = _case(tmp_path, mission)
+    data = yaml.safe_load(path.read_text())
+    content = yaml.safe_load(Path(data[file_key]).read_text())
+    content.update(changes)
+    changed = tmp_path / f"{file_key}.yaml"
+    changed.write_text(yaml.safe_dump(content))
+    data[file_key] = str(changed)
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def _rows_and_single(path: Path, draws: dict[str, list[float]]) -> tuple[np.ndarray, list]:
+    case = load_case(path)
+    values = {k: np.array(v, dtype=float) for k, v in draws.items()}
+    model = mission_for(case, list(values))
+    assert model is not None  # sampled, not refused
+    size = len(next(iter(draws.values())))
+    batch = sampled_landing(model, evaluator_for(case), values, size, None, None)[
+        "mission_landing_charge"][0]
+    single: list[float] = []
+    for row in range(size):
+        one = with_values(case, {k: v[row] for k, v in draws.items()})
+        try:
+            flown = solve_mission(one, load_mission(model.mission.path), 0.2)
+            single.append(flown.landing_charge_fraction if flown.attainable else np.nan)
+        except NotAttainable:  # refused at its plan (the launch): not attainable
+            single.append(np.nan)
+    return batch, single
+
+
+def test_a_catapult_launch_is_sampled_row_by_row(tmp_path) -> None:
+    """Released airborne: a row whose catapult cannot give the release speed is not met,
+    the others the single case to rounding (the batch's own release check)."""
+    path = _variant(tmp_path, "aircraft", {"launch": "catapult", "launch_speed_m_s": 20.0,
+                                           "launch_energy_j": 20000.0})
+    batch, single = _rows_and_single(path, {
+        "aircraft.launch_energy_j": [20000.0, 5000.0, 20000.0],
+        "aircraft.mass_kg": [26.7, 26.7, 30.0]})
+    assert np.isnan(batch[1]) and np.isnan(single[1])
+    assert np.all(np.isfinite(batch[[0, 2]])) and batch[0] != batch[2]
+    assert batch == pytest.approx(single, rel=1e-9, nan_ok=True)
+
+
+def test_a_takeoff_on_sagging_packs_is_sampled_row_by_row(tmp_path) -> None:
+    """With a reference voltage the roll's airspeed history and the arc's and climb's
+    gradients are the batch's take-off on the packs (held to CVODES in
+    test_batch_equals_deterministic): each row the single case's to 1e-8."""
+    path = _variant(tmp_path, "propulsion", {"reference_voltage_v": 46.0,
+                                             "voltage_exponent": 1.5})
+    batch, single = _rows_and_single(path, {"aircraft.mass_kg": [26.7064, 29.0, 25.0],
+                                            "atmosphere.temperature_offset_k": [0.0, 10.0, -5.0]})
+    assert np.all(np.isfinite(batch)) and len(set(np.round(batch, 6))) == 3
+    assert batch[0] == pytest.approx(single[0], rel=1e-9)  # the nominal row
+    assert batch == pytest.approx(single, rel=1e-8)

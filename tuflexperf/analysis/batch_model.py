@@ -56,6 +56,7 @@ class BatchModel(LevelFlightRows, GroundRollRows):
     packs_airborne: Array | None = None
     # where those packs reach their cut-off in the climb, before the obstacle
     packs_beyond: NDArray[np.bool_] | None = None
+    packs_air: Any = None  # that airborne part's settled path (airborne.AirborneOnPacks)
 
     def transition_speed(self) -> Array:
         """The take-off arc's true airspeed [m/s] per row ``(B,)``: 1.15 V_stall."""

@@ -45,7 +45,8 @@ FLOWN_KEYS = ("aircraft.mass_kg", "aircraft.wing_area_m2", "aircraft.cd0", "airc
               "aircraft.cl_max", "atmosphere.altitude_m", "atmosphere.temperature_offset_k",
               "requirements.envelope.stall_margin",
               "requirements.mission.min_landing_charge_fraction",
-              "requirements.takeoff.obstacle_height_m", "battery.cutoff_voltage_per_cell_v")
+              "requirements.takeoff.obstacle_height_m", "battery.cutoff_voltage_per_cell_v",
+              "aircraft.launch_speed_m_s", "aircraft.launch_energy_j")
 """The drawn keys a sampled mission flies (with ``aircraft.takeoff.*``, through the batch's
 take-off); other requirements' limits leave it alone."""
 ROWS_PER_MAP = 500  # rows per map call: a row's history is ~80 kB (states and aux per node)
@@ -55,7 +56,6 @@ MISSION_SOLVED = "mission_solved_time"
 
 def why_not_sampled(model: MissionModel, keys: list[str]) -> str | None:
     """Why the batch cannot fly ``model``'s mission for draws of ``keys`` (None: it can)."""
-    case = model.case
     for key in keys:
         # the case's requirement holds the reserve; of the requirements' numbers the mission
         # reads only FLOWN_KEYS' (the others are other requirements' limits)
@@ -63,15 +63,11 @@ def why_not_sampled(model: MissionModel, keys: list[str]) -> str | None:
             continue
         if key not in FLOWN_KEYS and not key.startswith("aircraft.takeoff."):
             return f"{key} is drawn and the sampled mission does not fly it"
-    if case.aircraft.launch == "catapult":
-        return "a catapult launch is flown for the nominal case only"
     if any(plan.solve_v for plan in model.plans):
         return "a level flight at a fixed throttle is flown for the nominal case only"
     if any(s.type not in ("takeoff", "engine_failure") and s.airspeed_m_s is None
            for s in model.mission.segments):
         return "a segment without airspeed_m_s is flown for the nominal case only"
-    if model.tk_layout and case.propulsion.reference_voltage_v is not None:
-        return "a take-off on sagging packs is flown for the nominal case only"
     return None
 
 
@@ -80,10 +76,12 @@ def _column(values: Mapping[str, Array], key: str, nominal: Any, size: int) -> A
                            (size,)).copy()
 
 
-def _takeoff_rows(model: MissionModel, m: Any, height: Array, layout: list[tuple[str, int]]
+def _takeoff_rows(model: MissionModel, m: Any, roll: tuple[Array, Array, Array, Array],
+                  height: Array, layout: list[tuple[str, int]]
                   ) -> tuple[Array, NDArray[np.bool_]]:
     """The take-off's step rows per row ``(B, P + 1, columns)`` from the batch's take-off
-    ``m``, and where the take-off reaches the obstacle."""
+    ``m`` and its ``roll`` (:meth:`BatchEvaluator.launch`: on sagging packs its history and
+    airborne gradients are the packs'), and where the take-off reaches the obstacle."""
     from tuflexperf.models._math import interp_rows
     from tuflexperf.models.aircraft import (
         climb_gradient,
@@ -93,11 +91,13 @@ def _takeoff_rows(model: MissionModel, m: Any, height: Array, layout: list[tuple
     )
 
     size = m.size
-    _, time, v_lo, ok = m.ground_roll()
+    _, time, v_lo, ok = roll
     ok = ok > 0.5
     rotation = _column({}, "", m.aircraft.takeoff.rotation_time_s, size)
     roll_s = np.where(ok, time - rotation, 0.0)
-    t_hist = np.where(ok[:, None], m.roll_history(ok), 0.0)
+    sagging = m.packs_roll is not None
+    t_hist = np.where(ok[:, None], np.nan_to_num(m.packs_roll.history_time) if sagging
+                      else m.roll_history(ok), 0.0)
     v_hist = np.where(ok, v_lo, 0.0)[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
     stage_t = roll_s[:, None] / (2 * STEPS) * np.arange(2 * STEPS + 1)[None, :]
     stage_t[:, -1] = roll_s
@@ -105,14 +105,19 @@ def _takeoff_rows(model: MissionModel, m: Any, height: Array, layout: list[tuple
     v_tr = m.transition_speed()
     load = _column({}, "", m.aircraft.takeoff.transition_load_factor, size)
     radius = np.asarray(transition_radius_m(v_tr, load), dtype=float)
-    thrust = np.asarray(m.thrust(1.0, v_tr[:, None]), dtype=float).reshape(-1)
-    gradient = np.asarray(climb_gradient(m.aircraft, thrust[:, None], v_tr[:, None],
-                                         m.density), dtype=float).reshape(-1) * np.ones(size)
+    if sagging:  # the packs sag over the arc and the climb: their settled gradients
+        arc_gradient = np.asarray(m.packs_air.arc_gradient, dtype=float) * np.ones(size)
+        gradient = np.asarray(m.packs_air.climb_gradient, dtype=float) * np.ones(size)
+    else:
+        thrust = np.asarray(m.thrust(1.0, v_tr[:, None]), dtype=float).reshape(-1)
+        gradient = np.asarray(climb_gradient(m.aircraft, thrust[:, None], v_tr[:, None],
+                                             m.density), dtype=float).reshape(-1) * np.ones(size)
+        arc_gradient = gradient
     arc, climb, top = (np.asarray(x, dtype=float).reshape(-1) * np.ones(size)
-                       for x in obstacle_distances_m(radius, gradient, height))
+                       for x in obstacle_distances_m(radius, arc_gradient, height, gradient))
     air = None
     if model.takeoff_to_obstacle:
-        air = airborne_path(v_tr, radius, height, gradient, gradient, top >= height)
+        air = airborne_path(v_tr, radius, height, gradient, arc_gradient, top >= height)
         ok &= np.isfinite(arc + climb) & ~np.asarray(transition_beyond_cl_max(load), dtype=bool)
     rows = takeoff_matrix(layout, stages, roll_s, rotation, np.where(ok, v_lo, 0.0), air)
     return np.where(ok[:, None, None], rows, 0.0), ok
@@ -161,14 +166,18 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     history, bounds, layout = model.sampled_chain()
     par = model.parameters(aircraft, (field_m, dt_k), coefficients, extrapolation_n, size)
     tk = np.zeros((size, model.tk.shape[0], 0))
-    if layout:
+    if model.mission.segments and model.mission.segments[0].type == "takeoff":
+        # a runway's roll or a catapult's release, per row as the batch's take-off flies it
         m = _Model(aircraft=aircraft, propulsion=evaluator._propulsion(coefficients),
                    density=evaluator._density(values, size), extrapolation_n=extrapolation_n,
                    size=size, stall_margin=margin)
         height = _column(values, "requirements.takeoff.obstacle_height_m",
                          obstacle_height_of(case), size)
-        tk, launched = _takeoff_rows(model, m, height, layout)
-        ok &= launched
+        roll = evaluator.launch(m, size, height, evaluator._battery_rows(values, size))
+        ok &= roll[3] > 0.5
+        if layout:
+            tk, launched = _takeoff_rows(model, m, roll, height, layout)
+            ok &= launched
     theta = np.repeat(model.theta[:, None], size, axis=1)
     k = model.mission.solve_for
 
