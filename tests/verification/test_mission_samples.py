@@ -235,3 +235,18 @@ def test_a_takeoff_on_sagging_packs_is_sampled_row_by_row(tmp_path) -> None:
     assert np.all(np.isfinite(batch)) and len(set(np.round(batch, 6))) == 3
     assert batch[0] == pytest.approx(single[0], rel=1e-9)  # the nominal row
     assert batch == pytest.approx(single, rel=1e-8)
+
+
+def test_a_cruise_at_a_fixed_throttle_is_sampled_row_by_row(tmp_path) -> None:
+    """The airspeed is solved per row (the fast root of level flight at that throttle, as
+    the single case's plan finds it); a row that holds no level flight is not met."""
+    mission = tmp_path / "fixed.yaml"
+    mission.write_text(SHIPPED_MISSION.read_text().replace(
+        "{type: cruise, airspeed_m_s: 26, time_min: 8}", "{type: cruise, throttle: 0.6, "
+        "time_min: 8}"))
+    batch, single = _rows_and_single(_case(tmp_path, mission), {
+        "aircraft.mass_kg": [26.7064, 33.0, 45.0], "aircraft.cd0": [0.04307, 0.03, 0.06],
+        "atmosphere.temperature_offset_k": [0.0, 10.0, -5.0]})
+    assert np.all(np.isfinite(batch[:2])) and batch[0] != batch[1]
+    assert np.isnan(batch[2]) and np.isnan(single[2])
+    assert batch == pytest.approx(single, rel=1e-9, nan_ok=True)

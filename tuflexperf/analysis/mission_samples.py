@@ -24,6 +24,7 @@ Andersson et al. (2019), "CasADi", Math. Prog. Comp. 11 (``Function.map``); SPEC
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
@@ -63,10 +64,8 @@ def why_not_sampled(model: MissionModel, keys: list[str]) -> str | None:
             continue
         if key not in FLOWN_KEYS and not key.startswith("aircraft.takeoff."):
             return f"{key} is drawn and the sampled mission does not fly it"
-    if any(plan.solve_v for plan in model.plans):
-        return "a level flight at a fixed throttle is flown for the nominal case only"
-    if any(s.type not in ("takeoff", "engine_failure") and s.airspeed_m_s is None
-           for s in model.mission.segments):
+    if any(s.airspeed_m_s is None and p.eas is not None
+           for p, s in zip(model.plans, model.mission.segments, strict=True)):
         return "a segment without airspeed_m_s is flown for the nominal case only"
     return None
 
@@ -123,6 +122,72 @@ def _takeoff_rows(model: MissionModel, m: Any, roll: tuple[Array, Array, Array, 
     return np.where(ok[:, None, None], rows, 0.0), ok
 
 
+def level_speeds_at_throttle(model: MissionModel, plan: Any, m: Any, field_m: Array,
+                             dt_k: Array) -> Array:
+    """Per row, :meth:`MissionModel._level_speed_at_throttle` of a level segment flown at a
+    fixed throttle: the fastest true airspeed [m/s] of level flight with full packs short
+    of the fans' jet velocity (NaN: none), the row's aircraft and thrust (with its
+    extrapolation error) at the segment's density; field [m], temperature offset [K] per
+    row. The same grid (4001 airspeeds, doubling the top while the throttle still flies
+    level) and the same 60 bisections, vectorised over the rows."""
+    from tuflexperf.models.aircraft import (
+        MAX_AIRSPEED_M_S,
+        level_flight_drag_n,
+        stall_speed_eas_m_s,
+    )
+    from tuflexperf.models.atmosphere import isa_density_kg_m3
+    from tuflexperf.models.powertrain import jet_velocity_ceiling_m_s
+
+    size = m.size
+    rho = (np.full(size, model.fixed_density) if model.fixed_density is not None
+           else np.asarray(isa_density_kg_m3(field_m + plan.start_h, dt_k), dtype=float)
+           * np.ones(size))
+    at = dataclasses.replace(m, density=rho[:, None], _uniform=None, _pieces=None,
+                             _force_range=None)
+    stall = np.asarray(stall_speed_eas_m_s(m.aircraft), dtype=float).reshape(-1) * np.sqrt(
+        1.225 / rho)
+    ceiling = np.asarray(jet_velocity_ceiling_m_s(m.propulsion, rho[:, None]),
+                         dtype=float).reshape(-1) * np.ones(size)
+
+    def excess(speed: Array) -> Array:  # speed (B, K) [m/s]
+        return (at.thrust(plan.throttle, speed, plan.dead, model.dead_mode)
+                - np.asarray(level_flight_drag_n(m.aircraft, speed, rho[:, None]), dtype=float))
+
+    top = 8.0 * stall
+    limit = np.maximum(top, np.minimum(ceiling, MAX_AIRSPEED_M_S))
+    for _ in range(64):  # the doubling, each row until it stops (<= log2(340/stall) steps)
+        grow = (top < limit) & (excess(top[:, None])[:, 0] >= 0.0)
+        if not grow.any():
+            break
+        top = np.where(grow, np.minimum(2.0 * top, limit), top)
+    grid, block = 4001, 250
+    start, step = 0.5 * stall, (top - 0.5 * stall) / (grid - 1)  # np.linspace's own terms
+    last = np.full(size, -1)
+    # the fast root short of the jet velocity: the last grid speed that flies level, found
+    # from the top down in blocks of speeds (all rows at once; done rows are not redone)
+    for end in range(grid, 0, -block):
+        todo = last < 0
+        if not todo.any():
+            break
+        index = np.arange(max(end - block, 0), end)
+        v = np.where(index[None, :] == grid - 1, top[:, None],
+                     index[None, :] * step[:, None] + start[:, None])
+        flies = (excess(v) >= 0) & (v < ceiling[:, None])
+        hit = flies.any(axis=1) & todo
+        last[hit] = index[v.shape[1] - 1 - np.argmax(flies[hit, ::-1], axis=1)]
+    found = (last >= 0) & (last < grid - 1)
+    low = np.where(found, last * step + start, np.nan)
+    high = np.where(found & (last + 1 == grid - 1), top, (last + 1) * step + start)
+    high = np.where(found, high, np.nan)
+    for _ in range(60):
+        mid = 0.5 * (low + high)
+        with np.errstate(invalid="ignore"):
+            up = excess(mid[:, None])[:, 0] >= 0
+        low, high = np.where(up, mid, low), np.where(up, high, mid)
+    with np.errstate(invalid="ignore"):
+        return np.where(high < ceiling, 0.5 * (low + high), np.nan)
+
+
 def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Array],
                     size: int, coefficients: Array | None,
                     extrapolation_n: Array | None) -> dict[str, tuple[Array, Array]]:
@@ -166,11 +231,17 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     history, bounds, layout = model.sampled_chain()
     par = model.parameters(aircraft, (field_m, dt_k), coefficients, extrapolation_n, size)
     tk = np.zeros((size, model.tk.shape[0], 0))
+    m = _Model(aircraft=aircraft, propulsion=evaluator._propulsion(coefficients),
+               density=evaluator._density(values, size), extrapolation_n=extrapolation_n,
+               size=size, stall_margin=margin)
+    theta = np.repeat(model.theta[:, None], size, axis=1)
+    for plan in model.plans:
+        if plan.solve_v:  # level at a fixed throttle: each row's own airspeed to start from
+            guess = level_speeds_at_throttle(model, plan, m, field_m, dt_k)
+            ok &= np.isfinite(guess)
+            theta[3 * plan.index + 2] = np.where(np.isfinite(guess), guess, plan.v_guess)
     if model.mission.segments and model.mission.segments[0].type == "takeoff":
         # a runway's roll or a catapult's release, per row as the batch's take-off flies it
-        m = _Model(aircraft=aircraft, propulsion=evaluator._propulsion(coefficients),
-                   density=evaluator._density(values, size), extrapolation_n=extrapolation_n,
-                   size=size, stall_margin=margin)
         height = _column(values, "requirements.takeoff.obstacle_height_m",
                          obstacle_height_of(case), size)
         roll = evaluator.launch(m, size, height, evaluator._battery_rows(values, size))
@@ -178,7 +249,6 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
         if layout:
             tk, launched = _takeoff_rows(model, m, roll, height, layout)
             ok &= launched
-    theta = np.repeat(model.theta[:, None], size, axis=1)
     k = model.mission.solve_for
 
     def fly(durations: Array) -> tuple[Array, Array | None]:
@@ -198,7 +268,7 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
             propulsion = evaluator._propulsion(None if coefficients is None
                                                else coefficients[:, rows, :])
             flown = _flown(model, bounds, states, aux, propulsion, field_m[rows], dt_k[rows],
-                           cutoff[rows])
+                           cutoff[rows], stall[rows])
             with np.errstate(invalid="ignore"):
                 value = np.min(1.0 - states[:model.n, :, -1] / model.capacity_ah, axis=0)
             landing[rows] = np.where(flown & ok[rows], value, np.nan)
@@ -351,11 +421,13 @@ def _mapped(function: Any, count: int) -> Any:
 
 
 def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, aux: Array,
-           propulsion: Any, field_m: Array, dt_k: Array, cutoff: Array) -> NDArray[np.bool_]:
+           propulsion: Any, field_m: Array, dt_k: Array, cutoff: Array, stall: Array
+           ) -> NDArray[np.bool_]:
     """Per row: the whole flight is attainable by :meth:`MissionModel._result`'s rules (the
     cut-off, full throttle, the pack's burst and continuous ratings, the fans' jet velocity,
-    climbs that climb and descents that descend). ``states``/``aux`` ``(k, B, nodes)``; per
-    row the field [m], temperature offset [K] and the packs' cut-off [V]."""
+    climbs that climb and descents that descend, a fixed throttle's airspeed above stall).
+    ``states``/``aux`` ``(k, B, nodes)``; per row the field [m], temperature offset [K],
+    the packs' cut-off [V] and the least EAS of level flight [m/s]."""
     from tuflexperf.models.atmosphere import isa_density_kg_m3
     from tuflexperf.models.battery import first_window_beyond
     from tuflexperf.models.powertrain import beyond_jet_velocity
@@ -399,6 +471,11 @@ def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, au
                 rho = (np.full(h[:, sl].shape, model.fixed_density)
                        if model.fixed_density is not None
                        else isa_density_kg_m3(field_m[:, None] + h[:, sl], dt_k[:, None]))
+                if plan.solve_v:  # the airspeed is an outcome here: stall bounds it; the
+                    # throttle must hold level flight all along
+                    ok &= np.all(np.abs(aux[5][:, sl]) < 1e-9, axis=1)
+                    slow = v[:, sl] < stall[:, None] * np.sqrt(1.225 / rho) * (1 - 1e-12)
+                    ok &= ~np.any(slow, axis=1)
                 fast = np.asarray(beyond_jet_velocity(propulsion, v[:, sl], rho), dtype=bool)
                 ok &= ~np.any(fast & (thrust[:, sl] > 0.0), axis=1)
             if plan.kind == "height":
