@@ -134,10 +134,11 @@ def test_a_dask_cluster_flies_the_sampled_mission_to_the_same_numbers(tmp_path) 
     distributed = pytest.importorskip("distributed")
     from tuflexperf.analysis.uncertainty import plan_for, run_samples
 
-    mission = tmp_path / "airborne.yaml"
-    mission.write_text(AIRBORNE + "solve_for: cruise\n")
+    mission = tmp_path / "airborne.yaml"  # a loiter at its best-endurance airspeed too
+    mission.write_text(AIRBORNE.replace("airspeed_m_s: 21, ", "") + "solve_for: cruise\n")
     case = load_case(_case(tmp_path, mission, {
-        "samples": 30, "seed": 2, "parameters": {"aircraft.cd0": {"normal": [0.021, 0.002]}}}))
+        "samples": 30, "seed": 2, "parameters": {"aircraft.cd0": {"normal": [0.021, 0.002]},
+                                                 "battery.capacity_ah": {"normal": [5.0, 0.2]}}}))
     plan = plan_for(case)
     here = run_samples(case, plan)
     assert np.isfinite(here.values["mission_solved_time"]).sum() >= 25
@@ -175,7 +176,20 @@ def test_what_the_batch_does_not_fly_is_named(tmp_path) -> None:
     assert why_not_sampled(model, ["requirements.takeoff.max_ground_roll_m",
                                    "requirements.envelope.min_airspeed_m_s",
                                    "aircraft.cl_max", "battery.mission.pattern_altitude_m"]) is None
-    assert "battery.capacity_ah" in why_not_sampled(model, ["battery.capacity_ah"])
+    assert why_not_sampled(model, ["battery.capacity_ah", "aircraft.launch_energy_j"]) is None
+    assert "aircraft.nonsense" in why_not_sampled(model, ["aircraft.nonsense"])
+
+
+def test_a_loiter_at_its_best_endurance_airspeed_is_sampled_row_by_row(tmp_path) -> None:
+    """No airspeed_m_s: each row loiters at its own airspeed of least power (the single
+    plan's grid and golden section, per row); a row with no level flight is not met."""
+    mission = tmp_path / "best.yaml"
+    mission.write_text(AIRBORNE.replace("airspeed_m_s: 21, ", ""))
+    batch, single = _rows_and_single(_case(tmp_path, mission), {
+        "aircraft.mass_kg": [26.7064, 29.0, 24.0, 60.0], "aircraft.cd0": [0.04307, 0.03, 0.05,
+                                                                          0.04]})
+    assert np.all(np.isfinite(batch[:3])) and np.isnan(batch[3]) and np.isnan(single[3])
+    assert batch == pytest.approx(single, rel=1e-9, nan_ok=True)
 
 
 def _variant(tmp_path: Path, file_key: str, changes: dict, mission: Path = SHIPPED_MISSION
@@ -250,3 +264,23 @@ def test_a_cruise_at_a_fixed_throttle_is_sampled_row_by_row(tmp_path) -> None:
     assert np.all(np.isfinite(batch[:2])) and batch[0] != batch[1]
     assert np.isnan(batch[2]) and np.isnan(single[2])
     assert batch == pytest.approx(single, rel=1e-9, nan_ok=True)
+
+
+def test_a_drawn_capacity_is_flown_row_by_row(tmp_path) -> None:
+    """battery.capacity_ah drawn: each row flies the circuit of its own packs (charge x the
+    ratio, resistance / the ratio), the landing fraction of its own capacity and its own
+    rating; a pack too small to take off is not met. solve_for too."""
+    batch, single = _rows_and_single(_case(tmp_path, SHIPPED_MISSION), {
+        "battery.capacity_ah": [5.0, 1.5, 6.5], "aircraft.mass_kg": [26.7064, 26.7064, 26.0]})
+    assert np.isnan(batch[1]) and np.isnan(single[1])
+    assert batch[2] > batch[0] and batch == pytest.approx(single, rel=1e-9, nan_ok=True)
+    mission = tmp_path / "airborne.yaml"
+    mission.write_text(AIRBORNE + "solve_for: cruise\n")
+    case = load_case(_case(tmp_path, mission))
+    values = {"battery.capacity_ah": np.array([4.0, 6.0])}
+    out = sampled_landing(mission_for(case, list(values)), evaluator_for(case), values, 2,
+                          None, None)["mission_solved_time"][0]
+    for row, capacity in enumerate([4.0, 6.0]):
+        one = with_values(case, {"battery.capacity_ah": capacity})
+        flown = solve_mission(one, load_mission(mission), 0.2)
+        assert out[row] == pytest.approx(flown.solved["time_min"], rel=1e-9)

@@ -11,10 +11,14 @@ are :meth:`MissionModel._result`'s, vectorised: a row that stalls, cuts off, nee
 than full throttle, does not climb, outruns its fans or its pack's rating is not met
 (NaN), never dropped.
 
-What the batch does not fly yet is said, not guessed (:func:`why_not_sampled`): battery or
-propulsion keys drawn, a segment whose airspeed is solved (no ``airspeed_m_s``, or a level
-flight at a fixed throttle), a catapult launch, a take-off on sagging packs. ``solve_for``
-is solved per row (:func:`longest_rows`), vectorised over the batch.
+Every mission the single case flies is sampled: a catapult's release and a take-off on
+sagging packs (the batch's launch, :meth:`BatchEvaluator.launch`), a level flight at a fixed
+throttle (:func:`level_speeds_at_throttle`) or at its best-endurance airspeed
+(:func:`best_endurance_eas_rows`), each row's airspeed found as the single plan finds it, and
+a drawn capacity (each row's packs: :func:`pack_rows_of`, the circuit's packs a parameter of
+the chained function). A drawn key the mission does not fly is said, not guessed
+(:func:`why_not_sampled`). ``solve_for`` is solved per row (:func:`longest_rows`),
+vectorised over the batch.
 
 References
 ----------
@@ -25,7 +29,9 @@ Andersson et al. (2019), "CasADi", Math. Prog. Comp. 11 (``Function.map``); SPEC
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -60,13 +66,10 @@ def why_not_sampled(model: MissionModel, keys: list[str]) -> str | None:
     for key in keys:
         # the case's requirement holds the reserve; of the requirements' numbers the mission
         # reads only FLOWN_KEYS' (the others are other requirements' limits)
-        if key.startswith(("battery.mission.", "requirements.")):
-            continue
+        if key.startswith(("battery.mission.", "requirements.")) or key == "battery.capacity_ah":
+            continue  # the reserve, the packs (pack_rows_of)
         if key not in FLOWN_KEYS and not key.startswith("aircraft.takeoff."):
             return f"{key} is drawn and the sampled mission does not fly it"
-    if any(s.airspeed_m_s is None and p.eas is not None
-           for p, s in zip(model.plans, model.mission.segments, strict=True)):
-        return "a segment without airspeed_m_s is flown for the nominal case only"
     return None
 
 
@@ -122,6 +125,81 @@ def _takeoff_rows(model: MissionModel, m: Any, roll: tuple[Array, Array, Array, 
     return np.where(ok[:, None, None], rows, 0.0), ok
 
 
+def _segment_rows(model: MissionModel, plan: Any, m: Any, field_m: Array, dt_k: Array
+                  ) -> tuple[Array, Any]:
+    """Per row the density [kg/m^3] at the start of ``plan`` and the batch's model there."""
+    from tuflexperf.models.atmosphere import isa_density_kg_m3
+
+    rho = (np.full(m.size, model.fixed_density) if model.fixed_density is not None
+           else np.asarray(isa_density_kg_m3(field_m + plan.start_h, dt_k), dtype=float)
+           * np.ones(m.size))
+    return rho, dataclasses.replace(m, density=rho[:, None], _uniform=None, _pieces=None,
+                                    _force_range=None)
+
+
+def best_endurance_eas_rows(model: MissionModel, plan: Any, m: Any, field_m: Array,
+                            dt_k: Array, least: Array) -> Array:
+    """Per row, :meth:`MissionModel._best_endurance_eas` of a segment without an airspeed:
+    the EAS [m/s] of least electrical power in level flight with full packs (NaN: no level
+    flight), over the same 2001 airspeeds from ``least`` (the row's stall x margin [m/s])
+    to 4 times it, then the same golden section to 1e-9 m/s, each row on its own bracket."""
+    from tuflexperf.models.aircraft import level_flight_drag_n, true_airspeed_m_s
+    from tuflexperf.models.thrust import least_throttle_reaching
+
+    rho, at = _segment_rows(model, plan, m, field_m, dt_k)
+    live = [i for i in range(model.n) if i != plan.dead]
+
+    def power_at(eas: Array) -> Array:  # eas (B, K) [m/s] -> electrical power [W]
+        # rows done with (no bracket: 0 m/s) or far outside the models go NaN, harmlessly
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            v = np.asarray(true_airspeed_m_s(eas, rho[:, None]), dtype=float)
+            t = [at.thrust(x, v, plan.dead, model.dead_mode) for x in (0.0, 0.5, 1.0)]
+            a = 2.0 * (t[2] - 2.0 * t[1] + t[0])
+            b = t[2] - t[0] - a
+            c = t[0] - np.asarray(level_flight_drag_n(m.aircraft, v, rho[:, None]),
+                                  dtype=float)
+            x, reached = least_throttle_reaching(a, b, c)
+            x = np.asarray(x, dtype=float)
+            total = sum(np.asarray(model._engine_power(i, x, v, rho[:, None]), dtype=float)
+                        for i in live)
+        return np.where(np.asarray(reached) > 0.5, total, np.inf)
+
+    grid, block, size = 2001, 250, m.size
+    start, step = least, (4.0 * least - least) / (grid - 1)  # np.linspace's own terms
+
+    def eas_at(index: Array) -> Array:
+        return np.where(index[None, :] == grid - 1, 4.0 * least[:, None],
+                        index[None, :] * step[:, None] + start[:, None])
+
+    best, k = np.full(size, np.inf), np.zeros(size, dtype=int)
+    for first in range(0, grid, block):  # the grid's least power per row, a block at a time
+        index = np.arange(first, min(first + block, grid))
+        power = power_at(eas_at(index))
+        j = np.argmin(power, axis=1)
+        lower = power[np.arange(size), j] < best
+        best, k = np.where(lower, power[np.arange(size), j], best), np.where(lower, index[j], k)
+    edge = (k == 0) | (k == grid - 1)
+    low = np.where(edge, 0.0, (k - 1) * step + start)
+    high = np.where(k + 1 == grid - 1, 4.0 * least, (k + 1) * step + start)
+    high = np.where(edge, 0.0, high)
+    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
+    a, b = high - ratio * (high - low), low + ratio * (high - low)
+    f_a, f_b = power_at(a[:, None])[:, 0], power_at(b[:, None])[:, 0]
+    active = ~edge & np.isfinite(best) & (high - low > 1e-9)
+    while active.any():  # each row stops at its own 1e-9 m/s, as the single case's loop
+        left = active & (f_a <= f_b)
+        right = active & ~left
+        high, b, f_b = np.where(left, b, high), np.where(left, a, b), np.where(left, f_a, f_b)
+        low, a, f_a = np.where(right, a, low), np.where(right, b, a), np.where(right, f_b, f_a)
+        a = np.where(left, high - ratio * (high - low), a)
+        b = np.where(right, low + ratio * (high - low), b)
+        fresh = power_at(np.where(left, a, b)[:, None])[:, 0]
+        f_a, f_b = np.where(left, fresh, f_a), np.where(right, fresh, f_b)
+        active &= high - low > 1e-9
+    on_grid = np.where(k == grid - 1, 4.0 * least, k * step + start)
+    return np.where(~np.isfinite(best), np.nan, np.where(edge, on_grid, 0.5 * (low + high)))
+
+
 def level_speeds_at_throttle(model: MissionModel, plan: Any, m: Any, field_m: Array,
                              dt_k: Array) -> Array:
     """Per row, :meth:`MissionModel._level_speed_at_throttle` of a level segment flown at a
@@ -135,15 +213,10 @@ def level_speeds_at_throttle(model: MissionModel, plan: Any, m: Any, field_m: Ar
         level_flight_drag_n,
         stall_speed_eas_m_s,
     )
-    from tuflexperf.models.atmosphere import isa_density_kg_m3
     from tuflexperf.models.powertrain import jet_velocity_ceiling_m_s
 
     size = m.size
-    rho = (np.full(size, model.fixed_density) if model.fixed_density is not None
-           else np.asarray(isa_density_kg_m3(field_m + plan.start_h, dt_k), dtype=float)
-           * np.ones(size))
-    at = dataclasses.replace(m, density=rho[:, None], _uniform=None, _pieces=None,
-                             _force_range=None)
+    rho, at = _segment_rows(model, plan, m, field_m, dt_k)
     stall = np.asarray(stall_speed_eas_m_s(m.aircraft), dtype=float).reshape(-1) * np.sqrt(
         1.225 / rho)
     ceiling = np.asarray(jet_velocity_ceiling_m_s(m.propulsion, rho[:, None]),
@@ -188,6 +261,35 @@ def level_speeds_at_throttle(model: MissionModel, plan: Any, m: Any, field_m: Ar
         return np.where(high < ceiling, 0.5 * (low + high), np.nan)
 
 
+@dataclass(frozen=True)
+class PackRowsOfMission:
+    """Per row the packs a drawn ``battery.capacity_ah`` makes: charge per engine [Ah] the
+    landing fraction counts, the circuit's measured packs [-], the pole of its knee [Ah]
+    and the pack's continuous rating [A] (None without one)."""
+
+    capacity_ah: Array
+    packs: Array
+    pole_ah: Array
+    rating_a: Array | None
+
+
+def pack_rows_of(model: MissionModel, values: Mapping[str, Array], size: int
+                 ) -> PackRowsOfMission:
+    """The rows' packs as :class:`MissionModel` builds them for one capacity
+    (``battery.circuit_packs``, ``capacity_ah x packs in parallel``, ``_pack_rating_a``)."""
+    from tuflexperf.models.battery import equivalent_packs
+
+    battery = model.battery
+    capacity = _column(values, "battery.capacity_ah", battery.capacity_ah, size)
+    per_engine = battery.packs_in_parallel_per_engine
+    packs = (np.full(size, model.packs) if "battery.capacity_ah" not in values else
+             np.asarray(equivalent_packs(per_engine, capacity, battery.as_read.capacity_ah),
+                        dtype=float) * np.ones(size))
+    c_rate = battery.max_discharge_c
+    return PackRowsOfMission(capacity * per_engine, packs, packs * model.params.max_capacity_ah,
+                             None if c_rate is None else float(c_rate) * capacity)
+
+
 def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Array],
                     size: int, coefficients: Array | None,
                     extrapolation_n: Array | None) -> dict[str, tuple[Array, Array]]:
@@ -221,20 +323,28 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     ok = np.ones(size, dtype=bool)
     stall = margin * np.asarray(stall_speed_eas_m_s(aircraft), dtype=float).reshape(-1)
     durations = np.repeat(model.durations[:, None], size, axis=1)
-    for plan, segment in zip(model.plans, model.mission.segments, strict=True):
-        if plan.eas is not None:  # below stall: the plan itself is not attainable
-            ok &= ~(plan.eas < stall * (1 - 1e-12))
-            if plan.kind == "time" and segment.distance_km is not None:
-                rho = np.asarray(isa_density_kg_m3(field_m + plan.start_h, dt_k), dtype=float)
-                durations[plan.index] = 1000.0 * segment.distance_km / np.asarray(
-                    true_airspeed_m_s(plan.eas, rho), dtype=float)
-    history, bounds, layout = model.sampled_chain()
-    par = model.parameters(aircraft, (field_m, dt_k), coefficients, extrapolation_n, size)
-    tk = np.zeros((size, model.tk.shape[0], 0))
     m = _Model(aircraft=aircraft, propulsion=evaluator._propulsion(coefficients),
                density=evaluator._density(values, size), extrapolation_n=extrapolation_n,
                size=size, stall_margin=margin)
     theta = np.repeat(model.theta[:, None], size, axis=1)
+    for plan, segment in zip(model.plans, model.mission.segments, strict=True):
+        eas: Any = plan.eas
+        if eas is not None and segment.airspeed_m_s is None:  # each row's best endurance
+            eas = best_endurance_eas_rows(model, plan, m, field_m, dt_k, stall)
+            ok &= np.isfinite(eas)
+            eas = np.where(np.isfinite(eas), eas, plan.eas)
+            theta[3 * plan.index + 1] = eas
+        if eas is not None:  # below stall: the plan itself is not attainable
+            ok &= ~(eas < stall * (1 - 1e-12))
+            if plan.kind == "time" and segment.distance_km is not None:
+                rho = np.asarray(isa_density_kg_m3(field_m + plan.start_h, dt_k), dtype=float)
+                durations[plan.index] = 1000.0 * segment.distance_km / np.asarray(
+                    true_airspeed_m_s(eas, rho), dtype=float)
+    history, bounds, layout = model.sampled_chain()
+    cells = pack_rows_of(model, values, size)
+    par = model.parameters(aircraft, (field_m, dt_k), coefficients, extrapolation_n, size,
+                           cells.packs)
+    tk = np.zeros((size, model.tk.shape[0], 0))
     for plan in model.plans:
         if plan.solve_v:  # level at a fixed throttle: each row's own airspeed to start from
             guess = level_speeds_at_throttle(model, plan, m, field_m, dt_k)
@@ -268,9 +378,10 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
             propulsion = evaluator._propulsion(None if coefficients is None
                                                else coefficients[:, rows, :])
             flown = _flown(model, bounds, states, aux, propulsion, field_m[rows], dt_k[rows],
-                           cutoff[rows], stall[rows])
+                           cutoff[rows], stall[rows], cells, rows)
             with np.errstate(invalid="ignore"):
-                value = np.min(1.0 - states[:model.n, :, -1] / model.capacity_ah, axis=0)
+                value = np.min(1.0 - states[:model.n, :, -1] / cells.capacity_ah[rows],
+                               axis=0)
             landing[rows] = np.where(flown & ok[rows], value, np.nan)
             if start is not None:
                 start[:, rows] = states[:, :, bounds[k][0]]
@@ -282,18 +393,19 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     written = durations[k] / 60.0
     with np.errstate(invalid="ignore"):
         durations[k] = longest_rows(model, k, np.where(ok, 1.0, np.nan) * start, durations,
-                                    theta, par, reserve, cutoff)
+                                    theta, par, reserve, cutoff, cells)
     landing, _ = fly(durations)
     solved = np.where(np.isfinite(landing), durations[k] / 60.0, np.nan)
     return {MISSION_LANDING: (landing, reserve), MISSION_SOLVED: (solved, written)}
 
 
 def longest_rows(model: MissionModel, k: int, start: Array, durations: Array, theta: Array,
-                 par: Array, reserve: Array, cutoff: Array) -> Array:
+                 par: Array, reserve: Array, cutoff: Array, cells: PackRowsOfMission
+                 ) -> Array:
     """Per row, :meth:`MissionModel.longest` of segment ``k`` [s] (NaN where no duration
     lands): the landing charge on the reserve, or the cut-off first, from where segment
     ``k`` begins (``start``, ``(state, B)``), per row the ``reserve`` [-] and the packs'
-    ``cutoff`` [V].
+    ``cutoff`` [V] and ``cells`` (:func:`pack_rows_of`).
 
     Vectorised over the rows, never a loop of them: each step evaluates the rows not yet
     converged at once (the mission from segment ``k`` on, mapped). Newton with the state
@@ -314,7 +426,6 @@ def longest_rows(model: MissionModel, k: int, start: Array, durations: Array, th
         model._suffix_sx[k] = model._suffix_function(k).expand()  # type: ignore[attr-defined]
     suffix = model._suffix_sx[k]  # type: ignore[attr-defined]
     n, width = model.n, model.tk.shape[1]
-    pole = model.packs * model.params.max_capacity_ah
 
     def at(rows: Array, tau: Array) -> tuple[Array, Array, Array]:
         d = durations[:, rows].copy()
@@ -324,13 +435,13 @@ def longest_rows(model: MissionModel, k: int, start: Array, durations: Array, th
             np.zeros((model.tk.shape[0], width * rows.size))))
         with np.errstate(invalid="ignore"):
             valid = (np.all(np.isfinite(end), axis=0) & np.all(most <= end[:n] + 1e-12, axis=0)
-                     & np.all(most < pole, axis=0))
-            frac = 1.0 - end[:n] / model.capacity_ah
+                     & np.all(most < cells.pole_ah[rows], axis=0))
+            frac = 1.0 - end[:n] / cells.capacity_ah[rows]
             j = np.argmin(np.where(np.isfinite(frac), frac, np.inf), axis=0)
             cols = np.arange(rows.size)
             g = np.where(valid, frac[j, cols] - reserve[rows], -1.0)
-            slope = np.where(valid, -aux[6 + j, cols] / SECONDS_PER_HOUR / model.capacity_ah,
-                             np.nan)
+            slope = np.where(valid, -aux[6 + j, cols] / SECONDS_PER_HOUR
+                             / cells.capacity_ah[rows], np.nan)
             volt = np.where(valid, least[0] - cutoff[rows], -1.0)
         return g, slope, volt
 
@@ -421,13 +532,14 @@ def _mapped(function: Any, count: int) -> Any:
 
 
 def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, aux: Array,
-           propulsion: Any, field_m: Array, dt_k: Array, cutoff: Array, stall: Array
-           ) -> NDArray[np.bool_]:
+           propulsion: Any, field_m: Array, dt_k: Array, cutoff: Array, stall: Array,
+           cells: PackRowsOfMission, rows: slice) -> NDArray[np.bool_]:
     """Per row: the whole flight is attainable by :meth:`MissionModel._result`'s rules (the
     cut-off, full throttle, the pack's burst and continuous ratings, the fans' jet velocity,
     climbs that climb and descents that descend, a fixed throttle's airspeed above stall).
     ``states``/``aux`` ``(k, B, nodes)``; per row the field [m], temperature offset [K],
-    the packs' cut-off [V] and the least EAS of level flight [m/s]."""
+    the packs' cut-off [V] and the least EAS of level flight [m/s]; the ``rows`` of
+    ``cells``' packs (:func:`pack_rows_of`)."""
     from tuflexperf.models.atmosphere import isa_density_kg_m3
     from tuflexperf.models.battery import first_window_beyond
     from tuflexperf.models.powertrain import beyond_jet_velocity
@@ -438,12 +550,12 @@ def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, au
     current, voltage, thrust = aux[6:6 + n], aux[6 + n:6 + 2 * n], aux[6 + 3 * n]
     size = q.shape[1]
     ok = np.ones(size, dtype=bool)
-    pole = model.packs * model.params.max_capacity_ah
-    rating = model._pack_rating_a()
+    pole = cells.pole_ah[rows]
+    rating = None if cells.rating_a is None else cells.rating_a[rows]
     per_pack = model.battery.packs_in_parallel_per_engine
     with np.errstate(invalid="ignore", over="ignore"):
         rising = np.all(np.diff(q, axis=2) >= -1e-12, axis=(0, 2))
-        ok &= rising & np.all(np.isfinite(q) & (q < pole), axis=(0, 2))
+        ok &= rising & np.all(np.isfinite(q) & (q < pole[None, :, None]), axis=(0, 2))
         ok &= np.all(np.isfinite(current) & (current >= 0.0), axis=(0, 2))
         if rating is not None and t.shape[1] > 1:
             # a stretch's mean current is a mean of the steps' (charge linear between nodes):
@@ -452,10 +564,10 @@ def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, au
             dt = np.broadcast_to(np.diff(t, axis=1), q[:, :, 1:].shape)
             dq = np.diff(q, axis=2) * SECONDS_PER_HOUR / per_pack
             steps = np.divide(dq, dt, out=np.where(dq == 0.0, 0.0, np.inf), where=dt > 0)
-            heavy = np.flatnonzero(np.any(~(steps <= rating), axis=(0, 2)))
+            heavy = np.flatnonzero(np.any(~(steps <= rating[None, :, None]), axis=(0, 2)))
             if heavy.size:
                 end = first_window_beyond(t[heavy], q[:, heavy].transpose(1, 0, 2) / per_pack,
-                                          rating, RATING_SEGMENT_S)[0]
+                                          rating[heavy], RATING_SEGMENT_S)[0]
                 ok[heavy] &= ~np.isfinite(end)
         for plan, (a, b) in zip(model.plans, bounds, strict=True):
             if plan.kind == "event":
@@ -466,7 +578,8 @@ def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, au
             ok &= np.all(reached[:, sl] >= 0.5, axis=1)
             if rating is not None and live:
                 peak = np.max(current[live, :, sl], axis=0) / per_pack
-                ok &= ~np.any(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9), axis=1)
+                ok &= ~np.any(peak > (BURST_OVER_CONTINUOUS * (1.0 + 1e-9) * rating)[:, None],
+                              axis=1)
             if plan.kind != "takeoff":
                 rho = (np.full(h[:, sl].shape, model.fixed_density)
                        if model.fixed_density is not None
