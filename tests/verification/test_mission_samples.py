@@ -284,3 +284,16 @@ def test_a_drawn_capacity_is_flown_row_by_row(tmp_path) -> None:
         one = with_values(case, {"battery.capacity_ah": capacity})
         flown = solve_mission(one, load_mission(mission), 0.2)
         assert out[row] == pytest.approx(flown.solved["time_min"], rel=1e-9)
+
+
+def test_a_fixed_throttle_cruise_on_a_braking_fan_is_not_met(tmp_path) -> None:
+    """A small, clean wing cruises so fast that one fan's models give no thrust (or thrust
+    on no power): the single case ends the flight there, and so does the row (it landed
+    with 91 % in the batch)."""
+    mission = tmp_path / "cruise.yaml"
+    mission.write_text("name: cruise\nsegments:\n  - {type: cruise, throttle: 0.6, "
+                       "time_min: 3}\n")
+    batch, single = _rows_and_single(_case(tmp_path, mission), {
+        "aircraft.cd0": [0.04307, 0.003], "aircraft.wing_area_m2": [0.36, 0.36]})
+    assert np.isfinite(batch[0]) and np.isnan(batch[1]) and np.isnan(single[1])
+    assert batch[0] == pytest.approx(single[0], rel=1e-9)

@@ -543,6 +543,7 @@ def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, au
     from tuflexperf.models.atmosphere import isa_density_kg_m3
     from tuflexperf.models.battery import first_window_beyond
     from tuflexperf.models.powertrain import beyond_jet_velocity
+    from tuflexperf.models.thrust import density_ratio, engine_thrust_n
 
     n = model.n
     q, h, t = states[:n], states[2 * n], states[2 * n + 2]
@@ -589,6 +590,15 @@ def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, au
                     ok &= np.all(np.abs(aux[5][:, sl]) < 1e-9, axis=1)
                     slow = v[:, sl] < stall[:, None] * np.sqrt(1.225 / rho) * (1 - 1e-12)
                     ok &= ~np.any(slow, axis=1)
+                    # a live fan whose models give no thrust, or thrust on no power, flies
+                    # no cruise (MissionModel._braking_engine)
+                    sigma = density_ratio(propulsion, rho)
+                    for i in live:
+                        pull = engine_thrust_n(propulsion.engines[i], plan.throttle, v[:, sl],
+                                               sigma)
+                        power = model._modelled_power(i, plan.throttle, v[:, sl], rho)
+                        ok &= ~np.any((np.asarray(pull) <= 0.0) | (np.asarray(power) <= 0.0),
+                                      axis=1)
                 fast = np.asarray(beyond_jet_velocity(propulsion, v[:, sl], rho), dtype=bool)
                 ok &= ~np.any(fast & (thrust[:, sl] > 0.0), axis=1)
             if plan.kind == "height":
