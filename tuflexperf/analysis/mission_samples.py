@@ -28,8 +28,6 @@ Andersson et al. (2019), "CasADi", Math. Prog. Comp. 11 (``Function.map``); SPEC
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -46,6 +44,7 @@ from tuflexperf.analysis.mission import (
     airborne_path,
     takeoff_matrix,
 )
+from tuflexperf.analysis.mission_plan import best_endurance_eas_rows, level_speeds_at_throttle
 
 Array = NDArray[np.float64]
 FLOWN_KEYS = ("aircraft.mass_kg", "aircraft.wing_area_m2", "aircraft.cd0", "aircraft.k",
@@ -125,142 +124,6 @@ def _takeoff_rows(model: MissionModel, m: Any, roll: tuple[Array, Array, Array, 
     return np.where(ok[:, None, None], rows, 0.0), ok
 
 
-def _segment_rows(model: MissionModel, plan: Any, m: Any, field_m: Array, dt_k: Array
-                  ) -> tuple[Array, Any]:
-    """Per row the density [kg/m^3] at the start of ``plan`` and the batch's model there."""
-    from tuflexperf.models.atmosphere import isa_density_kg_m3
-
-    rho = (np.full(m.size, model.fixed_density) if model.fixed_density is not None
-           else np.asarray(isa_density_kg_m3(field_m + plan.start_h, dt_k), dtype=float)
-           * np.ones(m.size))
-    return rho, dataclasses.replace(m, density=rho[:, None], _uniform=None, _pieces=None,
-                                    _force_range=None)
-
-
-def best_endurance_eas_rows(model: MissionModel, plan: Any, m: Any, field_m: Array,
-                            dt_k: Array, least: Array) -> Array:
-    """Per row, :meth:`MissionModel._best_endurance_eas` of a segment without an airspeed:
-    the EAS [m/s] of least electrical power in level flight with full packs (NaN: no level
-    flight), over the same 2001 airspeeds from ``least`` (the row's stall x margin [m/s])
-    to 4 times it, then the same golden section to 1e-9 m/s, each row on its own bracket."""
-    from tuflexperf.models.aircraft import level_flight_drag_n, true_airspeed_m_s
-    from tuflexperf.models.thrust import least_throttle_reaching
-
-    rho, at = _segment_rows(model, plan, m, field_m, dt_k)
-    live = [i for i in range(model.n) if i != plan.dead]
-
-    def power_at(eas: Array) -> Array:  # eas (B, K) [m/s] -> electrical power [W]
-        # rows done with (no bracket: 0 m/s) or far outside the models go NaN, harmlessly
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            v = np.asarray(true_airspeed_m_s(eas, rho[:, None]), dtype=float)
-            t = [at.thrust(x, v, plan.dead, model.dead_mode) for x in (0.0, 0.5, 1.0)]
-            a = 2.0 * (t[2] - 2.0 * t[1] + t[0])
-            b = t[2] - t[0] - a
-            c = t[0] - np.asarray(level_flight_drag_n(m.aircraft, v, rho[:, None]),
-                                  dtype=float)
-            x, reached = least_throttle_reaching(a, b, c)
-            x = np.asarray(x, dtype=float)
-            total = sum(np.asarray(model._engine_power(i, x, v, rho[:, None]), dtype=float)
-                        for i in live)
-        return np.where(np.asarray(reached) > 0.5, total, np.inf)
-
-    grid, block, size = 2001, 250, m.size
-    start, step = least, (4.0 * least - least) / (grid - 1)  # np.linspace's own terms
-
-    def eas_at(index: Array) -> Array:
-        return np.where(index[None, :] == grid - 1, 4.0 * least[:, None],
-                        index[None, :] * step[:, None] + start[:, None])
-
-    best, k = np.full(size, np.inf), np.zeros(size, dtype=int)
-    for first in range(0, grid, block):  # the grid's least power per row, a block at a time
-        index = np.arange(first, min(first + block, grid))
-        power = power_at(eas_at(index))
-        j = np.argmin(power, axis=1)
-        lower = power[np.arange(size), j] < best
-        best, k = np.where(lower, power[np.arange(size), j], best), np.where(lower, index[j], k)
-    edge = (k == 0) | (k == grid - 1)
-    low = np.where(edge, 0.0, (k - 1) * step + start)
-    high = np.where(k + 1 == grid - 1, 4.0 * least, (k + 1) * step + start)
-    high = np.where(edge, 0.0, high)
-    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
-    a, b = high - ratio * (high - low), low + ratio * (high - low)
-    f_a, f_b = power_at(a[:, None])[:, 0], power_at(b[:, None])[:, 0]
-    active = ~edge & np.isfinite(best) & (high - low > 1e-9)
-    while active.any():  # each row stops at its own 1e-9 m/s, as the single case's loop
-        left = active & (f_a <= f_b)
-        right = active & ~left
-        high, b, f_b = np.where(left, b, high), np.where(left, a, b), np.where(left, f_a, f_b)
-        low, a, f_a = np.where(right, a, low), np.where(right, b, a), np.where(right, f_b, f_a)
-        a = np.where(left, high - ratio * (high - low), a)
-        b = np.where(right, low + ratio * (high - low), b)
-        fresh = power_at(np.where(left, a, b)[:, None])[:, 0]
-        f_a, f_b = np.where(left, fresh, f_a), np.where(right, fresh, f_b)
-        active &= high - low > 1e-9
-    on_grid = np.where(k == grid - 1, 4.0 * least, k * step + start)
-    return np.where(~np.isfinite(best), np.nan, np.where(edge, on_grid, 0.5 * (low + high)))
-
-
-def level_speeds_at_throttle(model: MissionModel, plan: Any, m: Any, field_m: Array,
-                             dt_k: Array) -> Array:
-    """Per row, :meth:`MissionModel._level_speed_at_throttle` of a level segment flown at a
-    fixed throttle: the fastest true airspeed [m/s] of level flight with full packs short
-    of the fans' jet velocity (NaN: none), the row's aircraft and thrust (with its
-    extrapolation error) at the segment's density; field [m], temperature offset [K] per
-    row. The same grid (4001 airspeeds, doubling the top while the throttle still flies
-    level) and the same 60 bisections, vectorised over the rows."""
-    from tuflexperf.models.aircraft import (
-        MAX_AIRSPEED_M_S,
-        level_flight_drag_n,
-        stall_speed_eas_m_s,
-    )
-    from tuflexperf.models.powertrain import jet_velocity_ceiling_m_s
-
-    size = m.size
-    rho, at = _segment_rows(model, plan, m, field_m, dt_k)
-    stall = np.asarray(stall_speed_eas_m_s(m.aircraft), dtype=float).reshape(-1) * np.sqrt(
-        1.225 / rho)
-    ceiling = np.asarray(jet_velocity_ceiling_m_s(m.propulsion, rho[:, None]),
-                         dtype=float).reshape(-1) * np.ones(size)
-
-    def excess(speed: Array) -> Array:  # speed (B, K) [m/s]
-        return (at.thrust(plan.throttle, speed, plan.dead, model.dead_mode)
-                - np.asarray(level_flight_drag_n(m.aircraft, speed, rho[:, None]), dtype=float))
-
-    top = 8.0 * stall
-    limit = np.maximum(top, np.minimum(ceiling, MAX_AIRSPEED_M_S))
-    for _ in range(64):  # the doubling, each row until it stops (<= log2(340/stall) steps)
-        grow = (top < limit) & (excess(top[:, None])[:, 0] >= 0.0)
-        if not grow.any():
-            break
-        top = np.where(grow, np.minimum(2.0 * top, limit), top)
-    grid, block = 4001, 250
-    start, step = 0.5 * stall, (top - 0.5 * stall) / (grid - 1)  # np.linspace's own terms
-    last = np.full(size, -1)
-    # the fast root short of the jet velocity: the last grid speed that flies level, found
-    # from the top down in blocks of speeds (all rows at once; done rows are not redone)
-    for end in range(grid, 0, -block):
-        todo = last < 0
-        if not todo.any():
-            break
-        index = np.arange(max(end - block, 0), end)
-        v = np.where(index[None, :] == grid - 1, top[:, None],
-                     index[None, :] * step[:, None] + start[:, None])
-        flies = (excess(v) >= 0) & (v < ceiling[:, None])
-        hit = flies.any(axis=1) & todo
-        last[hit] = index[v.shape[1] - 1 - np.argmax(flies[hit, ::-1], axis=1)]
-    found = (last >= 0) & (last < grid - 1)
-    low = np.where(found, last * step + start, np.nan)
-    high = np.where(found & (last + 1 == grid - 1), top, (last + 1) * step + start)
-    high = np.where(found, high, np.nan)
-    for _ in range(60):
-        mid = 0.5 * (low + high)
-        with np.errstate(invalid="ignore"):
-            up = excess(mid[:, None])[:, 0] >= 0
-        low, high = np.where(up, mid, low), np.where(up, high, mid)
-    with np.errstate(invalid="ignore"):
-        return np.where(high < ceiling, 0.5 * (low + high), np.nan)
-
-
 @dataclass(frozen=True)
 class PackRowsOfMission:
     """Per row the packs a drawn ``battery.capacity_ah`` makes: charge per engine [Ah] the
@@ -330,7 +193,8 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     for plan, segment in zip(model.plans, model.mission.segments, strict=True):
         eas: Any = plan.eas
         if eas is not None and segment.airspeed_m_s is None:  # each row's best endurance
-            eas = best_endurance_eas_rows(model, plan, m, field_m, dt_k, stall)
+            eas = best_endurance_eas_rows(model, plan.start_h, plan.dead, m, field_m, dt_k,
+                                          stall)
             ok &= np.isfinite(eas)
             eas = np.where(np.isfinite(eas), eas, plan.eas)
             theta[3 * plan.index + 1] = eas
@@ -347,7 +211,8 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     tk = np.zeros((size, model.tk.shape[0], 0))
     for plan in model.plans:
         if plan.solve_v:  # level at a fixed throttle: each row's own airspeed to start from
-            guess = level_speeds_at_throttle(model, plan, m, field_m, dt_k)
+            guess = level_speeds_at_throttle(model, plan.start_h, plan.throttle, plan.dead, m,
+                                             field_m, dt_k)[0]
             ok &= np.isfinite(guess)
             theta[3 * plan.index + 2] = np.where(np.isfinite(guess), guess, plan.v_guess)
     if model.mission.segments and model.mission.segments[0].type == "takeoff":
