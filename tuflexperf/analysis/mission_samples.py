@@ -45,6 +45,7 @@ from tuflexperf.analysis.mission import (
     takeoff_matrix,
 )
 from tuflexperf.analysis.mission_plan import best_endurance_eas_rows, level_speeds_at_throttle
+from tuflexperf.analysis.mission_solve import longest_rows, mapped
 
 Array = NDArray[np.float64]
 FLOWN_KEYS = ("aircraft.mass_kg", "aircraft.wing_area_m2", "aircraft.cd0", "aircraft.k",
@@ -234,7 +235,7 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
             rows = slice(first, min(first + ROWS_PER_MAP, size))
             count = rows.stop - rows.start
             block = tk[rows]
-            states, aux = (np.asarray(x, dtype=float) for x in _mapped(history, count)(
+            states, aux = (np.asarray(x, dtype=float) for x in mapped(history, count)(
                 durations[:, rows], theta[:, rows], par[:, rows],
                 block.transpose(1, 0, 2).reshape(block.shape[1], -1)))
             nodes = states.shape[1] // count
@@ -258,142 +259,11 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     written = durations[k] / 60.0
     with np.errstate(invalid="ignore"):
         durations[k] = longest_rows(model, k, np.where(ok, 1.0, np.nan) * start, durations,
-                                    theta, par, reserve, cutoff, cells)
+                                    theta, par, reserve, cutoff, cells.capacity_ah,
+                                    cells.pole_ah)[0]
     landing, _ = fly(durations)
     solved = np.where(np.isfinite(landing), durations[k] / 60.0, np.nan)
     return {MISSION_LANDING: (landing, reserve), MISSION_SOLVED: (solved, written)}
-
-
-def longest_rows(model: MissionModel, k: int, start: Array, durations: Array, theta: Array,
-                 par: Array, reserve: Array, cutoff: Array, cells: PackRowsOfMission
-                 ) -> Array:
-    """Per row, :meth:`MissionModel.longest` of segment ``k`` [s] (NaN where no duration
-    lands): the landing charge on the reserve, or the cut-off first, from where segment
-    ``k`` begins (``start``, ``(state, B)``), per row the ``reserve`` [-] and the packs'
-    ``cutoff`` [V] and ``cells`` (:func:`pack_rows_of`).
-
-    Vectorised over the rows, never a loop of them: each step evaluates the rows not yet
-    converged at once (the mission from segment ``k`` on, mapped). Newton with the state
-    equations' slope ``-i_j / (3600 Q)`` (exact for the last segment, a close guess before
-    it) from the file's duration, safeguarded by the bracket it keeps (regula falsi,
-    Illinois, where a step leaves it); then, where the packs cut off first, regula falsi on
-    the least loaded voltage over ``[0, T]``. The same roots as the single case's to
-    1e-12 (fraction) and 1e-10 V.
-
-    References
-    ----------
-    Press et al., *Numerical Recipes*, 3rd ed., 9.2 (Illinois), 9.4 (safeguarded Newton).
-    """
-    size = start.shape[1]
-    if not hasattr(model, "_suffix_sx"):
-        model._suffix_sx = {}  # type: ignore[attr-defined]
-    if k not in model._suffix_sx:  # type: ignore[attr-defined]
-        model._suffix_sx[k] = model._suffix_function(k).expand()  # type: ignore[attr-defined]
-    suffix = model._suffix_sx[k]  # type: ignore[attr-defined]
-    n, width = model.n, model.tk.shape[1]
-
-    def at(rows: Array, tau: Array) -> tuple[Array, Array, Array]:
-        d = durations[:, rows].copy()
-        d[k] = tau
-        end, aux, most, least = (np.asarray(x, dtype=float) for x in _mapped(suffix, rows.size)(
-            start[:, rows], d, theta[:, rows], par[:, rows],
-            np.zeros((model.tk.shape[0], width * rows.size))))
-        with np.errstate(invalid="ignore"):
-            valid = (np.all(np.isfinite(end), axis=0) & np.all(most <= end[:n] + 1e-12, axis=0)
-                     & np.all(most < cells.pole_ah[rows], axis=0))
-            frac = 1.0 - end[:n] / cells.capacity_ah[rows]
-            j = np.argmin(np.where(np.isfinite(frac), frac, np.inf), axis=0)
-            cols = np.arange(rows.size)
-            g = np.where(valid, frac[j, cols] - reserve[rows], -1.0)
-            slope = np.where(valid, -aux[6 + j, cols] / SECONDS_PER_HOUR
-                             / cells.capacity_ah[rows], np.nan)
-            volt = np.where(valid, least[0] - cutoff[rows], -1.0)
-        return g, slope, volt
-
-    every = np.flatnonzero(np.all(np.isfinite(start), axis=0))
-    tau, g0, v0 = np.full(size, np.nan), np.full(size, np.nan), np.full(size, np.nan)
-    g0[every], _, v0[every] = at(every, np.zeros(every.size))
-    # landing short with none of it, or cut off: no duration lands
-    every = every[(g0[every] >= 0) & (v0[every] >= 0)]
-    tau[every] = _root(lambda rows, x: at(rows, x)[:2], every, g0, durations[k], 1e-12)
-    volts = np.full(size, np.nan)
-    found = every[np.isfinite(tau[every])]
-    volts[found] = at(found, tau[found])[2]
-    cut = found[volts[found] < 0]  # the packs cut off before the reserve: on the voltage
-    if cut.size:
-        tau[cut] = _root(lambda rows, x: (at(rows, x)[2], np.full(rows.size, np.nan)), cut,
-                         v0, tau, 1e-10, high=(tau.copy(), volts))
-    good = np.isfinite(tau) & (tau > 0)
-    checked = np.flatnonzero(good)
-    if checked.size:
-        good[checked] &= at(checked, tau[checked])[0] >= -1e-8
-    return np.where(good, tau, np.nan)
-
-
-def _root(f: Any, rows: Array, at_zero: Array, guess: Array, tolerance: float,
-          high: tuple[Array, Array] | None = None) -> Array:
-    """Per row of ``rows``, the root ``x > 0`` of a falling ``f(rows, x) -> (value, slope)``
-    with ``f(0) = at_zero >= 0``: safeguarded Newton from ``guess`` (slope NaN: regula falsi,
-    Illinois) inside the bracket it keeps, to ``|f| <= tolerance`` or a bracket of 1e-9
-    relative; ``high`` a known point and its value ``f < 0`` per row. Arrays over all rows;
-    NaN where none is found in 200 steps."""
-    size = at_zero.size
-    low, f_low = np.zeros(size), np.array(at_zero, dtype=float)
-    top = np.full(size, np.inf) if high is None else np.array(high[0], dtype=float)
-    f_top = np.full(size, np.nan) if high is None else np.array(high[1], dtype=float)
-    side = np.zeros(size)
-    x = np.maximum(np.asarray(guess, dtype=float) * np.ones(size), 1.0)
-    if high is not None:  # regula falsi on the bracket from the start
-        with np.errstate(invalid="ignore", divide="ignore"):
-            x = top - f_top * top / (f_top - f_low)
-    answer = np.full(size, np.nan)
-    active = np.array(rows)
-    for _ in range(200):
-        if not active.size:
-            break
-        value, slope = f(active, x[active])
-        done = np.abs(value) <= tolerance
-        above = ~done & (value > 0)
-        below = ~done & ~above
-        a, b = active[above], active[below]
-        # Illinois: halve the kept end's value when the same end moves twice
-        f_top[a] = np.where(side[a] == 1, 0.5 * f_top[a], f_top[a])
-        f_low[b] = np.where(side[b] == -1, 0.5 * f_low[b], f_low[b])
-        low[a], f_low[a], side[a] = x[a], value[above], 1
-        top[b], f_top[b], side[b] = x[b], value[below], -1
-        narrow = np.isfinite(top[active]) & (top[active] - low[active] <= 1e-9 * top[active])
-        answer[active[done | narrow]] = x[active[done | narrow]]
-        active, value, slope = (active[~(done | narrow)], value[~(done | narrow)],
-                                slope[~(done | narrow)])
-        with np.errstate(invalid="ignore", divide="ignore"):
-            newton = x[active] - value / slope
-            falsi = top[active] - f_top[active] * (top[active] - low[active]) / (
-                f_top[active] - f_low[active])
-            bounded = np.isfinite(top[active])
-            inside = np.isfinite(newton) & (newton > low[active]) & (
-                newton < np.where(bounded, top[active], np.inf))
-            unbracketed = np.where(np.isfinite(newton) & (newton > low[active]), newton,
-                                   2.0 * np.maximum(x[active], 60.0))
-            step = np.where(inside, newton, np.where(
-                bounded, np.where(np.isfinite(falsi) & (falsi > low[active])
-                                  & (falsi < top[active]), falsi,
-                                  0.5 * (low[active] + top[active])), unbracketed))
-        x[active] = step
-    return answer[rows]
-
-
-_MAPS: dict[tuple[int, int], Any] = {}
-
-
-def _mapped(function: Any, count: int) -> Any:
-    """``function.map(count, "thread", 2)``, built once per function and count (a map of the
-    expanded mission takes ~0.4 s to build, as long as flying 100 rows)."""
-    key = (id(function), count)
-    if key not in _MAPS:
-        if len(_MAPS) > 16:  # a process flies one case's mission at a time
-            _MAPS.clear()
-        _MAPS[key] = (function, function.map(count, "thread", 2))
-    return _MAPS[key][1]
 
 
 def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, aux: Array,
