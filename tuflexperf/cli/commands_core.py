@@ -27,6 +27,7 @@ from tuflexperf.cli.inputs import (
     load_case_with,
     output_file,
     refuse_empty_address,
+    refuse_implausible,
     replaced,
     scaled_pack_notes,
     set_keys,
@@ -121,6 +122,7 @@ def margins(
     from tuflexperf.analysis.margins import extrapolation_notes, solve_margins
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
+    refuse_implausible(case, "margins", None, as_json)
     rows = solve_margins(case)
     notes = (extrapolation_notes(rows, case.propulsion.tested_airspeed_m_s)
              + batch_notes(case, [], None) + scaled_pack_notes({m.parameter for m in rows}))
@@ -160,6 +162,7 @@ def sweep(
     refuse_empty_address(dask)
     csv_out, plot = output_file(csv_text, "--csv"), output_file(plot_text, "--plot")
     case, axes = sweep_case(case_file, sets, vary, replaced(aircraft, propulsion, battery))
+    refuse_implausible(case, "sweep", None, as_json, [key for key, _ in axes])
     outputs = {flag: target for flag, target in (("--csv", csv_out), ("--plot", plot))
                if target is not None}
     if plot is not None and plot.suffix.lower() != ".png":
@@ -203,6 +206,7 @@ def takeoff(
     from tuflexperf.analysis.takeoff import solve_takeoff
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
+    refuse_implausible(case, "takeoff", "takeoff", as_json)
     result = solve_takeoff(case)
     requirement = case.requirements.takeoff
     verdicts = takeoff_verdicts(requirement, result) if requirement is not None else []
@@ -227,6 +231,7 @@ def trim(
     from tuflexperf.analysis.trim import solve_trim
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
+    refuse_implausible(case, "trim", "envelope", as_json)
     result = solve_trim(case)
     if case.requirements.envelope is None:
         fail_input(f"{case.path}: requirements.envelope: trim needs the envelope requirement")
@@ -255,6 +260,7 @@ def oei(
     if dead_engine is not None and dead_engine not in ("windmilling", "zero"):
         fail_input(f"--dead-engine: must be windmilling or zero, got {dead_engine!r}")
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
+    refuse_implausible(case, "oei", "oei", as_json)
     result = solve_oei(case, dead_engine)  # type: ignore[arg-type]
     requirement = case.requirements.oei
     limit = requirement.max_throttle if requirement is not None else 1.0
@@ -275,6 +281,7 @@ def performance(
     from tuflexperf.analysis.performance import solve_performance
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
+    refuse_implausible(case, "performance", None, as_json)
     result = solve_performance(case)
     attainable = result.min_level_speed_m_s is not None
     render.show_performance(case, result, attainable, as_json)
