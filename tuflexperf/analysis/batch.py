@@ -160,8 +160,6 @@ class BatchEvaluator:
         self.implausible = implausible(case)
         self._side: Any = None
         if case.battery_path is not None:
-            from tuflexperf.analysis.pack_limits import pack_side
-
             self._side = pack_side(case)  # the plausibility rule's packs (cached fit)
         if any(r.block == "oei" for r in self.requirements):
             # as solve_oei refuses it (the sweep tabulated "not attainable" for every point)
