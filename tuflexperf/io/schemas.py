@@ -10,7 +10,13 @@ from pathlib import Path
 from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
-from pydantic import BeforeValidator, Field, field_validator, model_validator
+from pydantic import (
+    BeforeValidator,
+    Field,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, count_values
@@ -199,7 +205,7 @@ MAX_TESTED_AIRSPEED_M_S = 1000.0
 # A file without ``format: 2`` that gives an area is in the old form: the number may be the
 # jet area (the earlier shipped TU-Flex file) or the disk area (`fit`, `init`); no guess.
 OLD_AREA_FORM = (
-    "fan_area_m2: the file is in the old form (no 'format: 2'), where fan_area_m2 held the jet "
+    "the file is in the old form (no 'format: 2'), where fan_area_m2 held the jet "
     "area or the disk area; now fan_area_m2 is the fan's disk area (pi d^2 / 4) and the jet "
     "(exit) area has its own key jet_area_m2. If the number is the jet area (the earlier "
     "shipped TU-Flex file's 0.004342), rename the key to jet_area_m2, give the disk area as "
@@ -235,6 +241,16 @@ class PropulsionSchema(StrictModel):
     engines: Annotated[list[EngineSchema], Field(min_length=1)]
     source: dict[str, Any] | None = None  # free-form provenance written by `fit`
 
+    @field_validator("fan_area_m2", "jet_area_m2")
+    @classmethod
+    def _stated_form(cls, value: float | None, info: ValidationInfo) -> float | None:
+        # format precedes the areas: an area without it is the old form (OLD_AREA_FORM)
+        if value is not None and info.data.get("format") is None:
+            raise ValueError(OLD_AREA_FORM if info.field_name == "fan_area_m2" else
+                             "needs 'format: 2' (fan_area_m2 the disk area, jet_area_m2 the "
+                             "jet's; docs/formats.md, Fan and jet area)")
+        return value
+
     @field_validator("source", mode="before")
     @classmethod
     def _bounded_source(cls, value: Any) -> Any:
@@ -255,8 +271,6 @@ class PropulsionSchema(StrictModel):
             raise ValueError(f"tested_airspeed_m_s: [{low:g}, {high:g}] m/s is no range a "
                              f"thrust model was measured over (at most "
                              f"{MAX_TESTED_AIRSPEED_M_S:g} m/s)")
-        if self.format is None and (self.fan_area_m2 is not None or self.jet_area_m2 is not None):
-            raise ValueError(OLD_AREA_FORM)
         names = [engine.name for engine in self.engines]
         if len(set(names)) != len(names):
             raise ValueError(f"engines: duplicate engine names {names}")
