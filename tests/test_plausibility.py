@@ -237,3 +237,13 @@ def test_the_batch_judges_the_packs_rating_per_row_as_the_single_case() -> None:
     assert refused == [True, True, False, False]
     assert np.isnan(result.values["oei_min_throttle"][:2]).all()
     assert np.isfinite(result.values["oei_min_throttle"][2:]).all()
+
+
+def test_bad_input_is_refused_before_the_datas_verdict(tmp_path) -> None:
+    """A file or flag the command refuses is exit 2 even on implausible data."""
+    propulsion = _scaled(tmp_path, power=0.30)
+    ran = tuflexperf("sweep", "--vary", "aircraft.mass_kg=25:27:2", "--plot",
+                     str(tmp_path / "carpet.svg"), "--propulsion", str(propulsion))
+    assert ran.returncode == 2 and "PNG" in ran.stderr
+    ran = tuflexperf("endurance", "--throttle", "50", "--propulsion", str(propulsion))
+    assert ran.returncode == 2 and "implausible" not in ran.stderr

@@ -162,7 +162,6 @@ def sweep(
     refuse_empty_address(dask)
     csv_out, plot = output_file(csv_text, "--csv"), output_file(plot_text, "--plot")
     case, axes = sweep_case(case_file, sets, vary, replaced(aircraft, propulsion, battery))
-    refuse_implausible(case, "sweep", None, as_json, [key for key, _ in axes])
     outputs = {flag: target for flag, target in (("--csv", csv_out), ("--plot", plot))
                if target is not None}
     if plot is not None and plot.suffix.lower() != ".png":
@@ -173,6 +172,8 @@ def sweep(
 
         guard_outputs(outputs, [path for _, path in case_files(case)], "sweep",
                       {"--csv": "sweep grid", "--plot": "sweep plot"})
+    # after every refusal of bad input (exit 2): the data's own verdict, FAIL (exit 1)
+    refuse_implausible(case, "sweep", None, as_json, [key for key, _ in axes])
     from tuflexperf.cli.progress import TerminalProgress
 
     with TerminalProgress("sweep") as bar:
@@ -231,10 +232,10 @@ def trim(
     from tuflexperf.analysis.trim import solve_trim
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
-    refuse_implausible(case, "trim", "envelope", as_json)
     result = solve_trim(case)
     if case.requirements.envelope is None:
         fail_input(f"{case.path}: requirements.envelope: trim needs the envelope requirement")
+    refuse_implausible(case, "trim", "envelope", as_json)
     limit = case.requirements.envelope.max_trim_throttle
     verdict = trim_verdict(case.requirements.envelope, result)  # the one verdict rule
     render.show_trim(case, result, verdict, limit, table, as_json)
