@@ -1,8 +1,8 @@
 """The electrical side of a campaign fit (step 7 of :mod:`.pipeline`).
 
 Where the step runs log voltage and current: the voltage exponent, each engine's electrical
-power surface, the windmilling drag from the zero-throttle points, and how the thrust and
-power surfaces agree with momentum theory.
+power surface and how the thrust and power surfaces agree with momentum theory (on the disk
+area). Whatever is logged: the windmilling drag from the throttle-0 holds.
 """
 
 from __future__ import annotations
