@@ -247,3 +247,14 @@ def test_bad_input_is_refused_before_the_datas_verdict(tmp_path) -> None:
     assert ran.returncode == 2 and "PNG" in ran.stderr
     ran = tuflexperf("endurance", "--throttle", "50", "--propulsion", str(propulsion))
     assert ran.returncode == 2 and "implausible" not in ran.stderr
+
+
+@pytest.mark.parametrize("command", ["takeoff", "trim", "oei", "performance"])
+def test_the_refusal_carries_the_commands_own_json_keys(tmp_path, command) -> None:
+    """SPEC 5: on exit 1 a command's keys are there, null, as for "not attainable"."""
+    from tuflexperf.cli.guard import _RESULT_KEYS
+
+    ran = tuflexperf(command, "--propulsion", str(_scaled(tmp_path, power=0.30)), "--json")
+    said = json.loads(ran.stdout)
+    assert ran.returncode == 1 and said["verdict"] == "FAIL" and said["passed"] is False
+    assert all(said[key] is None for key in _RESULT_KEYS[command])

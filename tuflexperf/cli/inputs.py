@@ -211,5 +211,11 @@ def refuse_implausible(case: Any, command: str, block: str | None, as_json: bool
     found = [f for f in implausible(case) if (block is None or block in f.blocks)
              and f.rule not in per_point]
     if found:
-        show_implausible(command, found, as_json)
+        from tuflexperf.cli.guard import _RESULT_KEYS
+
+        # SPEC 5: the command's own keys are there on exit 1 too, null (no answer stands)
+        keys: dict[str, Any] = dict.fromkeys(_RESULT_KEYS.get(command, ()))
+        if command == "mission":
+            keys.update(landing_charge_fraction=None, segments=[])
+        show_implausible(command, found, as_json, keys)
         raise typer.Exit(1)

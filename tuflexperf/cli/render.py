@@ -621,12 +621,14 @@ def show_mission_not_flown(name: str, reason: str, limit: float | None, as_json:
     sys.stderr.write(f"tuflexperf: not attainable: {reason}\n")
 
 
-def show_implausible(command: str, found: list[Any], as_json: bool) -> None:
-    """A command refused on data physics forbids: FAIL, one line per reason (issue 43)."""
+def show_implausible(command: str, found: list[Any], as_json: bool,
+                     keys: dict[str, Any] | None = None) -> None:
+    """A command refused on data physics forbids: FAIL, one line per reason (issue 43);
+    ``keys`` the command's own JSON keys, null."""
     if as_json:
         emit_json({"command": command, "passed": False, "verdict": "FAIL",
                    "reason": "; ".join(f.reason for f in found),
-                   "implausible": [f.to_dict() for f in found]})
+                   "implausible": [f.to_dict() for f in found], **(keys or {})})
     for f in found:
         sys.stderr.write(f"tuflexperf: FAIL: {f.reason}\n")
 
