@@ -142,9 +142,12 @@ def _momentum(case: Case, side: Any) -> list[Implausibility]:
     scale = density_ratio(prop, rho)
     x, v = _grid(case)
     blocks = BLOCKS  # every requirement flies the thrust, and on the packs the power
+    # the power the analyses fly: every engine's surface, else (one missing) the battery
+    # file's fan-power law for all (pack_limits.pack_side); without packs, what is given
+    surfaces = all(e.power_coefficients is not None for e in prop.engines) or side is None
     out = []
     for index, engine in enumerate(prop.engines):
-        surface = engine_power_w(engine, x, v)
+        surface = engine_power_w(engine, x, v) if surfaces else None
         if surface is not None:
             power = scale * np.asarray(surface, dtype=float)
             rule, key = "figure_of_merit", f"engines[{index}] ({engine.name}).power"
@@ -258,8 +261,3 @@ def rating_rows(case: Case, side: Any, capacity_ah: Any) -> np.ndarray:
     for _, _, current, u in full_throttle_draw(case, side, capacity):
         found |= np.asarray(beyond_rating(side.battery, capacity, current, u), dtype=bool)
     return found
-
-
-def reasons(found: tuple[Implausibility, ...], block: str | None = None) -> list[str]:
-    """The reasons of ``found`` that bear on ``block`` (all of them with None)."""
-    return [f.reason for f in found if block is None or block in f.blocks]
