@@ -16,8 +16,10 @@
   at all is the limit of the same rule.
 - **battery beyond its rated C**: at the highest power any requirement flies (full throttle,
   the worst airspeed of the range: the take-off, a climb), the packs on full charge (their
-  highest voltage, so the least current that power can cost) would draw more than
-  ``max_discharge_c x capacity_ah`` per pack, or cannot deliver the power at all.
+  highest voltage, so the least current that power can cost) would draw more than their
+  burst rating ``2 x max_discharge_c x capacity_ah`` per pack (the rule the take-off's packs
+  are judged by: seconds at full throttle), or cannot deliver the power at all. The
+  continuous rating over a flight is the analyses' own (pack_limits, the mission).
 
 Each :class:`Implausibility` names the requirement blocks it bears on and carries a one-line
 reason naming the file, the key and the worst point; the registry makes those requirements
@@ -37,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS
 from tuflexperf.io.case import Case
 from tuflexperf.models.powertrain import (
     MAX_FIGURE_OF_MERIT,
@@ -220,11 +223,19 @@ def full_throttle_draw(case: Case, side: Any, capacity_ah: Any
 
 
 def beyond_rating(battery: Any, capacity_ah: Any, current_a: Any, voltage_v: Any) -> Any:
-    """True where the current per pack [A] exceeds ``max_discharge_c x capacity_ah`` or the
-    packs cannot deliver the power (NaN voltage); arrays broadcast."""
-    rating = float(battery.max_discharge_c) * np.asarray(capacity_ah, dtype=float)
+    """True where the current per pack [A] exceeds the burst rating ``BURST_OVER_CONTINUOUS x
+    max_discharge_c x capacity_ah`` or the packs cannot deliver the power (NaN voltage);
+    arrays broadcast. The burst: a full-throttle take-off lasts seconds, and the analyses'
+    own rules (pack_limits, the mission) allow it there; beyond it nothing can fly."""
+    rating = _burst_a(battery, capacity_ah)
     with np.errstate(invalid="ignore"):
         return ~np.isfinite(voltage_v) | (current_a > rating * (1.0 + 1e-9))
+
+
+def _burst_a(battery: Any, capacity_ah: Any) -> Any:
+    """A pack's burst rating [A]: twice the continuous ``max_discharge_c x capacity_ah``."""
+    return BURST_OVER_CONTINUOUS * float(battery.max_discharge_c) * np.asarray(capacity_ah,
+                                                                                 dtype=float)
 
 
 def _rating(case: Case, side: Any) -> list[Implausibility]:
@@ -232,7 +243,7 @@ def _rating(case: Case, side: Any) -> list[Implausibility]:
     battery = side.battery
     if battery.max_discharge_c is None:
         return []
-    rating = float(battery.max_discharge_c) * float(battery.capacity_ah)
+    rating = float(_burst_a(battery, battery.capacity_ah))
     out = []
     draws = full_throttle_draw(case, side, battery.capacity_ah)
     for engine, (power, speed, current, u) in zip(case.propulsion.engines, draws, strict=True):
@@ -245,8 +256,8 @@ def _rating(case: Case, side: Any) -> list[Implausibility]:
             "battery_rating", BLOCKS,  # every requirement flies on the packs
             f"implausible data: {case.battery_path}: max_discharge_c x capacity_ah: "
             f"{engine.name} at full throttle, {speed:.1f} m/s, draws {power:.0f} W: {draw} on "
-            f"full packs, beyond the rated {battery.max_discharge_c:g} C x "
-            f"{battery.capacity_ah:g} Ah = {rating:.0f} A",
+            f"full packs, beyond the battery's burst rating {BURST_OVER_CONTINUOUS:g} x "
+            f"{battery.max_discharge_c:g} C x {battery.capacity_ah:g} Ah = {rating:.0f} A",
             engine.name, 1.0, speed, amps / rating if np.isfinite(volts) else float("inf")))
     return out
 
