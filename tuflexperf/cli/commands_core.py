@@ -172,12 +172,13 @@ def sweep(
 
         guard_outputs(outputs, [path for _, path in case_files(case)], "sweep",
                       {"--csv": "sweep grid", "--plot": "sweep plot"})
-    # after every refusal of bad input (exit 2): the data's own verdict, FAIL (exit 1)
-    refuse_implausible(case, "sweep", None, as_json, [key for key, _ in axes])
     from tuflexperf.cli.progress import TerminalProgress
 
     with TerminalProgress("sweep") as bar:
         result = run_sweep(case, axes, workers, dask, bar)
+    # after every refusal of bad input (exit 2, some in run_sweep) and before any output is
+    # written: the data's own verdict, FAIL (exit 1)
+    refuse_implausible(case, "sweep", None, as_json, [key for key, _ in axes])
     notes = (result.extrapolation_notes(case.propulsion.tested_airspeed_m_s)
              + batch_notes(case, [key for key, _ in axes], sets))
     written: dict[Path, bytes | str] = {}
