@@ -207,6 +207,15 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
                     true_airspeed_m_s(eas, rho), dtype=float)
     history, bounds, layout = model.sampled_chain()
     cells = pack_rows_of(model, values, size)
+    battery = evaluator._battery_rows(values, size)
+    # data physics forbids (analysis.plausibility), as the batch refuses its requirements:
+    # every row, or per row the packs beyond their rated C at the row's capacity
+    if any("mission" in f.blocks and f.rule != "battery_rating" for f in evaluator.implausible):
+        ok[:] = False
+    if evaluator._side is not None:
+        from tuflexperf.analysis.plausibility import rating_rows
+
+        ok &= ~rating_rows(case, evaluator._side, battery["battery.capacity_ah"]).reshape(-1)
     par = model.parameters(aircraft, (field_m, dt_k), coefficients, extrapolation_n, size,
                            cells.packs)
     tk = np.zeros((size, model.tk.shape[0], 0))
@@ -220,7 +229,7 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
         # a runway's roll or a catapult's release, per row as the batch's take-off flies it
         height = _column(values, "requirements.takeoff.obstacle_height_m",
                          obstacle_height_of(case), size)
-        roll = evaluator.launch(m, size, height, evaluator._battery_rows(values, size))
+        roll = evaluator.launch(m, size, height, battery)
         ok &= roll[3] > 0.5
         if layout:
             tk, launched = _takeoff_rows(model, m, roll, height, layout)
