@@ -135,7 +135,9 @@ def test_a_sweep_point_without_an_envelope_is_bad_input(tmp_path, vary, message)
 
 def test_samples_of_crossed_bounds_count_as_not_met_and_are_said(tmp_path) -> None:
     path = copy_shipped_case(tmp_path)
-    path.write_text(path.read_text() + (
+    # an endurance every reading meets (the shipped 15 min is UNPROVEN: the discharge runs)
+    path.write_text(path.read_text().replace("min_flight_time_min: 15",
+                                             "min_flight_time_min: 12") + (
         "uncertainty:\n  samples: 400\n  seed: 3\n  parameters:\n"
         f"    {MAX}: {{uniform: [10, 45]}}\n"))
     result = runner.invoke(app, ["check", str(path), "--json"])

@@ -365,7 +365,9 @@ def test_the_pack_rating_is_the_same_rule_in_the_batch(tmp_path, c_rate, packs, 
                                 f"  pattern_altitude_m: {pattern_m} "))
     case = load_case(tmp_path / "requirements" / "tuflex.yaml")
     endurance = next(v for v in check_case(case) if v.name == "flight_endurance")
-    assert (endurance.value is not None) is attainable, endurance.reason
+    # the rule on the case as given (the first reading; the discharge runs' power is another)
+    said = endurance.details.get("nominal_reason", endurance.reason)
+    assert (nominal_value(endurance) is not None) is attainable, said
     if not attainable:
-        assert "beyond the battery" in endurance.reason
+        assert "beyond the battery" in said
     assert_equal_to_deterministic(case, BatchEvaluator(case).evaluate().values, 0)
