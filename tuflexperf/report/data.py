@@ -31,7 +31,12 @@ import numpy as np
 
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
-from tuflexperf.models.thrust import delay_samples, density_ratio, engine_thrust_n, lag_factor
+from tuflexperf.models.thrust import (
+    delay_samples,
+    engine_thrust_n,
+    lag_factor,
+    reference_basis_scale,
+)
 
 if TYPE_CHECKING:
     from tuflexperf.analysis.study import Study
@@ -68,6 +73,8 @@ class ProcessedRun:
     changepoints: tuple[int, ...]
     segments: tuple[tuple[int, int, float], ...]  # (start, stop, mean force N)
     outliers_replaced: int
+    # the basis of the forces (Measured.basis_scale applied): None = as measured
+    reference_density_kg_m3: float | None = None
 
     @property
     def mean_airspeed_m_s(self) -> float:
@@ -101,8 +108,12 @@ class Measured:
     processed: ProcessedRun | None = None
     sweep: SweepRun | None = None
     comparisons: list[ProcessedRun] = field(default_factory=list)
-    density_kg_m3: float | None = None
-    drag_c1_c2: tuple[float, float] | None = None
+    density_kg_m3: float | None = None  # the test's air density (the campaign's)
+    # rho_ref / rho_test: every measured force here (points, runs, sweep) is already on the
+    # propulsion file's reference density, the model's own basis (issue 47 item 3)
+    basis_scale: float = 1.0
+    reference_density_kg_m3: float | None = None
+    drag_c1_c2: tuple[float, float] | None = None  # as measured, at density_kg_m3
     files: list[Path] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     # the measured data are not those the propulsion file was fitted to (provenance_notes):
@@ -190,8 +201,9 @@ def _points_from_rows(rows: list[dict[str, Any]]) -> MeasuredPoints:
     )
 
 
-def _processed_run(result: Any) -> ProcessedRun:
-    """One throttle-step run as ``fit_campaign`` reduced it (paper Fig. 10); no re-reduction."""
+def _processed_run(result: Any, scale: float, reference: float | None) -> ProcessedRun:
+    """One throttle-step run as ``fit_campaign`` reduced it (paper Fig. 10); no re-reduction;
+    its forces times ``scale`` (onto the reference density, :attr:`Measured.basis_scale`)."""
     data = result.data
     return ProcessedRun(
         file=result.run.file,
@@ -199,11 +211,12 @@ def _processed_run(result: Any) -> ProcessedRun:
         time_s=data.time_s,
         throttle=data["throttle"],
         airspeed_m_s=data["airspeed_m_s"],
-        force_raw_n=data["force_n"],
-        force_clean_n=result.cleaned_force_n,
+        force_raw_n=scale * data["force_n"],
+        force_clean_n=scale * result.cleaned_force_n,
         changepoints=result.changepoints,
-        segments=tuple((s.start, s.stop, s.force_n) for s in result.segments),
+        segments=tuple((s.start, s.stop, scale * s.force_n) for s in result.segments),
         outliers_replaced=result.outliers_replaced,
+        reference_density_kg_m3=reference,
     )
 
 
@@ -217,6 +230,7 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
     source = find_measured_source(case, explicit)
     measured = Measured(source=source)
     measured.provenance = provenance_notes(case, source)
+    measured.reference_density_kg_m3 = case.propulsion.reference_density_kg_m3
     measured.notes.extend(measured.provenance)
     if source is None:
         measured.notes.append(
@@ -259,11 +273,16 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
     campaign = load_campaign(source)
     measured.kind = "campaign"
     measured.density_kg_m3 = campaign.air_density_kg_m3
+    scale = reference_basis_scale(case.propulsion, campaign.air_density_kg_m3)
+    measured.basis_scale = scale
     measured.files.extend(run.path for run in campaign.runs)
     result = fit_campaign(source, progress=progress)
     summary = result.summary
     measured.fit_summary = summary
-    measured.points = _points_from_rows(summary["points"])
+    points = _points_from_rows(summary["points"])
+    # the thrust points onto the model's basis: the campaign's points are at its own density
+    measured.points = MeasuredPoints(points.engine, points.throttle, points.airspeed_m_s,
+                                     scale * points.thrust_n)
     drag = summary.get("structure_drag")
     if drag:
         measured.drag_c1_c2 = (drag["c1_n_per_m_s"], drag["c2_n_per_m2_s2"])
@@ -281,12 +300,14 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
         # Paper Fig. 10: the run at the highest airspeed (30 m/s) of the first engine.
         first = [r for r in steps if str(r.run.engine) == engines[0]]
         fastest = max(first, key=lambda r: _mean_airspeed(airspeeds, r.run.file))
-        measured.processed = _processed_run(fastest)
+        measured.processed = _processed_run(fastest, scale, measured.reference_density_kg_m3)
         # Paper Figs. 16-17: first engine at its lowest airspeed, last at its highest.
         slowest = min(first, key=lambda r: _mean_airspeed(airspeeds, r.run.file))
         last = [r for r in steps if str(r.run.engine) == engines[-1]]
         top = max(last, key=lambda r: _mean_airspeed(airspeeds, r.run.file))
-        measured.comparisons = [_processed_run(slowest), _processed_run(top)]
+        measured.comparisons = [
+            _processed_run(run, scale, measured.reference_density_kg_m3) for run in (slowest, top)
+        ]
 
     if result.sweep_runs:
         # Paper Figs. 13-14: the sweep at the highest airspeed, of the last engine on a tie.
@@ -303,11 +324,12 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
             engine=str(sweep.run.engine),
             time_s=t,
             throttle=sweep.data["throttle"],
-            force_n=sweep.data["force_n"],
+            force_n=scale * sweep.data["force_n"],
             airspeed_m_s=float(np.mean(sweep.data["airspeed_m_s"])),
             delay_s=sweep.estimate.delay_s,
             lag_s=sweep.estimate.lag_s,
-            force_median_n=movmedian(sweep.data["force_n"], window_samples(0.02, rate) | 1),
+            force_median_n=scale * movmedian(sweep.data["force_n"],
+                                             window_samples(0.02, rate) | 1),
         )
     else:
         measured.notes.append(f"{source.name}: no sine_sweep run, delay figure left out")
@@ -367,17 +389,18 @@ def balance_model_n(
     case: Case, measured: Measured, engine_name: str, time_s: np.ndarray, throttle: np.ndarray,
     airspeed_m_s: Any, delay_s: float, lag_s: float,
 ) -> np.ndarray | None:
-    """The balance force the model predicts: dynamic thrust minus the structure's drag [N]."""
+    """The balance force the model predicts, ``F = T - D`` (drag positive rearward), on the
+    propulsion file's reference density as the measured forces are (:attr:`Measured.basis_scale`):
+    the model's thrust as it stands, the structure drag measured at the test's density scaled
+    onto it [N]."""
     names = [e.name for e in case.propulsion.engines]
     if engine_name not in names:
         return None
     engine = case.propulsion.engines[names.index(engine_name)]
-    rho = measured.density_kg_m3
-    scale = 1.0 if rho is None else float(density_ratio(case.propulsion, rho))
-    force = dynamic_thrust_n(engine, time_s, throttle, airspeed_m_s, scale, delay_s, lag_s)
+    force = dynamic_thrust_n(engine, time_s, throttle, airspeed_m_s, 1.0, delay_s, lag_s)
     if measured.drag_c1_c2 is not None:
         c1, c2 = measured.drag_c1_c2
-        force = force - (c1 * airspeed_m_s + c2 * np.square(airspeed_m_s))
+        force = force - measured.basis_scale * (c1 * airspeed_m_s + c2 * np.square(airspeed_m_s))
     return force
 
 
@@ -518,7 +541,8 @@ def _performance(study: Study, analyses: Analyses) -> None:
 
 def _thrust_bands(study: Study, analyses: Analyses) -> None:
     """Each engine's thrust at BAND_THROTTLES over 0 to the envelope's top (or 1.5x the
-    tested range), with the fit's 95 % band; as measured (no density scaling)."""
+    tested range), with the fit's 95 % band; on the model's reference density (its own basis,
+    the measured points are scaled onto it)."""
     from tuflexperf.analysis.thrust_band import thrust_band
 
     case = study.case

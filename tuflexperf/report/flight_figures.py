@@ -25,6 +25,8 @@ from tuflexperf.models.thrust import (
 from tuflexperf.report.canvas import (
     AVAILABLE_COLOUR,
     LEGEND_FONT,
+    flight_basis,
+    flight_label,
     label_line_ends,
     new_figure,
     page_legend,
@@ -173,10 +175,11 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
     ax.set_ylim(0, top)
     label_line_ends(ax, ends)
     ax.set_xlabel("true airspeed V (m/s)")
-    ax.set_ylabel("thrust, drag (N)")
+    ax.set_ylabel(flight_label("thrust T, drag D", rho))
     fig.suptitle(
         "Required and available thrust in level flight (paper Fig. 18)\n"
-        f"{case.name}, {unit(f'rho = {rho:.3f} kg/m^3')}"
+        f"{case.name}, {unit(f'rho = {rho:.3f} kg/m^3')}; "
+        f"{flight_basis(rho, propulsion.reference_density_kg_m3)}"
     )
     ax.grid(alpha=0.3)
     # right of the throttle labels in the margin, so neither covers the other
@@ -210,7 +213,7 @@ def _takeoff_not_attainable(case: Case, analyses: Analyses) -> Any:
     ad.axhline(0.0, color="black", linewidth=0.8)
     ad.axvline(v_lo, **STYLE["stall"], label=f"lift-off speed {v_lo:.1f} m/s")
     ad.set_xlabel("airspeed V (m/s)")
-    ad.set_ylabel("net force on the runway (N)")
+    ad.set_ylabel(flight_label("net force T - D - friction", rho))
     ad.set_title("why: the net force on the runway", fontsize=10)
     ad.grid(alpha=0.3)
     page_legend(ad)
@@ -308,7 +311,7 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     af.axhline(0.0, color="black", linewidth=0.8)
     af.set_ylim(bottom=0.0)
     af.set_xlabel("distance from brake release s (m)")
-    af.set_ylabel("force (N)")
+    af.set_ylabel(flight_label("force", case.density_kg_m3))
     af.set_title("forces on the ground run", fontsize=10)
     if catapult:
         af.text(0.5, 0.5, "catapult launch: no ground run (the catapult's energy, not the "

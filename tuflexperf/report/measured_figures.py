@@ -12,17 +12,17 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.io.case import Case
-from tuflexperf.models.thrust import (
-    density_ratio,
-    engine_thrust_n,
-)
+from tuflexperf.models.thrust import engine_thrust_n
 from tuflexperf.report.canvas import (
     ACCURACY_GOAL_N,
     LEGEND_FONT,
+    basis_note,
+    basis_text,
     new_figure,
     note_box,
     page_legend,
     style_of,
+    thrust_label,
     wrap_text,
 )
 from tuflexperf.report.data import (
@@ -44,8 +44,8 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
 
     propulsion = case.propulsion
     engine = propulsion.engines[engine_index]
-    rho_test = measured.density_kg_m3
-    scale = 1.0 if rho_test is None else float(density_ratio(propulsion, rho_test))
+    ref = propulsion.reference_density_kg_m3
+    scale = 1.0  # the model's own basis; the measured points were scaled onto it (data.py)
     low, high = propulsion.tested_airspeed_m_s
     x = np.linspace(0.0, 1.0, 21)
     v = np.linspace(max(low, 0.0), high, 31)
@@ -61,7 +61,7 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
                      zorder=1)
     ax3.set_xlabel("throttle x (fraction)")
     ax3.set_ylabel("airspeed V (m/s)")
-    ax3.set_zlabel("thrust T (N)")
+    ax3.set_zlabel(f"thrust T (N) {basis_text(ref)}", fontsize=9)
     ax3.view_init(elev=22, azim=-130)
     ax3.set_box_aspect(None, zoom=0.88)  # as large as the z label allows
     ax_r = fig.add_subplot(grid[1])
@@ -108,13 +108,14 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
     # the statistics are the panel's title: inside, a box would sit on a goal line or a point
     ax_r.set_title(f"residuals of the measured points\n{text}", fontsize=9)
     ax_r.set_xlabel("throttle x (fraction)")
-    ax_r.set_ylabel("measured - model thrust (N)")
+    ax_r.set_ylabel(thrust_label("measured - model thrust", ref))
     ax_r.grid(alpha=0.3)
     span = max(float(np.max(np.abs(residual))), ACCURACY_GOAL_N)
     ax_r.set_ylim(-1.15 * span, 1.15 * span)
     page_legend(ax_r)
     source = measured.source.name if measured.source is not None else "?"
-    fig.suptitle(f"{title} with the measured points from {source} (paper Figs. 11-12)")
+    fig.suptitle(f"{title} with the measured points from {source} (paper Figs. 11-12)\n"
+                 f"{basis_note(measured)}", fontsize=11)
     return fig
 
 
@@ -155,7 +156,7 @@ def run_processing(run: ProcessedRun) -> Any:
     for k, c in enumerate(run.changepoints):
         ax.axvline(t[c], **STYLE["changepoint"],
                    label="detected change point" if k == 0 else None)
-    ax.set_ylabel("balance force F (N)")
+    ax.set_ylabel(thrust_label("balance force F = T - D", run.reference_density_kg_m3))
     ax.grid(alpha=0.3)
     page_legend(ax)
     ax.tick_params(labelbottom=False)
@@ -222,10 +223,10 @@ def sine_sweep(measured: Measured, case: Case) -> Any:
         ax.set_title(f"whole sweep ({sweep.file}); model: poly22 thrust, dead time, spool lag, "
                      "minus structure drag", fontsize=9)
     ax.set_xlabel("time t (s)")
-    ax.set_ylabel("balance force F (N)")
+    ax.set_ylabel(thrust_label("balance force F = T - D", measured.reference_density_kg_m3))
     ax.grid(alpha=0.3)
     page_legend(ax)
-    az.set_ylabel("balance force F (N)")
+    az.set_ylabel(thrust_label("balance force F", measured.reference_density_kg_m3))
     az.set_title("end of the sweep (highest frequency)", fontsize=10)
     az.grid(alpha=0.3)
     az.tick_params(labelbottom=False)
@@ -265,11 +266,11 @@ def model_vs_measured(case: Case, measured: Measured) -> Any:
         ax.plot(tr, raw, **STYLE["measured_raw"], label="measured (raw)")
         ax.plot(tc, clean, **STYLE["measured"], label="measured (processed)")
         ax.set_title(f"{run.engine} at {run.mean_airspeed_m_s:.1f} m/s ({run.file})", fontsize=10)
-        ax.set_ylabel("balance force F (N)")
+        ax.set_ylabel(thrust_label("balance force F = T - D", measured.reference_density_kg_m3))
         ax.grid(alpha=0.3)
         ax.tick_params(labelbottom=False)
         ae.set_xlabel("time t (s)")
-        ae.set_ylabel("model - measured (N)")
+        ae.set_ylabel("model - measured F (N)")
         ae.grid(alpha=0.3)
         models = [model_force_n(case, measured, run, delay, lag) for _, delay, lag in dynamics]
         if models[0] is None:
@@ -303,6 +304,7 @@ def model_vs_measured(case: Case, measured: Measured) -> Any:
                ncols=3, fontsize=LEGEND_FONT)
     fig.suptitle(
         "Thrust model driven by the logged throttle against the measured force "
-        "(paper Figs. 16-17)\nerror panels clipped at ±3 N"
+        f"(paper Figs. 16-17)\nerror panels clipped at ±3 N; {basis_note(measured)}",
+        fontsize=11,
     )
     return fig
