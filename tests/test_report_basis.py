@@ -71,3 +71,41 @@ def test_the_balance_model_subtracts_the_drag_scaled_onto_the_basis(shipped):
     v = run.airspeed_m_s
     thrust = np.asarray(engine_thrust_n(engine, run.throttle, v), dtype=float)
     np.testing.assert_allclose(force, thrust - measured.basis_scale * (c1 * v + c2 * v * v))
+
+
+def test_the_dynamic_model_is_fitted_on_the_sweeps_and_on_the_steps_alike(shipped):
+    """Both fits against the synthetic campaign's truth (truth.yaml), reported side by side."""
+    import yaml
+
+    from tuflexperf.report.data import CAMPAIGN_BESIDE_PROPULSION
+
+    case, measured = shipped
+    truth_file = case.propulsion_path.parent / CAMPAIGN_BESIDE_PROPULSION.parent / "truth.yaml"
+    truth = yaml.safe_load(truth_file.read_text())
+    fits = measured.fit_summary["dynamics_fits"]
+    for which in ("sine_sweep", "throttle_steps"):
+        fit = fits[which]
+        assert fit["n_runs"] >= 2
+        assert fit["delay_s"] == pytest.approx(truth["delay_s"], abs=0.005)
+        assert fit["lag_s"] == pytest.approx(truth["spool_lag_s"], abs=0.01)
+    assert fits["throttle_steps"]["n_runs"] == len(
+        [r for r in measured.fit_summary["runs"] if r.get("kind") == "throttle_steps"])
+
+
+def test_the_sweep_page_says_which_dynamic_model_misses_the_amplitude(shipped):
+    """The shipped 50 ms pure delay over-predicts the 5 Hz amplitude about 3x (issue 47);
+    the fitted delay and lag reproduce it within 20 %."""
+    from tuflexperf.report.measured_figures import AMPLITUDE_TOLERANCE, amplitude_verdicts
+
+    _, measured = shipped
+    verdicts = {label: (ok, text) for label, ok, text in amplitude_verdicts(measured)}
+    assert set(verdicts) == {"propulsion file", "sine-sweep fit", "throttle-step fit"}
+    ok, text = verdicts["propulsion file"]
+    assert not ok and "does NOT reproduce" in text
+    error = measured.sweep_amplitude.error
+    labels = [label for label, _, _ in measured.sweep_amplitude_labels]
+    shipped_error = error[labels.index("propulsion file")]
+    assert np.nanmax(shipped_error) > 1.0  # more than twice the measured amplitude
+    for label in ("sine-sweep fit", "throttle-step fit"):
+        assert verdicts[label][0]
+        assert np.nanmax(np.abs(error[labels.index(label)])) <= AMPLITUDE_TOLERANCE

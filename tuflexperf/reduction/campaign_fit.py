@@ -271,22 +271,34 @@ def _fit_campaign(
     if sweeps:
         drag = fit_structure_drag(sweeps)
 
-    def reduce(run: CampaignRun, read: Future[Run]) -> tuple[StepRunResult, list[_Cell]]:
+    def reduce(run: CampaignRun, read: Future[Run]
+               ) -> tuple[StepRunResult, list[_Cell], DelayEstimate | None]:
         onset = onset_delay.get(str(run.engine)) or delay or 0.0
-        result = reduce_step_run(campaign, run, read.result(), max(onset, 0.0))
-        # the run's test points and their pack voltage and current, while on the worker
+        data = read.result()
+        result = reduce_step_run(campaign, run, data, max(onset, 0.0))
+        # the run's test points and their pack voltage and current, while on the worker;
+        # and the dynamic model fitted on its steps too (issue 47 item 6: the sweeps' fit
+        # checked against another excitation)
+        steps = (estimate_delay(data.time_s, data["throttle"], data["force_n"],
+                                data.sample_rate_hz)
+                 if float(np.ptp(data["throttle"])) >= MIN_SWEEP_THROTTLE_SWING else None)
         return result, [(cell, electrical_means(result, cell.members))
-                        for cell in merge_test_points(result.segments)]
+                        for cell in merge_test_points(result.segments)], steps
 
     # queued behind every read: a worker waits at most on a read another one is doing
     reduced = [(run, pool.submit(reduce, run, read)) for run, read in reads]
     digests = [(r, pool.submit(sha256_of, r.path)) for r in campaign.runs]  # for the source
     step_results: list[StepRunResult] = []
     cells_of: list[list[_Cell]] = []
+    step_dynamics: list[dict[str, Any]] = []
     for run, step_future in reduced:
         tick(run.file)
-        result, cells = step_future.result()
+        result, cells, steps = step_future.result()
         cells_of.append(cells)
+        if steps is not None and steps.r2 >= MIN_SWEEP_R2:
+            step_dynamics.append({"file": run.file, "engine": run.engine,
+                                  "delay_s": steps.delay_s, "lag_s": steps.lag_s,
+                                  "r2": steps.r2})
         data = result.data
         if not result.segments:  # e.g. 50 rows, or time stamps in microseconds
             degenerate.append(
@@ -469,6 +481,12 @@ def _fit_campaign(
     for report in run_reports:
         summary["warnings"].extend(f"{report['file']}: {w}" for w in report.get("warnings", []))
     summary["lag_s"] = measured_lag
+    # the dynamic model fitted on either excitation, both reported (issue 47 item 6); the
+    # sweeps' is the model's (delay_s, lag_s): the steps' is its check
+    summary["dynamics_fits"] = {
+        "sine_sweep": _dynamics_fit(delay_runs),
+        "throttle_steps": _dynamics_fit(step_dynamics),
+    }
     propulsion = render_propulsion(
         name=campaign.name,
         fits=fits,
@@ -490,6 +508,17 @@ def _fit_campaign(
         step_runs=step_results,
         sweep_runs=sweep_results,
     )
+
+
+def _dynamics_fit(runs: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The mean dead time and spool lag [s] of the runs fitted, with their count and the
+    least R^2 (None without a run)."""
+    if not runs:
+        return None
+    return {"delay_s": float(np.mean([r["delay_s"] for r in runs])),
+            "lag_s": float(np.mean([r["lag_s"] for r in runs])),
+            "n_runs": len(runs), "min_r2": float(min(r["r2"] for r in runs)),
+            "runs": runs}
 
 
 def _validation(

@@ -123,6 +123,10 @@ class Measured:
     model_force: dict[tuple[str, float, float], np.ndarray | None] = field(
         default_factory=dict
     )
+    # the sweep's first-harmonic amplitude per frequency, measured and per model of
+    # model_dynamics(..., steps=True) in its order (reduction.delay.sweep_amplitudes)
+    sweep_amplitude: Any | None = None
+    sweep_amplitude_labels: tuple[tuple[str, float, float], ...] = ()
 
 
 def find_measured_source(case: Case, explicit: Path | None) -> Path | None:
@@ -404,9 +408,11 @@ def balance_model_n(
     return force
 
 
-def model_dynamics(case: Case, measured: Measured) -> list[tuple[str, float, float]]:
+def model_dynamics(case: Case, measured: Measured,
+                   steps: bool = False) -> list[tuple[str, float, float]]:
     """(label, delay [s], lag [s]) of the models to draw: the propulsion file's (what the
-    exports carry) and, where it differs, what ``fit`` measured on this campaign."""
+    exports carry) and, where it differs, what ``fit`` measured on this campaign's sine
+    sweeps (the model ``fit`` writes); with ``steps`` also the fit on its throttle steps."""
     prop = case.propulsion
     shown = [("propulsion file", prop.delay_s, prop.lag_s)]
     summary = measured.fit_summary or {}
@@ -414,7 +420,10 @@ def model_dynamics(case: Case, measured: Measured) -> list[tuple[str, float, flo
     if delay is not None and math.isfinite(delay):
         lag = float(lag) if lag is not None and math.isfinite(lag) else 0.0
         if abs(delay - prop.delay_s) > 5e-4 or abs(lag - prop.lag_s) > 5e-4:
-            shown.append(("campaign fit", float(delay), lag))
+            shown.append(("sine-sweep fit", float(delay), lag))
+    fitted = (summary.get("dynamics_fits") or {}).get("throttle_steps")
+    if steps and fitted:
+        shown.append(("throttle-step fit", float(fitted["delay_s"]), float(fitted["lag_s"])))
     return shown
 
 
@@ -447,8 +456,18 @@ def _model_responses(case: Case, measured: Measured) -> None:
     for _, delay, lag in model_dynamics(case, measured):
         for run in measured.comparisons:
             model_force_n(case, measured, run, delay, lag)
-        if measured.sweep is not None:
-            model_force_n(case, measured, measured.sweep, delay, lag)
+    sweep = measured.sweep
+    if sweep is None:
+        return
+    from tuflexperf.reduction.delay import sweep_amplitudes
+
+    dynamics = model_dynamics(case, measured, steps=True)
+    models = [model_force_n(case, measured, sweep, delay, lag) for _, delay, lag in dynamics]
+    if any(m is None for m in models):  # the case's propulsion has no such engine
+        return
+    measured.sweep_amplitude = sweep_amplitudes(
+        sweep.time_s, sweep.throttle, np.vstack([sweep.force_median_n, *models]))
+    measured.sweep_amplitude_labels = tuple(dynamics)
 
 
 
