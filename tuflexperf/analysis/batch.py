@@ -130,6 +130,8 @@ class BatchResult:
     # rows whose answer flies the thrust model outside its tested airspeeds, as the single
     # case's `extrapolated` (SPEC: extrapolation is said; a sweep said nothing)
     extrapolated: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    # the airspeed a requirement is flown at, where it has one [m/s] (the endurance's cruise)
+    airspeeds: dict[str, Array] = field(default_factory=dict)
 
     def met(self, name: str) -> NDArray[np.bool_]:
         """Met per sample, by the verdict rule of :mod:`tuflexperf.analysis.verdict`."""
@@ -306,6 +308,7 @@ class BatchEvaluator:
             return found[0], found[1], found[2], np.where(within, found[3], 0.0)
 
         beyond: dict[str, NDArray[np.bool_]] = {}
+        airspeeds: dict[str, Array] = {}
         propulsion = self.case.propulsion
 
         def flown_span(*speeds: Array, from_rest: bool) -> tuple[Array, Array]:
@@ -366,6 +369,7 @@ class BatchEvaluator:
                 out[requirement.name], speed, climb = model.flight_endurance_min(
                     self._endurance, throttle, launch, battery
                 )
+                airspeeds[requirement.name] = np.asarray(speed, dtype=float).reshape(-1)
                 # the roll and the climb fly the thrust model too, as the single case's
                 # mission (a catapult's release is no node of it): a roll from rest below
                 # the tested range was not said
@@ -380,6 +384,7 @@ class BatchEvaluator:
             refused=self.rows_refused(values, size, coefficients),
             without_envelope=unflown,
             extrapolated=beyond,
+            airspeeds=airspeeds,
         )
 
     def _battery_nominal(self) -> dict[str, float]:

@@ -217,6 +217,7 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     reduced = _start_campaign_reduction(case, campaign, kept, step.detail, writers)
     from tuflexperf.report import analysis_figures as af
     from tuflexperf.report import figures as fg
+    from tuflexperf.report import review_figures as rf
 
     fg.use_agg()
     from tuflexperf.analysis.study import Study
@@ -245,6 +246,11 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     if analyses.mission is not None or analyses.mission_note is not None:
         analysis_pages["10_mission"] = lambda: af.mission(case, analyses)
     analysis_pages["11_tornado"] = lambda: af.tornado(case, analyses)
+    # issue 47 item 4: the views no requirement asks for (solved in the writer that draws them)
+    analysis_pages["07b_takeoff_profile"] = lambda: rf.takeoff_profile(case, analyses)
+    analysis_pages["08c_flight_envelope"] = lambda: rf.flight_envelope(case, analyses)
+    if case.battery_path is not None:
+        analysis_pages["09b_mass_trade"] = lambda: rf.mass_trade(case, analyses)
     # The first writer starts with the tornado: the margins behind it (about 1 s of batch
     # solves) are then solved while the campaign is reduced, not at the end.
     first = sorted(analysis_pages.items(), key=lambda item: item[0] != "11_tornado")
@@ -266,6 +272,8 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     if measured.comparisons:
         measured_pages["06_model_vs_measured"] = lambda: fg.model_vs_measured(case, measured)
     measured_pages["06b_thrust_band"] = lambda: af.thrust_band(case, analyses, measured)
+    measured_pages["06c_predicted_measured"] = lambda: rf.predicted_vs_measured(
+        case, analyses, measured)
     named = sorted({**analysis_pages, **measured_pages}.items())  # the report's page order
     notes = measured.notes + analyses.notes
     from tuflexperf import __version__

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from tuflexperf.analysis.review_views import thrust_at_points
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
 from tuflexperf.models.thrust import (
@@ -126,6 +127,7 @@ class Measured:
     # the sweep's first-harmonic amplitude per frequency, measured and per model of
     # model_dynamics(..., steps=True) in its order (reduction.delay.sweep_amplitudes)
     sweep_amplitude: Any | None = None
+    points_model_n: np.ndarray | None = None  # the thrust model at each point (its basis)
     sweep_amplitude_labels: tuple[tuple[str, float, float], ...] = ()
 
 
@@ -265,6 +267,9 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
         measured.points = MeasuredPoints(
             table.engine, table.throttle, table.airspeed_m_s, table.thrust_n
         )
+        measured.points_model_n = thrust_at_points(case, tuple(table.engine),
+                                                   np.asarray(table.throttle, dtype=float),
+                                                   np.asarray(table.airspeed_m_s, dtype=float))
         measured.notes.append(
             f"measured points from {what} {source.name}; no raw runs, so the run, "
             "sine-sweep and model-vs-run figures are left out"
@@ -287,6 +292,8 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
     # the thrust points onto the model's basis: the campaign's points are at its own density
     measured.points = MeasuredPoints(points.engine, points.throttle, points.airspeed_m_s,
                                      scale * points.thrust_n)
+    measured.points_model_n = thrust_at_points(case, points.engine, points.throttle,
+                                               points.airspeed_m_s)
     drag = summary.get("structure_drag")
     if drag:
         measured.drag_c1_c2 = (drag["c1_n_per_m_s"], drag["c2_n_per_m2_s2"])
@@ -504,6 +511,16 @@ class Analyses:
     # the case's mission flown (Study.mission), or why not; both None: the case has none
     mission: Any | None = None
     mission_note: str | None = None
+    # issue 47 item 4's views (analysis.review_views), filled by views() when first drawn,
+    # in the forked writer; a view that does not exist has its reason in view_notes
+    envelope: Any | None = None
+    mass_sweep: Any | None = None
+    height_profile: Any | None = None
+    run_powers: list[tuple[str, str, float, float, float, float]] = field(default_factory=list)
+    view_notes: dict[str, str] = field(default_factory=dict)
+    _views_done: bool = field(default=False, repr=False)
+    # --compare: (label, case, analyses) of each other configuration, drawn over this one's
+    others: list[tuple[str, Any, Any]] = field(default_factory=list)
 
 
 ENDURANCE_CURVE_POINTS = 15
@@ -592,6 +609,36 @@ def margins(analyses: Analyses) -> Analyses:
         analyses.limit_values = study.limit_values()
     except (NotAttainable, InputError) as exc:
         analyses.margins_note = f"margins: {exc}"
+    return analyses
+
+
+def views(analyses: Analyses) -> Analyses:
+    """Fill the review's views (envelope, endurance against mass, the take-off's height, the
+    discharge runs against the power model) from the Study, once; each failure a note."""
+    from tuflexperf.analysis.review_views import takeoff_height_profile
+
+    if analyses._views_done or analyses.study is None:
+        return analyses
+    analyses._views_done = True
+    study = analyses.study
+    try:
+        analyses.envelope = study.flight_envelope()
+    except NotAttainable as exc:
+        analyses.view_notes["envelope"] = str(exc)
+    if study.case.battery_path is None:
+        analyses.view_notes["mass"] = "the case names no battery file"
+    else:
+        try:
+            analyses.mass_sweep = study.mass_sweep()
+            analyses.run_powers = [(run.path.name, engine.name, x, v, measured, modelled)
+                                   for run, engine, x, v, measured, modelled
+                                   in study.endurance_model().run_powers()]
+        except (NotAttainable, InputError) as exc:
+            analyses.view_notes["mass"] = str(exc)
+    if analyses.takeoff is not None:
+        analyses.height_profile = takeoff_height_profile(analyses.takeoff)
+    else:
+        analyses.view_notes["takeoff"] = analyses.takeoff_note or "no take-off"
     return analyses
 
 
