@@ -519,8 +519,20 @@ class Analyses:
     run_powers: list[tuple[str, str, float, float, float, float]] = field(default_factory=list)
     view_notes: dict[str, str] = field(default_factory=dict)
     _views_done: bool = field(default=False, repr=False)
-    # --compare: (label, case, analyses) of each other configuration, drawn over this one's
-    others: list[tuple[str, Any, Any]] = field(default_factory=list)
+    # --compare: (label, case) of each other configuration, and once compared() has solved
+    # them (in whichever process draws a comparable page first) (label, case, analyses)
+    compare: list[tuple[str, Any]] = field(default_factory=list)
+    _others: list[tuple[str, Any, Any]] | None = field(default=None, repr=False)
+
+    @property
+    def others(self) -> list[tuple[str, Any, Any]]:
+        """Each ``--compare`` configuration with its analyses (solved on first use)."""
+        if self._others is None:
+            from tuflexperf.analysis.study import Study
+
+            self._others = [(label, case, run_analyses(Study(case)))
+                            for label, case in self.compare]
+        return self._others
 
 
 ENDURANCE_CURVE_POINTS = 15

@@ -30,22 +30,17 @@ from tuflexperf.report.canvas import (
 )
 from tuflexperf.report.data import Analyses, Measured, views
 from tuflexperf.report.style import (
-    BLUE,
-    BROWN,
+    CONFIG_COLOURS,
     EXTRAPOLATED_FILL,
-    GREEN,
-    PINK,
     POINT,
     STYLE,
 )
-
-CONFIG_COLOURS = (BLUE, GREEN, BROWN, PINK)  # the first configuration, then each --compare
 
 
 def configurations(case: Case, analyses: Analyses) -> list[tuple[str, Case, Analyses, str]]:
     """(label, case, analyses, colour) of the configurations drawn: this one, then each
     ``--compare``; each one's views filled."""
-    first = [(case.name, case, analyses)] if not analyses.others else [
+    first = [(case.name, case, analyses)] if not analyses.compare else [
         (f"A: {case.name}", case, analyses)]
     rows = first + list(analyses.others)
     return [(label, c, views(a), CONFIG_COLOURS[k % len(CONFIG_COLOURS)])
@@ -316,3 +311,97 @@ def takeoff_profile(case: Case, analyses: Analyses) -> Any:
     fig.suptitle("Take-off height profile to the obstacle at full throttle: ground roll, "
                  "transition arc, straight climb", fontsize=12)
     return fig
+
+
+# --- report --compare: the verdicts side by side -------------------------------------------
+def verdict_word(verdict: Any) -> str:
+    """PASS / FAIL (and UNPROVEN where the verdict carries it)."""
+    return str(getattr(verdict, "verdict", None) or ("PASS" if verdict.passed else "FAIL"))
+
+
+def compare_verdicts(case: Case, analyses: Analyses) -> Any:
+    """Every requirement of every configuration side by side: value and verdict per
+    configuration, and for each after the first what changed against the first (value and
+    margin, in the unit and in per cent)."""
+    from tuflexperf.report.canvas import page_margins
+    from tuflexperf.report.style import FAIL_FILL, PASS_FILL
+
+    drawn = configurations(case, analyses)
+    fig = new_figure()
+    page_margins(fig)
+    ax = fig.add_subplot()
+    ax.axis("off")
+    names = list(dict.fromkeys(v.name for _, _, a, _ in drawn for v in a.verdicts))
+    by = [{v.name: v for v in a.verdicts} for _, _, a, _ in drawn]
+    letters = [label.split(":", 1)[0] for label, _, _, _ in drawn]
+    columns = ["requirement", "limit"]
+    for k, letter in enumerate(letters):
+        columns += [f"{letter} value", f"{letter} verdict"]
+        if k:
+            columns += [f"{letter} - A", f"{letter} margin - A"]
+    rows, fills = [], []
+    for name in names:
+        row, fill = [name, ""], ["white", "white"]
+        first = by[0].get(name)
+        for k, table in enumerate(by):
+            v = table.get(name)
+            if v is not None and not row[1]:
+                row[1] = f"{'<=' if v.kind == 'max' else '>='} {v.limit:g}{_unit(v)}"
+            value = "not stated" if v is None else (
+                "not attainable" if v.value is None else f"{v.value:.4g}{_unit(v)}")
+            word = "" if v is None else verdict_word(v)
+            row += [value, word]
+            fill += ["white", PASS_FILL if word == "PASS" else FAIL_FILL if word == "FAIL"
+                     else "#ffe0b2" if word else "white"]
+            if k:
+                row += list(_change(first, v))
+                changed = word != ("" if first is None else verdict_word(first))
+                fill += ["white", "#fff3c4" if changed else "white"]
+        rows.append(row)
+        fills.append(fill)
+    if rows:
+        weights = {"requirement": 2.2, "limit": 1.0}
+        widths = [weights.get(c, 1.5 if " - A" in c else 0.75 if "verdict" in c else 1.0)
+                  for c in columns]
+        widths = [w / sum(widths) for w in widths]
+        table = ax.table(cellText=rows, colLabels=columns, cellColours=fills, loc="upper center",
+                         cellLoc="center", bbox=[0.0, 0.32, 1.0, 0.6], colWidths=widths)
+        table.auto_set_font_size(False)
+        table.set_fontsize(7.5 if len(drawn) > 2 else 9)
+        for (r, _), cell in table.get_celld().items():
+            if r == 0:
+                cell.set_facecolor("0.85")
+                cell.set_text_props(weight="bold")
+    lines = [f"{label}: {c.path}" + _overrides(c) for label, c, _, _ in drawn]
+    lines += ["", "change = value of the configuration less A's; margin change likewise "
+              "(positive: more margin than A); a verdict that differs from A's is shaded "
+              "yellow."]
+    ax.text(0.0, 0.28, "\n".join(wrap_text(line, 150) for line in lines),
+            transform=ax.transAxes, va="top", ha="left", fontsize=8.5, family="monospace")
+    passed = [all(v.passed for v in a.verdicts) for _, _, a, _ in drawn]
+    fig.suptitle("Configurations compared: "
+                 + "; ".join(f"{label} {'all met' if ok else 'NOT all met'}"
+                             for (label, _, _, _), ok in zip(drawn, passed, strict=True)),
+                 fontsize=12)
+    return fig
+
+
+def _overrides(case: Case) -> str:
+    given = getattr(case, "overrides", ())
+    return (" with --set " + ", ".join(f"{k}={v:g}" for k, v in given)) if given else ""
+
+
+def _change(first: Any, other: Any) -> tuple[str, str]:
+    """(value change, margin change) of ``other`` against ``first``, each with its per cent
+    of the first's value where both exist."""
+    if first is None or other is None or first.value is None or other.value is None:
+        return "-", "-"
+    delta = other.value - first.value
+    share = f" ({100 * delta / first.value:+.1f} %)" if first.value else ""
+    margin = other.margin - first.margin
+    return f"{delta:+.3g}{_unit(other)}{share}", f"{margin:+.3g}{_unit(other)}"
+
+
+def _unit(verdict: Any) -> str:
+    """`` m``, `` min``; a fraction goes without a word (its limit says 1)."""
+    return "" if verdict.unit == "fraction" else f" {verdict.unit}"
