@@ -271,34 +271,22 @@ def _fit_campaign(
     if sweeps:
         drag = fit_structure_drag(sweeps)
 
-    def reduce(run: CampaignRun, read: Future[Run]
-               ) -> tuple[StepRunResult, list[_Cell], DelayEstimate | None]:
+    def reduce(run: CampaignRun, read: Future[Run]) -> tuple[StepRunResult, list[_Cell]]:
         onset = onset_delay.get(str(run.engine)) or delay or 0.0
-        data = read.result()
-        result = reduce_step_run(campaign, run, data, max(onset, 0.0))
-        # the run's test points and their pack voltage and current, while on the worker;
-        # and the dynamic model fitted on its steps too (issue 47 item 6: the sweeps' fit
-        # checked against another excitation)
-        steps = (estimate_delay(data.time_s, data["throttle"], data["force_n"],
-                                data.sample_rate_hz)
-                 if float(np.ptp(data["throttle"])) >= MIN_SWEEP_THROTTLE_SWING else None)
+        result = reduce_step_run(campaign, run, read.result(), max(onset, 0.0))
+        # the run's test points and their pack voltage and current, while on the worker
         return result, [(cell, electrical_means(result, cell.members))
-                        for cell in merge_test_points(result.segments)], steps
+                        for cell in merge_test_points(result.segments)]
 
     # queued behind every read: a worker waits at most on a read another one is doing
     reduced = [(run, pool.submit(reduce, run, read)) for run, read in reads]
     digests = [(r, pool.submit(sha256_of, r.path)) for r in campaign.runs]  # for the source
     step_results: list[StepRunResult] = []
     cells_of: list[list[_Cell]] = []
-    step_dynamics: list[dict[str, Any]] = []
     for run, step_future in reduced:
         tick(run.file)
-        result, cells, steps = step_future.result()
+        result, cells = step_future.result()
         cells_of.append(cells)
-        if steps is not None and steps.r2 >= MIN_SWEEP_R2:
-            step_dynamics.append({"file": run.file, "engine": run.engine,
-                                  "delay_s": steps.delay_s, "lag_s": steps.lag_s,
-                                  "r2": steps.r2})
         data = result.data
         if not result.segments:  # e.g. 50 rows, or time stamps in microseconds
             degenerate.append(
@@ -485,7 +473,7 @@ def _fit_campaign(
     # sweeps' is the model's (delay_s, lag_s): the steps' is its check
     summary["dynamics_fits"] = {
         "sine_sweep": _dynamics_fit(delay_runs),
-        "throttle_steps": _dynamics_fit(step_dynamics),
+        "throttle_steps": _dynamics_fit(_step_dynamics(step_results, pool)),
     }
     propulsion = render_propulsion(
         name=campaign.name,
@@ -508,6 +496,30 @@ def _fit_campaign(
         step_runs=step_results,
         sweep_runs=sweep_results,
     )
+
+
+def _step_dynamics(results: list[StepRunResult],
+                   pool: ThreadPoolExecutor) -> list[dict[str, Any]]:
+    """The dead time and spool lag fitted on the throttle steps (:func:`estimate_delay`: its
+    model holds for any throttle history), of each engine's run at its highest airspeed,
+    where the fan's lag matters to flight; a run whose fit explains nothing is left out."""
+    top: dict[str, StepRunResult] = {}
+    for result in results:
+        speed = float(np.mean(result.data["airspeed_m_s"]))
+        engine = str(result.run.engine)
+        if float(np.ptp(result.data["throttle"])) >= MIN_SWEEP_THROTTLE_SWING and (
+                engine not in top
+                or speed > float(np.mean(top[engine].data["airspeed_m_s"]))):
+            top[engine] = result
+    fits = [(r, pool.submit(estimate_delay, r.data.time_s, r.data["throttle"],
+                            r.data["force_n"], r.data.sample_rate_hz)) for r in top.values()]
+    runs = []
+    for result, future in fits:
+        fit = future.result()
+        if fit.r2 >= MIN_SWEEP_R2:
+            runs.append({"file": result.run.file, "engine": result.run.engine,
+                         "delay_s": fit.delay_s, "lag_s": fit.lag_s, "r2": fit.r2})
+    return runs
 
 
 def _dynamics_fit(runs: list[dict[str, Any]]) -> dict[str, Any] | None:
