@@ -235,7 +235,11 @@ def sine_sweep(measured: Measured, case: Case) -> Any:
     at = fig.add_subplot(gs[2:4, 1])
     lax = fig.add_subplot(gs[3, 0])
     at.axis("off")
+    at.set_xticks([])  # a text panel: no axis to label
+    at.set_yticks([])
     lax.axis("off")
+    lax.set_xticks([])  # a text panel: no axis to label
+    lax.set_yticks([])
     ref = measured.reference_density_kg_m3
     t = sweep.time_s
     force = sweep.force_median_n
@@ -388,6 +392,8 @@ def model_vs_measured(case: Case, measured: Measured) -> Any:
     # the footer's strip stays free (a figure legend sat on the footer)
     lax = fig.add_subplot(gs[2, :])
     lax.axis("off")
+    lax.set_xticks([])  # a text panel: no axis to label
+    lax.set_yticks([])
     lax.legend(list(handles.values()), list(handles.keys()), loc="center", ncols=3,
                fontsize=LEGEND_FONT, frameon=False)
     fig.suptitle(

@@ -132,6 +132,8 @@ def predicted_vs_measured(case: Case, analyses: Analyses, measured: Measured) ->
     ap.set_ylabel("model power P (W), same throttle and airspeed", fontsize=9)
     ap.grid(alpha=0.3)
     af.axis("off")
+    af.set_xticks([])  # a text panel: no axis to label
+    af.set_yticks([])
     af.text(0.0, 1.0, wrap_text(
         "flown power: no flight log is given to report (the flightlog command compares a "
         "log's power with this case's model bin by bin)", 34),
