@@ -94,26 +94,27 @@ def _envelope_lines(ax: Any, case: Case) -> None:
 
 def _overlay(ax: Any, analyses: Analyses, what: str) -> None:
     """``report --compare``: each other configuration's curve of ``what`` ("trim", "oei",
-    "takeoff", "endurance") over this page's, in its colour, labelled with its letter."""
+    "takeoff", "endurance") on this page, in its colour, labelled with its letter; drawn
+    beneath the page's own curves (zorder 1.8), so where they coincide both show."""
     for k, (label, _, other) in enumerate(analyses.others, start=1):
         colour = CONFIG_COLOURS[k % len(CONFIG_COLOURS)]
         if what == "trim" and other.trim is not None:
             ax.plot(other.trim.airspeed_m_s, other.trim.throttle, color=colour, linewidth=1.8,
-                    label=f"{label}: trim, all engines")
+                    zorder=1.8, label=f"{label}: trim, all engines")
             if other.oei is not None:
                 worst = other.oei.critical
                 ax.plot(worst.airspeed_m_s, worst.throttle, color=colour, linewidth=1.4,
-                        linestyle="--", label=f"{label}: OEI, {worst.dead_engine} dead")
+                        linestyle="--", zorder=1.8, label=f"{label}: OEI, {worst.dead_engine} dead")
         elif what == "takeoff" and other.takeoff is not None:
             r = other.takeoff
             ax.plot(np.append(r.history_distance_m, r.ground_roll_m),
                     np.append(r.history_airspeed_m_s, r.liftoff_speed_m_s), color=colour,
-                    linewidth=1.8, label=f"{label}: ground run, lift-off at "
+                    linewidth=1.8, zorder=1.8, label=f"{label}: ground run, lift-off at "
                     f"{r.ground_roll_m:.1f} m")
         elif what == "endurance" and other.endurance_curve:
             ax.plot([c[0] for c in other.endurance_curve],
                     [c[1].flight_endurance_min for c in other.endurance_curve], color=colour,
-                    linewidth=1.8, label=f"{label}: flight endurance")
+                    linewidth=1.8, zorder=1.8, label=f"{label}: flight endurance")
         elif what in ("trim", "takeoff", "endurance"):
             note = {"trim": "no trim", "takeoff": other.takeoff_note or "no take-off",
                     "endurance": "no endurance curve"}[what]

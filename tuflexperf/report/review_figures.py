@@ -358,7 +358,7 @@ def compare_verdicts(case: Case, analyses: Analyses) -> Any:
             if k:
                 row += list(_change(first, v))
                 changed = word != ("" if first is None else verdict_word(first))
-                fill += ["white", "#fff3c4" if changed else "white"]
+                fill += ["#fff3c4" if changed else "white"] * 2
         rows.append(row)
         fills.append(fill)
     if rows:
@@ -376,9 +376,11 @@ def compare_verdicts(case: Case, analyses: Analyses) -> Any:
                 cell.set_text_props(weight="bold")
     lines = [f"{label}: {c.path}" + _overrides(c) for label, c, _, _ in drawn]
     lines += ["", "change = value of the configuration less A's; margin change likewise "
-              "(positive: more margin than A); a verdict that differs from A's is shaded "
-              "yellow."]
-    ax.text(0.0, 0.28, "\n".join(wrap_text(line, 150) for line in lines),
+              "(positive: more margin than A); the changes of a verdict that differs from A's "
+              "are shaded yellow."]
+    # monospace 8.5 pt: 110 characters fit the page's text width (longer ones widened the
+    # layout and squeezed the table)
+    ax.text(0.0, 0.28, "\n".join(wrap_text(line, 110) for line in lines),
             transform=ax.transAxes, va="top", ha="left", fontsize=8.5, family="monospace")
     passed = [all(v.passed for v in a.verdicts) for _, _, a, _ in drawn]
     fig.suptitle("Configurations compared: "
