@@ -155,8 +155,14 @@ class BatchEvaluator:
     """
 
     def __init__(self, case: Case) -> None:
+        from tuflexperf.analysis.plausibility import implausible
+
         self.case = case
         self.requirements = present_requirements(case)
+        self.implausible = implausible(case)
+        self._side: Any = None
+        if case.battery_path is not None:
+            self._side = pack_side(case)  # the plausibility rule's packs (cached fit)
         if any(r.block == "oei" for r in self.requirements):
             # as solve_oei refuses it (the sweep tabulated "not attainable" for every point)
             from tuflexperf.analysis.oei import refuse_one_engine
@@ -376,6 +382,7 @@ class BatchEvaluator:
                 flown = (speed, climb) if catapult else (launch[2], speed, climb)
                 beyond[requirement.name] = np.asarray(outside_tested_span(
                     propulsion, *flown_span(*flown, from_rest=not catapult)), dtype=bool)
+        self._refuse_implausible(out, battery, size)
         return BatchResult(
             values=out,
             limits=limits,
@@ -386,6 +393,27 @@ class BatchEvaluator:
             extrapolated=beyond,
             airspeeds=airspeeds,
         )
+
+    def _refuse_implausible(self, out: dict[str, Array], battery: dict[str, Array],
+                            size: int) -> None:
+        """NaN (not met) where the data are what physics forbids (issue 43 item 3, the
+        registry's FAIL): the momentum rule as the nominal case's scan (the rows vary no
+        thrust or power surface), the packs' rated C per row of the capacity."""
+        from tuflexperf.analysis.plausibility import rating_rows
+
+        bad = {name: np.zeros(size, dtype=bool) for name in out}
+        for f in self.implausible:
+            if f.rule == "battery_rating" and battery:
+                continue  # judged per row below
+            for requirement in self.requirements:
+                if requirement.block in f.blocks:
+                    bad[requirement.name] |= True
+        if battery and self._side is not None:
+            rows = rating_rows(self.case, self._side, battery["battery.capacity_ah"])
+            for requirement in self.requirements:
+                bad[requirement.name] |= rows.reshape(-1) * np.ones(size, dtype=bool)
+        for name, mask in bad.items():
+            out[name] = np.where(mask, np.nan, out[name])
 
     def _battery_nominal(self) -> dict[str, float]:
         from tuflexperf.io.dotted import battery_key_values
