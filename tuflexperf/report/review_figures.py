@@ -191,6 +191,9 @@ def flight_envelope(case: Case, analyses: Analyses) -> Any:
                             if ceiling is not None else f"above the {h[-1]:.0f} m drawn"))
         ax.plot(env.least_airspeed_m_s, h, **STYLE["stall"],
                 label="least airspeed (stall x margin)" if colour == drawn[0][3] else None)
+        right = max(right, float(np.nanmin(env.least_airspeed_m_s)))
+    if case.requirements.envelope is not None:  # the required band stays on the page
+        right = max(right, case.requirements.envelope.bounds_m_s(case.density_kg_m3)[1])
     right = max(right * 1.08, 1.0)
     _shade_tested(ax, case, right)
     envelope = case.requirements.envelope
@@ -242,6 +245,12 @@ def mass_trade(case: Case, analyses: Analyses) -> Any:
             ae.axhline(requirement.min_flight_time_min, **STYLE["limit"],
                        label=f"limit: min flight time {requirement.min_flight_time_min:g} min"
                        if colour == drawn[0][3] else None)
+        if not np.any(np.isfinite(sweep.best_endurance_min)):
+            notes.append(f"{label}: no flight at any take-off mass from {sweep.mass_kg[0]:.1f} "
+                         f"to {sweep.mass_kg[-1]:.1f} kg: no throttle gives one (not attainable)")
+            for axis in (ae, ar):
+                axis.set_xlim(sweep.mass_kg[0], sweep.mass_kg[-1])
+            continue
         for axis, values in ((ae, sweep.best_endurance_min), (ar, sweep.best_range_km)):
             at = float(np.interp(sweep.nominal_mass_kg, sweep.mass_kg, values))
             axis.plot([sweep.nominal_mass_kg], [at], "o", color=colour, markeredgecolor="black",
@@ -255,8 +264,9 @@ def mass_trade(case: Case, analyses: Analyses) -> Any:
         axis.grid(alpha=0.3)
         axis.set_ylim(bottom=0.0)
         _legend_below(axis)
-    if notes:
-        note_box(ae, wrap_text("; ".join(notes), 60))
+    if notes:  # in the title: a note box would sit on a curve of another configuration
+        ae.set_title("\n".join(wrap_text(n, 70) for n in notes), fontsize=9,
+                     color=STYLE["limit"]["color"])
     fig.suptitle("Endurance and range against take-off mass (batch endurance on a mass x "
                  "throttle grid; the battery and its packs as the case's)", fontsize=12)
     return fig
