@@ -175,7 +175,7 @@ class BatchEvaluator:
             self._endurance = battery_side(case)
         # trim and OEI are flown on the packs as the single case flies them (pack_limits)
         self._packs: Any = None
-        if self.requirements:
+        if self.requirements or case.requirements.mission is not None:
             self._packs = pack_side(case)
 
     # -- the batch's model objects -----------------------------------------------------------
@@ -285,33 +285,8 @@ class BatchEvaluator:
         battery = (self._battery_rows(values, size)
                    if self._packs is not None or self._endurance is not None else {})
 
-        sagging = self._packs is not None and sagging_packs(self.case)
-
         def launched() -> tuple[Array, Array, Array, Array]:
-            # a catapult's "roll" is its release: no runway (SPEC 4), as solve_takeoff; the
-            # packs give full throttle over it (pack_limits.takeoff_beyond_battery)
-            found = model.catapult_release() if catapult else model.ground_roll()
-            if sagging:  # rolled on the packs' loaded voltage, as solve_takeoff rolls
-                from tuflexperf.analysis import batch_takeoff_packs as packs_takeoff
-
-                rows = pack_rows(self._packs.battery, battery)
-                if catapult:
-                    model.release = packs_takeoff.release_on_packs(model, self._packs, rows)
-                    model.packs_roll = packs_takeoff.RollOnPacks(
-                        *found, np.zeros((size, 1)), model.release[2])
-                else:
-                    model.packs_roll = packs_takeoff.roll_on_packs(model, self._packs, rows)
-                model.packs_airborne, model.packs_beyond = packs_takeoff.airborne_on_packs(
-                    model, self._packs, rows, model.packs_roll, height)
-                found = model.packs_roll.as_roll()
-            elif catapult:
-                model.release = model.release_run()
-            if catapult:  # one that does not accelerate to the arc's speed never gets there
-                found = (*found[:3], np.where(model.release[3], found[3], 0.0))
-            if self._packs is None:
-                return found
-            within = model.launch_within_packs(found, height, catapult, self._packs, battery)
-            return found[0], found[1], found[2], np.where(within, found[3], 0.0)
+            return self.launch(model, size, height, battery)
 
         beyond: dict[str, NDArray[np.bool_]] = {}
         airspeeds: dict[str, Array] = {}
@@ -393,6 +368,41 @@ class BatchEvaluator:
             extrapolated=beyond,
             airspeeds=airspeeds,
         )
+
+    def launch(self, model: BatchModel, size: int, height: Any, battery: dict[str, Array]
+               ) -> tuple[Array, Array, Array, Array]:
+        """The take-off's roll tuple per row (:meth:`.GroundRollRows.ground_roll`): a
+        runway's roll or a catapult's release, on the sagging packs where the propulsion
+        has a reference voltage (then ``model.packs_roll``/``packs_air`` hold its history
+        and airborne part), attainable only within the packs. ``height`` the obstacle [m],
+        ``battery`` the rows' battery keys (:meth:`_battery_rows`)."""
+        catapult = self.case.aircraft.launch == "catapult"
+        # a catapult's "roll" is its release: no runway (SPEC 4), as solve_takeoff; the
+        # packs give full throttle over it (pack_limits.takeoff_beyond_battery)
+        found = model.catapult_release() if catapult else model.ground_roll()
+        if self._packs is not None and sagging_packs(self.case):
+            # rolled on the packs' loaded voltage, as solve_takeoff rolls
+            from tuflexperf.analysis import batch_takeoff_packs as packs_takeoff
+
+            rows = pack_rows(self._packs.battery, battery)
+            if catapult:
+                model.release = packs_takeoff.release_on_packs(model, self._packs, rows)
+                model.packs_roll = packs_takeoff.RollOnPacks(
+                    *found, np.zeros((size, 1)), model.release[2])
+            else:
+                model.packs_roll = packs_takeoff.roll_on_packs(model, self._packs, rows)
+            model.packs_airborne, model.packs_beyond, model.packs_air = \
+                packs_takeoff.airborne_on_packs(model, self._packs, rows, model.packs_roll,
+                                                height)
+            found = model.packs_roll.as_roll()
+        elif catapult:
+            model.release = model.release_run()
+        if catapult:  # one that does not accelerate to the arc's speed never gets there
+            found = (*found[:3], np.where(model.release[3], found[3], 0.0))
+        if self._packs is None:
+            return found
+        within = model.launch_within_packs(found, height, catapult, self._packs, battery)
+        return found[0], found[1], found[2], np.where(within, found[3], 0.0)
 
     def _refuse_implausible(self, out: dict[str, Array], battery: dict[str, Array],
                             size: int) -> None:

@@ -297,9 +297,9 @@ class ProbabilisticVerdict:
         }
 
 
-NOT_SAMPLED = ("not sampled: this mission is flown for the nominal case only (an airspeed it "
-               "solves, a catapult launch, a take-off on sagging packs, or battery or "
-               "propulsion keys drawn; analysis.mission_samples), so its P(met) is not shown "
+NOT_SAMPLED = ("not sampled: this mission is flown for the nominal case only (its nominal plan "
+               "is not attainable, or a drawn key it does not fly; analysis.mission_samples), "
+               "so its P(met) is not shown "
                "and it does not pass the probabilistic test")
 
 
