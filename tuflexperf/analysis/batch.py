@@ -135,6 +135,8 @@ class BatchResult:
     # first) and ``disputed`` the rows met on some reading but not on another (UNPROVEN)
     reading_values: dict[str, dict[str, Array]] = field(default_factory=dict)
     disputed: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    # the airspeed a requirement is flown at, where it has one [m/s] (the endurance's cruise)
+    airspeeds: dict[str, Array] = field(default_factory=dict)
 
     def met(self, name: str) -> NDArray[np.bool_]:
         """Met per sample, by the verdict rule of :mod:`tuflexperf.analysis.verdict`."""
@@ -295,6 +297,7 @@ class BatchEvaluator:
             return self.launch(model, size, height, battery)
 
         beyond: dict[str, NDArray[np.bool_]] = {}
+        airspeeds: dict[str, Array] = {}
         propulsion = self.case.propulsion
 
         def flown_span(*speeds: Array, from_rest: bool) -> tuple[Array, Array]:
@@ -355,6 +358,7 @@ class BatchEvaluator:
                 out[requirement.name], speed, climb = model.flight_endurance_min(
                     self._endurance, throttle, launch, battery
                 )
+                airspeeds[requirement.name] = np.asarray(speed, dtype=float).reshape(-1)
                 # the roll and the climb fly the thrust model too, as the single case's
                 # mission (a catapult's release is no node of it): a roll from rest below
                 # the tested range was not said
@@ -370,6 +374,7 @@ class BatchEvaluator:
             refused=self.rows_refused(values, size, coefficients),
             without_envelope=unflown,
             extrapolated=beyond,
+            airspeeds=airspeeds,
         )
 
     def launch(self, model: BatchModel, size: int, height: Any, battery: dict[str, Array]
