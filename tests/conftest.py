@@ -22,6 +22,10 @@ def _a_new_run(monkeypatch: pytest.MonkeyPatch) -> None:
 
 ROOT = Path(__file__).resolve().parent.parent
 SHIPPED_CASE = ROOT / "requirements" / "tuflex.yaml"
+PASSING = ("--set", "requirements.endurance.min_flight_time_min=12")
+"""The shipped case is UNPROVEN (exit 1): its endurance is 18.5 min on the power model and
+14.0 min on the discharge runs' measured power, against 15. With a 12 min requirement every
+requirement passes on every reading: a test that needs a passing check (exit 0) adds this."""
 
 
 class Ran(NamedTuple):

@@ -10,7 +10,7 @@ import shutil
 import yaml
 from typer.testing import CliRunner
 
-from tests.conftest import ROOT
+from tests.conftest import PASSING, ROOT
 from tuflexperf.cli import app
 
 runner = CliRunner()
@@ -62,7 +62,14 @@ def test_sweep_exits_0_unless_fail_on_fail_and_a_point_fails():
     verdicts = [cell["passed"] for row in rows for cell in row.values() if isinstance(cell, dict)]
     assert verdicts and not all(verdicts)  # a point FAILs
     assert plain.exit_code == 0 and strict.exit_code == 1
-    assert run("sweep", "--vary", "aircraft.mass_kg=24:26:2", "--fail-on-fail").exit_code == 0
+    # every point of the shipped case leaves the endurance UNPROVEN (the discharge runs'
+    # measured power): --fail-on-fail says so; with a limit both readings meet, 0
+    unproven = run("sweep", "--vary", "aircraft.mass_kg=24:26:2", "--fail-on-fail", "--json")
+    assert unproven.exit_code == 1
+    assert {row["flight_endurance"]["verdict"] for row in json.loads(unproven.stdout)["rows"]} \
+        == {"UNPROVEN"}
+    assert run("sweep", "--vary", "aircraft.mass_kg=24:26:2", "--fail-on-fail",
+               *PASSING).exit_code == 0
     assert re.search(r"Exit code: 0", run("sweep", "--help").stdout)
 
 

@@ -9,6 +9,7 @@ import sys
 
 import pytest
 
+from tests.conftest import PASSING
 from tuflexperf.entry import exit_status
 
 
@@ -26,7 +27,9 @@ def test_exit_status_is_pythons(capsys):
 
 @pytest.mark.parametrize(
     ("argv", "status"),
-    [(["check", "--json"], 0), (["check", "--json", "--set", "aircraft.mass_kg=60"], 1)],
+    # the shipped case is UNPROVEN (exit 1, like a FAIL); PASSING makes it pass
+    [(["check", "--json", *PASSING], 0), (["check", "--json"], 1),
+     (["check", "--json", "--set", "aircraft.mass_kg=60"], 1)],
 )
 def test_a_command_ends_with_its_status_and_whole_output(argv, status):
     done = subprocess.run(_tool(*argv), capture_output=True,
@@ -92,7 +95,7 @@ def test_pydantic_plugins_stay_out_unless_the_user_asks(tmp_path, setting, loade
     env["PYTHONPATH"] = os.pathsep.join([str(tmp_path), *sys.path[1:]])
     if setting is not None:
         env["PYDANTIC_DISABLE_PLUGINS"] = setting
-    done = subprocess.run(_tool("check", "--json"),
+    done = subprocess.run(_tool("check", "--json", *PASSING),
                           capture_output=True, text=True, env=env)
     assert done.returncode == 0, done.stderr
     assert marker.exists() is loaded
@@ -103,7 +106,7 @@ def test_a_reader_gone_leaves_the_verdict_its_exit_status(mass, status):
     """`check | true`: the reader closes the pipe before the first line. The write's
     BrokenPipeError ended a failing check with 0 (a PASS under `set -o pipefail`; outside
     audit); now the command runs on, its lines dropped, and exits with its own verdict."""
-    proc = subprocess.Popen(_tool("check", "--set", f"aircraft.mass_kg={mass}"),
+    proc = subprocess.Popen(_tool("check", "--set", f"aircraft.mass_kg={mass}", *PASSING),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     proc.stdout.close()  # before the ~0.3 s of imports are over: every write hits EPIPE
     _, err = proc.communicate(timeout=120)
@@ -121,8 +124,9 @@ def test_a_closed_stream_is_no_traceback():
         return subprocess.run(_tool(*argv), capture_output=True, timeout=120,
                               preexec_fn=lambda: os.close(fd))
 
-    assert run(["check"], 1).returncode == 0
+    assert run(["check", *PASSING], 1).returncode == 0
     assert run(["check", "--set", "aircraft.mass_kg=29"], 1).returncode == 1
+    assert run(["check"], 1).returncode == 1  # the shipped case is UNPROVEN
     refused = run(["check", "nonexistent.yaml"], 2)
     assert refused.returncode == 2 and refused.stdout == b""
     assert run(["check", "nonexistent.yaml"], 1).returncode == 2

@@ -141,9 +141,10 @@ def _notes(w: Path) -> None:
 CASES = [
     Case("misspelt requirement key", ("check", "requirements/tuflex.yaml"), 2,
          "did you mean 'max_ground_roll_m'", _typo, process=True),  # as the console runs it
-    Case("exponent notation is a number", ("check", "--case", "requirements/tuflex.yaml"), 0,
+    # the shipped case is UNPROVEN (its endurance disputed by the discharge runs): exit 1
+    Case("exponent notation is a number", ("check", "--case", "requirements/tuflex.yaml"), 1,
          "overall", _exponent),
-    Case("check --case", ("check", "--case", "requirements/tuflex.yaml"), 0, "overall"),
+    Case("check --case", ("check", "--case", "requirements/tuflex.yaml"), 1, "overall"),
     Case("report over the user's folder", ("report", "--case", "requirements/tuflex.yaml",
                                            "--out", "requirements"), 2, "--out", _notes),
     Case("fit over its own manifest", ("fit", "data/tuflex/campaign/campaign.yaml", "--out",

@@ -130,7 +130,9 @@ def test_json_lists_the_files_written_and_nothing_else_is_left(shipped):
     assert sorted(data["files"]) == sorted(str(p) for p in out.iterdir() if p.name != MARKER)
     assert read_marker(out) == "report"  # the mark that lets a later report replace it
     assert siblings(parent) == {"review"}  # no temporary or old directory beside it
-    assert data["passed"] is True  # the shipped case meets its requirements
+    # the shipped endurance is disputed (18.5 min on the power model, 14.0 on the discharge
+    # runs' measured power, against 15): the report says UNPROVEN, as check does
+    assert data["verdict"] == "UNPROVEN" and data["passed"] is False
 
 
 def test_last_page_names_every_input_by_sha256_first_page_version_and_date(shipped):

@@ -18,7 +18,8 @@ def _groups(text: str) -> dict[str, list[list[str]]]:
     groups: dict[str, list[list[str]]] = {}
     current = None
     for line in text.splitlines():
-        title = re.fullmatch(r"(\w+) \[.*\]", line)
+        # the title, then the requirement's verdict as check gives it
+        title = re.fullmatch(r"(\w+) \[[^\]]*\](  (PASS|FAIL|UNPROVEN) \(.*\))?", line)
         if title:
             current = title.group(1)
             groups[current] = []

@@ -928,16 +928,24 @@ def test_check_holds_a_solved_mission_to_the_time_its_file_plans(
         written = 1000.0 * km / float(true_airspeed_m_s(26.0, isa_density_kg_m3(100.0))) / 60.0
         assert flown["solved"]["written_distance_km"] == km
     assert solved["limit"] == pytest.approx(written, rel=1e-12)
-    assert solved["value"] == pytest.approx(flown["solved"]["time_min"], rel=1e-12)
+    # EDF2 fails in it, and its windmilling coefficient and thrust model disagree: the value
+    # shown is the worse reading's, the first reading the mission as flown
+    nominal = solved["readings"][0]["value"] if "readings" in solved else solved["value"]
+    assert nominal == pytest.approx(flown["solved"]["time_min"], rel=1e-12)
     assert solved["passed"] is fits and json.loads(out.stdout)["passed"] is fits
     assert out.exit_code == (0 if fits else 1)
     # the mission command gives the same verdict, and the file as written agrees with both
     assert flown["passed"] is fits
+    by_mission = {r["name"]: r for r in flown["results"]}["mission_solved_time"]
+    assert by_mission["verdict"] == solved["verdict"]
+    assert by_mission["value"] == (None if solved["value"] is None
+                                   else pytest.approx(solved["value"], rel=1e-12))
     plain = json.loads(runner.invoke(app, ["check", "--json", "--case", str(plain_case)]).stdout)
     assert plain["passed"] is fits
     text = runner.invoke(app, ["mission", "--case", str(solved_case)]).stdout
     assert f"solve_for: {flown['solved']['time_min']:.2f} min" in text
-    assert text.rstrip().endswith("PASS" if fits else "FAIL")
+    line = next(x for x in text.splitlines() if x.startswith("  solve_for:"))
+    assert line.endswith("PASS" if fits else "FAIL")  # the readings' lines follow it
 
 
 @pytest.mark.parametrize("loiter_min", [100, 21])

@@ -577,7 +577,8 @@ def fly_airborne(case: Case, height: float, packs: TakeoffPacks | None = None,
         radius, gradient, height, straight))
     reason = "" if math.isfinite(arc_m + climb_m) else why or (
         f"the {height:g} m obstacle is never cleared: the arc tops out at {arc_top_m:.1f} m "
-        f"and the full-throttle climb gradient at {v_tr:.1f} m/s is {reported:.3f} (no climb)"
+        f"and the full-throttle climb gradient sin(gamma) at {v_tr:.1f} m/s is {reported:.3f} "
+        "(no climb)"
     )
     n = aircraft.takeoff.transition_load_factor
     if transition_beyond_cl_max(n):

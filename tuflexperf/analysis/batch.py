@@ -130,6 +130,11 @@ class BatchResult:
     # rows whose answer flies the thrust model outside its tested airspeeds, as the single
     # case's `extrapolated` (SPEC: extrapolation is said; a sweep said nothing)
     extrapolated: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    # where readings of disputed evidence bear on a requirement (analysis.batch_readings):
+    # ``values`` are then the worse reading's, ``reading_values`` each reading's ("nominal"
+    # first) and ``disputed`` the rows met on some reading but not on another (UNPROVEN)
+    reading_values: dict[str, dict[str, Array]] = field(default_factory=dict)
+    disputed: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
     # the airspeed a requirement is flown at, where it has one [m/s] (the endurance's cruise)
     airspeeds: dict[str, Array] = field(default_factory=dict)
 
@@ -154,11 +159,14 @@ class BatchEvaluator:
         The nominal case; its keys not in a batch keep their nominal values.
     """
 
-    def __init__(self, case: Case) -> None:
+    def __init__(self, case: Case, blocks: frozenset[str] | None = None) -> None:
         from tuflexperf.analysis.plausibility import implausible
 
         self.case = case
-        self.requirements = present_requirements(case)
+        # ``blocks``: only these requirement blocks (a reading's case evaluates the ones it
+        # bears on; analysis.batch_readings)
+        self.requirements = [r for r in present_requirements(case)
+                             if blocks is None or r.block in blocks]
         self.implausible = implausible(case)
         self._side: Any = None
         if case.battery_path is not None:
@@ -169,7 +177,7 @@ class BatchEvaluator:
 
             refuse_one_engine(case)
         self._endurance: Any = None
-        if case.requirements.endurance is not None:
+        if any(r.block == "endurance" for r in self.requirements):
             from tuflexperf.analysis.batch_endurance import battery_side
 
             self._endurance = battery_side(case)

@@ -364,6 +364,11 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     ok &= np.all(_within_rating(model, launch, own, start, span, seconds, packs, capacity),
                  axis=0)
     cruise_s = np.min(seconds, axis=0)
+    # the first fan to end ends at its packs' cut-off before the landing reserve: no reserve
+    # is kept at the cruise's power, the endurance is not attainable (as endurance_verdict)
+    first = np.argmin(seconds, axis=0)
+    columns = np.arange(seconds.shape[1])
+    ok &= ~(np.broadcast_to(q_cut < reserve_ah, seconds.shape)[first, columns])
     if m.propulsion.reference_voltage_v is not None:
         # thrust and power follow the packs' loaded voltage: flown as the single case's
         # mission flies them (the constant-power cruise above only sizes the steps)

@@ -456,7 +456,11 @@ class SaggingFlight:
             return np.where(inside, np.where(np.abs(f_low) <= np.abs(f_high), low, high),
                             np.inf)
 
-        first = np.minimum(illinois(0), illinois(1))
+        to_reserve, to_cut = illinois(0), illinois(1)
+        # the packs' cut-off before the landing reserve: no reserve is kept at the cruise's
+        # power, and the endurance is not attainable (issue 43; as endurance_verdict)
+        self.cut_first = rows_ended & (to_cut < to_reserve)
+        first = np.minimum(to_reserve, to_cut)
         return np.where(rows_ended & np.isfinite(first), first, np.nan)
 
     # -- the packs' rating --------------------------------------------------------------------
@@ -530,6 +534,6 @@ def flight_on_sagging_packs(m: Any, model: Any, rows: PackRows, throttle: Array,
         ok &= held & np.all(start < rows.reserve_charge_ah, axis=0)
     cruise_s, ok = flight.cruise(throttle, start, nodes.time[-1], speed,
                                  np.where(np.isfinite(estimate_s), estimate_s, 600.0), ok, nodes)
-    ok = flight.within_rating(nodes, ok)
+    ok = flight.within_rating(nodes, ok) & ~getattr(flight, "cut_first", False)
     minutes = (cruise_s + climb_s) / 60.0
     return np.where(ok & np.isfinite(minutes), minutes, np.nan)

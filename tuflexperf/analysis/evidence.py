@@ -6,11 +6,15 @@ that the registry asks one place (:func:`case_readings`).
 
 from __future__ import annotations
 
+from tuflexperf.analysis.extrapolation_reading import extrapolation_readings
+from tuflexperf.analysis.flown_reading import flown_power_readings
 from tuflexperf.analysis.power_reading import measured_power_readings
 from tuflexperf.analysis.readings import Provider, Reading
+from tuflexperf.analysis.windmilling_reading import windmilling_readings
 from tuflexperf.io.case import Case
 
-PROVIDERS: tuple[Provider, ...] = (measured_power_readings,)
+PROVIDERS: tuple[Provider, ...] = (measured_power_readings, flown_power_readings,
+                                   windmilling_readings, extrapolation_readings)
 
 
 def case_readings(case: Case, blocks: frozenset[str] | None = None) -> tuple[Reading, ...]:

@@ -33,6 +33,7 @@ from tuflexperf.models.thrust import (
     Propulsion,
     density_ratio,
     engine_thrust_n,
+    extrapolation_offset_n,
     least_throttle_reaching,
     outside_tested_range,
     poly22,
@@ -171,6 +172,8 @@ class LevelFlightRows:
                 basis_a = 2.0 * (f1 - 2.0 * fh + f0)
                 a_j, b_j, c_j = (scale * (rows @ basis)
                                  for basis in (basis_a, f1 - f0 - basis_a, f0))
+                # the offset beyond the tested range, as engine_thrust_n adds it
+                c_j = c_j + scale * extrapolation_offset_n(engine, speed)
             else:
                 t0, th, t1 = (engine_thrust_n(engine, x, speed, scale) for x in (0.0, 0.5, 1.0))
                 a_j = 2.0 * (t1 - 2.0 * th + t0)

@@ -37,7 +37,8 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.analysis.batch import present_requirements
-from tuflexperf.analysis.uncertainty import evaluator_for
+from tuflexperf.analysis.batch_readings import readings_evaluator
+from tuflexperf.analysis.evaluators import evaluator_for
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import Case
 from tuflexperf.io.dotted import numeric_keys
@@ -136,7 +137,9 @@ def limit_values(case: Case, parameters: dict[str, float] | None = None
     """(requirement, parameter) -> (limit value, how it binds, search range); see module doc."""
     nominal = parameters or margin_parameters(case)
     keys = list(nominal)
-    evaluator = evaluator_for(case)  # one per case: its candidates once
+    # one per case (its candidates once), judged on every reading of disputed evidence: a
+    # limit value is where the requirement just holds on the worse reading
+    evaluator = readings_evaluator(case)
     ranges = {k: parameter_range(k, nominal[k]) for k in keys}
     with np.errstate(over="ignore", invalid="ignore"):  # 2 x 1e308 is inf: not attainable
         grids = [np.unique(np.concatenate([np.linspace(*ranges[k], _SCAN_POINTS),
@@ -320,7 +323,7 @@ def tornado(case: Case, requirement: str, relative_change: float = 0.1) -> Torna
     Tornado
         For the report's tornado figure (``report/`` draws it; nothing is computed there).
     """
-    evaluator = evaluator_for(case)  # one per case: its candidates once
+    evaluator = readings_evaluator(case)  # the worse reading's values, as limit_values
     nominal = margin_parameters(case)
     offsets = {"atmosphere.temperature_offset_k": 10.0, "atmosphere.altitude_m": 500.0}
     keys = [k for k in nominal if nominal[k] != 0.0 or k in offsets]

@@ -305,7 +305,22 @@ def solve_mission(case: Case, mission: MissionFile,
             raise
         return flown
     flown = model.solve_for() if mission.solve_for is not None else model.fly()
-    return _said_if_airborne(flown)
+    return _with_launch_energy(case, _said_if_airborne(flown))
+
+
+def _with_launch_energy(case: Case, flown: MissionResult) -> MissionResult:
+    """The mission's energy with a catapult's kinetic energy at release, ``m V^2 / 2`` at the
+    field's density (issue 43: the flight's energy left out what the catapult gave it)."""
+    import dataclasses
+
+    from tuflexperf.models.aircraft import true_airspeed_m_s
+
+    aircraft = case.aircraft
+    if aircraft.launch != "catapult" or aircraft.launch_speed_m_s is None:
+        return flown
+    release = float(true_airspeed_m_s(aircraft.launch_speed_m_s, case.density_kg_m3))
+    kinetic_wh = 0.5 * aircraft.mass_kg * release * release / 3600.0
+    return dataclasses.replace(flown, launch_kinetic_energy_wh=kinetic_wh)
 
 
 def _flown_up_to(case: Case, mission: MissionFile, min_landing_fraction: float | None,

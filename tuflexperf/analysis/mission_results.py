@@ -79,6 +79,9 @@ class MissionResult:
     ended_at_s: float | None = None
     # the packs' cut-off voltage [V] flown to (a --set of it, not the battery file's)
     cutoff_voltage_v: float | None = None
+    # a catapult's m V^2 / 2 at release [Wh]: energy the flight starts with that no pack gave
+    # (a runway take-off draws its own from the packs, in the take-off segment's energy)
+    launch_kinetic_energy_wh: float = 0.0
 
     @property
     def passed(self) -> bool:
@@ -97,6 +100,10 @@ class MissionResult:
             "landing_charge_fraction": self.landing_charge_fraction,
             "min_landing_charge_fraction": self.min_landing_charge_fraction,
             "total_time_min": float(self.history["time_s"][-1]) / 60.0,
+            "packs_energy_wh": float(sum(sum(s.energy_wh) for s in self.segments)),
+            "launch_kinetic_energy_wh": self.launch_kinetic_energy_wh,
+            "energy_wh": float(sum(sum(s.energy_wh) for s in self.segments))
+            + self.launch_kinetic_energy_wh,
             "engines": list(self.engines),
             "segments": [s.to_dict() for s in self.segments],
             "warnings": list(self.warnings),

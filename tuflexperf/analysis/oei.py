@@ -137,12 +137,24 @@ WINDMILLING_SHORTFALL = 2.0
 """A coefficient's drag under 1/this of the model's own throttle-0 drag is said."""
 
 
-def windmilling_notes(propulsion: Propulsion, density_kg_m3: float) -> list[str]:
-    """Where an engine's ``windmilling_drag_coefficient`` drags far less than its own thrust
-    model does at throttle 0 (its measured idle, ``min(T(0, V), 0)``) at the highest tested
-    airspeed: the dead engine takes the coefficient (SPEC 3), so the OEI figures are the
-    coefficient's, and the data disagree (the shipped 0.2 gives 0.48 N at 30 m/s where the
-    model's idle drags 3.3 N; outside audit).
+@dataclass(frozen=True)
+class WindmillingDisagreement:
+    """One engine whose windmilling coefficient drags far less than its own thrust model
+    does at throttle 0, at the top tested airspeed ``airspeed_m_s`` [m/s] (drags in N)."""
+
+    engine: str
+    coefficient: float
+    airspeed_m_s: float
+    by_coefficient_n: float
+    by_model_n: float
+
+
+def windmilling_disagreements(propulsion: Propulsion,
+                              density_kg_m3: float) -> list[WindmillingDisagreement]:
+    """Where an engine's ``windmilling_drag_coefficient`` drags less than
+    1/:data:`WINDMILLING_SHORTFALL` of its own thrust model at throttle 0 (its measured
+    idle, ``min(T(0, V), 0)``) at the highest tested airspeed: the one rule of the OEI note
+    and of the windmilling reading (:mod:`tuflexperf.analysis.windmilling_reading`).
 
     References
     ----------
@@ -152,7 +164,7 @@ def windmilling_notes(propulsion: Propulsion, density_kg_m3: float) -> list[str]
     if propulsion.fan_area_m2 is None or top <= 0.0:
         return []
     scale = density_ratio(propulsion, density_kg_m3)
-    notes = []
+    found = []
     for engine in propulsion.engines:
         if engine.windmilling_drag_coefficient is None:
             continue
@@ -160,11 +172,22 @@ def windmilling_notes(propulsion: Propulsion, density_kg_m3: float) -> list[str]
                                                      propulsion.fan_area_m2))
         by_model = -min(float(engine_thrust_n(engine, 0.0, top, scale)), 0.0)
         if by_model > WINDMILLING_SHORTFALL * by_coefficient:
-            notes.append(
-                f"{engine.name}'s windmilling_drag_coefficient "
-                f"{engine.windmilling_drag_coefficient:g} drags {by_coefficient:.2f} N at "
-                f"{top:g} m/s, its own thrust model at throttle 0 {by_model:.2f} N there "
-                f"({by_model / max(by_coefficient, 1e-12):.1f}x): a dead {engine.name} is "
-                "flown with the coefficient's drag (the propulsion file's rule); the data disagree"
-            )
-    return notes
+            found.append(WindmillingDisagreement(engine.name,
+                                                 engine.windmilling_drag_coefficient, top,
+                                                 by_coefficient, by_model))
+    return found
+
+
+def windmilling_notes(propulsion: Propulsion, density_kg_m3: float) -> list[str]:
+    """A note per :func:`windmilling_disagreements`: the dead engine takes the coefficient
+    (SPEC 3), so the OEI figures are the coefficient's, and the data disagree (the shipped
+    0.2 gives 0.48 N at 30 m/s where the model's idle drags 3.3 N; outside audit); the
+    registry judges OEI on the model's drag too (the windmilling reading)."""
+    return [
+        f"{d.engine}'s windmilling_drag_coefficient {d.coefficient:g} drags "
+        f"{d.by_coefficient_n:.2f} N at {d.airspeed_m_s:g} m/s, its own thrust model at "
+        f"throttle 0 {d.by_model_n:.2f} N there "
+        f"({d.by_model_n / max(d.by_coefficient_n, 1e-12):.1f}x): a dead {d.engine} is flown "
+        "with the coefficient's drag (the propulsion file's rule); the data disagree"
+        for d in windmilling_disagreements(propulsion, density_kg_m3)
+    ]

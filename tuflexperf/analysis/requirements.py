@@ -1,4 +1,9 @@
-"""Requirement verdicts: each requirement block in the case -> value, limit, margin, PASS/FAIL.
+"""Requirement verdicts: each requirement block in the case -> value, limit, margin, and
+PASS, FAIL or UNPROVEN.
+
+Each requirement is judged on the nominal case and on every reading of disputed evidence
+that bears on its block (:mod:`tuflexperf.analysis.readings`): met on all PASS, on none
+FAIL, on some UNPROVEN (:func:`tuflexperf.analysis.verdict.on_readings`).
 
 Margins are signed so that positive means met: ``limit - value`` for upper
 limits (ground roll, throttle), ``value - limit`` for lower limits (endurance).
@@ -6,15 +11,20 @@ limits (ground roll, throttle), ``value - limit`` for lower limits (endurance).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from tuflexperf.analysis.verdict import (
+    PASS,
     Verdict,
     mission_verdicts,
+    on_readings,
+    overall_verdict,
     requirement_met,
+    same_value,
 )
 from tuflexperf.errors import NotAttainable
 from tuflexperf.io.case import Case
@@ -181,7 +191,24 @@ def _endurance(study: Study) -> Verdict:
 
 
 def endurance_verdict(requirement: Any, result: Any) -> Verdict:
-    """The endurance verdict of a solved endurance at the requirement's throttle."""
+    """The endurance verdict of a solved endurance at the requirement's throttle.
+
+    A cruise that ends at the packs' cut-off before the landing reserve is no endurance
+    with a reserve: the ESC cuts the fans in cruise with the reserve's charge still in
+    packs that cannot give the cruise's power, so nothing is kept in hand to land on. It is
+    not attainable (FAIL), with the time to the cut-off in the reason (issue 43: it passed
+    with a note).
+    """
+    if result.cruise_ends_at == "cut-off":
+        return Verdict(
+            "flight_endurance", None, requirement.min_flight_time_min, "min", "min",
+            f"at throttle {requirement.throttle:g} the cruise ends at the packs' cut-off after "
+            f"{result.flight_endurance_min:.1f} min of flight, before the landing reserve "
+            f"({100 * result.landing_reserve_fraction:g} %): the ESC cuts the fans in cruise "
+            "and no reserve is kept to land on",
+            {"warnings": list(result.warnings),
+             "time_to_cutoff_min": result.flight_endurance_min},
+        )
     return Verdict(
         "flight_endurance",
         result.flight_endurance_min,
@@ -219,12 +246,66 @@ def study_verdicts(study: Study) -> list[Verdict]:
 def _judge(study: Study) -> list[Verdict]:
     requirements = study.case.requirements
     verdicts: list[Verdict] = []
-    for name, check in CHECKS.items():
+    for name in CHECKS:
         if getattr(requirements, name) is not None:
-            result = check(study)
+            # on every reading, then the one plausibility rule: data physics forbids FAIL
             verdicts.extend(implausible_verdict(v, study.plausibility(), name)
-                            for v in (result if isinstance(result, list) else [result]))
+                            for v in block_verdicts(study, name))
     return verdicts
+
+
+def _block(study: Study, block: str) -> list[Verdict]:
+    def judge() -> list[Verdict]:
+        result = CHECKS[block](study)
+        return result if isinstance(result, list) else [result]
+
+    # a command's own verdicts of the result it solved stand for the nominal (judged_block)
+    return study.once(("nominal", block), judge)
+
+
+def block_verdicts(study: Study, block: str) -> list[Verdict]:
+    """The verdicts of one requirement block, judged on the nominal case and on every
+    reading whose ``affects`` holds the block (each reading's study built only then).
+
+    A reading whose value equals the nominal's is left out of the verdict: the disputed
+    input never entered it (thrust inside the tested airspeeds, a flight with no dead
+    engine).
+    """
+    nominal = _block(study, block)
+    readings = [r for r in study.readings() if block in r.affects]
+    if not readings:
+        return nominal
+    others = [(r, {v.name: v for v in _block(study.on_reading(r), block)}) for r in readings]
+    out = []
+    for verdict in nominal:
+        paired = []
+        for reading, theirs in others:
+            other = theirs.get(verdict.name)
+            if other is None:  # the reading's flight ended sooner (a mission not flown)
+                other = Verdict(verdict.name, None, verdict.limit, verdict.unit, verdict.kind)
+            if not same_value(other.value, verdict.value):
+                paired.append((reading, other))
+        out.append(on_readings(verdict, paired))
+    return out
+
+
+def judged_block(case: Case, block: str,
+                 nominal: Callable[[], list[Verdict]] | None = None) -> list[Verdict]:
+    """One block's verdicts as ``check`` makes them (a fresh :class:`Study`): a single
+    analysis' command (``trim``, ``oei``, ``takeoff``, ``endurance``) gives the same verdict.
+    ``nominal`` the command's own verdicts of the result it solved (the study memoises
+    nothing of it); the readings are solved here."""
+    from tuflexperf.analysis.study import Study
+
+    study = Study(case)
+    if nominal is not None:
+        study.once(("nominal", block), nominal)
+    return block_verdicts(study, block)
+
+
+def case_verdict(verdicts: list[Verdict]) -> str:
+    """The case's verdict: any FAIL fails, else any UNPROVEN is UNPROVEN, else PASS."""
+    return overall_verdict([v.verdict for v in verdicts])
 
 
 # --- plausibility (issue 43 item 3): no verdict on data physics forbids passes ---------------
@@ -272,17 +353,33 @@ class ProbabilisticVerdict:
     probability_ci: tuple[float, float]
     quantiles: tuple[float | None, float | None, float | None]
     required_probability: float
+    # where readings of disputed evidence bear on it: (key, label, P(met), passed) on each,
+    # the nominal first; the counts above are then the worse reading's (met on every one)
+    readings: tuple[tuple[str, str, float, bool], ...] = ()
 
     @property
     def probability(self) -> float:
         return self.met / self.samples
 
     @property
+    def verdict(self) -> str:
+        """PASS when P(met) is shown on every reading, FAIL on none, else UNPROVEN."""
+        if not self.readings:
+            return PASS if self.probability_ci[0] >= self.required_probability else "FAIL"
+        shown = [r[3] for r in self.readings]
+        return PASS if all(shown) else "FAIL" if not any(shown) else "UNPROVEN"
+
+    @property
     def passed(self) -> bool:
-        return self.probability_ci[0] >= self.required_probability
+        return self.verdict == PASS
 
     def to_dict(self) -> dict[str, Any]:
         p05, p50, p95 = self.quantiles
+        extra: dict[str, Any] = {}
+        if self.readings:
+            extra["probability_readings"] = [
+                {"key": k, "label": label, "probability": p, "passed": ok}
+                for k, label, p, ok in self.readings]
         return {
             "probability": self.probability,
             "probability_ci": list(self.probability_ci),
@@ -293,7 +390,9 @@ class ProbabilisticVerdict:
             "samples_met": self.met,
             "samples_not_attainable": self.not_attainable,
             "required_probability": self.required_probability,
+            "probability_verdict": self.verdict,
             "probability_passed": self.passed,
+            **extra,
         }
 
 
@@ -315,9 +414,11 @@ def sampled_result(verdict: Verdict, probabilistic: ProbabilisticVerdict | None)
     """
     if probabilistic is None:
         return {**verdict.to_dict(), "probability": None, "probability_note": NOT_SAMPLED,
-                "nominal_passed": verdict.passed, "passed": False}
-    return {**verdict.to_dict(), **probabilistic.to_dict(), "nominal_passed": verdict.passed,
-            "passed": verdict.passed and probabilistic.passed}
+                "nominal_verdict": verdict.verdict, "nominal_passed": verdict.passed,
+                "verdict": "FAIL", "passed": False}
+    both = overall_verdict([verdict.verdict, probabilistic.verdict])
+    return {**verdict.to_dict(), **probabilistic.to_dict(), "nominal_verdict": verdict.verdict,
+            "nominal_passed": verdict.passed, "verdict": both, "passed": both == PASS}
 
 
 def probabilistic_verdicts(samples: Any) -> dict[str, ProbabilisticVerdict]:
@@ -326,10 +427,22 @@ def probabilistic_verdicts(samples: Any) -> dict[str, ProbabilisticVerdict]:
     from tuflexperf.analysis.uncertainty import quantiles
 
     out: dict[str, ProbabilisticVerdict] = {}
+    required = samples.plan.required_probability
     for name, values in samples.values.items():
         kind = samples.kinds[name]
         met = int(np.count_nonzero(requirement_met(values, samples.limits[name], kind)))
         n = int(values.size)
+        # P(met) shown on each reading of disputed evidence (the nominal first)
+        readings = []
+        flown = [k for k, by_name in samples.reading_values.items() if name in by_name]
+        labels = samples.reading_labels
+        nominal = " and ".join(dict.fromkeys(labels[k][1] for k in flown if k in labels))
+        for key in flown:
+            on = int(np.count_nonzero(requirement_met(samples.reading_values[key][name],
+                                                      samples.limits[name], kind)))
+            label = nominal if key == "nominal" else labels.get(key, (key, ""))[0]
+            readings.append((key, label, on / n,
+                             clopper_pearson(on, n, CONFIDENCE)[0] >= required))
         out[name] = ProbabilisticVerdict(
             name=name,
             samples=n,
@@ -337,6 +450,7 @@ def probabilistic_verdicts(samples: Any) -> dict[str, ProbabilisticVerdict]:
             not_attainable=int(np.count_nonzero(~np.isfinite(values))),
             probability_ci=clopper_pearson(met, n, CONFIDENCE),
             quantiles=tuple(quantiles(values, kind)),  # type: ignore[arg-type]
-            required_probability=samples.plan.required_probability,
+            required_probability=required,
+            readings=tuple(readings),
         )
     return out

@@ -28,6 +28,7 @@ if TYPE_CHECKING:  # the analyses are imported when first asked for: `check` sta
     from tuflexperf.analysis.oei import OeiResult
     from tuflexperf.analysis.performance import PerformanceResult
     from tuflexperf.analysis.plausibility import Implausibility
+    from tuflexperf.analysis.readings import Reading
     from tuflexperf.analysis.review_views import FlightEnvelope, MassSweep
     from tuflexperf.analysis.takeoff import TakeoffResult
     from tuflexperf.analysis.trim import TrimResult
@@ -68,6 +69,18 @@ class Study:
         if not ok:
             raise value
         return value  # type: ignore[no-any-return]
+
+    # --- the readings of disputed evidence ------------------------------------------------
+    def readings(self) -> tuple[Reading, ...]:
+        """Every reading of the case's disputed evidence (:func:`case_readings`), made once."""
+        from tuflexperf.analysis.evidence import case_readings
+
+        return self.once("readings", lambda: case_readings(self.case))
+
+    def on_reading(self, reading: Reading) -> Study:
+        """The study of ``reading``'s case, made when first asked for (lazily: only a
+        requirement the reading bears on asks)."""
+        return self.once(("reading", reading.key), lambda: Study(reading.case))
 
     # --- the analyses ---------------------------------------------------------------------
     def plausibility(self) -> tuple[Implausibility, ...]:

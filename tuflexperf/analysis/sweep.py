@@ -77,6 +77,14 @@ class SweepResult:
     units: dict[str, str]
     # rows whose answer flies the thrust model beyond its tested airspeeds (BatchResult's)
     extrapolated: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    # rows met on one reading of disputed evidence but not on another (analysis.batch_readings)
+    disputed: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+
+    def verdicts(self, name: str) -> NDArray[np.str_]:
+        """PASS, FAIL or UNPROVEN per grid point, as ``check`` judges each point: met on
+        every reading PASS, on some UNPROVEN, on none FAIL."""
+        disputed = self.disputed.get(name, np.zeros(self.met[name].shape, dtype=bool))
+        return np.where(self.met[name], "PASS", np.where(disputed, "UNPROVEN", "FAIL"))
 
     def extrapolation_notes(self, tested_m_s: tuple[float, float]) -> list[str]:
         """One line per requirement that extrapolates the thrust model at some grid point."""
@@ -92,6 +100,7 @@ class SweepResult:
 
     def to_dict(self) -> dict[str, Any]:
         rows = []
+        verdicts = {name: self.verdicts(name) for name in self.values}
         for i in range(self.points.shape[0]):
             row: dict[str, Any] = {k: float(self.points[i, j])
                                    for j, k in enumerate(self.parameters)}
@@ -99,6 +108,7 @@ class SweepResult:
                 value = float(self.values[name][i])
                 row[name] = {"value": value if np.isfinite(value) else None,
                              "limit": float(self.limits[name][i]),
+                             "verdict": str(verdicts[name][i]),
                              "passed": bool(self.met[name][i])}
                 if name in self.extrapolated:
                     row[name]["extrapolated"] = bool(self.extrapolated[name][i])
@@ -108,31 +118,34 @@ class SweepResult:
     def to_csv(self) -> str:
         header = list(self.parameters)
         for name in self.values:
-            header += [f"{name}_value", f"{name}_limit", f"{name}_passed"]
+            header += [f"{name}_value", f"{name}_limit", f"{name}_passed", f"{name}_verdict"]
         lines = [",".join(header)]
+        verdicts = {name: self.verdicts(name) for name in self.values}
         for i in range(self.points.shape[0]):
             cells = [repr(float(v)) for v in self.points[i]]
             for name in self.values:
                 value = float(self.values[name][i])
                 cells += ["" if not np.isfinite(value) else repr(value),
                           repr(float(self.limits[name][i])),
-                          "true" if self.met[name][i] else "false"]
+                          "true" if self.met[name][i] else "false", str(verdicts[name][i])]
             lines.append(",".join(cells))
         return "\n".join(lines) + "\n"
 
 
 def evaluate_rows(case: Case, keys: tuple[str, ...], points: Array) -> dict[str, Array]:
-    """One chunk of grid points as one batch (module level: picklable for processes/Dask)."""
-    from tuflexperf.analysis.uncertainty import evaluator_for
+    """One chunk of grid points as one batch (module level: picklable for processes/Dask),
+    on every reading of the case's disputed evidence too (the worse reading's values)."""
+    from tuflexperf.analysis.batch_readings import readings_evaluator
 
-    result = evaluator_for(case).evaluate({k: points[:, j] for j, k in enumerate(keys)},
-                                          size=points.shape[0])
+    result = readings_evaluator(case).evaluate({k: points[:, j] for j, k in enumerate(keys)},
+                                               size=points.shape[0])
     out: dict[str, Array] = {}
     for name, values in result.values.items():
         out[f"value:{name}"] = values
         out[f"limit:{name}"] = result.limits[name]
         out[f"met:{name}"] = requirement_met(values, result.limits[name], result.kinds[name])
         out[f"extrapolated:{name}"] = result.extrapolated[name]
+        out[f"disputed:{name}"] = result.disputed.get(name, np.zeros(values.shape, dtype=bool))
     return out
 
 
@@ -140,8 +153,8 @@ def _refuse_what_check_refuses(case: Case, keys: tuple[str, ...], points: Array)
     """A point the single case refuses is bad input: an aircraft whose static thrust is
     absurd for its weight, or envelope bounds that cross (or pass the speed of sound). The
     message names the point and the single case's fault."""
+    from tuflexperf.analysis.evaluators import evaluator_for
     from tuflexperf.analysis.trim import envelope_of
-    from tuflexperf.analysis.uncertainty import evaluator_for
     from tuflexperf.io.dotted import with_values
 
     values = {k: points[:, j] for j, k in enumerate(keys)}
@@ -200,4 +213,5 @@ def run_sweep(case: Case, axes: list[tuple[str, Array]], workers: int | None = N
         met={n: join("met", n) for n in names},
         units={r.name: r.unit for r in present_requirements(case)},
         extrapolated={n: join("extrapolated", n) for n in names},
+        disputed={n: join("disputed", n) for n in names},
     )

@@ -415,7 +415,8 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         # the roll's distance is reached, but nothing flies away from it (outside audit: a
         # poor polar lifted off below its least level-flight speed and said nothing)
         warnings.append(
-            f"after lift-off the full-throttle climb gradient at {air.speed_m_s:.1f} m/s "
+            f"after lift-off the full-throttle climb gradient sin(gamma) at "
+            f"{air.speed_m_s:.1f} m/s "
             f"(1.15 x stall) is {air.gradient:.3f}: the aircraft cannot climb away"
         )
     if to.cl_ground > 0.0:

@@ -40,9 +40,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tuflexperf.analysis.batch import BatchEvaluator, BatchResult
+from tuflexperf.analysis.batch import BatchResult
 from tuflexperf.analysis.batch_kernels import nominal_engines
 from tuflexperf.analysis.cache import file_key, fingerprint
+from tuflexperf.analysis.evaluators import EVALUATORS_KEPT, evaluator_for
 from tuflexperf.analysis.probability import normal_logcdf, normal_ppf_of_log
 from tuflexperf.analysis.runtime import (
     earlier_objects_frozen,
@@ -59,7 +60,6 @@ CHUNK_SIZE = 2500
 CHUNKS_PER_BATCH = 4
 """Chunks evaluated as one batch: numpy's per-call cost spread over 10,000 rows, not 2,500
 (10,000 samples took 0.32 s in four batches, 0.25 s in one), at a few MB per row array."""
-_evaluators: dict[str, BatchEvaluator] = {}
 ENVELOPE_KEY = "requirements.envelope"
 """The count key of samples whose envelope bounds cross (``samples_outside_bounds``)."""
 REFUSED_AIRCRAFT_KEY = "aircraft"
@@ -211,19 +211,6 @@ def _beyond_residual_sd_n(engine: Engine, residual: bool) -> float:
     return math.sqrt(max(e * e - r * r, 0.0))
 
 
-def evaluator_for(case: Case) -> BatchEvaluator:
-    """One :class:`BatchEvaluator` per case and process (workers build theirs once)."""
-    # content, not repr: a case's free-form provenance may be large (analysis.cache)
-    battery = case.battery_path
-    key = fingerprint(case.aircraft, case.propulsion, case.atmosphere, case.requirements,
-                      case.overrides, str(battery),
-                      file_key(battery) if battery is not None and battery.exists() else None)
-    if key not in _evaluators:
-        _evaluators.clear()  # one case per process at a time is all the CLI needs
-        _evaluators[key] = BatchEvaluator(case)
-    return _evaluators[key]
-
-
 def _joined(draws: Sequence[ChunkDraw]) -> ChunkDraw:
     """Consecutive chunks' draws as one (rows in chunk order)."""
     if len(draws) == 1:
@@ -260,10 +247,14 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range) -> dict[str, A
     A module-level function of picklable arguments, so local processes and Dask workers
     run it as they are.
     """
+    from tuflexperf.analysis.batch_readings import combine_rows, readings_evaluator
+
     draw = _joined([draw_chunk(case, plan, i) for i in chunks])
-    # a sample outside its key's range (mass 1e300) counts as not met below
-    result = evaluator_for(case).evaluate(draw.values, draw.size, draw.coefficients,
-                                          draw.extrapolation_n)
+    # a sample outside its key's range (mass 1e300) counts as not met below; every reading
+    # of disputed evidence flown too (the extrapolation band's bound not where it is drawn)
+    evaluator = readings_evaluator(case, drawn=plan.extrapolation)
+    result = evaluator.evaluate(draw.values, draw.size, draw.coefficients,
+                                draw.extrapolation_n)
     # a sample outside a key's schema bounds (a negative cd0 from a wide normal) is no
     # aircraft: every requirement counts it as not met, and it is reported
     outside = np.zeros(draw.size, dtype=bool)
@@ -285,15 +276,33 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range) -> dict[str, A
     out[f"outside:{ENVELOPE_KEY}"] = np.array([np.count_nonzero(crossed)])
     out.update({f"value:{k}": np.where(outside, np.nan, v) for k, v in result.values.items()})
     out.update({f"limit:{k}": v for k, v in result.limits.items()})
+    readings = {key: dict(by_name) for key, by_name in result.reading_values.items()}
     model = mission_for(case, list(draw.values))
     if model is not None:
         from tuflexperf.analysis.mission_samples import sampled_landing
 
-        flown = sampled_landing(model, evaluator_for(case), draw.values, draw.size,
-                                draw.coefficients, draw.extrapolation_n)
-        for name, (value, limit) in flown.items():
+        def fly(mission: Any, on: Case) -> dict[str, tuple[Array, Array]]:
+            return sampled_landing(mission, evaluator_for(on), draw.values, draw.size,
+                                   draw.coefficients, draw.extrapolation_n)
+
+        flown = fly(model, case)
+        theirs = []
+        for reading in evaluator.all_readings:
+            other = (mission_for(reading.case, list(draw.values))
+                     if "mission" in reading.affects else None)
+            if other is not None:
+                theirs.append((reading, {n: v for n, (v, _) in fly(other, reading.case).items()}))
+        values = {n: v for n, (v, _) in flown.items()}
+        limits = {n: lim for n, (_, lim) in flown.items()}
+        worse, _, by_reading = combine_rows(values, limits, MISSION_KINDS, theirs)
+        for key, by_name in by_reading.items():
+            readings.setdefault(key, {}).update(by_name)
+        for name, value in worse.items():
             out[f"value:{name}"] = np.where(outside, np.nan, value)
-            out[f"limit:{name}"] = limit
+            out[f"limit:{name}"] = limits[name]
+    for key, by_name in readings.items():  # each reading's own values ("nominal" first)
+        for name, value in by_name.items():
+            out[f"reading:{key}:{name}"] = np.where(outside, np.nan, value)
     return out
 
 
@@ -316,7 +325,8 @@ def mission_for(case: Case, keys: list[str]) -> Any:
     key = fingerprint(case.aircraft, case.propulsion, case.atmosphere, case.requirements,
                       case.overrides, str(case.battery_path), str(path), file_key(path))
     if key not in _missions:
-        _missions.clear()
+        if len(_missions) >= EVALUATORS_KEPT:  # one case and its readings at a time
+            _missions.clear()
         try:
             _missions[key] = MissionModel(case, load_mission(path),
                                           case.requirements.mission.min_landing_charge_fraction)
@@ -508,6 +518,11 @@ class SampleSet:
     kinds: dict[str, str] = field(default_factory=dict)
     # per parameter: samples outside its schema bounds (counted as not met everywhere)
     outside_bounds: dict[str, int] = field(default_factory=dict)
+    # where readings of disputed evidence bear on a requirement: ``values`` are the worse
+    # reading's, these each reading's (key -> requirement -> values; "nominal" first)
+    reading_values: dict[str, dict[str, Array]] = field(default_factory=dict)
+    # reading key -> (what it flies, what the nominal case flies in its place)
+    reading_labels: dict[str, tuple[str, str]] = field(default_factory=dict)
 
 
 def run_samples(
@@ -538,7 +553,15 @@ def run_samples(
     kinds.update(MISSION_KINDS)
     outside = {k.split(":", 1)[1]: int(sum(int(p[k][0]) for p in parts))
                for k in parts[0] if k.startswith("outside:")}
-    return SampleSet(plan, values, limits, kinds, outside)
+    readings: dict[str, dict[str, Array]] = {}
+    for k in parts[0]:
+        if k.startswith("reading:"):
+            _, key, name = k.split(":", 2)
+            readings.setdefault(key, {})[name] = np.concatenate([p[k] for p in parts])
+    from tuflexperf.analysis.batch_readings import reading_labels
+
+    return SampleSet(plan, values, limits, kinds, outside, readings,
+                     reading_labels(case) if readings else {})
 
 
 def as_batch(samples: SampleSet) -> BatchResult:

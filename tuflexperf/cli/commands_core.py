@@ -50,7 +50,7 @@ def check(
     propulsion: Path | None = PropulsionFileOption,
     battery: Path | None = BatteryFileOption,
 ) -> None:
-    """Verify every requirement in the case: value, limit, margin, PASS/FAIL."""
+    """Verify every requirement in the case: value, limit, margin, PASS/FAIL/UNPROVEN."""
     from tuflexperf.analysis.requirements import CHECKS, check_case, sampled_result
 
     if case_file is not None and case_option is not None and case_file != case_option:
@@ -97,10 +97,12 @@ def check(
     # with samples, each result's verdict is the nominal one and P(met) shown together
     results = [sampled_result(v, probabilistic.get(v.name)) if sampling else v.to_dict()
                for v in verdicts]
-    passed = all(r["passed"] for r in results)
-    render.show_check(case, verdicts, results, passed, plan, probabilistic, outside,
+    from tuflexperf.analysis.verdict import overall_verdict
+
+    overall = overall_verdict([r["verdict"] for r in results])
+    render.show_check(case, verdicts, results, overall, plan, probabilistic, outside,
                       sample_notes, as_json)
-    raise typer.Exit(0 if passed else 1)
+    raise typer.Exit(0 if overall == "PASS" else 1)
 
 
 def margins(
@@ -113,20 +115,24 @@ def margins(
 ) -> None:
     """Per requirement and parameter: the value where it just holds, and d(value)/d(parameter).
 
-    Grouped by requirement, the binding parameters first.
+    Each requirement's verdict as check gives it; the limit value is where it just holds on
+    the worse reading of disputed evidence. Grouped by requirement, the binding parameters
+    first.
 
     Order: smallest |limit value - nominal| / |nominal| first (nominal 0: over the range).
 
     The parameters that never bind come last. --json keeps the analysis' order.
     """
     from tuflexperf.analysis.margins import extrapolation_notes, solve_margins
+    from tuflexperf.analysis.requirements import check_case
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
     refuse_implausible(case, "margins", None, as_json)
     rows = solve_margins(case)
     notes = (extrapolation_notes(rows, case.propulsion.tested_airspeed_m_s)
              + batch_notes(case, [], None) + scaled_pack_notes({m.parameter for m in rows}))
-    render_tables.show_margins(case, rows, notes, as_json)
+    verdicts = [v for v in check_case(case) if any(m.requirement == v.name for m in rows)]
+    render_tables.show_margins(case, rows, notes, as_json, verdicts)
 
 
 def sweep(
@@ -145,14 +151,14 @@ def sweep(
     battery: Path | None = BatteryFileOption,
     fail_on_fail: bool = typer.Option(
         False, "--fail-on-fail", metavar="",
-        help="Exit 1 when any grid point FAILs a requirement.",
+        help="Exit 1 when any grid point FAILs a requirement or leaves it UNPROVEN.",
     ),
 ) -> None:
     """Every requirement over a grid of parameter values.
 
     Exit code: 0 once the grid is computed, whatever its verdicts (a sweep explores).
 
-    With --fail-on-fail: 1 when any grid point FAILs. Bad input: 2.
+    With --fail-on-fail: 1 when any grid point FAILs or is UNPROVEN. Bad input: 2.
     """
     from tuflexperf.analysis.sweep import run_sweep
     from tuflexperf.io.files import write_files_atomically
@@ -204,14 +210,16 @@ def takeoff(
     battery: Path | None = BatteryFileOption,
 ) -> None:
     """Take-off at full throttle: ground roll, rotation, transition arc, climb to the obstacle."""
-    from tuflexperf.analysis.requirements import takeoff_verdicts
+    from tuflexperf.analysis.requirements import judged_block, takeoff_verdicts
     from tuflexperf.analysis.takeoff import solve_takeoff
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
     refuse_implausible(case, "takeoff", "takeoff", as_json)
     result = solve_takeoff(case)
     requirement = case.requirements.takeoff
-    verdicts = takeoff_verdicts(requirement, result) if requirement is not None else []
+    # judged as check judges it: on every reading of disputed evidence too
+    verdicts = (judged_block(case, "takeoff", lambda: takeoff_verdicts(requirement, result))
+                if requirement is not None else [])
     met = all(v.passed for v in verdicts)
     render.show_takeoff(case, result, requirement, verdicts, met, as_json)
     raise typer.Exit(0 if met else 1)
@@ -229,7 +237,7 @@ def trim(
     battery: Path | None = BatteryFileOption,
 ) -> None:
     """Least throttle for level flight at each airspeed of the envelope (0.5 m/s grid)."""
-    from tuflexperf.analysis.requirements import trim_verdict
+    from tuflexperf.analysis.requirements import judged_block, trim_verdict
     from tuflexperf.analysis.trim import solve_trim
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
@@ -238,7 +246,9 @@ def trim(
         fail_input(f"{case.path}: requirements.envelope: trim needs the envelope requirement")
     refuse_implausible(case, "trim", "envelope", as_json)
     limit = case.requirements.envelope.max_trim_throttle
-    verdict = trim_verdict(case.requirements.envelope, result)  # the one verdict rule
+    envelope = case.requirements.envelope
+    # the one verdict rule, on every reading of disputed evidence as check judges it
+    verdict = judged_block(case, "envelope", lambda: [trim_verdict(envelope, result)])[0]
     render.show_trim(case, result, verdict, limit, table, as_json)
     raise typer.Exit(0 if verdict.passed else 1)
 
@@ -256,7 +266,7 @@ def oei(
 ) -> None:
     """Level flight with one engine inoperative; each engine dead in turn, worse case."""
     from tuflexperf.analysis.oei import solve_oei
-    from tuflexperf.analysis.requirements import oei_verdict
+    from tuflexperf.analysis.requirements import judged_block, oei_verdict
 
     dead_engine = dead_engine.lower() if dead_engine is not None else None
     if dead_engine is not None and dead_engine not in ("windmilling", "zero"):
@@ -266,9 +276,13 @@ def oei(
     result = solve_oei(case, dead_engine)  # type: ignore[arg-type]
     requirement = case.requirements.oei
     limit = requirement.max_throttle if requirement is not None else 1.0
-    met = oei_verdict(requirement, result).passed  # the one verdict rule
-    render.show_oei(case, result, limit, met, as_json)
-    raise typer.Exit(0 if met else 1)
+    # the one verdict rule; the case's own requirement judged as check judges it (on every
+    # reading of disputed evidence), another dead-engine mode on this case alone
+    verdict = (judged_block(case, "oei", lambda: [oei_verdict(requirement, result)])[0]
+               if requirement is not None and result.dead_engine_mode == requirement.dead_engine
+               else oei_verdict(requirement, result))
+    render.show_oei(case, result, limit, verdict, as_json)
+    raise typer.Exit(0 if verdict.passed else 1)
 
 
 def performance(

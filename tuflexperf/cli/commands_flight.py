@@ -41,7 +41,7 @@ def mission(
 ) -> None:
     """Fly a mission with the battery model; charge at landing against the reserve."""
     from tuflexperf.analysis.mission import solve_mission
-    from tuflexperf.analysis.requirements import mission_path, mission_verdicts
+    from tuflexperf.analysis.requirements import judged_block, mission_path, mission_verdicts
     from tuflexperf.io.mission import load_mission
 
     csv = output_file(csv_text, "--csv")
@@ -70,8 +70,13 @@ def mission(
         from tuflexperf.io.files import atomic_write_text
 
         atomic_write_text(csv, render.history_csv(result.history))
-    render.show_mission(case, result, mission_verdicts(result), csv, as_json)
-    raise typer.Exit(0 if result.passed else 1)
+    own = requirement is not None and Path(mission_file).resolve() == mission_path(case)
+    # the case's own mission is judged as check judges it (on every reading of disputed
+    # evidence); another file on this case alone
+    verdicts = (judged_block(case, "mission", lambda: mission_verdicts(result)) if own
+                else mission_verdicts(result))
+    render.show_mission(case, result, verdicts, csv, as_json)
+    raise typer.Exit(0 if all(v.passed for v in verdicts) else 1)
 
 
 def endurance(
@@ -91,7 +96,7 @@ def endurance(
 ) -> None:
     """Level-flight airspeed, electrical power, pack and flight endurance at a throttle."""
     from tuflexperf.analysis.endurance import solve_best, solve_endurance
-    from tuflexperf.analysis.requirements import endurance_verdict
+    from tuflexperf.analysis.requirements import endurance_verdict, judged_block
 
     if throttle is None and not best:
         fail_input("--throttle: required (a fraction in [0, 1]), or use --best")
@@ -108,6 +113,9 @@ def endurance(
     result = asked if asked is not None else best_result.endurance
     requirement = case.requirements.endurance
     judged = requirement is not None and abs(requirement.throttle - result.throttle) < 1e-12
-    met = not judged or endurance_verdict(requirement, result).passed  # the one verdict rule
-    render.show_endurance(case, result, best_result, requirement, judged, met, as_json)
+    # the one verdict rule, on every reading of disputed evidence as check judges it
+    verdict = (judged_block(case, "endurance", lambda: [endurance_verdict(requirement, result)])[0]
+               if judged else None)
+    met = verdict is None or verdict.passed
+    render.show_endurance(case, result, best_result, requirement, verdict, as_json)
     raise typer.Exit(0 if met else 1)

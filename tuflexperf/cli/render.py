@@ -66,16 +66,45 @@ def _colours() -> bool:
             and os.environ.get("TERM") != "dumb")
 
 
-def verdict_word(passed: bool) -> str:
-    """PASS or FAIL; on a terminal green or red (rich's styles), elsewhere plain text."""
-    word = "PASS" if passed else "FAIL"
+#: each verdict's own colour on a terminal (UNPROVEN amber: neither met nor failed)
+VERDICT_COLOURS = {"PASS": "green", "FAIL": "red", "UNPROVEN": "yellow"}
+
+
+def verdict_word(verdict: bool | str) -> str:
+    """PASS, FAIL or UNPROVEN (a bool: PASS or FAIL); on a terminal green, red or amber
+    (rich's styles), elsewhere plain text."""
+    word = verdict if isinstance(verdict, str) else "PASS" if verdict else "FAIL"
     if not _colours():
         return word
     from rich.color import ColorSystem
     from rich.style import Style
 
-    return Style(color="green" if passed else "red", bold=True).render(
+    return Style(color=VERDICT_COLOURS[word], bold=True).render(
         word, color_system=ColorSystem.STANDARD)
+
+
+def overall_of(verdicts: list[Any]) -> str:
+    """PASS, FAIL or UNPROVEN of several verdicts (the registry's rule)."""
+    from tuflexperf.analysis.verdict import overall_verdict
+
+    return overall_verdict([v.verdict for v in verdicts])
+
+
+def print_disputed(verdict: Any) -> None:
+    """An UNPROVEN verdict's disagreement, each reading's value and what would settle it."""
+    if verdict.verdict == "UNPROVEN":
+        typer.echo(f"  UNPROVEN: {verdict.reason}")
+    print_readings(verdict.to_dict())
+
+
+def print_readings(result: dict[str, Any]) -> None:
+    """A disputed requirement's value on each reading, and what would settle an UNPROVEN."""
+    for r in result.get("readings", []):
+        value = "not attainable" if r["value"] is None else f"{r['value']:.4g}"
+        typer.echo(f"  reading: {value} on {r['label']} "
+                   f"({'met' if r['passed'] else 'not met'})")
+    if result.get("verdict") == "UNPROVEN" and result.get("settle"):
+        typer.echo(f"  to settle: {result['settle']}")
 
 
 def cell(text: str, width: int = 10) -> str:
@@ -93,7 +122,7 @@ def replaced_files(case: Any) -> dict[str, str]:
     return {key: str(getattr(case, f"{key}_path")) for key in case.replaced}
 
 
-def show_check(case: Any, verdicts: list[Any], results: list[dict[str, Any]], passed: bool,
+def show_check(case: Any, verdicts: list[Any], results: list[dict[str, Any]], overall: str,
                plan: Any, probabilistic: dict[str, Any], outside: dict[str, int],
                sample_notes: list[str], as_json: bool) -> None:
     """``check``: the verdict table, and with samples P(met) per requirement."""
@@ -101,7 +130,8 @@ def show_check(case: Any, verdicts: list[Any], results: list[dict[str, Any]], pa
         payload: dict[str, Any] = {
             "case": case.name,
             "case_file": str(case.path),
-            "passed": passed,
+            "verdict": overall,
+            "passed": overall == "PASS",
             "results": results,
         }
         if plan is not None:
@@ -119,12 +149,17 @@ def show_check(case: Any, verdicts: list[Any], results: list[dict[str, Any]], pa
               "  verdict")
     typer.echo(header)
     typer.echo("-" * len(header))
-    for v in verdicts:
+    for v, r in zip(verdicts, results, strict=True):
         typer.echo(
             f"{v.name:<{w}}{cell(fmt(v.value))}{cell(fmt(v.limit))}{cell(v.unit)}"
-            f"{cell(fmt(v.margin))}  {verdict_word(v.passed)}"
+            f"{cell(fmt(v.margin))}  {verdict_word(v.verdict)}"
         )
-        typer.echo(f"  {v.reason}")
+        if v.verdict == "UNPROVEN":  # the disagreement first, then what the analysis said
+            typer.echo(f"  UNPROVEN: {v.reason}")
+            typer.echo(f"  {v.details.get('nominal_reason', '')}")
+        else:
+            typer.echo(f"  {v.reason}")
+        print_readings(r)
         print_warnings(v.details.get("warnings", []))
     if plan is not None:
         from tuflexperf.analysis.uncertainty import ENVELOPE_KEY, REFUSED_AIRCRAFT_KEY
@@ -147,7 +182,7 @@ def show_check(case: Any, verdicts: list[Any], results: list[dict[str, Any]], pa
             typer.echo(f"  note: {count} samples {what}")
         for note in sample_notes:
             typer.echo(f"  note: {note}")
-    typer.echo(f"overall: {verdict_word(passed)}")
+    typer.echo(f"overall: {verdict_word(overall)}")
 
 
 def print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
@@ -167,8 +202,11 @@ def print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
         typer.echo(
             f"{name:<{w}}{p.probability:>8.4f}{f'[{low:.4f}, {high:.4f}]':>17}{fmt(p05):>10}"
             f"{fmt(p50):>10}{fmt(p95):>10}{p.not_attainable:>7}  "
-            f"{verdict_word(p.passed)}"
+            f"{verdict_word(p.verdict)}"
         )
+        for _, label, probability, shown in p.readings:  # each reading of disputed evidence
+            typer.echo(f"  P(met) {probability:.4f} on {label} "
+                       f"({'shown' if shown else 'not shown'})")
     typer.echo("  (n/a: samples where the requirement is not attainable; they count as not met "
                "and as the worst value, so a percentile that falls on them shows n/a)")
 
@@ -181,6 +219,7 @@ def show_takeoff(case: Any, result: Any, requirement: Any, verdicts: list[Any], 
         if requirement is not None:
             payload["max_ground_roll_m"] = requirement.max_ground_roll_m
             payload["max_distance_to_obstacle_m"] = requirement.max_distance_to_obstacle_m
+            payload["verdict"] = overall_of(verdicts)
             payload["passed"] = met
             payload["results"] = [v.to_dict() for v in verdicts]
         emit_json(payload)
@@ -210,7 +249,7 @@ def show_takeoff(case: Any, result: Any, requirement: Any, verdicts: list[Any], 
     )
     angle = r.climb_angle_deg
     typer.echo(
-        f"  climb              {fmt(r.climb_distance_m, 2):>8} m  (gradient "
+        f"  climb              {fmt(r.climb_distance_m, 2):>8} m  (sin(gamma) "
         f"{r.climb_gradient:.3f}" + ("" if angle is None else f", {angle:.1f} deg")
         + (": thrust above weight plus drag, a vertical climb" if r.climb_gradient >= 1.0
            else "") + ")"
@@ -224,8 +263,9 @@ def show_takeoff(case: Any, result: Any, requirement: Any, verdicts: list[Any], 
     for v in verdicts:
         typer.echo(
             f"  {v.name:<30} {fmt(v.value, 2)} <= {v.limit:g} m  "
-            f"{verdict_word(v.passed)}"
+            f"{verdict_word(v.verdict)}"
         )
+        print_disputed(v)
 
 
 def throttle_table(
@@ -242,7 +282,8 @@ def show_trim(case: Any, result: Any, verdict: Any, limit: float, table: bool,
     data = result.to_dict()
     met = verdict.passed
     if as_json:
-        emit_json({**data, "max_trim_throttle": limit, "passed": met})
+        emit_json({**data, "max_trim_throttle": limit, "verdict": verdict.verdict,
+                   "passed": met, "result": verdict.to_dict()})
         return
     v = data["airspeed_m_s"]
     typer.echo(f"{case.name}: trim over {v[0]:.4g}-{v[-1]:.4g} m/s ({len(v)} airspeeds)")
@@ -270,16 +311,18 @@ def show_trim(case: Any, result: Any, verdict: Any, limit: float, table: bool,
     # the verdict and why, as take-off and OEI print theirs (SPEC 5: exit 1 says why)
     why = (verdict.reason if verdict.value is None else
            f"highest throttle {verdict.value:.3f} above the limit {limit:g}")
-    typer.echo(f"  {verdict.name}: {verdict_word(met)}"
-               + ("" if met else f" ({why})"))
+    typer.echo(f"  {verdict.name}: {verdict_word(verdict.verdict)}"
+               + ("" if met or verdict.verdict == "UNPROVEN" else f" ({why})"))
+    print_disputed(verdict)
 
 
-def show_oei(case: Any, result: Any, limit: float, met: bool, as_json: bool) -> None:
+def show_oei(case: Any, result: Any, limit: float, verdict: Any, as_json: bool) -> None:
     """``oei``: each engine dead in turn, the worse case and the verdict."""
     data = result.to_dict()
     worst = result.critical
     if as_json:
-        emit_json({**data, "max_throttle": limit, "passed": met})
+        emit_json({**data, "max_throttle": limit, "verdict": verdict.verdict,
+                   "passed": verdict.passed, "result": verdict.to_dict()})
         return
     typer.echo(f"{case.name}: one engine inoperative ({result.dead_engine_mode} dead engine)")
     for c in result.cases:
@@ -300,8 +343,9 @@ def show_oei(case: Any, result: Any, limit: float, met: bool, as_json: bool) -> 
         f"  worse case: {worst.dead_engine} dead, "
         + ("not attainable" if worst.min_throttle is None
            else f"throttle {fmt(worst.min_throttle)}")
-        + f" (limit {limit:g})  {verdict_word(met)}"
+        + f" (limit {limit:g})  {verdict_word(verdict.verdict)}"
     )
+    print_disputed(verdict)
     print_warnings(data["warnings"])
 
 
@@ -324,11 +368,12 @@ def show_performance(case: Any, result: Any, attainable: bool, as_json: bool) ->
         ("max level speed", r.max_level_speed_m_s, "m/s"),
         ("max rate of climb", r.max_climb_rate_m_s, "m/s"),
         ("  at Vy", r.best_climb_rate_speed_m_s, "m/s"),
-        ("max climb gradient", r.max_climb_gradient, "-"),
+        ("max climb gradient sin(gamma)", r.max_climb_gradient, "-"),
         ("  at Vx", r.best_climb_angle_speed_m_s, "m/s"),
         ("service ceiling (0.5 m/s)", r.service_ceiling_m, "m"),
         ("absolute ceiling", r.absolute_ceiling_m, "m"),
-        (f"OEI max climb gradient ({r.oei_dead_engine_mode})", r.oei_max_climb_gradient, "-"),
+        (f"OEI max climb sin(gamma) ({r.oei_dead_engine_mode})", r.oei_max_climb_gradient,
+         "-"),
         ("OEI max level speed", r.oei_max_level_speed_m_s, "m/s"),
         (f"take-off to {r.takeoff_obstacle_height_m:g} m obstacle",
          r.takeoff_distance_to_obstacle_m, "m"),
@@ -355,7 +400,9 @@ def show_mission(case: Any, result: Any, verdicts: list[Any], csv: Path | None,
                  as_json: bool) -> None:
     """``mission``: one row per segment, the landing charge and its verdict."""
     if as_json:
-        emit_json(result.to_dict())
+        emit_json({**result.to_dict(), "verdict": overall_of(verdicts),
+                   "passed": all(v.passed for v in verdicts),
+                   "results": [v.to_dict() for v in verdicts]})
         return
     typer.echo(f"{case.name}: mission {result.name}")
     header = (f"  {'segment':<16}{'time min':>9}{'dist km':>9}{'alt m':>8}{'EAS m/s':>8}"
@@ -370,29 +417,41 @@ def show_mission(case: Any, result: Any, verdicts: list[Any], csv: Path | None,
             f"{s.end_altitude_m:8.0f}{eas:>8}{sum(s.charge_ah):10.3f}"
             f"{sum(s.energy_wh):10.1f}{s.min_voltage_v:8.2f}{thr:>8}"
         )
+    packs_wh = sum(sum(s.energy_wh) for s in result.segments)
+    if result.launch_kinetic_energy_wh > 0.0:  # what the catapult gave, beside the packs'
+        typer.echo(f"  energy: {packs_wh:.1f} Wh from the packs + "
+                   f"{result.launch_kinetic_energy_wh:.2f} Wh of the catapult's release "
+                   f"(m V^2 / 2) = {packs_wh + result.launch_kinetic_energy_wh:.1f} Wh")
     for note in result.warnings:  # the JSON's "warnings": said in the text too
         typer.echo(f"  note: {note}")
     landing, *solved = verdicts
-    typer.echo(f"  {result.reason}  {verdict_word(landing.passed)}")
+    typer.echo(f"  {result.reason}  {verdict_word(landing.verdict)}")
+    print_disputed(landing)
     for verdict in solved:  # solve_for: the longest segment against the file's own
-        value = "not attainable" if verdict.value is None else f"{verdict.value:.2f} min"
-        typer.echo(f"  solve_for: {value}, {verdict.reason}  "
-                   f"{verdict_word(verdict.passed)}")
+        # the flight above (the first reading); each reading's value follows where disputed
+        flown = verdict.readings[0].value if verdict.readings else verdict.value
+        value = "not attainable" if flown is None else f"{flown:.2f} min"
+        typer.echo(f"  solve_for: {value}, {verdict.details.get('nominal_reason', verdict.reason)}"
+                   f"  {verdict_word(verdict.verdict)}")
+        print_disputed(verdict)
     if csv is not None:
         typer.echo(f"  wrote {csv}")
 
 
-def show_endurance(case: Any, result: Any, best_result: Any, requirement: Any, judged: bool,
-                   met: bool, as_json: bool) -> None:
-    """``endurance``: airspeed, power, pack and flight endurance, and the best throttles."""
+def show_endurance(case: Any, result: Any, best_result: Any, requirement: Any,
+                   verdict: Any, as_json: bool) -> None:
+    """``endurance``: airspeed, power, pack and flight endurance, and the best throttles
+    (``verdict`` None: the throttle asked for is not the requirement's, nothing judged)."""
     data = result.to_dict()
     if as_json:
         payload = dict(data)
         if best_result is not None:
             payload["best"] = best_result.to_dict()
-        if judged:
+        if verdict is not None:
             payload["min_flight_time_min"] = requirement.min_flight_time_min
-            payload["passed"] = met
+            payload["verdict"] = verdict.verdict
+            payload["passed"] = verdict.passed
+            payload["result"] = verdict.to_dict()
         emit_json(payload)
         return
     typer.echo(f"{case.name}: endurance at throttle {result.throttle:.3f}")
@@ -423,11 +482,12 @@ def show_endurance(case: Any, result: Any, best_result: Any, requirement: Any, j
             f"{cv['predicted_min']:.2f} min vs {cv['observed_min']:.2f} measured "
             f"({cv['error_percent']:+.1f} %)"
         )
-    if judged:
+    if verdict is not None:
         typer.echo(
             f"  requirement: >= {requirement.min_flight_time_min:g} min  "
-            f"{verdict_word(met)}"
+            f"{verdict_word(verdict.verdict)}"
         )
+        print_disputed(verdict)
     if best_result is not None:
         b = best_result.to_dict()
         e, r = b["best_endurance"], b["best_range"]
@@ -620,7 +680,8 @@ def show_report(result: Any, as_json: bool) -> None:
     typer.echo(
         f"wrote {len(result.files)} files to {result.out_dir} "
         f"({result.pages}-page {result.pdf.name}, {result.seconds:.1f} s); requirements "
-        + ("all met" if result.passed else "NOT all met")
+        + ("all met" if result.passed else "NOT all shown met (UNPROVEN)"
+           if result.verdict == "UNPROVEN" else "NOT all met")
     )
     for path in result.files:
         typer.echo(f"  {path.name}")
@@ -652,7 +713,7 @@ def show_export(result: Any, as_json: bool) -> None:
 def show_mission_not_flown(name: str, reason: str, limit: float | None, as_json: bool) -> None:
     """``mission`` that could not be flown: the mission's own keys, nothing flown (SPEC 5)."""
     if as_json:
-        emit_json({"command": "mission", "mission": name, "passed": False,
+        emit_json({"command": "mission", "mission": name, "verdict": "FAIL", "passed": False,
                    "attainable": False, "reason": reason,
                    "landing_charge_fraction": None, "min_landing_charge_fraction": limit,
                    "segments": []})

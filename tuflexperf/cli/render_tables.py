@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import typer
 
-from tuflexperf.cli.render import emit_json, verdict_word
+from tuflexperf.cli.render import emit_json, overall_of, verdict_word
 
 #: how a limit value binds -> the mark after it (explained under the table)
 _BINDS_MARK = {"not attainable": "*", "envelope ends": "^", "aircraft refused": "#"}
@@ -61,12 +61,19 @@ def _change_text(row: Any) -> str:
     return f"{100 * signed:+.1f} %" + (" w" if row.value == 0.0 else "  ")
 
 
-def show_margins(case: Any, rows: list[Any], notes: list[str], as_json: bool) -> None:
-    """``margins``: per requirement, each parameter's limit value and sensitivity, binding
-    parameters first."""
+def show_margins(case: Any, rows: list[Any], notes: list[str], as_json: bool,
+                 verdicts: list[Any] | None = None) -> None:
+    """``margins``: per requirement its verdict (as ``check`` gives it), each parameter's
+    limit value and sensitivity, binding parameters first."""
+    verdicts = verdicts or []
+    judged = {v.name: v for v in verdicts}
     if as_json:
         emit_json({"case": case.name, "case_file": str(case.path),
-                   "margins": [m.to_dict() for m in rows], "notes": notes})
+                   **({"verdict": overall_of(verdicts)} if verdicts else {}),
+                   "verdicts": [v.to_dict() for v in verdicts],
+                   "margins": [{**m.to_dict(), **({"verdict": judged[m.requirement].verdict}
+                                                  if m.requirement in judged else {})}
+                               for m in rows], "notes": notes})
         return
     typer.echo(f"{case.name}  ({case.path})")
     typer.echo("limit value: the parameter's value (others nominal) where the requirement "
@@ -88,13 +95,25 @@ def show_margins(case: Any, rows: list[Any], notes: list[str], as_json: bool) ->
               f"{'change  ':>{w_chg}}{'sensitivity':>{w_sen}}")
     for name, group in margin_groups(rows):
         typer.echo("")
-        typer.echo(f"{name} [{group[0].unit}]")
+        verdict = judged.get(name)
+        said = "" if verdict is None else (
+            f"  {verdict_word(verdict.verdict)} (value "
+            + ("not attainable" if verdict.value is None else f"{verdict.value:.4g}")
+            + f", limit {verdict.limit:g})")
+        typer.echo(f"{name} [{group[0].unit}]{said}")
         typer.echo(header)
         typer.echo("  " + "-" * (len(header) - 2))
         for m in group:
             nominal, limit, change, slope = shown[(m.requirement, m.parameter)]
             typer.echo(f"  {m.parameter:<{w_par}}{nominal:>{w_nom}}{limit:>{w_lim}}"
                        f"{change:>{w_chg}}{slope:>{w_sen}}")
+        if verdict is not None:  # under the table: the readings the verdict and limits rest on
+            for r in verdict.readings:
+                value = "not attainable" if r.value is None else f"{r.value:.4g}"
+                typer.echo(f"reading: {value} on {r.label} ({'met' if r.passed else 'not met'})")
+            if verdict.verdict == "UNPROVEN":
+                typer.echo(f"UNPROVEN: {verdict.reason}")
+                typer.echo(f"to settle: {verdict.settle}")
     typer.echo("")
     typer.echo("change: (limit value - nominal) / |nominal|; w: where the nominal is 0, over the "
                "searched range's width")
@@ -139,6 +158,7 @@ def show_sweep(case: Any, result: Any, notes: list[str], written: Iterable[Path 
     # fixed decimals per column: the decimal points of a column line up
     shown = [column_decimals(result.points[:, k], 5) for k in range(len(widths))]
     decimals = {n: column_decimals(np.asarray(result.values[n], dtype=float)) for n in names}
+    verdicts = {n: result.verdicts(n) for n in names}
     for i in range(result.points.shape[0]):
         cells = "".join(f"{v:>{w}.{d}f}" for v, w, d in zip(result.points[i], widths, shown,
                                                              strict=True))
@@ -146,7 +166,8 @@ def show_sweep(case: Any, result: Any, notes: list[str], written: Iterable[Path 
             value = result.values[n][i]
             text = "not attainable" if not np.isfinite(value) else f"{value:.{decimals[n]}f}"
             # padded as plain text: a colour's escape codes take no column
-            cells += f"{text + ' PASS':>30}"[:-4] + verdict_word(bool(result.met[n][i]))
+            word = str(verdicts[n][i])
+            cells += f"{text + ' ' + word:>30}"[:-len(word)] + verdict_word(word)
         typer.echo(cells)
     for target in written:
         if target is not None:

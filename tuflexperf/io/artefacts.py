@@ -133,15 +133,26 @@ def _is_mission_history(columns: list[str]) -> bool:
 
 
 def _is_sweep_grid(columns: list[str]) -> bool:
-    """The varied dotted keys, then ``<requirement>_value, _limit, _passed`` per requirement."""
+    """The varied dotted keys, then ``<requirement>_value, _limit, _passed, _verdict`` per
+    requirement (an earlier version's grid without ``_verdict`` too)."""
     keys = [c for c in columns if "." in c]
     tail = columns[len(keys):]
-    if not keys or columns[: len(keys)] != keys or not tail or len(tail) % 3:
+    if not keys or columns[: len(keys)] != keys or not tail:
         return False
-    for start in range(0, len(tail), 3):
+    return any(_sweep_groups(tail, suffixes)
+               for suffixes in (("_value", "_limit", "_passed", "_verdict"),
+                                ("_value", "_limit", "_passed")))
+
+
+def _sweep_groups(tail: list[str], suffixes: tuple[str, ...]) -> bool:
+    """Whether ``tail`` is whole groups of ``<requirement><suffix>`` columns."""
+    size = len(suffixes)
+    if len(tail) % size:
+        return False
+    for start in range(0, len(tail), size):
         name = tail[start].removesuffix("_value")
-        if name not in REQUIREMENT_NAMES or tail[start : start + 3] != [
-                f"{name}_value", f"{name}_limit", f"{name}_passed"]:
+        if name not in REQUIREMENT_NAMES or tail[start : start + size] != [
+                f"{name}{suffix}" for suffix in suffixes]:
             return False
     return True
 
@@ -177,7 +188,7 @@ def artefact_of(head: bytes) -> str | None:
     (the carpet plot) or ``tuflexperf VERSION`` (a report page); each CSV has its own
     header, matched whole: fit's thrust table, a mission's history (its columns, then six
     per engine), a sweep's grid (the varied keys, then ``<requirement>_value, _limit,
-    _passed`` per requirement).
+    _passed, _verdict`` per requirement).
     """
     first_line = head.split(b"\n", 1)[0]
     # fit's YAML (thrust model, battery) says so on its first comment line

@@ -115,6 +115,10 @@ def unset_optional_keys(case: Case) -> set[str]:
     }
 
 
+UNVARIED_KEY = "requirements.extrapolation.required_probability"
+"""A numeric key a batch (sweep, samples, margins) does not vary: it sets the evidence's bound."""
+
+
 def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
     """Raise :class:`InputError` naming ``where`` and the closest key if ``key`` is unknown.
 
@@ -122,6 +126,11 @@ def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
     unset is known too, and so is either kind of envelope bound (true or equivalent).
     """
     known = numeric_keys(case)
+    if key == UNVARIED_KEY and not unset:
+        # the readings are made once per run from the case, not per row of a batch
+        raise InputError(f"{where}: {key}: the probability a requirement resting on "
+                         "extrapolated thrust must reach is one number per run: give it in "
+                         "the case or with --set, it cannot be varied or drawn")
     if key in known or (unset and key in _BOUND_KEYS and case.requirements.envelope is not None):
         return
     optional = unset_optional_keys(case) if unset else set()

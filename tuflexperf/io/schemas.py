@@ -511,12 +511,28 @@ def refuse_null_block(value: Any, what: str, hint: str) -> Any:
     return value
 
 
+EXTRAPOLATION_REQUIRED_PROBABILITY = 0.9
+"""The least P(met) of a requirement that rests on thrust beyond the tested airspeeds, where
+the case states none (issue 43: below it the verdict is UNPROVEN)."""
+
+
+class ExtrapolationRequirement(StrictModel):
+    """How sure a requirement resting on extrapolated thrust must be (the band of the
+    propulsion file's ``extrapolation_sd_n``)."""
+
+    # below 1: a normal band has no bound at P = 1
+    required_probability: Annotated[float, Field(gt=0.5, lt=1)] = (
+        EXTRAPOLATION_REQUIRED_PROBABILITY)
+
+
 class Requirements(StrictModel):
     takeoff: TakeoffRequirement | None = None
     envelope: EnvelopeRequirement | None = None
     oei: OeiRequirement | None = None
     endurance: EnduranceRequirement | None = None
     mission: MissionRequirement | None = None
+    # always there (its default): --set may change it in a case that does not state it
+    extrapolation: ExtrapolationRequirement = ExtrapolationRequirement()
 
     @field_validator("*", mode="before")
     @classmethod

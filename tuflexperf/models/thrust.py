@@ -12,7 +12,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from tuflexperf.models._math import Vectorizable, fmin, sqrt, where
+from tuflexperf.models._math import Vectorizable, fmax, fmin, sqrt, where
 from tuflexperf.models.atmosphere import SEA_LEVEL_DENSITY_KG_M3
 
 POLY22_TERMS: tuple[str, ...] = ("p00", "p10", "p01", "p20", "p11", "p02")
@@ -61,6 +61,10 @@ class Engine:
     windmilling_drag_coefficient: float | None = None
     # poly22 electrical power surface in W (throttle fraction, airspeed m/s); None if unknown
     power_coefficients: Mapping[str, float] | None = None
+    # (tested low [m/s], tested high [m/s], offset [N]): the thrust beyond the tested airspeeds
+    # moved by the offset (the extrapolation reading's bound, analysis.extrapolation_reading);
+    # None: the polynomial as fitted
+    extrapolation_offset: tuple[float, float, float] | None = None
     # measured over modelled power (models.power_correction.PowerCorrection), multiplying
     # the power surface; None: the surface as fitted
     power_correction: Any = None
@@ -164,11 +168,37 @@ def engine_thrust_n(
 ) -> Vectorizable:
     """Thrust of one engine in N at ``throttle`` (fraction) and ``airspeed_m_s`` (m/s).
 
-    ``density_scale`` is ``rho / rho_ref`` (see :func:`density_ratio`).
+    ``density_scale`` is ``rho / rho_ref`` (see :func:`density_ratio`). Beyond the tested
+    airspeeds an engine's ``extrapolation_offset`` moves it (:func:`extrapolation_offset_n`).
     """
-    return density_scale * poly22(
-        throttle * engine.throttle_scale, airspeed_m_s, engine.coefficients
-    )
+    thrust = poly22(throttle * engine.throttle_scale, airspeed_m_s, engine.coefficients)
+    if engine.extrapolation_offset is not None:
+        thrust = thrust + extrapolation_offset_n(engine, airspeed_m_s)
+    return density_scale * thrust
+
+
+OFFSET_RAMP_M_S = 0.5
+"""Beyond the tested airspeeds an ``extrapolation_offset`` grows from 0 to its full size over
+this many m/s (the envelope grid's step): thrust stays continuous in airspeed, so a level
+flight at a fixed throttle keeps its root (a step left none near the tested edge)."""
+
+
+def extrapolation_offset_n(engine: Engine, airspeed_m_s: Vectorizable) -> Vectorizable:
+    """The thrust offset [N] of ``engine`` at ``airspeed_m_s`` [m/s]: 0 inside its tested
+    airspeeds, its full ``extrapolation_offset`` from :data:`OFFSET_RAMP_M_S` beyond them on
+    (linear between), 0 for an engine without one.
+
+    The one place the offset is made: the single case (CasADi), the batches' rows and the
+    mission's chained function all take it from here. Backend-neutral.
+    """
+    if engine.extrapolation_offset is None:
+        return 0.0
+    low, high, offset = engine.extrapolation_offset
+
+    def share(beyond: Vectorizable) -> Vectorizable:
+        return fmin(fmax(beyond / OFFSET_RAMP_M_S, 0.0), 1.0)
+
+    return offset * (share(airspeed_m_s - high) + share(low - airspeed_m_s))
 
 
 def windmilling_thrust_n(

@@ -123,7 +123,8 @@ def performance(case: Case, analyses: Analyses) -> Any:
             f"climb {perf.max_climb_rate_m_s:.2f} m/s")
     vx = perf.best_climb_angle_speed_m_s
     ax.plot([vx], [perf.max_climb_gradient * vx], **_MARK["vx"], color=blue,
-            label=f"Vx {vx:.1f} m/s: best climb gradient {100 * perf.max_climb_gradient:.1f} %")
+            label=f"Vx {vx:.1f} m/s: best climb gradient sin(gamma) "
+            f"{perf.max_climb_gradient:.3f}")
     if v.size:
         vmd = perf.minimum_drag_speed_m_s
         # placed on the drawn curve (interpolation of the result's own array)
@@ -136,7 +137,7 @@ def performance(case: Case, analyses: Analyses) -> Any:
     if worst is not None:
         speed = worst.max_climb_gradient_speed_m_s
         ax.plot([speed], [worst.max_climb_gradient * speed], **_MARK["vx"], color=orange,
-                label=f"OEI best gradient {100 * worst.max_climb_gradient:.1f} % at "
+                label=f"OEI best gradient sin(gamma) {worst.max_climb_gradient:.3f} at "
                 f"{speed:.1f} m/s")
         if worst.max_level_speed_m_s is not None:
             ax.plot([worst.max_level_speed_m_s], [0.0], **_MARK["vmax"], color=orange,
@@ -173,7 +174,7 @@ def _performance_table(ax: Any, perf: Any) -> None:
     else:
         oei_level = ("no level flight" if worst.max_level_speed_m_s is None
                      else f"up to {worst.max_level_speed_m_s:.2f} m/s")
-        oei_grad = (f"{100 * worst.max_climb_gradient:.1f} % at "
+        oei_grad = (f"sin(gamma) {worst.max_climb_gradient:.3f} at "
                     f"{worst.max_climb_gradient_speed_m_s:.2f} m/s")
     ceiling = "not reached (see notes)"
     rows = [
@@ -183,8 +184,8 @@ def _performance_table(ax: Any, perf: Any) -> None:
         ["minimum-drag speed", f"{perf.minimum_drag_speed_m_s:.2f} m/s", ""],
         ["best rate of climb (at Vy)",
          f"{perf.max_climb_rate_m_s:.2f} m/s at {perf.best_climb_rate_speed_m_s:.2f} m/s", ""],
-        ["best climb gradient (at Vx)",
-         f"{100 * perf.max_climb_gradient:.1f} % at {perf.best_climb_angle_speed_m_s:.2f} m/s",
+        ["best climb gradient sin(gamma) (at Vx)",
+         f"sin(gamma) {perf.max_climb_gradient:.3f} at {perf.best_climb_angle_speed_m_s:.2f} m/s",
          oei_grad],
         [f"service ceiling (0.5 m/s) / absolute ceiling ({CEILING_RULE})",
          (f"{ceiling_text(perf.service_ceiling_m)} m" if perf.service_ceiling_m is not None
@@ -367,7 +368,7 @@ def tornado(case: Case, analyses: Analyses) -> Any:
         u = unit(t.unit) if t.unit != "fraction" else ""
         head = t.requirement
         if verdict is not None:
-            head += f": {'PASS' if verdict.passed else 'FAIL'}"
+            head += f": {verdict.verdict}"
         head += f"\nnominal {_fmt(base, u, 3)}, limit {t.limit:g}{(' ' + u) if u else ''}"
         ax.set_title(head, fontsize=9.5)
         if not bars or base is None:
@@ -501,14 +502,14 @@ def mission(case: Case, analyses: Analyses) -> Any:
     outcome = (f"lands with {100 * result.landing_charge_fraction:.1f} % charge, reserve "
                f"{100 * reserve:g} %" if result.attainable else f"NOT ATTAINABLE: {result.reason}")
     if verdict is not None:
-        outcome += f" ({'PASS' if verdict.passed else 'FAIL'})"
+        outcome += f" ({verdict.verdict})"
     if result.solved is not None:
         solved = _verdict(analyses, "mission_solved_time")
         outcome += (f"; solved: longest {result.solved['segment']} "
                     f"{result.solved['time_min']:.2f} min, planned "
                     f"{result.solved['written_time_min']:.2f} min")
         if solved is not None:
-            outcome += f" ({'PASS' if solved.passed else 'FAIL'})"
+            outcome += f" ({solved.verdict})"
     fig.suptitle(textwrap.fill(f"Mission '{result.name}' of {case.name}: {outcome}", 150),
                  fontsize=11)
     return fig

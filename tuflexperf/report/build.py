@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from tuflexperf.analysis.verdict import overall_verdict
 from tuflexperf.errors import InputError
 from tuflexperf.io import swap
 from tuflexperf.report.footer import footer_texts, reserve, stamp
@@ -43,6 +44,7 @@ class ReportResult:
     passed: bool
     seconds: float
     notes: list[str] = field(default_factory=list)
+    verdict: str = "FAIL"  # PASS, FAIL or UNPROVEN, as check's overall line
     # --compare: each other configuration's name, file and whether it meets every requirement
     compared: list[dict[str, Any]] = field(default_factory=list)
 
@@ -54,6 +56,7 @@ class ReportResult:
             "pdf": str(self.pdf),
             "pages": self.pages,
             "figures": [str(p) for p in self.files if p.suffix == ".png"],
+            "verdict": self.verdict,
             "passed": self.passed,
             "seconds": self.seconds,
             "notes": self.notes,
@@ -164,6 +167,7 @@ def build_report(
         passed=result.passed,
         seconds=time.perf_counter() - started,
         notes=result.notes,
+        verdict=result.verdict,
         compared=result.compared,
     )
 
@@ -369,6 +373,7 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
         passed=all(v.passed for v in analyses.verdicts),
         seconds=0.0,
         notes=notes,
+        verdict=overall_verdict([v.verdict for v in analyses.verdicts]),
         compared=[{"label": label, "name": other.name, "case": str(other.path)}
                   for label, other in analyses.compare],
     )

@@ -43,7 +43,7 @@ from tuflexperf.report.measured_figures import (
     sine_sweep,
     thrust_surface,
 )
-from tuflexperf.report.style import FAIL_FILL, PASS_FILL, legend_outside, unit
+from tuflexperf.report.style import FAIL_FILL, PASS_FILL, UNPROVEN_FILL, legend_outside, unit
 
 # the report's pages by name: the page frame (canvas), the measurement's, the flight's
 __all__ = [
@@ -66,9 +66,11 @@ def requirement_table(case: Case, analyses: Analyses) -> Any:
     ax.axis("off")
     verdicts = analyses.verdicts
     passed = all(v.passed for v in verdicts)
+    unproven = not passed and all(v.verdict != "FAIL" for v in verdicts)
     fig.suptitle(
         f"Requirements of {case.name}: "
-        + ("none stated" if not verdicts else "all met" if passed else "NOT all met"),
+        + ("none stated" if not verdicts else "all met" if passed else
+           "NOT all shown met (UNPROVEN)" if unproven else "NOT all met"),
         fontsize=14,
         color="black" if passed else LIMIT_COLOUR,
     )
@@ -84,7 +86,7 @@ def requirement_table(case: Case, analyses: Analyses) -> Any:
             unit(v.unit),
             fmt(v.margin),
             "max" if v.kind == "max" else "min",
-            "PASS" if v.passed else "FAIL",
+            v.verdict,
         ]
         for v in verdicts
     ]
@@ -104,7 +106,9 @@ def requirement_table(case: Case, analyses: Analyses) -> Any:
                 cell.set_facecolor("0.85")
                 cell.set_text_props(weight="bold")
             else:
-                cell.set_facecolor(PASS_FILL if verdicts[r - 1].passed else FAIL_FILL)
+                word = verdicts[r - 1].verdict
+                cell.set_facecolor(PASS_FILL if word == "PASS" else FAIL_FILL
+                                   if word == "FAIL" else UNPROVEN_FILL)
     lines = [
         "Margin: positive when met (limit - value for a maximum, value - limit for a minimum)."
     ]

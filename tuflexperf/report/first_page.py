@@ -53,10 +53,13 @@ def fmt(value: float | None, digits: int = 3) -> str:
 
 
 def verdict_word(verdict: Any) -> str:
-    """PASS or FAIL as the verdict says (its own ``status`` where it has one)."""
+    """PASS, FAIL or UNPROVEN as the verdict says (its own ``status`` where it has one)."""
     status = getattr(verdict, "status", None)
     if isinstance(status, str) and status:
         return status.upper()
+    word = getattr(verdict, "verdict", None)
+    if isinstance(word, str) and word:
+        return word
     return "PASS" if verdict.passed else "FAIL"
 
 
@@ -93,6 +96,10 @@ def verdict_lines(verdicts: list[Any], width: int,
                       Segment(word, _word_colour(word), True, len(row))))
         if failed:
             lines += _wrapped(failure_reason(v), width, 2, FAIL_COLOUR, True)
+        elif word == "UNPROVEN":  # the disagreement, both values and what would settle it
+            lines += _wrapped(f"UNPROVEN: {v.reason}", width, 2, CAVEAT_COLOUR, True)
+            if getattr(v, "settle", ""):
+                lines += _wrapped(f"to settle: {v.settle}", width, 2, CAVEAT_COLOUR, True)
         elif v.reason:
             lines += _wrapped(v.reason, width, 2, QUIET)
         for warning in v.details.get("warnings", []):

@@ -219,9 +219,10 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
 
 
 # --- 8. take-off ----------------------------------------------------------------------------
-def _verdict_passed(analyses: Analyses, name: str) -> bool:
-    """PASS/FAIL as ``check`` decided it (analysis/requirements.py), never re-judged here."""
-    return any(v.name == name and v.passed for v in analyses.verdicts)
+def _verdict_word(analyses: Analyses, name: str) -> str:
+    """PASS, FAIL or UNPROVEN as ``check`` decided it (analysis/requirements.py), never
+    re-judged here (FAIL where no verdict of that name exists)."""
+    return next((v.verdict for v in analyses.verdicts if v.name == name), "FAIL")
 
 
 def _takeoff_not_attainable(case: Case, analyses: Analyses) -> Any:
@@ -295,9 +296,8 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     limit = requirement.max_ground_roll_m if requirement is not None else None
     for ax in (av, af):
         if limit is not None:
-            met = _verdict_passed(analyses, "takeoff_ground_roll")
-            ax.axvline(limit, **STYLE["limit"],
-                       label=f"runway limit {limit:g} m ({'PASS' if met else 'FAIL'})")
+            ax.axvline(limit, **STYLE["limit"], label=f"runway limit {limit:g} m "
+                       f"({_verdict_word(analyses, 'takeoff_ground_roll')})")
             right = max(right, limit)
     if limit is not None and not catapult and roll > limit:
         _mark_beyond(av, limit, roll, v_lo, f"ground roll FAIL: {roll:.1f} m, "
@@ -306,8 +306,7 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     if far is not None:
         av.axvline(far, **style_of("limit", linestyle="-."),
                    label=f"obstacle distance limit {far:g} m ("
-                   + ("PASS" if _verdict_passed(analyses, "takeoff_distance_to_obstacle")
-                      else "FAIL") + ")")
+                   + _verdict_word(analyses, "takeoff_distance_to_obstacle") + ")")
         right = max(right, far)
         if obstacle is not None and obstacle > far:
             _mark_beyond(av, far, obstacle, result.transition_speed_m_s,
@@ -587,10 +586,10 @@ def endurance(case: Case, analyses: Analyses) -> Any:
         af.axvline(requirement.throttle, **style_of("limit", linestyle=":"),
                    label=f"at the required throttle {requirement.throttle:g}")
         if result is not None:
-            met = _verdict_passed(analyses, "flight_endurance")
             af.plot([requirement.throttle], [result.flight_endurance_min], **POINT["verdict"],
                     label=f"{result.flight_endurance_min:.1f} min at "
-                    f"{result.airspeed_m_s:.1f} m/s ({'PASS' if met else 'FAIL'})")
+                    f"{result.airspeed_m_s:.1f} m/s "
+                    f"({_verdict_word(analyses, 'flight_endurance')})")
     af.set_xlabel("throttle, all engines x (fraction)")
     af.set_ylabel("endurance (min)")
     _overlay(af, analyses, "endurance")

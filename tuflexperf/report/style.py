@@ -51,6 +51,7 @@ CONFIG_COLOURS = (BLUE, GREEN, BROWN, PINK)
 
 EXTRAPOLATED_FILL = "0.90"  # airspeeds beyond the tested range
 PASS_FILL, FAIL_FILL = "#c8e6c9", "#ffcdd2"
+UNPROVEN_FILL = "#ffe0b2"  # amber: met on one reading of disputed evidence, not another
 UNITS = {"kg/m^3": "kg/m\u00b3", "m/s^2": "m/s\u00b2", "m^2": "m\u00b2"}
 
 
