@@ -221,6 +221,7 @@ class BatchEvaluator:
         size: int | None = None,
         coefficients: Array | None = None,
         extrapolation_n: Array | None = None,
+        power_scale: Array | None = None,
     ) -> BatchResult:
         """Every requirement's value for each of ``B`` parameter sets.
 
@@ -234,6 +235,8 @@ class BatchEvaluator:
             Thrust coefficients per engine and sample (POLY22_TERMS order, the file's units).
         extrapolation_n : array ``(E, B)``, optional
             Thrust error [N] per engine and sample added beyond the tested airspeed range.
+        power_scale : array ``(B,)``, optional
+            Factor [-] per sample on every fan's electrical power (the error model's).
 
         Returns
         -------
@@ -244,10 +247,11 @@ class BatchEvaluator:
         # mass) may overflow on its way to NaN, "not attainable": numpy's warnings about it
         # would only clutter stderr (margins and sweeps; samples said so already)
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            return self._evaluate(values, size, coefficients, extrapolation_n)
+            return self._evaluate(values, size, coefficients, extrapolation_n, power_scale)
 
     def _evaluate(self, values: Mapping[str, Array] | None, size: int | None,
-                  coefficients: Array | None, extrapolation_n: Array | None) -> BatchResult:
+                  coefficients: Array | None, extrapolation_n: Array | None,
+                  power_scale: Array | None = None) -> BatchResult:
         values = dict(values or {})
         if size is None:
             if values:
@@ -264,6 +268,7 @@ class BatchEvaluator:
             size=size,
             stall_margin=_column(values, "requirements.envelope.stall_margin",
                                  stall_margin_of(self.case), size),
+            power_scale=None if power_scale is None else np.asarray(power_scale, dtype=float),
         )
         out: dict[str, Array] = {}
         limits: dict[str, Array] = {}
@@ -555,7 +560,9 @@ def packs_surely_never_bind(model: BatchModel, grid: Array, packs: Any,
     densest = float(np.max(np.asarray(model.density, dtype=float)))
     if not (limit.size and np.isfinite(densest) and densest > 0.0 and np.isfinite(top)):
         return False
-    shared = _DensestAir(model.propulsion, densest)
+    scale = getattr(model, "power_scale", None)
+    shared = _DensestAir(model.propulsion, densest,
+                         None if scale is None else float(np.max(scale)))
     engines = model.propulsion.engines if packs.own_surfaces else (None,)
     least_limit = float(np.min(limit)) * (1.0 - 1e-9)
     for engine in engines:
@@ -579,3 +586,4 @@ class _DensestAir:
 
     propulsion: Propulsion
     density: float
+    power_scale: float | None = None  # the rows' largest factor on the power [-]

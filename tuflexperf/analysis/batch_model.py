@@ -56,6 +56,8 @@ class BatchModel(LevelFlightRows, GroundRollRows):
     packs_airborne: Array | None = None
     # where those packs reach their cut-off in the climb, before the obstacle
     packs_beyond: NDArray[np.bool_] | None = None
+    # per row, the error model's factor on every fan's electrical power [-] (None: 1)
+    power_scale: Array | None = None
 
     def transition_speed(self) -> Array:
         """The take-off arc's true airspeed [m/s] per row ``(B,)``: 1.15 V_stall."""

@@ -53,6 +53,11 @@ MAX_CL_MAX = 5.0
 MAX_OBSTACLE_HEIGHT_M = 100.0
 # Highest pack voltage [V] a propulsion file may name (electric aircraft run up to ~800 V)
 MAX_REFERENCE_VOLTAGE_V = 1000.0
+# beyond any subsonic airframe's speed (a textbook jet's table may reach past Mach 1 at
+# altitude's lower speed of sound, so not MAX_AIRSPEED_M_S)
+MAX_TESTED_AIRSPEED_M_S = 1000.0
+MAX_THRUST_SD_N = 1.0e5
+"""The largest thrust error [N] (1 sd) a file may state: ten tonnes, no ducted fan's."""
 # Largest exponent of thrust on the voltage ratio, either sign (2 by rpm ~ U; fit searches
 # -2..6)
 MAX_VOLTAGE_EXPONENT = 10.0
@@ -154,6 +159,66 @@ class PowerSurfaceSchema(StrictModel):
     n_points: Annotated[int, Field(ge=0)] | None = None
 
 
+class LackOfFitSchema(StrictModel):
+    """The fit's lack-of-fit test of one engine's poly22 (``fit`` writes it; issue 43/44).
+
+    ``model_form_rms_n`` [N] is the error of the poly22's shape itself, the scatter of the
+    holds' means about the surface beyond what their own repeat scatter explains: the
+    sampler's model-form error (a correlated surface, :mod:`tuflexperf.analysis.error_model`).
+    """
+
+    f_statistic: NonNegative | None = None
+    p_value: Annotated[float, Field(ge=0, le=1)] | None = None
+    model_form_rms_n: Annotated[float, Field(ge=0, le=MAX_THRUST_SD_N)] | None = None
+    pure_error_rms_n: Annotated[float, Field(ge=0, le=MAX_THRUST_SD_N)] | None = None
+    dof_lack_of_fit: Annotated[int, Field(ge=0)] | None = None
+    dof_pure_error: Annotated[int, Field(ge=0)] | None = None
+    worst_throttle: float | None = None
+    worst_airspeed_m_s: float | None = None
+    worst_residual_n: float | None = None
+    best_alternative: str | None = None
+
+
+RIG_KEYS: tuple[str, ...] = ("airspeed_bias_sd_m_s", "thrust_scale_sd", "balance_zero_sd_n",
+                             "voltage_sd_v")
+"""The rig's systematic errors, 1 sd each, in the order of ``rig_uncertainty.correlation``."""
+
+
+class RigUncertaintySchema(StrictModel):
+    """Systematic errors of the test rig, one standard deviation each (issue 44): the tunnel's
+    airspeed calibration [m/s], the balance's scale [fraction] and zero [N], the logged pack
+    voltage [V]; one error for the whole campaign, not a scatter per point. ``correlation``
+    (4x4, :data:`RIG_KEYS` order) where two share a cause. A key left out takes the
+    sampler's stated default (:data:`tuflexperf.analysis.error_model.RIG_DEFAULTS`)."""
+
+    # a scale error of 100 % is no balance (the thrust could be zero); negatives are no sd
+    airspeed_bias_sd_m_s: Annotated[float, Field(ge=0, le=MAX_TESTED_AIRSPEED_M_S)] | None = None
+    thrust_scale_sd: Annotated[float, Field(ge=0, lt=1)] | None = None
+    balance_zero_sd_n: Annotated[float, Field(ge=0, le=MAX_THRUST_SD_N)] | None = None
+    voltage_sd_v: Annotated[float, Field(ge=0, le=MAX_REFERENCE_VOLTAGE_V)] | None = None
+    correlation: list[list[float]] | None = None
+
+    @field_validator("correlation")
+    @classmethod
+    def _check_correlation(cls, matrix: list[list[float]] | None) -> list[list[float]] | None:
+        if matrix is None:
+            return matrix
+        n = len(RIG_KEYS)
+        if len(matrix) != n or any(len(row) != n for row in matrix):
+            raise ValueError(f"must be a {n}x{n} matrix ({', '.join(RIG_KEYS)})")
+        array = np.asarray(matrix, dtype=float)
+        if not np.all(np.isfinite(array)) or np.any(np.abs(array) > 1.0):
+            raise ValueError("every entry must be finite and within [-1, 1]")
+        if not np.allclose(np.diag(array), 1.0):
+            raise ValueError("the diagonal must be 1")
+        if not np.allclose(array, array.T, atol=1e-12):
+            raise ValueError("must be symmetric")
+        if float(np.linalg.eigvalsh(array).min()) < -1e-9:
+            raise ValueError("must be positive semi-definite (no set of errors has these "
+                             "correlations)")
+        return matrix
+
+
 class EngineSchema(StrictModel):
     name: EngineName
     coefficients: Poly22Schema
@@ -164,6 +229,13 @@ class EngineSchema(StrictModel):
     covariance: list[list[float]] | None = None  # of p00..p02 (POLY22_TERMS order) [N^2]
     residual_sd_n: NonNegative | None = None
     extrapolation_sd_n: NonNegative | None = None
+    # how far beyond the rest the left-out top airspeed lay [m/s]: extrapolation_sd_n is
+    # the error at that distance, the sampler grows it with the distance flown beyond
+    extrapolation_distance_m_s: Annotated[float, Field(gt=0, le=MAX_TESTED_AIRSPEED_M_S)] | \
+        None = None
+    # the largest of those errors over the left-out airspeed's throttles [N]
+    extrapolation_worst_n: Annotated[float, Field(ge=0, le=MAX_THRUST_SD_N)] | None = None
+    lack_of_fit: LackOfFitSchema | None = None
 
     @model_validator(mode="after")
     def _check_covariance(self) -> EngineSchema:
@@ -191,9 +263,6 @@ class EngineSchema(StrictModel):
 MAX_SOURCE_VALUES = 1_000_000
 
 
-# beyond any subsonic airframe's speed (a textbook jet's table may reach past Mach 1 at
-# altitude's lower speed of sound, so not MAX_AIRSPEED_M_S)
-MAX_TESTED_AIRSPEED_M_S = 1000.0
 
 
 class PropulsionSchema(StrictModel):
@@ -217,6 +286,7 @@ class PropulsionSchema(StrictModel):
     fan_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=MAX_FAN_AREA_M2)] | None = None
     throttle_unit: Literal["fraction", "percent"] = "fraction"
     engines: Annotated[list[EngineSchema], Field(min_length=1)]
+    rig_uncertainty: RigUncertaintySchema | None = None  # the campaign manifest's, by `fit`
     source: dict[str, Any] | None = None  # free-form provenance written by `fit`
 
     @field_validator("source", mode="before")
@@ -242,12 +312,41 @@ class PropulsionSchema(StrictModel):
         names = [engine.name for engine in self.engines]
         if len(set(names)) != len(names):
             raise ValueError(f"engines: duplicate engine names {names}")
+        self._check_rig_against_quantities()
         for engine in self.engines:
             if engine.windmilling_drag_coefficient is not None and self.fan_area_m2 is None:
                 raise ValueError(
                     f"engines: {engine.name}: windmilling_drag_coefficient needs fan_area_m2"
                 )
         return self
+
+
+    def _check_rig_against_quantities(self) -> None:
+        """A systematic error larger than the quantity it is an error of is no rig's: the
+        tunnel's airspeed bias beyond its top airspeed, the balance's zero beyond the
+        smallest fan's full-throttle static thrust, the voltage's beyond the reference."""
+        rig = self.rig_uncertainty
+        if rig is None:
+            return
+        high = self.tested_airspeed_m_s[1]
+        if rig.airspeed_bias_sd_m_s is not None and rig.airspeed_bias_sd_m_s >= high:
+            raise ValueError(f"rig_uncertainty.airspeed_bias_sd_m_s: {rig.airspeed_bias_sd_m_s:g} "
+                             f"m/s is not below the top tested airspeed {high:g} m/s: an error "
+                             "larger than the quantity")
+        scale = 100.0 if self.throttle_unit == "percent" else 1.0
+        static = min(sum(getattr(e.coefficients, t) * f for t, f in
+                         (("p00", 1.0), ("p10", scale), ("p20", scale * scale)))
+                     for e in self.engines)
+        if rig.balance_zero_sd_n is not None and rig.balance_zero_sd_n >= abs(static):
+            raise ValueError(f"rig_uncertainty.balance_zero_sd_n: {rig.balance_zero_sd_n:g} N is "
+                             f"not below the smallest full-throttle static thrust {static:.3g} "
+                             "N: an error larger than the quantity")
+        reference = self.reference_voltage_v
+        if (rig.voltage_sd_v is not None and reference is not None
+                and rig.voltage_sd_v >= reference):
+            raise ValueError(f"rig_uncertainty.voltage_sd_v: {rig.voltage_sd_v:g} V is not below "
+                             f"reference_voltage_v {reference:g} V: an error larger than the "
+                             "quantity")
 
 
 # --- case -----------------------------------------------------------------------------------
@@ -405,8 +504,13 @@ class PropulsionUncertaintySchema(StrictModel):
     covariance: bool = True
     extrapolation: bool = True
     # the fit's residual_sd_n as the model's own error at a point (the paper's +-0.5 N):
-    # the coefficients' covariance is the mean surface's uncertainty alone
+    # the coefficients' covariance is the mean surface's uncertainty alone. The older name
+    # of model_form: either false leaves the model-form surface out
     residual: bool = True
+    model_form: bool = True  # the poly22's shape error, a correlated surface (lack_of_fit)
+    rig: bool = True  # the rig's systematic errors (rig_uncertainty, else stated defaults)
+    power_model: bool = True  # the power model against the battery's discharge runs
+    battery_fit: bool = True  # the battery fit's own error (its cross-validation)
 
 
 def _whole_number(value: Any) -> Any:
@@ -513,6 +617,13 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
             ),
             residual_sd_n=e.residual_sd_n,
             extrapolation_sd_n=e.extrapolation_sd_n,
+            extrapolation_distance_m_s=e.extrapolation_distance_m_s,
+            extrapolation_worst_n=e.extrapolation_worst_n,
+            model_form_sd_n=(e.lack_of_fit.model_form_rms_n if e.lack_of_fit is not None
+                             else None),
+            model_form_worst_n=(abs(e.lack_of_fit.worst_residual_n)
+                                if e.lack_of_fit is not None
+                                and e.lack_of_fit.worst_residual_n is not None else None),
             windmilling_drag_coefficient=e.windmilling_drag_coefficient,
             power_coefficients=(
                 {term: getattr(e.power.coefficients, term) for term in POLY22_TERMS}
@@ -534,6 +645,8 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
         fan_area_m2=schema.fan_area_m2,
         reference_voltage_v=schema.reference_voltage_v,
         voltage_exponent=schema.voltage_exponent,
+        rig_uncertainty=(None if schema.rig_uncertainty is None
+                         else schema.rig_uncertainty.model_dump()),
     )
 
 
