@@ -79,6 +79,12 @@ def paper_table() -> str:
     takeoff = _json(["takeoff"])
     trim, oei = _json(["trim"]), _json(["oei"])
     endurance = _json(["endurance", "--throttle", "0.5"])
+    # the measured-power reading (battery.yaml fit.power_correction) flown alike
+    from tuflexperf.analysis.power_reading import measured_power_readings
+    from tuflexperf.analysis.study import Study
+
+    (reading,) = measured_power_readings(case)
+    measured = Study(reading.case).endurance(0.5).flight_endurance_min
     rows += [
         ["take-off ground roll", "55.5 m", f"{takeoff['ground_roll_m']:.2f} m",
          f"{takeoff['ground_roll_m'] - 55.5:+.2f} m"],
@@ -92,6 +98,8 @@ def paper_table() -> str:
         ["flight at throttle 0.5, two packs per fan", "about 15 min",
          f"{endurance['flight_endurance_min']:.2f} min",
          f"{endurance['flight_endurance_min'] - 15.0:+.2f} min"],
+        ["the same flight on the discharge runs' measured power", "about 15 min",
+         f"{measured:.2f} min", f"{measured - 15.0:+.2f} min"],
     ]
     return _table(["quantity", "paper", "tool, shipped case", "tool - paper"], rows)
 

@@ -173,15 +173,18 @@ def electrical_power_w(thrust_n: np.ndarray, airspeed: np.ndarray, volts: np.nda
 
 def powertrain(
     t: np.ndarray, lagged: np.ndarray, airspeed: np.ndarray, coefficients: dict[str, float],
-    start_charge_ah: float,
+    start_charge_ah: float, throttle_curve: float = 1.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Thrust (N), pack voltage (V) and current (A) per sample, and the charge at the end.
 
     The pack's loaded voltage sets the thrust (``(U/U_ref)^2``), the thrust the power and
-    the power the current: a fixed point, converged in a few passes.
+    the power the current: a fixed point, converged in a few passes. ``throttle_curve`` != 1:
+    the ESC's rpm goes as ``x^throttle_curve``, a thrust law no poly22 fits exactly (a harsh
+    campaign, issue 43 item 4).
     """
     dt = 1.0 / SAMPLE_RATE_HZ
-    thrust_ref = poly22(lagged, airspeed, coefficients)
+    shaped = lagged if throttle_curve == 1.0 else np.maximum(lagged, 0.0) ** throttle_curve
+    thrust_ref = poly22(shaped, airspeed, coefficients)
     resistance = PACK_RESISTANCE_OHM / PACKS_IN_PARALLEL
     charge = np.full(t.size, start_charge_ah)
     volts = open_circuit_voltage_v(charge)
@@ -203,6 +206,7 @@ def rig_response(
     true_airspeed: np.ndarray,
     coefficients: dict[str, float],
     start_charge_ah: float = 0.0,
+    throttle_curve: float = 1.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Measured force (thrust minus structure drag, plus rig noise), voltage, current, charge."""
     dt = 1.0 / SAMPLE_RATE_HZ
@@ -210,7 +214,7 @@ def rig_response(
     alpha = np.exp(-dt / SPOOL_LAG_S)
     lagged = lfilter([1 - alpha], [1, -alpha], delayed, zi=[alpha * delayed[0]])[0]
     thrust, volts, amps, end_charge = powertrain(
-        t, lagged, true_airspeed, coefficients, start_charge_ah
+        t, lagged, true_airspeed, coefficients, start_charge_ah, throttle_curve
     )
     force = thrust - structure_drag_n(true_airspeed)
     tone_hz = 50.0 + 130.0 * lagged
@@ -248,7 +252,8 @@ def quantise(columns: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
 
 
 def step_run(
-    rng: np.random.Generator, airspeed: float, coefficients: dict[str, float], charge_ah: float
+    rng: np.random.Generator, airspeed: float, coefficients: dict[str, float], charge_ah: float,
+    throttle_curve: float = 1.0,
 ):
     """Throttle 0 -> 100 % then down in 10 % steps to 10 %, then 0 (paper section 3).
 
@@ -261,7 +266,7 @@ def step_run(
     throttle = np.asarray(levels)[np.searchsorted(edges, t, side="right") - 1]
     true_v, measured_v = tunnel_airspeed(rng, airspeed, t)
     force, volts, amps, charge_ah = rig_response(
-        rng, t, throttle, true_v, coefficients, charge_ah
+        rng, t, throttle, true_v, coefficients, charge_ah, throttle_curve
     )
     volts = volts + rng.normal(0.0, ELECTRICAL_NOISE["voltage_v"], t.size)
     amps = amps + rng.normal(0.0, ELECTRICAL_NOISE["current_a"], t.size)
@@ -326,7 +331,12 @@ def write_run(path: Path, columns: dict[str, np.ndarray]) -> None:
         path.write_bytes(data)
 
 
-def main() -> None:
+def main(out: Path = OUT, seed: int = SEED, throttle_curve: dict[str, float] | None = None,
+         steps_only: bool = False) -> None:
+    """Write the campaign to ``out``. The shipped one: the defaults. ``throttle_curve`` per
+    engine (rpm ~ x^curve) and ``steps_only`` (no sweeps, no drag run) make the harsh
+    campaigns the tests fit (issue 43 item 4)."""
+    curves = throttle_curve or {}
     truth = truth_coefficients()
     runs: list[dict[str, str]] = []
     counter = 0
@@ -334,7 +344,7 @@ def main() -> None:
     def rng_for() -> np.random.Generator:
         nonlocal counter
         counter += 1
-        return np.random.default_rng([SEED, counter])
+        return np.random.default_rng([seed, counter])
 
     charge_log: dict[str, list[float]] = {}
     for engine, ext in (("EDF1", ".csv.gz"), ("EDF2", ".mat")):
@@ -345,18 +355,19 @@ def main() -> None:
             if v == PACK_CHANGE_AIRSPEED_M_S:
                 charge = 0.0  # the paper's pack change before the last run
             charge_log.setdefault(engine, []).append(round(charge, 4))
-            columns, charge = step_run(rng, v, truth[engine], charge)
+            columns, charge = step_run(rng, v, truth[engine], charge, curves.get(engine, 1.0))
             add_nans(rng, columns, int(rng.integers(0, 6)))
-            write_run(OUT / name, columns)
+            write_run(out / name, columns)
             runs.append({"file": name, "engine": engine, "kind": "throttle_steps"})
-    for engine, ext in (("EDF1", ".mat"), ("EDF2", ".csv.gz")):
+    for engine, ext in (("EDF1", ".mat"), ("EDF2", ".csv.gz"))[: 0 if steps_only else 2]:
         for v in SWEEP_AIRSPEEDS_M_S:
             rng = rng_for()
             name = f"runs/{engine.lower()}_sweep_v{v:02.0f}{ext}"
-            write_run(OUT / name, sweep_run(rng, v, truth[engine]))
+            write_run(out / name, sweep_run(rng, v, truth[engine]))
             runs.append({"file": name, "engine": engine, "kind": "sine_sweep"})
-    write_run(OUT / "runs/structure_drag.csv", drag_run(rng_for()))
-    runs.append({"file": "runs/structure_drag.csv", "kind": "drag_sweep"})
+    if not steps_only:
+        write_run(out / "runs/structure_drag.csv", drag_run(rng_for()))
+        runs.append({"file": "runs/structure_drag.csv", "kind": "drag_sweep"})
 
     manifest = [
         "# Synthetic TU-Flex test campaign; written by scripts/generate_campaign.py (seeded).",
@@ -372,12 +383,12 @@ def main() -> None:
     for run in runs:
         fields = ", ".join(f"{key}: {value}" for key, value in run.items())
         manifest.append(f"  - {{{fields}}}")
-    (OUT / "campaign.yaml").write_text("\n".join(manifest) + "\n", encoding="utf-8")
+    (out / "campaign.yaml").write_text("\n".join(manifest) + "\n", encoding="utf-8")
 
     truth_doc = {
         "note": "Ground truth of the synthetic campaign (scripts/generate_campaign.py); "
         "not an input of fit.",
-        "seed": SEED,
+        "seed": seed,
         "sample_rate_hz": SAMPLE_RATE_HZ,
         "delay_s": DELAY_S,
         "spool_lag_s": SPOOL_LAG_S,
@@ -394,9 +405,11 @@ def main() -> None:
         "perturbation": PERTURBATION,
         "engines": [{"name": name, "coefficients": c} for name, c in truth.items()],
     }
-    (OUT / "truth.yaml").write_text(yaml.safe_dump(truth_doc, sort_keys=False), encoding="utf-8")
-    total = sum(p.stat().st_size for p in OUT.rglob("*") if p.is_file())
-    print(f"wrote {len(runs)} runs to {OUT} ({total / 1e6:.2f} MB)")
+    if curves:
+        truth_doc["throttle_curve"] = curves
+    (out / "truth.yaml").write_text(yaml.safe_dump(truth_doc, sort_keys=False), encoding="utf-8")
+    total = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
+    print(f"wrote {len(runs)} runs to {out} ({total / 1e6:.2f} MB)")
 
 
 if __name__ == "__main__":

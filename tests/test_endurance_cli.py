@@ -229,13 +229,24 @@ def test_real_subprocess(case_path):
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--throttle" in bad.stderr
 
 
-def test_run_changed_since_the_fit_is_exit_2(tmp_path):
+def test_a_run_changed_since_the_fit_is_refused_where_it_is_read(tmp_path):
+    """check and endurance fly the battery file's fitted parameters and open no run (issue 43
+    item 2): a run edited since the fit leaves their answer as it was; the report, which
+    draws the runs, refuses it (sha256), naming the file, key and run."""
+    from tuflexperf.analysis.battery_fit import cached_case_battery, characterise_battery
+
     path = _battery_copy(tmp_path, lambda d: None)
+    case_file = _case_with(tmp_path, path)
+    before = run("endurance", "--throttle", "0.5", "--case", str(case_file), "--json")
     run_file = path.parent / "endurance" / "edf1_endurance_75.csv"
     run_file.write_text(run_file.read_text().replace("\n1", "\n2", 1))
-    result = run("endurance", "--throttle", "0.5", "--case", str(_case_with(tmp_path, path)))
-    assert result.exit_code == 2, result.output
-    assert run_file.name in result.stderr and "changed since" in result.stderr
+    after = run("endurance", "--throttle", "0.5", "--case", str(case_file), "--json")
+    assert before.exit_code == after.exit_code == 0, after.output
+    assert (json.loads(after.stdout)["flight_endurance_min"]
+            == json.loads(before.stdout)["flight_endurance_min"])
+    case = load_case(case_file)
+    with pytest.raises(InputError, match="fit.runs: edf1_endurance_75.csv changed since"):
+        characterise_battery(cached_case_battery(case), case).discharge_runs()
 
 
 def test_a_power_model_far_below_momentum_theory_flies_no_endurance(tmp_path):

@@ -157,11 +157,14 @@ def test_each_rig_error_moves_the_probability_as_phi_says(tmp_path, key, sd, shi
 
 
 def test_the_model_form_surface_is_correlated_over_the_operating_points(tmp_path) -> None:
-    """sd ``s`` at the tested corners, ``s / sqrt 2`` at the centre, the same sign along the
-    roll's airspeeds (it does not average away), correlated 0.5 between the engines."""
+    """sd ``s`` (the largest lack-of-fit residual) at the tested corners, ``s / sqrt 2`` at
+    the edges' middles, none at the centre (zero mean over the domain), the same sign along
+    the roll's airspeeds (it does not average away), correlated 0.5 between the engines;
+    without the largest residual, ``sqrt 3`` x the RMS at the corners."""
     def lack(prop):
         for engine, s in zip(prop["engines"], (0.4, 0.8), strict=True):
-            engine["lack_of_fit"] = {"model_form_rms_n": s}
+            engine["lack_of_fit"] = {"model_form_rms_n": s / 3, "worst_residual_n": -s,
+                                     "dof_lack_of_fit": 64, "dof_pure_error": 140}
 
     case = load_case(_case(tmp_path / "mf", lack, uncertainty={
         "samples": 20000, "propulsion": {**ALL_OFF, "model_form": True}}))
@@ -177,13 +180,27 @@ def test_the_model_form_surface_is_correlated_over_the_operating_points(tmp_path
         return delta[..., 0] + delta[..., 1] * x + delta[..., 2] * v
 
     for j, s in enumerate((0.4, 0.8)):
-        assert error(1.0, 0.0)[j].std() == pytest.approx(s, rel=0.05)
-        assert error(1.0, top)[j].std() == pytest.approx(s, rel=0.05)
-        assert error(0.5, top / 2)[j].std() == pytest.approx(s / math.sqrt(2.0), rel=0.05)
-        along = np.corrcoef(error(1.0, 0.0)[j], error(1.0, 17.0)[j])[0, 1]
-        assert along > 0.8
+        for corner in ((1.0, 0.0), (1.0, top), (0.0, 0.0)):
+            assert error(*corner)[j].std() == pytest.approx(s, rel=0.05)
+        assert error(1.0, top / 2)[j].std() == pytest.approx(s / math.sqrt(2.0), rel=0.05)
+        assert error(0.5, top / 2)[j].std() < 1e-9 * s
+        # over the roll's airspeeds (0-17 m/s at full throttle) the error keeps its size: the
+        # independent noise of a point would average away to s / sqrt 18
+        roll = np.mean([error(1.0, v)[j] for v in np.linspace(0.0, 17.0, 18)], axis=0)
+        assert roll.std() > 0.6 * s
     between = np.corrcoef(error(1.0, 0.0)[0], error(1.0, 0.0)[1])[0, 1]
     assert between == pytest.approx(ENGINE_CORRELATION, abs=0.05)
+
+    def rms_only(prop):
+        for engine in prop["engines"]:
+            engine["lack_of_fit"] = {"model_form_rms_n": 0.3, "dof_lack_of_fit": 64,
+                                     "dof_pure_error": 140}
+
+    only = load_case(_case(tmp_path / "rms", rms_only, uncertainty={
+        "samples": 20000, "propulsion": {**ALL_OFF, "model_form": True}}))
+    corner = draw_chunk(only, plan_for(only), 0).coefficients[0] - nominal[0]
+    static = corner[:, 0] + corner[:, 1]  # at full throttle, 0 m/s
+    assert static.std() == pytest.approx(math.sqrt(3.0) * 0.3, rel=0.05)
     # and the batch flies those coefficients: its roll of a row is the single case's
     values = run_samples(case, plan).values["takeoff_ground_roll"]
     for row in (0, 1):
@@ -264,7 +281,8 @@ def test_bad_rig_errors_exit_2_naming_the_key(tmp_path, rig, named) -> None:
 
 def test_a_negative_model_form_error_exits_2_naming_the_key(tmp_path) -> None:
     def lack(prop):
-        prop["engines"][0]["lack_of_fit"] = {"model_form_rms_n": -0.3}
+        prop["engines"][0]["lack_of_fit"] = {"model_form_rms_n": -0.3, "dof_lack_of_fit": 64,
+                                             "dof_pure_error": 140}
 
     result = runner.invoke(app, ["check", str(_case(tmp_path / "neg", lack))])
     assert result.exit_code == 2 and "lack_of_fit.model_form_rms_n" in result.stderr, \

@@ -26,6 +26,7 @@ from tuflexperf.io.campaign import CampaignSchema, load_campaign
 from tuflexperf.io.case import AircraftSchema, CaseSchema, PropulsionSchema, load_case
 from tuflexperf.io.datasheet import DatasheetSchema
 from tuflexperf.io.discharge import DISCHARGE_COLUMNS
+from tuflexperf.io.flight_summary import FlightSummarySchema
 from tuflexperf.io.mission import _ALLOWED, MissionFileSchema, load_mission
 from tuflexperf.io.proptables import PropellerTablesSchema, read_propeller_tables
 from tuflexperf.io.yamlio import load_model
@@ -94,6 +95,7 @@ SECTIONS: dict[type[BaseModel], str] = {
     CampaignSchema: "campaign",
     PropellerTablesSchema: "proptables",
     DatasheetSchema: "datasheet",
+    FlightSummarySchema: "flight-summary",
 }
 
 
@@ -123,7 +125,8 @@ def schema_keys() -> list[Key]:
                     walk(sub, section, f"{path}{suffix}.")
 
     for model in (CaseSchema, AircraftSchema, PropulsionSchema, BatterySchema,
-                  MissionFileSchema, CampaignSchema, PropellerTablesSchema, DatasheetSchema):
+                  MissionFileSchema, CampaignSchema, PropellerTablesSchema, DatasheetSchema,
+                  FlightSummarySchema):
         walk(model, SECTIONS[model], "")
     unique: dict[tuple[str, str], Key] = {}
     for key in keys:

@@ -290,10 +290,9 @@ def test_sampled_cruises_cross_the_tested_range_on_sagging_packs(tmp_path) -> No
     """The samples' extrapolation error steps the thrust at the tested range's end; a cruise
     whose airspeed falls through it as the packs sag still flies (168 of 300 samples were
     'not attainable' there, the level-flight root sought across the step)."""
-    from tuflexperf.analysis import uncertainty
-
     import dataclasses
 
+    from tuflexperf.analysis import uncertainty
     from tuflexperf.analysis.error_model import error_model_for
     from tuflexperf.io.schemas import PropulsionUncertaintySchema
 

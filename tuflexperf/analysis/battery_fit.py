@@ -8,7 +8,7 @@ characterisation cached here per file contents.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from tuflexperf.analysis.cache import BoundedCache, file_key, fingerprint
@@ -24,18 +24,13 @@ from tuflexperf.io.discharge import (
     DischargeRun,
     read_discharge_run,
 )
-from tuflexperf.models.battery import (
-    DischargeParameters,
-    published_static_power_w,
-)
-from tuflexperf.models.thrust import (
-    engine_thrust_n,
-)
+from tuflexperf.models.battery import DischargeParameters
 from tuflexperf.reduction.battery import (
     DischargeFit,
     PowerFit,
-    fit_fan_power,
+    fan_power_of,
     refuse_unreproduced_runs,
+    run_engine,
 )
 
 # A discharge run's measured power further than this from the power model is a warning.
@@ -82,7 +77,20 @@ class BatteryCharacterisation:
     cross_validation: tuple[CrossValidation, ...] = ()
 
     def discharge_runs(self) -> tuple[DischargeRun, ...]:
-        """The runs themselves (read on demand: the report draws them, check does not)."""
+        """The runs themselves (read on demand: the report draws them, check does not).
+
+        A run changed since the fit is bad input here, where it is read: the figures would
+        draw other data against the pack model (check flies the fitted parameters only).
+        """
+        from tuflexperf.io.files import sha256_of
+
+        for r in self.runs:
+            if not isinstance(r, DischargeRun) and sha256_of(r.path) != r.sha256:
+                raise InputError(
+                    f"{self.battery.path}: fit.runs: {r.path.name} changed since the pack model "
+                    f"was fitted (sha256 differs); fit it again (tuflexperf fit "
+                    f"{self.battery.path.name} --out ...)"
+                )
         return tuple(r if isinstance(r, DischargeRun) else read_discharge_run(r.path)
                      for r in self.runs)
 
@@ -107,19 +115,13 @@ def characterise_battery(battery: Battery, case: Case) -> BatteryCharacterisatio
 
 
 def _stored_fit(battery: Battery) -> tuple[tuple[Any, ...], DischargeFit, tuple[Any, ...]]:
-    """The pack model a fitted battery file carries (written by ``fit``; nothing is read)."""
+    """The pack model a fitted battery file carries (written by ``fit``; no run is opened:
+    check reads parameters only, issue 43 item 2; the report, which draws the runs, checks
+    their sha256 where it reads them)."""
     from tuflexperf.io.discharge import RunSummary
-    from tuflexperf.io.files import sha256_of
 
     stored = battery.fitted
     assert stored is not None
-    for ref, r in zip(battery.runs, stored.runs, strict=True):
-        if sha256_of(ref.path) != r.sha256:  # the fit no longer describes this run
-            raise InputError(
-                f"{battery.path}: fit.runs: {ref.path.name} changed since the pack model was "
-                f"fitted (sha256 differs); fit it again (tuflexperf fit {battery.path.name} "
-                "--out ...)"
-            )
     summaries = tuple(
         RunSummary(ref.path, r.sha256, r.throttle, r.airspeed_m_s, r.mean_power_w,
                    r.mean_force_n, r.start_charge_ah, r.time_to_cutoff_s, r.charge_drawn_ah)
@@ -148,23 +150,10 @@ def _characterise(battery: Battery, case: Case) -> BatteryCharacterisation:
         battery, [(run.path.name, drawn) for run, drawn in zip(runs, drawn_of, strict=True)]
     )
     refuse_unreproduced_runs(battery, fit.parameters, runs)
-    engine_name = next((r.engine for r in battery.runs if r.engine), None)
-    engines = {e.name: e for e in case.propulsion.engines}
-    if engine_name is not None and engine_name not in engines:
-        raise InputError(
-            f"{battery.path}: runs: engine {engine_name!r} is not in the propulsion file "
-            f"(engines: {', '.join(engines)})"
-        )
-    engine = engines[engine_name] if engine_name else case.propulsion.engines[0]
-    static_n = float(engine_thrust_n(engine, 1.0, 0.0))
-    if static_n <= 0:
-        raise InputError(
-            f"{case.propulsion_path}: {engine.name}: no static thrust at full throttle"
-        )
-    static_w = published_static_power_w(
-        static_n, battery.published_power_range_w, battery.published_static_thrust_range_n
-    )
-    power = fit_fan_power(runs, static_w, battery.jet_velocity_m_s)
+    power = fan_power_of(battery, case.propulsion, runs, case.propulsion_path)
+    correction = run_engine(battery, case.propulsion).power_correction
+    if correction is not None:  # a reading flown on the measured power (power_reading.py)
+        power = replace(power, model=replace(power.model, power_correction=correction))
     return BatteryCharacterisation(battery, runs, fit, power, stored_checks)
 
 

@@ -298,7 +298,9 @@ class EnduranceModel:
         throttle and airspeed (at the test day's density, as measured); more than
         :data:`RUN_POWER_TOLERANCE` apart is a warning naming the run. The run's mean force
         (thrust less the rig's drag, a lower bound on thrust) against its power goes
-        through the thrust/power agreement check.
+        through the thrust/power agreement check. Both read the battery file's ``fit.runs``
+        (parameters only: no run is opened, issue 43 item 2); the case flown on the measured
+        power is the reading of :mod:`tuflexperf.analysis.power_reading`.
         """
         from tuflexperf.models.agreement import power_agreement
 
@@ -315,7 +317,8 @@ class EnduranceModel:
             )
             if abs(modelled - measured) > RUN_POWER_TOLERANCE * measured:
                 warnings.append(
-                    f"{run.path.name}: measured {measured:.0f} W at throttle {x:.2f}, "
+                    f"{battery.path.name} fit.runs: {run.path.name}: measured {measured:.0f} W "
+                    f"at throttle {x:.2f}, "
                     f"{v:.1f} m/s; the power model used here gives {modelled:.0f} W "
                     f"({100 * (modelled / measured - 1):+.0f} %): thrust and power data disagree"
                 )
@@ -408,6 +411,16 @@ class EnduranceModel:
             else:
                 high = mid
         return 0.5 * (low + high)
+
+    def level_airspeed_m_s(self, throttle: float) -> float:
+        """The level-flight (front side) airspeed [m/s] at ``throttle`` [-], without flying."""
+        self.check_throttle(throttle)
+        guess = self._speed_guess(throttle)
+        speed = float(self._rf_level(guess, throttle))
+        if not (abs(float(self.excess(throttle, speed))) < 1e-6
+                and speed >= self.min_throttle_airspeed - 1e-6):
+            speed = self._fast_root_fallback(throttle, guess)
+        return speed
 
     def check_throttle(self, throttle: float) -> None:
         """Raise :class:`NotAttainable` if ``throttle`` cannot hold level flight."""

@@ -58,23 +58,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.io.case import Case
-from tuflexperf.io.schemas import RIG_KEYS
+from tuflexperf.io.schemas import RIG_UNCERTAINTY_DEFAULTS
 from tuflexperf.models.aircraft import true_airspeed_m_s
 from tuflexperf.models.thrust import POLY22_TERMS
 
 Array = NDArray[np.float64]
 
-RIG_DEFAULTS: dict[str, float] = {
-    # a tunnel's pitot-static calibration, ~1 % of 20 m/s
-    "airspeed_bias_sd_m_s": 0.2,
-    # a balance's calibration against weights, 1 %
-    "thrust_scale_sd": 0.01,
-    # a load cell's zero drift over a campaign
-    "balance_zero_sd_n": 0.05,
-    # a logger's voltage calibration
-    "voltage_sd_v": 0.1,
-}
-"""The rig errors (1 sd) drawn where ``rig_uncertainty`` does not state them."""
+RIG_DEFAULTS: dict[str, float] = dict(RIG_UNCERTAINTY_DEFAULTS)
+"""The rig errors (1 sd) drawn where ``rig_uncertainty`` does not state them (the schema's
+stated defaults: a pitot-static tunnel's 0.2 m/s, a balance's 1 % and 0.05 N, 0.1 V)."""
+RIG_KEYS: tuple[str, ...] = tuple(RIG_UNCERTAINTY_DEFAULTS)
+"""The rig errors in the order of ``rig_uncertainty.correlation``."""
 RIG_LABELS = {"airspeed_bias_sd_m_s": ("airspeed bias", "m/s"),
               "thrust_scale_sd": ("thrust scale", ""),
               "balance_zero_sd_n": ("balance zero", "N"),

@@ -47,6 +47,11 @@ def fit_command(
     delay_s: float | None = typer.Option(
         None, "--delay-s", help="Delay in s to write instead of the measured one."
     ),
+    propulsion: Path | None = typer.Option(
+        None, "--propulsion", metavar="<path>",
+        help="Battery file only: the propulsion file whose power model the discharge runs' "
+        "measured power correction is fitted against (default: propulsion.yaml beside it).",
+    ),
     as_json: bool = JsonOption,
 ) -> None:
     """Reduce raw runs (or a thrust table) to the poly22 propulsion file."""
@@ -57,7 +62,7 @@ def fit_command(
         battery = input_file.is_file() and is_battery_file(input_file)
         out = Path("battery_fit.yaml" if battery else "propulsion_fit.yaml")
     with render.FitProgress() as progress:
-        summary = run_fit(input_file, out, table, glauert, delay_s, progress)
+        summary = run_fit(input_file, out, table, glauert, delay_s, progress, propulsion)
     render.show_fit(summary, as_json)
 
 

@@ -40,12 +40,20 @@ def flightlog_command(
                                         help="Write the aligned time series as CSV here."),
     plot_text: str | None = typer.Option(None, "--plot", metavar="<path>",
                                          help="Write flown power against airspeed (PNG) here."),
+    summary_text: str | None = typer.Option(
+        None, "--summary", metavar="<path>",
+        help="With --case: write the flown bins beside the model (YAML) here, for the case's "
+        "validation: {flights: [...]}."),
 ) -> None:
     """The flown side of a flight log (energy, power against airspeed); with --case, the model."""
     from tuflexperf.analysis.flown import reduce_flight
     from tuflexperf.io.flightlog import read_flight_log
 
     csv_out, plot = _output(csv_text, "--csv"), _output(plot_text, "--plot")
+    summary_out = _output(summary_text, "--summary")
+    if summary_out is not None and case_file is None:
+        raise InputError("--summary: needs --case (the summary sets the flown power beside "
+                         "the case's model)")
     for flag, value in (("--mass", mass_kg), ("--airborne-airspeed", airborne_airspeed)):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise InputError(f"{flag}: must be a positive number, got {value:g}")
@@ -60,7 +68,8 @@ def flightlog_command(
         from tuflexperf.io.case import load_case
 
         case = load_case(case_file)
-    outputs = {f: p for f, p in (("--csv", csv_out), ("--plot", plot)) if p is not None}
+    outputs = {f: p for f, p in (("--csv", csv_out), ("--plot", plot),
+                                 ("--summary", summary_out)) if p is not None}
     if outputs:
         from tuflexperf.io.files import guard_outputs
 
@@ -70,7 +79,8 @@ def flightlog_command(
 
             inputs += [p for _, p in case_files(case)]
         guard_outputs(outputs, inputs, "flightlog",
-                      {"--csv": "flight series", "--plot": "flight plot"})
+                      {"--csv": "flight series", "--plot": "flight plot",
+                       "--summary": "flight summary"})
     log = read_flight_log(log_path)
     mass = mass_kg if mass_kg is not None else (case.aircraft.mass_kg if case else None)
     threshold = airborne_airspeed
@@ -91,6 +101,15 @@ def flightlog_command(
         from tuflexperf.report.flight_plot import flight_png
 
         written[plot] = flight_png(flown, comparison, f"{Path(log_path).name}")
+    if summary_out is not None and comparison is not None:
+        from tuflexperf.io.flight_summary import flight_summary_text, log_digest
+
+        text = flight_summary_text(Path(log_path), log_digest(Path(log_path)), comparison,
+                                   flown.window.duration_s, flown.energy_wh)
+        if text is None:
+            raise InputError(f"--summary: {Path(log_path).name}: no flown bin has a predicted "
+                             "power to set it beside; nothing to summarise")
+        written[summary_out] = text
     if written:
         from tuflexperf.io.files import write_files_atomically
 
@@ -103,7 +122,7 @@ def flightlog_command(
     if as_json:
         sys.stdout.write(json.dumps(_clean(payload), indent=2) + "\n")
         return
-    _print_text(payload, [p for p in (csv_out, plot) if p is not None])
+    _print_text(payload, [p for p in (csv_out, plot, summary_out) if p is not None])
 
 
 def _default_threshold(case: Any) -> float:

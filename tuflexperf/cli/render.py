@@ -485,6 +485,35 @@ def echo_electrical(electrical: dict[str, Any] | None) -> None:
             )
 
 
+def echo_lack_of_fit(summary: dict[str, Any]) -> None:
+    """Each engine's lack-of-fit test, one line, and the rig's systematic errors."""
+    for e in summary["engines"]:
+        lof = e.get("lack_of_fit")
+        if lof is None:
+            typer.echo(f"lack of fit {e['name']}: not tested (no repeated holds and no samples "
+                       "inside the holds)")
+            continue
+        p = lof["p_value"]
+        basis = "replicate holds" if lof["pure_error_basis"] == "replicate_holds" else \
+            "within-hold scatter"
+        typer.echo(
+            f"lack of fit {e['name']}: F {fmt(lof['f_statistic'], 2)} on {lof['dof_lack_of_fit']}"
+            f"/{lof['dof_pure_error']} dof, p {'n/a' if p is None else f'{p:.2g}'}; model-form "
+            f"{fmt(lof['model_form_rms_n'])} N rms vs pure error {fmt(lof['pure_error_rms_n'])} N "
+            f"({basis}); worst x {lof['worst_throttle']:.2f}, {lof['worst_airspeed_m_s']:.1f} m/s "
+            f"({lof['worst_residual_n']:+.3f} N): "
+            + ("no F (the pure error is 0)" if p is None else "fits" if p >= 0.01
+               else "DOES NOT FIT its data")
+        )
+    rig = summary.get("rig_uncertainty")
+    if rig:
+        runs = {k: f", {e['runs']} runs' idle holds" for k, e in rig["estimates"].items()}
+        parts = [f"{key} {rig['values'][key]:.3g} ({rig['basis'][key]}"
+                 f"{runs.get(key, '') if rig['basis'][key] == 'estimated' else ''})"
+                 for key in rig["values"]]
+        typer.echo("rig uncertainty (sd): " + ", ".join(parts))
+
+
 def print_fit(summary: dict[str, Any]) -> None:
     """``fit``'s table: each engine's poly22, its quality, and the full-throttle thrust at
     rest and at the top of the tested airspeeds."""
@@ -535,6 +564,7 @@ def print_fit(summary: dict[str, Any]) -> None:
             + ("applied" if glauert["applied"] else "not applied (--glauert applies it)")
         )
     echo_electrical(summary.get("electrical"))
+    echo_lack_of_fit(summary)
     runs = [r for r in summary.get("runs", []) if "validation" in r]
     if runs:
         typer.echo("validation, model - measured force over steady segments (mean -/+, N):")
@@ -561,6 +591,14 @@ def show_fit(summary: dict[str, Any], as_json: bool) -> None:
         for c in fit["cross_validation"]:
             typer.echo(f"  fitted on {c['fitted_on']}: {c['predicted_run']} cut-off "
                        f"{c['predicted_min']:.2f} min vs {c['observed_min']:.2f} measured")
+        correction = fit.get("power_correction")
+        if correction is None:
+            typer.echo("  no measured power correction (no propulsion.yaml beside the file)")
+        else:
+            ratios = ", ".join(f"{Path(r['file']).name} x{r['ratio']:.3f}"
+                               for r in correction["runs"])
+            typer.echo(f"  measured power correction ({correction['form']}) against "
+                       f"{correction['model']} ({correction['propulsion']}): {ratios}")
         typer.echo(f"wrote {summary['out']}")
     else:
         print_fit(summary)

@@ -31,7 +31,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, ClassVar
+from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import Field, model_validator
 
@@ -99,6 +99,38 @@ class CrossValidationSchema(StrictModel):
     predicted_min: float
 
 
+class CorrectionRunSchema(StrictModel):
+    file: FileName
+    model_power_w: Positive
+    ratio: Positive
+
+
+Span = Annotated[list[Annotated[float, Field(ge=0)]], Field(min_length=2, max_length=2)]
+
+
+class PowerCorrectionSchema(StrictModel):
+    """Measured over modelled power of the discharge runs (models.power_correction)."""
+
+    form: Literal["constant", "linear in throttle", "linear in airspeed",
+                  "linear in throttle and airspeed"]
+    constant: float
+    per_throttle: float = 0.0
+    per_airspeed_s_m: float = 0.0
+    throttle_span: Span
+    airspeed_span_m_s: Span
+    model: str
+    propulsion: FileName
+    runs: Annotated[list[CorrectionRunSchema], Field(min_length=1)]
+
+    @model_validator(mode="after")
+    def _check(self) -> PowerCorrectionSchema:
+        for key in ("throttle_span", "airspeed_span_m_s"):
+            low, high = getattr(self, key)
+            if not low <= high:
+                raise ValueError(f"{key}: low {low} must not be above high {high}")
+        return self
+
+
 class BatteryFitSchema(StrictModel):
     """Written by ``tuflexperf fit``: the pack model fitted to the runs (check never fits)."""
 
@@ -118,6 +150,8 @@ class BatteryFitSchema(StrictModel):
     n_points: Annotated[int, Field(ge=1)]
     runs: Annotated[list[FittedRunSchema], Field(min_length=1)]
     cross_validation: list[CrossValidationSchema] = []
+    # written by fit against the propulsion beside the battery file (issue 43 item 2)
+    power_correction: PowerCorrectionSchema | None = None
 
 
 MAX_CAPACITY_AH = 1000.0

@@ -16,6 +16,11 @@ runs:
   - {file: runs/edf1_endurance_50.csv, engine: EDF1, kind: endurance}   # ignored by fit
   - {file: runs/stand_v10.csv, engine: EDF1, kind: throttle_steps, format: rcbenchmark,
      esc_pulse_us: [1000, 2000], thrust_sign: -1, airspeed_m_s: 10}
+rig_uncertainty:             # optional: the rig's systematic errors (standard deviations)
+  airspeed_bias_sd_m_s: 0.2  # tunnel speed calibration [m/s]
+  thrust_scale_sd: 0.01      # balance scale, a fraction of the thrust
+  balance_zero_sd_n: 0.05    # balance zero between tare and run [N]
+  voltage_sd_v: 0.1          # pack voltage reading [V]
 ```
 
 ``format`` (``run`` or ``rcbenchmark``), ``esc_pulse_us``, ``thrust_sign`` and ``airspeed_m_s``
@@ -34,6 +39,7 @@ from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.files import same_file, why_not_a_file
+from tuflexperf.io.schemas import RigUncertaintySchema
 from tuflexperf.io.vendor import VendorSettings
 from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, load_model
 from tuflexperf.models.thrust import MAX_FAN_AREA_M2, MIN_FAN_AREA_M2
@@ -103,6 +109,9 @@ class CampaignSchema(ThrustStandKeys):
     # the fitted thrust x122 as the reference density and let everything pass)
     air_density_kg_m3: Annotated[float, Field(ge=0.3, le=2.0)] | None = None
     filters: FilterSettings = FilterSettings()
+    # the rig's systematic errors (standard deviations); fit writes them into the propulsion
+    # file, a key left out there with its stated default
+    rig_uncertainty: RigUncertaintySchema | None = None
     runs: Annotated[list[RunEntry], Field(min_length=1)]
 
     @model_validator(mode="after")
@@ -164,6 +173,7 @@ class Campaign:
     filters: FilterSettings
     runs: tuple[CampaignRun, ...]
     ignored: tuple[CampaignRun, ...]
+    rig_uncertainty: RigUncertaintySchema | None = None  # None: the rig declares none
 
     def of_kind(self, kind: str) -> list[CampaignRun]:
         return [run for run in self.runs if run.kind == kind]
@@ -220,4 +230,5 @@ def load_campaign(path: Path | str) -> Campaign:
         filters=schema.filters,
         runs=tuple(used),
         ignored=tuple(ignored),
+        rig_uncertainty=schema.rig_uncertainty,
     )

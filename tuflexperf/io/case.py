@@ -152,6 +152,17 @@ def load_case(path: Path | str | None = None,
         except InputError as exc:
             flag = f"--{key}: " if key in replace else ""
             problems.extend(flag + problem for problem in exc.problems)
+    flights: list[Path] = []
+    if schema is not None and schema.validation is not None:
+        from tuflexperf.io.flight_summary import load_flight_summary
+
+        for index, name in enumerate(schema.validation.flights):
+            try:
+                target = _resolve(case_path, f"validation.flights[{index}]", name)
+                load_flight_summary(target)  # validate now: bad keys fail early
+                flights.append(target)
+            except InputError as exc:
+                problems.extend(exc.problems)
     if problems or schema is None:
         raise InputError.of(problems)
     propulsion_schema = loaded["propulsion"]
@@ -168,6 +179,7 @@ def load_case(path: Path | str | None = None,
         uncertainty=schema.uncertainty,
         propulsion_schema=propulsion_schema,
         replaced=tuple(key for key in FILE_KEYS if key in replace),
+        validation_flights=tuple(flights),
     )
     if not math.isfinite(case.density_kg_m3) or case.density_kg_m3 <= 0:
         raise InputError(f"{case_path}: atmosphere: gives no valid density")
@@ -204,4 +216,5 @@ def case_files(case: Case) -> list[tuple[str, Path]]:
     mission = case.requirements.mission
     if mission is not None:
         files.append(("mission", (Path(case.path).parent / mission.file).resolve()))
+    files.extend(("flight summary", path) for path in case.validation_flights)
     return files

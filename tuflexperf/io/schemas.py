@@ -159,64 +159,36 @@ class PowerSurfaceSchema(StrictModel):
     n_points: Annotated[int, Field(ge=0)] | None = None
 
 
-class LackOfFitSchema(StrictModel):
-    """The fit's lack-of-fit test of one engine's poly22 (``fit`` writes it; issue 43/44).
+Probability = Annotated[float, Field(ge=0, le=1)]
+Count = Annotated[int, Field(ge=0)]
 
-    ``model_form_rms_n`` [N] is the error of the poly22's shape itself, the scatter of the
-    holds' means about the surface beyond what their own repeat scatter explains: the
-    sampler's model-form error (a correlated surface, :mod:`tuflexperf.analysis.error_model`).
-    """
+
+class BestAlternativeSchema(StrictModel):
+    """The form that fits the data best among those `fit` compares (not poly22)."""
+
+    form: Name
+    f_statistic: NonNegative | None = None
+    p_value: Probability | None = None
+    model_form_rms_n: NonNegative | None = None
+    in_propulsion_file: bool = False
+
+
+class LackOfFitSchema(StrictModel):
+    """`fit`'s lack-of-fit test of an engine's surface (issue 43 item 4)."""
 
     f_statistic: NonNegative | None = None
-    p_value: Annotated[float, Field(ge=0, le=1)] | None = None
-    model_form_rms_n: Annotated[float, Field(ge=0, le=MAX_THRUST_SD_N)] | None = None
-    pure_error_rms_n: Annotated[float, Field(ge=0, le=MAX_THRUST_SD_N)] | None = None
-    dof_lack_of_fit: Annotated[int, Field(ge=0)] | None = None
-    dof_pure_error: Annotated[int, Field(ge=0)] | None = None
-    worst_throttle: float | None = None
-    worst_airspeed_m_s: float | None = None
+    p_value: Probability | None = None
+    model_form_rms_n: NonNegative | None = None  # the surface's bias beyond the holds' noise
+    pure_error_rms_n: NonNegative | None = None  # one hold mean's repeatability
+    dof_lack_of_fit: Count
+    dof_pure_error: Count
+    worst_throttle: Annotated[float, Field(ge=0)] | None = None
+    # a set point: a static hold whose pitot reads a little below 0 may be at -0.5 m/s
+    worst_airspeed_m_s: Annotated[float, Field(ge=-MAX_AIRSPEED_M_S,
+                                               le=MAX_AIRSPEED_M_S)] | None = None
     worst_residual_n: float | None = None
-    best_alternative: str | None = None
-
-
-RIG_KEYS: tuple[str, ...] = ("airspeed_bias_sd_m_s", "thrust_scale_sd", "balance_zero_sd_n",
-                             "voltage_sd_v")
-"""The rig's systematic errors, 1 sd each, in the order of ``rig_uncertainty.correlation``."""
-
-
-class RigUncertaintySchema(StrictModel):
-    """Systematic errors of the test rig, one standard deviation each (issue 44): the tunnel's
-    airspeed calibration [m/s], the balance's scale [fraction] and zero [N], the logged pack
-    voltage [V]; one error for the whole campaign, not a scatter per point. ``correlation``
-    (4x4, :data:`RIG_KEYS` order) where two share a cause. A key left out takes the
-    sampler's stated default (:data:`tuflexperf.analysis.error_model.RIG_DEFAULTS`)."""
-
-    # a scale error of 100 % is no balance (the thrust could be zero); negatives are no sd
-    airspeed_bias_sd_m_s: Annotated[float, Field(ge=0, le=MAX_TESTED_AIRSPEED_M_S)] | None = None
-    thrust_scale_sd: Annotated[float, Field(ge=0, lt=1)] | None = None
-    balance_zero_sd_n: Annotated[float, Field(ge=0, le=MAX_THRUST_SD_N)] | None = None
-    voltage_sd_v: Annotated[float, Field(ge=0, le=MAX_REFERENCE_VOLTAGE_V)] | None = None
-    correlation: list[list[float]] | None = None
-
-    @field_validator("correlation")
-    @classmethod
-    def _check_correlation(cls, matrix: list[list[float]] | None) -> list[list[float]] | None:
-        if matrix is None:
-            return matrix
-        n = len(RIG_KEYS)
-        if len(matrix) != n or any(len(row) != n for row in matrix):
-            raise ValueError(f"must be a {n}x{n} matrix ({', '.join(RIG_KEYS)})")
-        array = np.asarray(matrix, dtype=float)
-        if not np.all(np.isfinite(array)) or np.any(np.abs(array) > 1.0):
-            raise ValueError("every entry must be finite and within [-1, 1]")
-        if not np.allclose(np.diag(array), 1.0):
-            raise ValueError("the diagonal must be 1")
-        if not np.allclose(array, array.T, atol=1e-12):
-            raise ValueError("must be symmetric")
-        if float(np.linalg.eigvalsh(array).min()) < -1e-9:
-            raise ValueError("must be positive semi-definite (no set of errors has these "
-                             "correlations)")
-        return matrix
+    pure_error_basis: Literal["replicate_holds", "within_hold"] = "within_hold"
+    best_alternative: BestAlternativeSchema | None = None
 
 
 class EngineSchema(StrictModel):
@@ -235,7 +207,6 @@ class EngineSchema(StrictModel):
         None = None
     # the largest of those errors over the left-out airspeed's throttles [N]
     extrapolation_worst_n: Annotated[float, Field(ge=0, le=MAX_THRUST_SD_N)] | None = None
-    lack_of_fit: LackOfFitSchema | None = None
 
     @model_validator(mode="after")
     def _check_covariance(self) -> EngineSchema:
@@ -256,6 +227,90 @@ class EngineSchema(StrictModel):
         return self
     windmilling_drag_coefficient: NonNegative | None = None
     power: PowerSurfaceSchema | None = None
+    lack_of_fit: LackOfFitSchema | None = None
+
+
+# --- rig systematic errors (issue 44) ---------------------------------------------------------
+# Stated defaults for a rig that declares none (standard deviations; docs/formats.md says why):
+# a pitot-static tunnel speed calibrated to ~1 % of 20-30 m/s; a load cell calibrated with dead
+# weights to ~0.5 % plus ~0.5-1 % from the balance's mounting; a balance zero that drifts by a
+# few hundredths of a newton between tare and run; a pack voltage read by an ADC to ~0.2 %.
+RIG_UNCERTAINTY_DEFAULTS: dict[str, float] = {
+    "airspeed_bias_sd_m_s": 0.2,
+    "thrust_scale_sd": 0.01,
+    "balance_zero_sd_n": 0.05,
+    "voltage_sd_v": 0.1,
+}
+# Beyond these a standard deviation is no calibrated rig's but a typo (or the wrong unit):
+# a tunnel speed off by 5 m/s, a balance off by a quarter of its reading
+MAX_AIRSPEED_BIAS_SD_M_S = 5.0
+MAX_THRUST_SCALE_SD = 0.25
+MAX_BALANCE_ZERO_SD_N = 100.0
+MAX_VOLTAGE_SD_V = 50.0
+
+
+class RigUncertaintySchema(StrictModel):
+    """Systematic errors of the test rig, standard deviations (issue 44): the tunnel's airspeed
+    calibration [m/s], the balance's scale (a fraction of the thrust) and zero [N], and the
+    pack voltage [V]. A key left out takes :data:`RIG_UNCERTAINTY_DEFAULTS` (stated, never 0)."""
+
+    airspeed_bias_sd_m_s: Annotated[float, Field(ge=0, le=MAX_AIRSPEED_BIAS_SD_M_S)] | None = None
+    thrust_scale_sd: Annotated[float, Field(ge=0, le=MAX_THRUST_SCALE_SD)] | None = None
+    balance_zero_sd_n: Annotated[float, Field(ge=0, le=MAX_BALANCE_ZERO_SD_N)] | None = None
+    voltage_sd_v: Annotated[float, Field(ge=0, le=MAX_VOLTAGE_SD_V)] | None = None
+    # where two errors share a cause (4x4, the order of RIG_UNCERTAINTY_DEFAULTS); None: none
+    correlation: list[list[float]] | None = None
+
+    @field_validator("correlation")
+    @classmethod
+    def _check_correlation(cls, matrix: list[list[float]] | None) -> list[list[float]] | None:
+        if matrix is None:
+            return matrix
+        n = len(RIG_UNCERTAINTY_DEFAULTS)
+        if len(matrix) != n or any(len(row) != n for row in matrix):
+            raise ValueError(f"must be a {n}x{n} matrix ({', '.join(RIG_UNCERTAINTY_DEFAULTS)})")
+        array = np.asarray(matrix, dtype=float)
+        if not np.all(np.isfinite(array)) or np.any(np.abs(array) > 1.0):
+            raise ValueError("every entry must be finite and within [-1, 1]")
+        if not np.allclose(np.diag(array), 1.0):
+            raise ValueError("the diagonal must be 1")
+        if not np.allclose(array, array.T, atol=1e-12):
+            raise ValueError("must be symmetric")
+        if float(np.linalg.eigvalsh(array).min()) < -1e-9:
+            raise ValueError("must be positive semi-definite (no set of errors has these "
+                             "correlations)")
+        return matrix
+
+    def resolved(self) -> dict[str, float]:
+        """Every key's standard deviation: the stated one, else the default."""
+        return {key: (RIG_UNCERTAINTY_DEFAULTS[key] if getattr(self, key) is None
+                      else float(getattr(self, key))) for key in RIG_UNCERTAINTY_DEFAULTS}
+
+    def declared(self) -> tuple[str, ...]:
+        """The keys the file states (the others are defaults)."""
+        return tuple(key for key in RIG_UNCERTAINTY_DEFAULTS if getattr(self, key) is not None)
+
+
+def rig_uncertainty_problems(
+    rig: RigUncertaintySchema, largest_airspeed_m_s: float | None,
+    largest_thrust_n: float | None, voltage_v: float | None,
+) -> list[str]:
+    """Where a stated systematic error is larger than the quantity it is an error of [one line
+    each, naming the key]: the highest airspeed [m/s], the largest thrust [N], the pack
+    voltage [V] (None: not known here, not checked)."""
+    values = rig.resolved()
+    declared = rig.declared()  # a default is never the user's mistake to be named
+    problems = []
+    for key, quantity, what in (
+        ("airspeed_bias_sd_m_s", largest_airspeed_m_s, "the highest airspeed tested"),
+        ("balance_zero_sd_n", largest_thrust_n, "the largest thrust"),
+        ("voltage_sd_v", voltage_v, "the pack voltage"),
+    ):
+        if key in declared and quantity is not None and quantity > 0 and \
+                values[key] >= quantity:
+            problems.append(f"rig_uncertainty.{key}: {values[key]:g} is not below {what} "
+                            f"({quantity:.4g}): a systematic error larger than the quantity")
+    return problems
 
 
 # fit's own provenance holds ~9 values per run (~150 for the shipped campaign): a million is
@@ -286,8 +341,9 @@ class PropulsionSchema(StrictModel):
     fan_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=MAX_FAN_AREA_M2)] | None = None
     throttle_unit: Literal["fraction", "percent"] = "fraction"
     engines: Annotated[list[EngineSchema], Field(min_length=1)]
-    rig_uncertainty: RigUncertaintySchema | None = None  # the campaign manifest's, by `fit`
     source: dict[str, Any] | None = None  # free-form provenance written by `fit`
+    # the rig's systematic errors (issue 44): written by `fit`, sampled by --samples
+    rig_uncertainty: RigUncertaintySchema | None = None
 
     @field_validator("source", mode="before")
     @classmethod
@@ -312,41 +368,20 @@ class PropulsionSchema(StrictModel):
         names = [engine.name for engine in self.engines]
         if len(set(names)) != len(names):
             raise ValueError(f"engines: duplicate engine names {names}")
-        self._check_rig_against_quantities()
         for engine in self.engines:
             if engine.windmilling_drag_coefficient is not None and self.fan_area_m2 is None:
                 raise ValueError(
                     f"engines: {engine.name}: windmilling_drag_coefficient needs fan_area_m2"
                 )
+        if self.rig_uncertainty is not None:
+            full = 100.0 if self.throttle_unit == "percent" else 1.0  # full throttle, static
+            static = min(c.p00 + c.p10 * full + c.p20 * full * full
+                         for c in (engine.coefficients for engine in self.engines))
+            problems = rig_uncertainty_problems(self.rig_uncertainty, high, static,
+                                                self.reference_voltage_v)
+            if problems:
+                raise ValueError("; ".join(problems))
         return self
-
-
-    def _check_rig_against_quantities(self) -> None:
-        """A systematic error larger than the quantity it is an error of is no rig's: the
-        tunnel's airspeed bias beyond its top airspeed, the balance's zero beyond the
-        smallest fan's full-throttle static thrust, the voltage's beyond the reference."""
-        rig = self.rig_uncertainty
-        if rig is None:
-            return
-        high = self.tested_airspeed_m_s[1]
-        if rig.airspeed_bias_sd_m_s is not None and rig.airspeed_bias_sd_m_s >= high:
-            raise ValueError(f"rig_uncertainty.airspeed_bias_sd_m_s: {rig.airspeed_bias_sd_m_s:g} "
-                             f"m/s is not below the top tested airspeed {high:g} m/s: an error "
-                             "larger than the quantity")
-        scale = 100.0 if self.throttle_unit == "percent" else 1.0
-        static = min(sum(getattr(e.coefficients, t) * f for t, f in
-                         (("p00", 1.0), ("p10", scale), ("p20", scale * scale)))
-                     for e in self.engines)
-        if rig.balance_zero_sd_n is not None and rig.balance_zero_sd_n >= abs(static):
-            raise ValueError(f"rig_uncertainty.balance_zero_sd_n: {rig.balance_zero_sd_n:g} N is "
-                             f"not below the smallest full-throttle static thrust {static:.3g} "
-                             "N: an error larger than the quantity")
-        reference = self.reference_voltage_v
-        if (rig.voltage_sd_v is not None and reference is not None
-                and rig.voltage_sd_v >= reference):
-            raise ValueError(f"rig_uncertainty.voltage_sd_v: {rig.voltage_sd_v:g} V is not below "
-                             f"reference_voltage_v {reference:g} V: an error larger than the "
-                             "quantity")
 
 
 # --- case -----------------------------------------------------------------------------------
@@ -530,6 +565,14 @@ class UncertaintySchema(StrictModel):
     parameters: dict[str, DistributionSchema] = {}
 
 
+class ValidationSchema(StrictModel):
+    """Flown evidence the case is held to (issue 45 item 3)."""
+
+    # flight summaries written by `flightlog LOG --case CASE --summary FILE`, relative to
+    # the case file: check reads them and never the logs
+    flights: Annotated[list[FileName], Field(min_length=1)]
+
+
 class CaseSchema(StrictModel):
     file_kind: ClassVar[str] = "case"  # named when another kind of file is given
     name: Name
@@ -539,6 +582,7 @@ class CaseSchema(StrictModel):
     atmosphere: AtmosphereSchema = AtmosphereSchema()
     requirements: Requirements = Requirements()
     uncertainty: UncertaintySchema | None = None
+    validation: ValidationSchema | None = None
 
     @field_validator("uncertainty", mode="before")
     @classmethod
@@ -569,6 +613,8 @@ class Case:
     overrides: tuple[tuple[str, float], ...] = ()
     # the files a flag replaced for this run (--aircraft, --propulsion, --battery): their keys
     replaced: tuple[str, ...] = ()
+    # flight summaries under validation.flights (absolute paths; io.flight_summary)
+    validation_flights: tuple[Path, ...] = ()
 
     @property
     def density_kg_m3(self) -> float:

@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 
@@ -48,6 +49,7 @@ from tuflexperf.models._math import (
     sqrt,
     where,
 )
+from tuflexperf.models.power_correction import PowerCorrection, corrected
 
 SECONDS_PER_HOUR = 3600.0
 PARAMETER_NAMES: tuple[str, ...] = (
@@ -425,6 +427,8 @@ class FanPowerModel:
     static_full_throttle_w: float
     exponent: float
     jet_velocity_m_s: float
+    # measured over modelled power (the discharge runs' reading); None: the law as fitted
+    power_correction: PowerCorrection | None = None
 
     def airspeed_factor(self, airspeed_m_s: Vectorizable) -> Vectorizable:
         """``1 - (V / V_j)^2`` (dimensionless)."""
@@ -434,15 +438,20 @@ class FanPowerModel:
     def electrical_power_w(
         self, throttle: Vectorizable, airspeed_m_s: Vectorizable
     ) -> Vectorizable:
-        """Electrical input power of one fan in W at ``throttle`` (fraction) and airspeed (m/s)."""
-        return (
+        """Electrical input power of one fan in W at ``throttle`` (fraction) and airspeed (m/s),
+        times ``power_correction`` where there is one."""
+        law = (
             self.static_full_throttle_w
             * throttle**self.exponent
             * self.airspeed_factor(airspeed_m_s)
         )
+        return corrected(law, self.power_correction, throttle, airspeed_m_s)
 
-    def to_dict(self) -> dict[str, float]:
-        return asdict(self)
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = asdict(self)
+        if self.power_correction is None:  # the law as fitted: its keys as ever
+            out.pop("power_correction")
+        return out
 
 
 def published_static_power_w(

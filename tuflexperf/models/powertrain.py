@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from tuflexperf.models._math import Vectorizable, fmax, fmin, sqrt, where
+from tuflexperf.models.power_correction import corrected
 from tuflexperf.models.thrust import Engine, Propulsion, density_ratio, engine_thrust_n, poly22
 
 # In-flight overall efficiency below this is implausible for a working fan (SPEC 3).
@@ -77,15 +78,21 @@ def engine_power_w(
     airspeed_m_s : float or array or CasADi
         True airspeed [m/s].
 
+    Returns
+    -------
+    The surface's power [W], times the engine's ``power_correction`` where it has one (the
+    measured power of the discharge runs: :mod:`tuflexperf.models.power_correction`).
+
     References
     ----------
-    SPEC 4 (``power: {model: poly22}``).
+    SPEC 4 (``power: {model: poly22}``); issue 43 item 2.
     """
     if engine.power_coefficients is None:
         return None
-    return electrical_power_w(
+    surface = electrical_power_w(
         throttle * engine.throttle_scale, airspeed_m_s, engine.power_coefficients
     )
+    return corrected(surface, engine.power_correction, throttle, airspeed_m_s)
 
 
 def exit_velocity_m_s(
@@ -322,6 +329,8 @@ class PowerSurfaces:
             "model": "propulsion power surfaces (poly22 per engine, the largest per fan)",
             "density_scale": self.density_scale,
             "engines": {e.name: dict(e.power_coefficients or {}) for e in self.engines},
+            **({"power_correction": self.engines[0].power_correction.to_dict()}
+               if self.engines and self.engines[0].power_correction is not None else {}),
         }
 
 

@@ -67,6 +67,9 @@ class Engine:
     windmilling_drag_coefficient: float | None = None
     # poly22 electrical power surface in W (throttle fraction, airspeed m/s); None if unknown
     power_coefficients: Mapping[str, float] | None = None
+    # measured over modelled power (models.power_correction.PowerCorrection), multiplying
+    # the power surface; None: the surface as fitted
+    power_correction: Any = None
 
 
 # SPEC 3: rpm follows duty cycle times voltage, thrust rpm^2

@@ -238,6 +238,174 @@ def fit_fan_power(
     return PowerFit(model, points, float(np.sqrt(np.mean(np.log(predicted / p) ** 2))))
 
 
+# --- the measured power correction (issue 43 item 2) ------------------------------------------
+# Runs this far apart in throttle [-] / airspeed [m/s] count as two settings (a tunnel held
+# at "30 m/s" measured 30.001 and 30.005 m/s: one airspeed)
+DISTINCT_THROTTLE = 0.02
+DISTINCT_AIRSPEED_M_S = 1.0
+
+
+def fan_power_of(battery: Any, propulsion: Any, runs: Sequence[Any],
+                 propulsion_file: Any = None) -> PowerFit:
+    """The battery file's fan-power law (:func:`fit_fan_power`) for the runs' fan.
+
+    The full-throttle static power is the published range interpolated at the static
+    thrust of the runs' engine (the first engine when the runs name none). ``runs`` are
+    discharge runs or their stored summaries. Raises :class:`InputError` naming the
+    propulsion file (``propulsion_file``, else the propulsion's name).
+    """
+    from tuflexperf.models.battery import published_static_power_w
+    from tuflexperf.models.thrust import engine_thrust_n
+
+    engine = run_engine(battery, propulsion)
+    static_n = float(engine_thrust_n(engine, 1.0, 0.0))
+    if static_n <= 0:
+        raise InputError(f"{propulsion_file or propulsion.name}: {engine.name}: no static "
+                         "thrust at full throttle")
+    static_w = published_static_power_w(
+        static_n, battery.published_power_range_w, battery.published_static_thrust_range_n
+    )
+    return fit_fan_power(runs, static_w, battery.jet_velocity_m_s)
+
+
+def run_engine(battery: Any, propulsion: Any) -> Any:
+    """The engine the discharge runs name (the first one where they name none)."""
+    engine_name = next((r.engine for r in battery.runs if r.engine), None)
+    engines = {e.name: e for e in propulsion.engines}
+    if engine_name is not None and engine_name not in engines:
+        raise InputError(
+            f"{battery.path}: runs: engine {engine_name!r} is not in the propulsion file "
+            f"(engines: {', '.join(engines)})"
+        )
+    return engines[engine_name] if engine_name else propulsion.engines[0]
+
+
+def run_model_power_w(battery: Any, propulsion: Any, runs: Sequence[Any],
+                      fan_law: Any = None) -> tuple[np.ndarray, str]:
+    """The power model [W] at each run's throttle and airspeed, and what that model is.
+
+    The run's own fan's power surface as fitted (the test day's density, as measured) where
+    every engine of ``propulsion`` has one, else the battery file's fan-power law
+    (``fan_law``, fitted here when not given): what the case flies.
+    """
+    from tuflexperf.models.powertrain import engine_power_w, power_surfaces
+
+    x = np.array([r.throttle_setting for r in runs], dtype=float)
+    v = np.array([r.airspeed_setting_m_s for r in runs], dtype=float)
+    engines = {e.name: e for e in propulsion.engines}
+    if power_surfaces(propulsion, 1.0) is not None:
+        chosen = [engines.get(ref.engine or "", propulsion.engines[0]) for ref in battery.runs]
+        # the surface as fitted, without any correction it may already fly
+        model = np.array([float(engine_power_w(_plain(e), xi, vi))
+                          for e, xi, vi in zip(chosen, x, v, strict=True)])
+        return model, f"{chosen[0].name}'s power surface in the propulsion file"
+    law = fan_law if fan_law is not None else fan_power_of(battery, propulsion, runs).model
+    law = _plain(law)
+    return (np.asarray(law.electrical_power_w(x, v), dtype=float),
+            "the battery file's fan-power law (fan_power)")
+
+
+def _plain(model: Any) -> Any:
+    """``model`` (an Engine or a fan-power law) without a power correction."""
+    from dataclasses import replace
+
+    return replace(model, power_correction=None) if model.power_correction is not None else model
+
+
+def fit_power_correction(runs: Sequence[Any], model_w: Sequence[float]) -> Any:
+    """Fit measured over modelled power, ``r = c0 + c_x x + c_V V``, to the runs.
+
+    The throttle term enters with runs at two throttles or more, the airspeed term with runs
+    at two airspeeds or more (each :data:`DISTINCT_THROTTLE` / :data:`DISTINCT_AIRSPEED_M_S`
+    apart), and only while the runs determine it (full column rank); least squares over the
+    runs' ratios, equal weights. One run gives a constant.
+
+    Parameters
+    ----------
+    runs : sequence
+        Discharge runs or their stored summaries (``throttle_setting`` [-],
+        ``airspeed_setting_m_s`` [m/s], ``mean_power_w`` [W]).
+    model_w : sequence of float
+        The power model at each run's throttle and airspeed [W].
+
+    Returns
+    -------
+    PowerCorrection
+        The law and the runs' throttle and airspeed span.
+
+    References
+    ----------
+    Issue 43 item 2 (the measured discharge power as a correction law over throttle and
+    airspeed).
+    """
+    from tuflexperf.models.power_correction import PowerCorrection
+
+    x = np.array([r.throttle_setting for r in runs], dtype=float)
+    v = np.array([r.airspeed_setting_m_s for r in runs], dtype=float)
+    measured = np.array([r.mean_power_w for r in runs], dtype=float)
+    model = np.asarray(model_w, dtype=float)
+    bad = [r.path.name for r, m in zip(runs, model, strict=True) if not m > 0]
+    if bad:
+        raise InputError(f"{', '.join(bad)}: the power model gives no positive power at the "
+                         "run's throttle and airspeed; no measured power correction")
+    ratio = measured / model
+    columns = [np.ones_like(x)]
+    wanted = [(np.ptp(x) >= DISTINCT_THROTTLE, x), (np.ptp(v) >= DISTINCT_AIRSPEED_M_S, v)]
+    used = []
+    for wants, column in wanted:
+        trial = np.column_stack([*columns, column])
+        if wants and np.linalg.matrix_rank(trial) == trial.shape[1]:
+            columns.append(column)
+            used.append(True)
+        else:
+            used.append(False)
+    coef = iter(np.linalg.lstsq(np.column_stack(columns), ratio, rcond=None)[0])
+    c0 = float(next(coef))
+    cx = float(next(coef)) if used[0] else 0.0
+    cv = float(next(coef)) if used[1] else 0.0
+    return PowerCorrection(c0, cx, cv, (float(x.min()), float(x.max())),
+                           (float(v.min()), float(v.max())))
+
+
+def correction_form(correction: Any) -> str:
+    """The law's form in words (``constant``, ``linear in throttle``, ...)."""
+    terms = [name for name, c in (("throttle", correction.per_throttle),
+                                  ("airspeed", correction.per_airspeed_s_m)) if c != 0.0]
+    return "constant" if not terms else "linear in " + " and ".join(terms)
+
+
+def power_correction_block(battery: Any, propulsion: Any, runs: Sequence[Any],
+                           relative_to: Any, propulsion_path: Any) -> dict[str, Any]:
+    """The ``fit.power_correction`` block: the law, its tested span and the runs it came from.
+
+    Parameters
+    ----------
+    battery : Battery
+        The loaded battery file.
+    propulsion : Propulsion
+        The propulsion whose power model the runs are compared with.
+    runs : sequence
+        The discharge runs, in the battery file's order.
+    relative_to : Path
+        Folder of the file written (the propulsion path is written relative to it).
+    propulsion_path : Path
+        The propulsion file read.
+    """
+    import os
+
+    model, label = run_model_power_w(battery, propulsion, runs)
+    law = fit_power_correction(runs, model)
+    return {
+        "form": correction_form(law),
+        **{k: v for k, v in law.to_dict().items()},
+        "model": label,
+        "propulsion": os.path.relpath(propulsion_path, relative_to),
+        "runs": [{"file": os.path.relpath(r.path, relative_to),
+                  "model_power_w": float(m), "ratio": float(r.mean_power_w / m)}
+                 for r, m in zip(runs, model, strict=True)],
+    }
+
+
 # --- the battery file as a fitted artefact (issue 9) -------------------------------------------
 CUTOFF_TIME_TOLERANCE = 0.25
 """Largest relative miss of a run's own time to cut-off by the pack fitted to the runs
@@ -330,8 +498,11 @@ def refuse_runs_short_of_the_cutoff(battery: Any, runs: Sequence[DischargeRun]) 
             )
 
 
-def fit_battery_block(battery: Any, relative_to: Any) -> dict[str, Any]:
-    """The ``fit:`` block of a battery file: pack model, residual, runs (sha256), validation.
+def fit_battery_block(battery: Any, relative_to: Any,
+                      propulsion_path: Any = None) -> dict[str, Any]:
+    """The ``fit:`` block of a battery file: pack model, residual, runs (sha256), validation,
+    and the measured power correction against ``propulsion_path``'s power model (none
+    without a propulsion file).
 
     ``battery`` is a loaded :class:`tuflexperf.io.battery.Battery`; run paths are written
     relative to ``relative_to`` (the folder of the file written). A capacity the runs
@@ -346,6 +517,12 @@ def fit_battery_block(battery: Any, relative_to: Any) -> dict[str, Any]:
     fit = fit_discharge(runs, battery.cells_in_series, battery.capacity_ah)
     refuse_unreproduced_runs(battery, fit.parameters, runs)
     refuse_label_beyond_fitted(battery.path, battery.capacity_ah, fit.parameters.max_capacity_ah)
+    correction: dict[str, Any] = {}
+    if propulsion_path is not None:
+        from tuflexperf.io.case import load_propulsion
+
+        correction = {"power_correction": power_correction_block(
+            battery, load_propulsion(propulsion_path), runs, relative_to, propulsion_path)}
     return {
         "capacity_ah": float(battery.capacity_ah),
         "cells_in_series": int(battery.cells_in_series),
@@ -358,15 +535,19 @@ def fit_battery_block(battery: Any, relative_to: Any) -> dict[str, Any]:
         "cross_validation": _cross_validation(runs, battery.cells_in_series,
                                               battery.capacity_ah, battery.cutoff_voltage_v)
         if len(runs) > 1 else [],
+        **correction,
     }
 
 
-def fitted_battery_text(battery_path: Any, out_path: Any) -> tuple[str, dict[str, Any]]:
+def fitted_battery_text(battery_path: Any, out_path: Any,
+                        propulsion_path: Any = None) -> tuple[str, dict[str, Any]]:
     """The battery file with its ``fit:`` block (re)written, and the block.
 
     Written beside the input, the file's own text (and its provenance comments) is kept and
     only the ``fit:`` block replaced; elsewhere the whole file is written anew with the run
-    paths made relative to the new place.
+    paths made relative to the new place. The measured power correction is fitted against
+    ``propulsion_path``'s power model (default: ``propulsion.yaml`` beside the battery file,
+    where there is one; else none is written).
     """
     import os
     from pathlib import Path
@@ -380,7 +561,10 @@ def fitted_battery_text(battery_path: Any, out_path: Any) -> tuple[str, dict[str
     battery_path, out_path = Path(battery_path), Path(out_path)
     battery = load_battery(battery_path, refitting=True)
     folder = out_path.absolute().parent
-    block = fit_battery_block(battery, folder)
+    if propulsion_path is None and (battery_path.parent / "propulsion.yaml").is_file():
+        propulsion_path = battery_path.parent / "propulsion.yaml"
+    block = fit_battery_block(battery, folder,
+                              Path(propulsion_path).absolute() if propulsion_path else None)
     header = ("# fit: written by `tuflexperf fit` (equivalent circuit fitted to the runs, "
               "their sha256);\n# check, endurance and report read it and never fit.\n")
     dumped = yaml.safe_dump({"fit": block}, sort_keys=False, width=100)

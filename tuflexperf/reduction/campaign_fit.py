@@ -40,11 +40,19 @@ from tuflexperf.reduction.fit_checks import (
     poor_fit_notes,
     refuse_force_scale_outliers,
     refuse_unphysical_fit,
+    set_point,
     speeds_by_engine,
 )
 from tuflexperf.reduction.fit_output import FitResult, fit_summary, render_propulsion, table_row
 from tuflexperf.reduction.glauert import glauert_ratio
+from tuflexperf.reduction.lack_of_fit import (
+    BATCH_S,
+    batch_mean_variance,
+    engine_lack_of_fit,
+    lack_of_fit_note,
+)
 from tuflexperf.reduction.poly22fit import Poly22Fit, fit_poly22
+from tuflexperf.reduction.rig import IDLE_THROTTLE, rig_uncertainty
 from tuflexperf.reduction.segments import (
     TestPoint,
     merge_test_points,
@@ -159,8 +167,20 @@ def _drag_sweep(campaign: Campaign, run: CampaignRun) -> _DragSweep:
         curve=(movmedian(data["airspeed_m_s"], k_med), force),
     )
 
-_Cell = tuple[TestPoint, tuple[float, float, float]]
-"""A run's test point with its mean pack voltage [V], current [A] and ``U I`` [W]."""
+_Cell = tuple[TestPoint, tuple[float, float, float], tuple[float, int]]
+"""A run's test point with its mean pack voltage [V], current [A] and ``U I`` [W], and the
+variance of its mean force [N^2] from inside its segments with its degrees of freedom."""
+
+
+def _hold_variance(result: StepRunResult, cell: TestPoint) -> tuple[float, int]:
+    """The variance [N^2] of a test point's mean force by batch means inside each of its
+    segments (:mod:`.lack_of_fit`), combined as the sample-weighted mean is, and its dof."""
+    batch = max(1, int(round(BATCH_S * result.data.sample_rate_hz)))
+    parts = [batch_mean_variance(result.segments[i].filtered_force_n, batch)
+             for i in cell.members]
+    weights = np.array([result.segments[i].n_samples for i in cell.members], dtype=float)
+    variance = float(np.sum(weights**2 * np.array([v for v, _ in parts])) / weights.sum() ** 2)
+    return variance, sum(d for _, d in parts)
 
 
 def _fit_campaign(
@@ -275,7 +295,8 @@ def _fit_campaign(
         onset = onset_delay.get(str(run.engine)) or delay or 0.0
         result = reduce_step_run(campaign, run, read.result(), max(onset, 0.0))
         # the run's test points and their pack voltage and current, while on the worker
-        return result, [(cell, electrical_means(result, cell.members))
+        return result, [(cell, electrical_means(result, cell.members),
+                         _hold_variance(result, cell))
                         for cell in merge_test_points(result.segments)]
 
     # queued behind every read: a worker waits at most on a read another one is doing
@@ -320,7 +341,7 @@ def _fit_campaign(
         if result.run.file in deaf:  # no fan's response: it would bend the surface
             point_ratios[index] = ratios
             continue
-        for cell, (volts, amps, watts) in cells_of[index]:
+        for cell, (volts, amps, watts), (variance, dof) in cells_of[index]:
             d = float(drag.drag_n(cell.airspeed_m_s)) if drag is not None else 0.0
             thrust = cell.force_n + d
             # no tunnel (a static stand): no walls, no blockage to correct
@@ -355,6 +376,8 @@ def _fit_campaign(
                     voltage_v=volts,
                     current_a=amps,
                     electrical_power_w=watts,
+                    hold_variance_n2=variance,
+                    hold_dof=dof,
                 )
             )
         point_ratios[index] = ratios
@@ -372,6 +395,17 @@ def _fit_campaign(
         )
     refuse_unphysical_fit(str(campaign.path), fits, drag, points)
     degenerate.extend(poor_fit_notes(fits))
+    lack = {}
+    for engine in engines:
+        mine = [p for p in points if p.engine == engine]
+        # the points as the fit saw them; set points from the measured airspeeds
+        lack[engine] = engine_lack_of_fit(
+            [p.throttle for p in mine], [p.airspeed_m_s for p in mine],
+            [p.thrust_n for p in mine], [set_point(p.airspeed_measured_m_s) for p in mine],
+            [p.hold_variance_n2 for p in mine], sum(p.hold_dof for p in mine))
+        note = lack_of_fit_note(engine, lack[engine]) if lack[engine] is not None else None
+        if note:
+            degenerate.append(note)
     validations = [
         pool.submit(_validation, result, fits[str(result.run.engine)], drag, point_ratios[index],
                     glauert, electrical)
@@ -402,6 +436,16 @@ def _fit_campaign(
         glauert_report["max_correction_at_top_airspeed_percent"] = 100 * max(at_top)
 
     speeds = speeds_by_engine((p.engine, p.airspeed_m_s) for p in points)
+    volts = [p.voltage_v for p in points if math.isfinite(p.voltage_v)]
+    rig = rig_uncertainty(
+        str(campaign.path), campaign.rig_uncertainty,
+        [d for r in step_results if r.run.file not in deaf
+         for d in [_idle_drift(r, fits[str(r.run.engine)], drag, electrical)] if d is not None],
+        max((p.airspeed_measured_m_s for p in points), default=0.0),
+        max((p.thrust_n for p in points), default=0.0),
+        float(np.mean(volts)) if volts else None,
+    )
+    degenerate.extend(rig.notes)
     files = [
         {"file": r.file, "kind": r.kind, "engine": r.engine, "sha256": digest.result()}
         for r, digest in digests
@@ -416,6 +460,7 @@ def _fit_campaign(
         "structure_drag": drag.as_dict() if drag else None,
         "glauert_applied": glauert,
         "delay_measured_s": measured_delay,
+        "rig_uncertainty_basis": rig.basis,
     }
     table_rows = [table_row(p) for p in points]
     summary = fit_summary(
@@ -424,6 +469,7 @@ def _fit_campaign(
         fits=fits,
         delay=delay,
         speeds=speeds,
+        lack_of_fit=lack,
     )
     summary.update(
         {
@@ -437,6 +483,7 @@ def _fit_campaign(
             ],
             "points": table_rows,
             "electrical": electrical.summary(),
+            "rig_uncertainty": rig.summary(),
         }
     )
     summary["warnings"].extend(electrical.warnings)
@@ -479,6 +526,8 @@ def _fit_campaign(
         source=source,
         electrical=electrical,
         fan_area_m2=campaign.fan_area_m2,
+        lack_of_fit=lack,
+        rig_uncertainty=rig.document(),
     )
     table = render_thrust_table(table_rows, TABLE_EXTRA_COLUMNS)
     return FitResult(
@@ -490,6 +539,28 @@ def _fit_campaign(
         step_runs=step_results,
         sweep_runs=sweep_results,
     )
+
+
+def _idle_drift(result: StepRunResult, fit: Poly22Fit, drag: DragModel | None,
+                electrical: ElectricalFits) -> float | None:
+    """How far a run's idle hold at its end reads from the one at its start [N], beyond what
+    the model expects from their airspeeds and pack voltages (:mod:`.rig`); None: the run
+    does not start and end idle."""
+    segments = result.segments
+    if len(segments) < 2 or max(abs(segments[0].throttle), abs(segments[-1].throttle)) > \
+            IDLE_THROTTLE:
+        return None
+    exponent, reference = electrical.exponent, electrical.reference_voltage_v
+    residuals = []
+    for segment in (segments[0], segments[-1]):
+        model = float(fit.predict([0.0], [segment.airspeed_m_s])[0])
+        if exponent is not None and reference is not None and "voltage_v" in result.data.columns:
+            volts = float(np.nanmean(result.data["voltage_v"][segment.start:segment.stop]))
+            model *= (volts / reference) ** exponent
+        if drag is not None:
+            model -= float(drag.drag_n(segment.airspeed_m_s))
+        residuals.append(segment.force_n - model)
+    return residuals[1] - residuals[0]
 
 
 def _validation(

@@ -19,6 +19,7 @@ from tuflexperf.io.files import FIT_PROPULSION_HEADER
 from tuflexperf.models.thrust import POLY22_TERMS
 from tuflexperf.reduction.electrical_fit import ElectricalFits
 from tuflexperf.reduction.fit_checks import tested_range, tested_range_notes
+from tuflexperf.reduction.lack_of_fit import EngineLackOfFit
 from tuflexperf.reduction.poly22fit import Poly22Fit
 from tuflexperf.reduction.step_runs import Point, StepRunResult, SweepRunResult, finite_or_none
 
@@ -72,6 +73,7 @@ def fit_summary(
     fits: dict[str, Poly22Fit],
     delay: float | None,
     speeds: dict[str, list[float]],
+    lack_of_fit: dict[str, EngineLackOfFit | None] | None = None,
 ) -> dict[str, Any]:
     engines = []
     for name, fit in fits.items():
@@ -88,6 +90,7 @@ def fit_summary(
                 "full_throttle_thrust_n": {
                     f"{v:g}": float(fit.predict([1.0], [v])[0]) for v in (0.0, 30.0, 40.0)
                 },
+                "lack_of_fit": _lack_of_fit_entry((lack_of_fit or {}).get(name)),
             }
         )
     return {
@@ -111,6 +114,8 @@ def render_propulsion(
     lag: float | None = None,
     electrical: ElectricalFits | None = None,
     fan_area_m2: float | None = None,
+    lack_of_fit: dict[str, EngineLackOfFit | None] | None = None,
+    rig_uncertainty: dict[str, Any] | None = None,
 ) -> str:
     """The propulsion file (SPEC 4), validated against the schema ``check`` loads."""
     from tuflexperf.io.case import PropulsionSchema
@@ -146,6 +151,9 @@ def render_propulsion(
         if all(math.isfinite(v) for v in fit.standard_errors.values()):
             entry["standard_errors"] = {t: fit.standard_errors[t] for t in POLY22_TERMS}
         entry.update(_uncertainty_entry(fit))
+        lack = _lack_of_fit_entry((lack_of_fit or {}).get(engine))
+        if lack is not None:
+            entry["lack_of_fit"] = lack
         if electrical is not None and engine in electrical.windmilling:
             entry["windmilling_drag_coefficient"] = round(
                 electrical.windmilling[engine].drag_coefficient, 4
@@ -162,6 +170,8 @@ def render_propulsion(
             if math.isfinite(power.rmse_n):
                 entry["power"]["rmse_w"] = power.rmse_n
         document["engines"].append(entry)
+    if rig_uncertainty is not None:
+        document["rig_uncertainty"] = rig_uncertainty
     document["source"] = source
     header = (
         f"{FIT_PROPULSION_HEADER} by ordinary least squares, paper section 4).\n"
@@ -205,6 +215,13 @@ def _uncertainty_entry(fit: Poly22Fit) -> dict[str, Any]:
             if worst is not None and math.isfinite(worst):
                 entry["extrapolation_worst_n"] = worst
     return entry
+
+
+def _lack_of_fit_entry(result: EngineLackOfFit | None) -> dict[str, Any] | None:
+    """The engine's ``lack_of_fit`` block (None: not tested), NaN as None."""
+    if result is None:
+        return None
+    return _plain(result.as_dict())
 
 
 def _plain(value: Any) -> Any:

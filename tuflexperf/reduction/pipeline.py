@@ -50,6 +50,7 @@ from tuflexperf.reduction.fit_checks import (
     speeds_by_engine,
 )
 from tuflexperf.reduction.fit_output import FitResult, fit_summary, render_propulsion, write_files
+from tuflexperf.reduction.lack_of_fit import engine_lack_of_fit, lack_of_fit_note
 from tuflexperf.reduction.poly22fit import fit_poly22
 from tuflexperf.reduction.step_runs import Progress
 
@@ -78,6 +79,9 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
         for engine in table.engines()
     }
     refuse_unphysical_fit(str(table.path), fits)
+    # a table holds no samples: only repeated rows (same throttle and set point) test the fit
+    lack = {engine: engine_lack_of_fit(x, v, t, [set_point(float(s)) for s in v])
+            for engine in table.engines() for x, v, t in [table.select(engine)]}
     speeds = speeds_by_engine(zip(table.engine, table.airspeed_m_s, strict=True))
     source = {
         "tool": "tuflexperf fit",
@@ -85,8 +89,10 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
         "input_sha256": sha256_of(Path(path)),
     }
     summary = fit_summary(kind="table", input_path=Path(path), fits=fits, delay=delay_s,
-                          speeds=speeds)
+                          speeds=speeds, lack_of_fit=lack)
     summary["warnings"].extend(poor_fit_notes(fits))
+    summary["warnings"].extend(note for engine, result in lack.items() if result is not None
+                               for note in [lack_of_fit_note(engine, result)] if note)
     propulsion = render_propulsion(
         name=f"poly22 fit of {path_text(Path(path).name)}",
         fits=fits,
@@ -94,6 +100,7 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
         delay=delay_s,
         density=None,
         source=source,
+        lack_of_fit=lack,
     )
     rows = []
     for e, x, v, t in zip(table.engine, table.throttle, table.airspeed_m_s, table.thrust_n,
@@ -153,7 +160,7 @@ def is_battery_file(path: Path) -> bool:
 
 
 def _fit_battery(path: Path, out: Path, table: Path | None, glauert: bool,
-                 delay_s: float | None) -> dict[str, Any]:
+                 delay_s: float | None, propulsion: Path | None = None) -> dict[str, Any]:
     """``fit BATTERY.yaml``: the pack model fitted to the file's discharge runs, written back."""
     from tuflexperf.reduction.battery import fitted_battery_text
 
@@ -162,7 +169,11 @@ def _fit_battery(path: Path, out: Path, table: Path | None, glauert: bool,
                                      ("--delay-s", delay_s is not None)) if used]
     if given:
         raise InputError(f"{given[0]}: not for a battery file (it fits the pack model alone)")
-    text, block = fitted_battery_text(path, out)
+    if propulsion is not None and not Path(propulsion).is_file():
+        from tuflexperf.io.files import why_not_a_file
+
+        raise InputError(f"--propulsion: {why_not_a_file(Path(propulsion))}: {propulsion}")
+    text, block = fitted_battery_text(path, out, propulsion)
     write_files({out: sealed(text)})
     return {"kind": "battery", "input": str(path), "out": str(out), "table": None,
             "battery_fit": block}
@@ -194,9 +205,12 @@ def run_fit(
     glauert: bool = False,
     delay_s: float | None = None,
     progress: Progress | None = None,
+    propulsion: Path | None = None,
 ) -> dict[str, Any]:
     """The ``fit`` command: compute, validate, then write ``out`` (and the table).
 
+    ``propulsion`` (battery files only): the propulsion file whose power model the measured
+    power correction is fitted against (default: ``propulsion.yaml`` beside the battery).
     Returns the JSON summary, with ``out`` and ``table`` set to the files written.
     """
     input_path = Path(input_path)
@@ -217,10 +231,16 @@ def run_fit(
 
     inputs = _fit_inputs(input_path)
     battery = is_battery_file(input_path)
+    if battery:  # the power model the correction is fitted against is read too
+        beside = input_path.parent / "propulsion.yaml"
+        inputs += [p for p in (propulsion, beside) if p is not None and Path(p).is_file()]
     guard_outputs({"--out": out}, inputs, "fit",
                   {"--out": "battery file" if battery else "propulsion file"})
     if battery:
-        return _fit_battery(input_path, out, table, glauert, delay_s)
+        return _fit_battery(input_path, out, table, glauert, delay_s, propulsion)
+    if propulsion is not None:
+        raise InputError("--propulsion: only for a battery file (the power model its measured "
+                         "power correction is fitted against)")
 
     if is_thrust_table(input_path) or is_propeller_manifest(input_path):
         if glauert:

@@ -57,6 +57,8 @@ class Point:
     ideal_power_w: float = math.nan  # momentum theory (SPEC 3), thrusting points
     figure_of_merit: float = math.nan
     overall_efficiency: float = math.nan
+    hold_variance_n2: float = math.nan  # of force_n, from inside the hold [N^2]
+    hold_dof: int = 0  # its degrees of freedom
 
 
 @dataclass

@@ -1,0 +1,105 @@
+"""Flight summary (issue 45 item 3): a flight log reduced against a case, as a case lists it.
+
+``tuflexperf flightlog LOG --case CASE --summary FILE`` writes it; a case names it under
+``validation: {flights: [FILE]}``, and ``check`` reads it (parameters only: the log itself is
+never opened again)::
+
+    log: flight.ulg                   # the log reduced (its name) and its sha256
+    log_sha256: 3f...
+    power_model: the propulsion file's power surfaces, summed over the engines
+    density_kg_m3: 1.19               # the log's air density the model was flown at
+    mass_kg: 18.0
+    airborne_s: 612.4
+    energy_wh: 98.1
+    bins:                             # level-flight (else all-flight) 1 m/s airspeed bins
+      - {airspeed_m_s: 18, true_airspeed_m_s: 18.3, time_s: 42.0, flown_power_w: 980,
+         predicted_power_w: 850, predicted_throttle: 0.41}
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any, ClassVar
+
+from pydantic import Field
+
+from tuflexperf.io.yamlio import FileName, StrictModel, load_model
+
+Positive = Annotated[float, Field(gt=0)]
+
+
+class FlownBinSchema(StrictModel):
+    airspeed_m_s: Annotated[float, Field(ge=0)]
+    true_airspeed_m_s: Annotated[float, Field(ge=0)]
+    time_s: Positive
+    flown_power_w: Positive
+    predicted_power_w: Positive
+    predicted_throttle: Annotated[float, Field(ge=0, le=1)]
+
+
+class FlightSummarySchema(StrictModel):
+    """Written by ``flightlog --summary``: the flown bins beside the case's model."""
+
+    file_kind: ClassVar[str] = "flight summary"
+    log: FileName
+    log_sha256: Annotated[str, Field(min_length=64, max_length=64)]
+    power_model: str
+    density_kg_m3: Positive
+    mass_kg: Positive
+    airborne_s: Annotated[float, Field(ge=0)]
+    energy_wh: Annotated[float, Field(ge=0)] | None = None
+    bins: Annotated[list[FlownBinSchema], Field(min_length=1)]
+
+
+@dataclass(frozen=True)
+class FlightSummary:
+    """A loaded flight summary (SI units)."""
+
+    path: Path
+    schema: FlightSummarySchema
+
+
+def load_flight_summary(path: Path | str) -> FlightSummary:
+    """Load and validate a flight summary; :class:`InputError` names the file and key."""
+    path = Path(path)
+    return FlightSummary(path.resolve(), load_model(path, FlightSummarySchema))
+
+
+def log_digest(path: Path) -> str:
+    """sha256 of a log file, or of a ulog2csv folder (its files' names and hashes, sorted)."""
+    import hashlib
+
+    from tuflexperf.io.files import sha256_of
+
+    if not path.is_dir():
+        return sha256_of(path)
+    lines = "".join(f"{p.name}:{sha256_of(p)}\n" for p in sorted(path.iterdir()) if p.is_file())
+    return hashlib.sha256(lines.encode("utf-8")).hexdigest()
+
+
+def flight_summary_text(log_path: Path, log_sha256: str, comparison: Any,
+                        airborne_s: float, energy_wh: float | None) -> str | None:
+    """The summary's YAML text from a ``flightlog`` comparison; ``None`` where no bin has a
+    predicted power (nothing to compare: the summary would hold no evidence)."""
+    import math
+
+    import yaml
+
+    bins = [{"airspeed_m_s": float(b["airspeed_m_s"]),
+             "true_airspeed_m_s": float(b["true_airspeed_m_s"]),
+             "time_s": float(b["time_s"]), "flown_power_w": float(b["flown_power_w"]),
+             "predicted_power_w": float(b["predicted_power_w"]),
+             "predicted_throttle": float(b["predicted_throttle"])}
+            for b in comparison.bins
+            if b.get("ratio") is not None and math.isfinite(float(b["predicted_power_w"]))
+            and float(b["predicted_power_w"]) > 0 and float(b["flown_power_w"]) > 0]
+    if not bins:
+        return None
+    data = {"log": log_path.name, "log_sha256": log_sha256, "power_model": comparison.power_model,
+            "density_kg_m3": float(comparison.density_kg_m3), "mass_kg": float(comparison.mass_kg),
+            "airborne_s": float(airborne_s),
+            "energy_wh": float(energy_wh) if energy_wh is not None else None, "bins": bins}
+    return ("# written by `tuflexperf flightlog --summary`: the flown power beside the case's "
+            "model;\n# a case lists it under validation: {flights: [...]}\n"
+            + yaml.safe_dump(data, sort_keys=False, width=100))
