@@ -117,6 +117,8 @@ def generate(folder: Path, laws: dict[str, dict[str, float]], bias_m_s: float, s
              seed: int) -> Path:
     """The campaign of ``laws`` on a rig whose tunnel reads ``bias_m_s`` high and whose
     balance reads ``1 + scale`` times the force."""
+    if folder.resolve().is_relative_to(ROOT):
+        raise ValueError(f"{folder}: a study's campaign is written outside the repository")
     quantise = GEN.quantise
 
     def on_the_rig(columns: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -130,7 +132,8 @@ def generate(folder: Path, laws: dict[str, dict[str, float]], bias_m_s: float, s
     GEN.truth_coefficients, GEN.quantise = (lambda: laws), on_the_rig
     try:
         with contextlib.redirect_stdout(io.StringIO()):
-            GEN.main()
+            # the folder and seed given, never the defaults: those write the shipped campaign
+            GEN.main(out=folder, seed=seed)
     finally:
         GEN.OUT, GEN.SEED, GEN.poly22, GEN.truth_coefficients, GEN.quantise = saved
     return folder / "campaign.yaml"
