@@ -157,13 +157,14 @@ def test_each_rig_error_moves_the_probability_as_phi_says(tmp_path, key, sd, shi
 
 
 def test_the_model_form_surface_is_correlated_over_the_operating_points(tmp_path) -> None:
-    """sd ``s`` (the largest lack-of-fit residual) at the tested corners, ``s / sqrt 2`` at
+    """sd ``s`` = ``sqrt 3`` x the lack of fit's RMS at the tested corners, ``s / sqrt 2`` at
     the edges' middles, none at the centre (zero mean over the domain), the same sign along
     the roll's airspeeds (it does not average away), correlated 0.5 between the engines;
-    without the largest residual, ``sqrt 3`` x the RMS at the corners."""
+    without a lack_of_fit, ``sqrt 3`` x ``residual_sd_n`` (said: an upper bound)."""
     def lack(prop):
         for engine, s in zip(prop["engines"], (0.4, 0.8), strict=True):
-            engine["lack_of_fit"] = {"model_form_rms_n": s / 3, "worst_residual_n": -s,
+            engine["lack_of_fit"] = {"model_form_rms_n": s / math.sqrt(3.0),
+                                     "worst_residual_n": -3 * s,  # noise, not the shape: unused
                                      "dof_lack_of_fit": 64, "dof_pure_error": 140}
 
     case = load_case(_case(tmp_path / "mf", lack, uncertainty={
@@ -191,16 +192,14 @@ def test_the_model_form_surface_is_correlated_over_the_operating_points(tmp_path
     between = np.corrcoef(error(1.0, 0.0)[0], error(1.0, 0.0)[1])[0, 1]
     assert between == pytest.approx(ENGINE_CORRELATION, abs=0.05)
 
-    def rms_only(prop):
-        for engine in prop["engines"]:
-            engine["lack_of_fit"] = {"model_form_rms_n": 0.3, "dof_lack_of_fit": 64,
-                                     "dof_pure_error": 140}
-
-    only = load_case(_case(tmp_path / "rms", rms_only, uncertainty={
+    # the shipped file has no lack_of_fit: its residual_sd_n (0.5 N), said
+    only = load_case(_case(tmp_path / "rms", uncertainty={
         "samples": 20000, "propulsion": {**ALL_OFF, "model_form": True}}))
-    corner = draw_chunk(only, plan_for(only), 0).coefficients[0] - nominal[0]
+    upper = plan_for(only)
+    assert "an upper bound" in upper.errors.sources[1].detail
+    corner = draw_chunk(only, upper, 0).coefficients[0] - nominal[0]
     static = corner[:, 0] + corner[:, 1]  # at full throttle, 0 m/s
-    assert static.std() == pytest.approx(math.sqrt(3.0) * 0.3, rel=0.05)
+    assert static.std() == pytest.approx(math.sqrt(3.0) * 0.5, rel=0.05)
     # and the batch flies those coefficients: its roll of a row is the single case's
     values = run_samples(case, plan).values["takeoff_ground_roll"]
     for row in (0, 1):

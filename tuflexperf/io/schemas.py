@@ -667,9 +667,6 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
             extrapolation_worst_n=e.extrapolation_worst_n,
             model_form_sd_n=(e.lack_of_fit.model_form_rms_n if e.lack_of_fit is not None
                              else None),
-            model_form_worst_n=(abs(e.lack_of_fit.worst_residual_n)
-                                if e.lack_of_fit is not None
-                                and e.lack_of_fit.worst_residual_n is not None else None),
             windmilling_drag_coefficient=e.windmilling_drag_coefficient,
             power_coefficients=(
                 {term: getattr(e.power.coefficients, term) for term in POLY22_TERMS}

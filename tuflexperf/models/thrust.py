@@ -62,7 +62,6 @@ class Engine:
     extrapolation_distance_m_s: float | None = None
     extrapolation_worst_n: float | None = None  # the largest of those errors [N]
     model_form_sd_n: float | None = None
-    model_form_worst_n: float | None = None  # the largest lack-of-fit residual [N]
     # C_d,wm on the propulsion's fan_area_m2 (SPEC 3); None: min(T(0, V), 0) instead
     windmilling_drag_coefficient: float | None = None
     # poly22 electrical power surface in W (throttle fraction, airspeed m/s); None if unknown
