@@ -343,23 +343,19 @@ class BatchEvaluator:
             elif requirement.block == "envelope":
                 value = model.trim_max_throttle(grid, self._candidates()[0])
                 if self._packs is not None and not packs_surely_never_bind(
-                        model, grid, self._packs, battery, value) and not model.packs_never_bind(
-                        grid, self._packs, battery, value):
-                    value = model.over_grid_on_packs(grid, None, "windmilling", self._packs,
-                                                     battery)
+                        model, grid, self._packs, battery, value):
+                    value = _on_packs_where_they_bind(model, grid, self._packs, battery, value,
+                                                      (None,), "windmilling")
                 out[requirement.name] = np.where(unflown, np.nan, value)
             elif requirement.block == "oei":
                 mode = self.case.requirements.oei.dead_engine
                 value = model.oei_min_throttle(grid, mode, self._candidates()[1])
                 if self._packs is not None and not packs_surely_never_bind(
-                        model, grid, self._packs, battery, np.ones(size)) \
-                        and not model.packs_never_bind(grid, self._packs, battery,
-                                                       np.ones(size)):
-                    worst = np.full(size, -np.inf)
-                    for dead in range(len(self.case.propulsion.engines)):
-                        worst = np.maximum(worst, model.over_grid_on_packs(
-                            grid, dead, mode, self._packs, battery))
-                    value = worst
+                        model, grid, self._packs, battery, np.ones(size)):
+                    value = _on_packs_where_they_bind(
+                        model, grid, self._packs, battery, value,
+                        tuple(range(len(self.case.propulsion.engines))), mode,
+                        top=np.ones(size))
                 out[requirement.name] = np.where(unflown, np.nan, value)
             else:
                 # a catapult launch starts airborne at its release speed (no runway)
@@ -531,6 +527,31 @@ class BatchEvaluator:
         return airspeed_grids(low, high), none
 
 
+
+
+def _on_packs_where_they_bind(model: BatchModel, grid: Array, packs: Any,
+                              battery: dict[str, Array], value: Array,
+                              dead: tuple[int | None, ...], mode: str,
+                              top: Array | None = None) -> Array:
+    """``value`` with the rows the packs may bind (:meth:`BatchModel.rows_packs_may_bind`)
+    flown on the packs: trim (``dead`` (None,)) or the worse dead engine's least throttle;
+    the other rows' answer stands (their packs change nothing), so only the rows that need
+    the slower solution take it (the error model's spread puts a few rows near the packs'
+    limit, where the whole batch took it)."""
+    bind = model.rows_packs_may_bind(grid, packs, battery, value if top is None else top)
+    if not np.any(bind):
+        return value
+    rows = np.flatnonzero(bind)
+    some = model if rows.size == model.size else model.rows(rows)
+    part = grid if np.shape(grid)[0] != model.size or rows.size == model.size else grid[rows]
+    own = {k: v[rows] if np.ndim(v) and np.shape(v)[0] == model.size else v
+           for k, v in battery.items()}
+    worst = np.full(rows.size, -np.inf)
+    for engine in dead:
+        worst = np.maximum(worst, some.over_grid_on_packs(part, engine, mode, packs, own))
+    out = np.array(value, dtype=float, copy=True)
+    out[rows] = worst
+    return out
 
 
 _SURE_MARGIN = 1e-6
