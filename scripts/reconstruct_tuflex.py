@@ -22,7 +22,7 @@ Priors (estimates with a spread, also residuals): Oswald ``e`` from Raymer's
 +- 0.008 (twin-EDF demonstrator with gear); ``cl_max`` 1.4 +- 0.15; lift-off 1.1-1.2 x
 stall (Raymer 17.8.1) as 1.15 +- 0.03; rotation 1 +- 0.5 s (Raymer 17.8.2: about 1 s for
 a small aircraft); ``Cd_wm`` 0.5 +- 0.2 on the jet area (a windmilling fan is a porous
-disk, Hoerner ch. 3); no-load power ``L`` 100 +- 50 W (motor no-load current ~2 A at 45 V).
+disk, Hoerner ch. 3; written on the disk area, the same drag); no-load power ``L`` 100 +- 50 W (motor no-load current ~2 A at 45 V).
 
 Derived, not knobs: the full-throttle thrust curve through the paper's 0, 30 and 40 m/s
 values per fan (exact, three points and three unknowns), ``p00 = 0``, ``p01`` estimated.
@@ -78,6 +78,8 @@ POWER_RANGE_W = (2400.0, 4100.0)
 STATIC_THRUST_RANGE_N = (41.0, 59.0)
 EXIT_VELOCITY_RANGE_M_S = (82.0, 98.0)
 ENVELOPE_M_S = (15.0, 45.0)
+FAN_DIAMETER_M = 0.093  # Table 1: the DS-51's 93 mm fan
+FAN_AREA_M2 = math.pi * FAN_DIAMETER_M**2 / 4.0  # its disk area, the file's fan_area_m2
 HOT_DAY_OFFSET_K = 20.0  # the envelope's 15 m/s must be above stall up to ISA+20 (summer)
 # (value, tolerance): each residual is (model - value) / tolerance
 TARGETS = {
@@ -352,6 +354,11 @@ def power_surface(engine: str, knobs: dict[str, float]) -> dict[str, float]:
     return {**{n: float(b) for n, b in zip(names, beta, strict=True)}, "_rms_w": rms}
 
 
+def windmilling_on_disk(knobs: dict[str, float]) -> float:
+    """The reconstructed ``Cd_wm`` (on the jet area) on the disk area: the same drag in N."""
+    return knobs["windmilling_cd"] * knobs["jet_area_m2"] / FAN_AREA_M2
+
+
 def render_propulsion(knobs: dict[str, float]) -> str:
     shape = knobs["throttle_shape"]
     dead_band = max(-shape / (1.0 - shape), 0.0)
@@ -368,7 +375,9 @@ def render_propulsion(knobs: dict[str, float]) -> str:
         "delay_s: 0.05                  # published: sine sweep, paper section 4",
         f"reference_density_kg_m3: {REFERENCE_DENSITY_KG_M3}  # estimated test day: indoor tunnel, "
         "20 C, 1013 hPa",
-        f"fan_area_m2: {knobs['jet_area_m2']:.6f}         # reconstructed jet area of momentum "
+        "format: 2                     # fan_area_m2 the disk area, jet_area_m2 the jet's",
+        f"fan_area_m2: {FAN_AREA_M2:.6f}         # published: the 93 mm fan's disk (Table 1)",
+        f"jet_area_m2: {knobs['jet_area_m2']:.6f}         # reconstructed jet area of momentum "
         "theory (Table 1 exit velocity)",
         "engines:",
     ]
@@ -387,7 +396,9 @@ def render_propulsion(knobs: dict[str, float]) -> str:
             "    residual_sd_n: 0.5   # published accuracy +-0.5 N",
             f"    extrapolation_sd_n: {grid.extrapolation_sd_n:.4g}   # derived: max(leave-30-m/s-"
             f"out error, published error at 30 m/s {PUBLISHED_EDGE_ERROR_N[engine]:g} N)",
-            f"    windmilling_drag_coefficient: {knobs['windmilling_cd']:.4f}",
+            # the knob is on the jet area; the file's coefficient is on the disk, same drag
+            f"    windmilling_drag_coefficient: {windmilling_on_disk(knobs):.4f}   # reconstructed "
+            f"{knobs['windmilling_cd']:.4f} on the jet area, restated on the disk",
             "    power:                       # W; P_i/eta + L x sampled on the test grid, poly22",
             "      model: poly22",
             f"      rmse_w: {surface['_rms_w']:.3f}",
@@ -445,7 +456,7 @@ def landed_values() -> dict[str, float]:
     static = power_agreement(
         "static", edf1.name, 1.0, 0.0, float(engine_thrust_n(edf1, 1.0, 0.0)),
         float(engine_power_w(edf1, 1.0, 0.0)), REFERENCE_DENSITY_KG_M3,
-        case.propulsion.fan_area_m2,
+        case.propulsion.jet_area_m2,  # Table 1's efficiency T v_e / 2 / P_el is on the jet
     )
     return {
         "pack_minutes_50pct_30ms": pack_min,

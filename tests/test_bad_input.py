@@ -487,7 +487,7 @@ def test_an_engine_name_a_spreadsheet_would_run_is_refused_in_a_table_and_a_camp
 
 @pytest.mark.parametrize(("line", "value", "needle"), [
     ("delay_s: 0.05", "delay_s: 1e9", "delay_s"),
-    ("fan_area_m2: 0.004342", "fan_area_m2: 4342", "fan_area_m2"),
+    ("fan_area_m2: 0.006793", "fan_area_m2: 6793", "fan_area_m2"),
 ])
 def test_a_propulsion_value_no_fan_has_is_bad_input(tmp_path, line, value, needle) -> None:
     """A 1e9 s delay ran (fit refuses beyond 1 s); an area in mm^2 gave misleading

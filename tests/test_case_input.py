@@ -83,7 +83,9 @@ def _shipped_copy(tmp_path: Path, **files: Path) -> Path:
 def _stronger_fans(tmp_path: Path) -> Path:
     propulsion = yaml.safe_load((DATA / "propulsion.yaml").read_text())
     for engine in propulsion["engines"]:
-        engine["coefficients"]["p10"] *= 1.3
+        # 1.3 x made the thrust at 0.33 throttle, 43.5 m/s more than the shipped power surface
+        # can make (figure of merit 1.23: FAIL by the plausibility rule, issue 43)
+        engine["coefficients"]["p10"] *= 1.2
     path = tmp_path / "stronger.yaml"
     path.write_text(yaml.safe_dump(propulsion, sort_keys=False))
     return path

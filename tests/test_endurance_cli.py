@@ -251,7 +251,7 @@ def test_a_run_changed_since_the_fit_is_refused_where_it_is_read(tmp_path):
 
 def test_a_power_model_far_below_momentum_theory_flies_no_endurance(tmp_path):
     """A power surface at 1 mW: 'flight_endurance 22166939 min PASS' beside a figure-of-merit
-    warning of 644970 (outside audit). Far above 1 it is no fan's power: not attainable."""
+    warning of 644970 (outside audit). Above 1 it is no fan's power: FAIL (plausibility)."""
 
     copy_shipped_case(tmp_path)
     path = tmp_path / "data" / "tuflex" / "propulsion.yaml"
@@ -264,7 +264,8 @@ def test_a_power_model_far_below_momentum_theory_flies_no_endurance(tmp_path):
     endurance = next(r for r in json.loads(result.stdout)["results"]
                      if r["name"] == "flight_endurance")
     assert endurance["passed"] is False and endurance["value"] is None
-    assert "momentum theory" in endurance["reason"] and "no fan flies on it" in endurance["reason"]
+    # the one plausibility rule says it (issue 43): the figure of merit on the disk area
+    assert "implausible data" in endurance["reason"] and "momentum theory" in endurance["reason"]
 
 
 def test_best_with_a_pack_too_small_names_the_throttle_asked_for_then_the_search():

@@ -205,7 +205,8 @@ def test_every_format_says_what_its_functions_leave_out(tmp_path: Path) -> None:
     import zipfile
 
     propulsion = copy.deepcopy(MADE_UP_PROPULSION)
-    propulsion.update(reference_voltage_v=44.4, voltage_exponent=1.7, fan_area_m2=0.0068)
+    propulsion.update(reference_voltage_v=44.4, voltage_exponent=1.7, fan_area_m2=0.0068,
+                      format=2)
     propulsion["engines"][0]["windmilling_drag_coefficient"] = 0.3
     case = write_case(tmp_path / "case", propulsion=propulsion)
     out = tmp_path / "exp"

@@ -319,7 +319,7 @@ def test_a_mission_requirement_that_lands_only_nominally_does_not_pass(tmp_path)
     assert row["samples_met"] < 200 and data["passed"] is False
     human = runner.invoke(app, ["check", str(path)])
     assert "overall: FAIL" in human.stdout
-    # a mission the batch does not fly yet (a battery key drawn) is said so, and does not pass
+    # a drawn capacity is flown too (each row its own packs): sampled, no longer refused
     folder = tmp_path / "battery"
     folder.mkdir()
     drawn = shipped_with(folder, {
@@ -328,8 +328,8 @@ def test_a_mission_requirement_that_lands_only_nominally_does_not_pass(tmp_path)
     out = runner.invoke(app, ["check", str(drawn), "--json"])
     assert out.stdout, (out.exit_code, out.exception)
     row = json.loads(out.stdout)["results"][0]
-    assert row["probability"] is None and "not sampled" in row["probability_note"]
-    assert row["nominal_passed"] is True and row["passed"] is False
+    assert row["probability"] is not None and row["samples"] == 20
+    assert row["nominal_passed"] is True and row["p05"] < row["p95"]
     swept = json.loads(runner.invoke(app, ["sweep", "--case", str(path), "--vary",
                                            "aircraft.mass_kg=25:27:2", "--json"]).stdout)
     assert any("mission_landing_charge is not in the batch" in n for n in swept["notes"])

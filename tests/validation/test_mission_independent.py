@@ -567,7 +567,7 @@ def _fan(name: str, scale: float, power_scale: float) -> dict[str, Any]:
 MADE_UP_PROPULSION: dict[str, Any] = {
     "name": "Made-up fans", "model": "poly22", "tested_airspeed_m_s": [0, 30],
     "reference_density_kg_m3": 1.19, "reference_voltage_v": 46.0, "voltage_exponent": 1.8,
-    "fan_area_m2": 0.004,
+    "format": 2, "fan_area_m2": 0.004,
     "engines": [
         {**_fan("left", 1.0, 1.0), "windmilling_drag_coefficient": 0.3},
         _fan("mid", 1.1, 1.08),       # no windmilling coefficient: min(T(0, V), 0)

@@ -276,7 +276,7 @@ def test_liftoff_beyond_the_fans_jet_velocity_is_not_attainable_in_both() -> Non
     static_n = min(float(engine_thrust_n(e, 1.0, 0.0, scale)) for e in case.propulsion.engines)
     # hover momentum theory: T = rho A v^2
     assert jet == pytest.approx(
-        math.sqrt(static_n / (case.density_kg_m3 * case.propulsion.fan_area_m2)), rel=1e-12)
+        math.sqrt(static_n / (case.density_kg_m3 * case.propulsion.jet_area_m2)), rel=1e-12)
     areas = np.array([0.030, 0.032])  # lift-off ~105 m/s (beyond) and ~101.5 m/s (inside)
     result = BatchEvaluator(case).evaluate({"aircraft.wing_area_m2": areas})
     for row, area in enumerate(areas):

@@ -43,6 +43,15 @@ def _fast_case(tmp_path: Path, low: float = 75.0, high: float = 120.0):
     data = SHIPPED_CASE.parent
     for key in ("aircraft", "propulsion", "battery"):
         shipped[key] = str((data / shipped[key]).resolve())
+    # the shipped power surfaces extrapolated to 100 m/s fall below momentum theory's least
+    # power (figure of merit 1.25: the plausibility rule FAILs every verdict); 1.5 x keeps
+    # them physical there, so that the jet velocity bound is what these tests see
+    propulsion = yaml.safe_load(Path(shipped["propulsion"]).read_text())
+    for engine in propulsion["engines"]:
+        engine["power"]["coefficients"] = {k: 1.5 * c for k, c in
+                                           engine["power"]["coefficients"].items()}
+    (tmp_path / "propulsion.yaml").write_text(yaml.safe_dump(propulsion, sort_keys=False))
+    shipped["propulsion"] = str(tmp_path / "propulsion.yaml")
     shipped["requirements"]["envelope"].update(min_airspeed_m_s=low, max_airspeed_m_s=high)
     shipped["requirements"]["takeoff"]["max_ground_roll_m"] = 5000
     path = tmp_path / "fast.yaml"
@@ -53,7 +62,8 @@ def _fast_case(tmp_path: Path, low: float = 75.0, high: float = 120.0):
 def _jet(case) -> float:
     scale = density_ratio(case.propulsion, case.density_kg_m3)
     static_n = min(float(engine_thrust_n(e, 1.0, 0.0, scale)) for e in case.propulsion.engines)
-    return math.sqrt(static_n / (case.density_kg_m3 * case.propulsion.fan_area_m2))
+    # the jet velocity is on the jet area (issue 43: fan_area_m2 is the disk's)
+    return math.sqrt(static_n / (case.density_kg_m3 * case.propulsion.jet_area_m2))
 
 
 def test_ceiling_is_the_jet_velocity_never_below_the_tested_range() -> None:
@@ -62,9 +72,9 @@ def test_ceiling_is_the_jet_velocity_never_below_the_tested_range() -> None:
     assert float(jet_velocity_ceiling_m_s(case.propulsion, rho)) == pytest.approx(
         _jet(case), rel=1e-12)
     assert 100.0 < _jet(case) < 106.0  # ~103 m/s for the shipped pair
-    no_area = dataclasses.replace(case.propulsion, fan_area_m2=None)
+    no_area = dataclasses.replace(case.propulsion, fan_area_m2=None, jet_area_m2=None)
     assert math.isinf(float(jet_velocity_ceiling_m_s(no_area, rho)))
-    tiny = dataclasses.replace(case.propulsion, fan_area_m2=10.0)
+    tiny = dataclasses.replace(case.propulsion, jet_area_m2=10.0)
     # a jet slower than the tested top speed: the tested range still counts as measured
     assert float(static_jet_velocity_m_s(tiny, rho)) < 30.0
     assert float(jet_velocity_ceiling_m_s(tiny, rho)) == 30.0
@@ -138,8 +148,8 @@ def test_an_idle_dive_past_the_jet_velocity_needs_no_thrust(tmp_path: Path) -> N
 
     copy_shipped_case(tmp_path)
     propulsion = tmp_path / "data" / "tuflex" / "propulsion.yaml"
-    propulsion.write_text(propulsion.read_text().replace("fan_area_m2: 0.004342",
-                                                         "fan_area_m2: 0.013"))
+    propulsion.write_text(propulsion.read_text().replace("jet_area_m2: 0.004342",
+                                                         "jet_area_m2: 0.013"))
     case = with_values(load_case(tmp_path / "requirements" / "tuflex.yaml"), {
         "aircraft.mass_kg": 5.0, "aircraft.wing_area_m2": 0.45, "aircraft.cd0": 0.012,
         "aircraft.k": 0.05, "aircraft.cl_max": 1.2, "aircraft.takeoff.cl_ground": 0.3})

@@ -15,6 +15,7 @@ from tuflexperf.analysis.mission import solve_mission
 from tuflexperf.analysis.mission_samples import sampled_landing
 from tuflexperf.analysis.uncertainty import evaluator_for, mission_for
 from tuflexperf.cli import app
+from tuflexperf.errors import NotAttainable
 from tuflexperf.io.case import load_case
 from tuflexperf.io.dotted import with_values
 from tuflexperf.io.mission import load_mission
@@ -133,10 +134,11 @@ def test_a_dask_cluster_flies_the_sampled_mission_to_the_same_numbers(tmp_path) 
     distributed = pytest.importorskip("distributed")
     from tuflexperf.analysis.uncertainty import plan_for, run_samples
 
-    mission = tmp_path / "airborne.yaml"
-    mission.write_text(AIRBORNE + "solve_for: cruise\n")
+    mission = tmp_path / "airborne.yaml"  # a loiter at its best-endurance airspeed too
+    mission.write_text(AIRBORNE.replace("airspeed_m_s: 21, ", "") + "solve_for: cruise\n")
     case = load_case(_case(tmp_path, mission, {
-        "samples": 30, "seed": 2, "parameters": {"aircraft.cd0": {"normal": [0.021, 0.002]}}}))
+        "samples": 30, "seed": 2, "parameters": {"aircraft.cd0": {"normal": [0.021, 0.002]},
+                                                 "battery.capacity_ah": {"normal": [5.0, 0.2]}}}))
     plan = plan_for(case)
     here = run_samples(case, plan)
     assert np.isfinite(here.values["mission_solved_time"]).sum() >= 25
@@ -174,4 +176,124 @@ def test_what_the_batch_does_not_fly_is_named(tmp_path) -> None:
     assert why_not_sampled(model, ["requirements.takeoff.max_ground_roll_m",
                                    "requirements.envelope.min_airspeed_m_s",
                                    "aircraft.cl_max", "battery.mission.pattern_altitude_m"]) is None
-    assert "battery.capacity_ah" in why_not_sampled(model, ["battery.capacity_ah"])
+    assert why_not_sampled(model, ["battery.capacity_ah", "aircraft.launch_energy_j"]) is None
+    assert "aircraft.nonsense" in why_not_sampled(model, ["aircraft.nonsense"])
+
+
+def test_a_loiter_at_its_best_endurance_airspeed_is_sampled_row_by_row(tmp_path) -> None:
+    """No airspeed_m_s: each row loiters at its own airspeed of least power (the single
+    plan's grid and golden section, per row); a row with no level flight is not met."""
+    mission = tmp_path / "best.yaml"
+    mission.write_text(AIRBORNE.replace("airspeed_m_s: 21, ", ""))
+    batch, single = _rows_and_single(_case(tmp_path, mission), {
+        "aircraft.mass_kg": [26.7064, 29.0, 24.0, 60.0], "aircraft.cd0": [0.04307, 0.03, 0.05,
+                                                                          0.04]})
+    assert np.all(np.isfinite(batch[:3])) and np.isnan(batch[3]) and np.isnan(single[3])
+    assert batch == pytest.approx(single, rel=1e-9, nan_ok=True)
+
+
+def _variant(tmp_path: Path, file_key: str, changes: dict, mission: Path = SHIPPED_MISSION
+             ) -> Path:
+    """The mission case with the aircraft or propulsion file changed by ``changes``."""
+    path = _case(tmp_path, mission)
+    data = yaml.safe_load(path.read_text())
+    content = yaml.safe_load(Path(data[file_key]).read_text())
+    content.update(changes)
+    changed = tmp_path / f"{file_key}.yaml"
+    changed.write_text(yaml.safe_dump(content))
+    data[file_key] = str(changed)
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def _rows_and_single(path: Path, draws: dict[str, list[float]]) -> tuple[np.ndarray, list]:
+    case = load_case(path)
+    values = {k: np.array(v, dtype=float) for k, v in draws.items()}
+    model = mission_for(case, list(values))
+    assert model is not None  # sampled, not refused
+    size = len(next(iter(draws.values())))
+    batch = sampled_landing(model, evaluator_for(case), values, size, None, None)[
+        "mission_landing_charge"][0]
+    single: list[float] = []
+    for row in range(size):
+        one = with_values(case, {k: v[row] for k, v in draws.items()})
+        try:
+            flown = solve_mission(one, load_mission(model.mission.path), 0.2)
+            single.append(flown.landing_charge_fraction if flown.attainable else np.nan)
+        except NotAttainable:  # refused at its plan (the launch): not attainable
+            single.append(np.nan)
+    return batch, single
+
+
+def test_a_catapult_launch_is_sampled_row_by_row(tmp_path) -> None:
+    """Released airborne: a row whose catapult cannot give the release speed is not met,
+    the others the single case to rounding (the batch's own release check)."""
+    path = _variant(tmp_path, "aircraft", {"launch": "catapult", "launch_speed_m_s": 20.0,
+                                           "launch_energy_j": 20000.0})
+    batch, single = _rows_and_single(path, {
+        "aircraft.launch_energy_j": [20000.0, 5000.0, 20000.0],
+        "aircraft.mass_kg": [26.7, 26.7, 30.0]})
+    assert np.isnan(batch[1]) and np.isnan(single[1])
+    assert np.all(np.isfinite(batch[[0, 2]])) and batch[0] != batch[2]
+    assert batch == pytest.approx(single, rel=1e-9, nan_ok=True)
+
+
+def test_a_takeoff_on_sagging_packs_is_sampled_row_by_row(tmp_path) -> None:
+    """With a reference voltage the roll's airspeed history and the arc's and climb's
+    gradients are the batch's take-off on the packs (held to CVODES in
+    test_batch_equals_deterministic): each row the single case's to 1e-8."""
+    path = _variant(tmp_path, "propulsion", {"reference_voltage_v": 46.0,
+                                             "voltage_exponent": 1.5})
+    batch, single = _rows_and_single(path, {"aircraft.mass_kg": [26.7064, 29.0, 25.0],
+                                            "atmosphere.temperature_offset_k": [0.0, 10.0, -5.0]})
+    assert np.all(np.isfinite(batch)) and len(set(np.round(batch, 6))) == 3
+    assert batch[0] == pytest.approx(single[0], rel=1e-9)  # the nominal row
+    assert batch == pytest.approx(single, rel=1e-8)
+
+
+def test_a_cruise_at_a_fixed_throttle_is_sampled_row_by_row(tmp_path) -> None:
+    """The airspeed is solved per row (the fast root of level flight at that throttle, as
+    the single case's plan finds it); a row that holds no level flight is not met."""
+    mission = tmp_path / "fixed.yaml"
+    mission.write_text(SHIPPED_MISSION.read_text().replace(
+        "{type: cruise, airspeed_m_s: 26, time_min: 8}", "{type: cruise, throttle: 0.6, "
+        "time_min: 8}"))
+    batch, single = _rows_and_single(_case(tmp_path, mission), {
+        "aircraft.mass_kg": [26.7064, 33.0, 45.0], "aircraft.cd0": [0.04307, 0.03, 0.06],
+        "atmosphere.temperature_offset_k": [0.0, 10.0, -5.0]})
+    assert np.all(np.isfinite(batch[:2])) and batch[0] != batch[1]
+    assert np.isnan(batch[2]) and np.isnan(single[2])
+    assert batch == pytest.approx(single, rel=1e-9, nan_ok=True)
+
+
+def test_a_drawn_capacity_is_flown_row_by_row(tmp_path) -> None:
+    """battery.capacity_ah drawn: each row flies the circuit of its own packs (charge x the
+    ratio, resistance / the ratio), the landing fraction of its own capacity and its own
+    rating; a pack too small to take off is not met. solve_for too."""
+    batch, single = _rows_and_single(_case(tmp_path, SHIPPED_MISSION), {
+        "battery.capacity_ah": [5.0, 1.5, 6.5], "aircraft.mass_kg": [26.7064, 26.7064, 26.0]})
+    assert np.isnan(batch[1]) and np.isnan(single[1])
+    assert batch[2] > batch[0] and batch == pytest.approx(single, rel=1e-9, nan_ok=True)
+    mission = tmp_path / "airborne.yaml"
+    mission.write_text(AIRBORNE + "solve_for: cruise\n")
+    case = load_case(_case(tmp_path, mission))
+    values = {"battery.capacity_ah": np.array([4.0, 6.0])}
+    out = sampled_landing(mission_for(case, list(values)), evaluator_for(case), values, 2,
+                          None, None)["mission_solved_time"][0]
+    for row, capacity in enumerate([4.0, 6.0]):
+        one = with_values(case, {"battery.capacity_ah": capacity})
+        flown = solve_mission(one, load_mission(mission), 0.2)
+        assert out[row] == pytest.approx(flown.solved["time_min"], rel=1e-9)
+
+
+def test_a_fixed_throttle_cruise_on_a_braking_fan_is_not_met(tmp_path) -> None:
+    """A small, clean wing cruises so fast that one fan's models give no thrust (or thrust
+    on no power): the single case ends the flight there, and so does the row (it landed
+    with 91 % in the batch)."""
+    mission = tmp_path / "cruise.yaml"
+    mission.write_text("name: cruise\nsegments:\n  - {type: cruise, throttle: 0.6, "
+                       "time_min: 3}\n")
+    batch, single = _rows_and_single(_case(tmp_path, mission), {
+        "aircraft.cd0": [0.04307, 0.003], "aircraft.wing_area_m2": [0.36, 0.36]})
+    assert np.isfinite(batch[0]) and np.isnan(batch[1]) and np.isnan(single[1])
+    assert batch[0] == pytest.approx(single[0], rel=1e-9)

@@ -52,7 +52,7 @@ def least_airspeed_m_s(case: Case) -> float:
 
 def jet_ceiling_m_s(case: Case) -> float:
     """Airspeed [m/s] from which level flight is beyond the fans' jet velocity at the case's
-    density (``inf`` without ``fan_area_m2``; :func:`jet_velocity_ceiling_m_s`)."""
+    density (``inf`` without an area; :func:`jet_velocity_ceiling_m_s`)."""
     return float(jet_velocity_ceiling_m_s(case.propulsion, case.density_kg_m3))
 
 
@@ -63,8 +63,8 @@ def jet_ceiling_note(case: Case, airspeed_m_s: np.ndarray) -> list[str]:
         return []
     return [
         f"at {jet_ceiling_m_s(case):.1f} m/s and above the fans' static jet velocity is reached "
-        "(momentum theory on fan_area_m2): a fan makes no thrust there, whatever the "
-        "extrapolated thrust model gives, so level flight is not attainable"
+        "(momentum theory on jet_area_m2, else fan_area_m2): a fan makes no thrust there, "
+        "whatever the extrapolated thrust model gives, so level flight is not attainable"
     ]
 
 

@@ -153,8 +153,14 @@ class BatchEvaluator:
     """
 
     def __init__(self, case: Case) -> None:
+        from tuflexperf.analysis.plausibility import implausible
+
         self.case = case
         self.requirements = present_requirements(case)
+        self.implausible = implausible(case)
+        self._side: Any = None
+        if case.battery_path is not None:
+            self._side = pack_side(case)  # the plausibility rule's packs (cached fit)
         if any(r.block == "oei" for r in self.requirements):
             # as solve_oei refuses it (the sweep tabulated "not attainable" for every point)
             from tuflexperf.analysis.oei import refuse_one_engine
@@ -167,7 +173,7 @@ class BatchEvaluator:
             self._endurance = battery_side(case)
         # trim and OEI are flown on the packs as the single case flies them (pack_limits)
         self._packs: Any = None
-        if self.requirements:
+        if self.requirements or case.requirements.mission is not None:
             self._packs = pack_side(case)
 
     # -- the batch's model objects -----------------------------------------------------------
@@ -282,33 +288,8 @@ class BatchEvaluator:
         battery = (self._battery_rows(values, size)
                    if self._packs is not None or self._endurance is not None else {})
 
-        sagging = self._packs is not None and sagging_packs(self.case)
-
         def launched() -> tuple[Array, Array, Array, Array]:
-            # a catapult's "roll" is its release: no runway (SPEC 4), as solve_takeoff; the
-            # packs give full throttle over it (pack_limits.takeoff_beyond_battery)
-            found = model.catapult_release() if catapult else model.ground_roll()
-            if sagging:  # rolled on the packs' loaded voltage, as solve_takeoff rolls
-                from tuflexperf.analysis import batch_takeoff_packs as packs_takeoff
-
-                rows = pack_rows(self._packs.battery, battery)
-                if catapult:
-                    model.release = packs_takeoff.release_on_packs(model, self._packs, rows)
-                    model.packs_roll = packs_takeoff.RollOnPacks(
-                        *found, np.zeros((size, 1)), model.release[2])
-                else:
-                    model.packs_roll = packs_takeoff.roll_on_packs(model, self._packs, rows)
-                model.packs_airborne, model.packs_beyond = packs_takeoff.airborne_on_packs(
-                    model, self._packs, rows, model.packs_roll, height)
-                found = model.packs_roll.as_roll()
-            elif catapult:
-                model.release = model.release_run()
-            if catapult:  # one that does not accelerate to the arc's speed never gets there
-                found = (*found[:3], np.where(model.release[3], found[3], 0.0))
-            if self._packs is None:
-                return found
-            within = model.launch_within_packs(found, height, catapult, self._packs, battery)
-            return found[0], found[1], found[2], np.where(within, found[3], 0.0)
+            return self.launch(model, size, height, battery)
 
         beyond: dict[str, NDArray[np.bool_]] = {}
         propulsion = self.case.propulsion
@@ -373,6 +354,7 @@ class BatchEvaluator:
                 flown = (speed, climb) if catapult else (launch[2], speed, climb)
                 beyond[requirement.name] = np.asarray(outside_tested_span(
                     propulsion, *flown_span(*flown, from_rest=not catapult)), dtype=bool)
+        self._refuse_implausible(out, battery, size)
         return BatchResult(
             values=out,
             limits=limits,
@@ -382,6 +364,62 @@ class BatchEvaluator:
             without_envelope=unflown,
             extrapolated=beyond,
         )
+
+    def launch(self, model: BatchModel, size: int, height: Any, battery: dict[str, Array]
+               ) -> tuple[Array, Array, Array, Array]:
+        """The take-off's roll tuple per row (:meth:`.GroundRollRows.ground_roll`): a
+        runway's roll or a catapult's release, on the sagging packs where the propulsion
+        has a reference voltage (then ``model.packs_roll``/``packs_air`` hold its history
+        and airborne part), attainable only within the packs. ``height`` the obstacle [m],
+        ``battery`` the rows' battery keys (:meth:`_battery_rows`)."""
+        catapult = self.case.aircraft.launch == "catapult"
+        # a catapult's "roll" is its release: no runway (SPEC 4), as solve_takeoff; the
+        # packs give full throttle over it (pack_limits.takeoff_beyond_battery)
+        found = model.catapult_release() if catapult else model.ground_roll()
+        if self._packs is not None and sagging_packs(self.case):
+            # rolled on the packs' loaded voltage, as solve_takeoff rolls
+            from tuflexperf.analysis import batch_takeoff_packs as packs_takeoff
+
+            rows = pack_rows(self._packs.battery, battery)
+            if catapult:
+                model.release = packs_takeoff.release_on_packs(model, self._packs, rows)
+                model.packs_roll = packs_takeoff.RollOnPacks(
+                    *found, np.zeros((size, 1)), model.release[2])
+            else:
+                model.packs_roll = packs_takeoff.roll_on_packs(model, self._packs, rows)
+            model.packs_airborne, model.packs_beyond, model.packs_air = \
+                packs_takeoff.airborne_on_packs(model, self._packs, rows, model.packs_roll,
+                                                height)
+            found = model.packs_roll.as_roll()
+        elif catapult:
+            model.release = model.release_run()
+        if catapult:  # one that does not accelerate to the arc's speed never gets there
+            found = (*found[:3], np.where(model.release[3], found[3], 0.0))
+        if self._packs is None:
+            return found
+        within = model.launch_within_packs(found, height, catapult, self._packs, battery)
+        return found[0], found[1], found[2], np.where(within, found[3], 0.0)
+
+    def _refuse_implausible(self, out: dict[str, Array], battery: dict[str, Array],
+                            size: int) -> None:
+        """NaN (not met) where the data are what physics forbids (issue 43 item 3, the
+        registry's FAIL): the momentum rule as the nominal case's scan (the rows vary no
+        thrust or power surface), the packs' rated C per row of the capacity."""
+        from tuflexperf.analysis.plausibility import rating_rows
+
+        bad = {name: np.zeros(size, dtype=bool) for name in out}
+        for f in self.implausible:
+            if f.rule == "battery_rating" and battery:
+                continue  # judged per row below
+            for requirement in self.requirements:
+                if requirement.block in f.blocks:
+                    bad[requirement.name] |= True
+        if battery and self._side is not None:
+            rows = rating_rows(self.case, self._side, battery["battery.capacity_ah"])
+            for requirement in self.requirements:
+                bad[requirement.name] |= rows.reshape(-1) * np.ones(size, dtype=bool)
+        for name, mask in bad.items():
+            out[name] = np.where(mask, np.nan, out[name])
 
     def _battery_nominal(self) -> dict[str, float]:
         from tuflexperf.io.dotted import battery_key_values

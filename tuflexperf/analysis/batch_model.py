@@ -33,7 +33,6 @@ from tuflexperf.models.aircraft import (
 from tuflexperf.models.thrust import (
     density_ratio,
     engine_thrust_n,
-    total_thrust_n,
 )
 
 Array = NDArray[np.float64]
@@ -59,26 +58,12 @@ class BatchModel(LevelFlightRows, GroundRollRows):
     packs_beyond: NDArray[np.bool_] | None = None
     # per row, the error model's factor on every fan's electrical power [-] (None: 1)
     power_scale: Array | None = None
+    packs_air: Any = None  # that airborne part's settled path (airborne.AirborneOnPacks)
 
     def transition_speed(self) -> Array:
         """The take-off arc's true airspeed [m/s] per row ``(B,)``: 1.15 V_stall."""
         return np.asarray(transition_speed_m_s(self.aircraft, self.density),
                           dtype=float).reshape(-1) * np.ones(self.size)
-
-    def _per_row(self, value: Any) -> Array:
-        """``value`` [N] as an array with one row per batch row (a view where it is shared)."""
-        value = np.asarray(value, dtype=float)
-        return np.broadcast_to(value, np.broadcast_shapes(value.shape, (self.size, 1)))
-
-    def thrust(self, throttle: Any, speed: Array, dead: int | None = None,
-               mode: str = "windmilling") -> Array:
-        """Total thrust [N]; the extrapolation error adds to each live engine beyond the range."""
-        total = total_thrust_n(self.propulsion, throttle, speed, self.density, dead, mode)
-        errors = self.extrapolation_errors_n(speed)
-        for j, error in enumerate(errors or ()):
-            if j != dead:
-                total = total + error
-        return self._per_row(total)
 
     def engine_thrust(self, index: int, throttle: Any, speed: Array) -> Array:
         """One live engine's thrust [N], as :meth:`thrust` counts it in the total (its model

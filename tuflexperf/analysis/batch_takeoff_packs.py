@@ -147,12 +147,13 @@ def release_on_packs(m: Any, packs: Any, rows: PackRows) -> tuple[Array, Array, 
 
 
 def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
-                      height: Any) -> tuple[Array, NDArray[np.bool_]]:
+                      height: Any) -> tuple[Array, NDArray[np.bool_], Any]:
     """Transition arc + climb to the obstacle [m] per row on the sagging packs from the
     charge after the roll and rotation (a catapult's release acceleration), as
     :func:`tuflexperf.analysis.takeoff.solve_takeoff`; ``inf`` where never cleared. And per
     row whether the packs reach their cut-off in the climb before the obstacle (the
-    take-off is then not attainable, as the single case's)."""
+    take-off is then not attainable, as the single case's), and the settled path
+    (:class:`~tuflexperf.analysis.airborne.AirborneOnPacks`: the mission flies its gradients)."""
     flight = _flight(m, packs, rows)
     v_tr = m.transition_speed()
     radius = np.asarray(transition_radius_m(v_tr.reshape(-1, 1),
@@ -174,4 +175,4 @@ def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
     # the climb's gradient is NaN where the obstacle is not reached: an infinite climb
     arc, climb, _ = obstacle_distances_m(radius, air.arc_gradient, tall, air.climb_gradient)
     return (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float),
-            air.status == BEYOND_THE_BATTERY_STATUS)
+            air.status == BEYOND_THE_BATTERY_STATUS, air)

@@ -36,6 +36,7 @@ from tuflexperf.models.thrust import (
     least_throttle_reaching,
     outside_tested_range,
     poly22,
+    total_thrust_n,
     windmilling_thrust_n,
 )
 
@@ -128,6 +129,21 @@ class LevelFlightRows:
         beyond = density_ratio(self.propulsion, self.density) \
             * outside_tested_range(self.propulsion, speed).astype(float)
         return [beyond * error[:, None] for error in self.extrapolation_n]
+
+    def _per_row(self, value: Any) -> Array:
+        """``value`` [N] as an array with one row per batch row (a view where it is shared)."""
+        value = np.asarray(value, dtype=float)
+        return np.broadcast_to(value, np.broadcast_shapes(value.shape, (self.size, 1)))
+
+    def thrust(self, throttle: Any, speed: Array, dead: int | None = None,
+               mode: str = "windmilling") -> Array:
+        """Total thrust [N]; the extrapolation error adds to each live engine beyond the range."""
+        total = total_thrust_n(self.propulsion, throttle, speed, self.density, dead, mode)
+        errors = self.extrapolation_errors_n(speed)
+        for j, error in enumerate(errors or ()):
+            if j != dead:
+                total = total + error
+        return self._per_row(total)
 
     def _engine_thrusts(self, speed: Array) -> Terms:
         """Per engine: its thrust [N] as ``a x^2 + b x + c`` in throttle at these airspeeds

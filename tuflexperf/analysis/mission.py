@@ -140,7 +140,7 @@ class MissionModel(SegmentEquations, MissionPlanning, FlightChecks, SolveFor):
              "field with full packs, the take-off's charge not counted (add {type: takeoff} "
              "first to fly it)",) if starts_airborne else ())
         self._takeoff_speeds: dict[int, np.ndarray] = {}
-        self.n_par = len(SAMPLED_AIRCRAFT) + 2 + 7 * self.n
+        self.n_par = len(SAMPLED_AIRCRAFT) + 2 + 7 * self.n + 1  # the circuit's packs last
         self._build()
 
     def _segment_function(self, k: int) -> Any:

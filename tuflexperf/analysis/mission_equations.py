@@ -72,11 +72,14 @@ class SegmentEquations:
 
     def parameters(self, aircraft: Any = None, density: tuple[Any, Any] | None = None,
                    coefficients: np.ndarray | None = None,
-                   extrapolation_n: np.ndarray | None = None, size: int = 1) -> np.ndarray:
+                   extrapolation_n: np.ndarray | None = None, size: int = 1,
+                   packs: np.ndarray | None = None) -> np.ndarray:
         """The chained function's ``par`` per row, ``(n_par, size)``: the aircraft's
         :data:`SAMPLED_AIRCRAFT` fields, the field's height [m] and temperature offset [K],
         each engine's six thrust coefficients (POLY22_TERMS order) and extrapolation error
-        [N]. Each argument left out is the case's own (no error)."""
+        [N], and the circuit's measured packs per engine [-] (a drawn capacity changes
+        them: :func:`tuflexperf.models.battery.equivalent_packs`). Each argument left out
+        is the case's own (no error)."""
         craft = self.case.aircraft if aircraft is None else aircraft
         atmosphere = self.case.atmosphere
         field_m, dt_k = ((atmosphere.altitude_m, atmosphere.temperature_offset_k)
@@ -92,6 +95,8 @@ class SegmentEquations:
         errors = (np.zeros((self.n, size)) if extrapolation_n is None
                   else np.asarray(extrapolation_n, dtype=float))
         rows.extend(errors[j] for j in range(self.n))
+        rows.append(np.broadcast_to(np.asarray(self.packs if packs is None else packs,
+                                               dtype=float).reshape(-1), (size,)))
         return np.stack(rows)
 
     def _symbolic_models(self, par: Any) -> tuple[Any, Any, list[Any]]:
@@ -174,10 +179,11 @@ class SegmentEquations:
         x_solved, reached = least_throttle_reaching(a, b, t[0] - needed)
         x = ca.if_else(solve_x > 0.5, x_solved, x_fixed)
         thrust = a * x * x + b * x + t[0] + dead_t
-        r = self.params.resistance_ohm / self.packs
+        packs = par[self.n_par - 1]
+        r = self.params.resistance_ohm / packs
         power, current, volt, residual = [], [], [], []
         for i in range(self.n):
-            ocv = open_circuit_voltage_v(self.params, q[i], self.packs)
+            ocv = open_circuit_voltage_v(self.params, q[i], packs)
             if i == dead:
                 power.append(0.0 * x)
                 current.append(0.0 * x)
@@ -186,7 +192,7 @@ class SegmentEquations:
                 continue
             p_i = self._engine_power(i, x, v, rho)
             if u_ref is None:
-                i_i = current_at_power_a(self.params, q[i], p_i, self.packs)
+                i_i = current_at_power_a(self.params, q[i], p_i, packs)
                 residual.append(u[i] - (ocv - r * i_i))
             else:
                 # fan laws: power ~ rpm^3 while thrust ~ rpm^2 (SPEC 3 voltage effect)
@@ -225,7 +231,7 @@ class SegmentEquations:
         p = ca.SX.sym("p", 4)
         par = ca.SX.sym("par", self.n_par)
         voltage_unknown = self.case.propulsion.reference_voltage_v is not None
-        ocv = [open_circuit_voltage_v(self.params, q[i], self.packs) for i in range(n)]
+        ocv = [open_circuit_voltage_v(self.params, q[i], par[self.n_par - 1]) for i in range(n)]
         m = (n if voltage_unknown else 0) + (1 if solve_v else 0)
         z = ca.SX.sym("z", m)
 

@@ -11,7 +11,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from tuflexperf.analysis.level_flight import LevelFlightRows
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.mission import SegmentSchema
 from tuflexperf.models.aircraft import (
@@ -20,13 +22,13 @@ from tuflexperf.models.aircraft import (
     stall_speed_eas_m_s,
     true_airspeed_m_s,
 )
+from tuflexperf.models.atmosphere import isa_density_kg_m3
 from tuflexperf.models.powertrain import (
     jet_velocity_ceiling_m_s,
 )
-from tuflexperf.models.thrust import (
-    least_throttle_reaching,
-    total_thrust_n,
-)
+from tuflexperf.models.thrust import least_throttle_reaching
+
+Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -153,104 +155,174 @@ class MissionPlanning:
             raise
         return tuple(plans)
 
+    def _case_rows(self) -> Any:
+        """The case as one row of the batch's model (its plan is a batch of one)."""
+        return LevelFlightRows(aircraft=self.case.aircraft, propulsion=self.case.propulsion,
+                               density=self.case.density_kg_m3, extrapolation_n=None, size=1)
+
     def _level_speed_at_throttle(self, throttle: float, h: float, dead: int | None,
                                  label: str) -> float:
         """Fastest true airspeed [m/s] of level flight at ``throttle`` short of the fans' jet
-        velocity (full packs, no sag)."""
-        aircraft, prop = self.case.aircraft, self.case.propulsion
-        rho = float(self._rho(h))
-        stall = float(stall_speed_eas_m_s(aircraft)) * math.sqrt(1.225 / rho)
-        ceiling = float(jet_velocity_ceiling_m_s(prop, rho))
-
-        def excess(speed: Any) -> Any:
-            return np.asarray(total_thrust_n(prop, throttle, speed, rho, dead, self.dead_mode)
-                              - level_flight_drag_n(aircraft, speed, rho), dtype=float)
-
-        # up to 8 x stall, further while the throttle still flies level at the top (a large
-        # cl_max puts the stall far below the cruise), to the jet velocity or Mach 1 at most
-        top = 8.0 * stall
-        limit = max(top, min(ceiling, MAX_AIRSPEED_M_S))
-        while top < limit and float(excess(top)) >= 0.0:
-            top = min(2.0 * top, limit)
-        v = np.linspace(0.5 * stall, top, 4001)
-        # the fast root short of the jet velocity: past it a fan makes no thrust, so the
-        # extrapolated polynomial's rise there (a near-zero cd0) is no level flight
-        ok = np.flatnonzero((excess(v) >= 0) & (v < ceiling))
-        if not ok.size or ok[-1] == v.size - 1:
-            raise NotAttainable(f"{label}: throttle {throttle:g} holds level flight at no "
-                                "airspeed")
-        low, high = float(v[ok[-1]]), float(v[ok[-1] + 1])
-        for _ in range(60):
-            mid = 0.5 * (low + high)
-            low, high = (mid, high) if excess(mid) >= 0 else (low, mid)
-        if high >= ceiling:
+        velocity (full packs, no sag): :func:`level_speeds_at_throttle`, a batch of one."""
+        speed, beyond = level_speeds_at_throttle(self, h, throttle, dead, self._case_rows(),
+                                                 np.array([self.field_m]),
+                                                 np.array([self.dt_k]))
+        if beyond[0]:
+            ceiling = float(jet_velocity_ceiling_m_s(self.case.propulsion, float(self._rho(h))))
             raise NotAttainable(
                 f"{label}: throttle {throttle:g} flies level only at or beyond the fans' static "
                 f"jet velocity {ceiling:.1f} m/s, where they make no thrust (the thrust model "
                 "is extrapolated there): not attainable")
-        return 0.5 * (low + high)
+        if not np.isfinite(speed[0]):
+            raise NotAttainable(f"{label}: throttle {throttle:g} holds level flight at no "
+                                "airspeed")
+        return float(speed[0])
 
     def _best_endurance_eas(self, h: float, dead: int | None = None) -> float:
-        """EAS of least electrical power in level flight at height ``h`` (full packs).
+        """EAS of least electrical power in level flight at height ``h`` (full packs):
+        :func:`best_endurance_eas_rows`, a batch of one.
 
         With a ``dead`` engine (after an engine failure) on the live engines alone, the dead
         one windmilling (or not) as in flight.
         """
-        aircraft = self.case.aircraft
-        rho = float(self._rho(h))
-        envelope = self.case.requirements.envelope
-        margin = getattr(envelope, "stall_margin", 1.0) if envelope is not None else 1.0
-        stall = margin * float(stall_speed_eas_m_s(aircraft))
-        eas = np.linspace(stall, 4.0 * stall, 2001)
-
-        def power_at(speeds_eas: np.ndarray) -> np.ndarray:
-            v = np.asarray(true_airspeed_m_s(speeds_eas, rho), dtype=float)
-            x, ok = self._level_throttle_numpy(v, rho, dead)
-            return np.where(ok, self._power_numpy(x, v, rho, dead), np.inf)
-
-        power = power_at(eas)
-        k = int(np.argmin(power))
-        if not np.isfinite(power[k]):
+        eas = best_endurance_eas_rows(self, h, dead, self._case_rows(), np.array([self.field_m]),
+                                      np.array([self.dt_k]), np.array([self._stall_factor()]))
+        if not np.isfinite(eas[0]):
             raise NotAttainable(f"loiter at {h:g} m: no level flight up to full throttle")
-        if k == 0 or k == eas.size - 1:
-            return float(eas[k])
-        # the grid's best point is up to half a step off the minimum: golden section on
-        # its neighbours (the power is smooth and unimodal there) to 1e-9 m/s
-        low, high = float(eas[k - 1]), float(eas[k + 1])
-        ratio = 0.5 * (math.sqrt(5.0) - 1.0)
-        a, b = high - ratio * (high - low), low + ratio * (high - low)
-        f_a, f_b = power_at(np.array([a, b]))
-        while high - low > 1e-9:
-            if f_a <= f_b:
-                high, b, f_b = b, a, f_a
-                a = high - ratio * (high - low)
-                f_a = float(power_at(np.array([a]))[0])
-            else:
-                low, a, f_a = a, b, f_b
-                b = low + ratio * (high - low)
-                f_b = float(power_at(np.array([b]))[0])
-        return 0.5 * (low + high)
-
-    def _level_throttle_numpy(self, v: np.ndarray, rho: float, dead: int | None = None
-                              ) -> tuple[np.ndarray, np.ndarray]:
-        prop = self.case.propulsion
-        t = [np.asarray(total_thrust_n(prop, x, v, rho, dead, self.dead_mode), dtype=float)
-             for x in (0.0, 0.5, 1.0)]
-        a = 2.0 * (t[2] - 2.0 * t[1] + t[0])
-        b = t[2] - t[0] - a
-        c = t[0] - np.asarray(level_flight_drag_n(self.case.aircraft, v, rho), dtype=float)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            x, reached = least_throttle_reaching(a, b, c)
-        return np.asarray(x, dtype=float), np.asarray(reached) > 0.5
-
-    def _power_numpy(self, x: np.ndarray, v: np.ndarray, rho: float, dead: int | None = None
-                     ) -> np.ndarray:
-        total = sum(np.asarray(self._engine_power(i, x, v, rho), dtype=float)
-                    for i in range(self.n) if i != dead)
-        return np.asarray(total, dtype=float)
+        return float(eas[0])
 
     def _stall_factor(self) -> float:
         """Least EAS [m/s] of level flight: the stall speed (EAS) x the envelope's margin."""
         envelope = self.case.requirements.envelope
         margin = getattr(envelope, "stall_margin", 1.0) if envelope is not None else 1.0
         return margin * float(stall_speed_eas_m_s(self.case.aircraft))
+
+
+def _segment_rows(model: Any, h: float, m: Any, field_m: Array, dt_k: Array
+                  ) -> tuple[Array, Any]:
+    """Per row the density [kg/m^3] at height ``h`` [m] and the batch's model there."""
+    rho = (np.full(m.size, model.fixed_density) if model.fixed_density is not None
+           else np.asarray(isa_density_kg_m3(field_m + h, dt_k), dtype=float)
+           * np.ones(m.size))
+    return rho, LevelFlightRows(aircraft=m.aircraft, propulsion=m.propulsion,
+                                density=rho[:, None], extrapolation_n=m.extrapolation_n,
+                                size=m.size)
+
+
+def best_endurance_eas_rows(model: Any, h: float, dead: int | None, m: Any, field_m: Array,
+                            dt_k: Array, least: Array) -> Array:
+    """Per row the EAS [m/s] of least electrical power in level flight at height ``h`` [m]
+    with full packs (NaN: no level flight), engine ``dead`` out: over 2001 airspeeds from
+    ``least`` (the row's stall x margin [m/s]) to 4 times it, then golden section on the
+    best one's neighbours (the power is smooth and unimodal there) to 1e-9 m/s, each row on
+    its own bracket. ``m`` the rows' model (``analysis.batch_model.BatchModel``; one row for
+    the single case's plan), per row the field [m] and temperature offset [K]."""
+    rho, at = _segment_rows(model, h, m, field_m, dt_k)
+    live = [i for i in range(model.n) if i != dead]
+
+    def power_at(eas: Array) -> Array:  # eas (B, K) [m/s] -> electrical power [W]
+        # rows done with (no bracket: 0 m/s) or far outside the models go NaN, harmlessly
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            v = np.asarray(true_airspeed_m_s(eas, rho[:, None]), dtype=float)
+            t = [at.thrust(x, v, dead, model.dead_mode) for x in (0.0, 0.5, 1.0)]
+            a = 2.0 * (t[2] - 2.0 * t[1] + t[0])
+            b = t[2] - t[0] - a
+            c = t[0] - np.asarray(level_flight_drag_n(m.aircraft, v, rho[:, None]),
+                                  dtype=float)
+            x, reached = least_throttle_reaching(a, b, c)
+            x = np.asarray(x, dtype=float)
+            total = sum(np.asarray(model._engine_power(i, x, v, rho[:, None]), dtype=float)
+                        for i in live)
+        return np.where(np.asarray(reached) > 0.5, total, np.inf)
+
+    grid, block, size = 2001, 250, m.size
+    start, step = least, (4.0 * least - least) / (grid - 1)  # np.linspace's own terms
+
+    def eas_at(index: Array) -> Array:
+        return np.where(index[None, :] == grid - 1, 4.0 * least[:, None],
+                        index[None, :] * step[:, None] + start[:, None])
+
+    best, k = np.full(size, np.inf), np.zeros(size, dtype=int)
+    for first in range(0, grid, block):  # the grid's least power per row, a block at a time
+        index = np.arange(first, min(first + block, grid))
+        power = power_at(eas_at(index))
+        j = np.argmin(power, axis=1)
+        lower = power[np.arange(size), j] < best
+        best, k = np.where(lower, power[np.arange(size), j], best), np.where(lower, index[j], k)
+    edge = (k == 0) | (k == grid - 1)
+    low = np.where(edge, 0.0, (k - 1) * step + start)
+    high = np.where(k + 1 == grid - 1, 4.0 * least, (k + 1) * step + start)
+    high = np.where(edge, 0.0, high)
+    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
+    a, b = high - ratio * (high - low), low + ratio * (high - low)
+    f_a, f_b = power_at(a[:, None])[:, 0], power_at(b[:, None])[:, 0]
+    active = ~edge & np.isfinite(best) & (high - low > 1e-9)
+    while active.any():  # each row stops at its own 1e-9 m/s, as the single case's loop
+        left = active & (f_a <= f_b)
+        right = active & ~left
+        high, b, f_b = np.where(left, b, high), np.where(left, a, b), np.where(left, f_a, f_b)
+        low, a, f_a = np.where(right, a, low), np.where(right, b, a), np.where(right, f_b, f_a)
+        a = np.where(left, high - ratio * (high - low), a)
+        b = np.where(right, low + ratio * (high - low), b)
+        fresh = power_at(np.where(left, a, b)[:, None])[:, 0]
+        f_a, f_b = np.where(left, fresh, f_a), np.where(right, fresh, f_b)
+        active &= high - low > 1e-9
+    on_grid = np.where(k == grid - 1, 4.0 * least, k * step + start)
+    return np.where(~np.isfinite(best), np.nan, np.where(edge, on_grid, 0.5 * (low + high)))
+
+
+def level_speeds_at_throttle(model: Any, h: float, throttle: float, dead: int | None, m: Any,
+                             field_m: Array, dt_k: Array) -> tuple[Array, Array]:
+    """Per row the fastest true airspeed [m/s] of level flight at ``throttle`` at height
+    ``h`` [m] with full packs short of the fans' jet velocity (NaN: none), engine ``dead``
+    out, and whether the root found lies at or beyond that velocity (then NaN too). The
+    rows' aircraft and thrust (with its extrapolation error; ``m`` as for
+    :func:`best_endurance_eas_rows`): 4001 airspeeds from half the stall speed to 8 x it,
+    the top doubled while the throttle still flies level there (a large ``cl_max`` puts the
+    stall far below the cruise) up to the jet velocity or Mach 1, the last one that flies
+    level, then 60 bisections."""
+    size = m.size
+    rho, at = _segment_rows(model, h, m, field_m, dt_k)
+    stall = np.asarray(stall_speed_eas_m_s(m.aircraft), dtype=float).reshape(-1) * np.sqrt(
+        1.225 / rho)
+    ceiling = np.asarray(jet_velocity_ceiling_m_s(m.propulsion, rho[:, None]),
+                         dtype=float).reshape(-1) * np.ones(size)
+
+    def excess(speed: Array) -> Array:  # speed (B, K) [m/s]
+        return (at.thrust(throttle, speed, dead, model.dead_mode)
+                - np.asarray(level_flight_drag_n(m.aircraft, speed, rho[:, None]), dtype=float))
+
+    top = 8.0 * stall
+    limit = np.maximum(top, np.minimum(ceiling, MAX_AIRSPEED_M_S))
+    for _ in range(64):  # the doubling, each row until it stops (<= log2(340/stall) steps)
+        grow = (top < limit) & (excess(top[:, None])[:, 0] >= 0.0)
+        if not grow.any():
+            break
+        top = np.where(grow, np.minimum(2.0 * top, limit), top)
+    grid, block = 4001, 250
+    start, step = 0.5 * stall, (top - 0.5 * stall) / (grid - 1)  # np.linspace's own terms
+    last = np.full(size, -1)
+    # the fast root short of the jet velocity: the last grid speed that flies level, found
+    # from the top down in blocks of speeds (all rows at once; done rows are not redone)
+    for end in range(grid, 0, -block):
+        todo = last < 0
+        if not todo.any():
+            break
+        index = np.arange(max(end - block, 0), end)
+        v = np.where(index[None, :] == grid - 1, top[:, None],
+                     index[None, :] * step[:, None] + start[:, None])
+        flies = (excess(v) >= 0) & (v < ceiling[:, None])
+        hit = flies.any(axis=1) & todo
+        last[hit] = index[v.shape[1] - 1 - np.argmax(flies[hit, ::-1], axis=1)]
+    found = (last >= 0) & (last < grid - 1)
+    low = np.where(found, last * step + start, np.nan)
+    high = np.where(found & (last + 1 == grid - 1), top, (last + 1) * step + start)
+    high = np.where(found, high, np.nan)
+    for _ in range(60):
+        mid = 0.5 * (low + high)
+        with np.errstate(invalid="ignore"):
+            up = excess(mid[:, None])[:, 0] >= 0
+        low, high = np.where(up, mid, low), np.where(up, high, mid)
+    with np.errstate(invalid="ignore"):
+        beyond = high >= ceiling
+        return np.where(beyond, np.nan, 0.5 * (low + high)), beyond

@@ -11,10 +11,14 @@ are :meth:`MissionModel._result`'s, vectorised: a row that stalls, cuts off, nee
 than full throttle, does not climb, outruns its fans or its pack's rating is not met
 (NaN), never dropped.
 
-What the batch does not fly yet is said, not guessed (:func:`why_not_sampled`): battery or
-propulsion keys drawn, a segment whose airspeed is solved (no ``airspeed_m_s``, or a level
-flight at a fixed throttle), a catapult launch, a take-off on sagging packs. ``solve_for``
-is solved per row (:func:`longest_rows`), vectorised over the batch.
+Every mission the single case flies is sampled: a catapult's release and a take-off on
+sagging packs (the batch's launch, :meth:`BatchEvaluator.launch`), a level flight at a fixed
+throttle (:func:`level_speeds_at_throttle`) or at its best-endurance airspeed
+(:func:`best_endurance_eas_rows`), each row's airspeed found as the single plan finds it, and
+a drawn capacity (each row's packs: :func:`pack_rows_of`, the circuit's packs a parameter of
+the chained function). A drawn key the mission does not fly is said, not guessed
+(:func:`why_not_sampled`). ``solve_for`` is solved per row (:func:`longest_rows`),
+vectorised over the batch.
 
 References
 ----------
@@ -25,6 +29,7 @@ Andersson et al. (2019), "CasADi", Math. Prog. Comp. 11 (``Function.map``); SPEC
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -39,13 +44,16 @@ from tuflexperf.analysis.mission import (
     airborne_path,
     takeoff_matrix,
 )
+from tuflexperf.analysis.mission_plan import best_endurance_eas_rows, level_speeds_at_throttle
+from tuflexperf.analysis.mission_solve import longest_rows, mapped
 
 Array = NDArray[np.float64]
 FLOWN_KEYS = ("aircraft.mass_kg", "aircraft.wing_area_m2", "aircraft.cd0", "aircraft.k",
               "aircraft.cl_max", "atmosphere.altitude_m", "atmosphere.temperature_offset_k",
               "requirements.envelope.stall_margin",
               "requirements.mission.min_landing_charge_fraction",
-              "requirements.takeoff.obstacle_height_m", "battery.cutoff_voltage_per_cell_v")
+              "requirements.takeoff.obstacle_height_m", "battery.cutoff_voltage_per_cell_v",
+              "aircraft.launch_speed_m_s", "aircraft.launch_energy_j")
 """The drawn keys a sampled mission flies (with ``aircraft.takeoff.*``, through the batch's
 take-off); other requirements' limits leave it alone."""
 ROWS_PER_MAP = 500  # rows per map call: a row's history is ~80 kB (states and aux per node)
@@ -55,23 +63,13 @@ MISSION_SOLVED = "mission_solved_time"
 
 def why_not_sampled(model: MissionModel, keys: list[str]) -> str | None:
     """Why the batch cannot fly ``model``'s mission for draws of ``keys`` (None: it can)."""
-    case = model.case
     for key in keys:
         # the case's requirement holds the reserve; of the requirements' numbers the mission
         # reads only FLOWN_KEYS' (the others are other requirements' limits)
-        if key.startswith(("battery.mission.", "requirements.")):
-            continue
+        if key.startswith(("battery.mission.", "requirements.")) or key == "battery.capacity_ah":
+            continue  # the reserve, the packs (pack_rows_of)
         if key not in FLOWN_KEYS and not key.startswith("aircraft.takeoff."):
             return f"{key} is drawn and the sampled mission does not fly it"
-    if case.aircraft.launch == "catapult":
-        return "a catapult launch is flown for the nominal case only"
-    if any(plan.solve_v for plan in model.plans):
-        return "a level flight at a fixed throttle is flown for the nominal case only"
-    if any(s.type not in ("takeoff", "engine_failure") and s.airspeed_m_s is None
-           for s in model.mission.segments):
-        return "a segment without airspeed_m_s is flown for the nominal case only"
-    if model.tk_layout and case.propulsion.reference_voltage_v is not None:
-        return "a take-off on sagging packs is flown for the nominal case only"
     return None
 
 
@@ -80,10 +78,12 @@ def _column(values: Mapping[str, Array], key: str, nominal: Any, size: int) -> A
                            (size,)).copy()
 
 
-def _takeoff_rows(model: MissionModel, m: Any, height: Array, layout: list[tuple[str, int]]
+def _takeoff_rows(model: MissionModel, m: Any, roll: tuple[Array, Array, Array, Array],
+                  height: Array, layout: list[tuple[str, int]]
                   ) -> tuple[Array, NDArray[np.bool_]]:
     """The take-off's step rows per row ``(B, P + 1, columns)`` from the batch's take-off
-    ``m``, and where the take-off reaches the obstacle."""
+    ``m`` and its ``roll`` (:meth:`BatchEvaluator.launch`: on sagging packs its history and
+    airborne gradients are the packs'), and where the take-off reaches the obstacle."""
     from tuflexperf.models._math import interp_rows
     from tuflexperf.models.aircraft import (
         climb_gradient,
@@ -93,11 +93,13 @@ def _takeoff_rows(model: MissionModel, m: Any, height: Array, layout: list[tuple
     )
 
     size = m.size
-    _, time, v_lo, ok = m.ground_roll()
+    _, time, v_lo, ok = roll
     ok = ok > 0.5
     rotation = _column({}, "", m.aircraft.takeoff.rotation_time_s, size)
     roll_s = np.where(ok, time - rotation, 0.0)
-    t_hist = np.where(ok[:, None], m.roll_history(ok), 0.0)
+    sagging = m.packs_roll is not None
+    t_hist = np.where(ok[:, None], np.nan_to_num(m.packs_roll.history_time) if sagging
+                      else m.roll_history(ok), 0.0)
     v_hist = np.where(ok, v_lo, 0.0)[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
     stage_t = roll_s[:, None] / (2 * STEPS) * np.arange(2 * STEPS + 1)[None, :]
     stage_t[:, -1] = roll_s
@@ -105,17 +107,51 @@ def _takeoff_rows(model: MissionModel, m: Any, height: Array, layout: list[tuple
     v_tr = m.transition_speed()
     load = _column({}, "", m.aircraft.takeoff.transition_load_factor, size)
     radius = np.asarray(transition_radius_m(v_tr, load), dtype=float)
-    thrust = np.asarray(m.thrust(1.0, v_tr[:, None]), dtype=float).reshape(-1)
-    gradient = np.asarray(climb_gradient(m.aircraft, thrust[:, None], v_tr[:, None],
-                                         m.density), dtype=float).reshape(-1) * np.ones(size)
+    if sagging:  # the packs sag over the arc and the climb: their settled gradients
+        arc_gradient = np.asarray(m.packs_air.arc_gradient, dtype=float) * np.ones(size)
+        gradient = np.asarray(m.packs_air.climb_gradient, dtype=float) * np.ones(size)
+    else:
+        thrust = np.asarray(m.thrust(1.0, v_tr[:, None]), dtype=float).reshape(-1)
+        gradient = np.asarray(climb_gradient(m.aircraft, thrust[:, None], v_tr[:, None],
+                                             m.density), dtype=float).reshape(-1) * np.ones(size)
+        arc_gradient = gradient
     arc, climb, top = (np.asarray(x, dtype=float).reshape(-1) * np.ones(size)
-                       for x in obstacle_distances_m(radius, gradient, height))
+                       for x in obstacle_distances_m(radius, arc_gradient, height, gradient))
     air = None
     if model.takeoff_to_obstacle:
-        air = airborne_path(v_tr, radius, height, gradient, gradient, top >= height)
+        air = airborne_path(v_tr, radius, height, gradient, arc_gradient, top >= height)
         ok &= np.isfinite(arc + climb) & ~np.asarray(transition_beyond_cl_max(load), dtype=bool)
     rows = takeoff_matrix(layout, stages, roll_s, rotation, np.where(ok, v_lo, 0.0), air)
     return np.where(ok[:, None, None], rows, 0.0), ok
+
+
+@dataclass(frozen=True)
+class PackRowsOfMission:
+    """Per row the packs a drawn ``battery.capacity_ah`` makes: charge per engine [Ah] the
+    landing fraction counts, the circuit's measured packs [-], the pole of its knee [Ah]
+    and the pack's continuous rating [A] (None without one)."""
+
+    capacity_ah: Array
+    packs: Array
+    pole_ah: Array
+    rating_a: Array | None
+
+
+def pack_rows_of(model: MissionModel, values: Mapping[str, Array], size: int
+                 ) -> PackRowsOfMission:
+    """The rows' packs as :class:`MissionModel` builds them for one capacity
+    (``battery.circuit_packs``, ``capacity_ah x packs in parallel``, ``_pack_rating_a``)."""
+    from tuflexperf.models.battery import equivalent_packs
+
+    battery = model.battery
+    capacity = _column(values, "battery.capacity_ah", battery.capacity_ah, size)
+    per_engine = battery.packs_in_parallel_per_engine
+    packs = (np.full(size, model.packs) if "battery.capacity_ah" not in values else
+             np.asarray(equivalent_packs(per_engine, capacity, battery.as_read.capacity_ah),
+                        dtype=float) * np.ones(size))
+    c_rate = battery.max_discharge_c
+    return PackRowsOfMission(capacity * per_engine, packs, packs * model.params.max_capacity_ah,
+                             None if c_rate is None else float(c_rate) * capacity)
 
 
 def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Array],
@@ -151,25 +187,53 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     ok = np.ones(size, dtype=bool)
     stall = margin * np.asarray(stall_speed_eas_m_s(aircraft), dtype=float).reshape(-1)
     durations = np.repeat(model.durations[:, None], size, axis=1)
+    m = _Model(aircraft=aircraft, propulsion=evaluator._propulsion(coefficients),
+               density=evaluator._density(values, size), extrapolation_n=extrapolation_n,
+               size=size, stall_margin=margin)
+    theta = np.repeat(model.theta[:, None], size, axis=1)
     for plan, segment in zip(model.plans, model.mission.segments, strict=True):
-        if plan.eas is not None:  # below stall: the plan itself is not attainable
-            ok &= ~(plan.eas < stall * (1 - 1e-12))
+        eas: Any = plan.eas
+        if eas is not None and segment.airspeed_m_s is None:  # each row's best endurance
+            eas = best_endurance_eas_rows(model, plan.start_h, plan.dead, m, field_m, dt_k,
+                                          stall)
+            ok &= np.isfinite(eas)
+            eas = np.where(np.isfinite(eas), eas, plan.eas)
+            theta[3 * plan.index + 1] = eas
+        if eas is not None:  # below stall: the plan itself is not attainable
+            ok &= ~(eas < stall * (1 - 1e-12))
             if plan.kind == "time" and segment.distance_km is not None:
                 rho = np.asarray(isa_density_kg_m3(field_m + plan.start_h, dt_k), dtype=float)
                 durations[plan.index] = 1000.0 * segment.distance_km / np.asarray(
-                    true_airspeed_m_s(plan.eas, rho), dtype=float)
+                    true_airspeed_m_s(eas, rho), dtype=float)
     history, bounds, layout = model.sampled_chain()
-    par = model.parameters(aircraft, (field_m, dt_k), coefficients, extrapolation_n, size)
+    cells = pack_rows_of(model, values, size)
+    battery = evaluator._battery_rows(values, size)
+    # data physics forbids (analysis.plausibility), as the batch refuses its requirements:
+    # every row, or per row the packs beyond their rated C at the row's capacity
+    if any("mission" in f.blocks and f.rule != "battery_rating" for f in evaluator.implausible):
+        ok[:] = False
+    if evaluator._side is not None:
+        from tuflexperf.analysis.plausibility import rating_rows
+
+        ok &= ~rating_rows(case, evaluator._side, battery["battery.capacity_ah"]).reshape(-1)
+    par = model.parameters(aircraft, (field_m, dt_k), coefficients, extrapolation_n, size,
+                           cells.packs)
     tk = np.zeros((size, model.tk.shape[0], 0))
-    if layout:
-        m = _Model(aircraft=aircraft, propulsion=evaluator._propulsion(coefficients),
-                   density=evaluator._density(values, size), extrapolation_n=extrapolation_n,
-                   size=size, stall_margin=margin)
+    for plan in model.plans:
+        if plan.solve_v:  # level at a fixed throttle: each row's own airspeed to start from
+            guess = level_speeds_at_throttle(model, plan.start_h, plan.throttle, plan.dead, m,
+                                             field_m, dt_k)[0]
+            ok &= np.isfinite(guess)
+            theta[3 * plan.index + 2] = np.where(np.isfinite(guess), guess, plan.v_guess)
+    if model.mission.segments and model.mission.segments[0].type == "takeoff":
+        # a runway's roll or a catapult's release, per row as the batch's take-off flies it
         height = _column(values, "requirements.takeoff.obstacle_height_m",
                          obstacle_height_of(case), size)
-        tk, launched = _takeoff_rows(model, m, height, layout)
-        ok &= launched
-    theta = np.repeat(model.theta[:, None], size, axis=1)
+        roll = evaluator.launch(m, size, height, battery)
+        ok &= roll[3] > 0.5
+        if layout:
+            tk, launched = _takeoff_rows(model, m, roll, height, layout)
+            ok &= launched
     k = model.mission.solve_for
 
     def fly(durations: Array) -> tuple[Array, Array | None]:
@@ -180,7 +244,7 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
             rows = slice(first, min(first + ROWS_PER_MAP, size))
             count = rows.stop - rows.start
             block = tk[rows]
-            states, aux = (np.asarray(x, dtype=float) for x in _mapped(history, count)(
+            states, aux = (np.asarray(x, dtype=float) for x in mapped(history, count)(
                 durations[:, rows], theta[:, rows], par[:, rows],
                 block.transpose(1, 0, 2).reshape(block.shape[1], -1)))
             nodes = states.shape[1] // count
@@ -189,9 +253,10 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
             propulsion = evaluator._propulsion(None if coefficients is None
                                                else coefficients[:, rows, :])
             flown = _flown(model, bounds, states, aux, propulsion, field_m[rows], dt_k[rows],
-                           cutoff[rows])
+                           cutoff[rows], stall[rows], cells, rows)
             with np.errstate(invalid="ignore"):
-                value = np.min(1.0 - states[:model.n, :, -1] / model.capacity_ah, axis=0)
+                value = np.min(1.0 - states[:model.n, :, -1] / cells.capacity_ah[rows],
+                               axis=0)
             landing[rows] = np.where(flown & ok[rows], value, np.nan)
             if start is not None:
                 start[:, rows] = states[:, :, bounds[k][0]]
@@ -203,153 +268,26 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     written = durations[k] / 60.0
     with np.errstate(invalid="ignore"):
         durations[k] = longest_rows(model, k, np.where(ok, 1.0, np.nan) * start, durations,
-                                    theta, par, reserve, cutoff)
+                                    theta, par, reserve, cutoff, cells.capacity_ah,
+                                    cells.pole_ah)[0]
     landing, _ = fly(durations)
     solved = np.where(np.isfinite(landing), durations[k] / 60.0, np.nan)
     return {MISSION_LANDING: (landing, reserve), MISSION_SOLVED: (solved, written)}
 
 
-def longest_rows(model: MissionModel, k: int, start: Array, durations: Array, theta: Array,
-                 par: Array, reserve: Array, cutoff: Array) -> Array:
-    """Per row, :meth:`MissionModel.longest` of segment ``k`` [s] (NaN where no duration
-    lands): the landing charge on the reserve, or the cut-off first, from where segment
-    ``k`` begins (``start``, ``(state, B)``), per row the ``reserve`` [-] and the packs'
-    ``cutoff`` [V].
-
-    Vectorised over the rows, never a loop of them: each step evaluates the rows not yet
-    converged at once (the mission from segment ``k`` on, mapped). Newton with the state
-    equations' slope ``-i_j / (3600 Q)`` (exact for the last segment, a close guess before
-    it) from the file's duration, safeguarded by the bracket it keeps (regula falsi,
-    Illinois, where a step leaves it); then, where the packs cut off first, regula falsi on
-    the least loaded voltage over ``[0, T]``. The same roots as the single case's to
-    1e-12 (fraction) and 1e-10 V.
-
-    References
-    ----------
-    Press et al., *Numerical Recipes*, 3rd ed., 9.2 (Illinois), 9.4 (safeguarded Newton).
-    """
-    size = start.shape[1]
-    if not hasattr(model, "_suffix_sx"):
-        model._suffix_sx = {}  # type: ignore[attr-defined]
-    if k not in model._suffix_sx:  # type: ignore[attr-defined]
-        model._suffix_sx[k] = model._suffix_function(k).expand()  # type: ignore[attr-defined]
-    suffix = model._suffix_sx[k]  # type: ignore[attr-defined]
-    n, width = model.n, model.tk.shape[1]
-    pole = model.packs * model.params.max_capacity_ah
-
-    def at(rows: Array, tau: Array) -> tuple[Array, Array, Array]:
-        d = durations[:, rows].copy()
-        d[k] = tau
-        end, aux, most, least = (np.asarray(x, dtype=float) for x in _mapped(suffix, rows.size)(
-            start[:, rows], d, theta[:, rows], par[:, rows],
-            np.zeros((model.tk.shape[0], width * rows.size))))
-        with np.errstate(invalid="ignore"):
-            valid = (np.all(np.isfinite(end), axis=0) & np.all(most <= end[:n] + 1e-12, axis=0)
-                     & np.all(most < pole, axis=0))
-            frac = 1.0 - end[:n] / model.capacity_ah
-            j = np.argmin(np.where(np.isfinite(frac), frac, np.inf), axis=0)
-            cols = np.arange(rows.size)
-            g = np.where(valid, frac[j, cols] - reserve[rows], -1.0)
-            slope = np.where(valid, -aux[6 + j, cols] / SECONDS_PER_HOUR / model.capacity_ah,
-                             np.nan)
-            volt = np.where(valid, least[0] - cutoff[rows], -1.0)
-        return g, slope, volt
-
-    every = np.flatnonzero(np.all(np.isfinite(start), axis=0))
-    tau, g0, v0 = np.full(size, np.nan), np.full(size, np.nan), np.full(size, np.nan)
-    g0[every], _, v0[every] = at(every, np.zeros(every.size))
-    # landing short with none of it, or cut off: no duration lands
-    every = every[(g0[every] >= 0) & (v0[every] >= 0)]
-    tau[every] = _root(lambda rows, x: at(rows, x)[:2], every, g0, durations[k], 1e-12)
-    volts = np.full(size, np.nan)
-    found = every[np.isfinite(tau[every])]
-    volts[found] = at(found, tau[found])[2]
-    cut = found[volts[found] < 0]  # the packs cut off before the reserve: on the voltage
-    if cut.size:
-        tau[cut] = _root(lambda rows, x: (at(rows, x)[2], np.full(rows.size, np.nan)), cut,
-                         v0, tau, 1e-10, high=(tau.copy(), volts))
-    good = np.isfinite(tau) & (tau > 0)
-    checked = np.flatnonzero(good)
-    if checked.size:
-        good[checked] &= at(checked, tau[checked])[0] >= -1e-8
-    return np.where(good, tau, np.nan)
-
-
-def _root(f: Any, rows: Array, at_zero: Array, guess: Array, tolerance: float,
-          high: tuple[Array, Array] | None = None) -> Array:
-    """Per row of ``rows``, the root ``x > 0`` of a falling ``f(rows, x) -> (value, slope)``
-    with ``f(0) = at_zero >= 0``: safeguarded Newton from ``guess`` (slope NaN: regula falsi,
-    Illinois) inside the bracket it keeps, to ``|f| <= tolerance`` or a bracket of 1e-9
-    relative; ``high`` a known point and its value ``f < 0`` per row. Arrays over all rows;
-    NaN where none is found in 200 steps."""
-    size = at_zero.size
-    low, f_low = np.zeros(size), np.array(at_zero, dtype=float)
-    top = np.full(size, np.inf) if high is None else np.array(high[0], dtype=float)
-    f_top = np.full(size, np.nan) if high is None else np.array(high[1], dtype=float)
-    side = np.zeros(size)
-    x = np.maximum(np.asarray(guess, dtype=float) * np.ones(size), 1.0)
-    if high is not None:  # regula falsi on the bracket from the start
-        with np.errstate(invalid="ignore", divide="ignore"):
-            x = top - f_top * top / (f_top - f_low)
-    answer = np.full(size, np.nan)
-    active = np.array(rows)
-    for _ in range(200):
-        if not active.size:
-            break
-        value, slope = f(active, x[active])
-        done = np.abs(value) <= tolerance
-        above = ~done & (value > 0)
-        below = ~done & ~above
-        a, b = active[above], active[below]
-        # Illinois: halve the kept end's value when the same end moves twice
-        f_top[a] = np.where(side[a] == 1, 0.5 * f_top[a], f_top[a])
-        f_low[b] = np.where(side[b] == -1, 0.5 * f_low[b], f_low[b])
-        low[a], f_low[a], side[a] = x[a], value[above], 1
-        top[b], f_top[b], side[b] = x[b], value[below], -1
-        narrow = np.isfinite(top[active]) & (top[active] - low[active] <= 1e-9 * top[active])
-        answer[active[done | narrow]] = x[active[done | narrow]]
-        active, value, slope = (active[~(done | narrow)], value[~(done | narrow)],
-                                slope[~(done | narrow)])
-        with np.errstate(invalid="ignore", divide="ignore"):
-            newton = x[active] - value / slope
-            falsi = top[active] - f_top[active] * (top[active] - low[active]) / (
-                f_top[active] - f_low[active])
-            bounded = np.isfinite(top[active])
-            inside = np.isfinite(newton) & (newton > low[active]) & (
-                newton < np.where(bounded, top[active], np.inf))
-            unbracketed = np.where(np.isfinite(newton) & (newton > low[active]), newton,
-                                   2.0 * np.maximum(x[active], 60.0))
-            step = np.where(inside, newton, np.where(
-                bounded, np.where(np.isfinite(falsi) & (falsi > low[active])
-                                  & (falsi < top[active]), falsi,
-                                  0.5 * (low[active] + top[active])), unbracketed))
-        x[active] = step
-    return answer[rows]
-
-
-_MAPS: dict[tuple[int, int], Any] = {}
-
-
-def _mapped(function: Any, count: int) -> Any:
-    """``function.map(count, "thread", 2)``, built once per function and count (a map of the
-    expanded mission takes ~0.4 s to build, as long as flying 100 rows)."""
-    key = (id(function), count)
-    if key not in _MAPS:
-        if len(_MAPS) > 16:  # a process flies one case's mission at a time
-            _MAPS.clear()
-        _MAPS[key] = (function, function.map(count, "thread", 2))
-    return _MAPS[key][1]
-
-
 def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, aux: Array,
-           propulsion: Any, field_m: Array, dt_k: Array, cutoff: Array) -> NDArray[np.bool_]:
+           propulsion: Any, field_m: Array, dt_k: Array, cutoff: Array, stall: Array,
+           cells: PackRowsOfMission, rows: slice) -> NDArray[np.bool_]:
     """Per row: the whole flight is attainable by :meth:`MissionModel._result`'s rules (the
     cut-off, full throttle, the pack's burst and continuous ratings, the fans' jet velocity,
-    climbs that climb and descents that descend). ``states``/``aux`` ``(k, B, nodes)``; per
-    row the field [m], temperature offset [K] and the packs' cut-off [V]."""
+    climbs that climb and descents that descend, a fixed throttle's airspeed above stall).
+    ``states``/``aux`` ``(k, B, nodes)``; per row the field [m], temperature offset [K],
+    the packs' cut-off [V] and the least EAS of level flight [m/s]; the ``rows`` of
+    ``cells``' packs (:func:`pack_rows_of`)."""
     from tuflexperf.models.atmosphere import isa_density_kg_m3
     from tuflexperf.models.battery import first_window_beyond
     from tuflexperf.models.powertrain import beyond_jet_velocity
+    from tuflexperf.models.thrust import density_ratio, engine_thrust_n
 
     n = model.n
     q, h, t = states[:n], states[2 * n], states[2 * n + 2]
@@ -357,12 +295,12 @@ def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, au
     current, voltage, thrust = aux[6:6 + n], aux[6 + n:6 + 2 * n], aux[6 + 3 * n]
     size = q.shape[1]
     ok = np.ones(size, dtype=bool)
-    pole = model.packs * model.params.max_capacity_ah
-    rating = model._pack_rating_a()
+    pole = cells.pole_ah[rows]
+    rating = None if cells.rating_a is None else cells.rating_a[rows]
     per_pack = model.battery.packs_in_parallel_per_engine
     with np.errstate(invalid="ignore", over="ignore"):
         rising = np.all(np.diff(q, axis=2) >= -1e-12, axis=(0, 2))
-        ok &= rising & np.all(np.isfinite(q) & (q < pole), axis=(0, 2))
+        ok &= rising & np.all(np.isfinite(q) & (q < pole[None, :, None]), axis=(0, 2))
         ok &= np.all(np.isfinite(current) & (current >= 0.0), axis=(0, 2))
         if rating is not None and t.shape[1] > 1:
             # a stretch's mean current is a mean of the steps' (charge linear between nodes):
@@ -371,10 +309,10 @@ def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, au
             dt = np.broadcast_to(np.diff(t, axis=1), q[:, :, 1:].shape)
             dq = np.diff(q, axis=2) * SECONDS_PER_HOUR / per_pack
             steps = np.divide(dq, dt, out=np.where(dq == 0.0, 0.0, np.inf), where=dt > 0)
-            heavy = np.flatnonzero(np.any(~(steps <= rating), axis=(0, 2)))
+            heavy = np.flatnonzero(np.any(~(steps <= rating[None, :, None]), axis=(0, 2)))
             if heavy.size:
                 end = first_window_beyond(t[heavy], q[:, heavy].transpose(1, 0, 2) / per_pack,
-                                          rating, RATING_SEGMENT_S)[0]
+                                          rating[heavy], RATING_SEGMENT_S)[0]
                 ok[heavy] &= ~np.isfinite(end)
         for plan, (a, b) in zip(model.plans, bounds, strict=True):
             if plan.kind == "event":
@@ -385,11 +323,26 @@ def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, au
             ok &= np.all(reached[:, sl] >= 0.5, axis=1)
             if rating is not None and live:
                 peak = np.max(current[live, :, sl], axis=0) / per_pack
-                ok &= ~np.any(peak > BURST_OVER_CONTINUOUS * rating * (1.0 + 1e-9), axis=1)
+                ok &= ~np.any(peak > (BURST_OVER_CONTINUOUS * (1.0 + 1e-9) * rating)[:, None],
+                              axis=1)
             if plan.kind != "takeoff":
                 rho = (np.full(h[:, sl].shape, model.fixed_density)
                        if model.fixed_density is not None
                        else isa_density_kg_m3(field_m[:, None] + h[:, sl], dt_k[:, None]))
+                if plan.solve_v:  # the airspeed is an outcome here: stall bounds it; the
+                    # throttle must hold level flight all along
+                    ok &= np.all(np.abs(aux[5][:, sl]) < 1e-9, axis=1)
+                    slow = v[:, sl] < stall[:, None] * np.sqrt(1.225 / rho) * (1 - 1e-12)
+                    ok &= ~np.any(slow, axis=1)
+                    # a live fan whose models give no thrust, or thrust on no power, flies
+                    # no cruise (MissionModel._braking_engine)
+                    sigma = density_ratio(propulsion, rho)
+                    for i in live:
+                        pull = engine_thrust_n(propulsion.engines[i], plan.throttle, v[:, sl],
+                                               sigma)
+                        power = model._modelled_power(i, plan.throttle, v[:, sl], rho)
+                        ok &= ~np.any((np.asarray(pull) <= 0.0) | (np.asarray(power) <= 0.0),
+                                      axis=1)
                 fast = np.asarray(beyond_jet_velocity(propulsion, v[:, sl], rho), dtype=bool)
                 ok &= ~np.any(fast & (thrust[:, sl] > 0.0), axis=1)
             if plan.kind == "height":

@@ -12,6 +12,7 @@ import math
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from tuflexperf.analysis.mission_equations import (
     SECONDS_PER_HOUR,
@@ -21,6 +22,8 @@ from tuflexperf.errors import NotAttainable
 from tuflexperf.models.aircraft import (
     true_airspeed_m_s,
 )
+
+Array = NDArray[np.float64]
 
 
 class SolveFor:
@@ -85,112 +88,32 @@ class SolveFor:
         A rootfinder on ``g(T) = min_i landing_fraction_i(T) - reserve`` (it falls
         monotonically with the segment's duration ``T``), each evaluation one integration of
         the mission from where segment ``k`` begins (``start``, computed once if not given)
-        to the landing. For the last segment, Newton with the slope from the state equations,
-        ``dg/dT = -i_j / (3600 Q)`` at the landing for the engine ``j`` that lands with
-        least charge (from ``guess_s``, e.g. a closed form); otherwise regula falsi
-        (Illinois) on a bracket from ``T = 0``. If the packs are then below their cut-off
-        voltage on the way to the landing, the same on ``min U(T) - U_cutoff`` instead (the
-        least loaded voltage of a live engine from segment ``k``'s end on).
-        Both to 1e-12 (fraction) and 1e-9 V. Returns the duration and what ends it:
-        ``"landing reserve"`` or ``"cut-off"``. Raises :class:`NotAttainable` when no
-        positive duration does.
+        to the landing; then, if the packs are below their cut-off voltage on the way, on the
+        least loaded voltage instead: :func:`longest_rows`, a batch of one (Newton from
+        ``guess_s``, e.g. a closed form, else from the segment's own duration). Returns the
+        duration and what ends it: ``"landing reserve"`` or ``"cut-off"``. Raises
+        :class:`NotAttainable` when no positive duration does.
 
         References
         ----------
         Issue 13 item 3 (``solve_for``); Press et al., *Numerical Recipes*, 3rd ed., 9.2
         (regula falsi, the Illinois variant) and 9.4 (Newton-Raphson).
         """
-        n = self.n
         d = (self.durations if durations is None else np.asarray(durations, float)).copy()
         th = self.theta if theta is None else np.asarray(theta, dtype=float)
         plan = self.plans[k]
-        f = self._suffix_function(k)
         x0 = self.start_state(k, d, th) if start is None else start
-        last = all(p.kind == "event" for p in self.plans[k + 1:])
-
-        pole = self.packs * self.params.max_capacity_ah
-        memo: dict[float, tuple[float, float, float]] = {}
-
-        def at(tau: float) -> tuple[float, float, float]:
-            if tau not in memo:
-                memo[tau] = evaluate(tau)
-            return memo[tau]
-
-        def evaluate(tau: float) -> tuple[float, float, float]:
-            d[k] = tau
-            end, aux, most, least = (np.asarray(v, dtype=float).ravel()
-                                     for v in f(x0, d, th, self.par, self.tk))
-            if not (np.all(np.isfinite(end)) and np.all(most <= end[:n] + 1e-12)
-                    and np.all(most < pole)):
-                return -1.0, math.nan, -1.0  # the packs were emptied on the way: beyond
-            frac = 1.0 - end[:n] / self.capacity_ah
-            j = int(np.argmin(frac))
-            volt = float(least[0])  # a live engine's, to the landing (_suffix_function)
-            slope = -aux[6 + j] / SECONDS_PER_HOUR / self.capacity_ah
-            return float(frac[j] - self.reserve), float(slope), float(volt - self.cutoff_v)
-
-        def illinois(which: int, low: float, high: float, f_low: float, f_high: float
-                     ) -> float | None:
-            side = 0
-            for _ in range(200):
-                c = high - f_high * (high - low) / (f_high - f_low)
-                fc = at(c)[which]
-                if not math.isfinite(fc):
-                    c, fc = 0.5 * (low + high), at(0.5 * (low + high))[which]
-                if abs(fc) <= (1e-12 if which == 0 else 1e-10) or high - low <= 1e-9 * high:
-                    return c
-                if fc > 0:
-                    low, f_low = c, fc
-                    f_high = 0.5 * f_high if side == 1 else f_high
-                    side = 1
-                else:
-                    high, f_high = c, fc
-                    f_low = 0.5 * f_low if side == -1 else f_low
-                    side = -1
-            return None
-
-        def bracket(which: int, tau: float, f_tau: float
-                    ) -> tuple[float, float, float, float] | None:
-            # from a point with f > 0 forwards until f < 0 (finite), by doubling the step
-            step = max(tau, 60.0)
-            for _ in range(40):
-                high = tau + step
-                f_high = at(high)[which]
-                if math.isfinite(f_high) and f_high < 0:
-                    return tau, f_tau, high, f_high
-                if not math.isfinite(f_high):
-                    step *= 0.5
-                else:
-                    tau, f_tau, step = high, f_high, 2 * step
-            return None
-
-        tau: float | None = None
-        if last and guess_s is not None:  # Newton from the guess
-            tau = max(guess_s, 1.0)
-            g, slope, _ = at(tau)
-            for _ in range(50):
-                if not (math.isfinite(g) and slope < 0):
-                    tau = None
-                    break
-                step = -g / slope
-                tau = max(tau + step, 0.5 * tau)
-                g, slope, _ = at(tau)
-                if abs(g) <= 1e-12 and abs(step) <= 1e-6 * max(tau, 1.0):
-                    break
-            else:
-                tau = None
-        if tau is None:  # regula falsi on a bracket from a segment of no duration
-            zero = at(0.0)
-            if zero[0] >= 0 and zero[2] >= 0:
-                found = bracket(0, 0.0, zero[0])
-                tau = None if found is None else illinois(0, found[0], found[2], found[1],
-                                                          found[3])
-        ends = "landing reserve"
-        if tau is not None and at(tau)[2] < 0:  # the pack cuts off before the reserve
-            ends = "cut-off"
-            zero = at(0.0)
-            tau = illinois(2, 0.0, tau, zero[2], at(tau)[2]) if zero[2] >= 0 else None
-        if tau is None or not tau > 0 or at(tau)[0] < -1e-8:
+        guess = d.copy()
+        if guess_s is not None:  # Newton from it (else from the segment's own duration)
+            guess[k] = guess_s
+        found, cut = longest_rows(
+            self, k, np.asarray(x0, dtype=float).reshape(-1, 1), guess[:, None], th[:, None],
+            np.asarray(self.par, dtype=float).reshape(-1, 1), np.array([self.reserve]),
+            np.array([self.cutoff_v]), np.array([self.capacity_ah]),
+            np.array([self.packs * self.params.max_capacity_ah]), self._suffix_function(k))
+        tau = float(found[0])
+        ends = "cut-off" if cut[0] else "landing reserve"
+        if not math.isfinite(tau):
             # the rest of the mission flown as it is: a segment before this one that empties
             # the packs is named with its own time, not blamed on this one with "-80 %" left
             # (the marker of an emptied pack; outside audit)
@@ -228,3 +151,147 @@ class SolveFor:
             if self.mission.segments[k].distance_km is not None:
                 solved["written_distance_km"] = self.mission.segments[k].distance_km
         return self.fly(final, solved)
+
+
+def longest_rows(model: Any, k: int, start: Array, durations: Array, theta: Array,
+                 par: Array, reserve: Array, cutoff: Array, capacity_ah: Array, pole_ah: Array,
+                 suffix: Any = None) -> tuple[Array, NDArray[np.bool_]]:
+    """Per row the longest duration [s] of segment ``k`` that lands on the reserve without a
+    cut-off (NaN where none does), and where the cut-off ends it: from where segment ``k``
+    begins (``start``, ``(state, B)``), per row the ``reserve`` [-], the packs' ``cutoff``
+    [V], the charge per engine the landing fraction counts and the pole of the circuit's
+    knee [Ah]. ``suffix`` the mission from segment ``k`` on (default: expanded to SX, for
+    many rows); the single case is a batch of one (:meth:`SolveFor.longest`).
+
+    Vectorised over the rows, never a loop of them: each step evaluates the rows not yet
+    converged at once (the mission from segment ``k`` on, mapped). Newton with the state
+    equations' slope ``-i_j / (3600 Q)`` (exact for the last segment, a close guess before
+    it) from the file's duration, safeguarded by the bracket it keeps (regula falsi,
+    Illinois, where a step leaves it); then, where the packs cut off first, regula falsi on
+    the least loaded voltage over ``[0, T]``: to 1e-12 (fraction) and 1e-10 V.
+
+    References
+    ----------
+    Press et al., *Numerical Recipes*, 3rd ed., 9.2 (Illinois), 9.4 (safeguarded Newton).
+    """
+    size = start.shape[1]
+    if suffix is None:
+        if not hasattr(model, "_suffix_sx"):
+            model._suffix_sx = {}
+        if k not in model._suffix_sx:
+            model._suffix_sx[k] = model._suffix_function(k).expand()
+        suffix = model._suffix_sx[k]
+    n, width = model.n, model.tk.shape[1]
+
+    def at(rows: Array, tau: Array) -> tuple[Array, Array, Array]:
+        if not rows.size:  # no row left to fly
+            return np.zeros(0), np.zeros(0), np.zeros(0)
+        d = durations[:, rows].copy()
+        d[k] = tau
+        end, aux, most, least = (np.asarray(x, dtype=float) for x in mapped(suffix, rows.size)(
+            start[:, rows], d, theta[:, rows], par[:, rows],
+            np.zeros((model.tk.shape[0], width * rows.size))))
+        with np.errstate(invalid="ignore"):
+            valid = (np.all(np.isfinite(end), axis=0) & np.all(most <= end[:n] + 1e-12, axis=0)
+                     & np.all(most < pole_ah[rows], axis=0))
+            frac = 1.0 - end[:n] / capacity_ah[rows]
+            j = np.argmin(np.where(np.isfinite(frac), frac, np.inf), axis=0)
+            cols = np.arange(rows.size)
+            g = np.where(valid, frac[j, cols] - reserve[rows], -1.0)
+            slope = np.where(valid, -aux[6 + j, cols] / SECONDS_PER_HOUR
+                             / capacity_ah[rows], np.nan)
+            volt = np.where(valid, least[0] - cutoff[rows], -1.0)
+        return g, slope, volt
+
+    every = np.flatnonzero(np.all(np.isfinite(start), axis=0))
+    tau, g0, v0 = np.full(size, np.nan), np.full(size, np.nan), np.full(size, np.nan)
+    g0[every], _, v0[every] = at(every, np.zeros(every.size))
+    # landing short with none of it, or cut off: no duration lands
+    every = every[(g0[every] >= 0) & (v0[every] >= 0)]
+    tau[every] = _root(lambda rows, x: at(rows, x)[:2], every, g0, durations[k], 1e-12)
+    volts = np.full(size, np.nan)
+    found = every[np.isfinite(tau[every])]
+    volts[found] = at(found, tau[found])[2]
+    cut = found[volts[found] < 0]  # the packs cut off before the reserve: on the voltage
+    if cut.size:
+        tau[cut] = _root(lambda rows, x: (at(rows, x)[2], np.full(rows.size, np.nan)), cut,
+                         v0, tau, 1e-10, high=(tau.copy(), volts))
+    good = np.isfinite(tau) & (tau > 0)
+    checked = np.flatnonzero(good)
+    if checked.size:
+        good[checked] &= at(checked, tau[checked])[0] >= -1e-8
+    cut_off = np.zeros(size, dtype=bool)
+    cut_off[cut] = True
+    return np.where(good, tau, np.nan), cut_off
+
+
+def _root(f: Any, rows: Array, at_zero: Array, guess: Array, tolerance: float,
+          high: tuple[Array, Array] | None = None) -> Array:
+    """Per row of ``rows``, the root ``x > 0`` of a falling ``f(rows, x) -> (value, slope)``
+    with ``f(0) = at_zero >= 0``: safeguarded Newton from ``guess`` (slope NaN: regula falsi,
+    Illinois) inside the bracket it keeps, to ``0 <= f <= tolerance`` or a bracket of 1e-12
+    relative (its end with ``f >= 0``); ``high`` a known point and its value ``f < 0`` per
+    row. Arrays over all rows; NaN where none is found in 200 steps."""
+    size = at_zero.size
+    low, f_low = np.zeros(size), np.array(at_zero, dtype=float)
+    top = np.full(size, np.inf) if high is None else np.array(high[0], dtype=float)
+    f_top = np.full(size, np.nan) if high is None else np.array(high[1], dtype=float)
+    side = np.zeros(size)
+    x = np.maximum(np.asarray(guess, dtype=float) * np.ones(size), 1.0)
+    if high is not None:  # regula falsi on the bracket from the start
+        with np.errstate(invalid="ignore", divide="ignore"):
+            x = top - f_top * top / (f_top - f_low)
+    answer = np.full(size, np.nan)
+    active = np.array(rows)
+    for _ in range(200):
+        if not active.size:
+            break
+        value, slope = f(active, x[active])
+        # on the safe side only: a duration a hair past the root lands 1e-12 short of the
+        # reserve, and a verdict that compares the landing with it then fails
+        done = (value >= 0.0) & (value <= tolerance)
+        above = ~done & (value > 0)
+        below = ~done & ~above
+        a, b = active[above], active[below]
+        # Illinois: halve the kept end's value when the same end moves twice
+        f_top[a] = np.where(side[a] == 1, 0.5 * f_top[a], f_top[a])
+        f_low[b] = np.where(side[b] == -1, 0.5 * f_low[b], f_low[b])
+        low[a], f_low[a], side[a] = x[a], value[above], 1
+        top[b], f_top[b], side[b] = x[b], value[below], -1
+        narrow = np.isfinite(top[active]) & (top[active] - low[active] <= 1e-12 * top[active])
+        answer[active[done]] = x[active[done]]
+        answer[active[narrow & ~done]] = low[active[narrow & ~done]]  # its safe end
+        active, value, slope = (active[~(done | narrow)], value[~(done | narrow)],
+                                slope[~(done | narrow)])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            newton = x[active] - value / slope
+            falsi = top[active] - f_top[active] * (top[active] - low[active]) / (
+                f_top[active] - f_low[active])
+            bounded = np.isfinite(top[active])
+            inside = np.isfinite(newton) & (newton > low[active]) & (
+                newton < np.where(bounded, top[active], np.inf))
+            unbracketed = np.where(np.isfinite(newton) & (newton > low[active]), newton,
+                                   2.0 * np.maximum(x[active], 60.0))
+            step = np.where(inside, newton, np.where(
+                bounded, np.where(np.isfinite(falsi) & (falsi > low[active])
+                                  & (falsi < top[active]), falsi,
+                                  0.5 * (low[active] + top[active])), unbracketed))
+        x[active] = step
+    return answer[rows]
+
+
+_MAPS: dict[tuple[int, int], Any] = {}
+
+
+def mapped(function: Any, count: int) -> Any:
+    """``function.map(count, "thread", 2)``, built once per function and count (a map of the
+    expanded mission takes ~0.4 s to build, as long as flying 100 rows); one row is the
+    function itself."""
+    if count == 1:
+        return function
+    key = (id(function), count)
+    if key not in _MAPS:
+        if len(_MAPS) > 16:  # a process flies one case's mission at a time
+            _MAPS.clear()
+        _MAPS[key] = (function, function.map(count, "thread", 2))
+    return _MAPS[key][1]

@@ -118,7 +118,7 @@ class PerformanceResult:
     climb_rate_curve_m_s: np.ndarray = field(repr=False)
     notes: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
-    # airspeed from which the fans make no thrust (None without fan_area_m2)
+    # airspeed from which the fans make no thrust (None without jet_area_m2 or fan_area_m2)
     jet_velocity_ceiling_m_s: float | None = None
 
     @property
@@ -350,7 +350,7 @@ class PerformanceProblems:
 
     def jet_ceiling_m_s(self, rho: Any) -> Any:
         """Airspeed [m/s] from which the fans make no thrust (:func:`jet_velocity_ceiling_m_s`;
-        ``inf`` without ``fan_area_m2``). Vectorised over ``rho``."""
+        ``inf`` without an area). Vectorised over ``rho``."""
         ceiling = np.asarray(jet_velocity_ceiling_m_s(self.propulsion, rho), dtype=float)
         return float(ceiling) if ceiling.ndim == 0 else ceiling
 
@@ -523,8 +523,8 @@ def solve_performance(case: Case, problems: PerformanceProblems | None = None) -
     if v_max is not None and v_max >= ceiling * (1.0 - 1e-12):
         notes.append(
             f"max level speed: the fans' static jet velocity {ceiling:.1f} m/s (momentum theory "
-            "on fan_area_m2), beyond which a fan makes no thrust; the extrapolated thrust "
-            "model would give more"
+            "on jet_area_m2, else fan_area_m2), beyond which a fan makes no thrust; the "
+            "extrapolated thrust model would give more"
         )
     if least >= ceiling:
         notes.append(

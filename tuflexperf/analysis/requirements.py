@@ -222,8 +222,26 @@ def _judge(study: Study) -> list[Verdict]:
     for name, check in CHECKS.items():
         if getattr(requirements, name) is not None:
             result = check(study)
-            verdicts.extend(result if isinstance(result, list) else [result])
+            verdicts.extend(implausible_verdict(v, study.plausibility(), name)
+                            for v in (result if isinstance(result, list) else [result]))
     return verdicts
+
+
+# --- plausibility (issue 43 item 3): no verdict on data physics forbids passes ---------------
+def implausible_verdict(verdict: Verdict, found: Any, block: str) -> Verdict:
+    """``verdict`` as a FAIL with the plausibility reasons that bear on requirement ``block``
+    (:func:`tuflexperf.analysis.plausibility.implausible`), else unchanged.
+
+    The value flown on such data is no value the evidence backs: it is kept in the details
+    (``value_on_implausible_data``) and the verdict has none, as a not-attainable one.
+    """
+    reasons = [f.reason for f in found if block in f.blocks]
+    if not reasons:
+        return verdict
+    return Verdict(verdict.name, None, verdict.limit, verdict.unit, verdict.kind,
+                   "; ".join(reasons),
+                   {**verdict.details, "value_on_implausible_data": verdict.value,
+                    "implausible": [f.to_dict() for f in found if block in f.blocks]})
 
 
 def check_case(case: Case) -> list[Verdict]:
@@ -279,9 +297,9 @@ class ProbabilisticVerdict:
         }
 
 
-NOT_SAMPLED = ("not sampled: this mission is flown for the nominal case only (an airspeed it "
-               "solves, a catapult launch, a take-off on sagging packs, or battery or "
-               "propulsion keys drawn; analysis.mission_samples), so its P(met) is not shown "
+NOT_SAMPLED = ("not sampled: this mission is flown for the nominal case only (its nominal plan "
+               "is not attainable, or a drawn key it does not fly; analysis.mission_samples), "
+               "so its P(met) is not shown "
                "and it does not pass the probabilistic test")
 
 

@@ -27,6 +27,7 @@ if TYPE_CHECKING:  # the analyses are imported when first asked for: `check` sta
     from tuflexperf.analysis.mission import MissionResult
     from tuflexperf.analysis.oei import OeiResult
     from tuflexperf.analysis.performance import PerformanceResult
+    from tuflexperf.analysis.plausibility import Implausibility
     from tuflexperf.analysis.takeoff import TakeoffResult
     from tuflexperf.analysis.trim import TrimResult
 
@@ -68,6 +69,12 @@ class Study:
         return value  # type: ignore[no-any-return]
 
     # --- the analyses ---------------------------------------------------------------------
+    def plausibility(self) -> tuple[Implausibility, ...]:
+        """What the case's data claim that physics forbids (:func:`implausible`), scanned once."""
+        from tuflexperf.analysis.plausibility import implausible
+
+        return self.once("plausibility", lambda: implausible(self.case))
+
     def takeoff(self) -> TakeoffResult:
         """Take-off to the obstacle at full throttle (:func:`solve_takeoff`)."""
         from tuflexperf.analysis.takeoff import solve_takeoff

@@ -338,8 +338,8 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         jet = float(static_jet_velocity_m_s(propulsion, rho))
         raise NotAttainable(
             f"lift-off at {v_lo:.1f} m/s is beyond the fans' jet velocity {jet:.1f} m/s "
-            f"(momentum theory, full-throttle static thrust on fan_area_m2), where they make "
-            f"no thrust; the thrust model is extrapolated there (tested "
+            f"(momentum theory, full-throttle static thrust on jet_area_m2, else fan_area_m2), "
+            f"where they make no thrust; the thrust model is extrapolated there (tested "
             f"{propulsion.tested_airspeed_m_s[0]:g}-{propulsion.tested_airspeed_m_s[1]:g} m/s)",
             known,
         )

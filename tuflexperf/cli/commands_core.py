@@ -27,6 +27,7 @@ from tuflexperf.cli.inputs import (
     load_case_with,
     output_file,
     refuse_empty_address,
+    refuse_implausible,
     replaced,
     scaled_pack_notes,
     set_keys,
@@ -121,6 +122,7 @@ def margins(
     from tuflexperf.analysis.margins import extrapolation_notes, solve_margins
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
+    refuse_implausible(case, "margins", None, as_json)
     rows = solve_margins(case)
     notes = (extrapolation_notes(rows, case.propulsion.tested_airspeed_m_s)
              + batch_notes(case, [], None) + scaled_pack_notes({m.parameter for m in rows}))
@@ -174,6 +176,9 @@ def sweep(
 
     with TerminalProgress("sweep") as bar:
         result = run_sweep(case, axes, workers, dask, bar)
+    # after every refusal of bad input (exit 2, some in run_sweep) and before any output is
+    # written: the data's own verdict, FAIL (exit 1)
+    refuse_implausible(case, "sweep", None, as_json, [key for key, _ in axes])
     notes = (result.extrapolation_notes(case.propulsion.tested_airspeed_m_s)
              + batch_notes(case, [key for key, _ in axes], sets))
     written: dict[Path, bytes | str] = {}
@@ -203,6 +208,7 @@ def takeoff(
     from tuflexperf.analysis.takeoff import solve_takeoff
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
+    refuse_implausible(case, "takeoff", "takeoff", as_json)
     result = solve_takeoff(case)
     requirement = case.requirements.takeoff
     verdicts = takeoff_verdicts(requirement, result) if requirement is not None else []
@@ -230,6 +236,7 @@ def trim(
     result = solve_trim(case)
     if case.requirements.envelope is None:
         fail_input(f"{case.path}: requirements.envelope: trim needs the envelope requirement")
+    refuse_implausible(case, "trim", "envelope", as_json)
     limit = case.requirements.envelope.max_trim_throttle
     verdict = trim_verdict(case.requirements.envelope, result)  # the one verdict rule
     render.show_trim(case, result, verdict, limit, table, as_json)
@@ -255,6 +262,7 @@ def oei(
     if dead_engine is not None and dead_engine not in ("windmilling", "zero"):
         fail_input(f"--dead-engine: must be windmilling or zero, got {dead_engine!r}")
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
+    refuse_implausible(case, "oei", "oei", as_json)
     result = solve_oei(case, dead_engine)  # type: ignore[arg-type]
     requirement = case.requirements.oei
     limit = requirement.max_throttle if requirement is not None else 1.0
@@ -275,6 +283,7 @@ def performance(
     from tuflexperf.analysis.performance import solve_performance
 
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
+    refuse_implausible(case, "performance", None, as_json)
     result = solve_performance(case)
     attainable = result.min_level_speed_m_s is not None
     render.show_performance(case, result, attainable, as_json)

@@ -5,6 +5,7 @@ flags, calls the work and hands the result to :mod:`tuflexperf.cli.render`."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import typer
@@ -95,6 +96,15 @@ def report_command(
         result = build_report(case, Path(out_text), campaign=campaign, progress=False,
                               bar=bar if bar.enabled else None)
     render.show_report(result, as_json)
+    # the report is written (its verdicts say FAIL with the reason); the exit says it too
+    from tuflexperf.analysis.plausibility import implausible
+
+    found = implausible(case if not isinstance(case, (Path, type(None)))
+                        else load_case_with(case_file, None, None))
+    if found:
+        for f in found:
+            sys.stderr.write(f"tuflexperf: FAIL: {f.reason}\n")
+        raise typer.Exit(1)
 
 
 def export_command(

@@ -20,6 +20,7 @@ from tuflexperf.cli.inputs import (
     fail_input,
     load_case_with,
     output_file,
+    refuse_implausible,
     replaced,
 )
 from tuflexperf.errors import NotAttainable
@@ -51,6 +52,7 @@ def mission(
             fail_input("MISSION: give a mission file (the case has no mission requirement)")
         mission_file = mission_path(case)
     plan = load_mission(mission_file)
+    refuse_implausible(case, "mission", "mission", as_json)
     if csv is not None:
         from tuflexperf.io.case import case_files
         from tuflexperf.io.files import guard_outputs
@@ -99,6 +101,7 @@ def endurance(
                 if math.isfinite(throttle) and 2.0 <= throttle <= 100.0 else "")
         fail_input(f"--throttle: must be a fraction in [0, 1], got {throttle!r}{hint}")
     case = load_case_with(case_file, sets, replaced(aircraft, propulsion, battery))
+    refuse_implausible(case, "endurance", "endurance", as_json)
     # the throttle asked for first: its own reason, not one of the best search's throttles
     asked = solve_endurance(case, throttle) if throttle is not None else None
     best_result = solve_best(case) if best else None

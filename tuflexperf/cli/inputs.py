@@ -196,3 +196,26 @@ def set_keys(sets: list[str] | None) -> list[str]:
     """The dotted keys of ``--set KEY=VALUE`` items (their values are load_case_with's)."""
     return [item.split("=", 1)[0].strip() for item in sets or []]
 
+
+
+def refuse_implausible(case: Any, command: str, block: str | None, as_json: bool,
+                       varied: Iterable[str] = ()) -> None:
+    """Exit 1 with the plausibility reasons that bear on requirement ``block`` (all of them
+    with None): the single-analysis commands give the verdict ``check`` gives on the same
+    data (:func:`tuflexperf.analysis.plausibility.implausible`, issue 43 item 3). A sweep
+    that ``varied`` the capacity has the packs' rating judged per point (the batch)."""
+    from tuflexperf.analysis.plausibility import implausible
+    from tuflexperf.cli.render import show_implausible
+
+    per_point = {"battery_rating"} if "battery.capacity_ah" in set(varied) else set()
+    found = [f for f in implausible(case) if (block is None or block in f.blocks)
+             and f.rule not in per_point]
+    if found:
+        from tuflexperf.cli.guard import _RESULT_KEYS
+
+        # SPEC 5: the command's own keys are there on exit 1 too, null (no answer stands)
+        keys: dict[str, Any] = dict.fromkeys(_RESULT_KEYS.get(command, ()))
+        if command == "mission":
+            keys.update(landing_charge_fraction=None, segments=[])
+        show_implausible(command, found, as_json, keys)
+        raise typer.Exit(1)

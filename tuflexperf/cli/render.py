@@ -472,9 +472,6 @@ def echo_electrical(electrical: dict[str, Any] | None) -> None:
     for name, power in electrical["power"].items():
         typer.echo(f"power surface {name}: poly22 in W, R^2 {fmt(power['r2'], 4)}, "
                    f"RMSE {fmt(power['rmse_w'], 0)} W over {power['n_points']} points")
-    for name, wm in electrical["windmilling"].items():
-        typer.echo(f"windmilling {name}: Cd {wm['windmilling_drag_coefficient']:.3f} on the fan "
-                   f"area, rms {wm['rms_n']:.2f} N over {wm['n_points']} idle points")
     for name, agree in electrical["thrust_power_agreement"].items():
         merit, eff = agree["figure_of_merit_range"], agree["overall_efficiency_range"]
         if merit:
@@ -483,6 +480,23 @@ def echo_electrical(electrical: dict[str, Any] | None) -> None:
                 + (f", overall efficiency {eff[0]:.2f}-{eff[1]:.2f}" if eff else "")
                 + f" over {agree['working_points']} working points"
             )
+
+
+def echo_windmilling(windmilling: dict[str, Any] | None) -> None:
+    """fit's windmilling line per engine: estimated from the throttle-0 holds, or why not."""
+    if not windmilling:
+        return
+    for name, wm in windmilling["engines"].items():
+        if wm["estimated"]:
+            low, high = wm["airspeed_range_m_s"]
+            typer.echo(
+                f"windmilling {name}: windmilling_drag_coefficient "
+                f"{wm['windmilling_drag_coefficient']:.3f} estimated from {wm['n_points']} "
+                f"throttle-0 holds at {low:.1f}-{high:.1f} m/s (rms {wm['rms_n']:.2f} N), on "
+                f"the disk area fan_area_m2 {windmilling['fan_area_m2']:g} m^2; written to the "
+                "file")
+        else:
+            typer.echo(f"windmilling {name}: not estimated: {wm['reason']}")
 
 
 def echo_lack_of_fit(summary: dict[str, Any]) -> None:
@@ -564,6 +578,7 @@ def print_fit(summary: dict[str, Any]) -> None:
             + ("applied" if glauert["applied"] else "not applied (--glauert applies it)")
         )
     echo_electrical(summary.get("electrical"))
+    echo_windmilling(summary.get("windmilling"))
     echo_lack_of_fit(summary)
     runs = [r for r in summary.get("runs", []) if "validation" in r]
     if runs:
@@ -649,6 +664,18 @@ def show_mission_not_flown(name: str, reason: str, limit: float | None, as_json:
                    "landing_charge_fraction": None, "min_landing_charge_fraction": limit,
                    "segments": []})
     sys.stderr.write(f"tuflexperf: not attainable: {reason}\n")
+
+
+def show_implausible(command: str, found: list[Any], as_json: bool,
+                     keys: dict[str, Any] | None = None) -> None:
+    """A command refused on data physics forbids: FAIL, one line per reason (issue 43);
+    ``keys`` the command's own JSON keys, null."""
+    if as_json:
+        emit_json({"command": command, "passed": False, "verdict": "FAIL",
+                   "reason": "; ".join(f.reason for f in found),
+                   "implausible": [f.to_dict() for f in found], **(keys or {})})
+    for f in found:
+        sys.stderr.write(f"tuflexperf: FAIL: {f.reason}\n")
 
 
 def history_csv(history: dict[str, Any]) -> str:

@@ -2,7 +2,7 @@
 
 ```yaml
 name: ...
-fan_area_m2: 0.0068          # fan cross-section A, for the Glauert check
+fan_area_m2: 0.0068          # the fan's disk area A (Glauert check, momentum theory, windmilling)
 tunnel_area_m2: 0.16         # tunnel cross-section C (leave out for a static stand)
 air_density_kg_m3: 1.19      # optional: test-day density (default 1.225, ISA sea level)
 filters:                     # optional: the paper's filter settings (section 4)

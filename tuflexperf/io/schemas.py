@@ -10,7 +10,13 @@ from pathlib import Path
 from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
-from pydantic import BeforeValidator, Field, field_validator, model_validator
+from pydantic import (
+    BeforeValidator,
+    Field,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, count_values
@@ -320,6 +326,18 @@ MAX_SOURCE_VALUES = 1_000_000
 
 
 
+# A file without ``format: 2`` that gives an area is in the old form: the number may be the
+# jet area (the earlier shipped TU-Flex file) or the disk area (`fit`, `init`); no guess.
+OLD_AREA_FORM = (
+    "the file is in the old form (no 'format: 2'), where fan_area_m2 held the jet "
+    "area or the disk area; now fan_area_m2 is the fan's disk area (pi d^2 / 4) and the jet "
+    "(exit) area has its own key jet_area_m2. If the number is the jet area (the earlier "
+    "shipped TU-Flex file's 0.004342), rename the key to jet_area_m2, give the disk area as "
+    "fan_area_m2 and multiply each windmilling_drag_coefficient by jet/disk area; if it is "
+    "the disk area (as `fit` and `init` wrote it), keep it. Then add 'format: 2'"
+)
+
+
 class PropulsionSchema(StrictModel):
     file_kind: ClassVar[str] = "propulsion"  # named when another kind of file is given
     name: Name
@@ -338,12 +356,26 @@ class PropulsionSchema(StrictModel):
     reference_voltage_v: Annotated[float, Field(gt=0, le=MAX_REFERENCE_VOLTAGE_V)] | None = None
     voltage_exponent: Annotated[float, Field(ge=-MAX_VOLTAGE_EXPONENT, le=MAX_VOLTAGE_EXPONENT)] = \
         DEFAULT_VOLTAGE_EXPONENT
+    # format 2 (issue 43): fan_area_m2 is the fan's disk area, the jet/exit area jet_area_m2;
+    # before it fan_area_m2 held either (the shipped file the jet area, fit the disk area)
+    format: Literal[2] | None = None
     fan_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=MAX_FAN_AREA_M2)] | None = None
+    jet_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=MAX_FAN_AREA_M2)] | None = None
     throttle_unit: Literal["fraction", "percent"] = "fraction"
     engines: Annotated[list[EngineSchema], Field(min_length=1)]
     source: dict[str, Any] | None = None  # free-form provenance written by `fit`
     # the rig's systematic errors (issue 44): written by `fit`, sampled by --samples
     rig_uncertainty: RigUncertaintySchema | None = None
+
+    @field_validator("fan_area_m2", "jet_area_m2")
+    @classmethod
+    def _stated_form(cls, value: float | None, info: ValidationInfo) -> float | None:
+        # format precedes the areas: an area without it is the old form (OLD_AREA_FORM)
+        if value is not None and info.data.get("format") is None:
+            raise ValueError(OLD_AREA_FORM if info.field_name == "fan_area_m2" else
+                             "needs 'format: 2' (fan_area_m2 the disk area, jet_area_m2 the "
+                             "jet's; docs/formats.md, Fan and jet area)")
+        return value
 
     @field_validator("source", mode="before")
     @classmethod
@@ -686,6 +718,7 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
         reference_density_kg_m3=schema.reference_density_kg_m3,
         metadata={"source": schema.source} if schema.source else {},
         fan_area_m2=schema.fan_area_m2,
+        jet_area_m2=schema.jet_area_m2,
         reference_voltage_v=schema.reference_voltage_v,
         voltage_exponent=schema.voltage_exponent,
         rig_uncertainty=(None if schema.rig_uncertainty is None

@@ -70,6 +70,7 @@ def power_agreement(
     density_kg_m3: float,
     fan_area_m2: float | None,
     warn_efficiency: bool = True,
+    jet_area_m2: float | None = None,
 ) -> PowerAgreement:
     """Ideal power, figure of merit and overall efficiency at one point, with warnings.
 
@@ -90,12 +91,15 @@ def power_agreement(
     density_kg_m3 : float
         Air density [kg/m^3].
     fan_area_m2 : float or None
-        Jet/fan area of momentum theory [m^2]; without it no ideal power or figure of merit.
+        The fan's disk area [m^2]: the ideal power and figure of merit are taken on it (the
+        least power of any fan of that disk); without it neither.
     warn_efficiency : bool
         Warn on an overall efficiency below 0.2 (flight points). Tunnel test points pass
         False: at low airspeed and high thrust a sound fan's ``T V / P_el`` is that low by
         momentum theory (jet far faster than the stream), so there the figure of merit
         is the check.
+    jet_area_m2 : float or None
+        The jet (exit) area [m^2] the exit velocity is taken on; None: the disk area's.
 
     Returns
     -------
@@ -117,7 +121,8 @@ def power_agreement(
     ideal = exit = merit = None
     if fan_area_m2 is not None and thrust_n > 0:
         ideal = _finite(ideal_power_w(thrust_n, airspeed_m_s, density_kg_m3, fan_area_m2))
-        exit = _finite(exit_velocity_m_s(thrust_n, airspeed_m_s, density_kg_m3, fan_area_m2))
+        jet = jet_area_m2 if jet_area_m2 is not None else fan_area_m2
+        exit = _finite(exit_velocity_m_s(thrust_n, airspeed_m_s, density_kg_m3, jet))
         merit = _finite(figure_of_merit(thrust_n, airspeed_m_s, density_kg_m3, fan_area_m2,
                                         electrical_power_w))
         if merit is not None and merit > MAX_FIGURE_OF_MERIT:
@@ -165,5 +170,6 @@ def agreement_at(
             continue
         thrust = float(engine_thrust_n(engine, throttle, airspeed_m_s, scale))
         out.append(power_agreement(label, engine.name, throttle, airspeed_m_s, thrust,
-                                   float(power), density_kg_m3, propulsion.fan_area_m2))
+                                   float(power), density_kg_m3, propulsion.fan_area_m2,
+                                   jet_area_m2=propulsion.jet_area_m2))
     return tuple(out)

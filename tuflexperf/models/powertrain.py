@@ -3,10 +3,21 @@
 A ducted fan that makes thrust ``T`` at airspeed ``V`` accelerates the air through its jet
 area ``A`` to the exit velocity ``v_e`` with ``T = rho A v_e (v_e - V)`` (momentum theory,
 actuator disc with the wake at the exit). The least (ideal) power that thrust can cost is
-``P_i = T (V + v_e) / 2``; the electrical power ``P_el`` a real fan draws is larger. So
+``P_i = T (V + v_e) / 2``; the electrical power ``P_el`` a real fan draws is larger.
 
-- the figure of merit ``P_i / P_el`` is at most 1 (above 1 the thrust is more than the
-  power can make), and
+Two areas, two keys of the propulsion file (issue 43: one meaning per key):
+
+- ``fan_area_m2``, the fan's **disk** area: the ideal power and figure of merit are taken on
+  it (a wake as wide as the disk: the least power any fan of that disk needs, unless its duct
+  diffuses; an open rotor's wake contracts, a nozzle's jet is narrower, both need more), and
+  the windmilling drag ``C_d q A`` refers to it (a dead fan is a porous disk);
+- ``jet_area_m2``, the jet (exit) area: the jet velocity (:func:`jet_area_m2`; without it the
+  disk area, a jet no wider than the disk and so the least jet velocity).
+
+So
+
+- the figure of merit ``P_i / P_el`` on the disk area is at most 1 (above 1 the thrust is
+  more than the power can make: :mod:`tuflexperf.analysis.plausibility`), and
 - the overall efficiency ``T V / P_el`` in flight is the share of electrical power turned
   into useful work (SPEC 3, "thrust and power agree").
 
@@ -37,6 +48,9 @@ from tuflexperf.models.thrust import Engine, Propulsion, density_ratio, engine_t
 MIN_OVERALL_EFFICIENCY = 0.2
 # A figure of merit above this means the thrust needs more power than is drawn (SPEC 3).
 MAX_FIGURE_OF_MERIT = 1.0
+# A working point of a fan makes at least this share of its largest thrust: near zero thrust
+# the ESC's idle draw and the models' own scatter rule T/P (fit's check, the plausibility rule)
+WORKING_THRUST_SHARE = 0.1
 
 
 def electrical_power_w(
@@ -112,7 +126,7 @@ def exit_velocity_m_s(
     density_kg_m3 : float or array or CasADi
         Air density [kg/m^3].
     area_m2 : float
-        Jet (fan) area ``A`` [m^2].
+        Jet area ``A`` [m^2] (:func:`jet_area_m2`; the disk area for the ideal power).
 
     Returns
     -------
@@ -129,6 +143,19 @@ def exit_velocity_m_s(
     )
 
 
+def jet_area_m2(propulsion: Propulsion) -> float | None:
+    """The area the jet velocity is taken on [m^2]: ``jet_area_m2``, else the disk area
+    ``fan_area_m2`` (a jet no wider than the disk: the least jet velocity, the lower airspeed
+    bound of :func:`beyond_jet_velocity`); ``None`` without either.
+
+    References
+    ----------
+    Leishman, *Principles of Helicopter Aerodynamics*, eq. 2.14 (the exit area fixes a ducted
+    fan's wake).
+    """
+    return propulsion.jet_area_m2 if propulsion.jet_area_m2 is not None else propulsion.fan_area_m2
+
+
 def static_jet_velocity_m_s(propulsion: Propulsion, density_kg_m3: Vectorizable) -> Vectorizable:
     """The least jet velocity of the engines at full throttle at rest [m/s] (momentum theory).
 
@@ -136,12 +163,12 @@ def static_jet_velocity_m_s(propulsion: Propulsion, density_kg_m3: Vectorizable)
     its thrust ``rho A v_j (v_j - V)`` falls to nothing as ``V`` reaches ``v_j``: beyond it
     a thrust model extrapolated from lower airspeeds has no physics behind it (the paper's
     DS-51 data, 0-30 m/s, follow this line to within ~7 %). ``inf`` without the
-    propulsion's ``fan_area_m2``.
+    propulsion's ``jet_area_m2`` or ``fan_area_m2`` (:func:`jet_area_m2`).
 
     Parameters
     ----------
     propulsion : Propulsion
-        The engines (their coefficients may be arrays of samples) and ``fan_area_m2``.
+        The engines (their coefficients may be arrays of samples) and the areas.
     density_kg_m3 : float or array
         Air density [kg/m^3] (the static thrust scales with it as the model says).
 
@@ -154,11 +181,12 @@ def static_jet_velocity_m_s(propulsion: Propulsion, density_kg_m3: Vectorizable)
     Leishman, *Principles of Helicopter Aerodynamics*, eq. 2.14 (hover: ``v = sqrt(T/(rho A))``
     across the far wake for a ducted fan, whose exit area fixes the contraction).
     """
-    if propulsion.fan_area_m2 is None:
+    area = jet_area_m2(propulsion)
+    if area is None:
         return float("inf")
     scale = density_ratio(propulsion, density_kg_m3)
     speeds = [exit_velocity_m_s(engine_thrust_n(engine, 1.0, 0.0, scale), 0.0, density_kg_m3,
-                                propulsion.fan_area_m2) for engine in propulsion.engines]
+                                area) for engine in propulsion.engines]
     least = speeds[0]
     for speed in speeds[1:]:
         least = fmin(least, speed)
@@ -184,12 +212,12 @@ def beyond_jet_velocity(propulsion: Propulsion, airspeed_m_s: Any, density_kg_m3
 def jet_velocity_ceiling_m_s(propulsion: Propulsion, density_kg_m3: Vectorizable) -> Vectorizable:
     """The airspeed [m/s] from which :func:`beyond_jet_velocity` holds: the fans' static jet
     velocity, never below the top tested airspeed (up to there the model is measured, not
-    extrapolated); ``inf`` without ``fan_area_m2``.
+    extrapolated); ``inf`` without an area (:func:`jet_area_m2`).
 
     Parameters
     ----------
     propulsion : Propulsion
-        The engines and ``fan_area_m2``.
+        The engines and their areas.
     density_kg_m3 : float or array
         Air density [kg/m^3].
 
@@ -223,11 +251,12 @@ def ideal_power_w(
     density_kg_m3 : float or array or CasADi
         Air density [kg/m^3].
     area_m2 : float
-        Jet (fan) area [m^2].
+        Area of the wake [m^2]: the disk area ``fan_area_m2`` for the least power any fan of
+        that disk needs (the figure of merit, the plausibility rule).
 
     Returns
     -------
-    Ideal power [W]: the least power any fan of that area needs for that thrust.
+    Ideal power [W]: the least power any fan whose wake is ``area_m2`` wide needs for that thrust.
 
     References
     ----------
@@ -287,7 +316,7 @@ def windmilling_drag_n(
     density_kg_m3 : float or array or CasADi
         Air density [kg/m^3].
     area_m2 : float
-        The propulsion file's ``fan_area_m2`` [m^2].
+        The propulsion file's ``fan_area_m2``, the fan's disk area [m^2].
 
     References
     ----------

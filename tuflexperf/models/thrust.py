@@ -62,7 +62,7 @@ class Engine:
     extrapolation_distance_m_s: float | None = None
     extrapolation_worst_n: float | None = None  # the largest of those errors [N]
     model_form_sd_n: float | None = None
-    # C_d,wm on the propulsion's fan_area_m2 (SPEC 3); None: min(T(0, V), 0) instead
+    # C_d,wm on the propulsion's fan_area_m2, the disk (SPEC 3); None: min(T(0, V), 0)
     windmilling_drag_coefficient: float | None = None
     # poly22 electrical power surface in W (throttle fraction, airspeed m/s); None if unknown
     power_coefficients: Mapping[str, float] | None = None
@@ -90,7 +90,10 @@ class Propulsion:
     delay_s: float = 0.0
     reference_density_kg_m3: float | None = None
     metadata: Mapping[str, Any] = field(default_factory=dict)
-    fan_area_m2: float | None = None  # momentum theory and windmilling drag (SPEC 3)
+    # the fan's disk area: momentum theory's least (ideal) power, the windmilling drag (SPEC 3)
+    fan_area_m2: float | None = None
+    # the jet (exit) area: the jet velocity; None: the disk area's (a jet no wider than it)
+    jet_area_m2: float | None = None
     reference_voltage_v: float | None = None  # the tests' pack voltage (SPEC 3)
     voltage_exponent: float = DEFAULT_VOLTAGE_EXPONENT  # thrust ~ (U / U_ref)^n
     # first-order spool lag (s) on thrust after the dead time delay_s; 0 = the paper's pure delay

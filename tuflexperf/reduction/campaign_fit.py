@@ -483,6 +483,7 @@ def _fit_campaign(
             ],
             "points": table_rows,
             "electrical": electrical.summary(),
+            "windmilling": windmilling_summary(campaign, engines, electrical),
             "rig_uncertainty": rig.summary(),
         }
     )
@@ -599,3 +600,26 @@ def _validation(
         "mean_error_n": float(e.mean()),
         "rms_error_n": float(np.sqrt(np.mean(e * e))),
     }
+
+
+def windmilling_summary(campaign: Campaign, engines: list[str], electrical: ElectricalFits
+                        ) -> dict[str, Any]:
+    """Per engine: the ``windmilling_drag_coefficient`` estimated from the campaign's
+    throttle-0 holds, on the disk area ``fan_area_m2``, or why none is (issue 43 item 5)."""
+    from tuflexperf.reduction.power import IDLE_THROTTLE, MIN_WINDMILL_AIRSPEED_M_S
+
+    out: dict[str, Any] = {"fan_area_m2": campaign.fan_area_m2, "engines": {}}
+    for name in engines:
+        fit = electrical.windmilling.get(name)
+        if fit is not None:
+            out["engines"][name] = {"estimated": True, **fit.to_dict(),
+                                    "source": "throttle-0 holds"}
+        else:
+            out["engines"][name] = {
+                "estimated": False,
+                "reason": (f"fewer than two throttle-0 holds (throttle <= {IDLE_THROTTLE:g}) at "
+                           f"{MIN_WINDMILL_AIRSPEED_M_S:g} m/s or more: no "
+                           "windmilling_drag_coefficient (a dead fan flies its own thrust "
+                           "model at throttle 0)"),
+            }
+    return out

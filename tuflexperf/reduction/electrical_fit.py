@@ -1,8 +1,8 @@
 """The electrical side of a campaign fit (step 7 of :mod:`.pipeline`).
 
 Where the step runs log voltage and current: the voltage exponent, each engine's electrical
-power surface, the windmilling drag from the zero-throttle points, and how the thrust and
-power surfaces agree with momentum theory.
+power surface and how the thrust and power surfaces agree with momentum theory (on the disk
+area). Whatever is logged: the windmilling drag from the throttle-0 holds.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import numpy as np
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.campaign import Campaign
+from tuflexperf.models.powertrain import WORKING_THRUST_SHARE
 from tuflexperf.models.thrust import DEFAULT_VOLTAGE_EXPONENT
 from tuflexperf.reduction.poly22fit import Poly22Fit
 from tuflexperf.reduction.power import (
@@ -194,9 +195,6 @@ def electrical_fits(
     return out
 
 
-# A test point is a working point of the fan (checked for T V / P_el) from this share of the
-# engine's largest measured thrust: near zero thrust the ESC's idle draw rules the ratio.
-WORKING_THRUST_SHARE = 0.1
 
 
 def _agreement(campaign: Campaign, engine: str, mine: list[Point], out: ElectricalFits) -> None:

@@ -136,6 +136,8 @@ def render_propulsion(
         if electrical.exponent is not None:
             document["voltage_exponent"] = round(electrical.exponent, 3)
     if fan_area_m2 is not None:
+        # the campaign's fan area is the disk's: format 2 says so (docs/formats.md)
+        document["format"] = 2
         document["fan_area_m2"] = float(fan_area_m2)
     document["engines"] = []
     for engine, fit in fits.items():
@@ -177,6 +179,12 @@ def render_propulsion(
         f"{FIT_PROPULSION_HEADER} by ordinary least squares, paper section 4).\n"
         "# T = p00 + p10 x + p01 v + p20 x^2 + p11 x v + p02 v^2, x throttle fraction, v m/s.\n"
     )
+    if electrical is not None and electrical.windmilling:
+        # say where the coefficient comes from: estimated, not a datasheet's or a guess
+        header += ("# windmilling_drag_coefficient: estimated from the throttle-0 holds ("
+                   + ", ".join(f"{name} {fit.n_points}"
+                               for name, fit in electrical.windmilling.items())
+                   + "), on fan_area_m2 (the disk).\n")
     # libyaml's emitter and parser where PyYAML has them (same text, ~10x faster)
     dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
     loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)

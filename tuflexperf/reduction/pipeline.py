@@ -16,8 +16,9 @@ Campaign path, in the paper's order:
    over the run's steady segments, as mean negative / mean positive error;
 7. where the step runs log ``voltage_v`` and ``current_a`` (:mod:`.power`): the voltage
    exponent (thrust brought to the reference voltage before step 6 when the runs determine
-   it), the electrical power surface per engine, and the windmilling drag coefficient
-   from the zero-throttle points.
+   it) and the electrical power surface per engine; with or without them, the windmilling
+   drag coefficient from the throttle-0 holds on the disk area ``fan_area_m2``, said per
+   engine in the output (or why none).
 
 Outputs are rendered in memory, the propulsion file is validated against the
 schema ``check`` uses, and only then are files written, atomically.

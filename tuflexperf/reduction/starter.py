@@ -183,6 +183,7 @@ name: {_q(s.name)}
 model: poly22            # T = p00 + p10 x + p01 v + p20 x^2 + p11 x v + p02 v^2 (x fraction, v m/s)
 tested_airspeed_m_s: [0, 1]   # a datasheet is a static test: above 1 m/s it is momentum theory
 reference_density_kg_m3: {m.density_kg_m3:g}   # ISA sea level, the datasheet's assumed air
+format: 2                # fan_area_m2 is the disk area (docs/formats.md)
 fan_area_m2: {m.fan_area_m2:.6g}
 engines:
 {engines}"""
