@@ -323,16 +323,14 @@ class BatchEvaluator:
                 beyond[requirement.name] = airborne_beyond(roll)
             elif requirement.block == "envelope":
                 value = model.trim_max_throttle(grid, self._candidates()[0])
-                if self._packs is not None and not packs_surely_never_bind(
-                        model, grid, self._packs, battery, value):
+                if self._packs is not None:
                     value = _on_packs_where_they_bind(model, grid, self._packs, battery, value,
                                                       (None,), "windmilling")
                 out[requirement.name] = np.where(unflown, np.nan, value)
             elif requirement.block == "oei":
                 mode = self.case.requirements.oei.dead_engine
                 value = model.oei_min_throttle(grid, mode, self._candidates()[1])
-                if self._packs is not None and not packs_surely_never_bind(
-                        model, grid, self._packs, battery, np.ones(size)):
+                if self._packs is not None:
                     value = _on_packs_where_they_bind(
                         model, grid, self._packs, battery, value,
                         tuple(range(len(self.case.propulsion.engines))), mode,
@@ -576,10 +574,21 @@ def _on_packs_where_they_bind(model: BatchModel, grid: Array, packs: Any,
     the other rows' answer stands (their packs change nothing), so only the rows that need
     the slower solution take it (the error model's spread puts a few rows near the packs'
     limit, where the whole batch took it)."""
-    bind = model.rows_packs_may_bind(grid, packs, battery, value if top is None else top)
-    if not np.any(bind):
+    top = value if top is None else top
+    # rows a bound shared by all shows free first; the row-by-row test on the others alone
+    unsure = np.flatnonzero(~rows_surely_never_bind(model, grid, packs, battery, top))
+    if not unsure.size:
         return value
-    rows = np.flatnonzero(bind)
+    asked = model if unsure.size == model.size else model.rows(unsure)
+    pick = grid if np.shape(grid)[0] != model.size or unsure.size == model.size \
+        else grid[unsure]
+    theirs = {k: v[unsure] if np.ndim(v) and np.shape(v)[0] == model.size else v
+              for k, v in battery.items()}
+    rows = unsure[asked.rows_packs_may_bind(pick, packs, theirs,
+                                            np.asarray(top, dtype=float)[unsure]
+                                            if np.ndim(top) else top)]
+    if not rows.size:
+        return value
     some = model if rows.size == model.size else model.rows(rows)
     part = grid if np.shape(grid)[0] != model.size or rows.size == model.size else grid[rows]
     own = {k: v[rows] if np.ndim(v) and np.shape(v)[0] == model.size else v
@@ -599,31 +608,41 @@ _SURE_MARGIN = 1e-6
 def packs_surely_never_bind(model: BatchModel, grid: Array, packs: Any,
                             battery: dict[str, Array], top_throttle: Array) -> bool:
     """True when one bound shared by every row already shows what
-    ``BatchModel.packs_never_bind`` would find row by row: each fan's power [W] over the
-    grid and throttles in ``[0, max top_throttle]`` at the batch's densest air, within
-    every row's least pack power limit. False means "not sure" (ask the row-by-row test),
-    so the answer is the same, for a fraction of its work on ``(B, K)`` arrays.
+    ``BatchModel.packs_never_bind`` would find row by row (:func:`rows_surely_never_bind`
+    in every row)."""
+    return bool(np.all(rows_surely_never_bind(model, grid, packs, battery, top_throttle)))
+
+
+def rows_surely_never_bind(model: BatchModel, grid: Array, packs: Any,
+                           battery: dict[str, Array], top_throttle: Array) -> NDArray[np.bool_]:
+    """Per row, True where one bound shared by every row already shows what
+    ``BatchModel.rows_packs_may_bind`` would find: each fan's power [W] over the grid and
+    throttles in ``[0, max top_throttle]`` at the batch's densest air, times the row's
+    sampled power scale, within the row's pack power limit. False means "not sure" (ask the
+    row-by-row test), so the answer is the same, for a fraction of its work on ``(B, K)``
+    arrays.
 
     The per-fan power scales with ``rho / rho_ref`` (a positive factor, rising with the
     density) on a surface shared by the rows (nominal power coefficients); the maximum of a
     quadratic in throttle over ``[0, T]`` is at the ends or the vertex, and ``[0, T]``
     holds every row's ``[0, top]``.
     """
+    unsure = np.zeros(model.size, dtype=bool)
     if model.propulsion.reference_voltage_v is not None or np.shape(grid)[0] != 1:
-        return False
+        return unsure
     limit = np.asarray(power_limit_w(packs, battery), dtype=float)
     tops = np.nan_to_num(np.asarray(top_throttle, dtype=float))
     if tops.size == 0 or float(np.min(tops)) < 0.0:  # a throttle below idle: row by row
-        return False
+        return unsure
     top = float(np.max(tops))
     densest = float(np.max(np.asarray(model.density, dtype=float)))
     if not (limit.size and np.isfinite(densest) and densest > 0.0 and np.isfinite(top)):
-        return False
+        return unsure
+    shared = _DensestAir(model.propulsion, densest)
     scale = getattr(model, "power_scale", None)
-    shared = _DensestAir(model.propulsion, densest,
-                         None if scale is None else float(np.max(scale)))
+    scale = np.ones(model.size) if scale is None else np.asarray(scale, dtype=float)
     engines = model.propulsion.engines if packs.own_surfaces else (None,)
-    least_limit = float(np.min(limit)) * (1.0 - 1e-9)
+    sure = np.ones(model.size, dtype=bool)
     for engine in engines:
         p0, ph, p1 = (np.asarray(fan_power_rows(packs, shared, x, grid, engine), dtype=float)
                       for x in (0.0, 0.5 * top, top))
@@ -633,10 +652,12 @@ def packs_surely_never_bind(model: BatchModel, grid: Array, packs: Any,
         vertex = np.where(np.isfinite(vertex), vertex, 0.0)
         pv = np.asarray(fan_power_rows(packs, shared, vertex * top, grid, engine), dtype=float)
         most = float(np.max(np.maximum(np.maximum(p0, p1), np.maximum(pv, 0.0))))
-        if not (np.isfinite(most) and most * (1.0 + _SURE_MARGIN) + _SURE_MARGIN
-                <= least_limit):
-            return False
-    return True
+        if not np.isfinite(most):
+            return unsure
+        with np.errstate(invalid="ignore"):
+            sure &= (most * scale * (1.0 + _SURE_MARGIN) + _SURE_MARGIN
+                     <= limit * (1.0 - 1e-9))
+    return sure
 
 
 @dataclass(frozen=True)
@@ -645,4 +666,3 @@ class _DensestAir:
 
     propulsion: Propulsion
     density: float
-    power_scale: float | None = None  # the rows' largest factor on the power [-]
