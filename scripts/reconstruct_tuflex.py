@@ -397,7 +397,7 @@ def render_propulsion(knobs: dict[str, float]) -> str:
             f"    extrapolation_sd_n: {grid.extrapolation_sd_n:.4g}   # derived: max(leave-30-m/s-"
             f"out error, published error at 30 m/s {PUBLISHED_EDGE_ERROR_N[engine]:g} N)",
             # the knob is on the jet area; the file's coefficient is on the disk, same drag
-            f"    windmilling_drag_coefficient: {windmilling_on_disk(knobs):.4f}   # reconstructed "
+            f"    windmilling_drag_coefficient: {windmilling_on_disk(knobs):.5f}   # reconstructed "
             f"{knobs['windmilling_cd']:.4f} on the jet area, restated on the disk",
             "    power:                       # W; P_i/eta + L x sampled on the test grid, poly22",
             "      model: poly22",

@@ -101,6 +101,13 @@ def _all_figures(case_path: Path | None) -> dict[str, object]:
         figures["sine_sweep"] = fg.sine_sweep(measured, case)
     if measured.comparisons:
         figures["model_vs_measured"] = fg.model_vs_measured(case, measured)
+    from tuflexperf.report import review_figures as rf  # issue 47 item 4's pages
+
+    figures["predicted_measured"] = rf.predicted_vs_measured(case, analyses, measured)
+    figures["takeoff_profile"] = rf.takeoff_profile(case, analyses)
+    figures["flight_envelope"] = rf.flight_envelope(case, analyses)
+    if case.battery_path is not None:
+        figures["mass_trade"] = rf.mass_trade(case, analyses)
     return figures
 
 

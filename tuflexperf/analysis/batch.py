@@ -130,6 +130,8 @@ class BatchResult:
     # rows whose answer flies the thrust model outside its tested airspeeds, as the single
     # case's `extrapolated` (SPEC: extrapolation is said; a sweep said nothing)
     extrapolated: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    # the airspeed a requirement is flown at, where it has one [m/s] (the endurance's cruise)
+    airspeeds: dict[str, Array] = field(default_factory=dict)
 
     def met(self, name: str) -> NDArray[np.bool_]:
         """Met per sample, by the verdict rule of :mod:`tuflexperf.analysis.verdict`."""
@@ -292,6 +294,7 @@ class BatchEvaluator:
             return self.launch(model, size, height, battery)
 
         beyond: dict[str, NDArray[np.bool_]] = {}
+        airspeeds: dict[str, Array] = {}
         propulsion = self.case.propulsion
 
         def flown_span(*speeds: Array, from_rest: bool) -> tuple[Array, Array]:
@@ -346,6 +349,7 @@ class BatchEvaluator:
                 out[requirement.name], speed, climb = model.flight_endurance_min(
                     self._endurance, throttle, launch, battery
                 )
+                airspeeds[requirement.name] = np.asarray(speed, dtype=float).reshape(-1)
                 # the roll and the climb fly the thrust model too, as the single case's
                 # mission (a catapult's release is no node of it): a roll from rest below
                 # the tested range was not said
@@ -361,6 +365,7 @@ class BatchEvaluator:
             refused=self.rows_refused(values, size, coefficients),
             without_envelope=unflown,
             extrapolated=beyond,
+            airspeeds=airspeeds,
         )
 
     def launch(self, model: BatchModel, size: int, height: Any, battery: dict[str, Array]

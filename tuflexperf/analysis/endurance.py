@@ -291,6 +291,25 @@ class EnduranceModel:
         self._nlp: dict[str, Any] = {}
 
     # -- the discharge runs against the power and thrust models (SPEC 3) ---------------------
+    def run_powers(self, battery: Battery | None = None) -> list[tuple[Any, Any, float, float,
+                                                                      float, float]]:
+        """Each discharge run against the power model: (run, its engine, throttle [-],
+        airspeed [m/s], measured mean ``V I`` under load [W], the model's power there [W]),
+        the model being the run's own fan's surface as fitted (test day, as measured), else
+        the battery file's fan-power law."""
+        battery = self.battery if battery is None else battery
+        engines = {e.name: e for e in self.case.propulsion.engines}
+        surfaces = isinstance(self.power, PowerSurfaces)
+        rows = []
+        for ref, run in zip(battery.runs, self.ch.runs, strict=True):
+            x, v, measured = run.throttle_setting, run.airspeed_setting_m_s, run.mean_power_w
+            engine = engines.get(ref.engine or "", self.case.propulsion.engines[0])
+            modelled = float(
+                engine_power_w(engine, x, v) if surfaces else self.power.electrical_power_w(x, v)
+            )
+            rows.append((run, engine, float(x), float(v), float(measured), modelled))
+        return rows
+
     def _check_runs(self, battery: Battery) -> tuple[str, ...]:
         """Warnings where a discharge run's measured power or force disagrees with the models.
 
@@ -305,16 +324,8 @@ class EnduranceModel:
         from tuflexperf.models.agreement import power_agreement
 
         warnings: list[str] = []
-        engines = {e.name: e for e in self.case.propulsion.engines}
         rho_ref = self.case.propulsion.reference_density_kg_m3
-        surfaces = isinstance(self.power, PowerSurfaces)
-        for ref, run in zip(battery.runs, self.ch.runs, strict=True):
-            x, v, measured = run.throttle_setting, run.airspeed_setting_m_s, run.mean_power_w
-            engine = engines.get(ref.engine or "", self.case.propulsion.engines[0])
-            # the run's own fan's surface as fitted (test day), else the battery's law
-            modelled = float(
-                engine_power_w(engine, x, v) if surfaces else self.power.electrical_power_w(x, v)
-            )
+        for (run, engine, x, v, measured, modelled) in self.run_powers(battery):
             if abs(modelled - measured) > RUN_POWER_TOLERANCE * measured:
                 warnings.append(
                     f"{battery.path.name} fit.runs: {run.path.name}: measured {measured:.0f} W "

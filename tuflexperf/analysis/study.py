@@ -28,6 +28,7 @@ if TYPE_CHECKING:  # the analyses are imported when first asked for: `check` sta
     from tuflexperf.analysis.oei import OeiResult
     from tuflexperf.analysis.performance import PerformanceResult
     from tuflexperf.analysis.plausibility import Implausibility
+    from tuflexperf.analysis.review_views import FlightEnvelope, MassSweep
     from tuflexperf.analysis.takeoff import TakeoffResult
     from tuflexperf.analysis.trim import TrimResult
 
@@ -135,6 +136,26 @@ class Study:
             return solve_mission(self.case, mission, requirement.min_landing_charge_fraction)
 
         return self.once("mission", fly)
+
+    def flight_envelope(self) -> FlightEnvelope:
+        """Level flight over altitude and airspeed, all engines and each one out, up to
+        1.15 x the absolute ceiling (:func:`flight_envelope`)."""
+        from tuflexperf.analysis.review_views import flight_envelope
+
+        def solve() -> FlightEnvelope:
+            try:
+                top = self.performance().absolute_ceiling_m
+            except NotAttainable:
+                top = None
+            return flight_envelope(self.case, None if top is None else 1.15 * top)
+
+        return self.once("flight_envelope", solve)
+
+    def mass_sweep(self) -> MassSweep:
+        """Endurance and range against take-off mass (:func:`endurance_against_mass`)."""
+        from tuflexperf.analysis.review_views import endurance_against_mass
+
+        return self.once("mass_sweep", lambda: endurance_against_mass(self.case))
 
     def tornado(self, requirement: str) -> Tornado:
         """A requirement's value with each parameter moved -/+ 10 % (:func:`tornado`)."""

@@ -82,6 +82,11 @@ def report_command(
     aircraft: Path | None = AircraftFileOption,
     propulsion: Path | None = PropulsionFileOption,
     battery: Path | None = BatteryFileOption,
+    compare: list[Path] | None = typer.Option(
+        None, "--compare", metavar="<path>",
+        help="Another configuration's requirement file, drawn over --case on every comparable "
+        "figure with the verdicts side by side (repeatable; --set applies to --case only).",
+    ),
 ) -> None:
     """Design-review figures (PNG, 150 dpi) and one multi-page PDF, review.pdf."""
     from tuflexperf.report import build_report  # lazy: matplotlib stays out of `check`
@@ -94,7 +99,7 @@ def report_command(
     # the steps as a bar on a terminal; elsewhere nothing (stderr keeps notes and errors)
     with TerminalProgress("report") as bar:
         result = build_report(case, Path(out_text), campaign=campaign, progress=False,
-                              bar=bar if bar.enabled else None)
+                              bar=bar if bar.enabled else None, compare=list(compare or []))
     render.show_report(result, as_json)
     # the report is written (its verdicts say FAIL with the reason); the exit says it too
     from tuflexperf.analysis.plausibility import implausible

@@ -109,6 +109,25 @@ def density_ratio(propulsion: Propulsion, density_kg_m3: Vectorizable) -> Vector
     return density_kg_m3 / propulsion.reference_density_kg_m3
 
 
+def reference_basis_scale(propulsion: Propulsion, density_kg_m3: float | None) -> float:
+    """Factor ``rho_ref / rho`` that brings a force measured at ``density_kg_m3`` onto the
+    propulsion file's reference density [-] (1 when either density is unknown).
+
+    Thrust and the structure's drag both scale with density, so a balance force, a thrust
+    point and a drag are all carried onto the model's own basis by this one factor.
+
+    Parameters
+    ----------
+    propulsion : Propulsion
+        The model whose ``reference_density_kg_m3`` is the basis.
+    density_kg_m3 : float or None
+        Air density the force was measured at [kg/m^3].
+    """
+    if density_kg_m3 is None or propulsion.reference_density_kg_m3 is None:
+        return 1.0
+    return float(propulsion.reference_density_kg_m3 / density_kg_m3)
+
+
 def unlapsed_density_warning(propulsion: Propulsion, density_kg_m3: float) -> str | None:
     """A warning when a model without reference density is used away from ISA sea level.
 

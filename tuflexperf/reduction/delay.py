@@ -315,3 +315,92 @@ def estimate_delay(
             h_d, h_tau = h_d / 4, h_tau / 4
     r2 = 1.0 - best / sst if sst > 0 else float("nan")
     return DelayEstimate(delay_s=delay, lag_s=tau, r2=float(r2), xcorr_lag_s=xcorr)
+
+
+@dataclass(frozen=True)
+class SweepAmplitude:
+    """First-harmonic force amplitude of a sine sweep per frequency band, measured and per
+    model, and each model's error against the measurement."""
+
+    frequency_hz: NDArray[np.float64]  # band centres [Hz]
+    measured_n: NDArray[np.float64]  # measured amplitude per band [N]
+    model_n: NDArray[np.float64]  # (model, band) amplitude [N]
+
+    @property
+    def error(self) -> NDArray[np.float64]:
+        """(model, band) amplitude error ``model / measured - 1`` [-]."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self.model_n / self.measured_n - 1.0
+
+
+AMPLITUDE_BANDS_HZ = (0.5, 1.0, 2.0, 3.0, 4.0, 5.0)
+"""Frequencies the amplitude is reported at: a sweep's cycles nearest each (paper: to 5 Hz)."""
+
+
+def sweep_amplitudes(
+    time_s: NDArray[np.float64],
+    throttle: NDArray[np.float64],
+    forces_n: NDArray[np.float64],
+    bands_hz: tuple[float, ...] = AMPLITUDE_BANDS_HZ,
+) -> SweepAmplitude:
+    """First-harmonic amplitude of each force over each cycle of a sine sweep, by band.
+
+    A cycle runs from one upward crossing of the throttle's mid value to the next; its
+    frequency is one over its length. Over each cycle the force's first harmonic at that
+    frequency is projected out (``2 |mean(F e^(-i w t))|``): noise and the fan's rpm^2
+    harmonic do not enter it, as they would a peak-to-peak. The cycles nearest each band
+    centre (within 15 %) are averaged; a band the sweep does not reach is NaN.
+
+    Parameters
+    ----------
+    time_s : ndarray
+        Sample times [s].
+    throttle : ndarray
+        Throttle command [fraction].
+    forces_n : ndarray
+        (signals, samples) forces [N]: the measured force first, then each model's.
+    bands_hz : tuple of float
+        Band centres [Hz].
+
+    Returns
+    -------
+    SweepAmplitude
+        ``measured_n`` from the first row of ``forces_n``, ``model_n`` from the others.
+    """
+    t = np.asarray(time_s, dtype=float)
+    x = np.asarray(throttle, dtype=float)
+    f = np.atleast_2d(np.asarray(forces_n, dtype=float))
+    moving = np.flatnonzero(np.abs(x - x[-1]) > 0.01)
+    bands = np.asarray(bands_hz, dtype=float)
+    empty = np.full(bands.size, np.nan)
+    if moving.size < 4:
+        return SweepAmplitude(bands, empty, np.tile(empty, (f.shape[0] - 1, 1)))
+    mid = 0.5 * (np.max(x[moving]) + np.min(x[moving]))
+    up = np.flatnonzero((x[:-1] < mid) & (x[1:] >= mid)) + 1
+    up = up[(up >= moving[0]) & (up <= moving[-1])]
+    if up.size < 2:
+        return SweepAmplitude(bands, empty, np.tile(empty, (f.shape[0] - 1, 1)))
+    starts, stops = up[:-1], up[1:]
+    period = t[stops] - t[starts]
+    # each sample's phase in its cycle; samples outside every cycle are dropped
+    cycle = np.searchsorted(up, np.arange(t.size), side="right") - 1
+    inside = (cycle >= 0) & (cycle < starts.size)
+    idx = np.flatnonzero(inside)
+    c = cycle[idx]
+    phase = 2.0 * np.pi * (t[idx] - t[starts[c]]) / period[c]
+    counts = np.bincount(c, minlength=starts.size).astype(float)
+    re = np.stack([np.bincount(c, weights=row[idx] * np.cos(phase), minlength=starts.size)
+                   for row in f])
+    im = np.stack([np.bincount(c, weights=row[idx] * np.sin(phase), minlength=starts.size)
+                   for row in f])
+    amplitude = 2.0 * np.hypot(re, im) / np.maximum(counts, 1.0)  # (signals, cycles)
+    freq = 1.0 / period
+    # each cycle to its nearest band, if within 15 % of the band's frequency
+    nearest = np.argmin(np.abs(freq[:, None] - bands[None, :]), axis=1)
+    ok = np.abs(freq - bands[nearest]) <= 0.15 * bands[nearest]
+    sums = np.stack([np.bincount(nearest[ok], weights=a[ok], minlength=bands.size)
+                     for a in amplitude])
+    n = np.bincount(nearest[ok], minlength=bands.size).astype(float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mean = np.where(n > 0, sums / n, np.nan)
+    return SweepAmplitude(bands, mean[0], mean[1:])

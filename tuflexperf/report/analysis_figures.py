@@ -20,7 +20,7 @@ import numpy as np
 
 from tuflexperf.io.case import Case
 from tuflexperf.messages import CEILING_RULE, ceiling_text
-from tuflexperf.report.canvas import new_figure
+from tuflexperf.report.canvas import basis_note, new_figure, thrust_label
 from tuflexperf.report.data import Analyses, Measured
 from tuflexperf.report.style import (
     CYAN,
@@ -266,7 +266,8 @@ def thrust_band(case: Case, analyses: Analyses, measured: Measured | None = None
         ax.set_xlim(0.0, 1.02 * right)  # the envelope's top edge stays visible
         ax.set_xlabel("airspeed V (m/s)")
         ax.grid(alpha=0.3)
-    axes[0].set_ylabel("thrust per engine, as tested (N)")
+    axes[0].set_ylabel(thrust_label("thrust per engine T",
+                                    case.propulsion.reference_density_kg_m3))
     axes[0].set_ylim(bottom=min(0.0, *(float(np.min(b.low_n)) for b in bands)))
     handles: list[Any] = []
     from matplotlib.lines import Line2D
@@ -291,7 +292,8 @@ def thrust_band(case: Case, analyses: Analyses, measured: Measured | None = None
                                   *envelope.bounds_m_s(case.density_kg_m3))))
     legend_outside(axes[-1], handles=handles)
     fig.suptitle(f"Thrust model {case.propulsion.name}: 95 % confidence band over the "
-                 "envelope (delta method, Montgomery & Runger 12-4)")
+                 "envelope (delta method, Montgomery & Runger 12-4)"
+                 + (f"\n{basis_note(measured)}" if points is not None else ""), fontsize=11)
     return fig
 
 

@@ -43,9 +43,12 @@ class ReportResult:
     passed: bool
     seconds: float
     notes: list[str] = field(default_factory=list)
+    # --compare: each other configuration's name, file and whether it meets every requirement
+    compared: list[dict[str, Any]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         return {
+            "compared": self.compared,
             "out": str(self.out_dir),
             "files": [str(p) for p in self.files],
             "pdf": str(self.pdf),
@@ -104,6 +107,7 @@ def build_report(
     progress: bool = True,
     stream: Any = None,
     bar: Callable[[int, int | None, str], None] | None = None,
+    compare: list[Any] | None = None,
 ) -> ReportResult:
     """Build the design-review report for a case (``None``: the shipped TU-Flex case).
 
@@ -120,6 +124,9 @@ def build_report(
         Write the step counter to ``stream`` (stderr).
     bar : callable or None
         ``bar(done, total, label)`` after each step (the command line's progress bar).
+    compare : list of path or Case, optional
+        Other configurations (``--compare``), drawn over this one on every comparable
+        figure, their verdicts beside its own (they are B, C, ... in that order).
 
     Returns
     -------
@@ -132,6 +139,7 @@ def build_report(
     out = Path(out).absolute()
     # bad input fails here, before anything is written; a Case is one already loaded (--set)
     case = case_file if isinstance(case_file, Case) else load_case(case_file)
+    compared = [_compared_case(given) for given in compare or []]
     campaign_path = Path(campaign) if campaign is not None else None
     if campaign_path is not None and not campaign_path.is_file():
         from tuflexperf.io.files import why_not_a_file
@@ -139,10 +147,14 @@ def build_report(
         raise InputError(f"--campaign: {why_not_a_file(campaign_path)}: {campaign_path}")
     if campaign_path is not None:
         _check_campaign(campaign_path)  # before any step is shown or anything is written
-    with (staged_directory(out, "report", _report_inputs(case, campaign_path)) as staging,
+    inputs = _report_inputs(case, campaign_path)
+    from tuflexperf.io.case import case_files
+
+    inputs += [path for other in compared for _, path in case_files(other)]
+    with (staged_directory(out, "report", inputs) as staging,
           swap.scratch("report") as kept):
         result = _render(case, staging, campaign_path, StepCounter(stream, progress, bar),
-                         Path(kept))
+                         Path(kept), compared)
     files = [out / p.name for p in result.files]
     return ReportResult(
         out_dir=out,
@@ -152,7 +164,21 @@ def build_report(
         passed=result.passed,
         seconds=time.perf_counter() - started,
         notes=result.notes,
+        compared=result.compared,
     )
+
+
+def _compared_case(given: Any) -> Any:
+    """A ``--compare`` configuration: a Case as given, or a requirement file loaded (its
+    errors named as the flag's)."""
+    from tuflexperf.io.case import Case, load_case
+
+    if isinstance(given, Case):
+        return given
+    try:
+        return load_case(Path(given))
+    except InputError as exc:
+        raise InputError.of([f"--compare {given}: {p}" for p in exc.problems]) from None
 
 
 def _report_inputs(case: Any, campaign: Path | None) -> list[Path]:
@@ -194,12 +220,12 @@ def _check_campaign(path: Path) -> None:
 
 
 def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
-            kept: Path) -> ReportResult:
+            kept: Path, compared: list[Any]) -> ReportResult:
     """Draw every page into ``folder``; ``kept`` is a private temporary folder for the
     one-page PDFs that the PDF is assembled from."""
     writers: list[Any] = []
     try:  # bad campaign, interrupt: every forked helper stopped, no page written after
-        return _render_pages(case, folder, campaign, step, kept, writers)
+        return _render_pages(case, folder, campaign, step, kept, writers, compared)
     finally:
         from tuflexperf.io.files import stop_helpers
 
@@ -207,7 +233,7 @@ def _render(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
 
 
 def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCounter,
-                  kept: Path, writers: list[Any]) -> ReportResult:
+                  kept: Path, writers: list[Any], compared: list[Any]) -> ReportResult:
     """:func:`_render`'s work; each forked helper is listed in ``writers`` as it starts."""
     from tuflexperf.io.files import raise_if_interrupted
 
@@ -217,6 +243,7 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     reduced = _start_campaign_reduction(case, campaign, kept, step.detail, writers)
     from tuflexperf.report import analysis_figures as af
     from tuflexperf.report import figures as fg
+    from tuflexperf.report import review_figures as rf
 
     fg.use_agg()
     from tuflexperf.analysis.study import Study
@@ -224,6 +251,10 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
 
     fg.preload()  # once here, inherited by every writer forked below
     analyses = run_analyses(Study(case))
+    # the other configurations are solved by whichever process first draws a page that
+    # compares (Analyses.others): the first writer, beside the campaign's reduction
+    analyses.compare = [(f"{chr(ord('B') + k)}: {other.name}", other)
+                        for k, other in enumerate(compared)]
     step("analyses: check, take-off, trim, OEI, endurance, performance, margins, mission")
     # Each page is drawn once, as a vector PDF page (``kept/NAME.pdf``); its PNG is that
     # page rasterised by PDFium, so the PNG is the PDF's page, and the PDF is those pages
@@ -234,6 +265,7 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     # exclusively in ``kept``) draws it.
     analysis_pages: dict[str, Callable[[], Any]] = {
         "01_requirements": lambda: fg.requirement_table(case, analyses),
+        **({"01b_compared": lambda: rf.compare_verdicts(case, analyses)} if compared else {}),
         "02_thrust_required_available": lambda: fg.thrust_required_available(case, analyses),
         "07_takeoff": lambda: fg.takeoff_history(case, analyses),
     }
@@ -245,9 +277,16 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     if analyses.mission is not None or analyses.mission_note is not None:
         analysis_pages["10_mission"] = lambda: af.mission(case, analyses)
     analysis_pages["11_tornado"] = lambda: af.tornado(case, analyses)
+    # issue 47 item 4: the views no requirement asks for (solved in the writer that draws them)
+    analysis_pages["07b_takeoff_profile"] = lambda: rf.takeoff_profile(case, analyses)
+    analysis_pages["08c_flight_envelope"] = lambda: rf.flight_envelope(case, analyses)
+    if case.battery_path is not None:
+        analysis_pages["09b_mass_trade"] = lambda: rf.mass_trade(case, analyses)
     # The first writer starts with the tornado: the margins behind it (about 1 s of batch
     # solves) are then solved while the campaign is reduced, not at the end.
     first = sorted(analysis_pages.items(), key=lambda item: item[0] != "11_tornado")
+    if compared:  # the comparison first: its configurations' analyses are solved there
+        first = sorted(first, key=lambda item: item[0] != "01b_compared")
     _start_helper(_draw_pages, (first, folder, kept), writers)
     measured = reduced()
     raise_if_interrupted()
@@ -266,6 +305,8 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     if measured.comparisons:
         measured_pages["06_model_vs_measured"] = lambda: fg.model_vs_measured(case, measured)
     measured_pages["06b_thrust_band"] = lambda: af.thrust_band(case, analyses, measured)
+    measured_pages["06c_predicted_measured"] = lambda: rf.predicted_vs_measured(
+        case, analyses, measured)
     named = sorted({**analysis_pages, **measured_pages}.items())  # the report's page order
     notes = measured.notes + analyses.notes
     from tuflexperf import __version__
@@ -275,10 +316,11 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     # The page count is known now: every page's footer is written down for the writers,
     # who stamp each page they draw from here on (and those drawn before) and render its PNG.
     now = timestamp()  # one date for the first page and every footer
-    hashed = input_hashes(case, measured)
+    hashed = input_hashes(case, measured, compared)
     digest = inputs_digest([h for h, _, _ in hashed])
     order = ["_title", *(name for name, _ in named), *(["_notes"] if notes else []), "_hashes"]
-    texts = {name: footer_texts(case, k, len(order), digest, __version__, now)
+    also = [other.name for other in compared]
+    texts = {name: footer_texts(case, k, len(order), digest, __version__, now, also)
              for k, name in enumerate(order, start=1)}
     _write_footers(kept, texts)
     _start_helper(_draw_pages, (list(measured_pages.items())[::-1], folder, kept), writers)
@@ -288,7 +330,8 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
         [first_page(case, measured, analyses, now,
                     notes_page=len(named) + 2 if notes else None)],
         kept / "_title.pdf",
-        metadata={"Title": f"Design review: {case.name}", "Creator": f"tuflexperf {__version__}"},
+        metadata={"Title": f"Design review: {' vs '.join([case.name, *also])}",
+                  "Creator": f"tuflexperf {__version__}"},
     )
     _stamp_page(kept, "_title", [texts["_title"]]).close()
     step("title page")
@@ -326,6 +369,8 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
         passed=all(v.passed for v in analyses.verdicts),
         seconds=0.0,
         notes=notes,
+        compared=[{"label": label, "name": other.name, "case": str(other.path)}
+                  for label, other in analyses.compare],
     )
 
 
@@ -551,15 +596,21 @@ def title_lines(case: Any, measured: Any, analyses: Any) -> list[str]:
     return plain_text(top) + plain_text(left) + plain_text(right)
 
 
-def input_hashes(case: Any, measured: Any) -> list[tuple[str, str, str]]:
-    """(sha256, role, path as shown) of every input of the report, in the last page's order."""
+def input_hashes(case: Any, measured: Any,
+                 compared: list[Any] | None = None) -> list[tuple[str, str, str]]:
+    """(sha256, role, path as shown) of every input of the report, in the last page's order
+    (each ``--compare`` configuration's files last, their role led by its letter)."""
+    from tuflexperf.io.case import case_files
     from tuflexperf.io.files import sha256_of
     from tuflexperf.io.inputs import path_text
     from tuflexperf.report.data import input_files
 
     hashed = []
     root = case.path.parent
-    for role, path in input_files(case, measured):
+    files = list(input_files(case, measured))
+    for k, other in enumerate(compared or []):
+        files += [(f"{chr(ord('B') + k)}: {role}", path) for role, path in case_files(other)]
+    for role, path in files:
         try:
             shown = os.path.relpath(path, root)
         except ValueError:

@@ -185,3 +185,44 @@ def text_page(
         family="monospace",
     )
     return fig
+
+
+# --- one basis for every thrust and force (issue 47 item 3) -----------------------------------
+DRAG_SIGN = "drag D > 0 rearward"  # the one sign convention: F = T - D on every page
+
+
+def basis_text(reference_density_kg_m3: float | None) -> str:
+    """The thrust figures' basis, for an axis label: the propulsion file's reference density,
+    or "as measured" when the file states none."""
+    if reference_density_kg_m3 is None:
+        return "as measured (no \u03c1ref stated)"
+    return f"at \u03c1ref = {reference_density_kg_m3:.3f} kg/m\u00b3"
+
+
+def basis_note(measured: Any) -> str:
+    """How the measured forces were brought onto the basis (one line under a title)."""
+    ref, rho = measured.reference_density_kg_m3, measured.density_kg_m3
+    if ref is None or rho is None:
+        return "measured forces as given"
+    return (f"measured at \u03c1 = {rho:.3f} kg/m\u00b3, scaled by \u03c1ref/\u03c1 = "
+            f"{measured.basis_scale:.4f} onto the model's \u03c1ref = {ref:.3f} kg/m\u00b3")
+
+
+def thrust_label(what: str, reference_density_kg_m3: float | None) -> str:
+    """An axis label of thrust or force: the quantity, its basis and the drag convention."""
+    return f"{what} (N)\n{basis_text(reference_density_kg_m3)}\n{DRAG_SIGN}"
+
+
+def flight_label(what: str, density_kg_m3: float) -> str:
+    """An axis label of a flight page's force: flight is at the case's density, not the
+    model's reference (the thrust model's pages are), so the label says which it is; three
+    short lines fit a half-height panel."""
+    return f"{what} (N)\nin flight, \u03c1 = {density_kg_m3:.3f} kg/m\u00b3\n{DRAG_SIGN}"
+
+
+def flight_basis(density_kg_m3: float, reference_density_kg_m3: float | None) -> str:
+    """How a flight page's thrust relates to the model's basis (for its title)."""
+    if reference_density_kg_m3 is None:
+        return "thrust as measured (the propulsion file states no reference density)"
+    return (f"thrust = model x \u03c1/\u03c1ref = {density_kg_m3 / reference_density_kg_m3:.3f} "
+            f"(\u03c1ref {reference_density_kg_m3:.3f} kg/m\u00b3)")

@@ -29,9 +29,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from tuflexperf.analysis.review_views import thrust_at_points
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
-from tuflexperf.models.thrust import delay_samples, density_ratio, engine_thrust_n, lag_factor
+from tuflexperf.models.thrust import (
+    delay_samples,
+    engine_thrust_n,
+    lag_factor,
+    reference_basis_scale,
+)
 
 if TYPE_CHECKING:
     from tuflexperf.analysis.study import Study
@@ -68,6 +74,8 @@ class ProcessedRun:
     changepoints: tuple[int, ...]
     segments: tuple[tuple[int, int, float], ...]  # (start, stop, mean force N)
     outliers_replaced: int
+    # the basis of the forces (Measured.basis_scale applied): None = as measured
+    reference_density_kg_m3: float | None = None
 
     @property
     def mean_airspeed_m_s(self) -> float:
@@ -101,8 +109,12 @@ class Measured:
     processed: ProcessedRun | None = None
     sweep: SweepRun | None = None
     comparisons: list[ProcessedRun] = field(default_factory=list)
-    density_kg_m3: float | None = None
-    drag_c1_c2: tuple[float, float] | None = None
+    density_kg_m3: float | None = None  # the test's air density (the campaign's)
+    # rho_ref / rho_test: every measured force here (points, runs, sweep) is already on the
+    # propulsion file's reference density, the model's own basis (issue 47 item 3)
+    basis_scale: float = 1.0
+    reference_density_kg_m3: float | None = None
+    drag_c1_c2: tuple[float, float] | None = None  # as measured, at density_kg_m3
     files: list[Path] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     # the measured data are not those the propulsion file was fitted to (provenance_notes):
@@ -112,6 +124,11 @@ class Measured:
     model_force: dict[tuple[str, float, float], np.ndarray | None] = field(
         default_factory=dict
     )
+    # the sweep's first-harmonic amplitude per frequency, measured and per model of
+    # model_dynamics(..., steps=True) in its order (reduction.delay.sweep_amplitudes)
+    sweep_amplitude: Any | None = None
+    points_model_n: np.ndarray | None = None  # the thrust model at each point (its basis)
+    sweep_amplitude_labels: tuple[tuple[str, float, float], ...] = ()
 
 
 def find_measured_source(case: Case, explicit: Path | None) -> Path | None:
@@ -190,8 +207,9 @@ def _points_from_rows(rows: list[dict[str, Any]]) -> MeasuredPoints:
     )
 
 
-def _processed_run(result: Any) -> ProcessedRun:
-    """One throttle-step run as ``fit_campaign`` reduced it (paper Fig. 10); no re-reduction."""
+def _processed_run(result: Any, scale: float, reference: float | None) -> ProcessedRun:
+    """One throttle-step run as ``fit_campaign`` reduced it (paper Fig. 10); no re-reduction;
+    its forces times ``scale`` (onto the reference density, :attr:`Measured.basis_scale`)."""
     data = result.data
     return ProcessedRun(
         file=result.run.file,
@@ -199,11 +217,12 @@ def _processed_run(result: Any) -> ProcessedRun:
         time_s=data.time_s,
         throttle=data["throttle"],
         airspeed_m_s=data["airspeed_m_s"],
-        force_raw_n=data["force_n"],
-        force_clean_n=result.cleaned_force_n,
+        force_raw_n=scale * data["force_n"],
+        force_clean_n=scale * result.cleaned_force_n,
         changepoints=result.changepoints,
-        segments=tuple((s.start, s.stop, s.force_n) for s in result.segments),
+        segments=tuple((s.start, s.stop, scale * s.force_n) for s in result.segments),
         outliers_replaced=result.outliers_replaced,
+        reference_density_kg_m3=reference,
     )
 
 
@@ -217,6 +236,7 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
     source = find_measured_source(case, explicit)
     measured = Measured(source=source)
     measured.provenance = provenance_notes(case, source)
+    measured.reference_density_kg_m3 = case.propulsion.reference_density_kg_m3
     measured.notes.extend(measured.provenance)
     if source is None:
         measured.notes.append(
@@ -247,6 +267,9 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
         measured.points = MeasuredPoints(
             table.engine, table.throttle, table.airspeed_m_s, table.thrust_n
         )
+        measured.points_model_n = thrust_at_points(case, tuple(table.engine),
+                                                   np.asarray(table.throttle, dtype=float),
+                                                   np.asarray(table.airspeed_m_s, dtype=float))
         measured.notes.append(
             f"measured points from {what} {source.name}; no raw runs, so the run, "
             "sine-sweep and model-vs-run figures are left out"
@@ -259,11 +282,18 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
     campaign = load_campaign(source)
     measured.kind = "campaign"
     measured.density_kg_m3 = campaign.air_density_kg_m3
+    scale = reference_basis_scale(case.propulsion, campaign.air_density_kg_m3)
+    measured.basis_scale = scale
     measured.files.extend(run.path for run in campaign.runs)
     result = fit_campaign(source, progress=progress)
     summary = result.summary
     measured.fit_summary = summary
-    measured.points = _points_from_rows(summary["points"])
+    points = _points_from_rows(summary["points"])
+    # the thrust points onto the model's basis: the campaign's points are at its own density
+    measured.points = MeasuredPoints(points.engine, points.throttle, points.airspeed_m_s,
+                                     scale * points.thrust_n)
+    measured.points_model_n = thrust_at_points(case, points.engine, points.throttle,
+                                               points.airspeed_m_s)
     drag = summary.get("structure_drag")
     if drag:
         measured.drag_c1_c2 = (drag["c1_n_per_m_s"], drag["c2_n_per_m2_s2"])
@@ -281,12 +311,14 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
         # Paper Fig. 10: the run at the highest airspeed (30 m/s) of the first engine.
         first = [r for r in steps if str(r.run.engine) == engines[0]]
         fastest = max(first, key=lambda r: _mean_airspeed(airspeeds, r.run.file))
-        measured.processed = _processed_run(fastest)
+        measured.processed = _processed_run(fastest, scale, measured.reference_density_kg_m3)
         # Paper Figs. 16-17: first engine at its lowest airspeed, last at its highest.
         slowest = min(first, key=lambda r: _mean_airspeed(airspeeds, r.run.file))
         last = [r for r in steps if str(r.run.engine) == engines[-1]]
         top = max(last, key=lambda r: _mean_airspeed(airspeeds, r.run.file))
-        measured.comparisons = [_processed_run(slowest), _processed_run(top)]
+        measured.comparisons = [
+            _processed_run(run, scale, measured.reference_density_kg_m3) for run in (slowest, top)
+        ]
 
     if result.sweep_runs:
         # Paper Figs. 13-14: the sweep at the highest airspeed, of the last engine on a tie.
@@ -303,11 +335,12 @@ def load_measured(case: Case, explicit: Path | None, progress: Any = None) -> Me
             engine=str(sweep.run.engine),
             time_s=t,
             throttle=sweep.data["throttle"],
-            force_n=sweep.data["force_n"],
+            force_n=scale * sweep.data["force_n"],
             airspeed_m_s=float(np.mean(sweep.data["airspeed_m_s"])),
             delay_s=sweep.estimate.delay_s,
             lag_s=sweep.estimate.lag_s,
-            force_median_n=movmedian(sweep.data["force_n"], window_samples(0.02, rate) | 1),
+            force_median_n=scale * movmedian(sweep.data["force_n"],
+                                             window_samples(0.02, rate) | 1),
         )
     else:
         measured.notes.append(f"{source.name}: no sine_sweep run, delay figure left out")
@@ -367,23 +400,26 @@ def balance_model_n(
     case: Case, measured: Measured, engine_name: str, time_s: np.ndarray, throttle: np.ndarray,
     airspeed_m_s: Any, delay_s: float, lag_s: float,
 ) -> np.ndarray | None:
-    """The balance force the model predicts: dynamic thrust minus the structure's drag [N]."""
+    """The balance force the model predicts, ``F = T - D`` (drag positive rearward), on the
+    propulsion file's reference density as the measured forces are (:attr:`Measured.basis_scale`):
+    the model's thrust as it stands, the structure drag measured at the test's density scaled
+    onto it [N]."""
     names = [e.name for e in case.propulsion.engines]
     if engine_name not in names:
         return None
     engine = case.propulsion.engines[names.index(engine_name)]
-    rho = measured.density_kg_m3
-    scale = 1.0 if rho is None else float(density_ratio(case.propulsion, rho))
-    force = dynamic_thrust_n(engine, time_s, throttle, airspeed_m_s, scale, delay_s, lag_s)
+    force = dynamic_thrust_n(engine, time_s, throttle, airspeed_m_s, 1.0, delay_s, lag_s)
     if measured.drag_c1_c2 is not None:
         c1, c2 = measured.drag_c1_c2
-        force = force - (c1 * airspeed_m_s + c2 * np.square(airspeed_m_s))
+        force = force - measured.basis_scale * (c1 * airspeed_m_s + c2 * np.square(airspeed_m_s))
     return force
 
 
-def model_dynamics(case: Case, measured: Measured) -> list[tuple[str, float, float]]:
+def model_dynamics(case: Case, measured: Measured,
+                   steps: bool = False) -> list[tuple[str, float, float]]:
     """(label, delay [s], lag [s]) of the models to draw: the propulsion file's (what the
-    exports carry) and, where it differs, what ``fit`` measured on this campaign."""
+    exports carry) and, where it differs, what ``fit`` measured on this campaign's sine
+    sweeps (the model ``fit`` writes); with ``steps`` also the fit on its throttle steps."""
     prop = case.propulsion
     shown = [("propulsion file", prop.delay_s, prop.lag_s)]
     summary = measured.fit_summary or {}
@@ -391,7 +427,10 @@ def model_dynamics(case: Case, measured: Measured) -> list[tuple[str, float, flo
     if delay is not None and math.isfinite(delay):
         lag = float(lag) if lag is not None and math.isfinite(lag) else 0.0
         if abs(delay - prop.delay_s) > 5e-4 or abs(lag - prop.lag_s) > 5e-4:
-            shown.append(("campaign fit", float(delay), lag))
+            shown.append(("sine-sweep fit", float(delay), lag))
+    fitted = (summary.get("dynamics_fits") or {}).get("throttle_steps")
+    if steps and fitted:
+        shown.append(("throttle-step fit", float(fitted["delay_s"]), float(fitted["lag_s"])))
     return shown
 
 
@@ -424,8 +463,18 @@ def _model_responses(case: Case, measured: Measured) -> None:
     for _, delay, lag in model_dynamics(case, measured):
         for run in measured.comparisons:
             model_force_n(case, measured, run, delay, lag)
-        if measured.sweep is not None:
-            model_force_n(case, measured, measured.sweep, delay, lag)
+    sweep = measured.sweep
+    if sweep is None:
+        return
+    from tuflexperf.reduction.delay import sweep_amplitudes
+
+    dynamics = model_dynamics(case, measured, steps=True)
+    models = [model_force_n(case, measured, sweep, delay, lag) for _, delay, lag in dynamics]
+    if any(m is None for m in models):  # the case's propulsion has no such engine
+        return
+    measured.sweep_amplitude = sweep_amplitudes(
+        sweep.time_s, sweep.throttle, np.vstack([sweep.force_median_n, *models]))
+    measured.sweep_amplitude_labels = tuple(dynamics)
 
 
 
@@ -462,6 +511,28 @@ class Analyses:
     # the case's mission flown (Study.mission), or why not; both None: the case has none
     mission: Any | None = None
     mission_note: str | None = None
+    # issue 47 item 4's views (analysis.review_views), filled by views() when first drawn,
+    # in the forked writer; a view that does not exist has its reason in view_notes
+    envelope: Any | None = None
+    mass_sweep: Any | None = None
+    height_profile: Any | None = None
+    run_powers: list[tuple[str, str, float, float, float, float]] = field(default_factory=list)
+    view_notes: dict[str, str] = field(default_factory=dict)
+    _views_done: bool = field(default=False, repr=False)
+    # --compare: (label, case) of each other configuration, and once compared() has solved
+    # them (in whichever process draws a comparable page first) (label, case, analyses)
+    compare: list[tuple[str, Any]] = field(default_factory=list)
+    _others: list[tuple[str, Any, Any]] | None = field(default=None, repr=False)
+
+    @property
+    def others(self) -> list[tuple[str, Any, Any]]:
+        """Each ``--compare`` configuration with its analyses (solved on first use)."""
+        if self._others is None:
+            from tuflexperf.analysis.study import Study
+
+            self._others = [(label, case, run_analyses(Study(case)))
+                            for label, case in self.compare]
+        return self._others
 
 
 ENDURANCE_CURVE_POINTS = 15
@@ -518,7 +589,8 @@ def _performance(study: Study, analyses: Analyses) -> None:
 
 def _thrust_bands(study: Study, analyses: Analyses) -> None:
     """Each engine's thrust at BAND_THROTTLES over 0 to the envelope's top (or 1.5x the
-    tested range), with the fit's 95 % band; as measured (no density scaling)."""
+    tested range), with the fit's 95 % band; on the model's reference density (its own basis,
+    the measured points are scaled onto it)."""
     from tuflexperf.analysis.thrust_band import thrust_band
 
     case = study.case
@@ -549,6 +621,36 @@ def margins(analyses: Analyses) -> Analyses:
         analyses.limit_values = study.limit_values()
     except (NotAttainable, InputError) as exc:
         analyses.margins_note = f"margins: {exc}"
+    return analyses
+
+
+def views(analyses: Analyses) -> Analyses:
+    """Fill the review's views (envelope, endurance against mass, the take-off's height, the
+    discharge runs against the power model) from the Study, once; each failure a note."""
+    from tuflexperf.analysis.review_views import takeoff_height_profile
+
+    if analyses._views_done or analyses.study is None:
+        return analyses
+    analyses._views_done = True
+    study = analyses.study
+    try:
+        analyses.envelope = study.flight_envelope()
+    except NotAttainable as exc:
+        analyses.view_notes["envelope"] = str(exc)
+    if study.case.battery_path is None:
+        analyses.view_notes["mass"] = "the case names no battery file"
+    else:
+        try:
+            analyses.mass_sweep = study.mass_sweep()
+            analyses.run_powers = [(run.path.name, engine.name, x, v, measured, modelled)
+                                   for run, engine, x, v, measured, modelled
+                                   in study.endurance_model().run_powers()]
+        except (NotAttainable, InputError) as exc:
+            analyses.view_notes["mass"] = str(exc)
+    if analyses.takeoff is not None:
+        analyses.height_profile = takeoff_height_profile(analyses.takeoff)
+    else:
+        analyses.view_notes["takeoff"] = analyses.takeoff_note or "no take-off"
     return analyses
 
 

@@ -25,6 +25,8 @@ from tuflexperf.models.thrust import (
 from tuflexperf.report.canvas import (
     AVAILABLE_COLOUR,
     LEGEND_FONT,
+    flight_basis,
+    flight_label,
     label_line_ends,
     new_figure,
     page_legend,
@@ -34,6 +36,7 @@ from tuflexperf.report.canvas import (
 from tuflexperf.report.data import Analyses
 from tuflexperf.report.decimate import envelope as decimated
 from tuflexperf.report.style import (
+    CONFIG_COLOURS,
     EXTRAPOLATED_FILL,
     FAIL_FILL,
     POINT,
@@ -87,6 +90,35 @@ def _envelope_lines(ax: Any, case: Case) -> None:
             **STYLE["envelope"],
             label=f"envelope {low:.4g}-{high:.4g} m/s" if k == 0 else None,
         )
+
+
+def _overlay(ax: Any, analyses: Analyses, what: str) -> None:
+    """``report --compare``: each other configuration's curve of ``what`` ("trim", "oei",
+    "takeoff", "endurance") on this page, in its colour, labelled with its letter; drawn
+    beneath the page's own curves (zorder 1.8), so where they coincide both show."""
+    for k, (label, _, other) in enumerate(analyses.others, start=1):
+        colour = CONFIG_COLOURS[k % len(CONFIG_COLOURS)]
+        if what == "trim" and other.trim is not None:
+            ax.plot(other.trim.airspeed_m_s, other.trim.throttle, color=colour, linewidth=1.8,
+                    zorder=1.8, label=f"{label}: trim, all engines")
+            if other.oei is not None:
+                worst = other.oei.critical
+                ax.plot(worst.airspeed_m_s, worst.throttle, color=colour, linewidth=1.4,
+                        linestyle="--", zorder=1.8, label=f"{label}: OEI, {worst.dead_engine} dead")
+        elif what == "takeoff" and other.takeoff is not None:
+            r = other.takeoff
+            ax.plot(np.append(r.history_distance_m, r.ground_roll_m),
+                    np.append(r.history_airspeed_m_s, r.liftoff_speed_m_s), color=colour,
+                    linewidth=1.8, zorder=1.8, label=f"{label}: ground run, lift-off at "
+                    f"{r.ground_roll_m:.1f} m")
+        elif what == "endurance" and other.endurance_curve:
+            ax.plot([c[0] for c in other.endurance_curve],
+                    [c[1].flight_endurance_min for c in other.endurance_curve], color=colour,
+                    linewidth=1.8, zorder=1.8, label=f"{label}: flight endurance")
+        elif what in ("trim", "takeoff", "endurance"):
+            note = {"trim": "no trim", "takeoff": other.takeoff_note or "no take-off",
+                    "endurance": "no endurance curve"}[what]
+            ax.plot([], [], color=colour, label=f"{label}: {wrap_text(note, 60)}")
 
 
 def _max_airspeed(case: Case) -> float:
@@ -173,10 +205,11 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
     ax.set_ylim(0, top)
     label_line_ends(ax, ends)
     ax.set_xlabel("true airspeed V (m/s)")
-    ax.set_ylabel("thrust, drag (N)")
+    ax.set_ylabel(flight_label("thrust T, drag D", rho))
     fig.suptitle(
         "Required and available thrust in level flight (paper Fig. 18)\n"
-        f"{case.name}, {unit(f'rho = {rho:.3f} kg/m^3')}"
+        f"{case.name}, {unit(f'rho = {rho:.3f} kg/m^3')}; "
+        f"{flight_basis(rho, propulsion.reference_density_kg_m3)}"
     )
     ax.grid(alpha=0.3)
     # right of the throttle labels in the margin, so neither covers the other
@@ -210,7 +243,7 @@ def _takeoff_not_attainable(case: Case, analyses: Analyses) -> Any:
     ad.axhline(0.0, color="black", linewidth=0.8)
     ad.axvline(v_lo, **STYLE["stall"], label=f"lift-off speed {v_lo:.1f} m/s")
     ad.set_xlabel("airspeed V (m/s)")
-    ad.set_ylabel("net force on the runway (N)")
+    ad.set_ylabel(flight_label("net force T - D - friction", rho))
     ad.set_title("why: the net force on the runway", fontsize=10)
     ad.grid(alpha=0.3)
     page_legend(ad)
@@ -286,6 +319,7 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     for ax in (av, af):
         ax.grid(alpha=0.3)
     av.set_ylim(0, top)
+    _overlay(av, analyses, "takeoff")
     av.set_ylabel("true airspeed V (m/s)")
     av.set_title("airspeed along the take-off", fontsize=10)
     av.set_xlabel("distance from brake release s (m)")
@@ -308,7 +342,7 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
     af.axhline(0.0, color="black", linewidth=0.8)
     af.set_ylim(bottom=0.0)
     af.set_xlabel("distance from brake release s (m)")
-    af.set_ylabel("force (N)")
+    af.set_ylabel(flight_label("force", case.density_kg_m3))
     af.set_title("forces on the ground run", fontsize=10)
     if catapult:
         af.text(0.5, 0.5, "catapult launch: no ground run (the catapult's energy, not the "
@@ -416,7 +450,9 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
     ax.set_ylim(0, 1.08)
     ax.set_xlabel("true airspeed V (m/s)")
     ax.set_ylabel("least throttle for level flight x (fraction)")
-    fig.suptitle(f"Trim and one-engine-inoperative throttle over the envelope, {case.name}")
+    _overlay(ax, analyses, "trim")
+    fig.suptitle(f"Trim and one-engine-inoperative throttle over the envelope, {case.name}"
+                 + (" (A), compared" if analyses.compare else ""))
     ax.grid(alpha=0.3)
     page_legend(ax)
     return fig
@@ -557,6 +593,7 @@ def endurance(case: Case, analyses: Analyses) -> Any:
                     f"{result.airspeed_m_s:.1f} m/s ({'PASS' if met else 'FAIL'})")
     af.set_xlabel("throttle, all engines x (fraction)")
     af.set_ylabel("endurance (min)")
+    _overlay(af, analyses, "endurance")
     af.set_title("level flight: endurance against throttle", fontsize=10)
     af.set_ylim(bottom=0)
     af.grid(alpha=0.3)

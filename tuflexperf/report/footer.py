@@ -33,12 +33,16 @@ def reserve(fig: Any) -> None:
 
 
 def footer_texts(case: Any, page: int, pages: int, digest: str, version: str,
-                 now: str) -> tuple[str, str]:
-    """(left, right) of one page's footer: the case, then page, inputs, tool and date."""
+                 now: str, compared: list[str] | None = None) -> tuple[str, str]:
+    """(left, right) of one page's footer: the case (and each ``--compare`` case), then page,
+    inputs, tool and date."""
     left = case.name
     overrides = getattr(case, "overrides", ())
     if overrides:  # a page of a changed case is not a page of the files alone
         left += " with --set " + ", ".join(f"{k}={v:g}" for k, v in overrides)
+    if compared:
+        left = "A: " + left + "".join(f" vs {chr(ord('B') + k)}: {name}"
+                                     for k, name in enumerate(compared))
     if len(left) > LONGEST_CASE_TEXT:
         left = left[: LONGEST_CASE_TEXT - 3] + "..."
     right = f"page {page} of {pages}  |  inputs {digest}  |  tuflexperf {version}  |  {now}"

@@ -46,6 +46,9 @@ POINT: dict[str, dict[str, Any]] = {
     "not_attainable": {"color": "#c62828", "marker": "x", "markersize": 6, "linestyle": "none"},
 }
 
+# report --compare: one colour per configuration, the first in the report's blue
+CONFIG_COLOURS = (BLUE, GREEN, BROWN, PINK)
+
 EXTRAPOLATED_FILL = "0.90"  # airspeeds beyond the tested range
 PASS_FILL, FAIL_FILL = "#c8e6c9", "#ffcdd2"
 UNITS = {"kg/m^3": "kg/m\u00b3", "m/s^2": "m/s\u00b2", "m^2": "m\u00b2"}
