@@ -134,7 +134,64 @@ def campaign_table() -> str:
     return _table(["quantity", "truth", "fitted", "fitted - truth"], rows)
 
 
-TABLES: dict[str, Callable[[], str]] = {"paper": paper_table, "campaign": campaign_table}
+CALIBRATION = DOCS / "calibration_study.json"
+REQUIREMENT_LABELS = {"takeoff_ground_roll": "ground roll", "trim_throttle_max": "trim throttle",
+                      "oei_min_throttle": "OEI throttle", "flight_endurance": "endurance",
+                      "mission_landing_charge": "mission landing charge"}
+
+
+def _study() -> dict[str, Any]:
+    """The self-calibration study's stored result (bench/calibration_study.py writes it: the
+    study takes minutes a truth, so it is run by hand and its JSON kept here)."""
+    return json.loads(CALIBRATION.read_text(encoding="utf-8"))
+
+
+def _rig_label(study: dict[str, Any], rig: str) -> str:
+    declared = study["rigs"][rig]
+    if not any(declared.values()):
+        return f"{rig} (no systematic error)"
+    return (f"{rig} (airspeed bias sd {declared['airspeed_bias_sd_m_s']:g} m/s, thrust scale sd "
+            f"{100 * declared['thrust_scale_sd']:g} %)")
+
+
+def calibration_table() -> str:
+    """Per rig and requirement: coverage of p05-p95 with its 95 % CI, RMS z and bias."""
+    study = _study()
+    rows = []
+    for rig, summary in study["summary"].items():
+        for name, r in summary["requirements"].items():
+            low, high = r["coverage_ci"]
+            met = (low <= 0.90 <= high) and 0.8 <= r["rms_z"] <= 1.25
+            rows.append([_rig_label(study, rig), REQUIREMENT_LABELS.get(name, name),
+                         f"{r['n']}", f"{r['coverage']:.2f} ({low:.2f}-{high:.2f})",
+                         f"{r['above_p95']} / {r['below_p05']}", f"{r['rms_z']:.2f}",
+                         f"{r['bias_z']:+.2f}", "yes" if met else "**no**"])
+    return _table(["rig", "requirement", "truths", "coverage of p05-p95 (95 % CI)",
+                   "above p95 / below p05", "RMS z", "bias (mean z)", "target met"], rows)
+
+
+def reliability_table() -> str:
+    """Per rig, the 5-bin reliability diagram of P(meet) as a table with a bar."""
+    study = _study()
+    rows = []
+    for rig, summary in study["summary"].items():
+        for b in summary["reliability"]:
+            if not b["n"]:
+                rows.append([_rig_label(study, rig), f"{b['low']:.1f}-{b['high']:.1f}", "0",
+                             "—", "—", ""])
+                continue
+            low, high = b["met_ci"]
+            bar = "#" * round(20 * b["met_fraction"])
+            rows.append([_rig_label(study, rig), f"{b['low']:.1f}-{b['high']:.1f}",
+                         f"{b['n']}", f"{b['mean_probability']:.2f}",
+                         f"{b['met_fraction']:.2f} ({low:.2f}-{high:.2f})", f"`{bar:<20}`"])
+    return _table(["rig", "P(meet) bin", "forecasts", "mean P(meet)",
+                   "fraction met (95 % CI)", "met, as a bar"], rows)
+
+
+TABLES: dict[str, Callable[[], str]] = {"paper": paper_table, "campaign": campaign_table,
+                                        "calibration": calibration_table,
+                                        "calibration-reliability": reliability_table}
 
 
 def bench_block(name: str) -> str:

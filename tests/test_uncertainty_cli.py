@@ -47,15 +47,22 @@ def test_samples_add_probability_columns_and_keep_the_deterministic_ones() -> No
     plain = json.loads(runner.invoke(app, ["check", "--json", *PASSING]).stdout)
     result = runner.invoke(app, ["check", "--json", "--samples", "3000", "--seed", "5",
                                  *PASSING])
-    assert result.exit_code == 0, result.stdout
+    # every error source drawn (issue 44): the shipped trim at 45 m/s may be met nominally
+    # but not with 95 % probability, so the exit follows the results; the nominal columns stay
+    assert result.exit_code in (0, 1), result.stdout
     data = json.loads(result.stdout)
     for before, after in zip(plain["results"], data["results"], strict=True):
-        for key in ("name", "value", "limit", "unit", "margin", "passed"):
+        for key in ("name", "value", "limit", "unit", "margin"):
             assert after[key] == before[key]
+        assert after["nominal_passed"] == before["passed"]
+        assert after["passed"] == (before["passed"] and after["probability_passed"])
         assert set(after) >= {"probability", "probability_ci", "p05", "p50", "p95"}
         low, high = after["probability_ci"]
         assert 0.0 <= low <= after["probability"] <= high <= 1.0
-        assert after["p05"] <= after["p50"] <= after["p95"]
+        # a percentile on not-attainable samples is None (n/a); the others are in order
+        shown = [after[q] for q in ("p05", "p50", "p95") if after[q] is not None]
+        assert shown and shown == sorted(shown)
+    assert result.exit_code == (0 if all(r["passed"] for r in data["results"]) else 1)
     assert data["uncertainty"]["samples"] == 3000 and data["uncertainty"]["seed"] == 5
     again = json.loads(runner.invoke(app, ["check", "--json", "--samples", "3000", "--seed",
                                            "5", *PASSING]).stdout)
@@ -306,6 +313,9 @@ def test_a_mission_requirement_that_lands_only_nominally_does_not_pass(tmp_path)
     mission = SHIPPED_CASE.parent.parent / "data" / "tuflex" / "missions" / "test_flight.yaml"
     path = shipped_with(tmp_path, {
         "samples": 200, "seed": 1, "required_probability": 0.95,
+        # the power model's disagreement with the discharge runs (23 %) would fail the
+        # endurance itself: off, so that the mission alone fails here
+        "propulsion": {"power_model": False},
         "parameters": {"aircraft.mass_kg": {"normal": [26.7064, 1.5]}},
     }, {"endurance": {"throttle": 0.5, "min_flight_time_min": 12},  # met on both readings
         "mission": {"file": str(mission), "min_landing_charge_fraction": 0.36}})

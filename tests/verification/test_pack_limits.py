@@ -303,10 +303,16 @@ def test_sampled_cruises_cross_the_tested_range_on_sagging_packs(tmp_path) -> No
     """The samples' extrapolation error steps the thrust at the tested range's end; a cruise
     whose airspeed falls through it as the packs sag still flies (168 of 300 samples were
     'not attainable' there, the level-flight root sought across the step)."""
+    import dataclasses
+
     from tuflexperf.analysis import uncertainty
+    from tuflexperf.analysis.error_model import error_model_for
+    from tuflexperf.io.schemas import PropulsionUncertaintySchema
 
     case = _case(tmp_path, 44.0)
-    plan = uncertainty.plan_for(case, 300, 1)
+    # the thrust model's own sources (the rig's systematic errors would move the median)
+    plan = dataclasses.replace(uncertainty.plan_for(case, 300, 1), errors=error_model_for(
+        case, PropulsionUncertaintySchema(rig=False, power_model=False, battery_fit=False)))
     draw = uncertainty.draw_chunk(case, plan, 0)
     assert draw.extrapolation_n is not None
     result = uncertainty.evaluator_for(case).evaluate(draw.values, draw.size,
@@ -316,7 +322,9 @@ def test_sampled_cruises_cross_the_tested_range_on_sagging_packs(tmp_path) -> No
     # the evaluator flies the case as given: the first reading (the power model)
     nominal = verdict.readings[0].value if verdict.readings else verdict.value
     assert np.isfinite(endurance).all()
-    assert np.median(endurance) == pytest.approx(nominal, rel=2e-3)
+    # about the nominal: the error beyond the range now grows with the distance (issue 44),
+    # a wider spread through a curved response moves the median a little (0.24 %)
+    assert np.median(endurance) == pytest.approx(nominal, rel=5e-3)
 
 
 @pytest.mark.parametrize("exponent", [0.0, 3.0])

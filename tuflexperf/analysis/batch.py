@@ -237,6 +237,7 @@ class BatchEvaluator:
         size: int | None = None,
         coefficients: Array | None = None,
         extrapolation_n: Array | None = None,
+        power_scale: Array | None = None,
     ) -> BatchResult:
         """Every requirement's value for each of ``B`` parameter sets.
 
@@ -250,6 +251,8 @@ class BatchEvaluator:
             Thrust coefficients per engine and sample (POLY22_TERMS order, the file's units).
         extrapolation_n : array ``(E, B)``, optional
             Thrust error [N] per engine and sample added beyond the tested airspeed range.
+        power_scale : array ``(B,)``, optional
+            Factor [-] per sample on every fan's electrical power (the error model's).
 
         Returns
         -------
@@ -260,10 +263,11 @@ class BatchEvaluator:
         # mass) may overflow on its way to NaN, "not attainable": numpy's warnings about it
         # would only clutter stderr (margins and sweeps; samples said so already)
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            return self._evaluate(values, size, coefficients, extrapolation_n)
+            return self._evaluate(values, size, coefficients, extrapolation_n, power_scale)
 
     def _evaluate(self, values: Mapping[str, Array] | None, size: int | None,
-                  coefficients: Array | None, extrapolation_n: Array | None) -> BatchResult:
+                  coefficients: Array | None, extrapolation_n: Array | None,
+                  power_scale: Array | None = None) -> BatchResult:
         values = dict(values or {})
         if size is None:
             if values:
@@ -280,6 +284,7 @@ class BatchEvaluator:
             size=size,
             stall_margin=_column(values, "requirements.envelope.stall_margin",
                                  stall_margin_of(self.case), size),
+            power_scale=None if power_scale is None else np.asarray(power_scale, dtype=float),
         )
         out: dict[str, Array] = {}
         limits: dict[str, Array] = {}
@@ -329,24 +334,18 @@ class BatchEvaluator:
                 beyond[requirement.name] = airborne_beyond(roll)
             elif requirement.block == "envelope":
                 value = model.trim_max_throttle(grid, self._candidates()[0])
-                if self._packs is not None and not packs_surely_never_bind(
-                        model, grid, self._packs, battery, value) and not model.packs_never_bind(
-                        grid, self._packs, battery, value):
-                    value = model.over_grid_on_packs(grid, None, "windmilling", self._packs,
-                                                     battery)
+                if self._packs is not None:
+                    value = _on_packs_where_they_bind(model, grid, self._packs, battery, value,
+                                                      (None,), "windmilling")
                 out[requirement.name] = np.where(unflown, np.nan, value)
             elif requirement.block == "oei":
                 mode = self.case.requirements.oei.dead_engine
                 value = model.oei_min_throttle(grid, mode, self._candidates()[1])
-                if self._packs is not None and not packs_surely_never_bind(
-                        model, grid, self._packs, battery, np.ones(size)) \
-                        and not model.packs_never_bind(grid, self._packs, battery,
-                                                       np.ones(size)):
-                    worst = np.full(size, -np.inf)
-                    for dead in range(len(self.case.propulsion.engines)):
-                        worst = np.maximum(worst, model.over_grid_on_packs(
-                            grid, dead, mode, self._packs, battery))
-                    value = worst
+                if self._packs is not None:
+                    value = _on_packs_where_they_bind(
+                        model, grid, self._packs, battery, value,
+                        tuple(range(len(self.case.propulsion.engines))), mode,
+                        top=np.ones(size))
                 out[requirement.name] = np.where(unflown, np.nan, value)
             else:
                 # a catapult launch starts airborne at its release speed (no runway)
@@ -579,6 +578,42 @@ class BatchEvaluator:
 
 
 
+def _on_packs_where_they_bind(model: BatchModel, grid: Array, packs: Any,
+                              battery: dict[str, Array], value: Array,
+                              dead: tuple[int | None, ...], mode: str,
+                              top: Array | None = None) -> Array:
+    """``value`` with the rows the packs may bind (:meth:`BatchModel.rows_packs_may_bind`)
+    flown on the packs: trim (``dead`` (None,)) or the worse dead engine's least throttle;
+    the other rows' answer stands (their packs change nothing), so only the rows that need
+    the slower solution take it (the error model's spread puts a few rows near the packs'
+    limit, where the whole batch took it)."""
+    top = value if top is None else top
+    # rows a bound shared by all shows free first; the row-by-row test on the others alone
+    unsure = np.flatnonzero(~rows_surely_never_bind(model, grid, packs, battery, top))
+    if not unsure.size:
+        return value
+    asked = model if unsure.size == model.size else model.rows(unsure)
+    pick = grid if np.shape(grid)[0] != model.size or unsure.size == model.size \
+        else grid[unsure]
+    theirs = {k: v[unsure] if np.ndim(v) and np.shape(v)[0] == model.size else v
+              for k, v in battery.items()}
+    rows = unsure[asked.rows_packs_may_bind(pick, packs, theirs,
+                                            np.asarray(top, dtype=float)[unsure]
+                                            if np.ndim(top) else top)]
+    if not rows.size:
+        return value
+    some = model if rows.size == model.size else model.rows(rows)
+    part = grid if np.shape(grid)[0] != model.size or rows.size == model.size else grid[rows]
+    own = {k: v[rows] if np.ndim(v) and np.shape(v)[0] == model.size else v
+           for k, v in battery.items()}
+    worst = np.full(rows.size, -np.inf)
+    for engine in dead:
+        worst = np.maximum(worst, some.over_grid_on_packs(part, engine, mode, packs, own))
+    out = np.array(value, dtype=float, copy=True)
+    out[rows] = worst
+    return out
+
+
 _SURE_MARGIN = 1e-6
 """Relative slack of :func:`packs_surely_never_bind`'s bound: far above its rounding."""
 
@@ -586,29 +621,41 @@ _SURE_MARGIN = 1e-6
 def packs_surely_never_bind(model: BatchModel, grid: Array, packs: Any,
                             battery: dict[str, Array], top_throttle: Array) -> bool:
     """True when one bound shared by every row already shows what
-    ``BatchModel.packs_never_bind`` would find row by row: each fan's power [W] over the
-    grid and throttles in ``[0, max top_throttle]`` at the batch's densest air, within
-    every row's least pack power limit. False means "not sure" (ask the row-by-row test),
-    so the answer is the same, for a fraction of its work on ``(B, K)`` arrays.
+    ``BatchModel.packs_never_bind`` would find row by row (:func:`rows_surely_never_bind`
+    in every row)."""
+    return bool(np.all(rows_surely_never_bind(model, grid, packs, battery, top_throttle)))
+
+
+def rows_surely_never_bind(model: BatchModel, grid: Array, packs: Any,
+                           battery: dict[str, Array], top_throttle: Array) -> NDArray[np.bool_]:
+    """Per row, True where one bound shared by every row already shows what
+    ``BatchModel.rows_packs_may_bind`` would find: each fan's power [W] over the grid and
+    throttles in ``[0, max top_throttle]`` at the batch's densest air, times the row's
+    sampled power scale, within the row's pack power limit. False means "not sure" (ask the
+    row-by-row test), so the answer is the same, for a fraction of its work on ``(B, K)``
+    arrays.
 
     The per-fan power scales with ``rho / rho_ref`` (a positive factor, rising with the
     density) on a surface shared by the rows (nominal power coefficients); the maximum of a
     quadratic in throttle over ``[0, T]`` is at the ends or the vertex, and ``[0, T]``
     holds every row's ``[0, top]``.
     """
+    unsure = np.zeros(model.size, dtype=bool)
     if model.propulsion.reference_voltage_v is not None or np.shape(grid)[0] != 1:
-        return False
+        return unsure
     limit = np.asarray(power_limit_w(packs, battery), dtype=float)
     tops = np.nan_to_num(np.asarray(top_throttle, dtype=float))
     if tops.size == 0 or float(np.min(tops)) < 0.0:  # a throttle below idle: row by row
-        return False
+        return unsure
     top = float(np.max(tops))
     densest = float(np.max(np.asarray(model.density, dtype=float)))
     if not (limit.size and np.isfinite(densest) and densest > 0.0 and np.isfinite(top)):
-        return False
+        return unsure
     shared = _DensestAir(model.propulsion, densest)
+    scale = getattr(model, "power_scale", None)
+    scale = np.ones(model.size) if scale is None else np.asarray(scale, dtype=float)
     engines = model.propulsion.engines if packs.own_surfaces else (None,)
-    least_limit = float(np.min(limit)) * (1.0 - 1e-9)
+    sure = np.ones(model.size, dtype=bool)
     for engine in engines:
         p0, ph, p1 = (np.asarray(fan_power_rows(packs, shared, x, grid, engine), dtype=float)
                       for x in (0.0, 0.5 * top, top))
@@ -618,10 +665,12 @@ def packs_surely_never_bind(model: BatchModel, grid: Array, packs: Any,
         vertex = np.where(np.isfinite(vertex), vertex, 0.0)
         pv = np.asarray(fan_power_rows(packs, shared, vertex * top, grid, engine), dtype=float)
         most = float(np.max(np.maximum(np.maximum(p0, p1), np.maximum(pv, 0.0))))
-        if not (np.isfinite(most) and most * (1.0 + _SURE_MARGIN) + _SURE_MARGIN
-                <= least_limit):
-            return False
-    return True
+        if not np.isfinite(most):
+            return unsure
+        with np.errstate(invalid="ignore"):
+            sure &= (most * scale * (1.0 + _SURE_MARGIN) + _SURE_MARGIN
+                     <= limit * (1.0 - 1e-9))
+    return sure
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,19 @@ Array = NDArray[np.float64]
 def fan_power_rows(model: Any, m: Any, throttle: Any, speed: Any, engine: Any = None) -> Array:
     """Per-fan electrical power [W] per row: the nominal model's power (the largest fan's),
     or ``engine``'s own surface, a propulsion power surface rescaled to the row's density
-    (``rho / rho_ref``, as the single case does)."""
+    (``rho / rho_ref``, as the single case does); times the row's sampled power scale."""
+    power = _unscaled_power_rows(model, m, throttle, speed, engine)
+    scale = getattr(m, "power_scale", None)
+    if scale is None:
+        return power
+    scale = np.asarray(scale, dtype=float)
+    if scale.ndim == 0 or power.ndim == 0:
+        return power * scale
+    return power * scale.reshape(-1, *([1] * (power.ndim - 1)))
+
+
+def _unscaled_power_rows(model: Any, m: Any, throttle: Any, speed: Any,
+                         engine: Any = None) -> Array:
     if not isinstance(model.power, PowerSurfaces):
         return np.asarray(model.power.electrical_power_w(throttle, speed), dtype=float)
     if engine is None:

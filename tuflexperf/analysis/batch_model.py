@@ -8,6 +8,7 @@ run on one row, and its take-off :class:`tuflexperf.analysis.batch_roll.GroundRo
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -55,6 +56,8 @@ class BatchModel(LevelFlightRows, GroundRollRows):
     packs_airborne: Array | None = None
     # where those packs reach their cut-off in the climb, before the obstacle
     packs_beyond: NDArray[np.bool_] | None = None
+    # per row, the error model's factor on every fan's electrical power [-] (None: 1)
+    power_scale: Array | None = None
     packs_air: Any = None  # that airborne part's settled path (airborne.AirborneOnPacks)
 
     def transition_speed(self) -> Array:
@@ -83,17 +86,23 @@ class BatchModel(LevelFlightRows, GroundRollRows):
 
     def packs_never_bind(self, grid: Array, packs: Any, battery: dict[str, Array],
                          top_throttle: Array) -> bool:
-        """True when the packs change no row's answer, so the candidates' answer stands: no
-        reference voltage (the thrust does not depend on the packs) and, in every row, each
-        fan's greatest power over the grid and throttles in ``[0, top_throttle]`` within the
+        """True when the packs change no row's answer (:meth:`rows_packs_may_bind` in none)."""
+        return not bool(np.any(self.rows_packs_may_bind(grid, packs, battery, top_throttle)))
+
+    def rows_packs_may_bind(self, grid: Array, packs: Any, battery: dict[str, Array],
+                            top_throttle: Array) -> NDArray[np.bool_]:
+        """Per row, False where the packs change nothing, so the candidates' answer stands:
+        no reference voltage (the thrust does not depend on the packs) and each fan's
+        greatest power over the grid and throttles in ``[0, top_throttle]`` within the
         power its packs give at the landing reserve (``pack_limits.power_limit_w``; power
         is quadratic in throttle for a surface, monotone for the fan law, so the ends and
         the vertex bound it). A row whose answer is NaN binds nothing."""
         if self.propulsion.reference_voltage_v is not None:
-            return False
+            return np.ones(self.size, dtype=bool)
         limit = power_limit_w(packs, battery)[:, None]
         top = np.nan_to_num(np.asarray(top_throttle, dtype=float)).reshape(-1, 1)
         engines = self.propulsion.engines if packs.own_surfaces else (None,)
+        may = np.zeros(self.size, dtype=bool)
         for engine in engines:
             p0, ph, p1 = (np.maximum(fan_power_rows(packs, self, x, grid, engine), 0.0)
                           for x in (0.0 * top, 0.5 * top, top))
@@ -104,9 +113,38 @@ class BatchModel(LevelFlightRows, GroundRollRows):
             pv = np.maximum(fan_power_rows(packs, self, vertex * top, grid, engine), 0.0)
             most = np.max(np.maximum(np.maximum(p0, p1), pv), axis=1, keepdims=True)
             with np.errstate(invalid="ignore"):
-                if not np.all(most <= limit * (1.0 - 1e-9)):
-                    return False
-        return True
+                may |= ~np.broadcast_to(most <= limit * (1.0 - 1e-9), (self.size, 1))[:, 0]
+        return may
+
+    def rows(self, index: NDArray[np.intp]) -> BatchModel:
+        """The model of the rows ``index`` alone (aircraft, thrust, density, errors, power
+        scale): where only some rows need the packs' slower solution, they alone take it."""
+        size = self.size
+
+        def take(value: Any) -> Any:
+            # a per-row array has the batch's rows first; a shared value is kept
+            if isinstance(value, np.ndarray) and value.ndim >= 1 and value.shape[0] == size:
+                return value[index]
+            return value
+
+        craft = self.aircraft
+        skip = ("name", "takeoff", "launch")
+        aircraft = dataclasses.replace(
+            craft, **{f.name: take(getattr(craft, f.name))
+                      for f in dataclasses.fields(craft) if f.name not in skip},
+            takeoff=dataclasses.replace(craft.takeoff, **{
+                f.name: take(getattr(craft.takeoff, f.name))
+                for f in dataclasses.fields(craft.takeoff)}))
+        engines = tuple(dataclasses.replace(e, coefficients={k: take(v) for k, v in
+                                                             e.coefficients.items()})
+                        for e in self.propulsion.engines)
+        return BatchModel(
+            aircraft=aircraft, propulsion=dataclasses.replace(self.propulsion, engines=engines),
+            density=take(self.density),
+            extrapolation_n=None if self.extrapolation_n is None
+            else self.extrapolation_n[:, index],
+            size=int(len(index)), stall_margin=take(self.stall_margin),
+            power_scale=take(self.power_scale))
 
     def over_grid_on_packs(self, grid: Array, dead: int | None, mode: str, packs: Any,
                            battery: dict[str, Array]) -> Array:

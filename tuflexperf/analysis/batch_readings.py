@@ -100,9 +100,10 @@ class ReadingsEvaluator:
 
     def evaluate(self, values: Mapping[str, Array] | None = None, size: int | None = None,
                  coefficients: Array | None = None,
-                 extrapolation_n: Array | None = None) -> BatchResult:
+                 extrapolation_n: Array | None = None,
+                 power_scale: Array | None = None) -> BatchResult:
         """As :meth:`BatchEvaluator.evaluate`, on every reading too."""
-        result = self.nominal.evaluate(values, size, coefficients, extrapolation_n)
+        result = self.nominal.evaluate(values, size, coefficients, extrapolation_n, power_scale)
         if not self.readings:
             return result
         from tuflexperf.analysis.evaluators import evaluator_for
@@ -119,7 +120,7 @@ class ReadingsEvaluator:
             if blocks:
                 evaluator = evaluator_for(reading.case, blocks)
                 theirs.append((reading, evaluator.evaluate(values, rows, coefficients,
-                                                           extrapolation_n).values))
+                                                           extrapolation_n, power_scale).values))
         worse, disputed, by_reading = combine_rows(result.values, result.limits,
                                                    result.kinds, theirs)
         return dataclasses.replace(result, values=worse, disputed=disputed,

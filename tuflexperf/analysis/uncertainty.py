@@ -10,14 +10,10 @@ the same seed.
 
 Draws per chunk, in this order: each declared parameter (sorted by key) -- normal
 ``[mean, sd]``, uniform ``[low, high]``, truncated normal ``[mean, sd, low, high]`` by
-inverse CDF; then per engine the six thrust coefficients from the multivariate normal of
-the fit's covariance; then per engine the thrust error beyond the tested airspeed range,
-normal with standard deviation ``extrapolation_sd_n``; then (``propulsion: {residual:
-true}``, the default) per engine the model's own error at a point, a thrust offset over
-every throttle and airspeed, normal with standard deviation ``residual_sd_n`` (the
-covariance is the mean surface's uncertainty only: at 30 m/s it gave 0.21 N where the
-paper's model is off by up to 0.73 N; outside audit), the error beyond the range then
-``sqrt(extrapolation_sd_n^2 - residual_sd_n^2)`` on top of it, the whole error there.
+inverse CDF; then the error model's sources (:mod:`tuflexperf.analysis.error_model`: the
+coefficients' covariance, the error beyond the tested range, the model-form surface, the
+rig's systematic errors, then the power scale of the power model and the battery fit), all
+jointly: each sample is one draw of every source.
 
 A mission requirement is flown for every sample by the single case's own chained function
 (:mod:`tuflexperf.analysis.mission_samples`), in the same batches, so it too gives the same
@@ -43,6 +39,12 @@ from numpy.typing import NDArray
 from tuflexperf.analysis.batch import BatchResult
 from tuflexperf.analysis.batch_kernels import nominal_engines
 from tuflexperf.analysis.cache import file_key, fingerprint
+from tuflexperf.analysis.error_model import (
+    ErrorModel,
+    draw_power_scale,
+    draw_thrust,
+    error_model_for,
+)
 from tuflexperf.analysis.evaluators import EVALUATORS_KEPT, evaluator_for
 from tuflexperf.analysis.probability import normal_logcdf, normal_ppf_of_log
 from tuflexperf.analysis.runtime import (
@@ -53,7 +55,6 @@ from tuflexperf.analysis.runtime import (
 from tuflexperf.errors import InputError
 from tuflexperf.io.case import MAX_SAMPLES, Case, UncertaintySchema
 from tuflexperf.io.dotted import value_bounds
-from tuflexperf.models.thrust import Engine
 
 Array = NDArray[np.float64]
 CHUNK_SIZE = 2500
@@ -77,6 +78,8 @@ class SamplingPlan:
     covariance: bool
     extrapolation: bool
     residual: bool = False
+    # every source the samples draw, or could not and why (None: the thrust switches alone)
+    errors: ErrorModel | None = None
 
     @property
     def chunks(self) -> list[int]:
@@ -95,6 +98,7 @@ class SamplingPlan:
             "parameters": {key: {kind: list(args)} for key, kind, args in self.parameters},
             "propulsion": {"covariance": self.covariance, "extrapolation": self.extrapolation,
                            "residual": self.residual},
+            **({"sources": self.errors.to_dict()} if self.errors is not None else {}),
         }
 
 
@@ -120,6 +124,7 @@ def plan_for(case: Case, samples: int | None = None, seed: int | None = None) ->
         covariance=bool(block.propulsion.covariance),
         extrapolation=bool(block.propulsion.extrapolation),
         residual=bool(block.propulsion.residual),
+        errors=error_model_for(case, block.propulsion),
     )
 
 
@@ -147,25 +152,30 @@ def _draw(rng: np.random.Generator, kind: str, args: Sequence[float], size: int)
     return np.clip(mean + sd * (-z if mirrored else z), low, high)
 
 
-def _square_root(covariance: Array) -> Array:
-    """``L`` with ``L L^T = C`` for a positive semi-definite ``C`` (eigen-decomposition)."""
-    w, v = np.linalg.eigh(covariance)
-    return v * np.sqrt(np.maximum(w, 0.0))
-
-
 @dataclass(frozen=True)
 class ChunkDraw:
     values: dict[str, Array]
     coefficients: Array | None
     extrapolation_n: Array | None
     size: int
+    power_scale: Array | None = None  # per sample, on every fan's electrical power [-]
+
+
+def _legacy_errors(case: Case, plan: SamplingPlan) -> ErrorModel:
+    """A plan built without its error model (by hand): the thrust switches it names."""
+    from tuflexperf.io.schemas import PropulsionUncertaintySchema
+
+    return error_model_for(case, PropulsionUncertaintySchema(
+        covariance=plan.covariance, extrapolation=plan.extrapolation, residual=plan.residual,
+        model_form=plan.residual, rig=False, power_model=False, battery_fit=False))
 
 
 def draw_chunk(case: Case, plan: SamplingPlan, index: int) -> ChunkDraw:
     """The samples of chunk ``index`` (its own spawned seed; see the module docstring).
 
-    Parameter values in their keys' units; thrust coefficients ``(E, size, 6)`` from
-    ``N(p, C)`` by ``p + L z`` with ``L L^T = C``; extrapolation errors ``(E, size)`` [N].
+    Parameter values in their keys' units; thrust coefficients ``(E, size, 6)``, the error
+    beyond the tested range ``(E, size)`` [N] and the power scale ``(size,)`` [-] of the
+    error model (:func:`tuflexperf.analysis.error_model.draw_thrust`).
 
     References
     ----------
@@ -176,39 +186,11 @@ def draw_chunk(case: Case, plan: SamplingPlan, index: int) -> ChunkDraw:
     child = np.random.SeedSequence(plan.seed).spawn(len(plan.chunks))[index]
     rng = np.random.default_rng(child)
     values = {key: _draw(rng, kind, args, size) for key, kind, args in plan.parameters}
-    engines = case.propulsion.engines
-    coefficients = None
-    if plan.covariance and any(e.covariance is not None for e in engines):
-        nominal = nominal_engines(case.propulsion)
-        coefficients = np.empty((len(engines), size, nominal.shape[1]))
-        for j, engine in enumerate(engines):
-            z = rng.standard_normal((size, nominal.shape[1]))
-            spread = (z @ _square_root(np.asarray(engine.covariance)).T
-                      if engine.covariance is not None else 0.0)
-            coefficients[j] = nominal[j] + spread
-    residual = plan.residual and any(e.residual_sd_n for e in engines)
-    extrapolation = None
-    if plan.extrapolation and any(e.extrapolation_sd_n for e in engines):
-        extrapolation = np.stack([
-            rng.standard_normal(size) * _beyond_residual_sd_n(e, residual) for e in engines
-        ])
-    if residual:
-        # drawn last: without it every other draw of a seed is as before
-        if coefficients is None:
-            coefficients = np.repeat(nominal_engines(case.propulsion)[:, None, :], size, axis=1)
-        for j, engine in enumerate(engines):
-            # a thrust offset over every throttle and airspeed: p00, the constant term
-            coefficients[j, :, 0] += rng.standard_normal(size) * float(engine.residual_sd_n or 0)
-    return ChunkDraw(values, coefficients, extrapolation, size)
-
-
-def _beyond_residual_sd_n(engine: Engine, residual: bool) -> float:
-    """The extrapolation error's sd [N] beyond the tested range, on top of the residual's
-    where that is drawn too: ``extrapolation_sd_n`` (a leave-one-airspeed-out error, the
-    scatter at that airspeed in it) is the whole error there, ``sqrt(e^2 - r^2)`` the rest."""
-    e = float(engine.extrapolation_sd_n or 0.0)
-    r = float(engine.residual_sd_n or 0.0) if residual else 0.0
-    return math.sqrt(max(e * e - r * r, 0.0))
+    errors = plan.errors if plan.errors is not None else _legacy_errors(case, plan)
+    coefficients, extrapolation = draw_thrust(rng, errors, nominal_engines(case.propulsion),
+                                              size)
+    return ChunkDraw(values, coefficients, extrapolation, size,
+                     draw_power_scale(rng, errors, size))
 
 
 def _joined(draws: Sequence[ChunkDraw]) -> ChunkDraw:
@@ -226,6 +208,7 @@ def _joined(draws: Sequence[ChunkDraw]) -> ChunkDraw:
         else np.concatenate([d.coefficients for d in draws], axis=1),  # type: ignore[misc]
         along_rows([d.extrapolation_n for d in draws]),
         sum(d.size for d in draws),
+        along_rows([d.power_scale for d in draws]),
     )
 
 
@@ -254,7 +237,7 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range) -> dict[str, A
     # of disputed evidence flown too (the extrapolation band's bound not where it is drawn)
     evaluator = readings_evaluator(case, drawn=plan.extrapolation)
     result = evaluator.evaluate(draw.values, draw.size, draw.coefficients,
-                                draw.extrapolation_n)
+                                draw.extrapolation_n, draw.power_scale)
     # a sample outside a key's schema bounds (a negative cd0 from a wide normal) is no
     # aircraft: every requirement counts it as not met, and it is reported
     outside = np.zeros(draw.size, dtype=bool)

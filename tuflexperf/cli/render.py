@@ -209,6 +209,13 @@ def print_probabilities(plan: Any, probabilistic: dict[str, Any]) -> None:
                        f"({'shown' if shown else 'not shown'})")
     typer.echo("  (n/a: samples where the requirement is not attainable; they count as not met "
                "and as the worst value, so a percentile that falls on them shows n/a)")
+    errors = getattr(plan, "errors", None)
+    if errors is not None:
+        from tuflexperf.analysis.error_model import listed
+
+        typer.echo("error sources, drawn jointly (each sample one draw of every one):")
+        for line in listed(errors.sources):
+            typer.echo(f"  {line}")
 
 
 def show_takeoff(case: Any, result: Any, requirement: Any, verdicts: list[Any], met: bool,

@@ -59,6 +59,11 @@ MAX_CL_MAX = 5.0
 MAX_OBSTACLE_HEIGHT_M = 100.0
 # Highest pack voltage [V] a propulsion file may name (electric aircraft run up to ~800 V)
 MAX_REFERENCE_VOLTAGE_V = 1000.0
+# beyond any subsonic airframe's speed (a textbook jet's table may reach past Mach 1 at
+# altitude's lower speed of sound, so not MAX_AIRSPEED_M_S)
+MAX_TESTED_AIRSPEED_M_S = 1000.0
+MAX_THRUST_SD_N = 1.0e5
+"""The largest thrust error [N] (1 sd) a file may state: ten tonnes, no ducted fan's."""
 # Largest exponent of thrust on the voltage ratio, either sign (2 by rpm ~ U; fit searches
 # -2..6)
 MAX_VOLTAGE_EXPONENT = 10.0
@@ -202,6 +207,12 @@ class EngineSchema(StrictModel):
     covariance: list[list[float]] | None = None  # of p00..p02 (POLY22_TERMS order) [N^2]
     residual_sd_n: NonNegative | None = None
     extrapolation_sd_n: NonNegative | None = None
+    # how far beyond the rest the left-out top airspeed lay [m/s]: extrapolation_sd_n is
+    # the error at that distance, the sampler grows it with the distance flown beyond
+    extrapolation_distance_m_s: Annotated[float, Field(gt=0, le=MAX_TESTED_AIRSPEED_M_S)] | \
+        None = None
+    # the largest of those errors over the left-out airspeed's throttles [N]
+    extrapolation_worst_n: Annotated[float, Field(ge=0, le=MAX_THRUST_SD_N)] | None = None
 
     @model_validator(mode="after")
     def _check_covariance(self) -> EngineSchema:
@@ -313,9 +324,6 @@ def rig_uncertainty_problems(
 MAX_SOURCE_VALUES = 1_000_000
 
 
-# beyond any subsonic airframe's speed (a textbook jet's table may reach past Mach 1 at
-# altitude's lower speed of sound, so not MAX_AIRSPEED_M_S)
-MAX_TESTED_AIRSPEED_M_S = 1000.0
 
 
 # A file without ``format: 2`` that gives an area is in the old form: the number may be the
@@ -579,8 +587,13 @@ class PropulsionUncertaintySchema(StrictModel):
     covariance: bool = True
     extrapolation: bool = True
     # the fit's residual_sd_n as the model's own error at a point (the paper's +-0.5 N):
-    # the coefficients' covariance is the mean surface's uncertainty alone
+    # the coefficients' covariance is the mean surface's uncertainty alone. The older name
+    # of model_form: either false leaves the model-form surface out
     residual: bool = True
+    model_form: bool = True  # the poly22's shape error, a correlated surface (lack_of_fit)
+    rig: bool = True  # the rig's systematic errors (rig_uncertainty, else stated defaults)
+    power_model: bool = True  # the power model against the battery's discharge runs
+    battery_fit: bool = True  # the battery fit's own error (its cross-validation)
 
 
 def _whole_number(value: Any) -> Any:
@@ -698,6 +711,10 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
             ),
             residual_sd_n=e.residual_sd_n,
             extrapolation_sd_n=e.extrapolation_sd_n,
+            extrapolation_distance_m_s=e.extrapolation_distance_m_s,
+            extrapolation_worst_n=e.extrapolation_worst_n,
+            model_form_sd_n=(e.lack_of_fit.model_form_rms_n if e.lack_of_fit is not None
+                             else None),
             windmilling_drag_coefficient=e.windmilling_drag_coefficient,
             power_coefficients=(
                 {term: getattr(e.power.coefficients, term) for term in POLY22_TERMS}
@@ -720,6 +737,8 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
         jet_area_m2=schema.jet_area_m2,
         reference_voltage_v=schema.reference_voltage_v,
         voltage_exponent=schema.voltage_exponent,
+        rig_uncertainty=(None if schema.rig_uncertainty is None
+                         else schema.rig_uncertainty.model_dump()),
     )
 
 

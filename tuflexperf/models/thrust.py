@@ -57,6 +57,11 @@ class Engine:
     covariance: tuple[tuple[float, ...], ...] | None = None
     residual_sd_n: float | None = None
     extrapolation_sd_n: float | None = None
+    # [m/s] beyond the rest of the tested airspeeds the left-out top one lay (the distance
+    # extrapolation_sd_n is the error at), and the poly22's shape error [N] (lack of fit)
+    extrapolation_distance_m_s: float | None = None
+    extrapolation_worst_n: float | None = None  # the largest of those errors [N]
+    model_form_sd_n: float | None = None
     # C_d,wm on the propulsion's fan_area_m2, the disk (SPEC 3); None: min(T(0, V), 0)
     windmilling_drag_coefficient: float | None = None
     # poly22 electrical power surface in W (throttle fraction, airspeed m/s); None if unknown
@@ -97,6 +102,8 @@ class Propulsion:
     voltage_exponent: float = DEFAULT_VOLTAGE_EXPONENT  # thrust ~ (U / U_ref)^n
     # first-order spool lag (s) on thrust after the dead time delay_s; 0 = the paper's pure delay
     lag_s: float = 0.0
+    # the rig's systematic errors, 1 sd each (io.schemas.RigUncertaintySchema); None: undeclared
+    rig_uncertainty: Mapping[str, Any] | None = None
 
 
 def density_ratio(propulsion: Propulsion, density_kg_m3: Vectorizable) -> Vectorizable:

@@ -212,9 +212,16 @@ def _uncertainty_entry(fit: Poly22Fit) -> dict[str, Any]:
         entry["covariance"] = [[float(c) for c in row] for row in fit.covariance]
         entry["residual_sd_n"] = float(fit.residual_sd_n)
     if fit.points:
-        extrapolation = leave_one_airspeed_out(*fit.points).extrapolation_sd_n
+        left_out = leave_one_airspeed_out(*fit.points)
+        extrapolation = left_out.extrapolation_sd_n
         if extrapolation is not None and math.isfinite(extrapolation):
             entry["extrapolation_sd_n"] = extrapolation
+            distance = left_out.extrapolation_distance_m_s
+            if distance is not None and distance > 0.0:
+                entry["extrapolation_distance_m_s"] = distance
+            worst = left_out.extrapolation_worst_n
+            if worst is not None and math.isfinite(worst):
+                entry["extrapolation_worst_n"] = worst
     return entry
 
 

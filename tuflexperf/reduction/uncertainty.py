@@ -86,11 +86,27 @@ class LeaveOneAirspeedOut:
 
     airspeed_m_s: tuple[float, ...]
     rms_error_n: tuple[float | None, ...]  # None where the rest cannot determine a surface
+    # the largest |error| among each left-out airspeed's points [N] (its worst throttle)
+    worst_error_n: tuple[float | None, ...] = ()
 
     @property
     def extrapolation_sd_n(self) -> float | None:
         """The error at the highest tested airspeed [N] (what extrapolation carries)."""
         return self.rms_error_n[-1] if self.rms_error_n else None
+
+    @property
+    def extrapolation_worst_n(self) -> float | None:
+        """The largest error [N] at the highest tested airspeed, over its throttles: a
+        requirement flown beyond the range flies a high throttle, where it is largest."""
+        return self.worst_error_n[-1] if self.worst_error_n else None
+
+    @property
+    def extrapolation_distance_m_s(self) -> float | None:
+        """How far [m/s] the left-out top airspeed lies beyond the rest: the distance
+        :attr:`extrapolation_sd_n` is the error at (the sampler grows it with distance)."""
+        if len(self.airspeed_m_s) < 2:
+            return None
+        return float(self.airspeed_m_s[-1] - self.airspeed_m_s[-2])
 
 
 def leave_one_airspeed_out(
@@ -122,20 +138,24 @@ def leave_one_airspeed_out(
     y = np.asarray(thrust_n, dtype=float)
     speeds: list[float] = []
     errors: list[float | None] = []
+    worst: list[float | None] = []
     for mask in airspeed_groups(v):
         speeds.append(float(v[mask].mean()))
         rest = ~mask
         if rest.sum() <= N_TERMS or np.unique(np.round(v[rest])).size < 3:
             errors.append(None)
+            worst.append(None)
             continue
         try:
             refit = fit_poly22(x[rest], v[rest], y[rest])
         except Exception:  # noqa: BLE001 - a degenerate remainder has no prediction
             errors.append(None)
+            worst.append(None)
             continue
         error = refit.predict(x[mask], v[mask]) - y[mask]
         errors.append(float(np.sqrt(np.mean(error**2))))
-    return LeaveOneAirspeedOut(tuple(speeds), tuple(errors))
+        worst.append(float(np.max(np.abs(error))))
+    return LeaveOneAirspeedOut(tuple(speeds), tuple(errors), tuple(worst))
 
 
 def expected_extrapolation_sd_n(

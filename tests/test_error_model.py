@@ -1,0 +1,288 @@
+"""The sampler's error model (issue 44): every source drawn, of the size it says, and listed.
+
+Each source alone against a closed form where there is one: a thrust scale, an airspeed
+bias or a balance zero moves the roll monotonically, so P(met) is Phi of the shift that
+rolls exactly the limit (found on the single-case take-off with the shift written into the
+propulsion file); the model-form surface, the extrapolation step and the power scale by the
+statistics of their draws and the spread they make.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import yaml
+from scipy import stats
+from typer.testing import CliRunner
+
+from tests.conftest import SHIPPED_CASE
+from tuflexperf.analysis.error_model import ENGINE_CORRELATION, RIG_DEFAULTS
+from tuflexperf.analysis.probability import clopper_pearson
+from tuflexperf.analysis.requirements import probabilistic_verdicts
+from tuflexperf.analysis.takeoff import solve_takeoff
+from tuflexperf.analysis.uncertainty import draw_chunk, plan_for, run_samples
+from tuflexperf.cli import app
+from tuflexperf.io.case import load_case
+
+runner = CliRunner()
+ALL_OFF = {"covariance": False, "extrapolation": False, "model_form": False, "rig": False,
+           "power_model": False, "battery_fit": False}
+SHIPPED_PROPULSION = SHIPPED_CASE.parent / yaml.safe_load(SHIPPED_CASE.read_text())["propulsion"]
+ZERO_RIG = {"airspeed_bias_sd_m_s": 0.0, "thrust_scale_sd": 0.0, "balance_zero_sd_n": 0.0,
+            "voltage_sd_v": 0.0}
+
+
+def _case(folder, propulsion=None, requirements=None, uncertainty=None):
+    """The shipped case in ``folder`` with its propulsion file changed by ``propulsion``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    data = yaml.safe_load(SHIPPED_CASE.read_text())
+    for key in ("aircraft", "battery"):
+        data[key] = str((SHIPPED_CASE.parent / data[key]).resolve())
+    prop = yaml.safe_load(SHIPPED_PROPULSION.read_text())
+    if propulsion is not None:
+        propulsion(prop)
+    (folder / "propulsion.yaml").write_text(yaml.safe_dump(prop))
+    data["propulsion"] = "propulsion.yaml"
+    if requirements is not None:
+        data["requirements"] = requirements
+    if uncertainty is not None:
+        data["uncertainty"] = uncertainty
+    path = folder / "case.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def _sources(result) -> dict[str, dict]:
+    block = json.loads(result.stdout)["uncertainty"]["sources"]
+    return {s["source"]: s for s in block["sampled"] + block["not_sampled"]}
+
+
+def test_check_lists_every_source_it_sampled_and_why_not(tmp_path) -> None:
+    result = runner.invoke(app, ["check", str(SHIPPED_CASE), "--samples", "300", "--json"])
+    assert result.exit_code in (0, 1), result.stderr
+    block = json.loads(result.stdout)["uncertainty"]["sources"]
+    sampled = [s["source"] for s in block["sampled"]]
+    assert sampled == ["covariance", "model_form", "rig", "extrapolation", "power_model",
+                       "battery_fit"], block
+    rig = next(s for s in block["sampled"] if s["source"] == "rig")
+    # the shipped file states no rig errors: each default is said, none is silently zero
+    assert rig["detail"].count("(default: not stated)") == 4, rig
+    assert "no lack_of_fit" in next(s["detail"] for s in block["sampled"]
+                                    if s["source"] == "model_form")
+    text = runner.invoke(app, ["check", str(SHIPPED_CASE), "--samples", "300"]).stdout
+    assert "sampled: rig (propulsion rig_uncertainty): airspeed bias 0.2 m/s (default" in text
+
+    def bare(prop):  # no covariance, no extrapolation error: said, with why
+        for engine in prop["engines"]:
+            engine.pop("covariance")
+            engine.pop("extrapolation_sd_n")
+        prop["rig_uncertainty"] = {"thrust_scale_sd": 0.01}
+
+    path = _case(tmp_path / "bare", bare, uncertainty={"samples": 200, "propulsion": {
+        "power_model": False}})
+    sources = _sources(runner.invoke(app, ["check", str(path), "--json"]))
+    assert "no engine has a covariance" in sources["covariance"]["why"]
+    assert "no engine has an extrapolation_sd_n" in sources["extrapolation"]["why"]
+    assert "switched off (uncertainty.propulsion.power_model: false)" in \
+        sources["power_model"]["why"]
+    # a declared key is the file's; the three left out their defaults, said
+    assert "thrust scale 1 %;" in sources["rig"]["detail"]
+    assert sources["rig"]["detail"].count("(default: not stated)") == 3
+
+
+def _rig_only_case(tmp_path, key: str, sd: float, limit: float):
+    rig = {**ZERO_RIG, key: sd}
+
+    def declare(prop):
+        prop["rig_uncertainty"] = rig
+
+    return load_case(_case(tmp_path / key, declare, {"takeoff": {"max_ground_roll_m": limit}},
+                           {"samples": 20000, "seed": 5, "required_probability": 0.5,
+                            "propulsion": {**ALL_OFF, "rig": True}}))
+
+
+def _roll_with(tmp_path, change) -> float:
+    """The single-case ground roll [m] with the propulsion file changed by ``change``."""
+    path = _case(tmp_path / "single", change, {"takeoff": {"max_ground_roll_m": 60}})
+    return solve_takeoff(load_case(path)).ground_roll_m
+
+
+def _scaled(s):
+    def change(prop):
+        for engine in prop["engines"]:
+            engine["coefficients"] = {t: c * (1.0 + s) for t, c in engine["coefficients"].items()}
+    return change
+
+
+def _zeroed(z):
+    def change(prop):
+        for engine in prop["engines"]:
+            engine["coefficients"]["p00"] += z
+    return change
+
+
+def _biased(b):
+    def change(prop):  # the thrust read at v + b: T(x, v + b) of the poly22
+        for engine in prop["engines"]:
+            c = engine["coefficients"]
+            c["p00"] += (c["p01"] + c["p02"] * b) * b
+            c["p10"] += c["p11"] * b
+            c["p01"] += 2.0 * c["p02"] * b
+    return change
+
+
+@pytest.mark.parametrize(("key", "sd", "shifted", "q"), [
+    ("thrust_scale_sd", 0.02, _scaled, -0.8),
+    ("balance_zero_sd_n", 0.5, _zeroed, -1.1),
+    ("airspeed_bias_sd_m_s", 1.5, _biased, 0.9),
+])
+def test_each_rig_error_moves_the_probability_as_phi_says(tmp_path, key, sd, shifted,
+                                                          q) -> None:
+    """The limit is the roll with the error at ``q`` sd (on the single case); the roll is
+    monotone in the error, so P(met) is Phi's of ``q`` on the side where it shortens."""
+    limit = _roll_with(tmp_path, shifted(q * sd))
+    shorter = _roll_with(tmp_path, shifted((q + 0.1) * sd)) < limit
+    exact = float(stats.norm.sf(q) if shorter else stats.norm.cdf(q))
+    case = _rig_only_case(tmp_path, key, sd, limit)
+    plan = plan_for(case)
+    assert plan.errors.sampled == ["rig"]
+    verdict = probabilistic_verdicts(run_samples(case, plan))["takeoff_ground_roll"]
+    # a 99.9 % interval: three cases at 95 % would fail one run in seven by chance alone
+    met = round(verdict.probability * plan.samples)
+    low, high = clopper_pearson(met, plan.samples, 0.999)
+    assert low <= exact <= high, (key, verdict.probability, exact)
+
+
+def test_the_model_form_surface_is_correlated_over_the_operating_points(tmp_path) -> None:
+    """sd ``s`` = ``sqrt 3`` x the lack of fit's RMS at the tested corners, ``s / sqrt 2`` at
+    the edges' middles, none at the centre (zero mean over the domain), the same sign along
+    the roll's airspeeds (it does not average away), correlated 0.5 between the engines;
+    without a lack_of_fit, ``sqrt 3`` x ``residual_sd_n`` (said: an upper bound)."""
+    def lack(prop):
+        for engine, s in zip(prop["engines"], (0.4, 0.8), strict=True):
+            engine["lack_of_fit"] = {"model_form_rms_n": s / math.sqrt(3.0),
+                                     "worst_residual_n": -3 * s,  # noise, not the shape: unused
+                                     "dof_lack_of_fit": 64, "dof_pure_error": 140}
+
+    case = load_case(_case(tmp_path / "mf", lack, uncertainty={
+        "samples": 20000, "propulsion": {**ALL_OFF, "model_form": True}}))
+    plan = plan_for(case)
+    assert plan.errors.sampled == ["model_form"]
+    draw = draw_chunk(case, plan, 0)
+    nominal = np.array([[e.coefficients[t] for t in ("p00", "p10", "p01", "p20", "p11", "p02")]
+                        for e in case.propulsion.engines])
+    delta = draw.coefficients - nominal[:, None, :]
+    top = case.propulsion.tested_airspeed_m_s[1]
+
+    def error(x, v):  # (E, B) [N]: the plane's terms are p00, p10 x, p01 v
+        return delta[..., 0] + delta[..., 1] * x + delta[..., 2] * v
+
+    for j, s in enumerate((0.4, 0.8)):
+        for corner in ((1.0, 0.0), (1.0, top), (0.0, 0.0)):
+            assert error(*corner)[j].std() == pytest.approx(s, rel=0.05)
+        assert error(1.0, top / 2)[j].std() == pytest.approx(s / math.sqrt(2.0), rel=0.05)
+        assert error(0.5, top / 2)[j].std() < 1e-9 * s
+        # over the roll's airspeeds (0-17 m/s at full throttle) the error keeps its size: the
+        # independent noise of a point would average away to s / sqrt 18
+        roll = np.mean([error(1.0, v)[j] for v in np.linspace(0.0, 17.0, 18)], axis=0)
+        assert roll.std() > 0.6 * s
+    between = np.corrcoef(error(1.0, 0.0)[0], error(1.0, 0.0)[1])[0, 1]
+    assert between == pytest.approx(ENGINE_CORRELATION, abs=0.05)
+
+    # the shipped file has no lack_of_fit: its residual_sd_n (0.5 N), said
+    only = load_case(_case(tmp_path / "rms", uncertainty={
+        "samples": 20000, "propulsion": {**ALL_OFF, "model_form": True}}))
+    upper = plan_for(only)
+    assert "an upper bound" in upper.errors.sources[1].detail
+    corner = draw_chunk(only, upper, 0).coefficients[0] - nominal[0]
+    static = corner[:, 0] + corner[:, 1]  # at full throttle, 0 m/s
+    assert static.std() == pytest.approx(math.sqrt(3.0) * 0.5, rel=0.05)
+    # and the batch flies those coefficients: its roll of a row is the single case's
+    values = run_samples(case, plan).values["takeoff_ground_roll"]
+    for row in (0, 1):
+        def drawn(prop, row=row):
+            for j, engine in enumerate(prop["engines"]):
+                engine["coefficients"] = dict(zip(("p00", "p10", "p01", "p20", "p11", "p02"),
+                                                  map(float, draw.coefficients[j, row]),
+                                                  strict=True))
+        assert values[row] == pytest.approx(_roll_with(tmp_path, drawn), rel=1e-5)
+
+
+def test_the_extrapolation_error_grows_with_the_distance_beyond(tmp_path) -> None:
+    """The shipped envelope reaches 45 m/s, 15 beyond the tested 30: the error stated at
+    2.5 m/s (no distance in the file: the tested span / 12) is drawn 6-fold; a file that
+    gives the distance 5 m/s halves it."""
+    def distance(prop):
+        for engine in prop["engines"]:
+            engine["extrapolation_distance_m_s"] = 5.0
+
+    for folder, change, factor in (("default", None, 15.0 / 2.5), ("five", distance, 3.0)):
+        case = load_case(_case(tmp_path / folder, change, uncertainty={
+            "samples": 20000, "propulsion": {**ALL_OFF, "extrapolation": True}}))
+        draw = draw_chunk(case, plan_for(case), 0)
+        for j, engine in enumerate(case.propulsion.engines):
+            assert draw.extrapolation_n[j].std() == pytest.approx(
+                engine.extrapolation_sd_n * factor, rel=0.05)
+
+
+@pytest.mark.parametrize("source", ["power_model", "battery_fit"])
+def test_the_power_sources_spread_the_endurance_by_their_size(tmp_path, source) -> None:
+    """The endurance is about the packs' energy over the power: a lognormal power scale of
+    sd ``s`` spreads log(endurance) by about ``s`` (the packs' losses grow it a little)."""
+    case = load_case(_case(tmp_path / source, requirements={
+        "endurance": {"throttle": 0.5, "min_flight_time_min": 15}},
+        uncertainty={"samples": 4000, "propulsion": {**ALL_OFF, source: True}}))
+    plan = plan_for(case)
+    assert plan.errors.sampled == [source]
+    sd = plan.errors.power_sds[0]
+    assert sd > 0.01
+    draw = draw_chunk(case, plan, 0)
+    assert np.log(draw.power_scale).std() == pytest.approx(sd, rel=0.05)
+    minutes = run_samples(case, plan).values["flight_endurance"]
+    spread = np.nanstd(np.log(minutes))
+    assert 0.8 * sd < spread < 1.5 * sd, (spread, sd)
+
+
+def test_undeclared_rig_errors_are_drawn_at_their_stated_defaults(tmp_path) -> None:
+    case = load_case(_case(tmp_path / "undeclared", uncertainty={
+        "samples": 20000, "propulsion": {**ALL_OFF, "rig": True}}))
+    errors = plan_for(case).errors
+    assert list(errors.rig_sd[:3]) == [RIG_DEFAULTS["airspeed_bias_sd_m_s"],
+                                        RIG_DEFAULTS["thrust_scale_sd"],
+                                        RIG_DEFAULTS["balance_zero_sd_n"]]
+    assert errors.rig_sd[3] == RIG_DEFAULTS["voltage_sd_v"]
+
+
+@pytest.mark.parametrize(("rig", "named"), [
+    ({"thrust_scale_sd": -0.01}, "rig_uncertainty.thrust_scale_sd"),
+    ({"thrust_scale_sd": 1.5}, "rig_uncertainty.thrust_scale_sd"),
+    ({"airspeed_bias_sd_m_s": -1}, "rig_uncertainty.airspeed_bias_sd_m_s"),
+    ({"airspeed_bias_sd_m_s": 31.0}, "rig_uncertainty.airspeed_bias_sd_m_s"),
+    ({"balance_zero_sd_n": 80.0}, "rig_uncertainty.balance_zero_sd_n"),
+    ({"voltage_sd_v": -0.2}, "rig_uncertainty.voltage_sd_v"),
+    ({"correlation": [[1, 0.9, 0, 0], [0.9, 1, -0.9, 0], [0, -0.9, 1, 0], [0, 0, 0, 1]]},
+     "rig_uncertainty.correlation"),
+    ({"correlation": [[1, 0.5], [0.5, 1]]}, "rig_uncertainty.correlation"),
+])
+def test_bad_rig_errors_exit_2_naming_the_key(tmp_path, rig, named) -> None:
+    def declare(prop):
+        prop["rig_uncertainty"] = rig
+
+    path = _case(tmp_path / "bad", declare)
+    result = runner.invoke(app, ["check", str(path), "--samples", "10"])
+    assert result.exit_code == 2, result.output
+    assert named in result.stderr and "Traceback" not in result.stderr, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+
+
+def test_a_negative_model_form_error_exits_2_naming_the_key(tmp_path) -> None:
+    def lack(prop):
+        prop["engines"][0]["lack_of_fit"] = {"model_form_rms_n": -0.3, "dof_lack_of_fit": 64,
+                                             "dof_pure_error": 140}
+
+    result = runner.invoke(app, ["check", str(_case(tmp_path / "neg", lack))])
+    assert result.exit_code == 2 and "lack_of_fit.model_form_rms_n" in result.stderr, \
+        result.stderr
