@@ -84,9 +84,14 @@ def test_fitted_model_predicts_the_run_it_was_not_fitted_on(case):
     assert result.to_dict()["battery_fit"]["rms_v"] < 0.15  # 12S pack, volts
 
 
-def test_endurance_requirement_is_checked_and_met(case):
+def test_endurance_requirement_is_checked_on_both_power_readings(case):
+    # met on the power model (18.5 min), not on the discharge runs' measured power (14.0):
+    # UNPROVEN, the shown value the worse reading's
     verdicts = {v.name: v for v in check_case(case)}
     assert "flight_endurance" in verdicts
     verdict = verdicts["flight_endurance"]
-    assert verdict.passed
-    assert verdict.value == pytest.approx(solve_endurance(case, 0.5).flight_endurance_min)
+    assert verdict.verdict == "UNPROVEN" and not verdict.passed
+    nominal, measured = verdict.readings[:2]
+    assert nominal.value == pytest.approx(solve_endurance(case, 0.5).flight_endurance_min)
+    assert nominal.passed and not measured.passed
+    assert verdict.value == measured.value < verdict.limit < nominal.value

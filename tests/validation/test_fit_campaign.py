@@ -142,4 +142,11 @@ def test_fitted_model_is_a_drop_in_for_check(fitted, tmp_path: Path) -> None:
     assert "beyond the battery at 42.5-45 m/s" in trim["reason"]
     assert any("loaded voltage" in w for w in trim["warnings"])
     verdicts.pop("trim_throttle_max")
+    # the endurance is judged on the discharge runs' measured power too: the shipped power
+    # model lies 25 % below the runs (UNPROVEN), the campaign's 30 % below, but on its
+    # thrust the case meets 15 min on both readings
+    endurance = results.pop("flight_endurance")
+    assert not verdicts.pop("flight_endurance")
+    assert [r["key"] for r in endurance["readings"]] == ["nominal", "measured_power"]
+    assert endurance["verdict"] == "PASS" and all(r["passed"] for r in endurance["readings"])
     assert {name: r["passed"] for name, r in results.items()} == verdicts

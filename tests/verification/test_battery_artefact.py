@@ -90,7 +90,10 @@ def test_check_neither_reads_nor_fits_the_discharge_runs(monkeypatch: pytest.Mon
     battery_fit._characterisation_cache = battery_fit.BoundedCache()
     endurance._model_cache = endurance.BoundedCache()
     verdicts = check_case(load_case(None))
-    assert any(v.name == "flight_endurance" and v.passed for v in verdicts)
+    # judged on both readings (model and measured power) from the file's parameters alone
+    endurance = next(v for v in verdicts if v.name == "flight_endurance")
+    assert [r.key for r in endurance.readings][:2] == ["nominal", "measured_power"]
+    assert all(r.value is not None and r.value > 10.0 for r in endurance.readings[:2])
 
 
 def test_an_unfitted_battery_is_bad_input_and_fit_makes_it_whole(tmp_path: Path) -> None:
@@ -114,11 +117,15 @@ def test_an_unfitted_battery_is_bad_input_and_fit_makes_it_whole(tmp_path: Path)
     case_file.write_text(case_file.read_text().replace("battery.yaml", "battery_fitted.yaml"))
     again = _tool("check", str(case_file),
                             "--json")
-    assert again.returncode == 0, again.stderr
+    # the shipped answer: endurance UNPROVEN on the discharge runs' measured power (exit 1)
+    assert again.returncode == 1, again.stderr
     endurance = next(r for r in json.loads(again.stdout)["results"]
                      if r["name"] == "flight_endurance")
     shipped = next(v for v in check_case(load_case(None)) if v.name == "flight_endurance")
+    assert endurance["verdict"] == shipped.verdict == "UNPROVEN"
     assert endurance["value"] == pytest.approx(shipped.value, rel=1e-9)
+    assert [r["value"] for r in endurance["readings"]] == pytest.approx(
+        [r.value for r in shipped.readings], rel=1e-9)
 
 
 @pytest.mark.parametrize("command", ["check", "fit"])

@@ -50,9 +50,9 @@ def test_trim_beyond_30_m_s_is_flagged_as_extrapolated(case):
     assert any("extrapolated" in w for w in result.warnings)
 
 
-def test_all_requirements_met(case):
-    verdicts = check_case(case)
-    assert {"takeoff_ground_roll", "trim_throttle_max", "oei_min_throttle"} <= {
-        v.name for v in verdicts
-    }
-    assert all(v.passed for v in verdicts)
+def test_every_requirement_met_but_the_endurance_the_runs_dispute(case):
+    verdicts = {v.name: v for v in check_case(case)}
+    assert {"takeoff_ground_roll", "trim_throttle_max", "oei_min_throttle"} <= set(verdicts)
+    # the discharge runs measured 25 % more power than the model: 14.0 min against 15
+    assert verdicts.pop("flight_endurance").verdict == "UNPROVEN"
+    assert all(v.verdict == "PASS" for v in verdicts.values())

@@ -119,6 +119,11 @@ def test_the_take_off_flies_on_the_packs_loaded_voltage(tmp_path, reference_v, s
     assert any("at the packs' loaded voltage" in w for w in result.warnings)
 
 
+def _nominal(verdict):
+    """The verdict's value on the case as given (its first reading), as the batch flies it."""
+    return verdict.readings[0].value if verdict.readings else verdict.value
+
+
 def test_the_outside_audits_cases_fail(tmp_path) -> None:
     """50.4 V: 61.31 m against a 60 m limit (it PASSed at 55.52 m). The campaign fitted by
     `fit` (its runs log the pack: reference 47.3 V, exponent 1.994) on 2.5 Ah packs: the
@@ -128,18 +133,21 @@ def test_the_outside_audits_cases_fail(tmp_path) -> None:
     from tuflexperf.reduction.pipeline import run_fit
 
     fresh = {v.name: v for v in check_case(_case(tmp_path / "a", 50.4))}
-    assert fresh["takeoff_ground_roll"].value == pytest.approx(61.306, abs=5e-3)
-    assert not fresh["takeoff_ground_roll"].passed
+    roll = fresh["takeoff_ground_roll"]
+    # the auditor's number is the power model's (the nominal reading); the discharge runs'
+    # measured power draws the packs lower and rolls further still
+    assert _nominal(roll) == pytest.approx(61.306, abs=5e-3)
+    assert roll.value >= _nominal(roll) and roll.verdict == "FAIL"
     case = copy_shipped_case(tmp_path / "b")
     data = tmp_path / "b" / "data" / "tuflex"
     run_fit(data / "campaign" / "campaign.yaml", data / "fitted.yaml")
     case.write_text(case.read_text().replace("propulsion.yaml", "fitted.yaml").replace(
         "max_ground_roll_m: 60", "max_ground_roll_m: 60, max_distance_to_obstacle_m: 135"))
     small = {v.name: v for v in check_case(load_case_with(case, ["battery.capacity_ah=2.5"]))}
-    assert small["takeoff_ground_roll"].value == pytest.approx(60.37, abs=0.02)
-    assert not small["takeoff_ground_roll"].passed
-    assert small["takeoff_distance_to_obstacle"].value == pytest.approx(137.65, abs=0.02)
-    assert not small["takeoff_distance_to_obstacle"].passed
+    assert _nominal(small["takeoff_ground_roll"]) == pytest.approx(60.37, abs=0.02)
+    assert small["takeoff_ground_roll"].verdict == "FAIL"
+    assert _nominal(small["takeoff_distance_to_obstacle"]) == pytest.approx(137.65, abs=0.02)
+    assert small["takeoff_distance_to_obstacle"].verdict == "FAIL"
 
 
 @pytest.mark.parametrize("catapult", [False, True])
@@ -157,7 +165,7 @@ def test_the_batch_takes_off_on_the_sagging_packs_as_the_single_case(tmp_path, c
               for k in keys}
     batch = BatchEvaluator(nominal).evaluate(values)
     for i, (key, value) in enumerate(rows):
-        single = {v.name: v.value for v in check_case(
+        single = {v.name: _nominal(v) for v in check_case(
             _case(tmp_path / f"row{i}", 47.3, (f"{key}={value}",), catapult))}
         for name in ("takeoff_ground_roll", "takeoff_distance_to_obstacle",
                      "flight_endurance"):

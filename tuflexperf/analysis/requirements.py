@@ -319,9 +319,14 @@ def implausible_verdict(verdict: Verdict, found: Any, block: str) -> Verdict:
     reasons = [f.reason for f in found if block in f.blocks]
     if not reasons:
         return verdict
+    # the value the implausible surface flew is the nominal reading's (the first), each
+    # other reading's kept beside it: none of them is evidence, so no reading can pass
+    flown = verdict.readings[0].value if verdict.readings else verdict.value
+    others = {r.key: r.value for r in verdict.readings[1:]}
     return Verdict(verdict.name, None, verdict.limit, verdict.unit, verdict.kind,
                    "; ".join(reasons),
-                   {**verdict.details, "value_on_implausible_data": verdict.value,
+                   {**verdict.details, "value_on_implausible_data": flown,
+                    **({"readings_on_implausible_data": others} if others else {}),
                     "implausible": [f.to_dict() for f in found if block in f.blocks]})
 
 
