@@ -23,8 +23,10 @@ from tuflexperf.analysis.verdict import requirement_met
 from tuflexperf.io.case import Case
 
 Array = NDArray[np.float64]
-#: the reading the samples draw themselves (the extrapolation band): they do not fly its bound
+#: the readings the samples draw themselves (the extrapolation band, the lack of fit's
+#: surface): where they draw them they do not fly the bound
 DRAWN_BY_SAMPLES = "extrapolation_bound"
+MODEL_FORM_BOUND = "model_form_bound"
 
 
 def _badness(values: Array, limits: Array, kind: str) -> Array:
@@ -80,9 +82,12 @@ class ReadingsEvaluator:
         The nominal case.
     drawn : bool
         Leave out the reading the samples draw themselves (:data:`DRAWN_BY_SAMPLES`).
+    drawn_model_form : bool
+        Leave out the lack of fit's bound (:data:`MODEL_FORM_BOUND`): the samples draw it.
     """
 
-    def __init__(self, case: Case, drawn: bool = False) -> None:
+    def __init__(self, case: Case, drawn: bool = False, drawn_model_form: bool = False
+                 ) -> None:
         from tuflexperf.analysis.evaluators import evaluator_for
         from tuflexperf.analysis.evidence import case_readings
 
@@ -91,7 +96,8 @@ class ReadingsEvaluator:
         blocks = frozenset(r.block for r in self.requirements)
         # every reading (a mission's too: the samples fly it beside the batch)
         self.all_readings = tuple(r for r in case_readings(case)
-                                  if not (drawn and r.key == DRAWN_BY_SAMPLES))
+                                  if not (drawn and r.key == DRAWN_BY_SAMPLES)
+                                  and not (drawn_model_form and r.key == MODEL_FORM_BOUND))
         self.readings: list[tuple[Reading, frozenset[str]]] = [
             (r, r.affects & blocks) for r in self.all_readings if r.affects & blocks]
 
@@ -127,9 +133,10 @@ class ReadingsEvaluator:
                                    reading_values=by_reading)
 
 
-def readings_evaluator(case: Case, drawn: bool = False) -> ReadingsEvaluator:
+def readings_evaluator(case: Case, drawn: bool = False, drawn_model_form: bool = False
+                       ) -> ReadingsEvaluator:
     """The :class:`ReadingsEvaluator` of ``case`` (its evaluators kept per process)."""
-    return ReadingsEvaluator(case, drawn)
+    return ReadingsEvaluator(case, drawn, drawn_model_form)
 
 
 def reading_labels(case: Case) -> dict[str, tuple[str, str]]:

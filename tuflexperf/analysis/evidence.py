@@ -8,13 +8,15 @@ from __future__ import annotations
 
 from tuflexperf.analysis.extrapolation_reading import extrapolation_readings
 from tuflexperf.analysis.flown_reading import flown_power_readings
+from tuflexperf.analysis.model_form_reading import model_form_readings
 from tuflexperf.analysis.power_reading import measured_power_readings
 from tuflexperf.analysis.readings import Provider, Reading
 from tuflexperf.analysis.windmilling_reading import windmilling_readings
 from tuflexperf.io.case import Case
 
 PROVIDERS: tuple[Provider, ...] = (measured_power_readings, flown_power_readings,
-                                   windmilling_readings, extrapolation_readings)
+                                   windmilling_readings, extrapolation_readings,
+                                   model_form_readings)
 
 
 def case_readings(case: Case, blocks: frozenset[str] | None = None) -> tuple[Reading, ...]:

@@ -235,7 +235,9 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range) -> dict[str, A
     draw = _joined([draw_chunk(case, plan, i) for i in chunks])
     # a sample outside its key's range (mass 1e300) counts as not met below; every reading
     # of disputed evidence flown too (the extrapolation band's bound not where it is drawn)
-    evaluator = readings_evaluator(case, drawn=plan.extrapolation)
+    errors = plan.errors if plan.errors is not None else _legacy_errors(case, plan)
+    evaluator = readings_evaluator(case, drawn=plan.extrapolation,
+                                   drawn_model_form=errors.model_form_maps is not None)
     result = evaluator.evaluate(draw.values, draw.size, draw.coefficients,
                                 draw.extrapolation_n, draw.power_scale)
     # a sample outside a key's schema bounds (a negative cd0 from a wide normal) is no
