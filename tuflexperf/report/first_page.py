@@ -179,7 +179,7 @@ def page_lines(case: Any, measured: Any, analyses: Any, width: int, now: str,
         top += [()] + _wrapped(f"What this report leaves out, and why: page {notes_page}",
                                width, 0, QUIET)
     half = width // 2 - 2
-    left = [(Segment("KEY FIGURES", bold=True),)]
+    left = [(Segment("KEY FIGURES (as fitted; verdicts: the worse reading)", bold=True),)]
     for text in key_figures(analyses):
         left += _wrapped(text.strip(), half, 2, PLAIN)
     right = [(Segment("INPUTS AND THEIR PROVENANCE", bold=True),)]

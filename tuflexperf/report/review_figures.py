@@ -124,8 +124,9 @@ def predicted_vs_measured(case: Case, analyses: Analyses, measured: Measured) ->
         ap.set_ylim(0.0, top)
         outside = sum(w > RUN_POWER_TOLERANCE for w in worst)
         ap.set_title("electrical power: model against the discharge runs (mean U I under load)"
-                     + (f"\n{outside} of {len(runs)} runs outside the tolerance: the endurance "
-                        "rests on the model" if outside else "\nevery run within the tolerance"),
+                     + (f"\n{outside} of {len(runs)} runs outside the tolerance: the power "
+                        "verdicts are judged on both" if outside
+                        else "\nevery run within the tolerance"),
                      fontsize=8, color=STYLE["limit"]["color"] if outside else "black")
         _legend_below(ap)
     ap.set_xlabel("measured power P (W), in the tunnel (as measured)", fontsize=9)
