@@ -276,6 +276,34 @@ def block_verdicts(study: Study, block: str) -> list[Verdict]:
     if not readings:
         return nominal
     others = [(r, {v.name: v for v in _block(study.on_reading(r), block)}) for r in readings]
+    return _judged_on_readings(nominal, others)
+
+
+def mission_file_verdicts(case: Case, plan: Any, limit: float | None,
+                          result: Any) -> list[Verdict]:
+    """A mission file's verdicts (``mission FILE``, not the case's own requirement) judged on
+    every reading of the case's disputed evidence, as ``check`` judges the case's mission.
+
+    ``plan`` the loaded mission, ``limit`` the reserve [fraction] or None for the file's own,
+    ``result`` its flight on the case as given. A reading the flight never meets (thrust
+    inside the tested airspeeds, no engine failure) leaves its value and is left out.
+    """
+    from tuflexperf.analysis.evidence import case_readings
+    from tuflexperf.analysis.mission import solve_mission
+
+    others = []
+    for reading in case_readings(case):
+        try:
+            flown = mission_verdicts(solve_mission(reading.case, plan, limit))
+        except NotAttainable:
+            flown = []
+        others.append((reading, {v.name: v for v in flown}))
+    return _judged_on_readings(mission_verdicts(result), others)
+
+
+def _judged_on_readings(nominal: list[Verdict],
+                        others: list[tuple[Any, dict[str, Verdict]]]) -> list[Verdict]:
+    """Each nominal verdict paired with its verdict on every reading that changes its value."""
     out = []
     for verdict in nominal:
         paired = []

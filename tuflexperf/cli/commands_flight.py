@@ -41,7 +41,12 @@ def mission(
 ) -> None:
     """Fly a mission with the battery model; charge at landing against the reserve."""
     from tuflexperf.analysis.mission import solve_mission
-    from tuflexperf.analysis.requirements import judged_block, mission_path, mission_verdicts
+    from tuflexperf.analysis.requirements import (
+        judged_block,
+        mission_file_verdicts,
+        mission_path,
+        mission_verdicts,
+    )
     from tuflexperf.io.mission import load_mission
 
     csv = output_file(csv_text, "--csv")
@@ -71,10 +76,10 @@ def mission(
 
         atomic_write_text(csv, render.history_csv(result.history))
     own = requirement is not None and Path(mission_file).resolve() == mission_path(case)
-    # the case's own mission is judged as check judges it (on every reading of disputed
-    # evidence); another file on this case alone
+    # the case's own mission is judged as check judges it, another file on every reading
+    # of the case's disputed evidence too
     verdicts = (judged_block(case, "mission", lambda: mission_verdicts(result)) if own
-                else mission_verdicts(result))
+                else mission_file_verdicts(case, plan, limit, result))
     render.show_mission(case, result, verdicts, csv, as_json)
     raise typer.Exit(0 if all(v.passed for v in verdicts) else 1)
 
