@@ -806,7 +806,11 @@ def test_solve_for_flown_as_a_plain_mission_lands_on_the_reserve(tmp_path: Path,
     plain.write_text(text.replace(old, f"time_min: {minutes!r}}}"))
     assert repr(minutes) in plain.read_text()
     code, again = tool_json(plain, "--case", case)
-    assert code == 0
+    # on the case as given it lands on the reserve; a reading of disputed evidence (the
+    # discharge runs' measured power) may land it lower: then UNPROVEN, exit 1
+    landing = next(r for r in again["results"] if r["name"] == "mission_landing_charge")
+    nominal = landing["readings"][0] if landing.get("readings") else landing
+    assert nominal["passed"] and code == (0 if landing["verdict"] == "PASS" else 1)
     assert again["landing_charge_fraction"] == pytest.approx(reserve, abs=1e-9)
     flown = fly(Reference(case), yaml.safe_load(plain.read_text())["segments"])
     assert flown.landing == pytest.approx(reserve, abs=1e-8)

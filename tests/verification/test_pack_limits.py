@@ -263,8 +263,10 @@ ENDURANCE_ROWS = [
 ]
 
 
-@pytest.mark.parametrize(("reference_v", "c_rate"), [(44.0, None), (47.3, None), (52.0, None),
-                                                     (47.3, 14)])
+# the reference voltage below and above the pack's: exhaustive variants of the 47.3 V case
+@pytest.mark.parametrize(("reference_v", "c_rate"), [
+    pytest.param(44.0, None, marks=pytest.mark.slow), (47.3, None),
+    pytest.param(52.0, None, marks=pytest.mark.slow), (47.3, 14)])
 def test_the_batch_flies_the_endurance_on_sagging_packs_as_the_single_case(
         tmp_path, reference_v, c_rate):
     """With a reference voltage the batch's endurance is the single case's mission, the packs

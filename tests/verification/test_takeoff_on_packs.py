@@ -150,7 +150,8 @@ def test_the_outside_audits_cases_fail(tmp_path) -> None:
     assert small["takeoff_distance_to_obstacle"].verdict == "FAIL"
 
 
-@pytest.mark.parametrize("catapult", [False, True])
+# the catapult's release on the packs: an exhaustive variant of the runway's
+@pytest.mark.parametrize("catapult", [False, pytest.param(True, marks=pytest.mark.slow)])
 def test_the_batch_takes_off_on_the_sagging_packs_as_the_single_case(tmp_path, catapult):
     rows = [("aircraft.mass_kg", 24.0), ("aircraft.mass_kg", 28.0),
             ("battery.capacity_ah", 2.0), ("battery.capacity_ah", 8.0),
