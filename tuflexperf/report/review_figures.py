@@ -394,10 +394,11 @@ def compare_verdicts(case: Case, analyses: Analyses) -> Any:
     ax.text(0.0, 0.28, "\n".join(wrap_text(line, 110) for line in lines),
             transform=ax.transAxes, va="top", ha="left", fontsize=8.5, family="monospace")
     passed = [all(v.passed for v in a.verdicts) for _, _, a, _ in drawn]
-    fig.suptitle("Configurations compared: "
-                 + "; ".join(f"{label} {'all met' if ok else 'NOT all met'}"
+    # one line per configuration: two long case names on one line ran off the page
+    fig.suptitle("Configurations compared\n"
+                 + "\n".join(wrap_text(f"{label}: {'all met' if ok else 'NOT all met'}", 110)
                              for (label, _, _, _), ok in zip(drawn, passed, strict=True)),
-                 fontsize=12)
+                 fontsize=11)
     return fig
 
 
