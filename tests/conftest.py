@@ -21,6 +21,20 @@ def _a_new_run(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(files, "_holding", [False])
 
 ROOT = Path(__file__).resolve().parent.parent
+
+
+def load_script(name: str) -> Any:
+    """``scripts/<name>.py`` imported as a module (registered under ``name``, so that the
+    dataclasses it defines resolve their own module)."""
+    import importlib.util
+    import sys
+
+    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault(name, module)
+    spec.loader.exec_module(module)
+    return module
 SHIPPED_CASE = ROOT / "requirements" / "tuflex.yaml"
 PASSING = ("--set", "requirements.endurance.min_flight_time_min=12")
 """The shipped case is UNPROVEN (exit 1): its endurance is 18.5 min on the power model and

@@ -8,24 +8,18 @@ until ``python scripts/docs_numbers.py`` is run again.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 from types import ModuleType
 
 import pytest
 
+from tests.conftest import load_script
+
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def _script() -> ModuleType:
-    path = ROOT / "scripts" / "docs_numbers.py"
-    spec = importlib.util.spec_from_file_location("docs_numbers", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("docs_numbers", module)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("docs_numbers")
 
 
 SCRIPT = _script()

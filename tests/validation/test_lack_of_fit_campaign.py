@@ -8,7 +8,6 @@ campaign's truth is a poly22: its fit must not be flagged.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import shutil
 from pathlib import Path
@@ -18,6 +17,7 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
+from tests.conftest import load_script
 from tuflexperf.cli import app
 from tuflexperf.io.schemas import PropulsionSchema
 
@@ -27,12 +27,7 @@ runner = CliRunner()
 
 
 def _generator() -> Any:
-    spec = importlib.util.spec_from_file_location("generate_campaign",
-                                                  ROOT / "scripts" / "generate_campaign.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("generate_campaign")
 
 
 def _fit(manifest: Path, out: Path) -> tuple[dict[str, Any], str, dict[str, Any]]:

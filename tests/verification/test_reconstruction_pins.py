@@ -80,14 +80,9 @@ def _assert_same_numbers(got, shipped) -> None:
 
 
 def _reconstruction_script():
-    import importlib.util
-    from pathlib import Path
+    from tests.conftest import load_script
 
-    path = Path(__file__).resolve().parents[2] / "scripts" / "reconstruct_tuflex.py"
-    spec = importlib.util.spec_from_file_location("reconstruct_tuflex", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("reconstruct_tuflex")
 
 
 def test_shipped_files_are_the_least_squares_optimum_and_its_analyses_are_the_tools():
