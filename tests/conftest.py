@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
+import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -21,6 +24,31 @@ def _a_new_run(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(files, "_holding", [False])
 
 ROOT = Path(__file__).resolve().parent.parent
+
+
+_OPENED: list[str] | None = None  # the files opened while files_opened() watches
+
+
+def _audit(event: str, args: tuple[Any, ...]) -> None:
+    if _OPENED is not None and event == "open" and args and isinstance(args[0],
+                                                                        (str, bytes, Path)):
+        _OPENED.append(str(args[0]))
+
+
+@contextlib.contextmanager
+def files_opened() -> Iterator[list[str]]:
+    """Every file this process opens inside the block (Python's audit hook sees each open):
+    the proof that a command reads what it says and nothing more."""
+    global _OPENED
+    opened: list[str] = []
+    _OPENED = opened
+    try:
+        yield opened
+    finally:
+        _OPENED = None
+
+
+sys.addaudithook(_audit)  # once per process: a hook cannot be removed
 
 
 def load_script(name: str) -> Any:

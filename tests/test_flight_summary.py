@@ -3,7 +3,6 @@ case lists the summary, and its flown power is a reading of the case (no log ope
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +11,7 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from tests.conftest import copy_shipped_case
+from tests.conftest import copy_shipped_case, files_opened
 from tuflexperf.analysis.flown_reading import flown_power_readings, model_power_w
 from tuflexperf.analysis.study import Study
 from tuflexperf.cli import app
@@ -121,16 +120,6 @@ def test_a_missing_or_bad_summary_is_bad_input(tmp_path: Path) -> None:
         load_case(case_file)
 
 
-_OPENED: list[str] = []
-_WATCHING: list[bool] = [False]
-
-
-def _audit(event: str, args: tuple) -> None:
-    if _WATCHING[0] and event == "open" and args and isinstance(args[0], (str, bytes, Path)):
-        _OPENED.append(str(args[0]))
-
-
-sys.addaudithook(_audit)
 
 
 def test_the_reading_opens_no_log(tmp_path: Path) -> None:
@@ -140,11 +129,7 @@ def test_the_reading_opens_no_log(tmp_path: Path) -> None:
     assert runner.invoke(app, ["flightlog", str(log), "--case", str(shipped), "--summary",
                                str(out)]).exit_code == 0
     case_file = _case_listing(tmp_path, out)
-    _OPENED.clear()
-    _WATCHING[0] = True
-    try:
+    with files_opened() as opened:
         (reading,) = flown_power_readings(load_case(case_file))
-    finally:
-        _WATCHING[0] = False
-    assert any(name.endswith("flight.yaml") for name in _OPENED)
-    assert not [name for name in _OPENED if str(log) in name]
+    assert any(name.endswith("flight.yaml") for name in opened)
+    assert not [name for name in opened if str(log) in name]

@@ -8,7 +8,6 @@ the batch alike; the reading flies the case on it; ``check`` opens no raw run.
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -16,7 +15,7 @@ import numpy as np
 import pytest
 import yaml
 
-from tests.conftest import SHIPPED_CASE, copy_shipped_case
+from tests.conftest import SHIPPED_CASE, copy_shipped_case, files_opened
 from tuflexperf.analysis import battery_fit
 from tuflexperf.analysis import endurance as endurance_module
 from tuflexperf.analysis.power_reading import (
@@ -284,16 +283,6 @@ def test_a_case_without_power_surfaces_corrects_the_fan_power_law(tmp_path: Path
 
 
 # --- check opens no raw run --------------------------------------------------------------
-_OPENED: list[str] = []
-_WATCHING: list[bool] = [False]
-
-
-def _audit(event: str, args: tuple) -> None:
-    if _WATCHING[0] and event == "open" and args and isinstance(args[0], (str, bytes, Path)):
-        _OPENED.append(str(args[0]))
-
-
-sys.addaudithook(_audit)
 
 
 def test_check_opens_no_discharge_run(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -303,17 +292,13 @@ def test_check_opens_no_discharge_run(monkeypatch: pytest.MonkeyPatch) -> None:
     battery_fit._characterisation_cache = battery_fit.BoundedCache()
     battery_fit._battery_cache = battery_fit.BoundedCache()
     endurance_module._model_cache = endurance_module.BoundedCache()
-    _OPENED.clear()
-    _WATCHING[0] = True
-    try:
+    with files_opened() as opened:
         case = load_case(SHIPPED_CASE)
         result = Study(case).endurance(0.5)
         (reading,) = measured_power_readings(case)
         Study(reading.case).endurance(0.5)
-    finally:
-        _WATCHING[0] = False
-    assert any(name.endswith("battery.yaml") for name in _OPENED)  # the hook does see opens
-    assert not [name for name in _OPENED if "endurance" in Path(name).parts
+    assert any(name.endswith("battery.yaml") for name in opened)  # the hook does see opens
+    assert not [name for name in opened if "endurance" in Path(name).parts
                 or name.endswith((".csv", ".csv.gz", ".mat"))]
     assert any("fit.runs: edf1_endurance_50.csv: measured 1328 W" in w
                for w in result.warnings)
