@@ -33,6 +33,11 @@ def required_probability(case: Case) -> float:
     return EXTRAPOLATION_REQUIRED_PROBABILITY if block is None else block.required_probability
 
 
+def thrust_blocks(case: Case) -> frozenset[str]:
+    """The case's requirement blocks that fly on the thrust (every one it has)."""
+    return frozenset(b for b in _BLOCKS if getattr(case.requirements, b) is not None)
+
+
 def extrapolation_readings(case: Case) -> tuple[Reading, ...]:
     """The case with each engine's thrust beyond its tested airspeeds lowered by
     ``z_p extrapolation_sd_n``; none where no engine states that error."""
@@ -40,8 +45,7 @@ def extrapolation_readings(case: Case) -> tuple[Reading, ...]:
     sds = [float(e.extrapolation_sd_n or 0.0) for e in propulsion.engines]
     if not any(sd > 0.0 for sd in sds):
         return ()
-    requirements = case.requirements
-    affects = {b for b in _BLOCKS if getattr(requirements, b) is not None}
+    affects = thrust_blocks(case)
     if not affects:
         return ()
     p = required_probability(case)
@@ -63,7 +67,7 @@ def extrapolation_readings(case: Case) -> tuple[Reading, ...]:
                "lower bound"),
         nominal_label="the thrust model as fitted",
         case=reading_case,
-        affects=frozenset(affects),
+        affects=affects,
         evidence=(f"{file} extrapolation_sd_n {per_engine}: beyond {low:g}-{high:g} m/s the "
                   f"thrust is lowered by {z:.2f} sd for P(met) >= {p:g} ({key})"),
         settle=" and ".join(beyond),

@@ -21,11 +21,9 @@ from __future__ import annotations
 import dataclasses
 from statistics import NormalDist
 
-from tuflexperf.analysis.extrapolation_reading import required_probability
+from tuflexperf.analysis.extrapolation_reading import required_probability, thrust_blocks
 from tuflexperf.analysis.readings import Reading
 from tuflexperf.io.case import Case
-
-_BLOCKS = ("takeoff", "envelope", "oei", "endurance", "mission")
 
 
 def model_form_readings(case: Case) -> tuple[Reading, ...]:
@@ -35,7 +33,7 @@ def model_form_readings(case: Case) -> tuple[Reading, ...]:
     sds = [float(e.model_form_sd_n or 0.0) for e in propulsion.engines]
     if not any(sd > 0.0 for sd in sds):
         return ()
-    affects = {b for b in _BLOCKS if getattr(case.requirements, b) is not None}
+    affects = thrust_blocks(case)
     if not affects:
         return ()
     p = required_probability(case)
@@ -54,7 +52,7 @@ def model_form_readings(case: Case) -> tuple[Reading, ...]:
         label=f"the thrust at its {100 * p:g} % lower bound for the surface's lack of fit",
         nominal_label="the thrust model as fitted",
         case=reading_case,
-        affects=frozenset(affects),
+        affects=affects,
         evidence=(f"{case.propulsion_path.name} engines[].lack_of_fit.model_form_rms_n "
                   f"{per_engine}: the poly22 misses its holds beyond their repeatability; "
                   f"thrust lowered by {z:.2f} x that error for P(met) >= {p:g}"),
