@@ -77,7 +77,7 @@ def show_margins(case: Any, rows: list[Any], notes: list[str], as_json: bool,
         return
     typer.echo(f"{case.name}  ({case.path})")
     typer.echo("limit value: the parameter's value (others nominal) where the requirement "
-               "just holds, nearest the nominal; sensitivity d(value)/d(parameter) by CasADi AD")
+               "just holds, nearest the nominal; sensitivity d(value)/d(parameter) at the nominal")
     typer.echo(f"order: {ORDER_RULE}")
     decimals = smallest_decimals([m.value for m in rows] + [m.limit_value for m in rows])
     texts = [(f"{m.value:.{decimals}f}",

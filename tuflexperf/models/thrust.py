@@ -15,6 +15,8 @@ from typing import Any, Literal
 from tuflexperf.models._math import Vectorizable, fmax, fmin, sqrt, where
 from tuflexperf.models.atmosphere import SEA_LEVEL_DENSITY_KG_M3
 
+_LARGEST = 1.7976931348623157e308  # the largest float
+
 POLY22_TERMS: tuple[str, ...] = ("p00", "p10", "p01", "p20", "p11", "p02")
 MAX_DELAY_S = 1.0
 """The longest dead time (and spool lag) a fan's model holds [s]: an EDF answers within tens
@@ -324,7 +326,8 @@ def least_throttle_reaching(
     )
     # f(1) >= 0 with no root <= 1 only happens by rounding when the demand is T(1) itself
     # within rounding of zero (1e-12 of the terms) the demand is T(1) itself (as the export's C)
-    full_ok = f_full >= -1e-12 * (abs(a) + abs(b) + abs(c))
+    # (a finite tolerance: an infinite demand, drag of a 1e308 C_D0, is never met at full)
+    full_ok = f_full >= -1e-12 * fmin(abs(a) + abs(b) + abs(c), _LARGEST)
     throttle = where(c >= 0.0, 0.0, where(root <= 1.0, root, where(full_ok, 1.0, best)))
     reached = where(c >= 0.0, 1.0, where(root <= 1.0, 1.0, where(full_ok, 1.0, 0.0)))
     return throttle, reached
