@@ -236,6 +236,9 @@ def provenance_lines(case: Any, measured: Any) -> list[str]:
                      f"{provenance_class(measured.source)}")
     else:
         lines.append("  test data    none (the thrust model is drawn alone)")
+    flights = getattr(case, "validation_flights", ())
+    lines.append("  flights      " + (", ".join(path_text(p.name) for p in flights)
+                                      + " (flight summaries)" if flights else "none"))
     lines.append(f"  atmosphere   ISA {case.atmosphere.altitude_m:g} m, "
                  f"dT {case.atmosphere.temperature_offset_k:+g} K, "
                  f"rho = {case.density_kg_m3:.4f} kg/m\u00b3")
