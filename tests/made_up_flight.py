@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-LEGS_M_S = (19.0, 22.0, 25.0, 28.0)  # level legs, calibrated airspeed [m/s]
+LEGS_M_S = (17.0, 20.0, 23.0, 26.0, 29.0)  # level legs, calibrated airspeed [m/s]
 LEG_S = 60.0
 TAKEOFF_S, CLIMB_S, DESCENT_S = 20.0, 15.0, 20.0  # on the ground before, climb, descent
 

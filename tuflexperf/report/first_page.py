@@ -70,9 +70,12 @@ def _word_colour(word: str) -> str:
 def _wrapped(text: str, width: int, indent: int, colour: str, bold: bool = False,
              column: int = 0) -> list[Line]:
     """``text`` wrapped to ``width`` characters, continuation lines indented further."""
-    parts = textwrap.wrap(text, max(20, width - indent), break_on_hyphens=False) or [""]
-    return [(Segment(" " * (indent if k == 0 else indent + 4) + part, colour, bold, column),)
-            for k, part in enumerate(parts)]
+    # the continuation's deeper indent counts against the width too (it ran 4 characters
+    # past the right margin)
+    parts = textwrap.wrap(text, max(20 + indent + 4, width), initial_indent=" " * indent,
+                          subsequent_indent=" " * (indent + 4),
+                          break_on_hyphens=False) or [" " * indent]
+    return [(Segment(part, colour, bold, column),) for part in parts]
 
 
 def verdict_lines(verdicts: list[Any], width: int,
