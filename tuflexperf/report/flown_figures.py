@@ -32,7 +32,7 @@ def draw_flown_against_model(ax: Any, flights: tuple[Any, ...], tolerance: float
 
     flown = np.concatenate([f.flown_power_w for f in flights])
     model = np.concatenate([f.model_power_w for f in flights])
-    top = 1.15 * float(max(flown.max(), model.max()))
+    top = 1.25 * float(max(flown.max(), model.max()))  # room for the labels right of a point
     span = np.array([0.0, top])
     ax.plot(span, span, color="black", linewidth=0.8, label="model = flown")
     ax.fill_between(span, (1 - tolerance) * span, (1 + tolerance) * span,
@@ -57,10 +57,11 @@ def draw_flown_against_model(ax: Any, flights: tuple[Any, ...], tolerance: float
     ax.grid(alpha=0.3)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), fontsize=7, ncols=1)
     judged = ratio is not None and not ratio["within_tolerance"]
+    # three short lines: the panel is as narrow as the discharge runs' beside it
     ax.set_title("electrical power: model against the validation flights\n"
                  f"{outside} of {sum(f.time_s.size for f in flights)} bins outside the "
-                 "tolerance" + (f"; x{ratio['ratio']:.3f} overall: judged on both"
-                                if judged else ""),
+                 "tolerance" + (f"; x{ratio['ratio']:.3f} overall:\nthe power verdicts are "
+                                "judged on both" if judged else ""),
                  fontsize=8, color=STYLE["limit"]["color"] if judged else "black")
 
 
@@ -86,21 +87,27 @@ def predicted_vs_flown(case: Any, analyses: Any) -> Any:
         name = f.log if len(flights) > 1 else "flown"
         ap.plot(v, f.flown_power_w[order], marker, color=colour, markersize=6,
                     label=f"{name}: mean U I per 1 m/s bin ({f.bins_kind or 'bins'})")
-        ap.plot(v, f.model_power_w[order], **{**STYLE["model"], "marker": "x"},
+        # several flights: each its own model line (its density and mass), in its colour
+        model = {**STYLE["model"], "marker": "x"} if len(flights) == 1 else {
+            "color": colour, "linestyle": "--", "linewidth": 1.2, "marker": "x"}
+        ap.plot(v, f.model_power_w[order], **model,
                 label=f"model at the bins ({f.log}: \u03c1 {f.density_kg_m3:.3f} kg/m\u00b3, "
-                f"{f.mass_kg:g} kg)" if len(flights) > 1 or k == 0 else None)
-        for vi, p, t in zip(v, f.flown_power_w[order], f.time_s[order], strict=True):
-            ap.annotate(f"{t:.0f} s", (vi, p), textcoords="offset points", xytext=(0, 7),
-                        ha="center", fontsize=6.5, color="0.35")
+                f"{f.mass_kg:g} kg)")
+        if len(flights) == 1:  # several flights' labels would sit on each other (the table)
+            for vi, p, t in zip(v, f.flown_power_w[order], f.time_s[order], strict=True):
+                ap.annotate(f"{t:.0f} s", (vi, p), textcoords="offset points", xytext=(0, 7),
+                            ha="center", fontsize=6.5, color="0.35")
         ar.plot(v, f.ratio[order], marker, color=colour, markersize=6, linestyle="-",
                 linewidth=0.8, label=f"{name}: x{f.mean_ratio:.3f} time-weighted")
-        ax.plot(v, f.model_throttle[order], **{**STYLE["model"], "marker": "x"},
-                label="throttle the model needs (level flight)" if k == 0 else None)
+        ax.plot(v, f.model_throttle[order], **model,
+                label="throttle the model needs (level flight)"
+                + (f", {f.log}" if len(flights) > 1 else ""))
         if np.any(np.isfinite(f.flown_throttle)):
             ax.plot(v, f.flown_throttle[order], marker, color=colour, markersize=6,
                     linestyle="none", label=f"{name}: throttle flown (bin mean)")
     ap.set_ylabel("electrical power P (W), all packs")
-    ap.set_xlabel("calibrated airspeed (m/s), 1 m/s bins (label: time flown)")
+    ap.set_xlabel("calibrated airspeed (m/s), 1 m/s bins"
+                  + (" (label: time flown)" if len(flights) == 1 else ""))
     ap.set_ylim(bottom=0.0, top=1.15 * ap.get_ylim()[1])
     ap.grid(alpha=0.3)
     ap.legend(loc="lower right", fontsize=7)
