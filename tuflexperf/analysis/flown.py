@@ -459,11 +459,16 @@ def reduce_flight(log: FlightLog, airborne_airspeed_m_s: float = DEFAULT_AIRBORN
             notes.append("no throttle logged (e.g. RC pass-through): throttle per bin is n/a")
         climb = climb_rate_at(log, t, notes)
         current = power_at(packs, t, "current_a")
-        bins = speed_bins(v, weight, power, throttle)
-        amps = {b.airspeed_m_s: b.power_w for b in speed_bins(v, weight, current, throttle)}
-        bins = tuple(replace(b, current_a=amps.get(b.airspeed_m_s, np.nan)) for b in bins)
+        def with_current(weights: np.ndarray) -> tuple[SpeedBin, ...]:
+            # the mean current per bin, for the autopilot hand-off (the same weights)
+            amps = {b.airspeed_m_s: b.power_w for b in speed_bins(v, weights, current,
+                                                                   throttle)}
+            return tuple(replace(b, current_a=amps.get(b.airspeed_m_s, np.nan))
+                         for b in speed_bins(v, weights, power, throttle))
+
+        bins = with_current(weight)
         is_level = np.abs(climb) < LEVEL_CLIMB_M_S
-        level = speed_bins(v, np.where(is_level, weight, 0.0), power, throttle)
+        level = with_current(np.where(is_level, weight, 0.0))
         if mass_kg is not None:
             corrected_power = power - mass_kg * G * climb / climb_efficiency
             corrected = speed_bins(v, np.where(np.isfinite(climb), weight, 0.0),

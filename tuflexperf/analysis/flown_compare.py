@@ -138,7 +138,7 @@ def compare_with_case(case: Any, log: FlightLog, flown: FlownResult,
                      "flown_power_w": b.power_w, "predicted_power_w": float(p),
                      "ratio": float(b.power_w / p) if np.isfinite(p) and p > 0 else None,
                      "flown_throttle": b.throttle, "predicted_throttle": float(x),
-                     "time_s": b.time_s, "bins": which})
+                     "flown_current_a": b.current_a, "time_s": b.time_s, "bins": which})
     if np.any(~np.isfinite(throttle) & ~below):
         notes.append("the model holds no level flight at some flown airspeeds (beyond full "
                      "throttle): n/a there")
@@ -184,26 +184,35 @@ def autopilot_handoff(case: Any, flown: FlownResult, notes: list[str]) -> dict[s
     """
     from tuflexperf.analysis.endurance import solve_best
     from tuflexperf.errors import InputError, NotAttainable
-    from tuflexperf.models.aircraft import EAS_REFERENCE_DENSITY_KG_M3
 
     if case.battery_path is None:
         notes.append("autopilot hand-off: the case has no battery file")
         return None
     try:
-        best = solve_best(case).endurance
+        best = solve_best(case)
     except (NotAttainable, InputError) as exc:
         notes.append(f"autopilot hand-off: no best-endurance point ({exc})")
         return None
-    eas = best.airspeed_m_s * float(np.sqrt(case.density_kg_m3 / EAS_REFERENCE_DENSITY_KG_M3))
-    out: dict[str, Any] = {
-        "airspeed_eas_m_s": eas, "airspeed_true_m_s": best.airspeed_m_s,
-        "throttle": best.throttle, "model_power_w": best.electrical_power_w * best.engines,
-        "model_current_a": best.pack_current_a * best.engines,
-        "flown_power_w": None, "flown_current_a": None,
-    }
-    label = float(np.floor(eas + 0.5))
-    held = next((b for b in flown.bins if b.airspeed_m_s == label), None)
+    out = handoff_point(case, best)
+    held = next((b for b in flown.bins if b.airspeed_m_s == out["bin_m_s"]), None)
     if held is not None:
         out["flown_power_w"] = held.power_w
         out["flown_current_a"] = held.current_a
     return out
+
+
+def handoff_point(case: Any, best: Any) -> dict[str, Any]:
+    """The model's side of the hand-off from ``endurance``'s best
+    (:class:`~tuflexperf.analysis.endurance.BestResult`): its airspeed as EAS [m/s] and
+    true [m/s], its throttle, the power [W] and pack current [A] of all engines, and the
+    1 m/s bin [m/s] that holds it (the flown side, ``None`` until a flight fills it)."""
+    from tuflexperf.models.aircraft import EAS_REFERENCE_DENSITY_KG_M3
+
+    point = best.endurance
+    eas = point.airspeed_m_s * float(np.sqrt(case.density_kg_m3 / EAS_REFERENCE_DENSITY_KG_M3))
+    return {
+        "airspeed_eas_m_s": eas, "airspeed_true_m_s": point.airspeed_m_s,
+        "throttle": point.throttle, "model_power_w": point.electrical_power_w * point.engines,
+        "model_current_a": point.pack_current_a * point.engines,
+        "bin_m_s": float(np.floor(eas + 0.5)), "flown_power_w": None, "flown_current_a": None,
+    }

@@ -11,6 +11,7 @@ limits (ground roll, throttle), ``value - limit`` for lower limits (endurance).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -184,10 +185,29 @@ def _endurance(study: Study) -> Verdict:
     try:
         result = study.endurance(requirement.throttle)
     except NotAttainable as exc:
-        return Verdict(
+        verdict = Verdict(
             "flight_endurance", None, requirement.min_flight_time_min, "min", "min", str(exc)
         )
-    return endurance_verdict(requirement, result)
+    else:
+        verdict = endurance_verdict(requirement, result)
+    return _with_flown_power(study.case, verdict)
+
+
+def _with_flown_power(case: Case, verdict: Verdict) -> Verdict:
+    """The validation flights' flown/predicted power beside the endurance verdict (its JSON's
+    ``flown_power``, and a note), within the tolerance or not (issue 45 item 3)."""
+    from tuflexperf.analysis.flown_reading import (
+        flown_flights,
+        flown_power_note,
+        flown_power_ratio,
+    )
+
+    ratio = flown_power_ratio(flown_flights(case)) if case.validation_flights else None
+    if ratio is None:
+        return verdict
+    warnings = [*verdict.details.get("warnings", []), flown_power_note(ratio)]
+    return dataclasses.replace(verdict, details={**verdict.details, "warnings": warnings,
+                                                 "flown_power": ratio})
 
 
 def endurance_verdict(requirement: Any, result: Any) -> Verdict:

@@ -11,16 +11,18 @@ never opened again)::
     mass_kg: 18.0
     airborne_s: 612.4
     energy_wh: 98.1
-    bins:                             # level-flight (else all-flight) 1 m/s airspeed bins
+    bins_kind: level-flight           # level-flight bins where any holds 10 s, else all-flight
+    bins:                             # 1 m/s airspeed bins
       - {airspeed_m_s: 18, true_airspeed_m_s: 18.3, time_s: 42.0, flown_power_w: 980,
-         predicted_power_w: 850, predicted_throttle: 0.41}
+         predicted_power_w: 850, predicted_throttle: 0.41, flown_throttle: 0.45,
+         flown_current_a: 22.1}
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, ClassVar
+from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import Field
 
@@ -36,6 +38,9 @@ class FlownBinSchema(StrictModel):
     flown_power_w: Positive
     predicted_power_w: Positive
     predicted_throttle: Annotated[float, Field(ge=0, le=1)]
+    # the log's own where it has them (no throttle stream, no current: absent)
+    flown_throttle: Annotated[float, Field(ge=0, le=1)] | None = None
+    flown_current_a: Annotated[float, Field(gt=0)] | None = None
 
 
 class FlightSummarySchema(StrictModel):
@@ -49,6 +54,7 @@ class FlightSummarySchema(StrictModel):
     mass_kg: Positive
     airborne_s: Annotated[float, Field(ge=0)]
     energy_wh: Annotated[float, Field(ge=0)] | None = None
+    bins_kind: Literal["level-flight", "all-flight"] | None = None
     bins: Annotated[list[FlownBinSchema], Field(min_length=1)]
 
 
@@ -86,20 +92,29 @@ def flight_summary_text(log_path: Path, log_sha256: str, comparison: Any,
 
     import yaml
 
+    def logged(value: Any, low: float, high: float) -> float | None:
+        # a stream the log lacks is NaN in the comparison: absent from the summary
+        ok = value is not None and math.isfinite(float(value)) and low <= float(value) <= high
+        return float(value) if ok else None
+
     bins = [{"airspeed_m_s": float(b["airspeed_m_s"]),
              "true_airspeed_m_s": float(b["true_airspeed_m_s"]),
              "time_s": float(b["time_s"]), "flown_power_w": float(b["flown_power_w"]),
              "predicted_power_w": float(b["predicted_power_w"]),
-             "predicted_throttle": float(b["predicted_throttle"])}
+             "predicted_throttle": float(b["predicted_throttle"]),
+             "flown_throttle": logged(b.get("flown_throttle"), 0.0, 1.0),
+             "flown_current_a": logged(b.get("flown_current_a"), 1e-9, math.inf)}
             for b in comparison.bins
             if b.get("ratio") is not None and math.isfinite(float(b["predicted_power_w"]))
             and float(b["predicted_power_w"]) > 0 and float(b["flown_power_w"]) > 0]
     if not bins:
         return None
+    bins = [{k: v for k, v in b.items() if v is not None} for b in bins]
     data = {"log": log_path.name, "log_sha256": log_sha256, "power_model": comparison.power_model,
             "density_kg_m3": float(comparison.density_kg_m3), "mass_kg": float(comparison.mass_kg),
             "airborne_s": float(airborne_s),
-            "energy_wh": float(energy_wh) if energy_wh is not None else None, "bins": bins}
+            "energy_wh": float(energy_wh) if energy_wh is not None else None,
+            "bins_kind": comparison.bins[0]["bins"], "bins": bins}
     return ("# written by `tuflexperf flightlog --summary`: the flown power beside the case's "
             "model;\n# a case lists it under validation: {flights: [...]}\n"
             + yaml.safe_dump(data, sort_keys=False, width=100))

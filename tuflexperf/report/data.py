@@ -522,6 +522,8 @@ class Analyses:
     # --compare: (label, case) of each other configuration, and once compared() has solved
     # them (in whichever process draws a comparable page first) (label, case, analyses)
     compare: list[tuple[str, Any]] = field(default_factory=list)
+    # the case's validation flights (analysis.flown_reading.flown_flights), read once
+    flights: tuple[Any, ...] = ()
     _others: list[tuple[str, Any, Any]] | None = field(default=None, repr=False)
 
     @property
@@ -566,6 +568,10 @@ def run_analyses(study: Study | Case) -> Analyses:
     else:
         notes.append("the case has no envelope requirement: trim and OEI are not drawn")
     analyses = Analyses(verdicts, takeoff, takeoff_note, trim, oei, notes=notes, study=study)
+    if case.validation_flights:  # summaries only: no log is opened
+        from tuflexperf.analysis.flown_reading import flown_flights
+
+        analyses.flights = flown_flights(case)
     _performance(study, analyses)
     _thrust_bands(study, analyses)
     _mission(study, analyses)
@@ -743,6 +749,11 @@ def input_caveats(case: Case, measured: Measured) -> list[str]:
         if said in CAVEAT_CLASSES:
             caveats.append(f"{role} {path.name}: {said} (its header says so), not measured: "
                            "the verdicts above rest on it")
+    if not case.validation_flights:  # a board asks first whether it has flown
+        caveats.append("no flight log: the case lists no validation.flights, so no power "
+                       "or endurance here is checked against a flight and the page "
+                       "\"predicted vs flown\" is left out (flightlog LOG --case CASE "
+                       "--summary FILE writes one)")
     return caveats + list(getattr(measured, "provenance", []))
 
 

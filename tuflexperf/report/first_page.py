@@ -70,9 +70,12 @@ def _word_colour(word: str) -> str:
 def _wrapped(text: str, width: int, indent: int, colour: str, bold: bool = False,
              column: int = 0) -> list[Line]:
     """``text`` wrapped to ``width`` characters, continuation lines indented further."""
-    parts = textwrap.wrap(text, max(20, width - indent), break_on_hyphens=False) or [""]
-    return [(Segment(" " * (indent if k == 0 else indent + 4) + part, colour, bold, column),)
-            for k, part in enumerate(parts)]
+    # the continuation's deeper indent counts against the width too (it ran 4 characters
+    # past the right margin)
+    parts = textwrap.wrap(text, max(20 + indent + 4, width), initial_indent=" " * indent,
+                          subsequent_indent=" " * (indent + 4),
+                          break_on_hyphens=False) or [" " * indent]
+    return [(Segment(part, colour, bold, column),) for part in parts]
 
 
 def verdict_lines(verdicts: list[Any], width: int,
@@ -236,6 +239,9 @@ def provenance_lines(case: Any, measured: Any) -> list[str]:
                      f"{provenance_class(measured.source)}")
     else:
         lines.append("  test data    none (the thrust model is drawn alone)")
+    flights = getattr(case, "validation_flights", ())
+    lines.append("  flights      " + (", ".join(path_text(p.name) for p in flights)
+                                      + " (flight summaries)" if flights else "none"))
     lines.append(f"  atmosphere   ISA {case.atmosphere.altitude_m:g} m, "
                  f"dT {case.atmosphere.temperature_offset_k:+g} K, "
                  f"rho = {case.density_kg_m3:.4f} kg/m\u00b3")

@@ -63,7 +63,7 @@ def predicted_vs_measured(case: Case, analyses: Analyses, measured: Measured) ->
 
     views(analyses)
     fig = new_figure()
-    at, ap, af = fig.subplots(1, 3, width_ratios=[1.0, 1.0, 0.55])
+    at, ap, af = fig.subplots(1, 3, width_ratios=[1.0, 1.0, 1.0 if analyses.flights else 0.55])
     ref = case.propulsion.reference_density_kg_m3
     points, model = measured.points, measured.points_model_n
     if points is None or model is None or points.thrust_n.size == 0:
@@ -132,13 +132,18 @@ def predicted_vs_measured(case: Case, analyses: Analyses, measured: Measured) ->
     ap.set_xlabel("measured power P (W), in the tunnel (as measured)", fontsize=9)
     ap.set_ylabel("model power P (W), same throttle and airspeed", fontsize=9)
     ap.grid(alpha=0.3)
-    af.axis("off")
-    af.set_xticks([])  # a text panel: no axis to label
-    af.set_yticks([])
-    af.text(0.0, 1.0, wrap_text(
-        "flown power: no flight log is given to report (the flightlog command compares a "
-        "log's power with this case's model bin by bin)", 34),
-        transform=af.transAxes, va="top", ha="left", fontsize=9, color="0.3")
+    if analyses.flights:
+        from tuflexperf.report.flown_figures import draw_flown_against_model
+
+        draw_flown_against_model(af, analyses.flights, RUN_POWER_TOLERANCE)
+    else:
+        af.axis("off")
+        af.set_xticks([])  # a text panel: no axis to label
+        af.set_yticks([])
+        af.text(0.0, 1.0, wrap_text(
+            "flown power: no flight log is given (the case lists no validation.flights; "
+            "flightlog LOG --case CASE --summary FILE writes one)", 34),
+            transform=af.transAxes, va="top", ha="left", fontsize=9, color="0.3")
     fig.suptitle(f"{case.name}: predicted against measured, on one basis\n"
                  f"{basis_note(measured)}", fontsize=11)
     return fig
