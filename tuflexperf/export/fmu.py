@@ -45,7 +45,6 @@ from tuflexperf.export.model import (
 )
 from tuflexperf.io import swap
 
-FMU_NAME = "tfp_thrust.fmu"
 MODEL_IDENTIFIER = "tfp_thrust"
 DEFAULT_SAMPLE_TIME_S = 0.001
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")

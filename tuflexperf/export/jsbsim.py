@@ -43,8 +43,6 @@ from tuflexperf.export.model import (
 )
 from tuflexperf.models.thrust import POLY22_TERMS, max_model_airspeed_m_s
 
-SYSTEM_FILE = "tfp_thrust_system.xml"
-REACTIONS_FILE = "tfp_thrust_reactions.xml"
 #: 1 lbf in N (international pound x standard gravity, exact).
 LBF_N = 0.45359237 * 9.80665
 #: 1 slug/ft^3 in kg/m^3 (1 slug = 1 lbf s^2 / ft).

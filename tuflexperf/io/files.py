@@ -193,11 +193,6 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
         raise
 
 
-def atomic_write_bytes(path: Path | str, data: bytes) -> None:
-    """Write ``data`` to ``path`` via a temporary file and a rename: never half-written."""
-    write_files_atomically({Path(path): data})
-
-
 def atomic_write_text(path: Path | str, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` via a temporary file and a rename."""
     write_files_atomically({Path(path): text})

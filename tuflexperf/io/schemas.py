@@ -132,16 +132,11 @@ class AircraftSchema(StrictModel):
             )
         # the stall EAS is the same at every density, so the check belongs to the file
         liftoff = self.takeoff.liftoff_speed_m_s
-        if liftoff is not None:
-            stall = math.sqrt(
-                2.0 * self.mass_kg * G0_M_S2
-                / (EAS_REFERENCE_DENSITY_KG_M3 * self.wing_area_m2 * self.cl_max)
+        if liftoff is not None and liftoff < stall_eas:
+            raise ValueError(
+                f"takeoff.liftoff_speed_m_s: {liftoff:g} m/s (EAS) is below the stall speed "
+                f"{stall_eas:.2f} m/s EAS (mass_kg, wing_area_m2, cl_max); lift-off needs >= stall"
             )
-            if liftoff < stall:
-                raise ValueError(
-                    f"takeoff.liftoff_speed_m_s: {liftoff:g} m/s (EAS) is below the stall speed "
-                    f"{stall:.2f} m/s EAS (mass_kg, wing_area_m2, cl_max); lift-off needs >= stall"
-                )
         return self
 
 
@@ -673,28 +668,8 @@ class Case:
 
 
 def aircraft_from_schema(schema: AircraftSchema) -> Aircraft:
-    to = schema.takeoff
-    return Aircraft(
-        name=schema.name,
-        mass_kg=schema.mass_kg,
-        wing_area_m2=schema.wing_area_m2,
-        cd0=schema.cd0,
-        k=schema.k,
-        cl_max=schema.cl_max,
-        takeoff=TakeoffConfig(
-            cl_ground=to.cl_ground,
-            rolling_friction=to.rolling_friction,
-            liftoff_speed_m_s=to.liftoff_speed_m_s,
-            cd0_ground=to.cd0_ground,
-            k_ground=to.k_ground,
-            liftoff_speed_factor=to.liftoff_speed_factor,
-            rotation_time_s=to.rotation_time_s,
-            transition_load_factor=to.transition_load_factor,
-        ),
-        launch=schema.launch,
-        launch_speed_m_s=schema.launch_speed_m_s,
-        launch_energy_j=schema.launch_energy_j,
-    )
+    """The model's aircraft of a validated file (its keys are the dataclasses' fields)."""
+    return Aircraft(**{**dict(schema), "takeoff": TakeoffConfig(**dict(schema.takeoff))})
 
 
 def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
@@ -702,25 +677,17 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
     engines = tuple(
         Engine(
             name=e.name,
-            coefficients={term: getattr(e.coefficients, term) for term in POLY22_TERMS},
+            coefficients=e.coefficients.model_dump(),
             throttle_scale=scale,
-            covariance=(
-                tuple(tuple(float(c) for c in row) for row in e.covariance)
-                if e.covariance is not None
-                else None
-            ),
+            covariance=(None if e.covariance is None
+                        else tuple(tuple(float(c) for c in row) for row in e.covariance)),
             residual_sd_n=e.residual_sd_n,
             extrapolation_sd_n=e.extrapolation_sd_n,
             extrapolation_distance_m_s=e.extrapolation_distance_m_s,
             extrapolation_worst_n=e.extrapolation_worst_n,
-            model_form_sd_n=(e.lack_of_fit.model_form_rms_n if e.lack_of_fit is not None
-                             else None),
+            model_form_sd_n=None if e.lack_of_fit is None else e.lack_of_fit.model_form_rms_n,
             windmilling_drag_coefficient=e.windmilling_drag_coefficient,
-            power_coefficients=(
-                {term: getattr(e.power.coefficients, term) for term in POLY22_TERMS}
-                if e.power is not None
-                else None
-            ),
+            power_coefficients=None if e.power is None else e.power.coefficients.model_dump(),
         )
         for e in schema.engines
     )
