@@ -6,10 +6,15 @@ from __future__ import annotations
 import ctypes
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from tuflexperf.export.c_code import DELAY_CAPACITY
 from tuflexperf.export.cbuild import find_compiler, run_compiler
+from tuflexperf.export.model import quadratic_coefficients
 from tuflexperf.io import swap
+from tuflexperf.models.thrust import Propulsion, density_ratio, least_throttle_reaching
 
 #: Stricter than the contract's ``-std=c99 -Wall -Werror``: the generated code must pass these.
 STRICT_CFLAGS: tuple[str, ...] = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2")
@@ -189,3 +194,22 @@ class CThrustModel:
         buffer = CDelay()
         code = self.lib.tfp_delay_init(ctypes.byref(buffer), sample_time_s, initial_throttle)
         return code, buffer
+
+
+def throttle_for_thrust(
+    propulsion: Propulsion, total_thrust_n_: Any, airspeed_m_s: Any, density_kg_m3: Any
+) -> tuple[Any, Any]:
+    """Least common throttle fraction whose total thrust reaches ``total_thrust_n_`` (numpy).
+
+    Returns ``(throttle, reached)``; see :func:`least_throttle_reaching`. Vectorised reference
+    for the exported C and CasADi inverses (same coefficients, same steps).
+    """
+    q = quadratic_coefficients(propulsion)
+    v = np.asarray(airspeed_m_s, dtype=float)
+    s = np.asarray(density_ratio(propulsion, np.asarray(density_kg_m3, dtype=float)), dtype=float)
+    a = s * q["qa"]
+    b = s * (q["qb0"] + q["qb1"] * v)
+    c = s * (q["qc0"] + q["qc1"] * v + q["qc2"] * v * v) - np.asarray(total_thrust_n_, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        throttle, reached = least_throttle_reaching(a, b, c)
+    return np.asarray(throttle, dtype=float), np.asarray(reached, dtype=bool)

@@ -300,27 +300,6 @@ def thrust_step_function(propulsion: Propulsion, sample_time_s: float) -> Any:
 STEP_SAMPLE_TIME_S = 0.001
 
 
-def throttle_for_thrust(
-    propulsion: Propulsion, total_thrust_n_: Any, airspeed_m_s: Any, density_kg_m3: Any
-) -> tuple[Any, Any]:
-    """Least common throttle fraction whose total thrust reaches ``total_thrust_n_`` (numpy).
-
-    Returns ``(throttle, reached)``; see :func:`least_throttle_reaching`. Vectorised reference
-    for the exported C and CasADi inverses (same coefficients, same steps).
-    """
-    import numpy as np
-
-    q = quadratic_coefficients(propulsion)
-    v = np.asarray(airspeed_m_s, dtype=float)
-    s = np.asarray(density_ratio(propulsion, np.asarray(density_kg_m3, dtype=float)), dtype=float)
-    a = s * q["qa"]
-    b = s * (q["qb0"] + q["qb1"] * v)
-    c = s * (q["qc0"] + q["qc1"] * v + q["qc2"] * v * v) - np.asarray(total_thrust_n_, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        throttle, reached = least_throttle_reaching(a, b, c)
-    return np.asarray(throttle, dtype=float), np.asarray(reached, dtype=bool)
-
-
 def inverse_function(propulsion: Propulsion) -> Any:
     """CasADi ``tfp_throttle_for_thrust(total_thrust_n, airspeed_m_s, density_kg_m3)``.
 
