@@ -65,38 +65,36 @@ def _unnamed_os_error_place() -> str:
 def guarded(callback: Any) -> Any:
     """Turn InputError into exit 2 and NotAttainable into exit 1, one line on stderr each."""
 
+    def bad_input(*lines: str) -> typer.Exit:
+        """Exit 2 with each line on stderr (an interrupt first stays the interrupt)."""
+        _unless_interrupted()
+        for line in lines:
+            sys.stderr.write(f"tuflexperf: error: {line}\n")
+        return typer.Exit(2)
+
     @functools.wraps(callback)
     def run(*args: Any, **kwargs: Any) -> Any:
         try:
             return callback(*args, **kwargs)
-        except InputError as exc:
-            _unless_interrupted()
-            for problem in exc.problems:  # every problem found, each on its own line
-                sys.stderr.write(f"tuflexperf: error: {one_line(problem)}\n")
-            raise typer.Exit(2) from None
+        except InputError as exc:  # every problem found, each on its own line
+            raise bad_input(*(one_line(problem) for problem in exc.problems)) from None
         except BrokenPipeError:  # a pipe of the command's own (io.streams guards stdout):
             # no verdict was given, so none is claimed (exit 0 here "passed" `check | head`)
             sys.stderr.write("tuflexperf: error: the output's reader went away\n")
             raise typer.Exit(2) from None
         except OverflowError:  # a number of the input far beyond any aircraft's
-            _unless_interrupted()
-            sys.stderr.write("tuflexperf: error: a number of the input is too large to compute "
-                             "with (floating-point overflow); check the magnitudes of the "
-                             "input files' keys and of the flags\n")
-            raise typer.Exit(2) from None
+            raise bad_input("a number of the input is too large to compute with (floating-"
+                            "point overflow); check the magnitudes of the input files' keys "
+                            "and of the flags") from None
         except OSError as exc:  # a file the OS refuses (name too long, disk full, ...)
-            _unless_interrupted()
-            sys.stderr.write(f"tuflexperf: error: {os_error_text(exc)}\n")
-            raise typer.Exit(2) from None
+            raise bad_input(os_error_text(exc)) from None
         except RuntimeError as exc:
             # pathlib's resolve() of a symbolic link that leads back to itself (Python < 3.13;
             # later versions raise the OSError above)
             if not str(exc).startswith(_SYMLINK_LOOP):
                 raise
-            _unless_interrupted()
             where = str(exc).removeprefix(_SYMLINK_LOOP).strip("'\"")
-            sys.stderr.write(f"tuflexperf: error: {one_line(where)}: symbolic link loop\n")
-            raise typer.Exit(2) from None
+            raise bad_input(f"{one_line(where)}: symbolic link loop") from None
         except NotAttainable as exc:
             if kwargs.get("as_json"):  # SPEC 5: one JSON object on exit 1 as well
                 command = callback.__name__.removesuffix("_command")

@@ -23,36 +23,19 @@ from typing import Any
 from tuflexperf.errors import InputError
 from tuflexperf.io import swap
 from tuflexperf.io.artefacts import (  # noqa: F401 - re-exported: the writers' checks
-    _UNKNOWN,
-    ARTEFACT_WRITERS,
     FIT_PROPULSION_HEADER,
-    FLIGHT_CSV_COLUMNS,
     FLIGHT_PNG_SOFTWARE,
     MARKER,
-    MISSION_CSV_COLUMNS,
-    MISSION_CSV_ENGINE_COLUMNS,
-    PNG_SOFTWARE,
-    REQUIREMENT_NAMES,
     SEAL,
     SWEEP_PNG_SOFTWARE,
-    WRITTEN_XATTR,
     _mark_written,
-    artefact_of,
-    fit_yaml_kind,
     output_path,
     refuse_foreign_files,
     seal_intact,
     sealed,
     sha256_of,
-    written_mark,
 )
-from tuflexperf.io.inputs import (  # noqa: F401 - re-exported: every reader's, named here too
-    MAX_RUN_BYTES,
-    MAX_TABLE_BYTES,
-    MAX_YAML_BYTES,
-    check_input_file,
-    why_not_a_file,
-)
+from tuflexperf.io.inputs import why_not_a_file  # noqa: F401 - re-exported: every reader's
 
 
 def user_umask() -> int:

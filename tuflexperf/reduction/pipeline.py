@@ -117,9 +117,6 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
     )
 
 
-# are 2.5 m/s or more apart; the measured means of one set point scatter by a few 0.1 m/s)
-
-
 def _fit_inputs(input_path: Path) -> list[Path]:
     """Every file ``fit`` reads: the input and, for a campaign, each run file it names."""
     inputs = [input_path]
