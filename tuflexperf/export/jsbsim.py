@@ -41,10 +41,9 @@ from tuflexperf.export.model import (
     model_notes,
     xml_comment,
 )
+from tuflexperf.io.vendor import LBF_N
 from tuflexperf.models.thrust import POLY22_TERMS, max_model_airspeed_m_s
 
-#: 1 lbf in N (international pound x standard gravity, exact).
-LBF_N = 0.45359237 * 9.80665
 #: 1 slug/ft^3 in kg/m^3 (1 slug = 1 lbf s^2 / ft).
 SLUG_FT3_KG_M3 = LBF_N / 0.3048 / 0.3048**3
 FT_M = 0.3048

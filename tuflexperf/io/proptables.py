@@ -43,10 +43,10 @@ from tuflexperf.io.inputs import (
     why_not_a_file,
 )
 from tuflexperf.io.runs import ThrustTable
+from tuflexperf.io.vendor import LBF_N
 from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, load_model
 
 MPH_M_S = 0.44704  # exact (1609.344 m / 3600 s)
-LBF_N = 0.45359237 * 9.80665  # exact
 ISA_SEA_LEVEL_DENSITY_KG_M3 = 1.225
 # the largest propellers are ~6 m across; 1e100 m overflowed far from the file (outside audit)
 Diameter = Annotated[float, Field(gt=0, le=10.0)]

@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from tuflexperf.errors import InputError
 from tuflexperf.io.vendor import (
     VendorSettings,
+    numeric_cells,
     read_vendor_columns,
     repeated_columns,
     repeated_header_error,
@@ -200,13 +201,11 @@ def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
         if raw.dtype.kind in "biuf":
             columns[name] = raw.to_numpy(dtype=float)
             continue
-        numeric = pd.to_numeric(raw, errors="coerce")
-        bad = numeric.isna() & raw.notna() & (raw.astype(str).str.strip() != "")
-        if bad.any():
-            row = int(np.flatnonzero(bad.to_numpy())[0])
-            bad_cells[name] = (row + 2, str(raw.iloc[row]))  # +2: header line, 1-based
-            continue  # only an error if the column is needed
-        columns[name] = numeric.to_numpy(dtype=float)
+        values, bad = numeric_cells(raw)
+        if bad is not None:
+            bad_cells[name] = bad  # only an error if the column is needed
+        else:
+            columns[name] = values
     return columns, bad_cells
 
 
