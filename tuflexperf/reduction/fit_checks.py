@@ -260,7 +260,10 @@ def tested_range(speeds: dict[str, list[float]], where: str) -> list[float]:
             + "): one propulsion file has one tested airspeed range")
     return [low, high]
 
-RANGE_NOTE_M_S = 1.0  # engines' tested ends further apart than this are said (set points
+
+# engines' tested ends further apart than this are said (set points are 2.5 m/s or more
+# apart; the measured means of one set point scatter by a few 0.1 m/s)
+RANGE_NOTE_M_S = 1.0
 
 
 def tested_range_notes(speeds: dict[str, list[float]]) -> list[str]:
