@@ -113,7 +113,7 @@ def guarded(callback: Any) -> Any:
 def repeated_option(params: Iterable[Any], args: list[str]) -> tuple[Any, list[str]] | None:
     """The first option of ``params`` that takes one value and that ``args`` give more than
     once, with the values given, or None (click keeps the last silently: `--throttle 0.5
-    --throttle 0.6` flew 0.6; outside audit). A flag said twice means the same: allowed."""
+    --throttle 0.6` flies 0.6). A flag said twice means the same: allowed."""
     by_name = {name: p for p in params if getattr(p, "param_type_name", "") == "option"
                and not (p.multiple or p.count or p.is_flag)
                for name in (*p.opts, *p.secondary_opts)}
@@ -153,7 +153,7 @@ def refuse_repeated(app: typer.Typer, args: list[str]) -> None:
 
 def refuse_empty(args: list[str]) -> None:
     """Exit 2 naming an option (or argument) given an empty value: ``--case=`` or ``--case ''``
-    became the path '.', reported as "is a directory" (outside audit)."""
+    is not the path '.' ("is a directory")."""
     for k, token in enumerate(args):
         if token == "--":
             return
@@ -177,8 +177,7 @@ def case_hint(message: str, argv: list[str] | None) -> str:
     args = sys.argv[1:] if argv is None else argv
     if not message.startswith("Got unexpected extra argument") or "--case" in args:
         return ""
-    # the argument refused, as the message names it: `mission M.yaml CASE.yaml` was told to
-    # give the mission file as the case (outside audit)
+    # the argument refused, as the message names it (`mission M.yaml CASE.yaml`: CASE.yaml)
     named = message.rpartition("(")[2].partition(")")[0].split()
     extra = next((a for a in (*named, *args[1:]) if a.lower().endswith((".yaml", ".yml"))),
                  None)

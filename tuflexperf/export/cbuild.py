@@ -22,9 +22,8 @@ def find_compiler() -> str | None:
 
 def run_compiler(command: Sequence[str], scratch: Path | str) -> subprocess.CompletedProcess[str]:
     """Run a compiler ``command`` with its temporary files in ``scratch`` (``TMPDIR``) and
-    in a process group of its own, which an interrupt ends whole: ``subprocess.run`` killed
-    the driver alone, and its assembler and compiler proper left their ``cc*.s`` / ``cc*.o``
-    in the user's ``$TMPDIR`` and a zombie behind (outside audit)."""
+    in a process group of its own, which an interrupt ends whole (``subprocess.run`` kills the
+    driver alone, leaving its ``cc*.s`` / ``cc*.o`` in the user's ``$TMPDIR``)."""
     env = {**os.environ, "TMPDIR": str(scratch)}
     process = subprocess.Popen(list(command), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                text=True, env=env, start_new_session=True)

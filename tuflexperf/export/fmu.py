@@ -478,7 +478,7 @@ def build_fmu(model: ExportModel, target: Path) -> Path:
     FMI 2.0.1 standard, section 2.3 (the zip layout: modelDescription.xml, sources/, binaries/).
     """
     wanted = os.environ.get("CC", "").strip()
-    if wanted and shutil.which(wanted) is None:  # gcc was taken instead, unsaid (re-audit)
+    if wanted and shutil.which(wanted) is None:  # said, not gcc taken instead
         raise InputError(f"--format fmu: CC={wanted!r} is no compiler on this machine (one "
                          "program, no arguments; unset CC to use gcc)")
     compiler = find_compiler()
@@ -511,7 +511,7 @@ def build_fmu(model: ExportModel, target: Path) -> Path:
                              f"{exc.strerror}; set CC to a working one") from None
         if done.returncode != 0:
             # the generated C compiles under -Wall -Wextra (tests): a failure is the compiler's
-            # (CC=/bin/false gave a traceback; outside audit), said in one line
+            # (CC=/bin/false), said in one line
             said = (done.stderr or done.stdout).strip().splitlines()
             raise InputError(f"--format fmu: the C compiler {compiler} failed (exit "
                              f"{done.returncode}): {said[0] if said else 'no message'}; set CC "

@@ -20,7 +20,7 @@ JSBSim keeps ``N = floor(delay / dt)`` frames in its delay buffer and hands the 
 ``N - 1`` frames after the frame it was set in (its ring buffer, FGFCSComponent::Delay), so
 its dead time is ``floor(delay / dt) - 1`` frames: one or two frames short of the model's
 ``round(delay / dt)`` samples (0.05 s: 5 frames = 42 ms at its default 120 Hz, 20 ms at
-50 Hz, none at 30 Hz or slower; outside audit). Run JSBSim at ``dt <= delay / 4`` for a dead
+50 Hz, none at 30 Hz or slower). Run JSBSim at ``dt <= delay / 4`` for a dead
 time within a quarter of the model's. The lag is discretised with Tustin's rule. Steady-state forces
 are exact. Forces are in lbf (JSBSim's unit).
 
@@ -77,8 +77,7 @@ def _number(value: float) -> str:
 
 
 def _attribute(text: str) -> str:
-    """A double-quoted XML attribute's text: ``&``, ``<``, ``>`` and ``"`` escaped (an engine
-    named with a quote wrote ``name="tfp-EDF"2"``, no XML; outside audit)."""
+    """A double-quoted XML attribute's text: ``&``, ``<``, ``>`` and ``"`` escaped."""
     return escape(xml_comment(text), {'"': "&quot;"})
 
 

@@ -41,21 +41,20 @@ EXTRAPOLATION_WARNING = (
 
 def plain_ascii(text: str) -> str:
     """``text`` as printable ASCII, every other character as its Python backslash escape
-    (``é`` -> ``\\xe9``, a control byte ``\\x01`` likewise): a file name's control byte
-    had made the exported XML unreadable by JSBSim and FMPy (outside audit)."""
+    (``é`` -> ``\\xe9``, a control byte ``\\x01`` likewise): a control byte makes the
+    exported XML unreadable by JSBSim and FMPy."""
     return "".join(ch if " " <= ch <= "~" else ch.encode("unicode_escape").decode("ascii")
                    for ch in str(text))
 
 
 def xml_comment(text: str) -> str:
-    """Text for an XML comment (:func:`plain_ascii`), with no ``--`` (forbidden there;
-    ``---`` once became ``--``: outside audit)."""
+    """Text for an XML comment (:func:`plain_ascii`), with no ``--`` (forbidden there)."""
     return re.sub(r"-{2,}", "-", plain_ascii(text))
 
 
 def model_notes(prop: Any) -> list[str]:
-    """What the exported functions leave to their user, said in every format (outside audit:
-    the voltage effect and a dead engine's drag were in no C, CasADi, FMU or JSBSim file).
+    """What the exported functions leave to their user, said in every format (the voltage
+    effect and a dead engine's drag are in no C, CasADi, FMU or JSBSim function).
 
     The functions give the thrust at the reference pack voltage, and a throttle-0 engine's
     ``T(0, v)``; the tool's own analyses scale by the pack voltage and give a dead engine its
@@ -400,7 +399,7 @@ def model_description(model: ExportModel) -> dict[str, Any]:
 
 def _json_plain(value: Any) -> Any:
     """Free-form provenance as JSON can hold it: what YAML read as a date, a timestamp,
-    bytes, a set or a NaN as text (each ended the export in a traceback; outside re-audit)."""
+    bytes, a set or a NaN as text."""
     if isinstance(value, dict):
         return {str(key): _json_plain(item) for key, item in value.items()}
     if isinstance(value, (set, frozenset)):

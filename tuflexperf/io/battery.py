@@ -135,12 +135,12 @@ class BatteryFitSchema(StrictModel):
     """Written by ``tuflexperf fit``: the pack model fitted to the runs (check never fits)."""
 
     # the file's capacity_ah the model was fitted with: a label edited after the fit is
-    # refused, since a relabelled file counted its reserve on charge the pack does not give
-    # while --set flew it scaled (outside audit; absent in files written before it)
+    # refused, since a relabelled file would count its reserve on charge the pack does not
+    # give, while --set flies it scaled (absent in files written before it)
     capacity_ah: Positive | None = None
     # likewise the pack's cells: the circuit is the fitted pack's, and a file relabelled 10S
-    # flew a 34 V cut-off on the 12S circuit, voltages no run measured, where fit refuses it
-    # (outside audit); and the cut-off its runs end at: a lower one flies the pack model
+    # would fly a 34 V cut-off on the 12S circuit, voltages no run measured, where fit
+    # refuses it; and the cut-off its runs end at: a lower one flies the pack model
     # below what they measured, which is said (absent in files written before them)
     cells_in_series: Annotated[int, Field(ge=1)] | None = None
     cutoff_voltage_per_cell_v: Positive | None = None
@@ -162,7 +162,7 @@ class BatterySchema(StrictModel):
     file_kind: ClassVar[str] = "battery"  # named when another kind of file is given
     name: Name
     cells_in_series: Annotated[int, Field(ge=1, le=100)]
-    # no aircraft pack holds more (a what-if of 1e308 Ah "flew" 4e20 min: outside audit)
+    # no aircraft pack holds more
     capacity_ah: Annotated[float, Field(gt=0, le=MAX_CAPACITY_AH)]
     nominal_voltage_v: Positive | None = None
     max_discharge_c: Positive | None = None
@@ -314,7 +314,7 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
         if not target.name.lower().endswith((".csv", ".csv.gz", ".mat")):
             raise InputError(f"{path}: runs[{index}].file: expected a .csv, .csv.gz or .mat "
                              f"run file, got {run.file}")
-        # it would count twice, under a second name (a hard link) too (outside re-audit)
+        # it would count twice, under a second name (a hard link) too
         if any(target == earlier.path or same_file(target, earlier.path) for earlier in runs):
             raise InputError(f"{path}: runs[{index}].file: {run.file} is listed twice")
         runs.append(DischargeRunRef(path=target, engine=run.engine))
@@ -395,8 +395,8 @@ def refuse_label_beyond_fitted(path: Path, capacity_ah: float, max_capacity_ah: 
     """Bad input when ``capacity_ah`` [Ah] exceeds the fitted circuit's full charge
     ``max_capacity_ah`` [Ah], where its voltage collapses: no discharge of that pack gives
     the label, and the landing reserve, a fraction of it, would be counted on charge the
-    pack does not hold (a 5 Ah pack relabelled and refitted as 6 Ah "landed with 20 %"
-    0.6 min before its cut-off; outside audit)."""
+    pack does not hold (a 5 Ah pack relabelled 6 Ah would "land with 20 %" 0.6 min before
+    its cut-off)."""
     if capacity_ah > max_capacity_ah * (1.0 + 1e-9):
         raise InputError(
             f"{path}: capacity_ah: {capacity_ah:g} Ah is more than the fitted pack holds "
@@ -432,7 +432,7 @@ def refuse_contradicted_capacity(battery: Battery, drawn: Sequence[tuple[str, fl
     if most is not None and battery.capacity_ah > LABEL_OVER_DRAWN * most:
         # the landing reserve and the charge left are fractions of capacity_ah: a label twice
         # what the runs drew to their cut-off let a cruise to the cut-off 'land with half the
-        # charge' and pass (outside audit)
+        # charge' and pass
         raise InputError(
             f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah is more than "
             f"{LABEL_OVER_DRAWN:g} x the most any discharge run drew to its cut-off "

@@ -139,8 +139,7 @@ def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
     parts = key.split(".")
     if (len(parts) == 3 and parts[0] == "requirements" and parts[1] in Requirements.model_fields
             and getattr(case.requirements, parts[1]) is None):
-        # a real key of a block the case leaves out: "did you mean" another block's key
-        # misled (outside audit)
+        # a real key of a block the case leaves out ("did you mean" another block's misleads)
         raise InputError(f"{where}: {key}: the case has no requirements.{parts[1]} block "
                          "to change; add it to the case file")
     if key in _BOUND_KEYS:
@@ -301,8 +300,8 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
         case, aircraft=new_aircraft, atmosphere=atmosphere, requirements=requirements,
         overrides=(*case.overrides, *((k, float(v)) for k, v in values.items())),
     )
-    # the files' cross checks hold for the changed case too: a 1e-9 kg aircraft passed on
-    # --set what its file refuses (thrust 1e10 x its weight; outside audit)
+    # the files' cross checks hold for the changed case too (a 1e-9 kg aircraft on --set as
+    # in its file)
     try:
         refuse_absurd_propulsion(changed_case)
     except InputError as exc:

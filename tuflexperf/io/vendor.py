@@ -107,7 +107,7 @@ def repeated_columns(names: Sequence[object]) -> set[str]:
     pandas renames a repeated ``throttle`` to ``throttle.1`` and the first one was read as
     the measurement, silently: which of the two is meant only the user can tell. The names
     pandas itself read, not a second reading of the header line, which a blank first line,
-    a BOM or a quoted newline led astray (outside audit).
+    a BOM or a quoted newline leads astray.
     """
     stripped = [str(name).strip() for name in names]
     present = set(stripped)
@@ -273,7 +273,7 @@ def read_rcbenchmark(
         convert("airspeed_m_s", speed_raw, SPEED_UNITS_M_S[unit])
         logged = columns.get("airspeed_m_s")
         if settings.airspeed_m_s is not None and logged is not None and np.isfinite(logged).any():
-            # the column is read; a manifest speed it contradicts was dropped unsaid (audit)
+            # the column is read; a manifest speed it contradicts is not dropped unsaid
             median = float(np.nanmedian(logged))
             if abs(median - settings.airspeed_m_s) > max(AIRSPEED_AGREEMENT_M_S,
                                                           0.05 * abs(median)):

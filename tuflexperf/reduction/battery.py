@@ -440,16 +440,15 @@ def refuse_runs_short_of_the_cutoff(battery: Any, runs: Sequence[DischargeRun]) 
     """Bad input: a discharge run that stopped before the pack's cut-off voltage.
 
     Its time under load is stored as the time to the cut-off and its charge as what the pack
-    gave there: a run stopped at 43.6 V of a 40.8 V cut-off was taken for a pack that lasts
-    17 % less, and one stopped earlier was refused as a capacity misprint (outside audit
-    with a known pack).
+    gave there: a run stopped at 43.6 V of a 40.8 V cut-off would be taken for a pack that
+    lasts 17 % less.
     """
     cutoff = battery.cutoff_voltage_v
     for run in runs:
         loaded = run.voltage_v[run.loaded]
         # a pack under load discharges: its voltage falls from the step to the cut-off. One
-        # that starts at or below the cut-off and rises was fitted with a 2.7 V residual and
-        # no word (outside audit): a swapped column, another pack, a charge log
+        # that starts at or below the cut-off and rises is a swapped column, another pack or
+        # a charge log
         tenth = max(1, loaded.size // 10)
         first, last = float(np.mean(loaded[:tenth])), float(np.mean(loaded[-tenth:]))
         if first <= cutoff * (1.0 + CUTOFF_REACHED_TOLERANCE) or last > first:

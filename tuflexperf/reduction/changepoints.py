@@ -128,7 +128,7 @@ def kernel_breaks(coarse: NDArray[np.float64], min_size: int, penalty: float) ->
     of the first block of each new segment, ascending.
 
     PELT prunes little where the mean never changes, so its time grows with the square of
-    the length (a steady run of 10 million samples took ten minutes; outside audit). A run
+    the length (a steady run of 10 million samples would take ten minutes). A run
     longer than :data:`PELT_WINDOW_BLOCKS` is searched in windows of that many blocks, each
     overlapping its neighbours by :data:`PELT_MARGIN_BLOCKS` and keeping the changes in its
     own core (a change is local: the penalty and the segments' least length are the whole
