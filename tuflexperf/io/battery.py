@@ -319,56 +319,40 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
             raise InputError(f"{path}: runs[{index}].file: {run.file} is listed twice")
         runs.append(DischargeRunRef(path=target, engine=run.engine))
     if schema.fit is not None and not refitting:
+        again = f"fit it again (tuflexperf fit {path.name} --out ...)"
         fitted_with = schema.fit.capacity_ah
         if fitted_with is not None and not math.isclose(fitted_with, schema.capacity_ah,
                                                         rel_tol=1e-9):
             raise InputError(
                 f"{path}: capacity_ah: {schema.capacity_ah:g} Ah, but the pack model in `fit:` "
-                f"was fitted with capacity_ah {fitted_with:g} Ah; fit it again (tuflexperf fit "
-                f"{path.name} --out ...), or keep {fitted_with:g} Ah in the file and fly another "
-                f"size with --set battery.capacity_ah={schema.capacity_ah:g}"
+                f"was fitted with capacity_ah {fitted_with:g} Ah; {again}, or keep "
+                f"{fitted_with:g} Ah in the file and fly another size with --set "
+                f"battery.capacity_ah={schema.capacity_ah:g}"
             )
         fitted_cells = schema.fit.cells_in_series
         if fitted_cells is not None and fitted_cells != schema.cells_in_series:
             raise InputError(
                 f"{path}: cells_in_series: {schema.cells_in_series}, but the pack model in "
-                f"`fit:` was fitted with cells_in_series {fitted_cells}; fit it again "
-                f"(tuflexperf fit {path.name} --out ...)")
+                f"`fit:` was fitted with cells_in_series {fitted_cells}; {again}")
         fitted = schema.fit.parameters.max_capacity_ah
         if not 0.5 <= fitted / schema.capacity_ah <= 2.0:  # edited after the fit
             raise InputError(
                 f"{path}: capacity_ah: {schema.capacity_ah:g} Ah, but the pack model in `fit:` "
-                f"holds {fitted:.3g} Ah; fit it again (tuflexperf fit {path.name} --out ...)"
-            )
+                f"holds {fitted:.3g} Ah; {again}")
         refuse_label_beyond_fitted(path, schema.capacity_ah, fitted)
         # matched by position and name (a copied file may point at its runs another way);
         # the content is then checked by sha256 where the fit is used
         stored = [Path(r.file).name for r in schema.fit.runs]
         if stored != [r.path.name for r in runs]:
-            raise InputError(
-                f"{path}: fit.runs: the fitted runs are not the file's runs; fit it again "
-                f"(tuflexperf fit {path.name} --out ...)"
-            )
-    fan, mission = schema.fan_power, schema.mission
+            raise InputError(f"{path}: fit.runs: the fitted runs are not the file's runs; {again}")
+    fan = schema.fan_power
+    same = ("name", "cells_in_series", "capacity_ah", "packs_in_parallel_per_engine",
+            "cutoff_voltage_per_cell_v", "nominal_voltage_v", "max_discharge_c")
     return Battery(
-        name=schema.name,
-        path=path.resolve(),
-        cells_in_series=schema.cells_in_series,
-        capacity_ah=schema.capacity_ah,
-        packs_in_parallel_per_engine=schema.packs_in_parallel_per_engine,
-        cutoff_voltage_per_cell_v=schema.cutoff_voltage_per_cell_v,
-        runs=tuple(runs),
-        published_power_range_w=(fan.published_power_range_w[0], fan.published_power_range_w[1]),
-        published_static_thrust_range_n=(
-            fan.published_static_thrust_range_n[0],
-            fan.published_static_thrust_range_n[1],
-        ),
-        jet_velocity_m_s=fan.jet_velocity_m_s,
-        pattern_altitude_m=mission.pattern_altitude_m,
-        landing_reserve_fraction=mission.landing_reserve_fraction,
-        nominal_voltage_v=schema.nominal_voltage_v,
-        max_discharge_c=schema.max_discharge_c,
-        fitted=schema.fit,
+        **{key: getattr(schema, key) for key in same}, path=path.resolve(), runs=tuple(runs),
+        published_power_range_w=tuple(fan.published_power_range_w),
+        published_static_thrust_range_n=tuple(fan.published_static_thrust_range_n),
+        jet_velocity_m_s=fan.jet_velocity_m_s, **schema.mission.model_dump(), fitted=schema.fit,
     )
 
 
