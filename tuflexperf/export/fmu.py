@@ -109,7 +109,6 @@ def model_description(model: ExportModel) -> str:
     n = model.n_engines
     refs = value_references(n)
     low, high = prop.tested_airspeed_m_s
-    reference = prop.reference_density_kg_m3 or 1.225
     variables: list[str] = []
 
     def scalar(name: str, causality: str, description: str, real: str, extra: str = "") -> None:
@@ -124,7 +123,7 @@ def model_description(model: ExportModel) -> str:
                ' start="0"', ' variability="continuous"')
     scalar("airspeed_m_s", "input", f"true airspeed in m/s (tested {low:g}..{high:g} m/s)",
            ' start="0"', ' variability="continuous"')
-    scalar("density_kg_m3", "input", "air density in kg/m^3", f' start="{reference!r}"',
+    scalar("density_kg_m3", "input", "air density in kg/m^3", f' start="{c_density(model)}"',
            ' variability="continuous"')
     for i, engine in enumerate(prop.engines):
         scalar(f"thrust_{i + 1}_n", "output",
