@@ -124,36 +124,26 @@ class CThrustModel:
         )
         return code, throttle
 
+    def _inverse(self, function: Any, *leading: Any) -> tuple[int, float, bool]:
+        """An inverse of the C API: (return code, throttle fraction, extrapolated)."""
+        out = ctypes.c_double(float("nan"))
+        flag = ctypes.c_int(-1)
+        code = function(*leading, ctypes.byref(out), ctypes.byref(flag))
+        return code, out.value, bool(flag.value)
+
     def throttle_for_thrust_flagged(
         self, total_thrust_n: float, airspeed_m_s: float, density_kg_m3: float
     ) -> tuple[int, float, bool]:
         """``tfp_throttle_for_thrust``: (return code, throttle fraction, extrapolated)."""
-        out = ctypes.c_double(float("nan"))
-        flag = ctypes.c_int(-1)
-        code = self.lib.tfp_throttle_for_thrust(
-            float(total_thrust_n),
-            float(airspeed_m_s),
-            float(density_kg_m3),
-            ctypes.byref(out),
-            ctypes.byref(flag),
-        )
-        return code, out.value, bool(flag.value)
+        return self._inverse(self.lib.tfp_throttle_for_thrust, float(total_thrust_n),
+                             float(airspeed_m_s), float(density_kg_m3))
 
     def engine_throttle_for_thrust(
         self, engine: int, thrust_n: float, airspeed_m_s: float, density_kg_m3: float
     ) -> tuple[int, float, bool]:
         """``tfp_engine_throttle_for_thrust``: (return code, throttle, extrapolated)."""
-        out = ctypes.c_double(float("nan"))
-        flag = ctypes.c_int(-1)
-        code = self.lib.tfp_engine_throttle_for_thrust(
-            int(engine),
-            float(thrust_n),
-            float(airspeed_m_s),
-            float(density_kg_m3),
-            ctypes.byref(out),
-            ctypes.byref(flag),
-        )
-        return code, out.value, bool(flag.value)
+        return self._inverse(self.lib.tfp_engine_throttle_for_thrust, int(engine),
+                             float(thrust_n), float(airspeed_m_s), float(density_kg_m3))
 
     def simulate(
         self,
