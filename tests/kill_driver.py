@@ -102,7 +102,7 @@ def _warm(args: list[str], log: Path) -> tuple[float, int]:
 
 def _state(path: Path) -> str:
     """``whole``, ``missing`` or ``broken: why`` (module docstring)."""
-    from tuflexperf.io import files
+    from tuflexperf.io import artefacts, files
 
     if not os.path.lexists(path):
         return "missing"
@@ -119,7 +119,7 @@ def _state(path: Path) -> str:
     data = path.read_bytes()
     if path.suffix in (".yaml", ".yml"):
         return "whole" if files.seal_intact(data) else "broken: seal"
-    mark = files.written_mark(path)
+    mark = artefacts.written_mark(path)
     return "whole" if mark == files.sha256_of(path) else f"broken: mark {mark}"
 
 

@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from tests.c_model import CThrustModel, compile_shared
 from tests.conftest import MADE_UP_PROPULSION, write_case
 from tuflexperf.cli import app
 from tuflexperf.export import FILES
-from tuflexperf.export.cbuild import CThrustModel, compile_shared, find_compiler
+from tuflexperf.export.cbuild import find_compiler
 from tuflexperf.io.case import load_propulsion
 from tuflexperf.io.files import MARKER
 from tuflexperf.models.thrust import total_thrust_n

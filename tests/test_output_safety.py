@@ -25,7 +25,7 @@ import pytest
 
 from tests.conftest import Ran, tuflexperf
 from tuflexperf.errors import InputError
-from tuflexperf.io import files
+from tuflexperf.io import artefacts, files
 
 ROOT = Path(__file__).resolve().parent.parent
 TUFLEXPERF = [sys.executable, "-m", "tuflexperf"]
@@ -168,13 +168,13 @@ def test_artefact_of_reads_the_png_software_chunk() -> None:
         Image.new("RGB", (4, 4)).save(buffer, format="png", pnginfo=info)
         return buffer.getvalue()
 
-    assert files.artefact_of(png("tuflexperf sweep")) == "sweep plot"
-    assert files.artefact_of(png("tuflexperf 0.1.0")) == "report page"
+    assert artefacts.artefact_of(png("tuflexperf sweep")) == "sweep plot"
+    assert artefacts.artefact_of(png("tuflexperf 0.1.0")) == "report page"
     # carpet plots of earlier versions
-    assert files.artefact_of(png("tuflexperf")) == "sweep plot"
-    assert files.artefact_of(png("tuflexperfX")) is None
-    assert files.artefact_of(png("GIMP")) is None
-    assert files.artefact_of(png(None)) is None
+    assert artefacts.artefact_of(png("tuflexperf")) == "sweep plot"
+    assert artefacts.artefact_of(png("tuflexperfX")) is None
+    assert artefacts.artefact_of(png("GIMP")) is None
+    assert artefacts.artefact_of(png(None)) is None
 
 
 def test_the_recognised_sweep_names_are_every_requirement_check_can_name() -> None:
@@ -185,7 +185,7 @@ def test_the_recognised_sweep_names_are_every_requirement_check_can_name() -> No
              if isinstance(call, ast.Call) and getattr(call.func, "id", None) == "Verdict"
              and call.args and isinstance(call.args[0], ast.Constant)}
     assert {"takeoff_ground_roll", "mission_solved_time"} <= names
-    assert names == set(files.REQUIREMENT_NAMES)
+    assert names == set(artefacts.REQUIREMENT_NAMES)
 
 
 def _stage_new_output_interrupted(tmp_path: Path, monkeypatch) -> None:
@@ -756,7 +756,7 @@ def test_a_copy_or_an_edit_of_a_written_csv_is_not_replaced(tmp_path) -> None:
     Each file the tool writes carries the sha256 of its bytes as an extended attribute."""
     probe = tmp_path / "probe"
     files.atomic_write_text(probe, "x\n")
-    if files.written_mark(probe) == files._UNKNOWN:
+    if artefacts.written_mark(probe) == artefacts._UNKNOWN:
         pytest.skip("this file system keeps no extended attributes")
     manifest = str(ROOT / "data" / "tuflex" / "campaign" / "campaign.yaml")
 
@@ -796,8 +796,9 @@ def test_a_mission_history_with_a_long_header_is_replaced_by_the_next_run(tmp_pa
     """Four engines of 200-character names make a header of ~5 kB: its first 4 KiB alone
     were no mission history, and the tool refused to replace its own CSV (outside audit)."""
     engines = [f"E{i}" + "x" * 198 for i in range(4)]
-    header = ",".join([*files.MISSION_CSV_COLUMNS,
-                       *(f"{c}_{e}" for e in engines for c in files.MISSION_CSV_ENGINE_COLUMNS)])
+    per_engine = artefacts.MISSION_CSV_ENGINE_COLUMNS
+    header = ",".join([*artefacts.MISSION_CSV_COLUMNS,
+                       *(f"{c}_{e}" for e in engines for c in per_engine)])
     assert len(header) > 4096
     out = tmp_path / "history.csv"
     files.atomic_write_text(out, header + "\n" + ",".join(["0"] * header.count(",")) + ",0\n")

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import yaml
 
+from tests.c_model import CThrustModel, compile_shared, throttle_for_thrust
 from tests.conftest import MADE_UP_PROPULSION
 from tuflexperf.export.c_code import (
     DELAY_CAPACITY,
@@ -24,8 +25,8 @@ from tuflexperf.export.c_code import (
     header_text,
     source_text,
 )
-from tuflexperf.export.cbuild import CThrustModel, compile_shared, find_compiler
-from tuflexperf.export.model import ExportModel, model_from_propulsion_file, throttle_for_thrust
+from tuflexperf.export.cbuild import find_compiler
+from tuflexperf.export.model import ExportModel, model_from_propulsion_file
 from tuflexperf.models.thrust import (
     density_ratio,
     engine_thrust_n,

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 import yaml
 
+from tests.c_model import CThrustModel, compile_shared
 from tests.conftest import MADE_UP_PROPULSION
 from tuflexperf.export.c_code import (
     RETURN_AIRSPEED_BEYOND_MODEL,
@@ -29,7 +30,7 @@ from tuflexperf.export.c_code import (
     header_text,
     source_text,
 )
-from tuflexperf.export.cbuild import CThrustModel, compile_shared, find_compiler
+from tuflexperf.export.cbuild import find_compiler
 from tuflexperf.export.model import model_from_propulsion_file
 from tuflexperf.models.thrust import max_model_airspeed_m_s
 

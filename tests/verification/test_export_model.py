@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 import yaml
 
+from tests.c_model import throttle_for_thrust
 from tests.conftest import MADE_UP_PROPULSION
 from tuflexperf.export.model import (
     inverse_function,
     least_throttle_reaching,
     model_from_propulsion_file,
     quadratic_coefficients,
-    throttle_for_thrust,
     thrust_function,
 )
 from tuflexperf.models.thrust import POLY22_TERMS, density_ratio, engine_thrust_n, total_thrust_n

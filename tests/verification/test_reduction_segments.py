@@ -7,7 +7,7 @@ import pytest
 from scipy.signal import lfilter
 
 from tuflexperf.reduction.changepoints import cross_check, force_changepoints, throttle_plateaus
-from tuflexperf.reduction.segments import fit_transients, merge_test_points, steady_mean
+from tuflexperf.reduction.segments import fit_transients, merge_test_points, steady_means
 
 FS = 500.0
 
@@ -115,16 +115,18 @@ def test_steady_mean_excludes_spikes_and_matches_level() -> None:
     n = 2000
     force = 30.0 + rng.normal(0, 0.5, n)
     force[rng.integers(0, n, 20)] += 15.0  # isolated spikes
-    seg = steady_mean(force, np.full(n, 20.0), np.full(n, 0.6), 0, n, 1000, 1.5, 25)
+    seg = steady_means(force, np.full(n, 20.0), np.full(n, 0.6), [(0, n)], 1000, 1.5, 25)[0]
     assert seg.force_n == pytest.approx(30.0, abs=0.05)
     assert seg.outliers_replaced >= 20
     assert (seg.throttle, seg.airspeed_m_s, seg.n_samples) == (0.6, 20.0, n)
 
 
 def test_merge_test_points_weights_by_samples() -> None:
-    base = steady_mean(np.full(10, 1.0), np.zeros(10), np.zeros(10), 0, 10, 5, 1.5, 3)
-    other = steady_mean(np.full(30, 2.0), np.zeros(30), np.full(30, 0.5), 0, 30, 5, 1.5, 3)
-    again = steady_mean(np.full(30, 3.0), np.zeros(30), np.full(30, 0.001), 0, 30, 5, 1.5, 3)
+    def held(n: int, force: float, throttle: float) -> object:
+        return steady_means(np.full(n, force), np.zeros(n), np.full(n, throttle), [(0, n)],
+                            5, 1.5, 3)[0]
+
+    base, other, again = held(10, 1.0, 0.0), held(30, 2.0, 0.5), held(30, 3.0, 0.001)
     cells = merge_test_points([base, other, again])
     assert [c.members for c in cells] == [(0, 2), (1,)]
     assert cells[0].force_n == pytest.approx((10 * 1.0 + 30 * 3.0) / 40)

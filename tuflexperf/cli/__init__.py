@@ -107,12 +107,12 @@ def main(argv: list[str] | None = None) -> None:
     os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
     # numpy's overflow in an extreme sample or margin search (exp of a huge charge) gives an
     # inf that the analysis turns into "not attainable"; its warning, with a source line, is
-    # noise on the user's screen (outside audit)
+    # noise on the user's screen
     import warnings
 
     warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"tuflexperf(\.|$)")
     def aborted() -> None:
-        hold_interrupts()  # a second Ctrl-C here printed a traceback (outside audit)
+        hold_interrupts()  # a second Ctrl-C here prints no traceback
         sys.stderr.write("tuflexperf: aborted\n")
         sys.exit(130)
 

@@ -62,8 +62,10 @@ def fit_command(
     if out is None:
         battery = input_file.is_file() and is_battery_file(input_file)
         out = Path("battery_fit.yaml" if battery else "propulsion_fit.yaml")
-    with render.FitProgress() as progress:
-        summary = run_fit(input_file, out, table, glauert, delay_s, progress, propulsion)
+    from tuflexperf.cli.progress import TerminalProgress
+
+    with TerminalProgress("reducing") as bar:  # the runs as a bar on a terminal
+        summary = run_fit(input_file, out, table, glauert, delay_s, bar, propulsion)
     render.show_fit(summary, as_json)
 
 

@@ -106,7 +106,7 @@ def endurance(
     if throttle is None and not best:
         fail_input("--throttle: required (a fraction in [0, 1]), or use --best")
     if throttle is not None and not (math.isfinite(throttle) and 0.0 <= throttle <= 1.0):
-        # a percent looks like one (50, 75); 1.0000001 or 1.5 is no percent (outside audit)
+        # a percent looks like one (50, 75); 1.0000001 or 1.5 is no percent
         hint = (f" (did you mean {throttle / 100:g}? throttle is a fraction, not percent)"
                 if math.isfinite(throttle) and 2.0 <= throttle <= 100.0 else "")
         fail_input(f"--throttle: must be a fraction in [0, 1], got {throttle!r}{hint}")

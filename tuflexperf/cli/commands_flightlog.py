@@ -1,8 +1,8 @@
 """``tuflexperf flightlog``: the flown side of a PX4 or ArduPilot log, and the case beside it.
 
-The body of the command; :mod:`tuflexperf.cli` registers it. It imports nothing of the CLI
-(bad input is an :class:`InputError`, which the CLI's guard turns into exit 2), and pyulog,
-pymavlink and matplotlib only when it runs.
+The body of the command; :mod:`tuflexperf.cli` registers it. Of the CLI it imports only the
+number format (bad input is an :class:`InputError`, which the CLI's guard turns into exit 2),
+and pyulog, pymavlink and matplotlib only when it runs.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from typing import Any
 
 import typer
 
+from tuflexperf.cli.render import fmt
 from tuflexperf.errors import InputError
 
 
@@ -169,18 +170,14 @@ def _clean(value: Any) -> Any:
     return value
 
 
-def _num(value: float | None, digits: int = 1) -> str:
-    return "n/a" if value is None or value != value else f"{value:.{digits}f}"
-
-
 def _print_text(p: dict[str, Any], written: list[Path]) -> None:
     echo = typer.echo
     echo(f"{p['log']} ({p['format']})")
-    echo(f"airborne: {_num(p['airborne_s'])} s ({_num(p['airborne_start_s'], 2)} to "
-         f"{_num(p['airborne_end_s'], 2)} s), {p['airborne_rule']}")
-    echo(f"energy: {_num(p['energy_wh'], 3)} Wh; charge {_num(p['charge_mah'])} mAh "
-         f"(log counter), {_num(p['integrated_charge_mah'])} mAh (integrated current); "
-         f"mean power {_num(p['mean_power_w'])} W")
+    echo(f"airborne: {fmt(p['airborne_s'], 1)} s ({fmt(p['airborne_start_s'], 2)} to "
+         f"{fmt(p['airborne_end_s'], 2)} s), {p['airborne_rule']}")
+    echo(f"energy: {fmt(p['energy_wh'], 3)} Wh; charge {fmt(p['charge_mah'], 1)} mAh "
+         f"(log counter), {fmt(p['integrated_charge_mah'], 1)} mAh (integrated current); "
+         f"mean power {fmt(p['mean_power_w'], 1)} W")
     comparison = p.get("comparison")
     predicted = {b["airspeed_m_s"]: b for b in comparison["bins"]} if comparison else {}
     # the model (level flight) stands beside the bins it was compared with
@@ -192,7 +189,7 @@ def _print_text(p: dict[str, Any], written: list[Path]) -> None:
         (f"level flight (|climb rate| < {p['level_climb_rate_m_s']:g} m/s)", "flown_power_w",
          p["level_bins"]),
         (f"climb-corrected (P - m g dh/dt / {p['climb_efficiency']:g}, m = "
-         f"{_num(p['mass_kg'])} kg)", "corrected_power_w", p["climb_corrected_bins"]),
+         f"{fmt(p['mass_kg'], 1)} kg)", "corrected_power_w", p["climb_corrected_bins"]),
     ):
         if not bins:
             continue
@@ -201,12 +198,12 @@ def _print_text(p: dict[str, Any], written: list[Path]) -> None:
         echo(head + (f"{'model W':>9}{'ratio':>7}{'model thr':>10}" if predicted and
                      bins is compared else ""))
         for b in bins:
-            row = (f"  {b['airspeed_m_s']:>6.0f}{b['time_s']:>8.1f}{_num(b[key]):>9}"
-                   f"{_num(b['power_std_w']):>8}{_num(b['throttle'], 3):>10}")
+            row = (f"  {b['airspeed_m_s']:>6.0f}{b['time_s']:>8.1f}{fmt(b[key], 1):>9}"
+                   f"{fmt(b['power_std_w'], 1):>8}{fmt(b['throttle'], 3):>10}")
             if predicted and bins is compared:
                 m = predicted.get(b["airspeed_m_s"], {})
-                row += (f"{_num(m.get('predicted_power_w')):>9}{_num(m.get('ratio'), 2):>7}"
-                        f"{_num(m.get('predicted_throttle'), 3):>10}")
+                row += (f"{fmt(m.get('predicted_power_w'), 1):>9}{fmt(m.get('ratio'), 2):>7}"
+                        f"{fmt(m.get('predicted_throttle'), 3):>10}")
             echo(row)
     if comparison:
         for line in comparison["summary"]:

@@ -65,38 +65,36 @@ def _unnamed_os_error_place() -> str:
 def guarded(callback: Any) -> Any:
     """Turn InputError into exit 2 and NotAttainable into exit 1, one line on stderr each."""
 
+    def bad_input(*lines: str) -> typer.Exit:
+        """Exit 2 with each line on stderr (an interrupt first stays the interrupt)."""
+        _unless_interrupted()
+        for line in lines:
+            sys.stderr.write(f"tuflexperf: error: {line}\n")
+        return typer.Exit(2)
+
     @functools.wraps(callback)
     def run(*args: Any, **kwargs: Any) -> Any:
         try:
             return callback(*args, **kwargs)
-        except InputError as exc:
-            _unless_interrupted()
-            for problem in exc.problems:  # every problem found, each on its own line
-                sys.stderr.write(f"tuflexperf: error: {one_line(problem)}\n")
-            raise typer.Exit(2) from None
+        except InputError as exc:  # every problem found, each on its own line
+            raise bad_input(*(one_line(problem) for problem in exc.problems)) from None
         except BrokenPipeError:  # a pipe of the command's own (io.streams guards stdout):
             # no verdict was given, so none is claimed (exit 0 here "passed" `check | head`)
             sys.stderr.write("tuflexperf: error: the output's reader went away\n")
             raise typer.Exit(2) from None
         except OverflowError:  # a number of the input far beyond any aircraft's
-            _unless_interrupted()
-            sys.stderr.write("tuflexperf: error: a number of the input is too large to compute "
-                             "with (floating-point overflow); check the magnitudes of the "
-                             "input files' keys and of the flags\n")
-            raise typer.Exit(2) from None
+            raise bad_input("a number of the input is too large to compute with (floating-"
+                            "point overflow); check the magnitudes of the input files' keys "
+                            "and of the flags") from None
         except OSError as exc:  # a file the OS refuses (name too long, disk full, ...)
-            _unless_interrupted()
-            sys.stderr.write(f"tuflexperf: error: {os_error_text(exc)}\n")
-            raise typer.Exit(2) from None
+            raise bad_input(os_error_text(exc)) from None
         except RuntimeError as exc:
             # pathlib's resolve() of a symbolic link that leads back to itself (Python < 3.13;
             # later versions raise the OSError above)
             if not str(exc).startswith(_SYMLINK_LOOP):
                 raise
-            _unless_interrupted()
             where = str(exc).removeprefix(_SYMLINK_LOOP).strip("'\"")
-            sys.stderr.write(f"tuflexperf: error: {one_line(where)}: symbolic link loop\n")
-            raise typer.Exit(2) from None
+            raise bad_input(f"{one_line(where)}: symbolic link loop") from None
         except NotAttainable as exc:
             if kwargs.get("as_json"):  # SPEC 5: one JSON object on exit 1 as well
                 command = callback.__name__.removesuffix("_command")
@@ -115,7 +113,7 @@ def guarded(callback: Any) -> Any:
 def repeated_option(params: Iterable[Any], args: list[str]) -> tuple[Any, list[str]] | None:
     """The first option of ``params`` that takes one value and that ``args`` give more than
     once, with the values given, or None (click keeps the last silently: `--throttle 0.5
-    --throttle 0.6` flew 0.6; outside audit). A flag said twice means the same: allowed."""
+    --throttle 0.6` flies 0.6). A flag said twice means the same: allowed."""
     by_name = {name: p for p in params if getattr(p, "param_type_name", "") == "option"
                and not (p.multiple or p.count or p.is_flag)
                for name in (*p.opts, *p.secondary_opts)}
@@ -155,7 +153,7 @@ def refuse_repeated(app: typer.Typer, args: list[str]) -> None:
 
 def refuse_empty(args: list[str]) -> None:
     """Exit 2 naming an option (or argument) given an empty value: ``--case=`` or ``--case ''``
-    became the path '.', reported as "is a directory" (outside audit)."""
+    is not the path '.' ("is a directory")."""
     for k, token in enumerate(args):
         if token == "--":
             return
@@ -179,8 +177,7 @@ def case_hint(message: str, argv: list[str] | None) -> str:
     args = sys.argv[1:] if argv is None else argv
     if not message.startswith("Got unexpected extra argument") or "--case" in args:
         return ""
-    # the argument refused, as the message names it: `mission M.yaml CASE.yaml` was told to
-    # give the mission file as the case (outside audit)
+    # the argument refused, as the message names it (`mission M.yaml CASE.yaml`: CASE.yaml)
     named = message.rpartition("(")[2].partition(")")[0].split()
     extra = next((a for a in (*named, *args[1:]) if a.lower().endswith((".yaml", ".yml"))),
                  None)

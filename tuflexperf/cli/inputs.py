@@ -64,12 +64,12 @@ def parse_sets(sets: list[str] | None) -> dict[str, float]:
     """Every ``--set KEY=VALUE`` as ``{key: number}`` (bad input names the flag).
 
     The value is a plain decimal number as Python reads it (``20``, ``0.5``, ``1e3``): read
-    as YAML, a comment, an anchor or a tag after it (``020 # twenty``, ``!!int 020``) took
-    ``020`` as octal 16 past the check below (outside audit).
+    as YAML, a comment, an anchor or a tag after it (``020 # twenty``, ``!!int 020``) would
+    take ``020`` as octal 16 past the check below.
     """
     from tuflexperf.io.yamlio import ambiguous_number
 
-    def shown(text: str) -> str:  # a 5000-digit value was echoed whole (outside audit)
+    def shown(text: str) -> str:  # a 5000-digit value is not echoed whole
         return repr(text if len(text) <= 60 else text[:57] + "...")
 
     values: dict[str, float] = {}
@@ -78,7 +78,7 @@ def parse_sets(sets: list[str] | None) -> dict[str, float]:
         if not sep or not key.strip():
             fail_input(f"--set: expected KEY=VALUE, got {shown(item)}")
         odd = ambiguous_number(text)
-        if odd is not None:  # as in the files: 020 was a limit of 16 (outside audit)
+        if odd is not None:  # as in the files: 020 is no limit of 16
             fail_input(f"--set: {key}: {odd.problem()}")
         try:
             value = float(text)
@@ -86,7 +86,7 @@ def parse_sets(sets: list[str] | None) -> dict[str, float]:
             fail_input(f"--set: {key}: not a number: {shown(text)}")
         if not math.isfinite(value):
             fail_input(f"--set: {key}: not a finite number: {shown(text)}")
-        if key.strip() in values:  # the last one won, silently (outside audit)
+        if key.strip() in values:  # given twice: the last would win, silently
             fail_input(f"--set: {key.strip()} given twice ({values[key.strip()]:g} and "
                        f"{value:g}); give each key once")
         values[key.strip()] = value
@@ -94,7 +94,7 @@ def parse_sets(sets: list[str] | None) -> dict[str, float]:
 
 
 def refuse_empty_address(dask: str | None) -> None:
-    """``--dask ''`` ran locally without a word (outside audit): an address is needed."""
+    """``--dask ''`` would run locally without a word: an address is needed."""
     if dask is not None and not dask.strip():
         fail_input("--dask: empty address; give the scheduler's tcp://HOST:PORT, or leave "
                    "--dask out to run here")
@@ -113,8 +113,7 @@ def output_file(value: str | None, flag: str) -> Path | None:
 
 def refuse_dash(value: str, flag: str) -> None:
     """An output named ``-`` or ``-...``: the shell's stdout, or the next option taken as
-    the path (``--csv --json`` wrote a file named --json, ``export --out -`` a folder named
-    -, and a later ``--case --json`` read it; outside audit)."""
+    the path (``--csv --json`` would write a file named --json)."""
     if value == "-":
         fail_input(f"{flag}: '-' (stdout) is no file name; give a path, and --json for JSON "
                    "on stdout")
@@ -168,7 +167,7 @@ def sweep_case(case_file: Path | None, sets: list[str] | None, vary: list[str],
 
 
 def batch_notes(case: Any, varied: list[str], sets: list[str] | None) -> list[str]:
-    """What a batch (sweep, margins) leaves out or overrides, said (outside audit): the
+    """What a batch (sweep, margins) leaves out or overrides, said: the
     mission requirement is flown for the nominal case only, and a --set on a varied key is
     replaced by the grid's values."""
     notes = []

@@ -748,33 +748,6 @@ def history_csv(history: dict[str, Any]) -> str:
     )
 
 
-class FitProgress:
-    """Rich progress bar on stderr while the campaign is reduced (silent when not a TTY)."""
-
-    def __enter__(self) -> FitProgress:
-        from rich.console import Console
-        from rich.progress import BarColumn, Progress, TextColumn
-
-        console = Console(stderr=True)
-        self._bar = Progress(
-            TextColumn("reducing"),
-            BarColumn(),
-            TextColumn("{task.completed}/{task.total} {task.description}"),
-            console=console,
-            transient=True,
-            disable=not console.is_terminal,
-        )
-        self._bar.__enter__()
-        self._task = self._bar.add_task("", total=None)
-        return self
-
-    def __call__(self, done: int, total: int, label: str) -> None:
-        self._bar.update(self._task, completed=done, total=total, description=label)
-
-    def __exit__(self, *exc: object) -> None:
-        self._bar.__exit__(*exc)
-
-
 def show_init(result: Any, as_json: bool) -> None:
     """``init``: the files written, what the datasheet gave, and the next command."""
     if as_json:

@@ -53,7 +53,7 @@ def comment_safe(text: str) -> str:
     """Text that cannot end a C block comment or form a trigraph (``-Wall`` warns),
     printable ASCII (:func:`~tuflexperf.export.model.plain_ascii`)."""
     text = plain_ascii(text).replace("*/", "* /").replace("/*", "/ *")
-    # every "?" before another apart: one pass of "??" -> "? ?" left "???" as "? ??" (audit)
+    # every "?" before another apart: one pass of "??" -> "? ?" leaves "???" as "? ??"
     return re.sub(r"\?(?=\?)", "? ", text)
 
 

@@ -45,7 +45,6 @@ from tuflexperf.export.model import (
 )
 from tuflexperf.io import swap
 
-FMU_NAME = "tfp_thrust.fmu"
 MODEL_IDENTIFIER = "tfp_thrust"
 DEFAULT_SAMPLE_TIME_S = 0.001
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
@@ -110,7 +109,6 @@ def model_description(model: ExportModel) -> str:
     n = model.n_engines
     refs = value_references(n)
     low, high = prop.tested_airspeed_m_s
-    reference = prop.reference_density_kg_m3 or 1.225
     variables: list[str] = []
 
     def scalar(name: str, causality: str, description: str, real: str, extra: str = "") -> None:
@@ -125,7 +123,7 @@ def model_description(model: ExportModel) -> str:
                ' start="0"', ' variability="continuous"')
     scalar("airspeed_m_s", "input", f"true airspeed in m/s (tested {low:g}..{high:g} m/s)",
            ' start="0"', ' variability="continuous"')
-    scalar("density_kg_m3", "input", "air density in kg/m^3", f' start="{reference!r}"',
+    scalar("density_kg_m3", "input", "air density in kg/m^3", f' start="{c_density(model)}"',
            ' variability="continuous"')
     for i, engine in enumerate(prop.engines):
         scalar(f"thrust_{i + 1}_n", "output",
@@ -479,7 +477,7 @@ def build_fmu(model: ExportModel, target: Path) -> Path:
     FMI 2.0.1 standard, section 2.3 (the zip layout: modelDescription.xml, sources/, binaries/).
     """
     wanted = os.environ.get("CC", "").strip()
-    if wanted and shutil.which(wanted) is None:  # gcc was taken instead, unsaid (re-audit)
+    if wanted and shutil.which(wanted) is None:  # said, not gcc taken instead
         raise InputError(f"--format fmu: CC={wanted!r} is no compiler on this machine (one "
                          "program, no arguments; unset CC to use gcc)")
     compiler = find_compiler()
@@ -512,7 +510,7 @@ def build_fmu(model: ExportModel, target: Path) -> Path:
                              f"{exc.strerror}; set CC to a working one") from None
         if done.returncode != 0:
             # the generated C compiles under -Wall -Wextra (tests): a failure is the compiler's
-            # (CC=/bin/false gave a traceback; outside audit), said in one line
+            # (CC=/bin/false), said in one line
             said = (done.stderr or done.stdout).strip().splitlines()
             raise InputError(f"--format fmu: the C compiler {compiler} failed (exit "
                              f"{done.returncode}): {said[0] if said else 'no message'}; set CC "

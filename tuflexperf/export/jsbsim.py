@@ -20,7 +20,7 @@ JSBSim keeps ``N = floor(delay / dt)`` frames in its delay buffer and hands the 
 ``N - 1`` frames after the frame it was set in (its ring buffer, FGFCSComponent::Delay), so
 its dead time is ``floor(delay / dt) - 1`` frames: one or two frames short of the model's
 ``round(delay / dt)`` samples (0.05 s: 5 frames = 42 ms at its default 120 Hz, 20 ms at
-50 Hz, none at 30 Hz or slower; outside audit). Run JSBSim at ``dt <= delay / 4`` for a dead
+50 Hz, none at 30 Hz or slower). Run JSBSim at ``dt <= delay / 4`` for a dead
 time within a quarter of the model's. The lag is discretised with Tustin's rule. Steady-state forces
 are exact. Forces are in lbf (JSBSim's unit).
 
@@ -41,12 +41,9 @@ from tuflexperf.export.model import (
     model_notes,
     xml_comment,
 )
+from tuflexperf.io.vendor import LBF_N
 from tuflexperf.models.thrust import POLY22_TERMS, max_model_airspeed_m_s
 
-SYSTEM_FILE = "tfp_thrust_system.xml"
-REACTIONS_FILE = "tfp_thrust_reactions.xml"
-#: 1 lbf in N (international pound x standard gravity, exact).
-LBF_N = 0.45359237 * 9.80665
 #: 1 slug/ft^3 in kg/m^3 (1 slug = 1 lbf s^2 / ft).
 SLUG_FT3_KG_M3 = LBF_N / 0.3048 / 0.3048**3
 FT_M = 0.3048
@@ -80,8 +77,7 @@ def _number(value: float) -> str:
 
 
 def _attribute(text: str) -> str:
-    """A double-quoted XML attribute's text: ``&``, ``<``, ``>`` and ``"`` escaped (an engine
-    named with a quote wrote ``name="tfp-EDF"2"``, no XML; outside audit)."""
+    """A double-quoted XML attribute's text: ``&``, ``<``, ``>`` and ``"`` escaped."""
     return escape(xml_comment(text), {'"': "&quot;"})
 
 

@@ -41,21 +41,20 @@ EXTRAPOLATION_WARNING = (
 
 def plain_ascii(text: str) -> str:
     """``text`` as printable ASCII, every other character as its Python backslash escape
-    (``é`` -> ``\\xe9``, a control byte ``\\x01`` likewise): a file name's control byte
-    had made the exported XML unreadable by JSBSim and FMPy (outside audit)."""
+    (``é`` -> ``\\xe9``, a control byte ``\\x01`` likewise): a control byte makes the
+    exported XML unreadable by JSBSim and FMPy."""
     return "".join(ch if " " <= ch <= "~" else ch.encode("unicode_escape").decode("ascii")
                    for ch in str(text))
 
 
 def xml_comment(text: str) -> str:
-    """Text for an XML comment (:func:`plain_ascii`), with no ``--`` (forbidden there;
-    ``---`` once became ``--``: outside audit)."""
+    """Text for an XML comment (:func:`plain_ascii`), with no ``--`` (forbidden there)."""
     return re.sub(r"-{2,}", "-", plain_ascii(text))
 
 
 def model_notes(prop: Any) -> list[str]:
-    """What the exported functions leave to their user, said in every format (outside audit:
-    the voltage effect and a dead engine's drag were in no C, CasADi, FMU or JSBSim file).
+    """What the exported functions leave to their user, said in every format (the voltage
+    effect and a dead engine's drag are in no C, CasADi, FMU or JSBSim function).
 
     The functions give the thrust at the reference pack voltage, and a throttle-0 engine's
     ``T(0, v)``; the tool's own analyses scale by the pack voltage and give a dead engine its
@@ -300,27 +299,6 @@ def thrust_step_function(propulsion: Propulsion, sample_time_s: float) -> Any:
 STEP_SAMPLE_TIME_S = 0.001
 
 
-def throttle_for_thrust(
-    propulsion: Propulsion, total_thrust_n_: Any, airspeed_m_s: Any, density_kg_m3: Any
-) -> tuple[Any, Any]:
-    """Least common throttle fraction whose total thrust reaches ``total_thrust_n_`` (numpy).
-
-    Returns ``(throttle, reached)``; see :func:`least_throttle_reaching`. Vectorised reference
-    for the exported C and CasADi inverses (same coefficients, same steps).
-    """
-    import numpy as np
-
-    q = quadratic_coefficients(propulsion)
-    v = np.asarray(airspeed_m_s, dtype=float)
-    s = np.asarray(density_ratio(propulsion, np.asarray(density_kg_m3, dtype=float)), dtype=float)
-    a = s * q["qa"]
-    b = s * (q["qb0"] + q["qb1"] * v)
-    c = s * (q["qc0"] + q["qc1"] * v + q["qc2"] * v * v) - np.asarray(total_thrust_n_, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        throttle, reached = least_throttle_reaching(a, b, c)
-    return np.asarray(throttle, dtype=float), np.asarray(reached, dtype=bool)
-
-
 def inverse_function(propulsion: Propulsion) -> Any:
     """CasADi ``tfp_throttle_for_thrust(total_thrust_n, airspeed_m_s, density_kg_m3)``.
 
@@ -421,7 +399,7 @@ def model_description(model: ExportModel) -> dict[str, Any]:
 
 def _json_plain(value: Any) -> Any:
     """Free-form provenance as JSON can hold it: what YAML read as a date, a timestamp,
-    bytes, a set or a NaN as text (each ended the export in a traceback; outside re-audit)."""
+    bytes, a set or a NaN as text."""
     if isinstance(value, dict):
         return {str(key): _json_plain(item) for key, item in value.items()}
     if isinstance(value, (set, frozenset)):

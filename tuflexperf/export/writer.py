@@ -81,8 +81,7 @@ def parse_formats(text: str) -> tuple[str, ...]:
 
 def _save_function(function: Any, path: Path) -> None:
     """``function.save`` to ``path``, by way of a plain temporary name: CasADi opens the file
-    itself, and a path of bytes that are no UTF-8 reached it as '' (a traceback; outside
-    audit)."""
+    itself, and a path of bytes that are no UTF-8 reaches it as ''."""
     from tuflexperf.io import swap
 
     with swap.scratch("export") as scratch:

@@ -54,8 +54,8 @@ def output_path(out: Path | str) -> Path:
     """Where an output named ``out`` lands: its folder resolved as the OS resolves it once the
     missing folders exist, its own name kept (a symbolic link there is still seen as one).
 
-    ``missing/../folder`` is ``folder``: checked as written, nothing was there, the missing
-    folder was made and the write replaced the user's folder (outside audit).
+    ``missing/../folder`` is ``folder``: checked as written, nothing would be there, and the
+    write would replace the user's folder.
     """
     out = Path(out)
     if out.name in ("", ".", ".."):
@@ -66,7 +66,7 @@ def output_path(out: Path | str) -> Path:
 # Each single file the tool writes carries the sha256 of its bytes in an extended attribute:
 # metadata of the file itself (no second file), which a copy (`cp`) or an editor's new file
 # drops and an edit in place outdates. A later run replaces a CSV or PNG only as written (its
-# header alone let a user's edited copy be replaced; outside audit). Where the file system
+# header alone would let a user's edited copy be replaced). Where the file system
 # keeps no extended attributes, how the file begins is all there is to go by.
 WRITTEN_XATTR = "user.tuflexperf.sha256"
 _UNKNOWN = "unknown"  # no extended attributes here: whether we wrote it cannot be told
@@ -231,8 +231,8 @@ def refuse_foreign_files(outputs: dict[str, Path], command: str,
     """Refuse (exit 2) to replace an existing file that ``command`` did not write (SPEC 5:
     a fitted model is not a mission's to overwrite, nor a report page a sweep's), or that
     is another artefact than the one its flag writes (``kinds``: flag -> artefact of
-    :data:`ARTEFACT_WRITERS`): fit's ``--table`` replaced a fitted propulsion model with a
-    CSV, and sweep's ``--csv`` its own carpet plot, with exit 0 (outside audit)."""
+    :data:`ARTEFACT_WRITERS`): fit's ``--table`` may not replace a fitted propulsion model,
+    nor sweep's ``--csv`` its own carpet plot."""
     for flag, out in outputs.items():
         out, target = Path(out), output_path(out)
         if target.is_symlink():  # replacing it would replace the user's link, not write through
@@ -240,13 +240,13 @@ def refuse_foreign_files(outputs: dict[str, Path], command: str,
                              "or another path")
         if not os.path.lexists(target) or target.is_dir():
             continue
-        if not target.is_file():  # a FIFO blocked the read below for ever (outside audit)
+        if not target.is_file():  # a FIFO would block the read below for ever
             raise InputError(f"{flag}: {out} is not a regular file; refusing to replace it, "
                              "choose another path")
         try:
             with open(target, "rb") as handle:
-                # a mission history's header grows with its engines' names: 4 KiB cut one
-                # of four 200-character names, refused as "not an earlier output" (audit)
+                # a mission history's header grows with its engines' names (four of 200
+                # characters pass 4 KiB)
                 head = handle.read(1 << 16)
         except OSError:
             head = None

@@ -135,12 +135,12 @@ class BatteryFitSchema(StrictModel):
     """Written by ``tuflexperf fit``: the pack model fitted to the runs (check never fits)."""
 
     # the file's capacity_ah the model was fitted with: a label edited after the fit is
-    # refused, since a relabelled file counted its reserve on charge the pack does not give
-    # while --set flew it scaled (outside audit; absent in files written before it)
+    # refused, since a relabelled file would count its reserve on charge the pack does not
+    # give, while --set flies it scaled (absent in files written before it)
     capacity_ah: Positive | None = None
     # likewise the pack's cells: the circuit is the fitted pack's, and a file relabelled 10S
-    # flew a 34 V cut-off on the 12S circuit, voltages no run measured, where fit refuses it
-    # (outside audit); and the cut-off its runs end at: a lower one flies the pack model
+    # would fly a 34 V cut-off on the 12S circuit, voltages no run measured, where fit
+    # refuses it; and the cut-off its runs end at: a lower one flies the pack model
     # below what they measured, which is said (absent in files written before them)
     cells_in_series: Annotated[int, Field(ge=1)] | None = None
     cutoff_voltage_per_cell_v: Positive | None = None
@@ -162,7 +162,7 @@ class BatterySchema(StrictModel):
     file_kind: ClassVar[str] = "battery"  # named when another kind of file is given
     name: Name
     cells_in_series: Annotated[int, Field(ge=1, le=100)]
-    # no aircraft pack holds more (a what-if of 1e308 Ah "flew" 4e20 min: outside audit)
+    # no aircraft pack holds more
     capacity_ah: Annotated[float, Field(gt=0, le=MAX_CAPACITY_AH)]
     nominal_voltage_v: Positive | None = None
     max_discharge_c: Positive | None = None
@@ -314,61 +314,45 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
         if not target.name.lower().endswith((".csv", ".csv.gz", ".mat")):
             raise InputError(f"{path}: runs[{index}].file: expected a .csv, .csv.gz or .mat "
                              f"run file, got {run.file}")
-        # it would count twice, under a second name (a hard link) too (outside re-audit)
+        # it would count twice, under a second name (a hard link) too
         if any(target == earlier.path or same_file(target, earlier.path) for earlier in runs):
             raise InputError(f"{path}: runs[{index}].file: {run.file} is listed twice")
         runs.append(DischargeRunRef(path=target, engine=run.engine))
     if schema.fit is not None and not refitting:
+        again = f"fit it again (tuflexperf fit {path.name} --out ...)"
         fitted_with = schema.fit.capacity_ah
         if fitted_with is not None and not math.isclose(fitted_with, schema.capacity_ah,
                                                         rel_tol=1e-9):
             raise InputError(
                 f"{path}: capacity_ah: {schema.capacity_ah:g} Ah, but the pack model in `fit:` "
-                f"was fitted with capacity_ah {fitted_with:g} Ah; fit it again (tuflexperf fit "
-                f"{path.name} --out ...), or keep {fitted_with:g} Ah in the file and fly another "
-                f"size with --set battery.capacity_ah={schema.capacity_ah:g}"
+                f"was fitted with capacity_ah {fitted_with:g} Ah; {again}, or keep "
+                f"{fitted_with:g} Ah in the file and fly another size with --set "
+                f"battery.capacity_ah={schema.capacity_ah:g}"
             )
         fitted_cells = schema.fit.cells_in_series
         if fitted_cells is not None and fitted_cells != schema.cells_in_series:
             raise InputError(
                 f"{path}: cells_in_series: {schema.cells_in_series}, but the pack model in "
-                f"`fit:` was fitted with cells_in_series {fitted_cells}; fit it again "
-                f"(tuflexperf fit {path.name} --out ...)")
+                f"`fit:` was fitted with cells_in_series {fitted_cells}; {again}")
         fitted = schema.fit.parameters.max_capacity_ah
         if not 0.5 <= fitted / schema.capacity_ah <= 2.0:  # edited after the fit
             raise InputError(
                 f"{path}: capacity_ah: {schema.capacity_ah:g} Ah, but the pack model in `fit:` "
-                f"holds {fitted:.3g} Ah; fit it again (tuflexperf fit {path.name} --out ...)"
-            )
+                f"holds {fitted:.3g} Ah; {again}")
         refuse_label_beyond_fitted(path, schema.capacity_ah, fitted)
         # matched by position and name (a copied file may point at its runs another way);
         # the content is then checked by sha256 where the fit is used
         stored = [Path(r.file).name for r in schema.fit.runs]
         if stored != [r.path.name for r in runs]:
-            raise InputError(
-                f"{path}: fit.runs: the fitted runs are not the file's runs; fit it again "
-                f"(tuflexperf fit {path.name} --out ...)"
-            )
-    fan, mission = schema.fan_power, schema.mission
+            raise InputError(f"{path}: fit.runs: the fitted runs are not the file's runs; {again}")
+    fan = schema.fan_power
+    same = ("name", "cells_in_series", "capacity_ah", "packs_in_parallel_per_engine",
+            "cutoff_voltage_per_cell_v", "nominal_voltage_v", "max_discharge_c")
     return Battery(
-        name=schema.name,
-        path=path.resolve(),
-        cells_in_series=schema.cells_in_series,
-        capacity_ah=schema.capacity_ah,
-        packs_in_parallel_per_engine=schema.packs_in_parallel_per_engine,
-        cutoff_voltage_per_cell_v=schema.cutoff_voltage_per_cell_v,
-        runs=tuple(runs),
-        published_power_range_w=(fan.published_power_range_w[0], fan.published_power_range_w[1]),
-        published_static_thrust_range_n=(
-            fan.published_static_thrust_range_n[0],
-            fan.published_static_thrust_range_n[1],
-        ),
-        jet_velocity_m_s=fan.jet_velocity_m_s,
-        pattern_altitude_m=mission.pattern_altitude_m,
-        landing_reserve_fraction=mission.landing_reserve_fraction,
-        nominal_voltage_v=schema.nominal_voltage_v,
-        max_discharge_c=schema.max_discharge_c,
-        fitted=schema.fit,
+        **{key: getattr(schema, key) for key in same}, path=path.resolve(), runs=tuple(runs),
+        published_power_range_w=tuple(fan.published_power_range_w),
+        published_static_thrust_range_n=tuple(fan.published_static_thrust_range_n),
+        jet_velocity_m_s=fan.jet_velocity_m_s, **schema.mission.model_dump(), fitted=schema.fit,
     )
 
 
@@ -395,8 +379,8 @@ def refuse_label_beyond_fitted(path: Path, capacity_ah: float, max_capacity_ah: 
     """Bad input when ``capacity_ah`` [Ah] exceeds the fitted circuit's full charge
     ``max_capacity_ah`` [Ah], where its voltage collapses: no discharge of that pack gives
     the label, and the landing reserve, a fraction of it, would be counted on charge the
-    pack does not hold (a 5 Ah pack relabelled and refitted as 6 Ah "landed with 20 %"
-    0.6 min before its cut-off; outside audit)."""
+    pack does not hold (a 5 Ah pack relabelled 6 Ah would "land with 20 %" 0.6 min before
+    its cut-off)."""
     if capacity_ah > max_capacity_ah * (1.0 + 1e-9):
         raise InputError(
             f"{path}: capacity_ah: {capacity_ah:g} Ah is more than the fitted pack holds "
@@ -432,7 +416,7 @@ def refuse_contradicted_capacity(battery: Battery, drawn: Sequence[tuple[str, fl
     if most is not None and battery.capacity_ah > LABEL_OVER_DRAWN * most:
         # the landing reserve and the charge left are fractions of capacity_ah: a label twice
         # what the runs drew to their cut-off let a cruise to the cut-off 'land with half the
-        # charge' and pass (outside audit)
+        # charge' and pass
         raise InputError(
             f"{battery.path}: capacity_ah: {battery.capacity_ah:g} Ah is more than "
             f"{LABEL_OVER_DRAWN:g} x the most any discharge run drew to its cut-off "

@@ -90,8 +90,7 @@ MAX_FILTER_WINDOW_S = 10.0
 class FilterSettings(StrictModel):
     """Filter windows in seconds (never samples) and the outlier threshold (paper section 4)."""
 
-    # a window as long as a throttle plateau (seconds) averages across the steps; one of
-    # 1e6 s took a minute and 1e308 overflowed (outside audit)
+    # a window as long as a throttle plateau (seconds) averages across the steps
     outlier_window_s: Annotated[float, Field(gt=0, le=MAX_FILTER_WINDOW_S)] = 2.0
     outlier_threshold: Annotated[float, Field(gt=0, le=100)] = 1.5
     median_window_s: Annotated[float, Field(gt=0, le=MAX_FILTER_WINDOW_S)] = 0.1
@@ -100,8 +99,7 @@ class FilterSettings(StrictModel):
 class CampaignSchema(ThrustStandKeys):
     file_kind: ClassVar[str] = "campaign"  # named when another kind of file is given
     name: Annotated[Name, Field(min_length=1)]
-    # a fan of 3.6 mm to a tunnel of 100 m x 100 m: 1e-300 m^2 was fitted with a figure of
-    # merit 130 digits long (outside audit)
+    # a fan of 3.6 mm to a tunnel of 100 m x 100 m
     fan_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=MAX_FAN_AREA_M2)]
     # a static thrust stand has no tunnel: no blockage to correct, nothing to give
     tunnel_area_m2: Annotated[float, Field(ge=MIN_FAN_AREA_M2, le=1.0e4)] | None = None
@@ -204,7 +202,7 @@ def load_campaign(path: Path | str) -> Campaign:
         if not resolved.is_file():
             raise InputError(f"{path}: runs[{index}].file: {why_not_a_file(resolved)}: "
                              f"{entry.file}")
-        # one file under two names (a hard link) is the same run too (outside audit)
+        # one file under two names (a hard link) is the same run too
         if any(earlier.kind == run.kind and (earlier.path == resolved
                                              or same_file(earlier.path, resolved))
                for earlier in used):
@@ -215,7 +213,7 @@ def load_campaign(path: Path | str) -> Campaign:
     if not any(run.kind == "throttle_steps" for run in used):
         raise InputError(f"{path}: runs: no throttle_steps run, nothing to fit")
     if not any(run.vendor is not None for run in (*used, *ignored)):
-        # a run's own such key is refused; the manifest's was ignored unsaid (outside audit)
+        # a run's own such key is refused, and the manifest's is not ignored unsaid
         for key in ("esc_pulse_us", "thrust_sign", "airspeed_m_s"):
             if getattr(schema, key) is not None:
                 raise InputError(f"{path}: {key}: only for a thrust-stand format (format: "

@@ -139,8 +139,7 @@ def check_key(case: Case, key: str, where: str, unset: bool = False) -> None:
     parts = key.split(".")
     if (len(parts) == 3 and parts[0] == "requirements" and parts[1] in Requirements.model_fields
             and getattr(case.requirements, parts[1]) is None):
-        # a real key of a block the case leaves out: "did you mean" another block's key
-        # misled (outside audit)
+        # a real key of a block the case leaves out ("did you mean" another block's misleads)
         raise InputError(f"{where}: {key}: the case has no requirements.{parts[1]} block "
                          "to change; add it to the case file")
     if key in _BOUND_KEYS:
@@ -230,13 +229,12 @@ def _problem(exc: ValidationError) -> str:
     return str(exc.errors()[0]["msg"]).removeprefix("Value error, ")
 
 
-def _replace_pydantic(model: BaseModel, path: list[str], value: float) -> BaseModel:
-    data = model.model_dump()
-    node = data
+def _set_in(data: dict[str, Any], path: list[str], value: float) -> dict[str, Any]:
+    """``value`` at the nested ``path`` of ``data`` (in place); the innermost mapping."""
     for part in path[:-1]:
-        node = node[part]
-    node[path[-1]] = value
-    return type(model).model_validate(data)
+        data = data[part]
+    data[path[-1]] = value
+    return data
 
 
 def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -> Case:
@@ -259,12 +257,11 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
                 # the case's overrides: only the value's own bounds here
                 check_value(case, key, float(value), where, unset=True)
             elif head == "aircraft":
-                node = aircraft
-                for part in rest[:-1]:
-                    node = node[part]
-                node[rest[-1]] = float(value)
+                _set_in(aircraft, rest, float(value))
             elif head == "atmosphere":
-                atmosphere = _replace_pydantic(atmosphere, rest, float(value))
+                data = atmosphere.model_dump()
+                _set_in(data, rest, float(value))
+                atmosphere = type(atmosphere).model_validate(data)
             else:
                 # each value against its own field now; a rule across fields (the envelope's
                 # min below its max) once all are set, so both bounds may move together
@@ -275,10 +272,7 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
     if changed:
         data = requirements.model_dump(exclude_none=True)  # absent blocks stay absent
         for rest, value in changed.values():
-            node = data
-            for part in rest[:-1]:
-                node = node[part]
-            node[rest[-1]] = value
+            node = _set_in(data, rest, value)
             # an envelope bound set as true airspeed replaces its equivalent one, and back
             other = _OTHER_KIND_OF_BOUND.get(rest[-1]) if rest[0] == "envelope" else None
             if other is not None and not any(r[-1] == other for r, _ in changed.values()):
@@ -289,7 +283,7 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
             keys = ", ".join(f"{k}={v:g}" for k, (_, v) in changed.items())
             raise InputError(f"{where}: {keys}: {_problem(exc)}") from None
     try:
-        AircraftSchema.model_validate({k: v for k, v in aircraft.items()})
+        AircraftSchema.model_validate(aircraft)
     except ValidationError as exc:
         error = exc.errors()[0]
         loc = ".".join(["aircraft", *(str(p) for p in error["loc"])])
@@ -301,8 +295,8 @@ def with_values(case: Case, values: Mapping[str, float], where: str = "--set") -
         case, aircraft=new_aircraft, atmosphere=atmosphere, requirements=requirements,
         overrides=(*case.overrides, *((k, float(v)) for k, v in values.items())),
     )
-    # the files' cross checks hold for the changed case too: a 1e-9 kg aircraft passed on
-    # --set what its file refuses (thrust 1e10 x its weight; outside audit)
+    # the files' cross checks hold for the changed case too (a 1e-9 kg aircraft on --set as
+    # in its file)
     try:
         refuse_absurd_propulsion(changed_case)
     except InputError as exc:

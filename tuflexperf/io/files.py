@@ -23,36 +23,19 @@ from typing import Any
 from tuflexperf.errors import InputError
 from tuflexperf.io import swap
 from tuflexperf.io.artefacts import (  # noqa: F401 - re-exported: the writers' checks
-    _UNKNOWN,
-    ARTEFACT_WRITERS,
     FIT_PROPULSION_HEADER,
-    FLIGHT_CSV_COLUMNS,
     FLIGHT_PNG_SOFTWARE,
     MARKER,
-    MISSION_CSV_COLUMNS,
-    MISSION_CSV_ENGINE_COLUMNS,
-    PNG_SOFTWARE,
-    REQUIREMENT_NAMES,
     SEAL,
     SWEEP_PNG_SOFTWARE,
-    WRITTEN_XATTR,
     _mark_written,
-    artefact_of,
-    fit_yaml_kind,
     output_path,
     refuse_foreign_files,
     seal_intact,
     sealed,
     sha256_of,
-    written_mark,
 )
-from tuflexperf.io.inputs import (  # noqa: F401 - re-exported: every reader's, named here too
-    MAX_RUN_BYTES,
-    MAX_TABLE_BYTES,
-    MAX_YAML_BYTES,
-    check_input_file,
-    why_not_a_file,
-)
+from tuflexperf.io.inputs import why_not_a_file  # noqa: F401 - re-exported: every reader's
 
 
 def user_umask() -> int:
@@ -70,8 +53,7 @@ def _os_error(path: Path, exc: OSError) -> InputError:
 
 def _staged_os_error(exc: OSError, staging: Path, out: Path) -> InputError:
     """An OS error inside a staged run: a write where it names the staging folder (or no
-    file), else the read of the input it names (an unreadable campaign run was reported as
-    "--out folder: cannot write: Permission denied"; outside audit)."""
+    file), else the read of the input it names (an unreadable run is no write failure)."""
     name = exc.filename
     if isinstance(name, (str, bytes, os.PathLike)):
         path = Path(os.fsdecode(name))
@@ -82,10 +64,9 @@ def _staged_os_error(exc: OSError, staging: Path, out: Path) -> InputError:
 
 def _short(name: str) -> str:
     """An output's name as its hidden helpers' names begin with: cut so that they stay within
-    the 255 bytes a name may have (an output named with 240 characters was written once,
-    then never replaced: its ``.old-`` name was too long; outside re-audit)."""
-    # as the file system has it: a name of bytes that are no UTF-8 (surrogate escapes)
-    # made every writer raise (outside audit); a character cut in two stays an escape
+    the 255 bytes a name may have (a long output's ``.old-`` name must fit too)."""
+    # in the file system's bytes (a name that is no UTF-8 has surrogate escapes); a character
+    # cut in two stays an escape
     return os.fsdecode(os.fsencode(name)[:200])
 
 
@@ -121,8 +102,8 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
     and get the user's umask (``mkstemp`` alone makes them 0600). On any failure, including
     an interrupt, no temporary file is left, no target is touched and no folder made for
     them stays. The renames run as one step with the interrupts held: an interrupt that
-    comes meanwhile puts every earlier file back (a Ctrl-C between two renames left a new
-    output beside the earlier table; outside audit) and is then raised.
+    comes meanwhile puts every earlier file back (never a new output beside an earlier one)
+    and is then raised.
     """
     staged: list[tuple[str, Path]] = []
     created: list[Path] = []
@@ -193,11 +174,6 @@ def write_files_atomically(files: dict[Path, bytes | str]) -> None:
         raise
 
 
-def atomic_write_bytes(path: Path | str, data: bytes) -> None:
-    """Write ``data`` to ``path`` via a temporary file and a rename: never half-written."""
-    write_files_atomically({Path(path): data})
-
-
 def atomic_write_text(path: Path | str, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` via a temporary file and a rename."""
     write_files_atomically({Path(path): text})
@@ -226,7 +202,7 @@ def _state_of(path: Path) -> tuple[int, int, int] | None:
 
 def _refuse_changed_since_guarded(target: Path) -> None:
     """Refuse to rename onto an output that changed after :func:`guard_outputs` allowed it
-    (a file the user saved there while the command ran was overwritten; outside audit)."""
+    (a file the user saved there while the command ran is theirs)."""
     seen = _guarded.get(target.resolve())
     if seen is not None and _state_of(target) != seen[2]:
         raise InputError(f"{seen[0]}: {seen[1]} changed while this command ran; refusing to "
@@ -275,16 +251,15 @@ def check_output_dir(out: Path, command: str, inputs: Iterable[Path] = ()) -> No
     command wrote (the marker lists it), and none of the command's ``inputs``.
 
     Anything else — a file, a symbolic link, a folder of the user's, an earlier output the
-    user has added files to or that holds an input (a case saved there under a name the
-    command writes was replaced by its output; outside audit) — is bad input: replacing it
-    would delete what the command did not write.
+    user has added files to or that holds an input — is bad input: replacing it would delete
+    what the command did not write.
     """
     shown, out = Path(out), output_path(out)
     inside = out.resolve()
     with contextlib.suppress(OSError):  # a working directory that is gone holds nothing
         here = Path.cwd().resolve()
         if inside == here or inside in here.parents:
-            # replacing it left the shell in a deleted folder (outside audit)
+            # replacing it would leave the shell in a deleted folder
             raise InputError(f"--out: {shown} is the working directory or holds it; "
                              "choose a folder inside or beside it")
     for source in inputs:
@@ -329,15 +304,14 @@ def _refuse_unless_earlier_output(out: Path, shown: Path, command: str) -> None:
             and isinstance(hashes, dict)
             and all(isinstance(k, str) and isinstance(v, str) for k, v in hashes.items())):
         # an earlier version's marker (names only) or one edited by hand: which files the
-        # user changed cannot be told (a marker without its hashes let edits go; audit)
+        # user changed cannot be told
         raise InputError(
             f"--out: {shown} was written by `tuflexperf {command}` without the files' "
             "sha256 (an earlier version, or its marker edited): whether you changed them "
             "cannot be told; refusing to replace it, remove it or choose another folder"
         )
-    # each file as the command wrote it: an edit since is the user's work (an edited
-    # tfp_thrust.c, or a folder of notes where a written file was, went with the folder;
-    # outside audit)
+    # each file as the command wrote it: an edit since (a changed tfp_thrust.c, a folder of
+    # notes where a written file was) is the user's work
     _refuse_held(shown, [name for name in entries if name in hashes
                          and _sha256_or_none(out / name) != hashes[name]],
                  f"changed since `tuflexperf {command}` wrote it")
@@ -346,7 +320,7 @@ def _refuse_unless_earlier_output(out: Path, shown: Path, command: str) -> None:
                          and name not in listed],
                  f"which the earlier `tuflexperf {command}` did not write")
     # its files are removed once the new output is in place: in a folder the user
-    # write-protected they cannot be, and every run left a hidden copy behind (audit)
+    # write-protected they cannot be, and every run would leave a hidden copy behind
     folders = _folders_of(out, entries)
     locked = next((f for f in folders if not os.access(f, os.W_OK | os.X_OK)), None)
     if locked is not None:
@@ -397,8 +371,8 @@ MAX_MARKER_BYTES = 16 << 20  # a marker lists files and their sha256: far below 
 
 
 def _read_marker_data(folder: Path) -> dict[str, Any]:
-    """The folder's marker, or ``{}`` when there is none that can be read as one: a FIFO
-    there hung, /dev/zero ran out of memory, deep nesting raised (outside re-audit)."""
+    """The folder's marker, or ``{}`` when there is none that can be read as one (a FIFO,
+    a device, a huge or deeply nested file is none)."""
     path = Path(folder) / MARKER
     try:
         info = path.lstat()
@@ -420,8 +394,8 @@ class _Terminated(KeyboardInterrupt):
     """SIGTERM (or SIGHUP), delivered as an interrupt so every cleanup path runs (exit 130)."""
 
 
-# Ctrl-C, kill, and the hang-up of a closed terminal or a dropped ssh session: a hang-up
-# had left the staging folder and the --workers helpers behind (outside audit)
+# Ctrl-C, kill, and the hang-up of a closed terminal or a dropped ssh session: each unwinds
+# the staging folder and the --workers helpers
 INTERRUPT_SIGNALS: tuple[int, ...] = tuple(
     getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 
@@ -450,7 +424,7 @@ def _raise_interrupt(signum: int, frame: object) -> None:
 @contextlib.contextmanager
 def _cleanup() -> Iterator[None]:
     """Hold interrupts while staging is removed on the way out: a second Ctrl-C landing in
-    the removal left staging folders behind (outside audit); the run is unwinding already."""
+    the removal would leave staging behind, and the run is unwinding already."""
     holding = _holding[0]
     _holding[0] = True
     try:
@@ -552,7 +526,7 @@ def _helper_body(target: Callable[..., None], args: tuple[Any, ...], parent: int
         target(*args)
     except Exception:  # noqa: BLE001 - said once, by the parent
         # the parent does again what a helper left undone, and reports an error there in
-        # one line (a full disk printed the helper's 35-line traceback as well; audit)
+        # one line (no helper's traceback beside it)
         os._exit(1)
 
 
@@ -600,8 +574,8 @@ def interrupted() -> bool:
 def _commit_or_back(held: Path, out: Path, shown: Path, command: str,
                     earlier: list[Path | None], staging: Path | None = None) -> None:
     """The earlier output, now at ``held``, is checked again where nothing reaches it by
-    its name (a note the user put into it while this run worked was deleted with it;
-    audit), then removed; on a failure or an interrupt it goes back to ``out``.
+    its name (a note the user put into it while this run worked is theirs), then removed;
+    on a failure or an interrupt it goes back to ``out``.
 
     ``staging`` None: ``out`` holds the new output already (exchanged); else ``out`` is
     free and the new output moves in from ``staging``. ``earlier[0]`` follows where the

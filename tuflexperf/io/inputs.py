@@ -28,7 +28,7 @@ def path_text(path: Path | str | bytes) -> str:
 
     Python holds such bytes as lone surrogates (``os.fsdecode``, surrogateescape), which
     the UTF-8 encoder of a YAML file, a JSON file or a PNG's text refuses: ``fit`` and
-    ``report`` under such a folder ended in a ``UnicodeEncodeError`` (outside audit).
+    ``report`` under such a folder must not end in a ``UnicodeEncodeError``.
     """
     text = os.fsdecode(path) if isinstance(path, (bytes, os.PathLike)) else path
     try:
@@ -117,8 +117,7 @@ def check_input_file(path: Path | str, what: str = "file", max_bytes: int = MAX_
 
 def why_not_a_file(path: Path | str) -> str:
     """Why ``path`` is no input file: ``file not found``, or what it is instead (a directory,
-    a pipe or device) — "file not found" of a folder sent the user looking for a missing file
-    (outside audit)."""
+    a pipe or device), never "file not found" of a file that is there."""
     path = Path(path)
     if path.is_dir():
         return "a directory, not a file"

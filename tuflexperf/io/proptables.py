@@ -43,12 +43,12 @@ from tuflexperf.io.inputs import (
     why_not_a_file,
 )
 from tuflexperf.io.runs import ThrustTable
+from tuflexperf.io.vendor import LBF_N
 from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, load_model
 
 MPH_M_S = 0.44704  # exact (1609.344 m / 3600 s)
-LBF_N = 0.45359237 * 9.80665  # exact
 ISA_SEA_LEVEL_DENSITY_KG_M3 = 1.225
-# the largest propellers are ~6 m across; 1e100 m overflowed far from the file (outside audit)
+# the largest propellers are ~6 m across
 Diameter = Annotated[float, Field(gt=0, le=10.0)]
 Rpm = Annotated[float, Field(gt=0, le=500_000.0)]
 AirDensity = Annotated[float, Field(gt=0, le=2.0)]  # ISA sea level 1.225
@@ -147,7 +147,7 @@ def read_apc_per3(path: Path) -> list[tuple[float, np.ndarray]]:
                 rpm = float(found.group(1))
             except ValueError:
                 rpm = math.nan
-            # 'PROP RPM = .' gave a traceback, '= 0' a division by zero (outside audit)
+            # 'PROP RPM = .' or '= 0' is no speed
             if not (math.isfinite(rpm) and rpm > 0):
                 raise InputError(f"{path_text(path)}: line {number}: 'PROP RPM = "
                                  f"{found.group(1)}' is no speed (a positive number of rpm)")
@@ -175,8 +175,7 @@ def _refuse_row(path: Path, number: int, used: dict[str, float], j_name: str, j:
                 previous_j: float | None, airspeed: tuple[str, float] | None = None) -> None:
     """Bad input naming the file, line and column: a NaN or infinity in a column used, a
     negative airspeed or advance ratio, or an advance ratio below the row before it in
-    the same rpm block. Each was accepted: a negative J flipped the coefficients' signs and
-    the fit went on; a NaN was named by the manifest, not the table (outside audit)."""
+    the same rpm block (a negative J flips the coefficients' signs)."""
     where = f"{path_text(path)}: line {number}"
     for name, value in used.items():
         if not math.isfinite(value):

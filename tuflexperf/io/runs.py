@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from tuflexperf.errors import InputError
 from tuflexperf.io.vendor import (
     VendorSettings,
+    numeric_cells,
     read_vendor_columns,
     repeated_columns,
     repeated_header_error,
@@ -108,9 +109,8 @@ class _TooLarge(Exception):
 
 
 class _BoundedReader:
-    """A gzip stream that stops at ``limit`` unpacked bytes (a 9 MB bomb unpacked to 6 GB
-    of text and exhausted the memory; outside audit): the cap of a plain run file holds for
-    what the compressed one holds."""
+    """A gzip stream that stops at ``limit`` unpacked bytes (a 9 MB bomb unpacks to 6 GB):
+    the cap of a plain run file holds for what the compressed one holds."""
 
     def __init__(self, path: Path, limit: int) -> None:
         import gzip
@@ -145,13 +145,12 @@ def _first_line(path: Path) -> str:
 
 
 def _refuse_header(path: Path, header: str, semicolons: bool) -> None:
-    # binary bytes (NUL, not UTF-8) were described as a ';'-separated header (outside audit)
-    # (a Latin-1 degree sign is one bad byte in a header, not a tenth of it)
+    # binary bytes (NUL, not UTF-8) are no header (a Latin-1 degree sign is one bad byte in
+    # a header, not a tenth of it)
     if "\x00" in header or header.count("\ufffd") > 0.1 * len(header):
         raise InputError(f"{path}: holds binary bytes, not text: a run file is comma-separated "
                          "text (CSV) with a header row, or a .csv.gz / .mat of one")
-    # a continental-European export (and its decimal commas): it said "missing column
-    # 'time_s' (found: none)" or a tokenizer's error (outside audit)
+    # a continental-European export (and its decimal commas), named as such
     if semicolons:
         raise InputError(f"{path}: the header's columns are separated by ';'; a run file is "
                          "comma-separated (CSV), with decimal points")
@@ -193,20 +192,17 @@ def _read_csv_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
     names = [str(c).strip() for c in frame.columns]
     columns: dict[str, np.ndarray] = {}
     bad_cells: dict[str, tuple[int, str]] = {}
-    # by position: 'note' and 'note ' are two columns of one name once stripped (by name,
-    # a frame of both came back and broke the read; outside audit)
+    # by position: 'note' and 'note ' are two columns of one name once stripped
     for index, name in enumerate(names):
         raw = frame.iloc[:, index]
         if raw.dtype.kind in "biuf":
             columns[name] = raw.to_numpy(dtype=float)
             continue
-        numeric = pd.to_numeric(raw, errors="coerce")
-        bad = numeric.isna() & raw.notna() & (raw.astype(str).str.strip() != "")
-        if bad.any():
-            row = int(np.flatnonzero(bad.to_numpy())[0])
-            bad_cells[name] = (row + 2, str(raw.iloc[row]))  # +2: header line, 1-based
-            continue  # only an error if the column is needed
-        columns[name] = numeric.to_numpy(dtype=float)
+        values, bad = numeric_cells(raw)
+        if bad is not None:
+            bad_cells[name] = bad  # only an error if the column is needed
+        else:
+            columns[name] = values
     return columns, bad_cells
 
 
@@ -215,7 +211,7 @@ def _read_mat_columns(path: Path) -> tuple[dict[str, np.ndarray], dict[str, tupl
 
     from tuflexperf.io.inputs import MAX_RUN_BYTES
 
-    try:  # scipy's word for a file it may not open was "Reader needs file name" (audit)
+    try:  # scipy's word for a file it may not open is "Reader needs file name"
         open(path, "rb").close()
     except OSError as exc:
         raise InputError(f"{path}: {exc.strerror or exc}") from None
@@ -367,8 +363,8 @@ def read_run(
             f"({float(time_s[row - 1])!r} -> {float(time_s[row])!r})"
         )
     if "voltage_v" in arrays:
-        # a logger's dropout reads 0 V: a missing sample, repaired as a NaN is (one such
-        # sample refused the whole run; outside review); a channel mostly at 0 is refused there
+        # a logger's dropout reads 0 V: a missing sample, repaired as a NaN is (not the whole
+        # run refused); a channel mostly at 0 is refused there
         dropped = arrays["voltage_v"] <= 0.0
         if dropped.any() and not dropped.all():
             arrays["voltage_v"] = np.where(dropped, np.nan, arrays["voltage_v"])
@@ -393,9 +389,8 @@ def read_run(
                 f"expected a fraction in [0, 1]{hint}"
             )
     if "voltage_v" in arrays:
-        # a pack voltage logged in mV passed as a 24 kV pack and fitted a voltage effect
-        # giving 1e7 N (outside audit); one near zero broke the exponent's fit (samples at or
-        # below 0 V were repaired above, unless all are)
+        # a pack voltage logged in mV is no 24 kV pack, one near zero breaks the exponent's
+        # fit (samples at or below 0 V were repaired above, unless all are)
         typical = float(np.median(arrays["voltage_v"]))
         if not MIN_PACK_VOLTAGE_V <= typical <= MAX_PACK_VOLTAGE_V:
             hint = " (millivolts?)" if typical > MAX_PACK_VOLTAGE_V else ""
@@ -419,8 +414,7 @@ def read_run(
                              "negative (a tunnel blows one way: is its sign flipped?)")
     step = float(np.median(steps))
     if not MIN_SAMPLE_INTERVAL_S <= step <= MAX_SAMPLE_INTERVAL_S:
-        # a time base scaled by 1e-300 overflowed the filters with no file named, one by
-        # 1e300 was fitted (outside audit)
+        # a time base scaled by 1e-300 overflows the filters
         raise InputError(f"{path}: column time_s: a sample interval of {step:.3g} s is no "
                          f"measurement (expected {MIN_SAMPLE_INTERVAL_S:g}-"
                          f"{MAX_SAMPLE_INTERVAL_S:g} s; a time base in other units?)")
@@ -467,11 +461,11 @@ def read_thrust_table(path: Path | str) -> ThrustTable:
     from tuflexperf.io.inputs import MAX_TABLE_BYTES, check_input_file
     from tuflexperf.io.yamlio import engine_name_problem
 
-    # a FIFO hung it, /dev/zero filled the memory, 3 GB gave a traceback (outside audit)
+    # a FIFO, a device or a huge file is refused before it is read
     path = check_input_file(path, "thrust table (.csv)", MAX_TABLE_BYTES)
     try:
         data = path.read_bytes()
-        if data[:2] == b"\x1f\x8b":  # it said "cannot decode byte 0x8b" (outside audit)
+        if data[:2] == b"\x1f\x8b":  # not "cannot decode byte 0x8b"
             raise InputError(f"{path}: gzip-compressed; a thrust table is plain CSV text "
                              "(unpack it with gunzip)")
         text = data.decode("utf-8-sig")
@@ -533,8 +527,7 @@ def read_thrust_table(path: Path | str) -> ThrustTable:
     if backwards.size:
         raise InputError(f"{path}: line {backwards[0] + 2}: airspeed_m_s: "
                          f"{airspeed[backwards[0]]:g} is negative (a tunnel blows one way)")
-    # no ducted fan is tested beyond the speed of sound: 3e7 m/s was refused for a wrong
-    # reason, as points that do not determine the surface (outside audit)
+    # no ducted fan is tested beyond the speed of sound
     supersonic = np.flatnonzero(airspeed > MAX_AIRSPEED_M_S)
     if supersonic.size:
         raise InputError(f"{path}: line {supersonic[0] + 2}: airspeed_m_s: "

@@ -69,8 +69,7 @@ MAX_THRUST_SD_N = 1.0e5
 MAX_VOLTAGE_EXPONENT = 10.0
 
 class TakeoffSchema(StrictModel):
-    # the ground-roll attitude's lift coefficient is below the wing's most (cl_max's bound):
-    # 1e308 gave "the net force vanishes at nan m/s" (outside audit)
+    # the ground-roll attitude's lift coefficient is below the wing's most (cl_max's bound)
     cl_ground: Annotated[float, Field(ge=0, le=MAX_CL_MAX)]
     rolling_friction: Annotated[float, Field(ge=0, le=1)] = 0.04
     liftoff_speed_m_s: Positive | None = None  # EAS; replaces the factor
@@ -83,7 +82,7 @@ class TakeoffSchema(StrictModel):
 
 
 # a thousand tonnes: beyond any aircraft a ducted fan flies (from ~1e154 kg the weight's
-# square overflows: a traceback, outside audit)
+# square overflows)
 MAX_MASS_KG = 1.0e6
 
 
@@ -100,7 +99,7 @@ class AircraftSchema(StrictModel):
     cl_max: Annotated[float, Field(gt=0, le=MAX_CL_MAX)]
     takeoff: TakeoffSchema
     launch: Literal["runway", "catapult"] = "runway"
-    # EAS at the end of the catapult stroke; below Mach 1 (400 m/s "flew"; outside audit)
+    # EAS at the end of the catapult stroke; below Mach 1
     launch_speed_m_s: Annotated[float, Field(gt=0, le=MAX_AIRSPEED_M_S)] | None = None
     launch_energy_j: Annotated[float, Field(ge=0)] | None = None  # from ground equipment
 
@@ -110,7 +109,7 @@ class AircraftSchema(StrictModel):
             2.0 * self.mass_kg * G0_M_S2
             / (EAS_REFERENCE_DENSITY_KG_M3 * self.wing_area_m2 * self.cl_max)
         )
-        if stall_eas > MAX_AIRSPEED_M_S:  # a 1e-300 m^2 wing "flew" at 1e150 m/s (audit)
+        if stall_eas > MAX_AIRSPEED_M_S:  # a 1e-300 m^2 wing would "fly" at 1e150 m/s
             raise ValueError(
                 f"stall speed {stall_eas:.3g} m/s EAS is beyond the speed of sound: check "
                 "mass_kg, wing_area_m2 and cl_max"
@@ -132,16 +131,11 @@ class AircraftSchema(StrictModel):
             )
         # the stall EAS is the same at every density, so the check belongs to the file
         liftoff = self.takeoff.liftoff_speed_m_s
-        if liftoff is not None:
-            stall = math.sqrt(
-                2.0 * self.mass_kg * G0_M_S2
-                / (EAS_REFERENCE_DENSITY_KG_M3 * self.wing_area_m2 * self.cl_max)
+        if liftoff is not None and liftoff < stall_eas:
+            raise ValueError(
+                f"takeoff.liftoff_speed_m_s: {liftoff:g} m/s (EAS) is below the stall speed "
+                f"{stall_eas:.2f} m/s EAS (mass_kg, wing_area_m2, cl_max); lift-off needs >= stall"
             )
-            if liftoff < stall:
-                raise ValueError(
-                    f"takeoff.liftoff_speed_m_s: {liftoff:g} m/s (EAS) is below the stall speed "
-                    f"{stall:.2f} m/s EAS (mass_kg, wing_area_m2, cl_max); lift-off needs >= stall"
-                )
         return self
 
 
@@ -345,14 +339,14 @@ class PropulsionSchema(StrictModel):
     # airspeeds tested in the tunnel: none negative (a range of [-30, 30] was taken)
     tested_airspeed_m_s: Annotated[list[Annotated[float, Field(ge=0)]],
                                    Field(min_length=2, max_length=2)]
-    # a dead time or lag beyond MAX_DELAY_S is no fan's (1e9 s was taken; outside audit)
+    # a dead time or lag beyond MAX_DELAY_S is no fan's
     delay_s: Annotated[float, Field(ge=0.0, le=MAX_DELAY_S)] = 0.0
     lag_s: Annotated[float, Field(ge=0.0, le=MAX_DELAY_S)] = 0.0  # spool lag after delay_s
     # the test day's air: a test stand or tunnel is on the ground (ISA 11 km is 0.36; the
-    # coldest sea-level air ~1.5); 1e-9 scaled the thrust 1e9-fold into a PASS (outside audit)
+    # coldest sea-level air ~1.5); 1e-9 would scale the thrust 1e9-fold into a PASS
     reference_density_kg_m3: Annotated[float, Field(ge=0.3, le=2.0)] | None = None
     # a pack of any aircraft a ducted fan flies, and thrust ~ U^2 (rpm ~ U); beyond these the
-    # powers of the voltage ratio overflowed with a message naming no key (outside audit)
+    # powers of the voltage ratio overflow with a message naming no key
     reference_voltage_v: Annotated[float, Field(gt=0, le=MAX_REFERENCE_VOLTAGE_V)] | None = None
     voltage_exponent: Annotated[float, Field(ge=-MAX_VOLTAGE_EXPONENT, le=MAX_VOLTAGE_EXPONENT)] = \
         DEFAULT_VOLTAGE_EXPONENT
@@ -381,7 +375,7 @@ class PropulsionSchema(StrictModel):
     @classmethod
     def _bounded_source(cls, value: Any) -> Any:
         # YAML aliases share one object many times: nine levels of nine expand to 4e8 values
-        # that the exports wrote out until memory ran out (outside audit); count, then stop
+        # that the exports would write out until memory ran out; count, then stop
         if count_values(value, MAX_SOURCE_VALUES) > MAX_SOURCE_VALUES:
             raise ValueError(f"more than {MAX_SOURCE_VALUES} values once its aliases are "
                              "expanded: write the provenance out plainly")
@@ -545,8 +539,8 @@ class Requirements(StrictModel):
     @field_validator("*", mode="before")
     @classmethod
     def _no_null_block(cls, value: Any) -> Any:
-        # `takeoff: null` (or a bare `takeoff:`) dropped the requirement without a word, and
-        # check passed without it (outside audit): leave a block out, or give its keys
+        # `takeoff: null` (or a bare `takeoff:`) would drop the requirement without a word:
+        # leave a block out, or give its keys
         return refuse_null_block(value, "the requirement block", "")
 
 
@@ -635,8 +629,7 @@ class CaseSchema(StrictModel):
     @field_validator("uncertainty", mode="before")
     @classmethod
     def _no_null_uncertainty(cls, value: Any) -> Any:
-        # a bare `uncertainty:` turned the probabilistic check off without a word (outside
-        # audit), as an empty requirement block dropped the requirement
+        # a bare `uncertainty:` would turn the probabilistic check off without a word
         return refuse_null_block(value, "the uncertainty block", " ({} for the defaults)")
 
 
@@ -673,28 +666,8 @@ class Case:
 
 
 def aircraft_from_schema(schema: AircraftSchema) -> Aircraft:
-    to = schema.takeoff
-    return Aircraft(
-        name=schema.name,
-        mass_kg=schema.mass_kg,
-        wing_area_m2=schema.wing_area_m2,
-        cd0=schema.cd0,
-        k=schema.k,
-        cl_max=schema.cl_max,
-        takeoff=TakeoffConfig(
-            cl_ground=to.cl_ground,
-            rolling_friction=to.rolling_friction,
-            liftoff_speed_m_s=to.liftoff_speed_m_s,
-            cd0_ground=to.cd0_ground,
-            k_ground=to.k_ground,
-            liftoff_speed_factor=to.liftoff_speed_factor,
-            rotation_time_s=to.rotation_time_s,
-            transition_load_factor=to.transition_load_factor,
-        ),
-        launch=schema.launch,
-        launch_speed_m_s=schema.launch_speed_m_s,
-        launch_energy_j=schema.launch_energy_j,
-    )
+    """The model's aircraft of a validated file (its keys are the dataclasses' fields)."""
+    return Aircraft(**{**dict(schema), "takeoff": TakeoffConfig(**dict(schema.takeoff))})
 
 
 def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
@@ -702,25 +675,17 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
     engines = tuple(
         Engine(
             name=e.name,
-            coefficients={term: getattr(e.coefficients, term) for term in POLY22_TERMS},
+            coefficients=e.coefficients.model_dump(),
             throttle_scale=scale,
-            covariance=(
-                tuple(tuple(float(c) for c in row) for row in e.covariance)
-                if e.covariance is not None
-                else None
-            ),
+            covariance=(None if e.covariance is None
+                        else tuple(tuple(float(c) for c in row) for row in e.covariance)),
             residual_sd_n=e.residual_sd_n,
             extrapolation_sd_n=e.extrapolation_sd_n,
             extrapolation_distance_m_s=e.extrapolation_distance_m_s,
             extrapolation_worst_n=e.extrapolation_worst_n,
-            model_form_sd_n=(e.lack_of_fit.model_form_rms_n if e.lack_of_fit is not None
-                             else None),
+            model_form_sd_n=None if e.lack_of_fit is None else e.lack_of_fit.model_form_rms_n,
             windmilling_drag_coefficient=e.windmilling_drag_coefficient,
-            power_coefficients=(
-                {term: getattr(e.power.coefficients, term) for term in POLY22_TERMS}
-                if e.power is not None
-                else None
-            ),
+            power_coefficients=None if e.power is None else e.power.coefficients.model_dump(),
         )
         for e in schema.engines
     )
@@ -768,8 +733,7 @@ def refuse_absurd_propulsion(case: Case) -> None:
                 f"x the aircraft's weight ({weight:.3g} N): physically absurd; is throttle_unit "
                 "right (fraction vs percent)?"
             )
-        # inside the tested range the model is the measurement: a p02 of 1e300 PASSed trim
-        # at throttle 0 (outside audit)
+        # inside the tested range the model is the measurement (a p02 of 1e300 is none)
         with np.errstate(over="ignore", invalid="ignore"):
             thrust = np.asarray(engine_thrust_n(engine, throttle, airspeed, scale), dtype=float)
         worst = np.unravel_index(np.argmax(np.abs(np.nan_to_num(thrust, nan=np.inf))),

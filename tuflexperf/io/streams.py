@@ -2,7 +2,7 @@
 
 ``tuflexperf check case.yaml | head -1`` closes the pipe after one line. Python raises
 ``BrokenPipeError`` at the next write, which ended the command with exit 0 whatever the
-verdict (a failing case "passed" under ``set -o pipefail``; outside audit), and a
+verdict (a failing case "passed" under ``set -o pipefail``), and a
 progress line on a closed stderr ended a ``report`` half-way. A stream closed before the
 start (``>&-``) is ``None`` in Python, and the first write was a traceback.
 

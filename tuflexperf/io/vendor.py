@@ -25,16 +25,16 @@ import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from tuflexperf.errors import InputError
+from tuflexperf.models.atmosphere import G0_M_S2 as G0
 
 VENDOR_FORMATS: tuple[str, ...] = ("rcbenchmark",)
 
-#: Standard gravity [m/s^2] (CGPM 1901): 1 kgf = 9.80665 N exactly.
-G0 = 9.80665
-#: 1 lbf = 0.45359237 kg x g0 exactly (international pound).
+#: 1 lbf = 0.45359237 kg x g0 exactly (international pound); 1 kgf = g0 N (CGPM 1901).
 LBF_N = 0.45359237 * G0
 
 THRUST_UNITS_N: dict[str, float] = {
@@ -107,7 +107,7 @@ def repeated_columns(names: Sequence[object]) -> set[str]:
     pandas renames a repeated ``throttle`` to ``throttle.1`` and the first one was read as
     the measurement, silently: which of the two is meant only the user can tell. The names
     pandas itself read, not a second reading of the header line, which a blank first line,
-    a BOM or a quoted newline led astray (outside audit).
+    a BOM or a quoted newline leads astray.
     """
     stripped = [str(name).strip() for name in names]
     present = set(stripped)
@@ -117,6 +117,19 @@ def repeated_columns(names: Sequence[object]) -> set[str]:
         if dot and count.isdigit() and base in present:
             repeated.add(base)
     return repeated
+
+
+def numeric_cells(cells: Any) -> tuple[np.ndarray | None, tuple[int, str] | None]:
+    """A CSV column (pandas) as floats, or None with its first non-numeric cell's (line,
+    text) (an empty cell is a NaN; the line counts the header)."""
+    import pandas as pd
+
+    values = pd.to_numeric(cells, errors="coerce")
+    bad = values.isna() & cells.notna() & (cells.astype(str).str.strip() != "")
+    if bad.any():
+        row = int(np.flatnonzero(bad.to_numpy())[0])
+        return None, (row + 2, str(cells.iloc[row]))  # +2: header line, 1-based
+    return values.to_numpy(dtype=float), None
 
 
 def repeated_header_error(path: Path, name: str) -> InputError:
@@ -207,14 +220,10 @@ def read_rcbenchmark(
     bad_cells: dict[str, tuple[int, str]] = {}
 
     def numeric(raw: str, target: str) -> np.ndarray | None:
-        cells = frame[raw]
-        values = pd.to_numeric(cells, errors="coerce")
-        bad = values.isna() & cells.notna() & (cells.astype(str).str.strip() != "")
-        if bad.any():
-            row = int(np.flatnonzero(bad.to_numpy())[0])
-            bad_cells[target] = (row + 2, f"{cells.iloc[row]} in {raw!r}")
-            return None
-        return values.to_numpy(dtype=float)
+        values, bad = numeric_cells(frame[raw])
+        if bad is not None:
+            bad_cells[target] = (bad[0], f"{bad[1]} in {raw!r}")
+        return values
 
     def need(raw: str | None, what: str) -> str:
         if raw is None:
@@ -264,7 +273,7 @@ def read_rcbenchmark(
         convert("airspeed_m_s", speed_raw, SPEED_UNITS_M_S[unit])
         logged = columns.get("airspeed_m_s")
         if settings.airspeed_m_s is not None and logged is not None and np.isfinite(logged).any():
-            # the column is read; a manifest speed it contradicts was dropped unsaid (audit)
+            # the column is read; a manifest speed it contradicts is not dropped unsaid
             median = float(np.nanmedian(logged))
             if abs(median - settings.airspeed_m_s) > max(AIRSPEED_AGREEMENT_M_S,
                                                           0.05 * abs(median)):

@@ -18,7 +18,7 @@ M = TypeVar("M", bound=BaseModel)
 
 
 def _no_nul(name: str) -> str:
-    if "\x00" in name:  # the OS refuses it, with a ValueError no one reports (outside audit)
+    if "\x00" in name:  # the OS refuses it, with a ValueError that names no key
         raise ValueError("a file name cannot hold a NUL character")
     return name
 
@@ -33,14 +33,13 @@ _BIDI_CONTROLS = ("LRE", "RLE", "LRO", "RLO", "PDF", "LRI", "RLI", "FSI", "PDI")
 def _one_printable_line(name: str) -> str:
     import unicodedata
 
-    # names go into comments, CSV headers, XML and C sources: a newline in a battery's
-    # name injected YAML keys into fit's output, an escape in an engine's made the JSBSim
-    # and FMU XML malformed (outside audit)
+    # names go into comments, CSV headers, XML and C sources: a newline would inject YAML
+    # keys into fit's output, an escape make the JSBSim and FMU XML malformed
     if any(unicodedata.category(c) in ("Cc", "Zl", "Zp") for c in name):
         raise ValueError("a name is one line of printable characters (no newline, tab or "
                          "control character)")
     # a bidirectional override shows a name in another order than it is stored (U+202E
-    # "Trojan Source" in the exported C and XML; outside audit)
+    # "Trojan Source" in the exported C and XML)
     if any(unicodedata.bidirectional(c) in _BIDI_CONTROLS for c in name):
         raise ValueError("a name cannot hold a bidirectional text control (U+202A-202E, "
                          "U+2066-2069)")
@@ -61,7 +60,7 @@ def _column_safe(name: str) -> str:
     if any(c in name for c in ',"'):
         raise ValueError("an engine's name heads CSV columns: no comma or double quote")
     # and it fills the thrust table's engine cells: a spreadsheet runs a cell that starts
-    # with one of these as a formula (CSV injection; outside audit)
+    # with one of these as a formula (CSV injection)
     if name[:1] in ("=", "+", "-", "@"):
         raise ValueError(f"an engine's name fills CSV cells: it cannot start with {name[0]!r} "
                          "(a spreadsheet would run it as a formula)")
@@ -130,7 +129,7 @@ class AmbiguousNumber(str):
     """A number YAML 1.1 reads other than as plain decimal: ``020`` (octal, 16), ``1:00``
     (base 60, 60), ``0x40`` (hex, 64), ``0b11`` (binary, 3). It stays text: a free-form field
     keeps it as written, and a key that needs a number refuses it, naming the key and the
-    reading (``min_flight_time_min: 020`` was a 16 min limit, a false PASS; outside audit).
+    reading (``min_flight_time_min: 020`` would be a 16 min limit, a false PASS).
     """
 
     reading: str
@@ -185,7 +184,7 @@ _UniqueKeyLoader.add_constructor(_AMBIGUOUS_TAG, _construct_ambiguous)
 
 def _explicit(tag: str) -> Any:
     """The constructor of an explicitly tagged number (``!!int 020``): a non-decimal form is
-    an :class:`AmbiguousNumber` as when untagged (the tag took it past; outside audit)."""
+    an :class:`AmbiguousNumber` as when untagged (a tag does not take it past)."""
     standard = _UniqueKeyLoader.yaml_constructors[tag]
 
     def construct(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> Any:
@@ -259,8 +258,8 @@ def read_yaml(path: Path) -> Any:
                          f"{str(exc).split(';')[0][:120]}") from None
     except RecursionError:
         raise InputError(f"{path}: invalid YAML: nested too deeply") from None
-    # aliases share one object: a 143 kB covariance of 20,000 aliased rows became 4e8 floats
-    # (3.2 GB) in the schema's hands before its 6 x 6 check (outside audit); count first
+    # aliases share one object: a 143 kB covariance of 20,000 aliased rows is 4e8 floats
+    # (3.2 GB) in the schema's hands before its 6 x 6 check; count first
     if count_values(data, MAX_DOCUMENT_VALUES) > MAX_DOCUMENT_VALUES:
         raise InputError(f"{path}: more than {MAX_DOCUMENT_VALUES:,} values once its anchors "
                          "and aliases are expanded: write the file out plainly")
@@ -412,8 +411,8 @@ def _file_schemas() -> list[type[BaseModel]]:
 
 def _another_kind(data: dict[Any, Any], model: type[BaseModel]) -> str | None:
     """The kind of file ``data`` is when it shares no key with ``model``'s but most with
-    another file schema's (a case's mission naming the aircraft file was told its
-    ``mass_kg`` is an unknown key; outside audit), else None."""
+    another file schema's (an aircraft file given as a mission is named so, not told its
+    ``mass_kg`` is an unknown key), else None."""
     keys = {str(k) for k in data} - {"name"}
     if not keys or "file_kind" not in model.__dict__:
         return None
@@ -421,7 +420,7 @@ def _another_kind(data: dict[Any, Any], model: type[BaseModel]) -> str | None:
     shared, kind = max(((len(keys & set(cls.model_fields)), cls.file_kind)
                         for cls in _file_schemas() if cls is not model), default=(0, ""))
     # a key or two in common is no match: a propulsion file given to fit shares only
-    # fan_area_m2 with a campaign's ("unknown key 'model' (and 6 more)"; outside audit)
+    # fan_area_m2 with a campaign's
     return kind if 2 * shared >= len(keys) and shared >= 3 * own else None
 
 

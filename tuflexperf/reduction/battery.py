@@ -1,7 +1,7 @@
 """Fits of the battery artefact: the pack's equivalent circuit and the fan's power law.
 
-Levenberg-Marquardt least squares on 1-s block means of the discharge runs (and an IPOPT
-twin kept as a cross-check), and the fan-power law fitted to the runs' mean power.
+Levenberg-Marquardt least squares on 1-s block means of the discharge runs, and the fan-power
+law fitted to the runs' mean power.
 """
 
 from __future__ import annotations
@@ -118,7 +118,7 @@ def fit_discharge(
     Jacobian are one CasADi function mapped over the samples, built once per fit; a step
     that leaves the bounds (``Q`` above the largest charge drawn, so the knee's pole stays
     outside the data; signs) is rejected like one that raises the cost. It reaches the
-    same optimum as :func:`fit_discharge_ipopt` (tested) in a fraction of the time, which
+    same optimum as CasADi's IPOPT (tested) in a fraction of the time, which
     keeps ``tuflexperf check`` fast. The reported error (rms and max, volts) is over every
     raw sample. Raises :class:`InputError` if the runs cannot be fitted.
     """
@@ -162,36 +162,6 @@ def fit_discharge(
                 break
     params = DischargeParameters.from_vector(z * scale)
     return _finish_fit(runs, params, converged, "Levenberg-Marquardt did not converge")
-
-
-def fit_discharge_ipopt(
-    runs: Sequence[DischargeRun], cells_in_series: int, capacity_ah: float
-) -> DischargeFit:
-    """The same least-squares fit as :func:`fit_discharge`, solved by CasADi's IPOPT.
-
-    Kept as the reference the Levenberg-Marquardt fit is verified against (and for
-    problems where a general NLP solver is wanted); about ten times slower.
-    """
-    import casadi as ca
-
-    q, i, v, scale, lower, upper, z0 = _fit_setup(runs, cells_in_series, capacity_ah)
-    residual = _residual_function(scale)
-    z = ca.MX.sym("z", len(PARAMETER_NAMES))
-    data = [ca.DM(column).T for column in (q, i, v)]
-    r = residual.map(q.size, "serial")(z, *data)[0]
-    objective = 0.5 * ca.sumsqr(r) / q.size
-    solver = ca.nlpsol(
-        "discharge_fit",
-        "ipopt",
-        {"x": z, "f": objective},
-        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
-         "ipopt.tol": 1e-12, "ipopt.max_iter": 500},
-    )
-    solution = solver(x0=z0, lbx=lower, ubx=upper)
-    status = solver.stats()["return_status"]
-    params = DischargeParameters.from_vector(np.asarray(solution["x"]).ravel() * scale)
-    ok = status in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
-    return _finish_fit(runs, params, ok, status)
 
 
 @dataclass(frozen=True)
@@ -470,16 +440,15 @@ def refuse_runs_short_of_the_cutoff(battery: Any, runs: Sequence[DischargeRun]) 
     """Bad input: a discharge run that stopped before the pack's cut-off voltage.
 
     Its time under load is stored as the time to the cut-off and its charge as what the pack
-    gave there: a run stopped at 43.6 V of a 40.8 V cut-off was taken for a pack that lasts
-    17 % less, and one stopped earlier was refused as a capacity misprint (outside audit
-    with a known pack).
+    gave there: a run stopped at 43.6 V of a 40.8 V cut-off would be taken for a pack that
+    lasts 17 % less.
     """
     cutoff = battery.cutoff_voltage_v
     for run in runs:
         loaded = run.voltage_v[run.loaded]
         # a pack under load discharges: its voltage falls from the step to the cut-off. One
-        # that starts at or below the cut-off and rises was fitted with a 2.7 V residual and
-        # no word (outside audit): a swapped column, another pack, a charge log
+        # that starts at or below the cut-off and rises is a swapped column, another pack or
+        # a charge log
         tenth = max(1, loaded.size // 10)
         first, last = float(np.mean(loaded[:tenth])), float(np.mean(loaded[-tenth:]))
         if first <= cutoff * (1.0 + CUTOFF_REACHED_TOLERANCE) or last > first:

@@ -77,8 +77,7 @@ from tuflexperf.reduction.step_runs import (
 # to 2 ms; the shipped ones 0.999)
 MIN_SWEEP_R2 = 0.1
 # Sweeps of one rig further apart than this in their delay say one of them is off (the
-# shipped campaign's agree to 0.2 ms; a sweep logged with a tenth of its time base came out
-# 45 ms off and passed the earlier 0.05 s unseen: outside audit)
+# shipped campaign's agree to 0.2 ms; one logged with a tenth of its time base is 45 ms off)
 MAX_DELAY_SPREAD_S = 0.01
 # Engines' delays further apart than this (the paper's whole delay, 0.05 s) get one mean
 # delay_s that fits neither engine
@@ -153,8 +152,7 @@ def _drag_sweep(campaign: Campaign, run: CampaignRun) -> _DragSweep:
             f">= {MIN_DRAG_SWEEP_SPAN_M_S:g}): no drag curve from it, left out",
         )
     if float(np.ptp(data["force_n"])) <= DEAD_LOAD_CELL_N:
-        # the same force at every airspeed: "D = 0 (R^2 nan)" was added to every point
-        # unremarked (outside audit)
+        # the same force at every airspeed: no "D = 0 (R^2 nan)" added to every point
         return _DragSweep(
             data, {**run_header(run, data), "force": "constant"},
             f"{run.file}: drag sweep whose force is {float(data['force_n'][0]):.4g} N "
@@ -259,8 +257,7 @@ def _fit_campaign(
             )
     if per_engine and max(per_engine.values()) - min(per_engine.values()) > \
             MAX_DELAY_ENGINES_APART_S:
-        # the model has one delay_s, their mean: two ESCs 10x apart got one that fits neither,
-        # unsaid (outside audit)
+        # the model has one delay_s, their mean: for two ESCs 10x apart it fits neither
         named = ", ".join(f"{e} {v:.3f} s" for e, v in per_engine.items())
         degenerate.append(
             f"the engines disagree on the delay ({named}, more than "

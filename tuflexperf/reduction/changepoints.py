@@ -107,7 +107,7 @@ def throttle_plateaus(
     return plateaus
 
 
-def _l2_split(csum: NDArray[np.float64], csum2: NDArray[np.float64], lo: int, hi: int) -> int:
+def _l2_split(csum: NDArray[np.float64], lo: int, hi: int) -> int:
     """Best single split ``s`` of ``[lo, hi)`` into two constant-mean pieces (least squares)."""
     s = np.arange(lo + 1, hi)
     n_left = (s - lo).astype(float)
@@ -128,7 +128,7 @@ def kernel_breaks(coarse: NDArray[np.float64], min_size: int, penalty: float) ->
     of the first block of each new segment, ascending.
 
     PELT prunes little where the mean never changes, so its time grows with the square of
-    the length (a steady run of 10 million samples took ten minutes; outside audit). A run
+    the length (a steady run of 10 million samples would take ten minutes). A run
     longer than :data:`PELT_WINDOW_BLOCKS` is searched in windows of that many blocks, each
     overlapping its neighbours by :data:`PELT_MARGIN_BLOCKS` and keeping the changes in its
     own core (a change is local: the penalty and the segments' least length are the whole
@@ -212,13 +212,12 @@ def force_changepoints(
         return []
     # refine at full rate: best split between the neighbouring coarse change points
     csum = np.concatenate(([0.0], np.cumsum(y - y.mean())))
-    csum2 = np.concatenate(([0.0], np.cumsum((y - y.mean()) ** 2)))
     edges = [0, *[b * block for b in breaks], y.size]
     refined = []
     for i, b in enumerate(breaks, start=1):
         lo = max(edges[i - 1], (b - min_size // 2) * block, (edges[i - 1] + edges[i]) // 2)
         hi = min(edges[i + 1], (b + min_size // 2) * block, (edges[i] + edges[i + 1]) // 2)
-        refined.append(_l2_split(csum, csum2, lo, hi) if hi - lo >= 2 else b * block)
+        refined.append(_l2_split(csum, lo, hi) if hi - lo >= 2 else b * block)
     return refined
 
 

@@ -50,8 +50,8 @@ def _lag_filter(u: NDArray[np.float64], tau: float, dt: float) -> NDArray[np.flo
     block's start towards ``u``, so its mean is ``u + (y_start - u) (tau/dt) (1 - a)`` with
     ``a = exp(-dt/tau)``, and its end ``a y_start + (1 - a) u`` starts the next block. The
     recursion's end value alone (``first_order_lag``) runs half a block ahead of the block
-    means it is compared with: the dead time took up that half block (+2.5 ms at 200 Hz on a
-    synthetic campaign with a known truth; outside audit). Starts at rest at ``u[0]``.
+    means it is compared with, and the dead time would take up that half block (+2.5 ms at
+    200 Hz). Starts at rest at ``u[0]``.
     """
     if tau <= 0:
         return u
@@ -201,7 +201,7 @@ def _explained(grams: NDArray[np.float64], rhs: NDArray[np.float64]) -> NDArray[
 
 
 MIN_FIT_SAMPLES = 16
-"""Block means a sweep must give for a fit (a 12-sample sweep crashed the grid; review)."""
+"""Block means a sweep must give for a fit (the grid needs them)."""
 TRUST = 4.0
 """The stencil's quadratic model is trusted this many stencil widths away."""
 MAX_REFINEMENTS = 60
@@ -261,8 +261,8 @@ def estimate_delay(
     xcorr = _xcorr_lag(x, y, dt, max_lag)
     top = min(max_delay_s, xcorr + 0.1)
     # every whole-sample dead time up to ``top`` against 13 lags: a coarser grid (20 ms on
-    # 20 ms block means) picked the wrong side of the valley d + tau = const, where a pure
-    # 50 ms delay came out as 41 ms + a 12 ms lag (outside audit with a known truth)
+    # 20 ms block means) picks the wrong side of the valley d + tau = const, where a pure
+    # 50 ms delay comes out as 41 ms + a 12 ms lag
     shifts = min(int(math.floor(top / dt + 1e-9)), t.size // 4)
     delays = np.arange(shifts + 1) * dt
     taus = np.concatenate(([0.0], np.geomspace(dt / 4, max(2 * top, 4 * dt), 12)))

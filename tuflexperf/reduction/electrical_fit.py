@@ -195,8 +195,6 @@ def electrical_fits(
     return out
 
 
-
-
 def _agreement(campaign: Campaign, engine: str, mine: list[Point], out: ElectricalFits) -> None:
     """Measured thrust against measured ``U I`` at the engine's working points (SPEC 3)."""
     from tuflexperf.models.agreement import power_agreement
@@ -204,25 +202,17 @@ def _agreement(campaign: Campaign, engine: str, mine: list[Point], out: Electric
     measured = [p for p in mine if math.isfinite(p.electrical_power_w)]
     if not measured:
         return
-    for p in measured:  # every point with a power carries the SPEC 3 figures in the table
-        a = power_agreement("", engine, p.throttle, p.airspeed_m_s, p.thrust_at_voltage_n,
-                            p.electrical_power_w, campaign.air_density_kg_m3,
-                            campaign.fan_area_m2, warn_efficiency=False)
-        p.ideal_power_w = rounded(a.ideal_power_w) if a.ideal_power_w is not None else math.nan
-        p.figure_of_merit = (rounded(a.figure_of_merit) if a.figure_of_merit is not None
-                             else math.nan)
-        p.overall_efficiency = (rounded(a.overall_efficiency)
-                                if a.overall_efficiency is not None else math.nan)
+    agreed = [power_agreement(f"{campaign.path.name} test point", engine, p.throttle,
+                              p.airspeed_m_s, p.thrust_at_voltage_n, p.electrical_power_w,
+                              campaign.air_density_kg_m3, campaign.fan_area_m2,
+                              warn_efficiency=False) for p in measured]
+    for p, a in zip(measured, agreed, strict=True):  # the SPEC 3 figures in the table
+        p.ideal_power_w, p.figure_of_merit, p.overall_efficiency = (
+            math.nan if value is None else rounded(value)
+            for value in (a.ideal_power_w, a.figure_of_merit, a.overall_efficiency))
     largest = max(p.thrust_at_voltage_n for p in measured)
-    working = [p for p in measured if p.thrust_at_voltage_n >= WORKING_THRUST_SHARE * largest]
-    checks = [
-        power_agreement(
-            f"{campaign.path.name} test point", engine, p.throttle, p.airspeed_m_s,
-            p.thrust_at_voltage_n, p.electrical_power_w, campaign.air_density_kg_m3,
-            campaign.fan_area_m2, warn_efficiency=False,
-        )
-        for p in working
-    ]
+    checks = [a for p, a in zip(measured, agreed, strict=True)
+              if p.thrust_at_voltage_n >= WORKING_THRUST_SHARE * largest]
     merits = [c.figure_of_merit for c in checks if c.figure_of_merit is not None]
     efficiencies = [c.overall_efficiency for c in checks if c.overall_efficiency is not None]
     out.agreement[engine] = {

@@ -119,8 +119,7 @@ def movmedian(x: ArrayLike, k: int) -> Array:
         edges = np.r_[0 : min(before, n), max(n - after, 0) : n]
     elif np.isfinite(values).all():
         # a window longer than the signal: each one is a prefix, a suffix or the whole
-        # signal. One median per sample took 53 s for a run whose time was logged in
-        # microseconds (its 0.1 s window spanned every sample; outside audit)
+        # signal (one median per sample takes 53 s for a run logged in microseconds)
         return _clipped_window_medians(values, before, after)
     else:
         edges = np.arange(n)

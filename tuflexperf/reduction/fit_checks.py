@@ -19,7 +19,7 @@ from tuflexperf.reduction.poly22fit import Poly22Fit
 from tuflexperf.reduction.step_runs import Point, StepRunResult
 
 # A thrust surface that explains less of its points than this is no fan's (the paper's
-# 0.9968; a run with its force sign flipped gave 0.43 and was written: outside audit); below
+# 0.9968; a run with its force sign flipped gives 0.43); below
 # POOR_POLY22_R2 it is said (a small fan's noisy table gave 0.89 and is a fit)
 MIN_POLY22_R2 = 0.5
 POOR_POLY22_R2 = 0.9
@@ -50,7 +50,7 @@ def check_set_points(campaign: Any, step_results: list[Any]) -> list[str]:
     for result in step_results:
         runs = by_engine.setdefault(str(result.run.engine), {})
         speeds = [seg.airspeed_m_s for seg in result.segments]
-        if not speeds:  # no test point: no airspeed either (it counted as 0 m/s: audit)
+        if not speeds:  # no test point: no airspeed either (not 0 m/s)
             empty.setdefault(str(result.run.engine), []).append(result.run.file)
             continue
         runs.setdefault(set_point(float(np.median(speeds))), []).append(result.run.file)
@@ -126,9 +126,8 @@ def _typical_largest_force(results: list[StepRunResult]) -> dict[str, float]:
 def refuse_force_scale_outliers(campaign: Any, results: list[StepRunResult]) -> None:
     """Bad input: two step runs of one engine, each with a force that follows its throttle,
     whose largest forces are more than :data:`FORCE_SCALE_RATIO` apart: one group is in
-    another unit (mN, kgf) or another engine's. Which one cannot be told from the runs: one
-    run in mN wrote a 1.5 MN fan; four of seven, by the median, a 55 kN one (outside
-    audits)."""
+    another unit (mN, kgf) or another engine's. Which one cannot be told from the runs (one
+    run in mN makes a 1.5 MN fan; four of seven, by the median, a 55 kN one)."""
     by_engine: dict[str, list[StepRunResult]] = {}
     for r in results:
         if _follows_its_throttle(r):
@@ -150,8 +149,7 @@ def deaf_runs(results: list[StepRunResult]) -> tuple[list[str], set[str]]:
     those runs' files: their points are left out of the fit (fitted, one stuck run brought
     EDF1's surface to R^2 0.78)."""
     # per engine (a small fan beside a big one is no deaf one), the median run's largest
-    # force: by the largest of all, one run logged in mN made six good ones "deaf" and the
-    # fit took the bad run's 11 points alone (outside audit)
+    # force: by the largest of all, one run logged in mN would make six good ones "deaf"
     largest = _typical_largest_force(results)
     notes = []
     deaf: set[str] = set()
@@ -248,8 +246,7 @@ def _engine_range(speeds: list[float]) -> tuple[float, float]:
 def tested_range(speeds: dict[str, list[float]], where: str) -> list[float]:
     """The airspeed range [m/s] every engine was tested over (the file has one range, and
     each engine's model is flown over all of it: an engine tested to 25 m/s beside one
-    tested to 30 m/s was written as tested to 30, its extrapolation never said; outside
-    audit). Engines with no airspeed in common are bad input."""
+    tested to 30 m/s is not tested to 30). Engines with no airspeed in common are bad input."""
     ranges = {engine: _engine_range(v) for engine, v in speeds.items()}
     low = max(r[0] for r in ranges.values())
     high = min(r[1] for r in ranges.values())
@@ -260,7 +257,10 @@ def tested_range(speeds: dict[str, list[float]], where: str) -> list[float]:
             + "): one propulsion file has one tested airspeed range")
     return [low, high]
 
-RANGE_NOTE_M_S = 1.0  # engines' tested ends further apart than this are said (set points
+
+# engines' tested ends further apart than this are said (set points are 2.5 m/s or more
+# apart; the measured means of one set point scatter by a few 0.1 m/s)
+RANGE_NOTE_M_S = 1.0
 
 
 def tested_range_notes(speeds: dict[str, list[float]]) -> list[str]:

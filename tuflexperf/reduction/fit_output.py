@@ -16,6 +16,7 @@ import yaml
 
 from tuflexperf.errors import InputError
 from tuflexperf.io.files import FIT_PROPULSION_HEADER
+from tuflexperf.io.runs import TABLE_COLUMNS, TABLE_EXTRA_COLUMNS
 from tuflexperf.models.thrust import POLY22_TERMS
 from tuflexperf.reduction.electrical_fit import ElectricalFits
 from tuflexperf.reduction.fit_checks import tested_range, tested_range_notes
@@ -37,34 +38,16 @@ class FitResult:
     sweep_runs: list[SweepRunResult] = field(default_factory=list)
 
 
+# the table's columns that hold no value where a point has none (NaN there is empty)
+_MISSING_AS_NONE = frozenset({"glauert_ratio", "voltage_v", "current_a", "electrical_power_w",
+                              "ideal_power_w", "figure_of_merit", "overall_efficiency"})
+
+
 def table_row(p: Point) -> dict[str, Any]:
-    return {
-        "engine": p.engine,
-        "throttle": p.throttle,
-        "airspeed_m_s": p.airspeed_m_s,
-        "thrust_n": p.thrust_n,
-        "airspeed_measured_m_s": p.airspeed_measured_m_s,
-        "force_n": p.force_n,
-        "drag_n": p.drag_n,
-        "force_std_n": p.force_std_n,
-        "n_samples": p.n_samples,
-        "glauert_ratio": p.glauert_ratio if math.isfinite(p.glauert_ratio) else None,
-        "run": p.run,
-        "thrust_at_voltage_n": p.thrust_at_voltage_n,
-        "voltage_v": p.voltage_v if math.isfinite(p.voltage_v) else None,
-        "current_a": p.current_a if math.isfinite(p.current_a) else None,
-        "electrical_power_w": (
-            p.electrical_power_w if math.isfinite(p.electrical_power_w) else None
-        ),
-        **{
-            key: value if math.isfinite(value) else None
-            for key, value in (
-                ("ideal_power_w", p.ideal_power_w),
-                ("figure_of_merit", p.figure_of_merit),
-                ("overall_efficiency", p.overall_efficiency),
-            )
-        },
-    }
+    """A point as a row of fit's thrust table, its columns in the table's order."""
+    row = {key: getattr(p, key) for key in (*TABLE_COLUMNS, *TABLE_EXTRA_COLUMNS)}
+    return {key: None if key in _MISSING_AS_NONE and not math.isfinite(value) else value
+            for key, value in row.items()}
 
 
 def fit_summary(

@@ -117,9 +117,6 @@ def fit_table(path: Path | str, delay_s: float | None = None) -> FitResult:
     )
 
 
-# are 2.5 m/s or more apart; the measured means of one set point scatter by a few 0.1 m/s)
-
-
 def _fit_inputs(input_path: Path) -> list[Path]:
     """Every file ``fit`` reads: the input and, for a campaign, each run file it names."""
     inputs = [input_path]
@@ -165,7 +162,7 @@ def _fit_battery(path: Path, out: Path, table: Path | None, glauert: bool,
     """``fit BATTERY.yaml``: the pack model fitted to the file's discharge runs, written back."""
     from tuflexperf.reduction.battery import fitted_battery_text
 
-    # a flag the pack fit has no use for is refused, not ignored (--delay-s was: outside audit)
+    # a flag the pack fit has no use for is refused, not ignored
     given = [flag for flag, used in (("--table", table is not None), ("--glauert", glauert),
                                      ("--delay-s", delay_s is not None)) if used]
     if given:

@@ -182,26 +182,6 @@ class SteadyMean:
     filtered_force_n: NDArray[np.float64]
 
 
-def steady_mean(
-    force_n: NDArray[np.float64],
-    airspeed_m_s: NDArray[np.float64],
-    throttle: NDArray[np.float64],
-    start: int,
-    stop: int,
-    outlier_window: int,
-    outlier_threshold: float,
-    median_window: int,
-) -> SteadyMean:
-    """Mean force over samples ``[start, stop)`` after the paper's two filters.
-
-    The filters run on this stretch alone (shrinking windows at its ends), so the
-    mean never sees a neighbouring step. Airspeed is averaged as logged; the
-    throttle is the median of the logged command.
-    """
-    return steady_means(force_n, airspeed_m_s, throttle, [(start, stop)], outlier_window,
-                        outlier_threshold, median_window)[0]
-
-
 def steady_means(
     force_n: NDArray[np.float64],
     airspeed_m_s: NDArray[np.float64],
@@ -211,11 +191,13 @@ def steady_means(
     outlier_threshold: float,
     median_window: int,
 ) -> list[SteadyMean]:
-    """:func:`steady_mean` of each ``(start, stop)`` in ``spans`` (a run's steady stretches).
+    """Mean force over each ``(start, stop)`` in ``spans`` (a run's steady stretches) after
+    the paper's two filters.
 
-    Each stretch is filtered on its own, as :func:`steady_mean` does; the moving medians of
-    all of them run together (:func:`~tuflexperf.reduction.filters.movmedians`, equal to the
-    bit to one call per stretch).
+    Each stretch is filtered on its own (shrinking windows at its ends), so a mean never sees
+    a neighbouring step; the moving medians of all of them run together
+    (:func:`~tuflexperf.reduction.filters.movmedians`, equal to the bit to one call per
+    stretch). Airspeed is averaged as logged; the throttle is the median of the command.
 
     Parameters
     ----------

@@ -85,7 +85,7 @@ def write_starter(folder: Path, sheet: DatasheetSchema, from_datasheet: bool) ->
     model = starter_model(sheet)
     runs = {f"endurance/run_{round(100 * x):d}.csv": discharge_run_csv(model, x)
             for x in RUN_THROTTLES}
-    texts = {"case.yaml": case_text(model), "aircraft.yaml": aircraft_text(model),
+    texts = {"case.yaml": case_text(model), "aircraft.yaml": AIRCRAFT_TEXT,
              "propulsion.yaml": propulsion_text(model, from_datasheet)}
     names = [*texts, "battery.yaml", *runs]
     refuse_existing(folder, names)
@@ -133,9 +133,8 @@ requirements:
 """
 
 
-def aircraft_text(m: StarterModel) -> str:
-    """Typical values of a 5 kg two-fan jet model, each to be replaced by the user's."""
-    return """\
+#: The starter aircraft: typical values of a 5 kg two-fan jet model, each to be replaced.
+AIRCRAFT_TEXT = """\
 # Starter aircraft written by `tuflexperf init`: typical values of a 5 kg ducted-fan
 # model, NOT your aircraft's. Replace each one; units in the key names.
 name: My aircraft

@@ -179,8 +179,8 @@ def reduce_step_run(
     # come that long (plus the refinement's half segment) before the step.
     margin = window_samples(1.5 * MIN_SEGMENT_S, fs)
     # the paper's outlier fill is blind within half its window of a step (the step inflates
-    # the local spread): what it lets through there showed as changes 0.85-0.94 s before the
-    # shipped runs' steps, each noted as a change without a step (audit); a real change that
+    # the local spread): what it lets through there shows as changes 0.85-0.94 s before the
+    # shipped runs' steps, not changes without a step; a real change that
     # close to a step cannot be told from them and is not said
     ahead = max(margin, k_out // 2)
     check = cross_check(

@@ -189,14 +189,6 @@ class PublishedGridUncertainty:
     residual_sd_n: float  # [N]
     extrapolation_sd_n: float  # [N]
 
-    def to_yaml_dict(self) -> dict[str, object]:
-        """The propulsion file's per-engine keys (SPEC 4), plain floats."""
-        return {
-            "covariance": [[float(f"{c:.6g}") for c in row] for row in self.covariance],
-            "residual_sd_n": float(f"{self.residual_sd_n:.6g}"),
-            "extrapolation_sd_n": float(f"{self.extrapolation_sd_n:.6g}"),
-        }
-
 
 def published_grid_uncertainty(
     accuracy_n: float = PAPER_ACCURACY_N, edge_error_n: float = 0.0
