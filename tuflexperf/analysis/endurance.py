@@ -14,24 +14,24 @@ the tunnel at 30 m/s; with two packs per fan and the launch's energy, "a flight 
 4. **Pack endurance**: one pack on one fan at ``P(x, V)`` from full to the cut-off
    under load: ``t = 3600 * integral_0^{q_c} dq / i(q, P)`` (constant-power discharge).
 5. **Flight endurance**: the mission "take off, climb to the pattern altitude, cruise at
-   ``x`` until the reserve" (:func:`endurance_mission`) flown by the one mission
-   integrator (:class:`tuflexperf.analysis.mission.MissionModel`, CasADi RK4): the
-   full-throttle ground roll along the history of :func:`solve_takeoff`, the full-throttle
+   ``x`` until the reserve" (:func:`endurance_mission`): the full-throttle ground roll
+   along the take-off's airspeed history, the full-throttle
    climb at the best rate of climb to the battery file's pattern altitude, then level
    flight at throttle ``x``, each fan on its ``n`` parallel packs at the loaded pack
    voltage, until the first fan has given ``(1 - reserve)`` of its rated capacity (the
-   landing reserve) or reaches the cut-off, whichever comes first (Newton on the landing
-   charge). With the propulsion file's ``reference_voltage_v`` thrust and power fall as
-   the pack sags, and the cruise airspeed with them (SPEC 3).
+   landing reserve) or reaches the cut-off, whichever comes first. With the propulsion
+   file's ``reference_voltage_v`` thrust and power fall as the pack sags, and the cruise
+   airspeed with them (SPEC 3).
    ``flight_endurance_min`` = climb + cruise time (airborne). The endurance figure is
    the case's point performance: flown at the case's density throughout.
 
-Steps 3-4 are one CasADi function (Newton rootfinders on the level-flight excess thrust
-and on the cut-off condition, Gauss-Legendre quadrature of the discharge) built once per
-case and battery and called per throttle; the constant-power closed form of step 4 also
-starts the Newton iteration of step 5 (exact without a voltage effect, so it converges at
-once). ``--best`` solves two small IPOPT NLPs: the throttle and airspeed of longest
-flight, and of longest cruise distance (constant-power cruise, no voltage effect).
+Steps 3-5 are the batch's code on one row (:func:`.batch_endurance.flight_rows`, on
+sagging packs :mod:`.batch_sagging`), the very code ``--samples`` flies on N: the fast
+level-flight root, the packs' cut-off charge, the launch and the Gauss-Legendre cruise. The
+mission integrator then flies the mission once at that cruise time for the flight's record,
+and says why where the rows find the flight not attainable. ``--best`` solves two small
+IPOPT NLPs: the throttle and airspeed of longest flight, and of longest cruise distance
+(constant-power cruise, no voltage effect).
 
 Steps 1-2 live in :mod:`.battery_fit`, the flight of step 5 as a mission in
 :mod:`.endurance_plan`; this module holds :class:`EnduranceModel` and its results.
@@ -237,7 +237,7 @@ class EnduranceModel:
         # the flight: take-off, climb, cruise at a throttle, flown by the mission integrator
         self.mission = self._planned_mission(case, battery)
         self._cruise = len(self.mission.plans) - 1
-        self.launch = launch_of(self.mission)
+        self._launch: LaunchBudget | None = None  # from the first flight flown
 
         def excess(x: Any, v: Any) -> Any:
             return total_thrust_n(propulsion, x, v, rho) - level_flight_drag_n(aircraft, v, rho)
@@ -247,6 +247,7 @@ class EnduranceModel:
         # the flight itself: the batch's code on a batch of one row (batch_endurance)
         self._batch = BatchEvaluator(case, blocks=frozenset({"endurance"}))
         self._side = battery_side(case)
+        self._rows_of: dict[int, tuple[Any, dict[str, np.ndarray], Any]] = {}
         self._nlp: dict[str, Any] = {}
 
     # -- the discharge runs against the power and thrust models (SPEC 3) ---------------------
@@ -373,24 +374,36 @@ class EnduranceModel:
                 f"that holds level flight (at {self.min_throttle_airspeed:.1f} m/s)"
             )
 
-    def rows(self, throttle: np.ndarray) -> EnduranceRows:
-        """The endurance flight at each ``throttle`` [-] (the batch's code, one row per
-        throttle of the case as given: :func:`.batch_endurance.flight_rows`)."""
-        size = int(np.size(throttle))
-        batch = self._batch
-        values: dict[str, np.ndarray] = {}
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+    def _launched(self, size: int) -> tuple[Any, dict[str, np.ndarray], Any]:
+        """``size`` rows of the case as given: their physics, battery keys and take-off
+        (the same for every throttle, so solved once per size)."""
+        if size not in self._rows_of:
+            batch, values = self._batch, {}
             m = batch.model(values, size)
             battery = batch._battery_rows(values, size)
             height = np.full(size, obstacle_height_of(self.case))
-            launch = batch.launch(m, size, height, battery)
+            self._rows_of[size] = (m, battery, batch.launch(m, size, height, battery))
+        return self._rows_of[size]
+
+    def rows(self, throttle: np.ndarray) -> EnduranceRows:
+        """The endurance flight at each ``throttle`` [-] (the batch's code, one row per
+        throttle of the case as given: :func:`.batch_endurance.flight_rows`)."""
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            m, battery, launch = self._launched(int(np.size(throttle)))
             return flight_rows(m, self._side, np.asarray(throttle, dtype=float).reshape(-1),
                                launch, battery)
+
+    @property
+    def launch(self) -> LaunchBudget:
+        """The take-off and climb to the pattern altitude of the endurance mission."""
+        if self._launch is None:
+            self._launch = launch_of(self.mission)
+        return self._launch
 
     def level_airspeed_m_s(self, throttle: float) -> float:
         """The level-flight (front side) airspeed [m/s] at ``throttle`` [-], without flying."""
         self.check_throttle(throttle)
-        m = self._batch.model({}, 1)
+        m = self._launched(1)[0]
         speed, ok = level_airspeed(m, np.array([float(throttle)]), stall_speed(m))
         if not ok[0]:
             raise NotAttainable(f"throttle {throttle:g}: no level flight")
@@ -441,7 +454,10 @@ class EnduranceModel:
         theta[3 * self._cruise:3 * self._cruise + 3] = (throttle, 0.0, speed)
         durations = model.durations.copy()
         durations[self._cruise] = cruise_s
-        return model.fly(durations, theta=theta)
+        flight = model.fly(durations, theta=theta)
+        if self._launch is None and flight.attainable:
+            self._launch = launch_of(model, flight)
+        return flight
 
     def _why_not(self, throttle: float, speed: float) -> tuple[Any, float, str]:
         """The endurance mission at ``throttle`` flown to the reserve (or cut-off) by the
