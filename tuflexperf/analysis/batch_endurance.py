@@ -343,11 +343,14 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
 
 
 def flight_rows(m: Any, model: Any, throttle: Array, roll: tuple[Array, Array, Array, Array],
-                battery: dict[str, Array]) -> EnduranceRows:
+                battery: dict[str, Array],
+                launches: dict[tuple[Any, ...], _Launch] | None = None) -> EnduranceRows:
     """The endurance flight of each row (:class:`EnduranceRows`): ``m`` the rows' physics
     (:class:`.batch_model.BatchModel`), ``model`` the battery side (:func:`battery_side`),
     ``throttle`` [-] per row, ``roll`` the take-off's roll tuple, ``battery`` the rows'
-    battery keys (``dotted.BATTERY_KEYS``)."""
+    battery keys (``dotted.BATTERY_KEYS``); ``launches`` the launch per fans flown, kept by
+    a caller that flies the same rows at other throttles (the launch is full throttle)."""
+    launches = {} if launches is None else launches
     stall = stall_speed(m)
     from tuflexperf.analysis.pack_limits import pack_rows
 
@@ -373,12 +376,19 @@ def flight_rows(m: Any, model: Any, throttle: Array, roll: tuple[Array, Array, A
     # one fan draws the most throughout, the largest fan's power is exactly its own
     height = battery["battery.mission.pattern_altitude_m"]
     engines: tuple[Any, ...] = (None,)
-    launch = _launch_charge(m, model, roll, stall, height, packs, cutoff, engines)
+
+    def launched(engines: tuple[Any, ...]) -> _Launch:
+        if engines not in launches:
+            launches[engines] = _launch_charge(m, model, roll, stall, height, packs, cutoff,
+                                               engines)
+        return launches[engines]
+
+    launch = launched(engines)
     if isinstance(model.power, PowerSurfaces) and len(m.propulsion.engines) > 1 \
             and not _one_fan_draws_most(model, m, launch, throttle, speed,
                                         ok & np.all(np.isfinite(launch.charge_ah), axis=0)):
         engines = m.propulsion.engines
-        launch = _launch_charge(m, model, roll, stall, height, packs, cutoff, engines)
+        launch = launched(engines)
     climb_time = launch.climb_time_s
     # the climb's airspeed (the last of them), where there is a climb
     climb = np.where(height > 0, launch.full_throttle_speeds_m_s[:, -1], np.nan)

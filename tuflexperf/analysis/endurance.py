@@ -247,7 +247,7 @@ class EnduranceModel:
         # the flight itself: the batch's code on a batch of one row (batch_endurance)
         self._batch = BatchEvaluator(case, blocks=frozenset({"endurance"}))
         self._side = battery_side(case)
-        self._rows_of: dict[int, tuple[Any, dict[str, np.ndarray], Any]] = {}
+        self._rows_of: dict[int, tuple[Any, dict[str, np.ndarray], Any, dict[Any, Any]]] = {}
         self._nlp: dict[str, Any] = {}
 
     # -- the discharge runs against the power and thrust models (SPEC 3) ---------------------
@@ -374,24 +374,24 @@ class EnduranceModel:
                 f"that holds level flight (at {self.min_throttle_airspeed:.1f} m/s)"
             )
 
-    def _launched(self, size: int) -> tuple[Any, dict[str, np.ndarray], Any]:
-        """``size`` rows of the case as given: their physics, battery keys and take-off
-        (the same for every throttle, so solved once per size)."""
+    def _launched(self, size: int) -> tuple[Any, dict[str, np.ndarray], Any, dict[Any, Any]]:
+        """``size`` rows of the case as given: their physics, battery keys, take-off and
+        launches (the same for every throttle, so solved once per size)."""
         if size not in self._rows_of:
             batch, values = self._batch, {}
             m = batch.model(values, size)
             battery = batch._battery_rows(values, size)
             height = np.full(size, obstacle_height_of(self.case))
-            self._rows_of[size] = (m, battery, batch.launch(m, size, height, battery))
+            self._rows_of[size] = (m, battery, batch.launch(m, size, height, battery), {})
         return self._rows_of[size]
 
     def rows(self, throttle: np.ndarray) -> EnduranceRows:
         """The endurance flight at each ``throttle`` [-] (the batch's code, one row per
         throttle of the case as given: :func:`.batch_endurance.flight_rows`)."""
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            m, battery, launch = self._launched(int(np.size(throttle)))
+            m, battery, launch, launches = self._launched(int(np.size(throttle)))
             return flight_rows(m, self._side, np.asarray(throttle, dtype=float).reshape(-1),
-                               launch, battery)
+                               launch, battery, launches)
 
     @property
     def launch(self) -> LaunchBudget:
