@@ -77,7 +77,7 @@ from tuflexperf.models.battery import (
     cutoff_residual_v,
     discharge_time_s,
 )
-from tuflexperf.models.powertrain import PowerSurfaces, engine_power_w, power_surfaces
+from tuflexperf.models.powertrain import PowerSurfaces, engine_power_w
 from tuflexperf.models.thrust import (
     is_extrapolated,
     least_throttle_of,
@@ -207,19 +207,19 @@ class BestResult:
         }
 
 
-# --- the CasADi model, built once per case + battery -----------------------------------------
+# --- the model, built once per case + battery ------------------------------------------------
 class EnduranceModel:
-    """Level flight, power and discharge of one case as CasADi functions (build once)."""
+    """The endurance of one case at any throttle: its battery, least throttle, mission and
+    the batch's rows of the case (build once)."""
 
     def __init__(self, case: Case, battery: Battery) -> None:
-
         self.case, self.battery = case, battery
         self.ch = characterise_battery(battery, case)
-        self.params = self.ch.fit.parameters
-        # the propulsion file's fitted power surfaces where every engine has one (SPEC 4),
-        # else the battery file's fan-power law fitted to the discharge runs
-        surfaces = power_surfaces(case.propulsion, case.density_kg_m3)
-        self.power: Any = surfaces if surfaces is not None else self.ch.power.model
+        # the packs' circuit and the power model (the propulsion file's fitted surfaces where
+        # every engine has one, SPEC 4, else the battery file's fan-power law), as the
+        # batch's rows fly them
+        self._side = battery_side(case)
+        self.params, self.power = self._side.params, self._side.power
         self.run_checks = self._check_runs(battery)
         aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
         self.packs = battery.circuit_packs
@@ -246,7 +246,6 @@ class EnduranceModel:
         self._one = one
         # the flight itself: the batch's code on a batch of one row (batch_endurance)
         self._batch = BatchEvaluator(case, blocks=frozenset({"endurance"}))
-        self._side = battery_side(case)
         self._rows_of: dict[int, tuple[Any, dict[str, np.ndarray], Any, dict[Any, Any]]] = {}
         self._nlp: dict[str, Any] = {}
 
