@@ -252,60 +252,10 @@ def test_the_batch_takes_off_on_the_packs_as_the_single_case(tmp_path, reference
     assert True in verdicts and False in verdicts  # the rows straddle the packs' limit
 
 
-ENDURANCE_ROWS = [
-    {},
-    {"battery.capacity_ah": 3.0},
-    {"requirements.endurance.throttle": 0.7},
-    {"battery.cutoff_voltage_per_cell_v": 3.75},  # the cut-off ends the cruise
-    {"battery.capacity_ah": 8.0, "requirements.endurance.throttle": 0.4},
-    {"battery.mission.landing_reserve_fraction": 0.05, "battery.capacity_ah": 4.0},
-    {"battery.capacity_ah": 1.2},  # beyond the battery at the take-off
-]
-
-
-# the reference voltage below and above the pack's: exhaustive variants of the 47.3 V case
-@pytest.mark.parametrize(("reference_v", "c_rate"), [
-    pytest.param(44.0, None, marks=pytest.mark.slow), (47.3, None),
-    pytest.param(52.0, None, marks=pytest.mark.slow), (47.3, 14)])
-def test_the_batch_flies_the_endurance_on_sagging_packs_as_the_single_case(
-        tmp_path, reference_v, c_rate):
-    """With a reference voltage the batch's endurance is the single case's mission, the packs
-    sagging: it had taken the reference voltage throughout, 18.5 min against the case's 16.2
-    for a reference of 44 V (a P(met) of 1.0 where the case FAILed)."""
-    defaults = {"battery.capacity_ah": 5.0, "requirements.endurance.throttle": 0.5,
-                "battery.cutoff_voltage_per_cell_v": 3.4,
-                "battery.mission.landing_reserve_fraction": 0.2}
-    nominal = _case(tmp_path / "nominal", reference_v, c_rate)
-    values = {k: np.array([{**defaults, **row}[k] for row in ENDURANCE_ROWS]) for k in defaults}
-    batch = BatchEvaluator(nominal).evaluate(values).values["flight_endurance"]
-    ends = set()
-    for i, row in enumerate(ENDURANCE_ROWS):
-        single = _case(tmp_path / f"row{i}", reference_v, c_rate,
-                       tuple(f"{k}={v}" for k, v in row.items()))
-        verdict = next(v for v in check_case(single) if v.name == "flight_endurance")
-        # the batch flies the case as given: the first reading where readings dispute it
-        verdict = dataclasses.replace(verdict, value=verdict.readings[0].value
-                                      if verdict.readings else verdict.value)
-        if verdict.value is None:
-            assert np.isnan(batch[i]), (row, batch[i], verdict.reason)
-            # a cruise ended by the cut-off before the reserve keeps none: not attainable in
-            # both (issue 43), said so
-            ends.add("cut-off" if "cut-off before" in verdict.reason
-                     or "cruise ends at the packs' cut-off" in verdict.reason
-                     else "not attainable")
-            continue
-        assert batch[i] == pytest.approx(verdict.value, rel=1e-7), (row, verdict.reason)
-        ends.add("reserve")
-    # the rows end at the reserve, at the cut-off (no reserve kept: not attainable), and not at
-    # all
-    assert ends == {"not attainable", "reserve", "cut-off"}, ends
-
-
 def test_sampled_cruises_cross_the_tested_range_on_sagging_packs(tmp_path) -> None:
     """The samples' extrapolation error steps the thrust at the tested range's end; a cruise
     whose airspeed falls through it as the packs sag still flies (168 of 300 samples were
     'not attainable' there, the level-flight root sought across the step)."""
-    import dataclasses
 
     from tuflexperf.analysis import uncertainty
     from tuflexperf.analysis.error_model import error_model_for

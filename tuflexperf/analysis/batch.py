@@ -183,7 +183,8 @@ class BatchEvaluator:
             self._endurance = battery_side(case)
         # trim and OEI are flown on the packs as the single case flies them (pack_limits)
         self._packs: Any = None
-        if self.requirements or case.requirements.mission is not None:
+        if self.requirements or case.requirements.mission is not None or (
+                blocks is not None and "endurance" in blocks):  # the endurance of one case
             self._packs = pack_side(case)
 
     # -- the batch's model objects -----------------------------------------------------------
@@ -265,6 +266,22 @@ class BatchEvaluator:
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             return self._evaluate(values, size, coefficients, extrapolation_n, power_scale)
 
+    def model(self, values: Mapping[str, Array], size: int,
+              coefficients: Array | None = None, extrapolation_n: Array | None = None,
+              power_scale: Array | None = None) -> BatchModel:
+        """The physics of ``size`` rows of ``values`` (absent keys nominal; as
+        :meth:`evaluate`'s arguments)."""
+        return BatchModel(
+            aircraft=self._aircraft(values, size),
+            propulsion=self._propulsion(coefficients),
+            density=self._density(values, size),
+            extrapolation_n=extrapolation_n,
+            size=size,
+            stall_margin=_column(values, "requirements.envelope.stall_margin",
+                                 stall_margin_of(self.case), size),
+            power_scale=None if power_scale is None else np.asarray(power_scale, dtype=float),
+        )
+
     def _evaluate(self, values: Mapping[str, Array] | None, size: int | None,
                   coefficients: Array | None, extrapolation_n: Array | None,
                   power_scale: Array | None = None) -> BatchResult:
@@ -276,16 +293,7 @@ class BatchEvaluator:
                 size = int(coefficients.shape[1])
             else:
                 size = 1
-        model = BatchModel(
-            aircraft=self._aircraft(values, size),
-            propulsion=self._propulsion(coefficients),
-            density=self._density(values, size),
-            extrapolation_n=extrapolation_n,
-            size=size,
-            stall_margin=_column(values, "requirements.envelope.stall_margin",
-                                 stall_margin_of(self.case), size),
-            power_scale=None if power_scale is None else np.asarray(power_scale, dtype=float),
-        )
+        model = self.model(values, size, coefficients, extrapolation_n, power_scale)
         out: dict[str, Array] = {}
         limits: dict[str, Array] = {}
         roll: tuple[Array, Array, Array, Array] | None = None

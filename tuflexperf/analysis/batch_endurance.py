@@ -25,7 +25,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tuflexperf.analysis import endurance as single
 from tuflexperf.analysis.batch_kernels import (
     GOLDEN_STEPS,
     best_climb,
@@ -60,38 +59,27 @@ from tuflexperf.models.thrust import density_ratio, engine_thrust_n
 
 Array = NDArray[np.float64]
 
+# A figure of merit beyond this (ideal power over electrical) is no measurement error: the
+# power model gives less than half what momentum theory needs for the thrust
+IMPOSSIBLE_FIGURE_OF_MERIT = 2.0
+
 
 def battery_side(case: Any) -> Any:
-    """What the batch takes from the case's endurance model: the battery, its fitted pack
-    model (``params``), the packs per engine and the fan power model.
-
-    The deterministic :func:`endurance_model` (cached, so ``check`` has built it already);
-    where the nominal case cannot launch (it never rolls to lift-off) that model does not
-    exist, but its battery side does, and the batch's other rows may well launch.
+    """What the endurance flight takes from the case's battery: the battery, its fitted pack
+    model (``params``) and the fan power model (:func:`.pack_limits.pack_side`, cached).
 
     References
     ----------
     Paper section 4 (endurance estimate); SPEC 4 (battery file).
     """
-    from types import SimpleNamespace
+    from tuflexperf.analysis.pack_limits import pack_side
+    from tuflexperf.errors import InputError
 
-    from tuflexperf.errors import NotAttainable
-
-    try:
-        return single.endurance_model(case)
-    except NotAttainable:
-        from tuflexperf.io.battery import case_battery
-        from tuflexperf.models.powertrain import power_surfaces
-
-        battery = case_battery(case)
-        characterised = single.characterise_battery(battery, case)
-        # the same choice as EnduranceModel: the propulsion's power surfaces, else the
-        # battery file's fan-power law
-        surfaces = power_surfaces(case.propulsion, case.density_kg_m3)
-        return SimpleNamespace(
-            battery=battery, params=characterised.fit.parameters,
-            packs=battery.circuit_packs,
-            power=surfaces if surfaces is not None else characterised.power.model)
+    side = pack_side(case)
+    if side is None:
+        raise InputError(
+            f"{case.path}: battery: the case names no battery file; endurance needs one")
+    return side
 
 
 _ROLL_STEPS = 16  # RK4 steps of a roll along its history: 1e-8 of the mission's 64 ...
@@ -292,25 +280,44 @@ def _excess(m: Any, throttle: Array, speed: Array) -> Array:
     return thrust - drag
 
 
-def flight_endurance_min(m: Any, model: Any, throttle: Array,
-                         roll: tuple[Array, Array, Array, Array],
-                         battery: dict[str, Array]) -> tuple[Array, Array, Array]:
-    """Flight endurance [min] per row, NaN where the single-case analysis says not
-    attainable, the level-flight airspeed [m/s] on full packs (the result's) and the
-    launch's climb airspeed [m/s]."""
-    stall = stall_speed(m)
-    from tuflexperf.analysis.pack_limits import pack_rows
+@dataclass(frozen=True)
+class EnduranceRows:
+    """The endurance flight per row (NaN where not flown).
 
-    # the battery keys that vary without refitting the pack (dotted.BATTERY_KEYS); a pack of
-    # another capacity flies as that many measured packs in parallel
-    rows = pack_rows(model.battery, battery)
-    capacity, packs, cutoff = rows.capacity_ah, rows.circuit_packs, rows.cutoff_v
-    reserve_ah = rows.reserve_charge_ah
-    # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
+    ``minutes`` the flight endurance [min] (climb + cruise; NaN: not attainable, except
+    where the cruise ends at the packs' cut-off before the landing reserve: ``cut_first``,
+    the time to it), ``airspeed_m_s`` the level-flight airspeed [m/s] on full packs at the
+    reference voltage, ``climb_airspeed_m_s`` the launch's climb airspeed [m/s],
+    ``power_w`` the power model's electrical power per fan there [W], ``cruise_s`` and
+    ``climb_s`` the cruise's and the climb's times [s], ``end_charge_ah`` the charge drawn
+    per fan at the cruise's end from the fan that ends it [Ah], ``level`` where the throttle holds
+    level flight (short of the jet velocity, a fan's models possible, the packs above their
+    cut-off at the start).
+    """
+
+    minutes: Array
+    cut_first: NDArray[np.bool_]
+    airspeed_m_s: Array
+    climb_airspeed_m_s: Array
+    power_w: Array
+    cruise_s: Array
+    climb_s: Array
+    end_charge_ah: Array
+    level: NDArray[np.bool_]
+
+    def endurance_min(self) -> Array:
+        """The requirement's value [min]: NaN where no reserve is kept (the cut-off first)."""
+        return np.where(self.cut_first, np.nan, self.minutes)
+
+
+def level_airspeed(m: Any, throttle: Array, stall: Array) -> tuple[Array, NDArray[np.bool_]]:
+    """The fast level-flight airspeed [m/s] per row at ``throttle`` [-] (all engines, the
+    reference voltage) and where the throttle holds level flight at or above the least
+    level-flight airspeed (``stall`` [m/s] x the envelope's margin)."""
     most, least_speed = _most_excess(m, throttle, m.least_airspeed(), stall)
-    # EnduranceModel.check_throttle accepts a throttle down to the least one less 1e-9
+    # a throttle down to the least one less 1e-9 holds it (EnduranceModel.check_throttle)
     ok = (most >= 0.0) | (_excess(m, throttle + 1e-9, least_speed) >= 0.0)
-    # an airspeed above the fast level-flight root, as EnduranceModel._speed_guess
+    # an airspeed above the fast level-flight root: the bracket's upper end
     guess = np.maximum(least_speed, stall) * 1.25
     found = np.zeros(m.size, dtype=bool)
     for _ in range(60):
@@ -322,6 +329,38 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     speed = bracketed_root(
         lambda v: _excess(m, throttle, v), np.where(ok, least_speed, 1.0), np.where(ok, guess, 2.0)
     )
+    return speed, ok
+
+
+def flight_endurance_min(m: Any, model: Any, throttle: Array,
+                         roll: tuple[Array, Array, Array, Array],
+                         battery: dict[str, Array]) -> tuple[Array, Array, Array]:
+    """Flight endurance [min] per row, NaN where not attainable, the level-flight airspeed
+    [m/s] on full packs (the result's) and the launch's climb airspeed [m/s]
+    (:func:`flight_rows`)."""
+    rows = flight_rows(m, model, throttle, roll, battery)
+    return rows.endurance_min(), rows.airspeed_m_s, rows.climb_airspeed_m_s
+
+
+def flight_rows(m: Any, model: Any, throttle: Array, roll: tuple[Array, Array, Array, Array],
+                battery: dict[str, Array],
+                launches: dict[tuple[Any, ...], _Launch] | None = None) -> EnduranceRows:
+    """The endurance flight of each row (:class:`EnduranceRows`): ``m`` the rows' physics
+    (:class:`.batch_model.BatchModel`), ``model`` the battery side (:func:`battery_side`),
+    ``throttle`` [-] per row, ``roll`` the take-off's roll tuple, ``battery`` the rows'
+    battery keys (``dotted.BATTERY_KEYS``); ``launches`` the launch per fans flown, kept by
+    a caller that flies the same rows at other throttles (the launch is full throttle)."""
+    launches = {} if launches is None else launches
+    stall = stall_speed(m)
+    from tuflexperf.analysis.pack_limits import pack_rows
+
+    # the battery keys that vary without refitting the pack (dotted.BATTERY_KEYS); a pack of
+    # another capacity flies as that many measured packs in parallel
+    rows = pack_rows(model.battery, battery)
+    capacity, packs, cutoff = rows.capacity_ah, rows.circuit_packs, rows.cutoff_v
+    reserve_ah = rows.reserve_charge_ah
+    # level flight counts from stall x the envelope's margin, as EnduranceModel.least_m_s
+    speed, ok = level_airspeed(m, throttle, stall)
     # a cruise at or beyond the fans' jet velocity flies on no thrust (the mission's rule)
     density = np.asarray(m.density, dtype=float).reshape(-1, 1)
     ok &= ~beyond_jet_velocity(m.propulsion, speed[:, None], density)[:, 0]
@@ -337,12 +376,19 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     # one fan draws the most throughout, the largest fan's power is exactly its own
     height = battery["battery.mission.pattern_altitude_m"]
     engines: tuple[Any, ...] = (None,)
-    launch = _launch_charge(m, model, roll, stall, height, packs, cutoff, engines)
+
+    def launched(engines: tuple[Any, ...]) -> _Launch:
+        if engines not in launches:
+            launches[engines] = _launch_charge(m, model, roll, stall, height, packs, cutoff,
+                                               engines)
+        return launches[engines]
+
+    launch = launched(engines)
     if isinstance(model.power, PowerSurfaces) and len(m.propulsion.engines) > 1 \
             and not _one_fan_draws_most(model, m, launch, throttle, speed,
                                         ok & np.all(np.isfinite(launch.charge_ah), axis=0)):
         engines = m.propulsion.engines
-        launch = _launch_charge(m, model, roll, stall, height, packs, cutoff, engines)
+        launch = launched(engines)
     climb_time = launch.climb_time_s
     # the climb's airspeed (the last of them), where there is a climb
     climb = np.where(height > 0, launch.full_throttle_speeds_m_s[:, -1], np.nan)
@@ -368,16 +414,23 @@ def flight_endurance_min(m: Any, model: Any, throttle: Array,
     # is kept at the cruise's power, the endurance is not attainable (as endurance_verdict)
     first = np.argmin(seconds, axis=0)
     columns = np.arange(seconds.shape[1])
-    ok &= ~(np.broadcast_to(q_cut < reserve_ah, seconds.shape)[first, columns])
+    cut_first = ok & np.broadcast_to(q_cut < reserve_ah, seconds.shape)[first, columns]
     if m.propulsion.reference_voltage_v is not None:
         # thrust and power follow the packs' loaded voltage: flown as the single case's
         # mission flies them (the constant-power cruise above only sizes the steps)
         from tuflexperf.analysis.batch_sagging import flight_on_sagging_packs
 
-        return flight_on_sagging_packs(m, model, rows, throttle, roll, stall, height, speed,
-                                       level, np.where(ok, cruise_s, np.nan)), speed, climb
+        sag = flight_on_sagging_packs(m, model, rows, throttle, roll, stall, height, speed,
+                                      level, np.where(ok & ~cut_first, cruise_s, np.nan))
+        return EnduranceRows(sag.minutes, sag.cut_first, speed, climb, power_w, sag.cruise_s,
+                             sag.climb_s, sag.end_charge_ah, level)
     minutes = cruise_s / 60.0 + np.where(ok, climb_time, 0.0) / 60.0
-    return np.where(ok & np.isfinite(minutes), minutes, np.nan), speed, climb
+    flown = ok & np.isfinite(minutes)
+    end_ah = np.broadcast_to(np.minimum(q_cut, reserve_ah), seconds.shape)[first, columns]
+    return EnduranceRows(np.where(flown, minutes, np.nan), flown & cut_first, speed, climb,
+                         power_w, np.where(flown, cruise_s, np.nan),
+                         np.where(flown, climb_time, np.nan),
+                         np.where(flown, end_ah, np.nan), level)
 
 
 def _impossible_cruise(m: Any, throttle: Array, speed: Array, power_w: Array) -> Array:
@@ -400,7 +453,7 @@ def _impossible_cruise(m: Any, throttle: Array, speed: Array, power_w: Array) ->
             continue
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             merit = np.asarray(figure_of_merit(thrust, v, density, area, power), dtype=float)
-        impossible |= (merit > single.IMPOSSIBLE_FIGURE_OF_MERIT).reshape(-1)
+        impossible |= (merit > IMPOSSIBLE_FIGURE_OF_MERIT).reshape(-1)
     return impossible
 
 

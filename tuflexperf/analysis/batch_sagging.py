@@ -102,6 +102,7 @@ class SaggingFlight:
         self.mass = np.asarray(m.aircraft.mass_kg, dtype=float).reshape(-1) * np.ones(m.size)
         self.pole = rows.circuit_packs * model.params.max_capacity_ah
         self.active = np.ones(m.size, dtype=bool)  # the rows still flown (the cruise's)
+        self.cut_first = np.zeros(m.size, dtype=bool)  # the cut-off before the reserve
 
     # -- one point --------------------------------------------------------------------------
     def _thrusts(self, throttle: Any, speed: Array) -> Array:
@@ -508,11 +509,24 @@ class SaggingFlight:
         return ok
 
 
+@dataclass(frozen=True)
+class SaggingRows:
+    """The flight on sagging packs per row: its endurance [min] (NaN: not attainable; where
+    the cut-off comes before the landing reserve, ``cut_first``, the time to it), the
+    cruise's and the climb's times [s] and the greatest charge drawn per fan at its end [Ah]."""
+
+    minutes: Array
+    cut_first: NDArray[np.bool_]
+    cruise_s: Array
+    climb_s: Array
+    end_charge_ah: Array
+
+
 def flight_on_sagging_packs(m: Any, model: Any, rows: PackRows, throttle: Array,
                             roll: tuple[Array, Array, Array, Array], stall: Array,
                             height: Array, speed: Array, ok: NDArray[np.bool_],
-                            estimate_s: Array) -> Array:
-    """Flight endurance [min] per row on sagging packs (NaN: not attainable).
+                            estimate_s: Array) -> SaggingRows:
+    """The endurance flight per row on sagging packs (:class:`SaggingRows`).
 
     ``ok`` the rows whose throttle holds level flight at the reference voltage (the single
     case's check before its mission), ``speed`` [m/s] their level-flight airspeed there,
@@ -534,6 +548,9 @@ def flight_on_sagging_packs(m: Any, model: Any, rows: PackRows, throttle: Array,
         ok &= held & np.all(start < rows.reserve_charge_ah, axis=0)
     cruise_s, ok = flight.cruise(throttle, start, nodes.time[-1], speed,
                                  np.where(np.isfinite(estimate_s), estimate_s, 600.0), ok, nodes)
-    ok = flight.within_rating(nodes, ok) & ~getattr(flight, "cut_first", False)
+    ok = flight.within_rating(nodes, ok)
     minutes = (cruise_s + climb_s) / 60.0
-    return np.where(ok & np.isfinite(minutes), minutes, np.nan)
+    flown = ok & np.isfinite(minutes)
+    return SaggingRows(np.where(flown, minutes, np.nan), flown & flight.cut_first,
+                       np.where(flown, cruise_s, np.nan), np.where(flown, climb_s, np.nan),
+                       np.where(flown, np.max(nodes.charge[-1], axis=0), np.nan))

@@ -14,24 +14,24 @@ the tunnel at 30 m/s; with two packs per fan and the launch's energy, "a flight 
 4. **Pack endurance**: one pack on one fan at ``P(x, V)`` from full to the cut-off
    under load: ``t = 3600 * integral_0^{q_c} dq / i(q, P)`` (constant-power discharge).
 5. **Flight endurance**: the mission "take off, climb to the pattern altitude, cruise at
-   ``x`` until the reserve" (:func:`endurance_mission`) flown by the one mission
-   integrator (:class:`tuflexperf.analysis.mission.MissionModel`, CasADi RK4): the
-   full-throttle ground roll along the history of :func:`solve_takeoff`, the full-throttle
+   ``x`` until the reserve" (:func:`endurance_mission`): the full-throttle ground roll
+   along the take-off's airspeed history, the full-throttle
    climb at the best rate of climb to the battery file's pattern altitude, then level
    flight at throttle ``x``, each fan on its ``n`` parallel packs at the loaded pack
    voltage, until the first fan has given ``(1 - reserve)`` of its rated capacity (the
-   landing reserve) or reaches the cut-off, whichever comes first (Newton on the landing
-   charge). With the propulsion file's ``reference_voltage_v`` thrust and power fall as
-   the pack sags, and the cruise airspeed with them (SPEC 3).
+   landing reserve) or reaches the cut-off, whichever comes first. With the propulsion
+   file's ``reference_voltage_v`` thrust and power fall as the pack sags, and the cruise
+   airspeed with them (SPEC 3).
    ``flight_endurance_min`` = climb + cruise time (airborne). The endurance figure is
    the case's point performance: flown at the case's density throughout.
 
-Steps 3-4 are one CasADi function (Newton rootfinders on the level-flight excess thrust
-and on the cut-off condition, Gauss-Legendre quadrature of the discharge) built once per
-case and battery and called per throttle; the constant-power closed form of step 4 also
-starts the Newton iteration of step 5 (exact without a voltage effect, so it converges at
-once). ``--best`` solves two small IPOPT NLPs: the throttle and airspeed of longest
-flight, and of longest cruise distance (constant-power cruise, no voltage effect).
+Steps 3-5 are the batch's code on one row (:func:`.batch_endurance.flight_rows`, on
+sagging packs :mod:`.batch_sagging`), the very code ``--samples`` flies on N: the fast
+level-flight root, the packs' cut-off charge, the launch and the Gauss-Legendre cruise. The
+mission integrator then flies the mission once at that cruise time for the flight's record,
+and says why where the rows find the flight not attainable. ``--best`` solves two small
+IPOPT NLPs: the throttle and airspeed of longest flight, and of longest cruise distance
+(constant-power cruise, no voltage effect).
 
 Steps 1-2 live in :mod:`.battery_fit`, the flight of step 5 as a mission in
 :mod:`.endurance_plan`; this module holds :class:`EnduranceModel` and its results.
@@ -45,7 +45,17 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.airborne import obstacle_height_of
 from tuflexperf.analysis.attainable import least_airspeed_m_s
+from tuflexperf.analysis.batch import BatchEvaluator
+from tuflexperf.analysis.batch_endurance import (
+    IMPOSSIBLE_FIGURE_OF_MERIT,
+    EnduranceRows,
+    battery_side,
+    flight_rows,
+    level_airspeed,
+)
+from tuflexperf.analysis.batch_kernels import bracketed_root, stall_speed
 from tuflexperf.analysis.battery_fit import (
     RUN_POWER_TOLERANCE,
     BatteryCharacterisation,
@@ -67,7 +77,7 @@ from tuflexperf.models.battery import (
     cutoff_residual_v,
     discharge_time_s,
 )
-from tuflexperf.models.powertrain import PowerSurfaces, engine_power_w, power_surfaces
+from tuflexperf.models.powertrain import PowerSurfaces, engine_power_w
 from tuflexperf.models.thrust import (
     is_extrapolated,
     least_throttle_of,
@@ -76,14 +86,8 @@ from tuflexperf.models.thrust import (
     unlapsed_density_warning,
 )
 
-# Level flight is searched between the stall speed and this multiple of it.
-# A figure of merit beyond this (ideal power over electrical) is no measurement error: the
-# power model gives less than half what momentum theory needs for the thrust
-IMPOSSIBLE_FIGURE_OF_MERIT = 2.0
 # Least airspeed for the --best NLPs: the usual 20 % margin over the 1-g stall speed.
 BEST_MIN_AIRSPEED_OVER_STALL = 1.2
-# RK4 step of the batch evaluator's launch (batch_endurance.py keeps the earlier scheme)
-_LAUNCH_STEP_S = 0.25
 _model_cache: BoundedCache[EnduranceModel] = BoundedCache()
 
 
@@ -203,20 +207,19 @@ class BestResult:
         }
 
 
-# --- the CasADi model, built once per case + battery -----------------------------------------
+# --- the model, built once per case + battery ------------------------------------------------
 class EnduranceModel:
-    """Level flight, power and discharge of one case as CasADi functions (build once)."""
+    """The endurance of one case at any throttle: its battery, least throttle, mission and
+    the batch's rows of the case (build once)."""
 
     def __init__(self, case: Case, battery: Battery) -> None:
-        import casadi as ca
-
         self.case, self.battery = case, battery
         self.ch = characterise_battery(battery, case)
-        self.params = self.ch.fit.parameters
-        # the propulsion file's fitted power surfaces where every engine has one (SPEC 4),
-        # else the battery file's fan-power law fitted to the discharge runs
-        surfaces = power_surfaces(case.propulsion, case.density_kg_m3)
-        self.power: Any = surfaces if surfaces is not None else self.ch.power.model
+        # the packs' circuit and the power model (the propulsion file's fitted surfaces where
+        # every engine has one, SPEC 4, else the battery file's fan-power law), as the
+        # batch's rows fly them
+        self._side = battery_side(case)
+        self.params, self.power = self._side.params, self._side.power
         self.run_checks = self._check_runs(battery)
         aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
         self.packs = battery.circuit_packs
@@ -234,60 +237,16 @@ class EnduranceModel:
         # the flight: take-off, climb, cruise at a throttle, flown by the mission integrator
         self.mission = self._planned_mission(case, battery)
         self._cruise = len(self.mission.plans) - 1
-        self.launch = launch_of(self.mission)
-        # the cruise starts where the launch ends, whatever its throttle
-        self._cruise_start = self.mission.start_state(self._cruise, self.mission.durations,
-                                                      self.mission.theta)
+        self._launch: LaunchBudget | None = None  # from the first flight flown
 
         def excess(x: Any, v: Any) -> Any:
             return total_thrust_n(propulsion, x, v, rho) - level_flight_drag_n(aircraft, v, rho)
 
         self.excess = excess
-        x, v, q, p = (ca.SX.sym(n) for n in ("x", "v", "q", "p"))
-        sym = self.params
-        level = ca.Function("level_excess", [v, x], [excess(x, v)])
-        cut_1 = ca.Function("cutoff_1", [q, p],
-                            [cutoff_residual_v(sym, q, p, self.cutoff_v, one)])
-        cut_n = ca.Function(
-            "cutoff_n", [q, p], [cutoff_residual_v(sym, q, p, self.cutoff_v, self.packs)]
-        )
-        # a pack far too small for the power has no root: said as not attainable, not in
-        # CasADi's evaluation warnings on stderr
-        opts = {"abstol": 1e-10, "max_iter": 200, "error_on_fail": False,
-                "show_eval_warnings": False}
-        self._rf_level = ca.rootfinder("level_speed", "newton", level, opts)
-        rf_cut_1 = ca.rootfinder("cutoff_charge_1", "newton", cut_1, opts)
-        rf_cut_n = ca.rootfinder("cutoff_charge_n", "newton", cut_n, opts)
-        a, b = ca.SX.sym("a"), ca.SX.sym("b")
-        time_1 = ca.Function("time_1", [p, a, b], [discharge_time_s(sym, p, a, b, one)])
-        time_n = ca.Function("time_n", [p, a, b], [discharge_time_s(sym, p, a, b, self.packs)])
-        self._power = ca.Function("power", [x, v], [self.power.electrical_power_w(x, v)])
-        self._current = ca.Function("current", [q, p], [current_at_power_a(sym, q, p, one)])
-
-        xm, v0, q10, qn0 = (ca.MX.sym(n) for n in ("x", "v0", "q1_0", "qn_0"))
-        speed = self._rf_level(v0, xm)
-        pw = self._power(xm, speed)
-        q_cut_1 = rf_cut_1(q10, pw)
-        q_cut_n = rf_cut_n(qn0, pw)
-        q_launch = self.launch.charge_ah
-        q_end = ca.fmin(q_cut_n, self.reserve_ah)
-        span = ca.fmax(q_end - q_launch, 0.0)
-        outputs = [
-            speed,
-            pw,
-            q_cut_1,
-            q_cut_n,
-            time_1(pw, 0.0, q_cut_1),
-            time_n(pw, q_launch, q_launch + span),
-            level(speed, xm),
-            cut_1(q_cut_1, pw),
-            cut_n(q_cut_n, pw),
-        ]
-        self._solve = ca.Function("endurance", [xm, v0, q10, qn0], outputs)
-        # Pole of the knee term (charge per fan): Newton starts just left of it, where the
-        # residual is concave and decreasing, so it converges monotonically from the right.
-        pole = self.params.max_capacity_ah
-        self._q_guess = (one * pole * (1 - 1e-4), self.packs * pole * (1 - 1e-4))
+        self._one = one
+        # the flight itself: the batch's code on a batch of one row (batch_endurance)
+        self._batch = BatchEvaluator(case, blocks=frozenset({"endurance"}))
+        self._rows_of: dict[int, tuple[Any, dict[str, np.ndarray], Any, dict[Any, Any]]] = {}
         self._nlp: dict[str, Any] = {}
 
     # -- the discharge runs against the power and thrust models (SPEC 3) ---------------------
@@ -404,35 +363,6 @@ class EnduranceModel:
             speeds = np.linspace(speeds[max(k - 1, 0)], speeds[min(k + 1, speeds.size - 1)], 101)
         return best
 
-    def _speed_guess(self, throttle: float) -> float:
-        """An airspeed above the fast level-flight root (excess thrust < 0), in m/s."""
-        speed = max(self.min_throttle_airspeed, self.stall_m_s) * 1.25
-        for _ in range(60):
-            if float(self.excess(throttle, speed)) < 0.0:
-                return speed
-            speed *= 1.25
-        raise NotAttainable(f"throttle {throttle:g}: no upper level-flight airspeed found")
-
-    def _fast_root_fallback(self, throttle: float, high: float) -> float:
-        low = self.min_throttle_airspeed
-        for _ in range(200):
-            mid = 0.5 * (low + high)
-            if float(self.excess(throttle, mid)) >= 0.0:
-                low = mid
-            else:
-                high = mid
-        return 0.5 * (low + high)
-
-    def level_airspeed_m_s(self, throttle: float) -> float:
-        """The level-flight (front side) airspeed [m/s] at ``throttle`` [-], without flying."""
-        self.check_throttle(throttle)
-        guess = self._speed_guess(throttle)
-        speed = float(self._rf_level(guess, throttle))
-        if not (abs(float(self.excess(throttle, speed))) < 1e-6
-                and speed >= self.min_throttle_airspeed - 1e-6):
-            speed = self._fast_root_fallback(throttle, guess)
-        return speed
-
     def check_throttle(self, throttle: float) -> None:
         """Raise :class:`NotAttainable` if ``throttle`` cannot hold level flight."""
         if not math.isfinite(self.min_throttle):
@@ -443,23 +373,48 @@ class EnduranceModel:
                 f"that holds level flight (at {self.min_throttle_airspeed:.1f} m/s)"
             )
 
+    def _launched(self, size: int) -> tuple[Any, dict[str, np.ndarray], Any, dict[Any, Any]]:
+        """``size`` rows of the case as given: their physics, battery keys, take-off and
+        launches (the same for every throttle, so solved once per size)."""
+        if size not in self._rows_of:
+            batch, values = self._batch, {}
+            m = batch.model(values, size)
+            battery = batch._battery_rows(values, size)
+            height = np.full(size, obstacle_height_of(self.case))
+            self._rows_of[size] = (m, battery, batch.launch(m, size, height, battery), {})
+        return self._rows_of[size]
+
+    def rows(self, throttle: np.ndarray) -> EnduranceRows:
+        """The endurance flight at each ``throttle`` [-] (the batch's code, one row per
+        throttle of the case as given: :func:`.batch_endurance.flight_rows`)."""
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            m, battery, launch, launches = self._launched(int(np.size(throttle)))
+            return flight_rows(m, self._side, np.asarray(throttle, dtype=float).reshape(-1),
+                               launch, battery, launches)
+
+    @property
+    def launch(self) -> LaunchBudget:
+        """The take-off and climb to the pattern altitude of the endurance mission."""
+        if self._launch is None:
+            self._launch = launch_of(self.mission)
+        return self._launch
+
+    def level_airspeed_m_s(self, throttle: float) -> float:
+        """The level-flight (front side) airspeed [m/s] at ``throttle`` [-], without flying."""
+        self.check_throttle(throttle)
+        m = self._launched(1)[0]
+        speed, ok = level_airspeed(m, np.array([float(throttle)]), stall_speed(m))
+        if not ok[0]:
+            raise NotAttainable(f"throttle {throttle:g}: no level flight")
+        return float(speed[0])
+
     def solve(self, throttle: float) -> EnduranceResult:
         """Endurance at ``throttle`` (fraction, all engines)."""
         self.check_throttle(throttle)
-        guess = self._speed_guess(throttle)
-        out = [float(val) for val in self._solve(throttle, guess, *self._q_guess)]
-        speed, power_w, q1, qn, t1, tn, res_level, res_1, res_n = out
-        # Verify the Newton answers; fall back to bisection (robust, slower) if any failed.
-        if not (abs(res_level) < 1e-6 and speed >= self.min_throttle_airspeed - 1e-6):
-            speed = self._fast_root_fallback(throttle, guess)
-            out = [float(val) for val in self._solve(throttle, speed, *self._q_guess)]
-            _, power_w, q1, qn, t1, tn, _, res_1, res_n = out
-        if speed < self.least_m_s * (1.0 - 1e-9):
-            raise NotAttainable(
-                f"throttle {throttle:g}: level flight at {speed:.1f} m/s is below stall "
-                f"({self.stall_m_s:.1f} m/s x {self.least_m_s / self.stall_m_s:g})"
-            )
-        if not (abs(res_n) < 1e-6 and 0 < qn):
+        row = self.rows(np.array([throttle]))
+        speed, power_w = float(row.airspeed_m_s[0]), float(row.power_w[0])
+        params, cutoff = self.params, self.cutoff_v
+        if not (speed > 0.0 and cutoff_residual_v(params, 0.0, power_w, cutoff, self.packs) > 0):
             raise NotAttainable(
                 f"throttle {throttle:g}: the pack is below its cut-off voltage at "
                 f"{power_w:.0f} W per fan from the start"
@@ -467,25 +422,52 @@ class EnduranceModel:
         # one pack alone is the figure of the battery, not of the flight: a fan flies on its
         # packs in parallel, which may hold a power one of them cannot (a full-throttle
         # flight on two 2.5 Ah packs per fan was "not attainable"; outside audit)
-        alone = abs(res_1) < 1e-6 and 0 < q1
-        flight, cruise_s, ends_at = self._fly(throttle, speed, tn)
-        return self._result(throttle, speed, power_w, q1 if alone else 0.0,
-                            t1 if alone else 0.0, flight, cruise_s, ends_at)
+        q1 = t1 = 0.0
+        if cutoff_residual_v(params, 0.0, power_w, cutoff, self._one) > 0:
+            pole = np.array([self._one * params.max_capacity_ah * (1.0 - 1e-12)])
+            q1 = float(bracketed_root(
+                lambda q: np.asarray(cutoff_residual_v(params, q, power_w, cutoff, self._one),
+                                     dtype=float), np.zeros(1), pole)[0])
+            t1 = float(discharge_time_s(params, power_w, 0.0, q1, self._one))
+        if not (row.level[0] and math.isfinite(row.minutes[0])):
+            # not attainable: the mission integrator (the same rules) and the result's checks
+            # say why
+            flight, cruise_s, ends_at = self._why_not(throttle, speed)
+            self._result(throttle, speed, power_w, q1, t1, flight,
+                         (cruise_s + self.launch.climb_time_s) / 60.0, cruise_s / 60.0, ends_at)
+            raise NotAttainable(f"throttle {throttle:g}: the endurance flight is not attainable")
+        cruise_s = float(row.cruise_s[0])
+        ends_at = "cut-off" if row.cut_first[0] else "landing reserve"
+        flight = self._flown(throttle, speed, cruise_s)
+        if not flight.attainable:
+            raise NotAttainable(f"throttle {throttle:g}: {flight.reason}")
+        return self._result(throttle, speed, power_w, q1, t1, flight,
+                            float(row.minutes[0]), cruise_s / 60.0, ends_at,
+                            float(row.end_charge_ah[0]))
 
-    def _fly(self, throttle: float, speed: float, guess_s: float) -> tuple[Any, float, str]:
-        """The endurance mission at ``throttle``: the cruise runs to the reserve (or cut-off).
+    def _flown(self, throttle: float, speed: float, cruise_s: float) -> Any:
+        """The endurance mission flown with the cruise ``cruise_s`` [s] long at ``throttle``:
+        the flight's record (segments, time history)."""
+        model = self.mission
+        theta = model.theta.copy()
+        theta[3 * self._cruise:3 * self._cruise + 3] = (throttle, 0.0, speed)
+        durations = model.durations.copy()
+        durations[self._cruise] = cruise_s
+        flight = model.fly(durations, theta=theta)
+        if self._launch is None and flight.attainable:
+            self._launch = launch_of(model, flight)
+        return flight
 
-        The cruise's duration is the root of the mission's landing charge (see
-        :meth:`MissionModel.longest`), started from the constant-power closed form
-        ``guess_s`` [s] (exact without a voltage effect, so Newton confirms it at once).
-        """
+    def _why_not(self, throttle: float, speed: float) -> tuple[Any, float, str]:
+        """The endurance mission at ``throttle`` flown to the reserve (or cut-off) by the
+        mission integrator, raising :class:`NotAttainable` with its reason (see
+        :meth:`MissionModel.longest`): where the flight is not attainable, why."""
         model = self.mission
         theta = model.theta.copy()
         theta[3 * self._cruise:3 * self._cruise + 3] = (throttle, 0.0, speed)
         durations = model.durations.copy()
         try:
-            cruise_s, ends_at = model.longest(self._cruise, durations, theta,
-                                              max(guess_s, 1.0), self._cruise_start)
+            cruise_s, ends_at = model.longest(self._cruise, durations, theta)
         except NotAttainable as exc:
             raise NotAttainable(
                 f"throttle {throttle:g}: the launch leaves no cruise before the landing reserve "
@@ -499,7 +481,8 @@ class EnduranceModel:
 
     def _result(
         self, throttle: float, speed: float, power_w: float, q1: float, t1: float,
-        flight: Any, cruise_s: float, ends_at: str,
+        flight: Any, flight_min: float, cruise_min: float, ends_at: str,
+        cruise_end_ah: float = math.nan,
     ) -> EnduranceResult:
         warnings: list[str] = []
         propulsion = self.case.propulsion
@@ -530,9 +513,6 @@ class EnduranceModel:
         density_note = unlapsed_density_warning(self.case.propulsion, self.case.density_kg_m3)
         if density_note:
             warnings.append(density_note)
-        cruise_min = cruise_s / 60.0
-        cruise_end = max(float(flight.history[f"charge_ah_{name}"][-1])
-                         for name in flight.engines)
         agreement = agreement_at(
             f"endurance at throttle {throttle:.2f}", self.case.propulsion, throttle, speed,
             self.case.density_kg_m3, power_w,
@@ -584,14 +564,15 @@ class EnduranceModel:
             airspeed_m_s=speed,
             electrical_power_w=power_w,
             battery_endurance_min=t1 / 60.0,
-            flight_endurance_min=cruise_min + self.launch.climb_time_s / 60.0,
+            flight_endurance_min=flight_min,
             cruise_time_min=cruise_min,
             # NaN (null in JSON) where one pack cannot give the power at all
-            pack_current_a=float(self._current(0.0, power_w)) if q1 > 0.0 else math.nan,
+            pack_current_a=(float(current_at_power_a(self.params, 0.0, power_w, self._one))
+                            if q1 > 0.0 else math.nan),
             pack_energy_wh=power_w * t1 / 3600.0,
             cutoff_charge_ah=q1,
             cutoff_voltage_v=self.cutoff_v,
-            cruise_end_charge_ah=cruise_end,
+            cruise_end_charge_ah=cruise_end_ah,
             cruise_ends_at=ends_at,
             engines=len(self.case.propulsion.engines),
             packs_in_parallel_per_engine=self.battery.packs_in_parallel_per_engine,

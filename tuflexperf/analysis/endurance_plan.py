@@ -20,9 +20,6 @@ from tuflexperf.io.battery import (
 )
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import climb_sine, level_flight_drag_n, stall_speed_m_s
-from tuflexperf.models.battery import (
-    DischargeParameters,
-)
 from tuflexperf.models.thrust import (
     total_thrust_n,
 )
@@ -136,9 +133,10 @@ def endurance_mission_model(case: Case, battery: Battery, throttle: float = 0.5)
                         battery=battery)
 
 
-def launch_of(model: Any) -> LaunchBudget:
-    """The launch segments of a flown endurance mission (per fan: the larger engine's)."""
-    flown = model.fly()
+def launch_of(model: Any, flown: Any = None) -> LaunchBudget:
+    """The launch segments of the endurance mission ``model`` (per fan: the larger engine's),
+    from its flight ``flown`` (the launch is the same whatever the cruise), else flown."""
+    flown = model.fly() if flown is None else flown
     case = model.case
     takeoff = getattr(model, "takeoff", None)
     climb = next((s for s in flown.segments if s.type == "climb"), None)
@@ -168,26 +166,3 @@ def launch_of(model: Any) -> LaunchBudget:
         energy_wh=energy[worst],
     )
 
-
-def launch_budget(
-    case: Case, battery: Battery, params: DischargeParameters | None = None, power: Any = None
-) -> LaunchBudget:
-    """Charge drawn per fan (its ``n`` parallel packs) by the take-off and the climb.
-
-    The launch segments of :func:`endurance_mission` flown by the mission integrator
-    (CasADi RK4, :mod:`tuflexperf.analysis.mission`): ground roll at full throttle along the
-    airspeed history of :func:`solve_takeoff`, rotation, then the full-throttle climb at
-    the best-rate airspeed to the pattern altitude, each fan drawing its own power (its
-    power surface, else the battery file's fan-power law) at the loaded pack voltage.
-    The fan that draws most sets the budget. ``params`` and ``power`` are accepted for
-    compatibility: the pack model and the power model are the case's own (the same that
-    :class:`EnduranceModel` uses). Raises :class:`NotAttainable` when the aircraft cannot
-    take off or climb.
-
-    References
-    ----------
-    Raymer, *Aircraft Design*, 17.8 (take-off); Anderson, *Aircraft Performance and
-    Design*, 5.10 (rate of climb).
-    """
-    del params, power
-    return launch_of(endurance_mission_model(case, battery))
