@@ -109,15 +109,20 @@ class ReadingsEvaluator:
                  extrapolation_n: Array | None = None,
                  power_scale: Array | None = None) -> BatchResult:
         """As :meth:`BatchEvaluator.evaluate`, on every reading too."""
-        result = self.nominal.evaluate(values, size, coefficients, extrapolation_n, power_scale)
+        # the results that read only the thrust, shared with the readings that fly the same
+        # thrust (a power correction; a dead engine's drag): made once for all of them
+        shared: dict[Any, Any] | None = {} if self.readings else None
+        result = self.nominal.evaluate(values, size, coefficients, extrapolation_n, power_scale,
+                                       shared)
         if not self.readings:
             return result
         from tuflexperf.analysis.evaluators import evaluator_for
 
         rows = next(iter(result.values.values())).shape[0] if result.values else size
+        live = self.nominal.thrust_identity[0]
         theirs = []
         for reading, blocks in self.readings:
-            if reading.key == DRAWN_BY_SAMPLES:
+            if reading.beyond_tested_only:
                 # the bound moves thrust beyond the tested airspeeds only: a block no row of
                 # which flies there is the nominal's (its evaluation saved)
                 blocks = frozenset(r.block for r in self.requirements
@@ -125,8 +130,10 @@ class ReadingsEvaluator:
                                    and result.extrapolated[r.name].any())
             if blocks:
                 evaluator = evaluator_for(reading.case, blocks)
-                theirs.append((reading, evaluator.evaluate(values, rows, coefficients,
-                                                           extrapolation_n, power_scale).values))
+                same = evaluator.thrust_identity[0] == live
+                theirs.append((reading, evaluator.evaluate(
+                    values, rows, coefficients, extrapolation_n, power_scale,
+                    shared if same else None).values))
         worse, disputed, by_reading = combine_rows(result.values, result.limits,
                                                    result.kinds, theirs)
         return dataclasses.replace(result, values=worse, disputed=disputed,
