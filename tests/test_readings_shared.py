@@ -90,3 +90,22 @@ def test_the_bound_is_flown_only_where_the_nominal_flies_beyond_the_tested_airsp
     # its value there is the nominal's: flown anyway, the same number
     again = Study(bound.case).endurance(throttle).flight_endurance_min
     assert again == pytest.approx(study.endurance(throttle).flight_endurance_min, rel=1e-9)
+
+
+def test_the_power_reading_flies_the_nominal_mission_functions(case) -> None:
+    from tuflexperf.analysis.endurance import endurance_model
+    from tuflexperf.analysis.mission_equations import CORRECTION_SIZE
+
+    power = _reading(case, "measured_power")
+    nominal = endurance_model(case).mission
+    theirs = endurance_model(power.case).mission
+    assert theirs is not nominal and theirs._steps
+    # the same step functions: the correction is a parameter, the nominal's ratio 1
+    for key, function in theirs._steps.items():
+        assert function is nominal._steps[key]
+    law = power.case.propulsion.engines[0].power_correction
+    n = len(case.propulsion.engines)
+    first = nominal.n_par - 1 - CORRECTION_SIZE * (n + 1)
+    assert list(theirs.par[first:first + 3, 0]) == [law.constant, law.per_throttle,
+                                                    law.per_airspeed_s_m]
+    assert list(nominal.par[first:first + 3, 0]) == [1.0, 0.0, 0.0]

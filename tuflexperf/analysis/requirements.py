@@ -473,7 +473,12 @@ def sampled_result(verdict: Verdict, probabilistic: ProbabilisticVerdict | None)
 
 def probabilistic_verdicts(samples: Any) -> dict[str, ProbabilisticVerdict]:
     """Per requirement of a :class:`tuflexperf.analysis.uncertainty.SampleSet`."""
+    from functools import cache
+
     from tuflexperf.analysis.probability import clopper_pearson
+
+    # the worse reading's count is often one reading's own: its interval is computed once
+    clopper_pearson = cache(clopper_pearson)
     from tuflexperf.analysis.uncertainty import quantiles
 
     out: dict[str, ProbabilisticVerdict] = {}
