@@ -52,7 +52,7 @@ from numpy.typing import NDArray
 from tuflexperf.analysis.airborne import obstacle_height_of
 from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.analysis.batch_kernels import fan_power_rows
-from tuflexperf.analysis.batch_model import BatchModel
+from tuflexperf.analysis.batch_model import BatchModel, SharedRows
 from tuflexperf.analysis.level_flight import airspeed_grid, airspeed_grids
 from tuflexperf.analysis.pack_limits import (
     pack_rows,
@@ -186,6 +186,16 @@ class BatchEvaluator:
         if self.requirements or case.requirements.mission is not None or (
                 blocks is not None and "endurance" in blocks):  # the endurance of one case
             self._packs = pack_side(case)
+        self._identity: tuple[str, str] | None = None
+
+    @property
+    def thrust_identity(self) -> tuple[str, str]:
+        """What the case's thrust reads (:func:`~tuflexperf.analysis.readings.thrust_identity`)."""
+        if self._identity is None:
+            from tuflexperf.analysis.readings import thrust_identity
+
+            self._identity = thrust_identity(self.case)
+        return self._identity
 
     # -- the batch's model objects -----------------------------------------------------------
     def _aircraft(self, values: Mapping[str, Array], size: int) -> Aircraft:
@@ -239,6 +249,7 @@ class BatchEvaluator:
         coefficients: Array | None = None,
         extrapolation_n: Array | None = None,
         power_scale: Array | None = None,
+        shared: dict[Any, Any] | None = None,
     ) -> BatchResult:
         """Every requirement's value for each of ``B`` parameter sets.
 
@@ -254,6 +265,10 @@ class BatchEvaluator:
             Thrust error [N] per engine and sample added beyond the tested airspeed range.
         power_scale : array ``(B,)``, optional
             Factor [-] per sample on every fan's electrical power (the error model's).
+        shared : dict, optional
+            The results of these rows on another reading of the case that read only the
+            thrust (:class:`~tuflexperf.analysis.batch_model.SharedRows`): taken where
+            this case's thrust is that reading's, and added to.
 
         Returns
         -------
@@ -264,11 +279,13 @@ class BatchEvaluator:
         # mass) may overflow on its way to NaN, "not attainable": numpy's warnings about it
         # would only clutter stderr (margins and sweeps; samples said so already)
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            return self._evaluate(values, size, coefficients, extrapolation_n, power_scale)
+            return self._evaluate(values, size, coefficients, extrapolation_n, power_scale,
+                                  shared)
 
     def model(self, values: Mapping[str, Array], size: int,
               coefficients: Array | None = None, extrapolation_n: Array | None = None,
-              power_scale: Array | None = None) -> BatchModel:
+              power_scale: Array | None = None,
+              shared: dict[Any, Any] | None = None) -> BatchModel:
         """The physics of ``size`` rows of ``values`` (absent keys nominal; as
         :meth:`evaluate`'s arguments)."""
         return BatchModel(
@@ -280,11 +297,13 @@ class BatchEvaluator:
             stall_margin=_column(values, "requirements.envelope.stall_margin",
                                  stall_margin_of(self.case), size),
             power_scale=None if power_scale is None else np.asarray(power_scale, dtype=float),
+            shared=None if shared is None else SharedRows(shared, *self.thrust_identity),
         )
 
     def _evaluate(self, values: Mapping[str, Array] | None, size: int | None,
                   coefficients: Array | None, extrapolation_n: Array | None,
-                  power_scale: Array | None = None) -> BatchResult:
+                  power_scale: Array | None = None,
+                  shared: dict[Any, Any] | None = None) -> BatchResult:
         values = dict(values or {})
         if size is None:
             if values:
@@ -293,7 +312,7 @@ class BatchEvaluator:
                 size = int(coefficients.shape[1])
             else:
                 size = 1
-        model = self.model(values, size, coefficients, extrapolation_n, power_scale)
+        model = self.model(values, size, coefficients, extrapolation_n, power_scale, shared)
         out: dict[str, Array] = {}
         limits: dict[str, Array] = {}
         roll: tuple[Array, Array, Array, Array] | None = None

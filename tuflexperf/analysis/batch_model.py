@@ -9,6 +9,7 @@ run on one row, and its take-off :class:`tuflexperf.analysis.batch_roll.GroundRo
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,6 +37,55 @@ from tuflexperf.models.thrust import (
 )
 
 Array = NDArray[np.float64]
+_MISSING = object()
+
+
+@dataclass(frozen=True)
+class SharedRows:
+    """What the evaluations of one batch on several readings of a case share: the results
+    that read only the thrust, the aircraft and the air (never a fan's electrical power), kept
+    in ``memo`` under the fingerprint of what they read (:func:`thrust_identity`).
+
+    A reading that moves only the power (the measured power correction) finds every such
+    result there; one that moves a dead engine's drag only (windmilling) finds the live
+    engines' thrust and the take-off. The numbers are the ones each evaluation would make.
+
+    Attributes
+    ----------
+    memo : dict
+        ``(identity, method, arguments) -> result``, one per batch of rows.
+    live : str
+        Fingerprint of what every live engine's thrust reads.
+    dead : str
+        The same with the dead engines' windmilling drag.
+    """
+
+    memo: dict[Hashable, Any]
+    live: str
+    dead: str
+
+
+def _digest(value: Any) -> Hashable:
+    """A key equal for equal arguments [arrays by shape, type and bytes]."""
+    if isinstance(value, np.ndarray):
+        return ("array", value.shape, value.dtype.str, value.tobytes())
+    if isinstance(value, (tuple, list)):
+        return tuple(_digest(v) for v in value)
+    if isinstance(value, dict):
+        return tuple(sorted((k, _digest(v)) for k, v in value.items()))
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _frozen(value: Any) -> Any:
+    """``value`` with its arrays read-only (a shared result is never changed in place)."""
+    if isinstance(value, np.ndarray):
+        value.flags.writeable = False
+    elif isinstance(value, (tuple, list)):
+        for v in value:
+            _frozen(v)
+    return value
 
 
 @dataclass
@@ -59,6 +109,62 @@ class BatchModel(LevelFlightRows, GroundRollRows):
     # per row, the error model's factor on every fan's electrical power [-] (None: 1)
     power_scale: Array | None = None
     packs_air: Any = None  # that airborne part's settled path (airborne.AirborneOnPacks)
+    # the results of the batch's other readings that this one may take (SharedRows)
+    shared: SharedRows | None = None
+
+    def _shared(self, kind: str, name: str, arguments: tuple[Any, ...],
+                compute: Callable[[], Any]) -> Any:
+        """``compute()``, or its result from another reading of the batch that reads the
+        same thrust (``kind`` "live": every engine running; "dead": a dead one's drag too)."""
+        if self.shared is None:
+            return compute()
+        identity = self.shared.live if kind == "live" else self.shared.dead
+        key = (identity, name, _digest(arguments))
+        found = self.shared.memo.get(key, _MISSING)
+        if found is _MISSING:
+            found = self.shared.memo[key] = _frozen(compute())
+        return found
+
+    # -- the thrust-only results, shared between readings (SharedRows) ----------------------
+    def thrust(self, throttle: Any, speed: Array, dead: int | None = None,
+               mode: str = "windmilling") -> Array:
+        kind = "dead" if dead is not None and mode == "windmilling" else "live"
+        return self._shared(kind, "thrust", (throttle, speed, dead, mode),
+                            lambda: super(BatchModel, self).thrust(throttle, speed, dead, mode))
+
+    def _live_thrusts(self, speed: Array) -> list[tuple[Array, Array, Array]]:
+        return self._shared("live", "live_thrusts", (speed,),
+                            lambda: super(BatchModel, self)._live_thrusts(speed))
+
+    def trim_max_throttle(self, grid: Array, candidates: Array | None = None) -> Array:
+        return self._shared("live", "trim", (grid, candidates),
+                            lambda: super(BatchModel, self).trim_max_throttle(grid, candidates))
+
+    def oei_min_throttle(self, grid: Array, mode: str,
+                         candidates: dict[int, Array] | None = None) -> Array:
+        return self._shared("dead", "oei", (grid, mode, candidates),
+                            lambda: super(BatchModel, self).oei_min_throttle(grid, mode,
+                                                                             candidates))
+
+    def _roll_pieces(self) -> Any:
+        return self._shared("live", "roll_pieces", (),
+                            lambda: super(BatchModel, self)._roll_pieces())
+
+    def uniform_force(self) -> Array:
+        return self._shared("live", "uniform_force", (),
+                            lambda: super(BatchModel, self).uniform_force())
+
+    def force_range(self) -> tuple[Array, Array]:
+        return self._shared("live", "force_range", (),
+                            lambda: super(BatchModel, self).force_range())
+
+    def ground_roll(self) -> tuple[Array, Array, Array, Array]:
+        return self._shared("live", "ground_roll", (),
+                            lambda: super(BatchModel, self).ground_roll())
+
+    def roll_history(self, wanted: NDArray[np.bool_] | None = None) -> Array:
+        return self._shared("live", "roll_history", (wanted,),
+                            lambda: super(BatchModel, self).roll_history(wanted))
 
     def transition_speed(self) -> Array:
         """The take-off arc's true airspeed [m/s] per row ``(B,)``: 1.15 V_stall."""

@@ -6,6 +6,9 @@ each reading's case too, for the requirement blocks it affects only (a reading's
 evaluator holds those blocks alone), and per row the worse reading's value is kept: a row
 is met only where it is met on every reading, and disputed where it is met on some but
 not all (UNPROVEN, as :func:`tuflexperf.analysis.verdict.on_readings` judges one case).
+A reading that flies the nominal's thrust (it moves only the fans' power, or a dead engine's
+drag) takes the nominal's thrust-only results of the same rows instead of making them again
+(:class:`tuflexperf.analysis.batch_model.SharedRows`).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis.batch import BatchResult
-from tuflexperf.analysis.readings import Reading
+from tuflexperf.analysis.readings import Reading, thrust_identity
 from tuflexperf.analysis.verdict import requirement_met
 from tuflexperf.io.case import Case
 
@@ -100,6 +103,11 @@ class ReadingsEvaluator:
                                   and not (drawn_model_form and r.key == MODEL_FORM_BOUND))
         self.readings: list[tuple[Reading, frozenset[str]]] = [
             (r, r.affects & blocks) for r in self.all_readings if r.affects & blocks]
+        # the readings that fly the nominal's thrust (a power correction, a dead engine's
+        # drag) take its thrust-only results (batch_model.SharedRows)
+        live = self.nominal.thrust_identity[0]
+        self.sharing = frozenset(r.key for r, _ in self.readings
+                                 if thrust_identity(r.case)[0] == live)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.nominal, name)
@@ -109,7 +117,10 @@ class ReadingsEvaluator:
                  extrapolation_n: Array | None = None,
                  power_scale: Array | None = None) -> BatchResult:
         """As :meth:`BatchEvaluator.evaluate`, on every reading too."""
-        result = self.nominal.evaluate(values, size, coefficients, extrapolation_n, power_scale)
+        # the results that read only the thrust: made once for every reading that flies it
+        shared: dict[Any, Any] | None = {} if self.sharing else None
+        result = self.nominal.evaluate(values, size, coefficients, extrapolation_n, power_scale,
+                                       shared)
         if not self.readings:
             return result
         from tuflexperf.analysis.evaluators import evaluator_for
@@ -117,7 +128,7 @@ class ReadingsEvaluator:
         rows = next(iter(result.values.values())).shape[0] if result.values else size
         theirs = []
         for reading, blocks in self.readings:
-            if reading.key == DRAWN_BY_SAMPLES:
+            if reading.beyond_tested_only:
                 # the bound moves thrust beyond the tested airspeeds only: a block no row of
                 # which flies there is the nominal's (its evaluation saved)
                 blocks = frozenset(r.block for r in self.requirements
@@ -125,8 +136,9 @@ class ReadingsEvaluator:
                                    and result.extrapolated[r.name].any())
             if blocks:
                 evaluator = evaluator_for(reading.case, blocks)
-                theirs.append((reading, evaluator.evaluate(values, rows, coefficients,
-                                                           extrapolation_n, power_scale).values))
+                theirs.append((reading, evaluator.evaluate(
+                    values, rows, coefficients, extrapolation_n, power_scale,
+                    shared if reading.key in self.sharing else None).values))
         worse, disputed, by_reading = combine_rows(result.values, result.limits,
                                                    result.kinds, theirs)
         return dataclasses.replace(result, values=worse, disputed=disputed,

@@ -21,11 +21,28 @@ MAX_ENTRIES = 16
 _PROVENANCE = ("metadata", "source")  # free-form: what the user wrote, not what is flown
 
 
+_KNOWN: OrderedDict[int, tuple[Any, Any]] = OrderedDict()
+_KNOWN_SIZE = 256  # frozen model objects whose numbers are kept (each held, so its id stays)
+
+
 def _physics(obj: Any) -> Any:
-    """The numbers of a model object (dataclass / mapping / sequence), provenance left out."""
+    """The numbers of a model object (dataclass / mapping / sequence), provenance left out.
+
+    A frozen dataclass's are kept for the next key that reads it (the case's propulsion is
+    read for a dozen problems' keys a command): model objects are never changed in place.
+    """
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        return {f.name: _physics(getattr(obj, f.name)) for f in dataclasses.fields(obj)
-                if f.name not in _PROVENANCE}
+        frozen = type(obj).__dataclass_params__.frozen  # type: ignore[attr-defined]
+        known = _KNOWN.get(id(obj)) if frozen else None
+        if known is not None and known[0] is obj:
+            return known[1]
+        out = {f.name: _physics(getattr(obj, f.name)) for f in dataclasses.fields(obj)
+               if f.name not in _PROVENANCE}
+        if frozen:
+            _KNOWN[id(obj)] = (obj, out)
+            while len(_KNOWN) > _KNOWN_SIZE:
+                _KNOWN.popitem(last=False)
+        return out
     fields = getattr(type(obj), "model_fields", None)  # a validated schema (pydantic)
     if isinstance(fields, dict):
         return {name: _physics(getattr(obj, name)) for name in fields

@@ -71,4 +71,5 @@ def extrapolation_readings(case: Case) -> tuple[Reading, ...]:
         evidence=(f"{file} extrapolation_sd_n {per_engine}: beyond {low:g}-{high:g} m/s the "
                   f"thrust is lowered by {z:.2f} sd for P(met) >= {p:g} ({key})"),
         settle=" and ".join(beyond),
+        beyond_tested_only=True,
     ),)

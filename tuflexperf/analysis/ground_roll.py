@@ -21,6 +21,7 @@ from tuflexperf.models.aircraft import (
 from tuflexperf.models.battery import SECONDS_PER_HOUR
 from tuflexperf.models.thrust import (
     Propulsion,
+    thrust_part,
     total_thrust_n,
 )
 
@@ -73,7 +74,8 @@ def build_ground_roll_integrator(
 
 def integrator_for(case: Case) -> Any:
     return TAKEOFF_CACHE.get(
-        fingerprint(case.aircraft, case.propulsion, case.density_kg_m3),
+        # the roll reads the thrust alone (a reading that moves the power shares it)
+        fingerprint(case.aircraft, thrust_part(case.propulsion), case.density_kg_m3),
         lambda: build_ground_roll_integrator(case.aircraft, case.propulsion, case.density_kg_m3),
     )
 

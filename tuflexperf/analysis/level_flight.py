@@ -148,8 +148,13 @@ class LevelFlightRows:
 
     def _engine_thrusts(self, speed: Array) -> Terms:
         """Per engine: its thrust [N] as ``a x^2 + b x + c`` in throttle at these airspeeds
-        (the extrapolation error in ``c``), and its dead-engine contribution, as
-        :func:`~tuflexperf.models.thrust.total_thrust_n` sums them.
+        (:meth:`_live_thrusts`), and its dead-engine contribution (:meth:`_dead_drags`), as
+        :func:`~tuflexperf.models.thrust.total_thrust_n` sums them."""
+        return self._live_thrusts(speed), self._dead_drags(speed)
+
+    def _live_thrusts(self, speed: Array) -> list[tuple[Array, Array, Array]]:
+        """Per engine: its thrust [N] as ``a x^2 + b x + c`` in throttle at these airspeeds
+        (the extrapolation error in ``c``).
 
         poly22 is quadratic in throttle: ``a, b, c`` from its values at throttle 0, 1/2
         and 1. Sampled coefficients against airspeeds common to all rows: poly22 is linear
@@ -158,7 +163,7 @@ class LevelFlightRows:
         """
         scale = density_ratio(self.propulsion, self.density)
         errors = self.extrapolation_errors_n(speed)
-        live, dead = [], []
+        live = []
         for j, engine in enumerate(self.propulsion.engines):
             error = 0.0 if errors is None else errors[j]
             coefficients = engine.coefficients
@@ -179,9 +184,14 @@ class LevelFlightRows:
                 a_j = 2.0 * (t1 - 2.0 * th + t0)
                 b_j, c_j = t1 - t0 - a_j, t0
             live.append((a_j, b_j, c_j + error))
-            dead.append(windmilling_thrust_n(engine, speed, scale, self.density,
-                                             self.propulsion.fan_area_m2))
-        return live, dead
+        return live
+
+    def _dead_drags(self, speed: Array) -> list[Array]:
+        """Per engine: its thrust [N] when dead and windmilling at these airspeeds."""
+        scale = density_ratio(self.propulsion, self.density)
+        return [windmilling_thrust_n(engine, speed, scale, self.density,
+                                     self.propulsion.fan_area_m2)
+                for engine in self.propulsion.engines]
 
     def _grid_terms(self, grid: Array) -> Terms:
         """:meth:`_engine_thrusts` on the grid, shared by trim and OEI (keyed on the object)."""

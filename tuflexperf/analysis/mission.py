@@ -61,6 +61,7 @@ from tuflexperf.analysis.mission_equations import (
     _P_SIZE,
     ARC_STEPS,
     BURST_OVER_CONTINUOUS,
+    CORRECTION_SIZE,
     NEWTON,
     RATING_SEGMENT_S,
     SAMPLED_AIRCRAFT,
@@ -140,7 +141,8 @@ class MissionModel(SegmentEquations, MissionPlanning, FlightChecks, SolveFor):
              "field with full packs, the take-off's charge not counted (add {type: takeoff} "
              "first to fly it)",) if starts_airborne else ())
         self._takeoff_speeds: dict[int, np.ndarray] = {}
-        self.n_par = len(SAMPLED_AIRCRAFT) + 2 + 7 * self.n + 1  # the circuit's packs last
+        # the circuit's packs last
+        self.n_par = len(SAMPLED_AIRCRAFT) + 2 + 7 * self.n + CORRECTION_SIZE * (self.n + 1) + 1
         self._build()
 
     def _segment_function(self, k: int) -> Any:

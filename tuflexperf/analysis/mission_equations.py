@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.analysis.airborne import ROTATION_STEPS
+from tuflexperf.analysis.cache import BoundedCache, fingerprint
 from tuflexperf.analysis.constants import (  # re-exported: the mission's own names
     BURST_OVER_CONTINUOUS as BURST_OVER_CONTINUOUS,
 )
@@ -44,11 +45,13 @@ from tuflexperf.models.battery import (
     current_at_power_a,
     open_circuit_voltage_v,
 )
+from tuflexperf.models.power_correction import PowerCorrection
 from tuflexperf.models.thrust import (
     POLY22_TERMS,
     density_ratio,
     engine_thrust_n,
     least_throttle_reaching,
+    thrust_part,
     windmilling_thrust_n,
 )
 
@@ -60,6 +63,22 @@ _P_SIZE = 10  # per-step parameters, see MissionModel._step_functions
 SAMPLED_AIRCRAFT = ("mass_kg", "wing_area_m2", "cd0", "k")
 """The aircraft's numbers the flight's equations read (its others bound the plan: stall)."""
 STRAIGHT_STEPS = 8  # the take-off's straight climb to the obstacle (constant airspeed and rate)
+CORRECTION_SIZE = 7
+"""A power correction law's entries in ``par``: ``c0``, ``c_x``, ``c_V`` and its throttle and
+airspeed spans (:class:`tuflexperf.models.power_correction.PowerCorrection`)."""
+_NO_CORRECTION = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0)  # r = 1 exactly: the power as modelled
+STEP_FUNCTIONS: BoundedCache[Any] = BoundedCache(64)
+"""The step functions of every mission model of the process, keyed on what they read
+(:meth:`SegmentEquations._equations_key`): a reading of the case that moves only the fans'
+power (a parameter) flies the nominal's functions, not a new build."""
+
+
+def _law_entries(law: PowerCorrection | None) -> tuple[float, ...]:
+    """A power correction's :data:`CORRECTION_SIZE` entries of ``par`` (none: ratio 1)."""
+    if law is None:
+        return _NO_CORRECTION
+    return (law.constant, law.per_throttle, law.per_airspeed_s_m, *law.throttle_span,
+            *law.airspeed_span_m_s)
 
 
 class SegmentEquations:
@@ -77,9 +96,10 @@ class SegmentEquations:
         """The chained function's ``par`` per row, ``(n_par, size)``: the aircraft's
         :data:`SAMPLED_AIRCRAFT` fields, the field's height [m] and temperature offset [K],
         each engine's six thrust coefficients (POLY22_TERMS order) and extrapolation error
-        [N], and the circuit's measured packs per engine [-] (a drawn capacity changes
-        them: :func:`tuflexperf.models.battery.equivalent_packs`). Each argument left out
-        is the case's own (no error)."""
+        [N], each engine's power correction and the fan-power law's (:data:`CORRECTION_SIZE`
+        each, the case's), and the circuit's measured packs per engine [-] (a drawn capacity
+        changes them: :func:`tuflexperf.models.battery.equivalent_packs`). Each argument left
+        out is the case's own (no error)."""
         craft = self.case.aircraft if aircraft is None else aircraft
         atmosphere = self.case.atmosphere
         field_m, dt_k = ((atmosphere.altitude_m, atmosphere.temperature_offset_k)
@@ -95,13 +115,21 @@ class SegmentEquations:
         errors = (np.zeros((self.n, size)) if extrapolation_n is None
                   else np.asarray(extrapolation_n, dtype=float))
         rows.extend(errors[j] for j in range(self.n))
+        rows.extend(np.full(size, value) for law in self._corrections()
+                    for value in _law_entries(law))
         rows.append(np.broadcast_to(np.asarray(self.packs if packs is None else packs,
                                                dtype=float).reshape(-1), (size,)))
         return np.stack(rows)
 
-    def _symbolic_models(self, par: Any) -> tuple[Any, Any, list[Any]]:
-        """The aircraft and propulsion with ``par``'s symbols in place of their sampled
-        numbers, and each engine's extrapolation error [N] (see :meth:`parameters`)."""
+    def _corrections(self) -> list[PowerCorrection | None]:
+        """Each engine's power correction, then the fan-power law's (the case's)."""
+        return ([e.power_correction for e in self.case.propulsion.engines]
+                + [getattr(self.fan_power, "power_correction", None)])
+
+    def _symbolic_models(self, par: Any) -> tuple[Any, Any, list[Any], Any]:
+        """The aircraft, propulsion and fan-power law with ``par``'s symbols in place of their
+        sampled numbers and power corrections, and each engine's extrapolation error [N]
+        (see :meth:`parameters`)."""
         import dataclasses
 
         k = len(SAMPLED_AIRCRAFT)
@@ -109,11 +137,34 @@ class SegmentEquations:
                                        **{name: par[i] for i, name in enumerate(SAMPLED_AIRCRAFT)})
         base = self.case.propulsion
         terms = len(POLY22_TERMS)
-        engines = tuple(dataclasses.replace(engine, coefficients={
+        errors = [par[k + 2 + terms * self.n + j] for j in range(self.n)]
+        first = k + 2 + (terms + 1) * self.n
+        laws = [PowerCorrection(par[i], par[i + 1], par[i + 2], (par[i + 3], par[i + 4]),
+                                (par[i + 5], par[i + 6]))
+                for i in range(first, first + CORRECTION_SIZE * (self.n + 1), CORRECTION_SIZE)]
+        engines = tuple(dataclasses.replace(engine, power_correction=laws[j], coefficients={
             t: par[k + 2 + terms * j + i] for i, t in enumerate(POLY22_TERMS)})
             for j, engine in enumerate(base.engines))
-        errors = [par[k + 2 + terms * self.n + j] for j in range(self.n)]
-        return aircraft, dataclasses.replace(base, engines=engines), errors
+        fan = self.fan_power
+        if dataclasses.is_dataclass(fan) and hasattr(fan, "power_correction"):
+            fan = dataclasses.replace(fan, power_correction=laws[-1])
+        return aircraft, dataclasses.replace(base, engines=engines), errors, fan
+
+    def _equations_key(self) -> str:
+        """What the step functions read besides ``par`` (the power corrections are in it)."""
+        import dataclasses
+
+        known = getattr(self, "_known_key", None)
+        if known is not None:
+            return known
+        fan = self.fan_power
+        if dataclasses.is_dataclass(fan) and hasattr(fan, "power_correction"):
+            fan = dataclasses.replace(fan, power_correction=None)
+        self._known_key: str = fingerprint(
+            "mission-steps", self.case.aircraft, thrust_part(self.case.propulsion), self.params,
+            fan, self.fixed_density, self.field_m, self.dt_k, self.dead_mode, self.own_power,
+            self.n, self.n_par)
+        return self._known_key
 
     def _rho(self, h: Any, par: Any = None) -> Any:
         """ISA density [kg/m^3] at ``h`` [m] above the field (the sampled field height and
@@ -128,22 +179,25 @@ class SegmentEquations:
         with np.errstate(over="ignore"):
             return isa_density_kg_m3(self.field_m + h, self.dt_k)
 
-    def _modelled_power(self, i: int, x: Any, v: Any, rho: Any) -> Any:
-        """Engine ``i``'s electrical power [W] as its model gives it (may be negative)."""
+    def _modelled_power(self, i: int, x: Any, v: Any, rho: Any, prop: Any = None,
+                        fan: Any = None) -> Any:
+        """Engine ``i``'s electrical power [W] as its model gives it (may be negative): the
+        case's propulsion and fan-power law, or ``prop`` and ``fan`` where given."""
         from tuflexperf.models.powertrain import engine_power_w
 
-        prop = self.case.propulsion
+        prop = self.case.propulsion if prop is None else prop
         if self.own_power:
             return density_ratio(prop, rho) * engine_power_w(prop.engines[i], x, v)
-        return self.fan_power.electrical_power_w(x, v)
+        return (self.fan_power if fan is None else fan).electrical_power_w(x, v)
 
-    def _engine_power(self, i: int, x: Any, v: Any, rho: Any) -> Any:
+    def _engine_power(self, i: int, x: Any, v: Any, rho: Any, prop: Any = None,
+                      fan: Any = None) -> Any:
         from tuflexperf.models._math import fmax
 
         # an ESC draws, it does not charge: the power surface extrapolated to idle at high
         # airspeed dips below zero, which "charged" the pack past its circuit (a dive failed
         # on a cut-off it never reached)
-        return fmax(self._modelled_power(i, x, v, rho), 0.0)
+        return fmax(self._modelled_power(i, x, v, rho, prop, fan), 0.0)
 
     def _algebra(self, u: list[Any], v: Any, q: Any, rho: Any, plan_p: Any,
                  dead: int | None, par: Any) -> dict[str, Any]:
@@ -156,7 +210,7 @@ class SegmentEquations:
         """
         import casadi as ca
 
-        aircraft, prop, errors = self._symbolic_models(par)
+        aircraft, prop, errors, fan = self._symbolic_models(par)
         solve_x, x_fixed, rate_cmd, from_excess = plan_p[0], plan_p[1], plan_p[2], plan_p[3]
         sigma = density_ratio(prop, rho)
         weight = aircraft.weight_n
@@ -190,7 +244,7 @@ class SegmentEquations:
                 volt.append(ocv)
                 residual.append(u[i] - ocv)
                 continue
-            p_i = self._engine_power(i, x, v, rho)
+            p_i = self._engine_power(i, x, v, rho, prop, fan)
             if u_ref is None:
                 i_i = current_at_power_a(self.params, q[i], p_i, packs)
                 residual.append(u[i] - (ocv - r * i_i))
@@ -220,11 +274,19 @@ class SegmentEquations:
         solved by :data:`NEWTON` unrolled Newton steps (quadratic convergence from the
         open-circuit voltage and the full-pack airspeed: machine precision).
         """
-        import casadi as ca
 
         key = (dead, solve_v)
         if key in self._instants:
             return self._instants[key]
+        self._instants[key] = STEP_FUNCTIONS.get(
+            f"{self._equations_key()}:instant:{dead}:{solve_v}",
+            lambda: self._build_instant_function(dead, solve_v))
+        return self._instants[key]
+
+    def _build_instant_function(self, dead: int | None, solve_v: bool) -> Any:
+        """:meth:`_instant_function`, built."""
+        import casadi as ca
+
         n = self.n
         q = ca.SX.sym("q", n)
         v_in, rho = ca.SX.sym("v_in"), ca.SX.sym("rho")
@@ -264,9 +326,7 @@ class SegmentEquations:
         out = ca.vertcat(alg["x"], alg["v"], alg["rate"], alg["reached"], alg["idle_excess"],
                          alg["level_residual"], *alg["current"], *alg["voltage"],
                          *alg["power"], alg["thrust"])
-        f = ca.Function(f"instant_{dead}_{int(solve_v)}", [q, v_in, rho, p, par], [out])
-        self._instants[key] = f
-        return f
+        return ca.Function(f"instant_{dead}_{int(solve_v)}", [q, v_in, rho, p, par], [out])
 
     # -- the CasADi build -----------------------------------------------------------------
     def _stepper(self, dead: int | None, solve_v: bool, kind: str) -> Any:
@@ -277,7 +337,9 @@ class SegmentEquations:
         """
         key = (dead, solve_v, kind)
         if key not in self._steps:
-            self._steps[key] = self._step_functions(dead, solve_v, kind)
+            self._steps[key] = STEP_FUNCTIONS.get(
+                f"{self._equations_key()}:step:{dead}:{solve_v}:{kind}",
+                lambda: self._step_functions(dead, solve_v, kind))
         return self._steps[key]
 
     def _step_functions(self, dead: int | None, solve_v: bool, kind: str) -> Any:

@@ -14,10 +14,13 @@ function ``Case -> tuple[Reading, ...]``, gathered in :mod:`tuflexperf.analysis.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from tuflexperf.analysis.cache import file_key, fingerprint
 from tuflexperf.io.case import Case
+from tuflexperf.models.thrust import thrust_part
 
 
 @dataclass(frozen=True)
@@ -43,6 +46,9 @@ class Reading:
         30.0 m/s; the power model 1001 W").
     settle : str
         The measurement that would settle it ("a discharge run at 27.6 m/s").
+    beyond_tested_only : bool
+        The reading moves the thrust beyond the tested airspeeds only: a requirement whose
+        nominal flight stays inside them has the nominal's value on it (not flown again).
     """
 
     key: str
@@ -52,6 +58,26 @@ class Reading:
     affects: frozenset[str]
     evidence: str
     settle: str
+    beyond_tested_only: bool = False
 
 
 Provider = Callable[[Case], tuple[Reading, ...]]
+
+
+def thrust_identity(case: Case) -> tuple[str, str]:
+    """Fingerprints of what ``case``'s thrust reads: every engine running (the power
+    correction of a reading left out, and the dead engines' windmilling drag), then with
+    that drag. Two readings of a case with equal fingerprints fly the same thrust, so a
+    batch's results that read only the thrust serve both
+    (:class:`tuflexperf.analysis.batch_model.SharedRows`)."""
+    battery = case.battery_path
+    parts = (case.aircraft, case.atmosphere, case.requirements, case.overrides, str(battery),
+             file_key(battery) if battery is not None and battery.exists() else None)
+
+    def engines(**cleared: None) -> object:
+        thrust = thrust_part(case.propulsion)
+        return dataclasses.replace(thrust, engines=tuple(
+            dataclasses.replace(e, **cleared) for e in thrust.engines))
+
+    return (fingerprint(*parts, engines(windmilling_drag_coefficient=None)),
+            fingerprint(*parts, engines()))

@@ -289,14 +289,31 @@ def block_verdicts(study: Study, block: str) -> list[Verdict]:
 
     A reading whose value equals the nominal's is left out of the verdict: the disputed
     input never entered it (thrust inside the tested airspeeds, a flight with no dead
-    engine).
+    engine). One that moves the thrust beyond the tested airspeeds only is not flown for a
+    block whose nominal flight stays inside them: its value there is the nominal's.
     """
     nominal = _block(study, block)
-    readings = [r for r in study.readings() if block in r.affects]
+    readings = [r for r in study.readings() if block in r.affects
+                and not (r.beyond_tested_only and not _beyond_tested(study, block))]
     if not readings:
         return nominal
     others = [(r, {v.name: v for v in _block(study.on_reading(r), block)}) for r in readings]
     return _judged_on_readings(nominal, others)
+
+
+def _beyond_tested(study: Study, block: str) -> bool:
+    """Whether the nominal flight of ``block`` flies the thrust model beyond its tested
+    airspeeds (its result's ``extrapolated``); a block not flown, or not attainable, may."""
+    requirements = study.case.requirements
+    flights: dict[str, Callable[[], Any]] = {
+        "takeoff": study.takeoff, "envelope": study.trim, "oei": study.oei,
+        "endurance": lambda: study.endurance(requirements.endurance.throttle)}
+    if block not in flights:
+        return True
+    try:
+        return bool(flights[block]().extrapolated)
+    except NotAttainable:
+        return True
 
 
 def mission_file_verdicts(case: Case, plan: Any, limit: float | None,
@@ -476,7 +493,12 @@ def sampled_result(verdict: Verdict, probabilistic: ProbabilisticVerdict | None)
 
 def probabilistic_verdicts(samples: Any) -> dict[str, ProbabilisticVerdict]:
     """Per requirement of a :class:`tuflexperf.analysis.uncertainty.SampleSet`."""
+    from functools import cache
+
     from tuflexperf.analysis.probability import clopper_pearson
+
+    # the worse reading's count is often one reading's own: its interval is computed once
+    clopper_pearson = cache(clopper_pearson)
     from tuflexperf.analysis.uncertainty import quantiles
 
     out: dict[str, ProbabilisticVerdict] = {}

@@ -7,6 +7,7 @@ Every function takes floats, numpy arrays or CasADi symbols.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -106,6 +107,14 @@ class Propulsion:
     lag_s: float = 0.0
     # the rig's systematic errors, 1 sd each (io.schemas.RigUncertaintySchema); None: undeclared
     rig_uncertainty: Mapping[str, Any] | None = None
+
+
+def thrust_part(propulsion: Propulsion) -> Propulsion:
+    """``propulsion`` with each engine's power correction left out: what its thrust reads,
+    so the key of a problem built on the thrust alone (a reading of the case that moves
+    only the fans' power shares that problem)."""
+    return dataclasses.replace(propulsion, engines=tuple(
+        dataclasses.replace(e, power_correction=None) for e in propulsion.engines))
 
 
 def density_ratio(propulsion: Propulsion, density_kg_m3: Vectorizable) -> Vectorizable:
