@@ -171,6 +171,9 @@ def test_check_prints_the_flown_power_beside_the_endurance_verdict(flown: dict) 
     block = rest[:next((k for k, line in enumerate(rest) if not line.startswith("  ")),
                        len(rest))]
     assert any(f"flown/predicted power x{ratio:.3f}" in line for line in block), block
+    # the two power readings share their nominal: the power model is named once
+    (reason,) = [line for line in block if line.lstrip().startswith("UNPROVEN:")]
+    assert reason.count("on the power model") == 1, reason
 
 
 def test_without_flights_page_one_says_so_and_there_is_no_flown_page(shipped_report) -> None:

@@ -166,7 +166,10 @@ def on_readings(nominal: Verdict, others: list[tuple[Any, Verdict]]) -> Verdict:
     each disagreeing reading's evidence and both values, ``settle`` what would settle it."""
     if not others:
         return nominal
-    nominal_label = " and ".join(dict.fromkeys(r.nominal_label for r, _ in others))
+    labels = list(dict.fromkeys(r.nominal_label for r, _ in others))
+    # "the power model" says less than "the power model (EDF1's surface)": name it once
+    nominal_label = " and ".join(a for a in labels
+                                 if not any(b != a and b.startswith(a) for b in labels))
     values = [ReadingValue("nominal", nominal_label, nominal.value, nominal.passed)] + [
         ReadingValue(r.key, r.label, v.value, v.passed) for r, v in others]
 
