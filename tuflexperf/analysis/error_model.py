@@ -40,7 +40,7 @@ a place in a file where it is stated, and a default:
   scale on every fan's electrical power. Not where the case is flown on the runs' measured
   power as a reading of its own (``fit.power_correction``,
   :mod:`tuflexperf.analysis.power_reading`): the samples are judged on the worse reading,
-  which takes the disagreement whole; drawing it as well counted it twice.
+  which takes the disagreement whole; drawing it as well would count it twice.
 - ``battery_fit``: the battery fit's own error, its cross-validation (``fit.cross_validation``:
   a run's time to cut-off predicted from the other's fit), drawn as a lognormal scale on
   the power (a time error of the packs is an energy error: ``t ~ E / P``).
@@ -346,7 +346,7 @@ def _power_sources(case: Case, switches: Any) -> tuple[tuple[Source, float],
                         else "no requirement flies on the packs"), 0.0)
     elif _measured_power_flown(case):
         # the reading is the disagreement taken whole: a spread of its size on top of it
-        # counted it twice (the shipped endurance band, p05-p95, 9x as wide)
+        # would count it twice (the shipped endurance band, p05-p95, 9x as wide)
         power = (Source("power_model", False, "battery fit.power_correction",
                         "the discharge runs' measured power is flown as a reading of its own: "
                         "every sample is judged on the worse of it and the power model, so "
