@@ -12,7 +12,8 @@ plus terms no poly22 holds: ``c3 x^3 + c5 x^2 (v / 30) + c6 x (v / 30)^3`` [N], 
 U(-4, 4), ``c5`` ~ U(-3, 3), ``c6`` ~ N(-1, 1) (a family of fans whose thrust falls faster
 at speed, one sign for most). The deterministic check takes poly22 only: for each
 requirement the true law is replaced by its least-squares poly22 over the requirement's own
-operating region (:data:`REGIONS`), and that surrogate's largest error there is recorded.
+operating region (:data:`REGIONS`, the whole domain joining at a small weight), and that
+surrogate's largest error in the region is recorded.
 
 Rigs: ``clean`` (no systematic error; ``rig_uncertainty`` declares zeros) and ``biased``
 (an airspeed bias ~ N(0, 0.3 m/s) and a thrust scale ~ N(0, 2 %) per campaign, declared as
@@ -26,10 +27,13 @@ charge): coverage of p05-p95 with its Clopper-Pearson 95 % interval, RMS z and m
 sampled median (p50 + u (p95 - p05) / 3.29, u = -1.65, -0.75, 0, 0.75, 1.65) against
 whether the truth met them: the 5-bin reliability diagram.
 
-Run: ``python bench/calibration_study.py [--truths 40] [--samples 4000] [--out FILE]``
-(about 12 s a truth on one core). The result JSON (default
-``docs/calibration_study.json``) is what ``scripts/docs_numbers.py`` renders into
-docs/validation.md.
+Run: ``python bench/calibration_study.py [--truths 40] [--samples 4000] [--out FILE]
+[--cache DIR]``. ``--cache`` keeps each truth's fit and true values outside the
+repository, so a second run with another error model samples only; ``--resume`` goes on
+where a stopped run left ``--out``; ``--merge`` joins result files (e.g. one per rig, run
+side by side) and, with ``--cache``, adds the clean rig's :func:`diagnose` table;
+``--diagnose`` prints it alone. The result JSON (default ``docs/calibration_study.json``) is
+what ``scripts/docs_numbers.py`` renders into docs/validation.md.
 """
 
 from __future__ import annotations
@@ -66,6 +70,8 @@ RIGS: dict[str, dict[str, float]] = {
                "voltage_sd_v": 0.0},
 }
 LIMIT_OFFSETS = (-1.65, -0.75, 0.0, 0.75, 1.65)
+ANCHOR_WEIGHT = 1e-3  # per point of the whole domain in a truth's surrogate, against 1 inside
+TRUTH_VERSION = 2  # of the true values kept in a cache (1: surrogates without the anchor)
 ENVELOPE_TOP_M_S = 40.0  # beyond the tested 30 m/s (extrapolated), within what the fans fly
 # each requirement's operating region: boxes of (throttle, airspeed [m/s]) the surrogate fits
 # (a dead engine windmills at throttle 0; the mission's phases: the roll and climb at full
@@ -168,17 +174,29 @@ def study_propulsion(fitted: Path, rig: dict[str, float]) -> dict[str, Any]:
 
 
 def surrogate(law: dict[str, float], boxes: list[Any]) -> tuple[dict[str, float], float]:
-    """The least-squares poly22 of ``law`` over ``boxes`` and its largest error there [N]."""
-    xs, vs = [], []
+    """The least-squares poly22 of ``law`` over ``boxes`` and its largest error there [N].
+
+    The whole flown domain (throttle 0-1, 0 to the envelope's top) joins the fit at
+    :data:`ANCHOR_WEIGHT`: a surface fitted to one corner alone may turn absurd elsewhere
+    (a figure of merit above 1 at low throttle) and the tool then refuses the whole case,
+    leaving the truth unknown.
+    """
+    xs, vs, ws = [], [], []
     for (x0, x1), (v0, v1) in boxes:
         x, v = np.meshgrid(np.linspace(x0, x1, 21), np.linspace(v0, v1, 21))
         xs.append(x.ravel())
         vs.append(v.ravel())
-    x, v = np.concatenate(xs), np.concatenate(vs)
+        ws.append(np.ones(x.size))
+    inside = sum(w.size for w in ws)
+    x, v = np.meshgrid(np.linspace(0.0, 1.0, 11), np.linspace(0.0, ENVELOPE_TOP_M_S, 11))
+    xs.append(x.ravel())
+    vs.append(v.ravel())
+    ws.append(np.full(x.size, ANCHOR_WEIGHT))
+    x, v, w = np.concatenate(xs), np.concatenate(vs), np.sqrt(np.concatenate(ws))
     design = np.stack([x ** 0, x, v, x * x, x * v, v * v], axis=1)
     target = true_thrust(x, v, law)
-    coefficients = np.linalg.lstsq(design, target, rcond=None)[0]
-    error = float(np.max(np.abs(design @ coefficients - target)))
+    coefficients = np.linalg.lstsq(design * w[:, None], target * w, rcond=None)[0]
+    error = float(np.max(np.abs(design[:inside] @ coefficients - target[:inside])))
     return dict(zip(POLY22_TERMS, (float(c) for c in coefficients), strict=True)), error
 
 
@@ -253,25 +271,54 @@ def truth_values(folder: Path, doc: dict[str, Any], laws: dict[str, dict[str, fl
     return values, errors
 
 
-def one_truth(rig_name: str, index: int, samples: int) -> dict[str, Any]:
-    from tuflexperf.analysis.uncertainty import plan_for, quantiles, run_samples
-    from tuflexperf.io.case import load_case
-
+def draw_campaign(rig_name: str, index: int) -> tuple[dict[str, dict[str, float]], float, float]:
+    """The truth's thrust laws, airspeed bias [m/s] and thrust scale [-] (seeded by rig and
+    index: a truth is the same in every run)."""
     rig = RIGS[rig_name]
     rng = np.random.default_rng([SEED, list(RIGS).index(rig_name), index])
     laws = draw_truth(rng)
     bias = float(rng.normal(0.0, rig["airspeed_bias_sd_m_s"])) if rig["airspeed_bias_sd_m_s"] \
         else 0.0
     scale = float(rng.normal(0.0, rig["thrust_scale_sd"])) if rig["thrust_scale_sd"] else 0.0
+    return laws, bias, scale
+
+
+def prepare(rig_name: str, index: int, folder: Path) -> dict[str, Any]:
+    """Generate and fit the truth's campaign into ``folder`` (its propulsion file and the
+    requirements' true values); kept there, a second study with another error model reuses
+    it (the fit and the truths do not depend on the error model)."""
+    done = folder / "truth.json"
+    if done.exists():
+        kept = json.loads(done.read_text(encoding="utf-8"))
+        if kept.get("version") == TRUTH_VERSION:
+            return kept
+    folder.mkdir(parents=True, exist_ok=True)
+    laws, bias, scale = draw_campaign(rig_name, index)
+    if not (folder / "fitted.yaml").exists():
+        with tempfile.TemporaryDirectory(prefix="calibration_") as tmp:
+            campaign = generate(Path(tmp) / "campaign", laws, bias, scale, 1000 * index + 7)
+            fit(campaign, folder / "fitted.yaml")
+    doc = study_propulsion(folder / "fitted.yaml", RIGS[rig_name])
+    (folder / "propulsion.yaml").write_text(yaml.safe_dump(doc, sort_keys=False),
+                                            encoding="utf-8")
+    truth, surrogate_error = truth_values(folder, doc, laws)
+    result = {"version": TRUTH_VERSION, "bias_m_s": bias, "scale": scale, "truth": truth,
+              "surrogate_error_n": surrogate_error}
+    done.write_text(json.dumps(result), encoding="utf-8")
+    return result
+
+
+def one_truth(rig_name: str, index: int, samples: int, cache: Path | None = None
+              ) -> dict[str, Any]:
+    from tuflexperf.analysis.uncertainty import plan_for, quantiles, run_samples
+    from tuflexperf.io.case import load_case
+
     with tempfile.TemporaryDirectory(prefix="calibration_") as tmp:
-        folder = Path(tmp)
-        campaign = generate(folder / "campaign", laws, bias, scale, 1000 * index + 7)
-        fit(campaign, folder / "fitted.yaml")
-        doc = study_propulsion(folder / "fitted.yaml", rig)
-        prop = folder / "propulsion.yaml"
-        prop.write_text(yaml.safe_dump(doc, sort_keys=False), encoding="utf-8")
-        truth, surrogate_error = truth_values(folder, doc, laws)
-        case = load_case(write_case(folder, prop, samples, index + 1))
+        folder = Path(tmp) if cache is None else cache / f"{rig_name}_{index}"
+        prepared = prepare(rig_name, index, folder)
+        bias, scale = prepared["bias_m_s"], prepared["scale"]
+        truth, surrogate_error = prepared["truth"], prepared["surrogate_error_n"]
+        case = load_case(write_case(folder, folder / "propulsion.yaml", samples, index + 1))
         plan = plan_for(case)
         drawn = run_samples(case, plan)
     out: dict[str, Any] = {"rig": rig_name, "index": index, "bias_m_s": bias, "scale": scale,
@@ -295,6 +342,53 @@ def one_truth(rig_name: str, index: int, samples: int) -> dict[str, Any]:
                                          "truth_met": bool(met and math.isfinite(truth[name]))})
         out["requirements"][name] = record
     return out
+
+
+# where the study's requirements fly their live engines (throttle [-], true airspeed [m/s])
+OPERATING_POINTS = {"roll": (1.0, 10.0), "climb": (1.0, 20.0), "OEI and loiter": (0.63, 17.0),
+                    "mission cruise": (0.47, 26.0), "endurance cruise": (0.5, 27.6),
+                    "descent": (0.1, 20.0)}
+
+
+def diagnose(cache: Path, rig_name: str, indices: Any) -> dict[str, Any]:
+    """At :data:`OPERATING_POINTS`: the fitted surface's true error and the error model's
+    model-form sd there, both in the lack of fit's RMS, over the cached truths' engines, and
+    the correlation of the true errors between the points (the model's, beside it)."""
+    from tuflexperf.analysis.error_model import error_model_for
+    from tuflexperf.io.case import load_case
+
+    names = list(OPERATING_POINTS)
+    errors: list[list[float]] = [[] for _ in names]
+    sds: list[list[float]] = [[] for _ in names]
+    model_corr = None
+    for index in indices:
+        folder = cache / f"{rig_name}_{index}"
+        laws = draw_campaign(rig_name, index)[0]
+        case = load_case(write_case(folder, folder / "propulsion.yaml", 1, 1))
+        maps = error_model_for(case, case.uncertainty.propulsion).model_form_maps
+        if maps is None:
+            continue
+        for j, engine in enumerate(case.propulsion.engines):
+            rms = engine.model_form_sd_n
+            basis = []
+            for k, (x, v) in enumerate(OPERATING_POINTS.values()):
+                b = np.array([1.0, x, v, x * x, x * v, v * v])
+                fitted = sum(engine.coefficients[t] * bt for t, bt in zip(POLY22_TERMS, b,
+                                                                         strict=True))
+                errors[k].append(float((true_thrust(x, v, laws[engine.name]) - fitted) / rms))
+                sds[k].append(float(np.linalg.norm(maps[j] @ b)) / rms)
+                basis.append(maps[j] @ b)
+            cov = np.array(basis) @ np.array(basis).T
+            model_corr = cov / np.sqrt(np.outer(np.diag(cov), np.diag(cov)))
+    table = np.array(errors)
+    return {"points": OPERATING_POINTS,
+            "true_error_rms": dict(zip(names, np.sqrt(np.mean(table ** 2, axis=1)).tolist(),
+                                       strict=True)),
+            "true_error_mean": dict(zip(names, np.mean(table, axis=1).tolist(), strict=True)),
+            "model_sd": dict(zip(names, np.mean(sds, axis=1).tolist(), strict=True)),
+            "true_correlation": np.corrcoef(table).round(2).tolist(),
+            "model_correlation": None if model_corr is None else model_corr.round(2).tolist(),
+            "engines": table.shape[1]}
 
 
 def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
@@ -334,30 +428,86 @@ def main() -> None:
                         help="first truth's index; with --more, the records already in --out "
                         "are kept and these added")
     parser.add_argument("--more", action="store_true")
+    parser.add_argument("--cache", type=Path, default=None,
+                        help="folder (outside the repository) that keeps each truth's fitted "
+                        "campaign and true values for the next run")
+    parser.add_argument("--prepare-only", action="store_true",
+                        help="generate and fit the truths into --cache, sample none")
+    parser.add_argument("--resume", action="store_true",
+                        help="keep the records in --out and skip the truths they hold (a "
+                        "stopped study goes on where it stopped)")
+    parser.add_argument("--merge", type=Path, nargs="+", default=None,
+                        help="write --out from these result files' records (e.g. one per rig, "
+                        "run side by side), sampling nothing")
+    parser.add_argument("--diagnose", action="store_true",
+                        help="with --cache: the surface's true error against the model-form "
+                        "sd at the requirements' operating points (JSON), sampling nothing")
     args = parser.parse_args()
+    if args.diagnose:
+        if args.cache is None:
+            parser.error("--diagnose needs --cache")
+        found = {rig: diagnose(args.cache, rig, range(args.first, args.first + args.truths))
+                 for rig in args.rigs.split(",")}
+        print(json.dumps(found, indent=1))
+        return
+    if args.merge:
+        merged: dict[tuple[str, int], dict[str, Any]] = {}
+        samples, seconds = set(), 0.0
+        for path in args.merge:
+            done = json.loads(path.read_text(encoding="utf-8"))
+            samples.add(done["samples"])
+            seconds += done["seconds_this_run"]
+            merged.update({(r["rig"], r["index"]): r for r in done["records"]})
+        if len(samples) != 1:
+            parser.error(f"--merge: the files drew different sample counts {sorted(samples)}")
+        records = sorted(merged.values(), key=lambda r: (r["index"], list(RIGS).index(r["rig"])))
+        diagnosis = None
+        if args.cache is not None:  # the clean rig: the model form alone makes its bands
+            indices = sorted(r["index"] for r in records if r["rig"] == "clean")
+            diagnosis = diagnose(args.cache, "clean", indices)
+        _write(args.out, records, samples.pop(), seconds, diagnosis)
+        return
+    if args.cache is not None and args.cache.resolve().is_relative_to(ROOT):
+        parser.error(f"--cache {args.cache}: keep the campaigns outside the repository")
+    if args.prepare_only:
+        if args.cache is None:
+            parser.error("--prepare-only needs --cache")
+        for index in range(args.first, args.first + args.truths):
+            for rig in args.rigs.split(","):
+                t0 = time.perf_counter()
+                prepare(rig, index, args.cache / f"{rig}_{index}")
+                print(f"prepared {rig} {index}: {time.perf_counter() - t0:.1f} s",
+                      file=sys.stderr, flush=True)
+        return
     records: list[dict[str, Any]] = []
-    if args.more and args.out.exists():
+    if (args.more or args.resume) and args.out.exists():
         records = json.loads(args.out.read_text(encoding="utf-8"))["records"]
+    done = {(r["rig"], r["index"]) for r in records} if args.resume else set()
     started = time.perf_counter()
     # truth by truth, both rigs each time: a study stopped early holds as many of each
     for index in range(args.first, args.first + args.truths):
         for rig in args.rigs.split(","):
+            if (rig, index) in done:
+                continue
             t0 = time.perf_counter()
             records = [r for r in records if (r["rig"], r["index"]) != (rig, index)]
-            records.append(one_truth(rig, index, args.samples))
+            records.append(one_truth(rig, index, args.samples, args.cache))
             print(f"{rig} {index}: {time.perf_counter() - t0:.1f} s", file=sys.stderr,
                   flush=True)
             _write(args.out, records, args.samples, time.perf_counter() - started)
     print(json.dumps(summarise(records), indent=1))
 
 
-def _write(out: Path, records: list[dict[str, Any]], samples: int, seconds: float) -> None:
+def _write(out: Path, records: list[dict[str, Any]], samples: int, seconds: float,
+           diagnosis: dict[str, Any] | None = None) -> None:
     """The result so far (rewritten after each truth: a stopped study keeps what it did)."""
     rigs = sorted({r["rig"] for r in records}, key=list(RIGS).index)
     result = {"study": "bench/calibration_study.py", "seed": SEED, "samples": samples,
               "truths_per_rig": {rig: sum(r["rig"] == rig for r in records) for rig in rigs},
               "rigs": {rig: RIGS[rig] for rig in rigs}, "seconds_this_run": round(seconds, 1),
-              "summary": summarise(records), "records": records}
+              "summary": summarise(records),
+              **({"diagnosis": diagnosis} if diagnosis is not None else {}),
+              "records": records}
     out.write_text(json.dumps(result, indent=1, default=float) + "\n", encoding="utf-8")
     print(json.dumps(result["summary"], indent=1))
 

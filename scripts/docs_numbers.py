@@ -189,9 +189,28 @@ def reliability_table() -> str:
                    "fraction met (95 % CI)", "met, as a bar"], rows)
 
 
+def diagnosis_table() -> str:
+    """The clean rig's thrust error at each requirement's operating point against the
+    model-form sd the samples draw there, both in the lack of fit's RMS."""
+    found = _study()["diagnosis"]
+    rows = []
+    for name, (x, v) in found["points"].items():
+        true, model = found["true_error_rms"][name], found["model_sd"][name]
+        rows.append([name, f"{x:g}", f"{v:g}", f"{true:.2f}", f"{found['true_error_mean'][name]:+.2f}",
+                     f"{model:.2f}", f"{model / true:.1f}"])
+    names = list(found["points"])
+    i, j = names.index("mission cruise"), names.index("OEI and loiter")
+    rows.append([f"correlation, {names[i]} and {names[j]}", "", "",
+                 f"{found['true_correlation'][i][j]:+.2f}", "",
+                 f"{found['model_correlation'][i][j]:+.2f}", ""])
+    return _table(["operating point", "throttle", "airspeed [m/s]", "true error, RMS",
+                   "true error, mean", "model-form sd", "sd / true"], rows)
+
+
 TABLES: dict[str, Callable[[], str]] = {"paper": paper_table, "campaign": campaign_table,
                                         "calibration": calibration_table,
-                                        "calibration-reliability": reliability_table}
+                                        "calibration-reliability": reliability_table,
+                                        "calibration-diagnosis": diagnosis_table}
 
 
 def bench_block(name: str) -> str:

@@ -157,8 +157,9 @@ def test_sampled_thrust_coefficients_equal_a_case_with_those_coefficients() -> N
 def test_extrapolation_error_moves_thrust_only_beyond_the_tested_range() -> None:
     case = load_case(SHIPPED_CASE)
     evaluator = BatchEvaluator(case)
-    # -1.5 N per engine: the shipped trim needs 0.966 at 45 m/s, so more would be unattainable
-    shift = np.array([[0.0, -1.5], [0.0, -1.5]])
+    # -0.1 N per m/s beyond 30 m/s per engine, -1.5 N at 45 m/s: the shipped trim needs 0.966
+    # there, so more would be unattainable
+    shift = np.array([[0.0, -0.1], [0.0, -0.1]])
     result = evaluator.evaluate(size=2, extrapolation_n=shift)
     # take-off ends at 17 m/s, inside 0-30 m/s: unchanged; trim's worst point is at 45 m/s
     assert result.values["takeoff_ground_roll"][1] == result.values["takeoff_ground_roll"][0]

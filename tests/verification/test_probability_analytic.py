@@ -122,10 +122,10 @@ def test_distributions_draw_what_they_say(tmp_path) -> None:
     spread = np.cov(draw.coefficients[0].T)
     variance = np.diag(np.asarray(engine.covariance))
     np.testing.assert_allclose(np.sqrt(np.diag(spread)), np.sqrt(variance), rtol=0.1)
-    # beyond the tested range: extrapolation_sd_n grown to the envelope's 45 m/s, 15 m/s
-    # beyond, from the 2.5 m/s it was measured at (the file gives no distance: span / 12)
+    # beyond the tested range: extrapolation_sd_n per the 2.5 m/s it was measured at (the
+    # file gives no distance: span / 12), drawn per m/s beyond the range
     assert draw.extrapolation_n[0].std() == pytest.approx(
-        engine.extrapolation_sd_n * 15.0 / 2.5, rel=0.1)
+        engine.extrapolation_sd_n / 2.5, rel=0.1)
     assert math.isfinite(float(draw.extrapolation_n.sum()))
 
 

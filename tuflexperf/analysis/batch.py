@@ -25,7 +25,8 @@ plain way in ``tests/verification/test_batch_shortcuts.py``.
 
 A not-attainable parameter set gives NaN, never a dropped row. The thrust model may be
 perturbed per sample: coefficients ``(E, B, 6)`` and an extrapolation error ``(E, B)``
-[N] added beyond the tested airspeed range (SPEC 4, uncertainty block).
+[N per m/s] added times the distance beyond the tested airspeed range (SPEC 4, uncertainty
+block).
 ``tests/verification/test_batch_equals_deterministic.py`` holds this module to the
 deterministic analyses.
 
@@ -262,7 +263,8 @@ class BatchEvaluator:
         coefficients : array ``(E, B, 6)``, optional
             Thrust coefficients per engine and sample (POLY22_TERMS order, the file's units).
         extrapolation_n : array ``(E, B)``, optional
-            Thrust error [N] per engine and sample added beyond the tested airspeed range.
+            Thrust error [N per m/s] per engine and sample, added times the distance
+            beyond the tested airspeed range [m/s].
         power_scale : array ``(B,)``, optional
             Factor [-] per sample on every fan's electrical power (the error model's).
         shared : dict, optional

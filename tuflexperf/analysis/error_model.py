@@ -8,17 +8,21 @@ a place in a file where it is stated, and a default:
   (``engines[].covariance``); ``N(p, C)`` per engine. Default: none (not sampled, said).
 - ``model_form``: the poly22's own shape error (``engines[].lack_of_fit.model_form_rms_n``,
   the fit's lack of fit; without it the fit's ``residual_sd_n``, an upper bound, said).
-  Drawn as a random plane over the tested domain, ``b (2x - 1) + c (2t - 1)`` with ``x`` the
-  throttle, ``t`` the airspeed's place in the tested range and ``b, c ~ N(0, s^2 / 2)``:
-  zero mean over the domain (a least-squares fit's residuals average zero there), sd ``s``
-  at its corners, where a fit errs most, and growing on beyond the tested airspeeds. ``s``
-  is ``sqrt 3`` x the lack of fit's RMS (the plane whose mean square over the domain is the
-  RMS's square), not its largest residual: the largest of some 70 holds' residuals is
-  mostly their noise (a study on the shipped generator gave bands twice too wide with it;
-  docs/validation.md). One draw holds over every operating point of a requirement, so it
-  does not average away across them (a constant offset on ``p00`` did, across the roll's
-  airspeeds: issue 44); correlated :data:`ENGINE_CORRELATION` between engines (fans of one
-  design err alike).
+  Drawn as a random plane over the tested domain, ``a + b (2x - 1) + c (2t - 1)`` with
+  ``x`` the throttle and ``t`` the airspeed's place in the tested range, its mean square
+  over the domain the lack of fit's RMS squared, shared equally by the three terms
+  (:data:`MODEL_FORM_VARIANCES`): sd ``RMS / sqrt 3`` at the domain's centre, ``sqrt(7/3)``
+  x RMS at its corners, where a fit errs most, growing on beyond the tested airspeeds. The
+  RMS, not the largest residual: the largest of some 70 holds' residuals is mostly their
+  noise (a study on the shipped generator gave bands twice too wide with it;
+  docs/validation.md). The offset: a plane without it is zero at the domain's centre, where
+  a one-engine throttle flies, and its bands measured twice too narrow there. One
+  draw holds over every operating point of a requirement, so it does not average away
+  across them (a constant offset on ``p00`` alone did, across the roll's airspeeds: issue
+  44); correlated :data:`ENGINE_CORRELATION` between engines (fans of one design err alike).
+  A poly22 perturbation cannot change sign between nearby throttles as a least-squares
+  residual does: a requirement flown at several throttles (the mission) gets a band wider
+  than its error (docs/validation.md).
 - ``rig``: the test rig's systematic errors (top-level ``rig_uncertainty``, the campaign
   manifest's, copied by ``fit``): the tunnel's airspeed bias ``b`` (thrust read at ``v + b``),
   the balance's scale ``s`` (thrust x ``1 + s``) and zero (added), the pack voltage's error
@@ -26,13 +30,17 @@ a place in a file where it is stated, and a default:
   same for every engine. A key not stated takes :data:`RIG_DEFAULTS` (said, never zero).
 - ``extrapolation``: beyond the tested airspeeds, a refit without the top tested airspeed
   errs there by ``extrapolation_worst_n`` at its worst throttle (else ``extrapolation_sd_n``,
-  the RMS over its throttles), ``extrapolation_distance_m_s`` beyond the rest; the error
-  grows in proportion to the distance, and the step the batch adds beyond the range is
-  drawn with its sd at the farthest airspeed the case flies (the envelope's top;
-  conservative nearer the edge), correlated :data:`ENGINE_CORRELATION` between engines.
+  the RMS over its throttles), ``extrapolation_distance_m_s`` beyond the rest: an error of
+  that sd per that distance, drawn once per sample and engine (correlated
+  :data:`ENGINE_CORRELATION` between engines) and added at each airspeed in proportion to
+  its distance beyond the tested range (0 at its ends: a cruise 1 m/s beyond them carries a
+  tenth of the error of a trim 10 m/s beyond).
 - ``power_model``: the battery file's discharge runs (``fit.runs``) measured a power the
   power model gives otherwise; their RMS relative disagreement is drawn as a lognormal
-  scale on every fan's electrical power.
+  scale on every fan's electrical power. Not where the case is flown on the runs' measured
+  power as a reading of its own (``fit.power_correction``,
+  :mod:`tuflexperf.analysis.power_reading`): the samples are judged on the worse reading,
+  which takes the disagreement whole; drawing it as well would count it twice.
 - ``battery_fit``: the battery fit's own error, its cross-validation (``fit.cross_validation``:
   a run's time to cut-off predicted from the other's fit), drawn as a lognormal scale on
   the power (a time error of the packs is an energy error: ``t ~ E / P``).
@@ -75,11 +83,13 @@ RIG_LABELS = {"airspeed_bias_sd_m_s": ("airspeed bias", "m/s"),
               "thrust_scale_sd": ("thrust scale", ""),
               "balance_zero_sd_n": ("balance zero", "N"),
               "voltage_sd_v": ("voltage", "V")}
-MODEL_FORM_VARIANCES = (0.0, 0.5, 0.5)
-"""Variance shares of the model-form plane's constant, throttle and airspeed terms: no
-constant (the fit's residuals average zero over the tested domain), the corners' sd whole."""
-EDGE_PER_RMS = 3.0 ** 0.5
-"""The corners' sd per RMS over the tested domain: the plane's own ratio."""
+MODEL_FORM_VARIANCES = (1.0 / 7.0, 3.0 / 7.0, 3.0 / 7.0)
+"""Shares of the corners' variance of the model-form plane's constant, throttle and
+airspeed terms: each term a third of the mean square over the tested domain (``u^2`` of a
+term ``b u`` averages 1/3 over ``u`` in [-1, 1]), none favoured: the lack of fit says how
+large the error is, not where."""
+EDGE_PER_RMS = (7.0 / 3.0) ** 0.5
+"""The corners' sd per RMS over the tested domain: ``sqrt(1/3 + 1 + 1)``."""
 ENGINE_CORRELATION = 0.5
 """Correlation of the model-form error between engines (one design, not one fan)."""
 SPAN_PER_LEFT_OUT_STEP = 12.0
@@ -108,7 +118,8 @@ class ErrorModel:
 
     ``covariance_roots`` per engine ``L`` with ``L L^T = C`` (None: not drawn);
     ``model_form_maps`` ``(E, 3, 6)``: the plane's three standard normals to coefficient
-    changes [file units]; ``extrapolation_sd_n`` ``(E,)`` [N]; ``rig_sd`` ``(4,)`` in
+    changes [file units]; ``extrapolation_sd_n`` ``(E,)`` [N per m/s beyond the tested
+    range]; ``rig_sd`` ``(4,)`` in
     :data:`RIG_KEYS` order and ``rig_root`` its correlation's root; ``volt_fraction`` the
     thrust fraction per volt; ``power_sds`` the lognormal power scales' sds [-].
     """
@@ -201,8 +212,8 @@ def _model_form(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
             said.append(f"{e.name}: none (no lack_of_fit, no residual_sd_n)")
             continue
         corner = EDGE_PER_RMS * float(rms)
-        how = (f"sqrt 3 x the lack of fit's RMS {rms:.3g} N" if e.model_form_sd_n is not None
-               else f"sqrt 3 x residual_sd_n {rms:.3g} N: no lack_of_fit, an upper bound; "
+        how = (f"sqrt(7/3) x the lack of fit's RMS {rms:.3g} N" if e.model_form_sd_n is not None
+               else f"sqrt(7/3) x residual_sd_n {rms:.3g} N: no lack_of_fit, an upper bound; "
                "refit to split it")
         sds.append(corner)
         said.append(f"{e.name} {corner:.3g} N ({how})")
@@ -221,8 +232,8 @@ def _model_form(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
     parts["model_form_maps"] = maps
     return Source("model_form", True, origin,
                   "; ".join(said) + ": the sd at the tested corners of a random plane over "
-                  "throttle and airspeed (zero mean over the tested domain), correlated "
-                  f"{ENGINE_CORRELATION:g} between engines")
+                  "throttle and airspeed (an offset and two slopes, each a third of the "
+                  f"mean square), correlated {ENGINE_CORRELATION:g} between engines")
 
 
 def _rig(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
@@ -302,16 +313,16 @@ def _extrapolation(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
         step = (high - low) / SPAN_PER_LEFT_OUT_STEP if step is None else float(step)
         worst = e.extrapolation_worst_n is not None
         base = float(e.extrapolation_worst_n if worst else (e.extrapolation_sd_n or 0.0))
-        sd = base * far / step
-        sds.append(sd)
-        said.append(f"{e.name} {sd:.3g} N ({base:.3g} N "
+        sds.append(base / step)
+        said.append(f"{e.name} {base / step:.3g} N per m/s ({base:.3g} N "
                     + ("at its worst throttle" if worst else "RMS (extrapolation_sd_n)")
                     + f" at {step:.3g} m/s" + (" (default: tested span / 12)" if default else "")
-                    + ")")
+                    + f"; {base * far / step:.3g} N at the farthest)")
     parts["extrapolation_sd_n"] = np.asarray(sds)
     return Source("extrapolation", True, origin,
-                  f"{far:.3g} m/s beyond the tested {low:g}-{high:g} m/s: " + "; ".join(said)
-                  + ", grown in proportion to the distance")
+                  f"up to {far:.3g} m/s beyond the tested {low:g}-{high:g} m/s: "
+                  + "; ".join(said) + ", grown in proportion to each airspeed's distance "
+                  "beyond the range")
 
 
 def _power_sources(case: Case, switches: Any) -> tuple[tuple[Source, float],
@@ -333,6 +344,13 @@ def _power_sources(case: Case, switches: Any) -> tuple[tuple[Source, float],
         power = (Source("power_model", False, power_origin,
                         "no battery fit (no discharge runs to compare)" if uses_packs
                         else "no requirement flies on the packs"), 0.0)
+    elif _measured_power_flown(case):
+        # the reading is the disagreement taken whole: a spread of its size on top of it
+        # would count it twice (the shipped endurance band, p05-p95, 9x as wide)
+        power = (Source("power_model", False, "battery fit.power_correction",
+                        "the discharge runs' measured power is flown as a reading of its own: "
+                        "every sample is judged on the worse of it and the power model, so "
+                        "their disagreement is not drawn again"), 0.0)
     else:
         power = _power_disagreement(case, fitted, mission)
     if not switches.battery_fit:
@@ -350,6 +368,14 @@ def _power_sources(case: Case, switches: Any) -> tuple[tuple[Source, float],
                           f"{100 * sd:.3g} % rms ({listed}): a lognormal scale on the power "
                           f"the packs deliver{mission}"), sd)
     return power, battery
+
+
+def _measured_power_flown(case: Case) -> bool:
+    """Whether the case is also flown on the discharge runs' measured power (a reading:
+    :mod:`tuflexperf.analysis.power_reading`)."""
+    from tuflexperf.analysis.power_reading import measured_power_readings
+
+    return bool(measured_power_readings(case))
 
 
 def _power_disagreement(case: Case, fitted: Any, mission: str) -> tuple[Source, float]:
@@ -383,8 +409,8 @@ def _power_disagreement(case: Case, fitted: Any, mission: str) -> tuple[Source, 
 
 def draw_thrust(rng: np.random.Generator, model: ErrorModel, nominal: Array,
                 size: int) -> tuple[Array | None, Array | None]:
-    """Each engine's coefficients ``(E, size, 6)`` [file units] and the step beyond the
-    tested range ``(E, size)`` [N]; None where nothing perturbs them.
+    """Each engine's coefficients ``(E, size, 6)`` [file units] and its error beyond the
+    tested range ``(E, size)`` [N per m/s beyond it]; None where nothing perturbs them.
 
     Order of the draws: covariance (engine by engine), extrapolation, model form, rig.
     """
@@ -406,7 +432,7 @@ def draw_thrust(rng: np.random.Generator, model: ErrorModel, nominal: Array,
         z = _between_engines(rng, (count, size))
         extrapolation = z * model.extrapolation_sd_n[:, None]
     if model.model_form_maps is not None:
-        z = _between_engines(rng, (count, size, 3))
+        z = _between_engines(rng, (count, size, model.model_form_maps.shape[1]))
         coefficients()[...] += np.einsum("ebk,ekt->ebt", z, model.model_form_maps)
     if model.rig_sd is not None and model.rig_root is not None:
         errors = (rng.standard_normal((size, len(RIG_KEYS))) @ model.rig_root.T) * model.rig_sd

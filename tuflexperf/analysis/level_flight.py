@@ -31,11 +31,11 @@ from tuflexperf.models.powertrain import beyond_jet_velocity
 from tuflexperf.models.thrust import (
     POLY22_TERMS,
     Propulsion,
+    beyond_tested_m_s,
     density_ratio,
     engine_thrust_n,
     extrapolation_offset_n,
     least_throttle_reaching,
-    outside_tested_range,
     poly22,
     total_thrust_n,
     windmilling_thrust_n,
@@ -92,7 +92,8 @@ class LevelFlightRows:
     density : float or ndarray ``(B, 1)``
         Air density [kg/m^3].
     extrapolation_n : ndarray ``(E, B)`` or None
-        Thrust error [N] per engine and row added beyond the tested airspeed range.
+        Thrust error [N per m/s] per engine and row, added times the distance beyond the
+        tested airspeed range [m/s].
     size : int
         ``B``, the number of rows (1 for one case).
     stall_margin : float or ndarray ``(B, 1)``
@@ -123,12 +124,13 @@ class LevelFlightRows:
         return above & ~beyond_jet_velocity(self.propulsion, grid, density)
 
     def extrapolation_errors_n(self, speed: Array) -> list[Array] | None:
-        """Per engine, the row's sampled thrust error [N] at ``speed``: its draw beyond the
-        tested range, scaled to the row's density as the thrust is; ``None`` without draws."""
+        """Per engine, the row's sampled thrust error [N] at ``speed``: its draw per m/s
+        beyond the tested range times the distance beyond it, scaled to the row's density as
+        the thrust is; ``None`` without draws."""
         if self.extrapolation_n is None:
             return None
         beyond = density_ratio(self.propulsion, self.density) \
-            * outside_tested_range(self.propulsion, speed).astype(float)
+            * beyond_tested_m_s(self.propulsion, speed)
         return [beyond * error[:, None] for error in self.extrapolation_n]
 
     def _per_row(self, value: Any) -> Array:

@@ -48,6 +48,7 @@ from tuflexperf.models.battery import (
 from tuflexperf.models.power_correction import PowerCorrection
 from tuflexperf.models.thrust import (
     POLY22_TERMS,
+    beyond_tested_m_s,
     density_ratio,
     engine_thrust_n,
     least_throttle_reaching,
@@ -96,10 +97,11 @@ class SegmentEquations:
         """The chained function's ``par`` per row, ``(n_par, size)``: the aircraft's
         :data:`SAMPLED_AIRCRAFT` fields, the field's height [m] and temperature offset [K],
         each engine's six thrust coefficients (POLY22_TERMS order) and extrapolation error
-        [N], each engine's power correction and the fan-power law's (:data:`CORRECTION_SIZE`
-        each, the case's), and the circuit's measured packs per engine [-] (a drawn capacity
-        changes them: :func:`tuflexperf.models.battery.equivalent_packs`). Each argument left
-        out is the case's own (no error)."""
+        [N per m/s beyond the tested range], each engine's power correction and the fan-power
+        law's (:data:`CORRECTION_SIZE` each, the case's), and the circuit's measured packs per
+        engine [-] (a drawn capacity changes them:
+        :func:`tuflexperf.models.battery.equivalent_packs`). Each argument left out is the
+        case's own (no error)."""
         craft = self.case.aircraft if aircraft is None else aircraft
         atmosphere = self.case.atmosphere
         field_m, dt_k = ((atmosphere.altitude_m, atmosphere.temperature_offset_k)
@@ -128,8 +130,8 @@ class SegmentEquations:
 
     def _symbolic_models(self, par: Any) -> tuple[Any, Any, list[Any], Any]:
         """The aircraft, propulsion and fan-power law with ``par``'s symbols in place of their
-        sampled numbers and power corrections, and each engine's extrapolation error [N]
-        (see :meth:`parameters`)."""
+        sampled numbers and power corrections, and each engine's extrapolation error [N per m/s
+        beyond the tested range] (see :meth:`parameters`)."""
         import dataclasses
 
         k = len(SAMPLED_AIRCRAFT)
@@ -206,7 +208,8 @@ class SegmentEquations:
         ``plan_p = [solve_x, throttle, rate, rate_from_excess]``. Without a reference
         voltage ``u`` is ignored and the current is the closed-form constant-power root.
         ``par`` holds the sampled parameters (:meth:`parameters`); each engine's
-        extrapolation error [N] adds to its thrust beyond the tested airspeeds.
+        extrapolation error [N per m/s] adds to its thrust, times the distance beyond
+        the tested airspeeds.
         """
         import casadi as ca
 
@@ -222,8 +225,8 @@ class SegmentEquations:
         if dead is not None and self.dead_mode == "windmilling":
             dead_t = windmilling_thrust_n(prop.engines[dead], v, sigma, rho, prop.fan_area_m2)
         factor = [(u[i] / u_ref) ** k_exp if u_ref is not None else 1.0 for i in range(self.n)]
-        low, high = prop.tested_airspeed_m_s
-        beyond = sigma * ca.if_else(ca.logic_or(v < low - 1e-9, v > high + 1e-9), 1.0, 0.0)
+        # the extrapolation error is drawn per m/s beyond the tested range
+        beyond = sigma * beyond_tested_m_s(prop, v)
         t = [sum(factor[i] * (engine_thrust_n(prop.engines[i], xs, v, sigma)
                               + beyond * errors[i]) for i in live)
              for xs in (0.0, 0.5, 1.0)]

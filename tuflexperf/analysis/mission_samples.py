@@ -164,7 +164,7 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
 
     ``evaluator`` the case's :class:`tuflexperf.analysis.batch.BatchEvaluator` (its rows'
     aircraft, propulsion and density); ``values`` dotted key -> ``(B,)``; thrust
-    ``coefficients`` ``(E, B, 6)`` and ``extrapolation_n`` ``(E, B)`` [N] as drawn.
+    ``coefficients`` ``(E, B, 6)`` and ``extrapolation_n`` ``(E, B)`` [N per m/s] as drawn.
     """
     from tuflexperf.analysis.airborne import obstacle_height_of
     from tuflexperf.analysis.attainable import stall_margin_of

@@ -297,6 +297,20 @@ def outside_tested_span(propulsion: Propulsion, slowest_m_s: Any, fastest_m_s: A
     return (slowest_m_s < low - 1e-9) | (fastest_m_s > high + 1e-9)
 
 
+def beyond_tested_m_s(propulsion: Propulsion, airspeed_m_s: Vectorizable) -> Vectorizable:
+    """How far [m/s] airspeeds (a float, numpy array or CasADi expression) lie outside the
+    model's tested airspeed range: 0 inside it, the distance below its low end or above its
+    high end beyond it (the samples' extrapolation error grows in proportion to it).
+
+    References
+    ----------
+    SPEC 3 (extrapolation is said); issue 44 (an extrapolation error that grows with the
+    distance beyond the tested range).
+    """
+    low, high = propulsion.tested_airspeed_m_s
+    return fmax(low - airspeed_m_s, 0.0) + fmax(airspeed_m_s - high, 0.0)
+
+
 def is_extrapolated(propulsion: Propulsion, airspeed_m_s: float) -> bool:
     """True when ``airspeed_m_s`` lies outside the model's tested airspeed range."""
     return bool(outside_tested_range(propulsion, airspeed_m_s))
