@@ -64,7 +64,10 @@ def with_battery(case, key: str, value: float, folder):
 
 @pytest.fixture(scope="module")
 def case():
-    return load_case(SHIPPED_CASE)
+    # trim's limits need a trim at the thrust's bound: at 45 m/s, 15 m/s beyond the tested
+    # 30, it is not attainable at P(met) >= 0.9, and is at 0.6
+    return with_values(load_case(SHIPPED_CASE),
+                       {"requirements.extrapolation.required_probability": 0.6})
 
 
 @pytest.fixture(scope="module")

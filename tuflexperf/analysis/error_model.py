@@ -70,7 +70,7 @@ from numpy.typing import NDArray
 from tuflexperf.io.case import Case
 from tuflexperf.io.schemas import RIG_UNCERTAINTY_DEFAULTS
 from tuflexperf.models.aircraft import true_airspeed_m_s
-from tuflexperf.models.thrust import POLY22_TERMS
+from tuflexperf.models.thrust import POLY22_TERMS, extrapolation_error_per_m_s
 
 Array = NDArray[np.float64]
 
@@ -92,9 +92,6 @@ EDGE_PER_RMS = (7.0 / 3.0) ** 0.5
 """The corners' sd per RMS over the tested domain: ``sqrt(1/3 + 1 + 1)``."""
 ENGINE_CORRELATION = 0.5
 """Correlation of the model-form error between engines (one design, not one fan)."""
-SPAN_PER_LEFT_OUT_STEP = 12.0
-"""Without ``extrapolation_distance_m_s``: the left-out step taken as the tested span / 12
-(the paper's 2.5 m/s top step of 0-30 m/s)."""
 NOMINAL_CELL_V = 3.7  # a LiPo cell's nominal voltage [V], where the battery gives none
 
 
@@ -308,16 +305,16 @@ def _extrapolation(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
     low, high = prop.tested_airspeed_m_s
     sds, said = [], []
     for e in prop.engines:
-        step = e.extrapolation_distance_m_s
-        default = step is None
-        step = (high - low) / SPAN_PER_LEFT_OUT_STEP if step is None else float(step)
+        default = e.extrapolation_distance_m_s is None
         worst = e.extrapolation_worst_n is not None
+        rate = extrapolation_error_per_m_s(e, (low, high))
         base = float(e.extrapolation_worst_n if worst else (e.extrapolation_sd_n or 0.0))
-        sds.append(base / step)
-        said.append(f"{e.name} {base / step:.3g} N per m/s ({base:.3g} N "
+        sds.append(rate)
+        said.append(f"{e.name} {rate:.3g} N per m/s ({base:.3g} N "
                     + ("at its worst throttle" if worst else "RMS (extrapolation_sd_n)")
-                    + f" at {step:.3g} m/s" + (" (default: tested span / 12)" if default else "")
-                    + f"; {base * far / step:.3g} N at the farthest)")
+                    + (f" at {base / rate:.3g} m/s" if rate > 0.0 else "")
+                    + (" (default: tested span / 12)" if default else "")
+                    + f"; {rate * far:.3g} N at the farthest)")
     parts["extrapolation_sd_n"] = np.asarray(sds)
     return Source("extrapolation", True, origin,
                   f"up to {far:.3g} m/s beyond the tested {low:g}-{high:g} m/s: "

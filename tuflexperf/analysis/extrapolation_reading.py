@@ -1,15 +1,16 @@
 """The thrust beyond the tested airspeeds at the bound the required probability asks for
 (see :mod:`tuflexperf.analysis.readings`).
 
-Beyond its tested airspeeds the fitted thrust is an extrapolation, with the propulsion
-file's ``extrapolation_sd_n`` as its band (a leave-one-airspeed-out error). A requirement
-that rests on it is shown only when it holds with probability at least ``p``
-(``requirements.extrapolation.required_probability``, default 0.9). Thrust helps every
-requirement (more thrust never lengthens a roll nor raises a trim throttle), so P(met) >= p
-exactly when the requirement holds with the thrust there lowered to its ``p`` bound,
-``T - z_p sd`` with ``z_p`` the standard normal quantile: that is this reading. The
+Beyond its tested airspeeds the fitted thrust is an extrapolation. Its error grows with the
+distance beyond them: the propulsion file's ``extrapolation_sd_n`` (a leave-one-airspeed-out
+error) per left-out step, the rate the samples draw too, whose coverage the calibration study
+measured. A requirement that rests on it is shown only when it holds with probability at
+least ``p`` (``requirements.extrapolation.required_probability``, default 0.9). Thrust helps
+every requirement (more thrust never lengthens a roll nor raises a trim throttle), so
+P(met) >= p exactly when the requirement holds with the thrust there lowered to its ``p``
+bound, ``T - z_p sd(V)`` with ``z_p`` the standard normal quantile: that is this reading. The
 engines' errors are taken as one (the same fan type, the same polynomial form): each is
-lowered by its own ``z_p sd``, the cautious choice. Inside the tested airspeeds nothing
+lowered by its own ``z_p sd(V)``, the cautious choice. Inside the tested airspeeds nothing
 changes, so a requirement flown there is judged the same on both readings.
 """
 
@@ -21,6 +22,7 @@ from statistics import NormalDist
 from tuflexperf.analysis.readings import Reading
 from tuflexperf.io.case import Case
 from tuflexperf.io.schemas import EXTRAPOLATION_REQUIRED_PROBABILITY
+from tuflexperf.models.thrust import extrapolation_error_per_m_s
 
 #: every block: any flight may leave the tested airspeeds (a sweep's row where the nominal
 #: does not); a requirement the bound leaves unchanged is judged on the nominal alone
@@ -39,25 +41,27 @@ def thrust_blocks(case: Case) -> frozenset[str]:
 
 
 def extrapolation_readings(case: Case) -> tuple[Reading, ...]:
-    """The case with each engine's thrust beyond its tested airspeeds lowered by
-    ``z_p extrapolation_sd_n``; none where no engine states that error."""
+    """The case with each engine's thrust beyond its tested airspeeds lowered by ``z_p``
+    times its extrapolation error, which grows with the distance beyond them
+    (:func:`~tuflexperf.models.thrust.extrapolation_error_per_m_s`, the samples' rate); none
+    where no engine states that error."""
     propulsion = case.propulsion
-    sds = [float(e.extrapolation_sd_n or 0.0) for e in propulsion.engines]
-    if not any(sd > 0.0 for sd in sds):
+    low, high = (float(v) for v in propulsion.tested_airspeed_m_s)
+    rates = [extrapolation_error_per_m_s(e, (low, high)) for e in propulsion.engines]
+    if not any(rate > 0.0 for rate in rates):
         return ()
     affects = thrust_blocks(case)
     if not affects:
         return ()
     p = required_probability(case)
     z = NormalDist().inv_cdf(p)
-    low, high = (float(v) for v in propulsion.tested_airspeed_m_s)
-    engines = tuple(dataclasses.replace(e, extrapolation_offset=(low, high, -z * sd))
-                    for e, sd in zip(propulsion.engines, sds, strict=True))
+    engines = tuple(dataclasses.replace(e, extrapolation_offset=(low, high, -z * rate))
+                    for e, rate in zip(propulsion.engines, rates, strict=True))
     reading_case = dataclasses.replace(
         case, propulsion=dataclasses.replace(propulsion, engines=engines))
     file = case.propulsion_path.name
-    per_engine = ", ".join(f"{e.name} {sd:g} N" for e, sd in zip(propulsion.engines, sds,
-                                                                   strict=True))
+    per_engine = ", ".join(f"{e.name} {rate:.3g} N per m/s" for e, rate
+                           in zip(propulsion.engines, rates, strict=True))
     key = "requirements.extrapolation.required_probability"
     beyond = [f"tunnel points above {high:g} m/s"] + (
         [f"tunnel points below {low:g} m/s"] if low > 0.0 else [])
@@ -68,8 +72,9 @@ def extrapolation_readings(case: Case) -> tuple[Reading, ...]:
         nominal_label="the thrust model as fitted",
         case=reading_case,
         affects=affects,
-        evidence=(f"{file} extrapolation_sd_n {per_engine}: beyond {low:g}-{high:g} m/s the "
-                  f"thrust is lowered by {z:.2f} sd for P(met) >= {p:g} ({key})"),
+        evidence=(f"{file} extrapolation error {per_engine} beyond {low:g}-{high:g} m/s "
+                  f"(extrapolation_sd_n over the left-out distance): the thrust is lowered by "
+                  f"{z:.2f} sd, growing with the distance, for P(met) >= {p:g} ({key})"),
         settle=" and ".join(beyond),
         beyond_tested_only=True,
     ),)

@@ -69,8 +69,8 @@ class Engine:
     windmilling_drag_coefficient: float | None = None
     # poly22 electrical power surface in W (throttle fraction, airspeed m/s); None if unknown
     power_coefficients: Mapping[str, float] | None = None
-    # (tested low [m/s], tested high [m/s], offset [N]): the thrust beyond the tested airspeeds
-    # moved by the offset (the extrapolation reading's bound, analysis.extrapolation_reading);
+    # (tested low [m/s], tested high [m/s], slope [N per m/s]): the thrust beyond the tested
+    # airspeeds moved in proportion to the distance (the extrapolation reading's bound);
     # None: the polynomial as fitted
     extrapolation_offset: tuple[float, float, float] | None = None
     # measured over modelled power (models.power_correction.PowerCorrection), multiplying
@@ -195,28 +195,44 @@ def engine_thrust_n(
     return density_scale * thrust
 
 
-OFFSET_RAMP_M_S = 0.5
-"""Beyond the tested airspeeds an ``extrapolation_offset`` grows from 0 to its full size over
-this many m/s (the envelope grid's step): thrust stays continuous in airspeed, so a level
-flight at a fixed throttle keeps its root (a step left none near the tested edge)."""
+SPAN_PER_LEFT_OUT_STEP = 12.0
+"""Without ``extrapolation_distance_m_s``: the left-out step taken as the tested span / 12
+(the paper's 2.5 m/s top step of 0-30 m/s)."""
+
+
+def extrapolation_error_per_m_s(engine: Engine, tested_airspeed_m_s: tuple[float, float]
+                                ) -> float:
+    """The thrust's extrapolation error [N per m/s beyond the tested airspeeds]: the
+    leave-out error (``extrapolation_worst_n`` where the fit gave it, else
+    ``extrapolation_sd_n``) [N] over the distance it was measured at
+    (``extrapolation_distance_m_s``, else the tested span / :data:`SPAN_PER_LEFT_OUT_STEP`)
+    [m/s]; 0 for an engine that states neither error.
+
+    One rate for the samples' error (:mod:`tuflexperf.analysis.error_model`) and the
+    deterministic bound (:mod:`tuflexperf.analysis.extrapolation_reading`), so the two judge
+    the same extrapolation; the calibration study measured its coverage (docs/validation.md).
+    """
+    low, high = tested_airspeed_m_s
+    step = engine.extrapolation_distance_m_s
+    step = (high - low) / SPAN_PER_LEFT_OUT_STEP if step is None else float(step)
+    base = engine.extrapolation_worst_n
+    base = float(engine.extrapolation_sd_n or 0.0) if base is None else float(base)
+    return base / step if step > 0.0 else 0.0
 
 
 def extrapolation_offset_n(engine: Engine, airspeed_m_s: Vectorizable) -> Vectorizable:
     """The thrust offset [N] of ``engine`` at ``airspeed_m_s`` [m/s]: 0 inside its tested
-    airspeeds, its full ``extrapolation_offset`` from :data:`OFFSET_RAMP_M_S` beyond them on
-    (linear between), 0 for an engine without one.
+    airspeeds, its ``extrapolation_offset`` slope [N per m/s] times the distance beyond them
+    (continuous, so a level flight at a fixed throttle keeps its root near the tested edge),
+    0 for an engine without one.
 
     The one place the offset is made: the single case (CasADi), the batches' rows and the
     mission's chained function all take it from here. Backend-neutral.
     """
     if engine.extrapolation_offset is None:
         return 0.0
-    low, high, offset = engine.extrapolation_offset
-
-    def share(beyond: Vectorizable) -> Vectorizable:
-        return fmin(fmax(beyond / OFFSET_RAMP_M_S, 0.0), 1.0)
-
-    return offset * (share(airspeed_m_s - high) + share(low - airspeed_m_s))
+    low, high, slope = engine.extrapolation_offset
+    return slope * (fmax(airspeed_m_s - high, 0.0) + fmax(low - airspeed_m_s, 0.0))
 
 
 def windmilling_thrust_n(

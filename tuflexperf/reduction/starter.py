@@ -160,6 +160,7 @@ def propulsion_text(m: StarterModel, from_datasheet: bool) -> str:
 p20: {_g(t['p20'])}, p11: {_g(t['p11'])}, p02: {_g(t['p02'])}}}
     residual_sd_n: {_g(m.thrust_sd_n)}      # stated uncertainty (1 sd), see above
     extrapolation_sd_n: {_g(m.thrust_sd_n)}
+    extrapolation_distance_m_s: 2.5  # the stated sd per 2.5 m/s beyond (a tunnel step)
     power:
       model: poly22
       coefficients: {{p00: {_g(p['p00'])}, p10: {_g(p['p10'])}, p01: {_g(p['p01'])}, \
