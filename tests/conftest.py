@@ -64,10 +64,13 @@ def load_script(name: str) -> Any:
     spec.loader.exec_module(module)
     return module
 SHIPPED_CASE = ROOT / "requirements" / "tuflex.yaml"
-PASSING = ("--set", "requirements.endurance.min_flight_time_min=12")
+PASSING = ("--set", "requirements.endurance.min_flight_time_min=12",
+           "--set", "requirements.envelope.max_airspeed_m_s=40")
 """The shipped case is UNPROVEN (exit 1): its endurance is 18.5 min on the power model and
-14.0 min on the discharge runs' measured power, against 15. With a 12 min requirement every
-requirement passes on every reading: a test that needs a passing check (exit 0) adds this."""
+14.0 min on the discharge runs' measured power, against 15; its trim at 45 m/s is not
+attainable at the thrust's 90 % bound there, 15 m/s beyond the tested 30. With a 12 min
+requirement and the envelope to 40 m/s every requirement passes on every reading: a test that
+needs a passing check (exit 0) adds this."""
 
 
 class Ran(NamedTuple):

@@ -295,8 +295,8 @@ def test_liftoff_beyond_the_fans_jet_velocity_is_not_attainable_in_both() -> Non
         if row == 0:
             assert verdict.value is None and not verdict.passed
             assert "jet velocity" in verdict.reason
-        else:
-            assert verdict.value is not None
+        else:  # the nominal reading rolls (the thrust's bound 70 m/s beyond 30 may not)
+            assert (verdict.readings[0].value if verdict.readings else verdict.value) is not None
 
 
 def test_a_catapults_take_off_is_its_release_and_needs_its_energy(tmp_path) -> None:

@@ -211,5 +211,8 @@ def test_the_planned_cruise_takes_the_fast_root_short_of_the_jet_velocity() -> N
     case = with_values(load_case(SHIPPED_CASE),
                        {"aircraft.wing_area_m2": 0.36, "aircraft.cd0": 4.307e-05})
     verdict = {v.name: v for v in check_case(case)}["flight_endurance"]
-    assert "jet velocity" not in verdict.reason
-    assert "EDF1's models give -3.5 N" in verdict.reason and "98.9 m/s" in verdict.reason
+    # the nominal reading's reason (the thrust's 90 % bound, 70 m/s beyond the tested 30,
+    # is another flight)
+    reason = verdict.details.get("nominal_reason", verdict.reason)
+    assert "jet velocity" not in reason
+    assert "EDF1's models give -3.5 N" in reason and "98.9 m/s" in reason

@@ -378,10 +378,12 @@ def flight_rows(m: Any, model: Any, throttle: Array, roll: tuple[Array, Array, A
     engines: tuple[Any, ...] = (None,)
 
     def launched(engines: tuple[Any, ...]) -> _Launch:
-        if engines not in launches:
-            launches[engines] = _launch_charge(m, model, roll, stall, height, packs, cutoff,
-                                               engines)
-        return launches[engines]
+        # keyed by which fans fly, not by the engines (an engine may hold unhashable maps)
+        key = tuple(None if e is None else e.name for e in engines)
+        if key not in launches:
+            launches[key] = _launch_charge(m, model, roll, stall, height, packs, cutoff,
+                                           engines)
+        return launches[key]
 
     launch = launched(engines)
     if isinstance(model.power, PowerSurfaces) and len(m.propulsion.engines) > 1 \
