@@ -489,6 +489,10 @@ class Analyses:
     takeoff_note: str | None
     trim: Any | None
     oei: Any | None
+    # trim on the thrust beyond the tested airspeeds at its required-probability bound (the
+    # extrapolation reading's Study: the curve its verdict read), with the reading's label
+    trim_bound: Any | None = None
+    trim_bound_label: str | None = None
     endurance_curve: list[tuple[float, Any]] = field(default_factory=list)
     endurance_at_requirement: Any | None = None
     best_endurance: Any | None = None  # Study.best_endurance(): the longest flight (BestResult)
@@ -568,6 +572,12 @@ def run_analyses(study: Study | Case) -> Analyses:
     else:
         notes.append("the case has no envelope requirement: trim and OEI are not drawn")
     analyses = Analyses(verdicts, takeoff, takeoff_note, trim, oei, notes=notes, study=study)
+    if trim is not None:
+        bound = [r for r in study.readings() if r.key == "extrapolation_bound"
+                 and "envelope" in r.affects]
+        if bound and trim.extrapolated:
+            analyses.trim_bound = study.on_reading(bound[0]).trim()
+            analyses.trim_bound_label = bound[0].label
     if case.validation_flights:  # summaries only: no log is opened
         from tuflexperf.analysis.flown_reading import flown_flights
 

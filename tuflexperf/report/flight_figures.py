@@ -389,11 +389,21 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
                 markerfacecolor=STYLE["trim"]["color"],
                 label=f"least trim throttle {100 * trim.min_throttle:.1f} % at "
                 f"{trim.airspeed_at_min_throttle_m_s:.1f} m/s")
+    bound = analyses.trim_bound
     if trim.max_throttle is not None:
         k = int(np.nanargmax(trim.throttle))
         ax.plot([trim.airspeed_m_s[k]], [trim.max_throttle], **POINT["verdict"],
                 label=f"highest trim throttle {100 * trim.max_throttle:.1f} % at "
-                f"{trim.airspeed_m_s[k]:.1f} m/s (the verdict)")
+                f"{trim.airspeed_m_s[k]:.1f} m/s "
+                + ("(as fitted)" if bound is not None else "(the verdict)"))
+    if bound is not None:  # the reading the verdict also reads: where it flies and where not
+        throttle = np.asarray(bound.throttle, dtype=float)
+        lost = np.asarray(bound.airspeed_m_s, dtype=float)[~np.isfinite(throttle)
+                                                           | (throttle > 1.0)]
+        top = (f"not attainable at {lost.min():.1f}-{lost.max():.1f} m/s" if lost.size
+               else f"highest {100 * bound.max_throttle:.1f} %")
+        ax.plot(bound.airspeed_m_s, bound.throttle, **style_of("trim", linestyle=":"),
+                label=wrap_text(f"trim on {analyses.trim_bound_label}: {top}", 60))
     ax.axhline(envelope.max_trim_throttle, **STYLE["limit"],
                label=f"limit: max trim throttle {envelope.max_trim_throttle:g}")
     if oei is not None:
