@@ -17,7 +17,7 @@ from tuflexperf.analysis import batch_endurance
 from tuflexperf.analysis.batch import BatchEvaluator
 from tuflexperf.analysis.batch_kernels import nominal_engines
 from tuflexperf.analysis.batch_model import BatchModel
-from tuflexperf.analysis.batch_roll import _STEEP_FORCE_SHARE
+from tuflexperf.analysis.ground_roll import _STEEP_FORCE_SHARE
 from tuflexperf.io.case import load_case
 from tuflexperf.models._math import interp_rows
 

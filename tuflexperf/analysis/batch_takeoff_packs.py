@@ -5,7 +5,7 @@ obstacle with each fan's thrust ``T (U/U_ref)^k`` at its packs' loaded voltage `
 (:func:`tuflexperf.analysis.takeoff.solve_takeoff`): CVODES over the airspeed with the
 charge drawn per engine beside the distance and the time. Here the same roll is flown per
 row, vectorised, in the reference roll's own time ``tau`` (the batch's exact quadrature of
-``m / F_ref``, :meth:`tuflexperf.analysis.batch_roll.GroundRollRows.roll_history`):
+``m / F_ref``, :meth:`tuflexperf.analysis.ground_roll.GroundRollRows.roll_history`):
 
 ``dt/dtau = F_ref(V) / F(V, q)``, ``ds/dtau = V dt/dtau``, ``dq/dtau = I(V, q) / 3600 dt/dtau``,
 

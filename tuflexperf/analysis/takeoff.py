@@ -2,15 +2,16 @@
 
 Equation of motion on the runway (Raymer, *Aircraft Design*, section 17.8.1):
 ``m dV/dt = T(1, V) - D_g(V) - mu max(W - L_g(V), 0)``. With the airspeed as the
-independent variable, ``ds/dV = m V / F(V)`` and ``dt/dV = m / F(V)``, integrated by
-CasADi's CVODES from 0 to the lift-off true airspeed (no wind, level runway). Rotation
-adds ``V_LO t_R`` (Raymer 17.8.2); the airborne part is an arc at ``1.15 V_stall`` and
-load factor ``n`` followed by the full-throttle straight climb (Anderson, *Aircraft
-Performance and Design*, 6.7.2).
+independent variable, ``ds/dV = m V / F(V)`` and ``dt/dV = m / F(V)``, integrated from 0
+to the lift-off true airspeed (no wind, level runway) by the batch's quadrature on one row
+(:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`); on sagging packs by CVODES
+with the charge drawn per engine beside them. Rotation adds ``V_LO t_R`` (Raymer 17.8.2);
+the airborne part is an arc at ``1.15 V_stall`` and load factor ``n`` followed by the
+full-throttle straight climb (Anderson, *Aircraft Performance and Design*, 6.7.2).
 
-The roll's force and integrator live in :mod:`.ground_roll`, the rotation and the arc (on
-sagging packs too) in :mod:`.airborne`; this module holds the result and the catapult and
-puts the three together in :func:`solve_takeoff`.
+The roll lives in :mod:`.ground_roll`, the rotation and the arc (on sagging packs too) in
+:mod:`.airborne`; this module holds the result and the catapult and puts the three
+together in :func:`solve_takeoff`.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.analysis.ground_roll import (
     CHECK_POINTS,
     HISTORY_POINTS,
-    integrator_for,
+    GroundRollRows,
     net_force_n,
     release_acceleration,
 )
@@ -343,15 +344,19 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
             f"{propulsion.tested_airspeed_m_s[0]:g}-{propulsion.tested_airspeed_m_s[1]:g} m/s)",
             known,
         )
-    rows = 2 if packs is None else 2 + packs.n
-    try:
-        # CasADi prints the failed call's inputs (8 lines per try) through Python's stderr:
-        # the reason below says what failed, in one line
-        with contextlib.redirect_stderr(io.StringIO()):
-            states = np.asarray(integrator_for(case)(v_lo) if packs is None
-                                else packs.roll(v_lo))
-    except RuntimeError:  # CVODES failed: the net force nearly vanishes between check points
-        states = np.full((rows, HISTORY_POINTS - 1), np.nan)
+    if packs is None:
+        rows = GroundRollRows(aircraft, propulsion, rho, None, 1)
+        time, distance = (h[0] for h in rows.roll_histories())  # type: ignore[index]
+        states = (np.stack([distance[1:], time[1:]]) if rows.ground_roll()[3][0] > 0.5
+                  else np.nan)
+    else:
+        try:
+            # CasADi prints the failed call's inputs (8 lines per try) through Python's
+            # stderr: the reason below says what failed, in one line
+            with contextlib.redirect_stderr(io.StringIO()):
+                states = np.asarray(packs.roll(v_lo))
+        except RuntimeError:  # CVODES failed: the net force nearly vanishes between checks
+            states = np.full((2 + packs.n, HISTORY_POINTS - 1), np.nan)
     if not np.all(np.isfinite(states)):
         raise NotAttainable(
             f"never reaches lift-off: the net force all but vanishes below the lift-off speed "
@@ -360,12 +365,14 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
     distance = np.concatenate([[0.0], states[0, :]])
     time = np.concatenate([[0.0], states[1, :]])
     history_speed = np.linspace(0.0, v_lo, distance.size)
-    charge = np.zeros((0, distance.size)) if packs is None else np.concatenate(
-        [np.zeros((packs.n, 1)), states[2:, :]], axis=1)
+    rotation_m = v_lo * to.rotation_time_s  # Raymer 17.8.2: rotation at the lift-off speed
+    ground_roll = float(distance[-1]) + rotation_m
+    total_s = float(time[-1]) + to.rotation_time_s
     if packs is None:
         history_thrust = np.asarray(total_thrust_n(propulsion, 1.0, history_speed, rho),
                                     dtype=float)
     else:
+        charge = np.concatenate([np.zeros((packs.n, 1)), states[2:, :]], axis=1)
         history_thrust, _, history_volts = packs.point(charge, history_speed)
         # the force where the packs have sagged (between the history's nodes, its charge
         # interpolated): a roll that stalls as they sag never lifts off
@@ -380,16 +387,13 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         np.broadcast_to(np.asarray(f, dtype=float), history_speed.shape).copy()
         for f in ground_roll_resistance_n(aircraft, history_speed, rho)
     )
-    rotation_m = v_lo * to.rotation_time_s  # Raymer 17.8.2: rotation at the lift-off speed
-
     air = fly_airborne(case, height, packs, None if packs is None else packs.rotation(
         charge[:, -1], v_lo, to.rotation_time_s))
     airborne_s = (air.distance_m or 0.0) / air.speed_m_s
     _refuse_beyond_battery(case, np.append(history_speed, air.speed_m_s),
-                           float(time[-1]) + to.rotation_time_s + airborne_s, known)
+                           total_s + airborne_s, known)
     if air.beyond_battery:  # the packs give out in the climb, before the obstacle
         raise NotAttainable(air.reason, known)
-    ground_roll = float(distance[-1]) + rotation_m
 
     # the roll flies every airspeed from rest up to the lift-off's, the arc its own
     extrapolated, warnings = flown_span_note(propulsion, 0.0, max(v_lo, air.speed_m_s))
@@ -431,7 +435,7 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
     return TakeoffResult(
         ground_roll_m=ground_roll,
         liftoff_speed_m_s=v_lo,
-        time_s=float(time[-1]) + to.rotation_time_s,
+        time_s=total_s,
         history_time_s=time,
         history_airspeed_m_s=history_speed,
         history_distance_m=distance,
