@@ -17,7 +17,7 @@ import numpy as np
 
 from tuflexperf.analysis.attainable import BEYOND_THE_BATTERY
 from tuflexperf.analysis.cache import fingerprint
-from tuflexperf.analysis.ground_roll import HISTORY_POINTS, TAKEOFF_CACHE
+from tuflexperf.analysis.ground_roll import TAKEOFF_CACHE
 from tuflexperf.analysis.pack_limits import (
     full_throttle_on_packs,
     pack_side,
@@ -59,20 +59,19 @@ def rotation_charge(rate: Any, charge_ah: Any, seconds: Any) -> Any:
 
 
 class TakeoffPacks:
-    """The take-off on sagging packs (a battery and the propulsion's ``reference_voltage_v``).
+    """The take-off's full-throttle operating point on sagging packs (a battery and the
+    propulsion's ``reference_voltage_v``).
 
     Each fan makes ``T (U/U_ref)^k`` at its packs' loaded voltage ``U``, which falls as the
-    roll draws charge (:func:`tuflexperf.analysis.pack_limits.full_throttle_on_packs`): the
-    roll integrates the charge drawn per engine beside the distance and the time (CVODES,
-    ``dq/dV = I m / (3600 F)``), the rotation adds its own at the lift-off speed, and the
-    arc and climb to the obstacle fly at the packs' thrust on the way
-    (:func:`settle_airborne`).
+    take-off draws charge (:func:`tuflexperf.analysis.pack_limits.full_throttle_on_packs`):
+    the roll and the rotation fly it in
+    :func:`tuflexperf.analysis.batch_takeoff_packs.roll_on_packs`, the arc and climb to the
+    obstacle at the packs' thrust on the way (:func:`settle_airborne`).
     """
 
     def __init__(self, case: Case, side: Any) -> None:
         import casadi as ca
 
-        aircraft, rho = case.aircraft, case.density_kg_m3
         n = len(case.propulsion.engines)
         self.n = n
         self.cutoff_v = float(side.battery.cutoff_voltage_v)  # the packs' [V]
@@ -81,22 +80,6 @@ class TakeoffPacks:
         self.at = ca.Function("full_throttle_on_packs", [q, v],
                               [thrust, ca.vertcat(*currents), ca.vertcat(*volts)])
         self._maps: dict[int, Any] = {}
-        u, v_lo = ca.SX.sym("u"), ca.SX.sym("v_lo")
-        state = ca.SX.sym("state", 2 + n)  # distance m, time s, charge Ah per engine
-        speed = u * v_lo
-        thrust_u, current_u, _ = self.at(state[2:], speed)
-        dt_dv = aircraft.mass_kg / ground_roll_net_force_n(aircraft, thrust_u, speed, rho)
-        rhs = ca.vertcat(speed * dt_dv, dt_dv, current_u * dt_dv / SECONDS_PER_HOUR) * v_lo
-        grid = np.linspace(0.0, 1.0, HISTORY_POINTS)
-        integrator = ca.integrator(
-            "ground_roll_on_packs", "cvodes",
-            {"x": state, "p": v_lo, "t": u, "ode": rhs}, 0.0, grid[1:],
-            {"abstol": 1e-12, "reltol": 1e-11, "max_num_steps": 100000,
-             "disable_internal_warnings": True},
-        )
-        given = ca.MX.sym("v_lo_in")
-        self.roll = ca.Function("ground_roll_on_packs_history", [given],
-                                [integrator(x0=ca.DM.zeros(2 + n), p=given)["xf"]])
 
     def point(self, charge_ah: np.ndarray, speeds: np.ndarray
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -110,12 +93,6 @@ class TakeoffPacks:
         thrust, current, volts = self._maps[size](q, v)
         return (np.asarray(thrust, dtype=float).reshape(-1), np.asarray(current, dtype=float),
                 np.asarray(volts, dtype=float))
-
-    def rotation(self, charge_ah: np.ndarray, v_lo: float, seconds: float) -> np.ndarray:
-        """The charge per engine [Ah] after ``seconds`` [s] at full throttle at ``v_lo``."""
-        return rotation_charge(
-            lambda q: self.point(q, np.array([v_lo]))[1][:, 0] / SECONDS_PER_HOUR,
-            np.asarray(charge_ah, dtype=float), seconds)
 
 
 # the airborne charge on sagging packs: a settled fixed point, or why not (settle_airborne)

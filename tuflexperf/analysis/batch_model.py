@@ -25,10 +25,6 @@ from tuflexperf.analysis.pack_limits import (
     power_limit_w,
     within_limits,
 )
-from tuflexperf.models.thrust import (
-    density_ratio,
-    engine_thrust_n,
-)
 
 Array = NDArray[np.float64]
 
@@ -43,14 +39,6 @@ class BatchModel(GroundRollRows):
     # per row, the error model's factor on every fan's electrical power [-] (None: 1)
     power_scale: Array | None = None
     packs_air: Any = None  # that airborne part's settled path (airborne.AirborneOnPacks)
-
-    def engine_thrust(self, index: int, throttle: Any, speed: Array) -> Array:
-        """One live engine's thrust [N], as :meth:`thrust` counts it in the total (its model
-        at the row's density, its extrapolation error beyond the tested range)."""
-        own = engine_thrust_n(self.propulsion.engines[index], throttle, speed,
-                              density_ratio(self.propulsion, self.density))
-        errors = self.extrapolation_errors_n(speed)
-        return self._per_row(own if errors is None else own + errors[index])
 
     def packs_never_bind(self, grid: Array, packs: Any, battery: dict[str, Array],
                          top_throttle: Array) -> bool:

@@ -1,11 +1,11 @@
-"""The batch's take-off on sagging packs: the propulsion's ``reference_voltage_v``.
+"""The take-off on sagging packs, for one case or many: the propulsion's ``reference_voltage_v``.
 
-With a reference voltage and a battery the single case rolls, rotates and climbs to the
-obstacle with each fan's thrust ``T (U/U_ref)^k`` at its packs' loaded voltage ``U``
-(:func:`tuflexperf.analysis.takeoff.solve_takeoff`): CVODES over the airspeed with the
-charge drawn per engine beside the distance and the time. Here the same roll is flown per
-row, vectorised, in the reference roll's own time ``tau`` (the batch's exact quadrature of
-``m / F_ref``, :meth:`tuflexperf.analysis.ground_roll.GroundRollRows.roll_history`):
+With a reference voltage and a battery the take-off rolls, rotates and climbs to the
+obstacle with each fan's thrust ``T (U/U_ref)^k`` at its packs' loaded voltage ``U``, the
+charge drawn per engine beside the distance and the time. The roll is flown per row
+(``takeoff``: one row, :func:`tuflexperf.analysis.takeoff.solve_takeoff`), vectorised, in
+the reference roll's own time ``tau`` (the exact quadrature of ``m / F_ref``,
+:meth:`tuflexperf.analysis.ground_roll.GroundRollRows.roll_history`):
 
 ``dt/dtau = F_ref(V) / F(V, q)``, ``ds/dtau = V dt/dtau``, ``dq/dtau = I(V, q) / 3600 dt/dtau``,
 
@@ -49,8 +49,9 @@ Array = NDArray[np.float64]
 @dataclass(frozen=True)
 class RollOnPacks:
     """Per row: ground roll [m] and time [s] (rotation included), lift-off speed [m/s],
-    attainable (1/0), the acceleration's time [s] at the 101 history airspeeds ``(B, 101)``
-    and the charge per fan flown [Ah] after the rotation ``(fans, B)``."""
+    attainable (1/0), the acceleration's time [s] and distance [m] at the 101 history
+    airspeeds ``(B, 101)``, the charge per fan there [Ah] ``(fans, B, 101)`` and after the
+    rotation ``(fans, B)``."""
 
     distance: Array
     time: Array
@@ -58,6 +59,8 @@ class RollOnPacks:
     ok: Array
     history_time: Array
     charge_ah: Array
+    history_distance: Array | None = None
+    history_charge_ah: Array | None = None
 
     def as_roll(self) -> tuple[Array, Array, Array, Array]:
         """The batch's roll tuple (:meth:`.GroundRollRows.ground_roll`)."""
@@ -101,7 +104,7 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
     q = np.zeros((fans, m.size))
     t = np.zeros(m.size)
     s = np.zeros(m.size)
-    times = [t]
+    times, lengths, charges = [t], [s], [q]
     with np.errstate(invalid="ignore", over="ignore"):
         for i in range(tau.shape[1] - 1):
             v0, vm, v1 = speeds[:, i], middle[:, i], speeds[:, i + 1]
@@ -115,6 +118,8 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
             t = t + step / 6.0 * (d1 + 2.0 * d2 + 2.0 * d3 + d4)
             s = s + step / 6.0 * (v0 * d1 + 2.0 * vm * (d2 + d3) + v1 * d4)
             times.append(t)
+            lengths.append(s)
+            charges.append(q)
         # a row whose loaded force vanished at a stage went NaN: it never lifts off
         ok &= np.isfinite(t) & np.isfinite(s) & np.all(np.isfinite(q), axis=0)
         ok &= rates(q, v_lo, force_ref[:, -1])[1] > 0.0  # and at lift-off itself
@@ -129,6 +134,8 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
         ok=ok.astype(float),
         history_time=np.where(ok[:, None], np.stack(times, axis=1), np.nan),
         charge_ah=q,
+        history_distance=np.where(ok[:, None], np.stack(lengths, axis=1), np.nan),
+        history_charge_ah=np.where(ok[:, None], np.stack(charges, axis=-1), np.nan),
     )
 
 

@@ -45,6 +45,8 @@ from tuflexperf.models.aircraft import (
 from tuflexperf.models.powertrain import beyond_jet_velocity
 from tuflexperf.models.thrust import (
     Propulsion,
+    density_ratio,
+    engine_thrust_n,
     total_thrust_n,
 )
 
@@ -230,6 +232,14 @@ class GroundRollRows(LevelFlightRows):
         """The take-off arc's true airspeed [m/s] per row ``(B,)``: 1.15 V_stall."""
         return np.asarray(transition_speed_m_s(self.aircraft, self.density),
                           dtype=float).reshape(-1) * np.ones(self.size)
+
+    def engine_thrust(self, index: int, throttle: Any, speed: Array) -> Array:
+        """One live engine's thrust [N], as :meth:`thrust` counts it in the total (its model
+        at the row's density, its extrapolation error beyond the tested range)."""
+        own = engine_thrust_n(self.propulsion.engines[index], throttle, speed,
+                              density_ratio(self.propulsion, self.density))
+        errors = self.extrapolation_errors_n(speed)
+        return self._per_row(own if errors is None else own + errors[index])
 
     def _breaks(self, v_lo: Array) -> list[Array]:
         """Where the integrand kinks in [0, V_LO]: friction clamp (L = W), tested range end."""

@@ -16,8 +16,6 @@ together in :func:`solve_takeoff`.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -34,6 +32,7 @@ from tuflexperf.analysis.airborne import (
     packs_of,
 )
 from tuflexperf.analysis.attainable import stall_margin_of
+from tuflexperf.analysis.batch_takeoff_packs import roll_on_packs
 from tuflexperf.analysis.ground_roll import (
     CHECK_POINTS,
     HISTORY_POINTS,
@@ -41,9 +40,10 @@ from tuflexperf.analysis.ground_roll import (
     net_force_n,
     release_acceleration,
 )
-from tuflexperf.analysis.pack_limits import pack_side, takeoff_beyond_battery
+from tuflexperf.analysis.pack_limits import pack_rows, pack_side, takeoff_beyond_battery
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
+from tuflexperf.io.dotted import battery_key_values
 from tuflexperf.models.aircraft import (
     DEFAULT_OBSTACLE_HEIGHT_M,
     TRANSITION_SPEED_OVER_STALL,
@@ -260,6 +260,32 @@ def _refuse_beyond_battery(case: Case, speeds: np.ndarray, seconds: float,
         raise NotAttainable(why, known)
 
 
+
+def ground_roll_of(case: Case, packs: TakeoffPacks | None
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    """The ground roll's distance [m] and time [s] at the :data:`HISTORY_POINTS` airspeeds
+    from rest to lift-off (NaN where it never lifts off), and on sagging ``packs`` the charge
+    per engine there [Ah] ``(engines, 101)`` and after the rotation ``(engines,)`` (else
+    empty and None): the batch's roll on one row
+    (:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`,
+    :func:`~tuflexperf.analysis.batch_takeoff_packs.roll_on_packs`)."""
+    rows = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1)
+    if packs is None:
+        time, distance = (h[0] for h in rows.roll_histories())  # type: ignore[index]
+        if rows.ground_roll()[3][0] < 0.5:
+            distance = time = np.full(HISTORY_POINTS, np.nan)
+        return distance, time, np.zeros((0, HISTORY_POINTS)), None
+    side = pack_side(case)
+    battery = {k: np.array([v], dtype=float)
+               for k, v in battery_key_values(side.battery).items()}  # type: ignore[union-attr]
+    flown = roll_on_packs(rows, side, pack_rows(side.battery, battery))  # type: ignore[union-attr]
+    # a shared power surface: every engine draws the one fan's charge
+    return (flown.history_distance[0], flown.history_time[0],  # type: ignore[index]
+            np.broadcast_to(flown.history_charge_ah[:, 0, :],  # type: ignore[index]
+                            (packs.n, HISTORY_POINTS)),
+            np.broadcast_to(flown.charge_ah[:, 0], (packs.n,)))
+
+
 def flown_span_note(propulsion: Propulsion, slowest_m_s: float, fastest_m_s: float
                     ) -> tuple[bool, list[str]]:
     """Whether a take-off flying every airspeed from ``slowest_m_s`` to ``fastest_m_s``
@@ -344,26 +370,12 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
             f"{propulsion.tested_airspeed_m_s[0]:g}-{propulsion.tested_airspeed_m_s[1]:g} m/s)",
             known,
         )
-    if packs is None:
-        rows = GroundRollRows(aircraft, propulsion, rho, None, 1)
-        time, distance = (h[0] for h in rows.roll_histories())  # type: ignore[index]
-        states = (np.stack([distance[1:], time[1:]]) if rows.ground_roll()[3][0] > 0.5
-                  else np.nan)
-    else:
-        try:
-            # CasADi prints the failed call's inputs (8 lines per try) through Python's
-            # stderr: the reason below says what failed, in one line
-            with contextlib.redirect_stderr(io.StringIO()):
-                states = np.asarray(packs.roll(v_lo))
-        except RuntimeError:  # CVODES failed: the net force nearly vanishes between checks
-            states = np.full((2 + packs.n, HISTORY_POINTS - 1), np.nan)
-    if not np.all(np.isfinite(states)):
+    distance, time, charge, rotated = ground_roll_of(case, packs)
+    if not (np.all(np.isfinite(distance)) and np.all(np.isfinite(time))):
         raise NotAttainable(
             f"never reaches lift-off: the net force all but vanishes below the lift-off speed "
             f"{v_lo:.2f} m/s (least {force.min():.3g} N{ON_PACKS if packs else ''})", known
         )
-    distance = np.concatenate([[0.0], states[0, :]])
-    time = np.concatenate([[0.0], states[1, :]])
     history_speed = np.linspace(0.0, v_lo, distance.size)
     rotation_m = v_lo * to.rotation_time_s  # Raymer 17.8.2: rotation at the lift-off speed
     ground_roll = float(distance[-1]) + rotation_m
@@ -372,7 +384,6 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         history_thrust = np.asarray(total_thrust_n(propulsion, 1.0, history_speed, rho),
                                     dtype=float)
     else:
-        charge = np.concatenate([np.zeros((packs.n, 1)), states[2:, :]], axis=1)
         history_thrust, _, history_volts = packs.point(charge, history_speed)
         # the force where the packs have sagged (between the history's nodes, its charge
         # interpolated): a roll that stalls as they sag never lifts off
@@ -387,8 +398,7 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         np.broadcast_to(np.asarray(f, dtype=float), history_speed.shape).copy()
         for f in ground_roll_resistance_n(aircraft, history_speed, rho)
     )
-    air = fly_airborne(case, height, packs, None if packs is None else packs.rotation(
-        charge[:, -1], v_lo, to.rotation_time_s))
+    air = fly_airborne(case, height, packs, rotated)
     airborne_s = (air.distance_m or 0.0) / air.speed_m_s
     _refuse_beyond_battery(case, np.append(history_speed, air.speed_m_s),
                            total_s + airborne_s, known)
