@@ -32,7 +32,6 @@ from tuflexperf.analysis.airborne import (
     packs_of,
 )
 from tuflexperf.analysis.attainable import stall_margin_of
-from tuflexperf.analysis.batch_takeoff_packs import roll_on_packs
 from tuflexperf.analysis.ground_roll import (
     CHECK_POINTS,
     HISTORY_POINTS,
@@ -275,6 +274,9 @@ def ground_roll_of(case: Case, packs: TakeoffPacks | None
         if rows.ground_roll()[3][0] < 0.5:
             distance = time = np.full(HISTORY_POINTS, np.nan)
         return distance, time, np.zeros((0, HISTORY_POINTS)), None
+    # the packs' roll imports the sagging flight: only a case on sagging packs needs it
+    from tuflexperf.analysis.batch_takeoff_packs import roll_on_packs
+
     side = pack_side(case)
     battery = {k: np.array([v], dtype=float)
                for k, v in battery_key_values(side.battery).items()}  # type: ignore[union-attr]
