@@ -34,7 +34,8 @@ from numpy.typing import NDArray
 
 from tuflexperf.analysis.airborne import BEYOND_THE_BATTERY_STATUS, rotation_charge, settle_airborne
 from tuflexperf.analysis.batch_sagging import SaggingFlight
-from tuflexperf.analysis.pack_limits import PackRows
+from tuflexperf.analysis.ground_roll import GroundRollRows
+from tuflexperf.analysis.pack_limits import PackRows, pack_rows
 from tuflexperf.models.aircraft import (
     climb_gradient,
     ground_roll_net_force_n,
@@ -70,6 +71,40 @@ class RollOnPacks:
 def _flight(m: Any, packs: Any, rows: PackRows) -> SaggingFlight:
     return SaggingFlight(m, packs, rows,
                          tuple(m.propulsion.engines) if packs.own_surfaces else (None,))
+
+
+class TakeoffPacks:
+    """One case's sagging packs for the take-off: its batch of one row
+    (:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`), its packs ``side``
+    (:class:`~tuflexperf.analysis.pack_limits.PackSide`) and their rows, and the packs'
+    full-throttle operating point at any airspeeds (:meth:`point`, the batch's
+    :class:`~tuflexperf.analysis.batch_sagging.SaggingFlight`)."""
+
+    def __init__(self, case: Any, side: Any) -> None:
+        from tuflexperf.io.dotted import battery_key_values
+
+        self.n = len(case.propulsion.engines)
+        self.cutoff_v = float(side.battery.cutoff_voltage_v)  # the packs' [V]
+        self.side = side
+        self.model = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1)
+        self.rows = pack_rows(side.battery, {k: np.array([v], dtype=float) for k, v in
+                                             battery_key_values(side.battery).items()})
+        self.flight = _flight(self.model, side, self.rows)
+
+    def point(self, charge_ah: Array, speeds: Array) -> tuple[Array, Array, Array]:
+        """Thrust [N] ``(K,)``, current [A] and loaded voltage [V] per engine ``(n, K)`` at
+        the airspeeds ``speeds`` [m/s] ``(K,)`` after ``charge_ah`` ``(n,)`` or ``(n, K)``
+        (a shared power surface: every engine draws the first one's)."""
+        v = np.atleast_1d(np.asarray(speeds, dtype=float)).reshape(-1)
+        q = np.asarray(charge_ah, dtype=float).reshape(self.n, -1) * np.ones((1, v.size))
+        thrust, volts, current, _ = self.flight.point(1.0, v, q[:len(self.flight.engines)])
+        shape = (self.n, v.size)
+        return (np.asarray(thrust, dtype=float).reshape(-1),
+                np.broadcast_to(current, shape), np.broadcast_to(volts, shape))
+
+    def roll(self) -> RollOnPacks:
+        """The ground roll and rotation on the packs (:func:`roll_on_packs`, one row)."""
+        return roll_on_packs(self.model, self.side, self.rows)
 
 
 def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:

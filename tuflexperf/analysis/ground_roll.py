@@ -21,7 +21,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis.batch_kernels import fan_power_rows, stall_speed
-from tuflexperf.analysis.cache import BoundedCache
 from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
 from tuflexperf.analysis.level_flight import LevelFlightRows
 from tuflexperf.analysis.pack_limits import (
@@ -55,8 +54,6 @@ Array = NDArray[np.float64]
 HISTORY_POINTS = 101  # equally spaced airspeeds of the roll's time and distance history
 
 CHECK_POINTS = 2001  # the single case's airspeeds where the net force must be positive
-
-TAKEOFF_CACHE: BoundedCache[Any] = BoundedCache()
 
 
 def net_force_n(

@@ -24,12 +24,10 @@ import numpy as np
 
 from tuflexperf.analysis.airborne import (
     ON_PACKS,
-    TakeoffPacks,
     fly_airborne,
     obstacle_height_of,
     on_packs_force,
     packs_note,
-    packs_of,
 )
 from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.analysis.ground_roll import (
@@ -39,10 +37,9 @@ from tuflexperf.analysis.ground_roll import (
     net_force_n,
     release_acceleration,
 )
-from tuflexperf.analysis.pack_limits import pack_rows, pack_side, takeoff_beyond_battery
+from tuflexperf.analysis.pack_limits import pack_side, sagging_packs, takeoff_beyond_battery
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
-from tuflexperf.io.dotted import battery_key_values
 from tuflexperf.models.aircraft import (
     DEFAULT_OBSTACLE_HEIGHT_M,
     TRANSITION_SPEED_OVER_STALL,
@@ -151,7 +148,7 @@ class TakeoffResult:
         }
 
 
-def _release_forces(case: Case, packs: TakeoffPacks | None) -> Any:
+def _release_forces(case: Case, packs: Any) -> Any:
     """``forces`` of :func:`release_acceleration` for the case (on full packs where they
     sag)."""
     aircraft, rho = case.aircraft, case.density_kg_m3
@@ -260,31 +257,39 @@ def _refuse_beyond_battery(case: Case, speeds: np.ndarray, seconds: float,
 
 
 
-def ground_roll_of(case: Case, packs: TakeoffPacks | None
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+def packs_of(case: Case) -> Any:
+    """The sagging packs the take-off flies on
+    (:class:`~tuflexperf.analysis.batch_takeoff_packs.TakeoffPacks`), or None (no battery,
+    or no reference voltage: the thrust model's own thrust)."""
+    if not sagging_packs(case):
+        return None
+    side = pack_side(case)
+    if side is None:
+        return None
+    # the packs' flight module: only a case on sagging packs needs it
+    from tuflexperf.analysis.batch_takeoff_packs import TakeoffPacks
+
+    return TakeoffPacks(case, side)
+
+
+def ground_roll_of(case: Case, packs: Any
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
     """The ground roll's distance [m] and time [s] at the :data:`HISTORY_POINTS` airspeeds
-    from rest to lift-off (NaN where it never lifts off), and on sagging ``packs`` the charge
-    per engine there [Ah] ``(engines, 101)`` and after the rotation ``(engines,)`` (else
-    empty and None): the batch's roll on one row
+    from rest to lift-off (NaN where it never lifts off), and on sagging ``packs``
+    (:func:`packs_of`) the charge per engine there [Ah] ``(engines, 101)`` and after the
+    rotation ``(engines,)`` (else empty and None): the batch's roll on one row
     (:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`,
     :func:`~tuflexperf.analysis.batch_takeoff_packs.roll_on_packs`)."""
-    rows = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1)
     if packs is None:
+        rows = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1)
         time, distance = (h[0] for h in rows.roll_histories())  # type: ignore[index]
         if rows.ground_roll()[3][0] < 0.5:
             distance = time = np.full(HISTORY_POINTS, np.nan)
         return distance, time, np.zeros((0, HISTORY_POINTS)), None
-    # the packs' roll imports the sagging flight: only a case on sagging packs needs it
-    from tuflexperf.analysis.batch_takeoff_packs import roll_on_packs
-
-    side = pack_side(case)
-    battery = {k: np.array([v], dtype=float)
-               for k, v in battery_key_values(side.battery).items()}  # type: ignore[union-attr]
-    flown = roll_on_packs(rows, side, pack_rows(side.battery, battery))  # type: ignore[union-attr]
+    flown = packs.roll()
     # a shared power surface: every engine draws the one fan's charge
-    return (flown.history_distance[0], flown.history_time[0],  # type: ignore[index]
-            np.broadcast_to(flown.history_charge_ah[:, 0, :],  # type: ignore[index]
-                            (packs.n, HISTORY_POINTS)),
+    return (flown.history_distance[0], flown.history_time[0],
+            np.broadcast_to(flown.history_charge_ah[:, 0, :], (packs.n, HISTORY_POINTS)),
             np.broadcast_to(flown.charge_ah[:, 0], (packs.n,)))
 
 
