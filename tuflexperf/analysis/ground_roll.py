@@ -111,8 +111,6 @@ def release_acceleration(mass_kg: Any, release_m_s: Any, transition_m_s: Any, fo
 
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(16)
 
-_PANELS = 4  # composite rule: 4 panels x 16 nodes per smooth piece
-
 
 def _unit_rule(panels: int) -> tuple[Array, Array]:
     """Composite Gauss-Legendre nodes and weights on [0, 1], ``(1, panels x 16)`` each."""
@@ -123,19 +121,23 @@ _ROLL_PROBES = np.array([0.25, 0.5, 0.75, 0.9])  # three fix a piece's quadratic
 
 _STEEP_FORCE_SHARE = 0.05  # a least net force below this share of the greatest: a peak
 
-_FINE_PANELS = 256
-
 _PEAK_PANELS = 16  # Gauss panels on each monotone half of a piece, in the stretched variable
 
 _HISTORY_GL = np.polynomial.legendre.leggauss(4)  # per part of a history interval
+
+_FINE_GL = _GL_NODES, _GL_WEIGHTS  # per part where the force comes near vanishing
+
+_NEAR_FORCE_SHARE = 0.25  # a least net force below this share of the greatest: _FINE_GL
 
 # those nodes on a roll of one piece, in its own coordinate s = V / V_LO - 1/2
 _HISTORY_S = ((np.arange(HISTORY_POINTS - 1)[:, None] + 0.5 * (_HISTORY_GL[0] + 1.0))
               / (HISTORY_POINTS - 1)).reshape(1, -1) - 0.5
 
+# and their weights times V / V_LO, per interval ``(100, 4)``: the distance's
+_HISTORY_V = _HISTORY_GL[1] * (_HISTORY_S + 0.5).reshape(HISTORY_POINTS - 1, -1)
 
-# the roll's quadrature on each piece's own coordinate (as _integrate places its nodes)
-_ROLL_RULE, _PEAK_RULE = _unit_rule(_PANELS), _unit_rule(_PEAK_PANELS)
+
+_PEAK_RULE = _unit_rule(_PEAK_PANELS)
 
 
 
@@ -201,6 +203,7 @@ class GroundRollRows(LevelFlightRows):
     results on sagging packs in)."""
 
     _uniform: Array | None = None
+    _histories: tuple[Array, Array] | None = None  # memo of roll_histories
     _pieces: Any = None  # memo of _roll_pieces (False: evaluate node by node)
     _force_range: tuple[Array, Array] | None = None  # memo of force_range
     # the take-off on sagging packs (batch_takeoff_packs.RollOnPacks), where one is flown
@@ -250,21 +253,6 @@ class GroundRollRows(LevelFlightRows):
         second = np.minimum(np.maximum(clamp, edge), v_lo)
         return [np.zeros_like(v_lo), first, second, v_lo]
 
-    def _integrate(self, low: Array, high: Array, panels: int) -> tuple[Array, Array]:
-        """Composite Gauss-Legendre of ``m V / F`` and ``m / F`` over [low, high] per row
-        (the force evaluated node by node: the fallback of :meth:`_roll_pieces`)."""
-        width = (high - low) / panels
-        starts = low + width * np.arange(panels)[None, :]
-        nodes = (starts[:, :, None] + 0.5 * width[:, :, None] * (_GL_NODES + 1.0)).reshape(
-            self.size, -1)
-        weights = np.tile(_GL_WEIGHTS, panels)[None, :] * 0.5 * width
-        force = self.net_force(nodes)
-        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            distance = np.sum(weights * mass * nodes / force, axis=1)
-            time = np.sum(weights * mass / force, axis=1)
-        return distance, time
-
     def _roll_pieces(self) -> tuple[list[Array], list[tuple[Array, ...]]] | None:
         """The net force on each smooth piece of [0, V_LO] as a quadratic (memoised).
 
@@ -300,28 +288,6 @@ class GroundRollRows(LevelFlightRows):
             fits.append((low, width, c0, c1, c2))
         self._pieces = (breaks, fits) if ok else False
         return self._pieces or None
-
-    def _integrate_piece(self, piece: tuple[Array, ...]) -> tuple[Array, Array]:
-        """:meth:`_integrate` on one piece of :meth:`_roll_pieces`: the same nodes, the force
-        from the piece's quadratic."""
-        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
-        low, width, c0, c1, c2 = piece
-        u, w = _ROLL_RULE
-        s = u - 0.5
-        force = c0 + s * (c1 + s * c2)
-        speed = low + width * u
-        weights = w * width
-        with np.errstate(divide="ignore", invalid="ignore"):
-            over = weights * mass / force
-            return np.sum(over * speed, axis=1), np.sum(over, axis=1)
-
-    def _integrate_piece_near_a_peak(self, piece: tuple[Array, ...], rows: Array
-                                     ) -> tuple[Array, Array]:
-        """:func:`roll_integrals_near_a_peak` on one piece of :meth:`_roll_pieces`, ``rows``
-        (indices) only."""
-        mass = np.asarray(self.aircraft.mass_kg, dtype=float) * np.ones((self.size, 1))
-        low, width, c0, c1, c2 = (a[rows] for a in piece)
-        return roll_integrals_near_a_peak(low, width, c0, c1, c2, mass[rows])
 
     def force_range(self) -> tuple[Array, Array]:
         """Least and greatest full-throttle net force [N] per row from rest to lift-off.
@@ -390,10 +356,11 @@ class GroundRollRows(LevelFlightRows):
         return self._uniform
 
     def ground_roll(self) -> tuple[Array, Array, Array, Array]:
-        """Ground roll [m], time [s], lift-off speed [m/s], and attainable (1/0) per row.
+        """Ground roll [m], time [s], lift-off speed [m/s], and attainable (1/0) per row: the
+        last of :meth:`roll_histories`, plus the rotation.
 
-        Not attainable where the net force is not positive on the 101-point check grid
-        from rest to the lift-off speed (a vanishing force means no lift-off).
+        Not attainable where the net force is not positive from rest to the lift-off speed
+        (:meth:`force_range`; a vanishing force means no lift-off).
         """
         v_lo = self.liftoff_speed()
         # a sampled lift-off speed below stall cannot lift off (bad input for one case)
@@ -403,27 +370,7 @@ class GroundRollRows(LevelFlightRows):
         # beyond the fans' jet velocity an extrapolated thrust model is not physics (as
         # solve_takeoff says); v_lo is a column, as the jet velocity of sampled rows is
         attainable &= ~beyond_jet_velocity(self.propulsion, v_lo, self.density)[:, 0]
-        pieces = self._roll_pieces()
-        breaks = self._breaks(v_lo) if pieces is None else pieces[0]
-        distance = np.zeros(self.size)
-        time = np.zeros(self.size)
-        # 1/F peaks where the force all but vanishes: 64 nodes a piece missed it by 17 % (a
-        # roll of 812 m for 976; outside audit); such rows take 64 times the panels
-        with np.errstate(divide="ignore", invalid="ignore"):
-            steep = attainable & (least < _STEEP_FORCE_SHARE * most)
-        for k, (low, high) in enumerate(zip(breaks[:-1], breaks[1:], strict=True)):
-            if np.all(high <= low):
-                continue  # this kink lies beyond lift-off for every row
-            d, t = (self._integrate(low, high, _PANELS) if pieces is None
-                    else self._integrate_piece(pieces[1][k]))
-            if steep.any() and pieces is None:
-                fine = self._integrate(low, high, _FINE_PANELS)
-                d, t = np.where(steep, fine[0], d), np.where(steep, fine[1], t)
-            elif steep.any():  # the spike-resolving rule on those rows alone
-                rows = np.flatnonzero(steep)
-                d, t = d.copy(), t.copy()
-                d[rows], t[rows] = self._integrate_piece_near_a_peak(pieces[1][k], rows)
-            distance, time = distance + d, time + t
+        time, distance = (h[:, -1] for h in self.roll_histories())
         # a sum over 1/F is no roll unless it is positive (a force negative between check
         # points summed to -796 m and passed; outside audit)
         ok = attainable & (distance > 0.0) & (time > 0.0) & np.isfinite(distance) \
@@ -552,22 +499,26 @@ class GroundRollRows(LevelFlightRows):
         return np.where(np.isfinite(total) & (roll[3] > 0.5) & flown, total, np.nan)
 
 
-    def roll_histories(self, wanted: NDArray[np.bool_] | None = None,
-                       distance: bool = True) -> tuple[Array, Array | None]:
-        """Time [s] and distance [m] (None unless ``distance``) at the
-        :data:`HISTORY_POINTS` equally spaced airspeeds from rest to V_LO per row
-        ``(B, 101)``, as exact as :meth:`ground_roll`.
+    def roll_histories(self) -> tuple[Array, Array]:
+        """Time [s] and distance [m] of the acceleration at the :data:`HISTORY_POINTS`
+        equally spaced airspeeds from rest to V_LO per row ``(B, 101)`` (memoised): the
+        roll's one quadrature, its last node the roll's (:meth:`ground_roll`).
 
         Each interval between two history airspeeds is cut at the force's kinks (the
         friction clamp, the tested range's end; its start too where a sampled error jumps
         there); on each part the net force is one quadratic (:meth:`_roll_pieces`) and
         ``integral m / F dV``, ``integral m V / F dV`` take 4 Gauss-Legendre nodes, or
         :func:`roll_integrals_near_a_peak` where the part's least force is below
-        ``_STEEP_FORCE_SHARE`` of the roll's greatest (in the ``wanted`` rows only: the
-        others are not flown); node by node where the force is not quadratic. A four-point
-        rule on the history's airspeeds alone was 3e-6 off in time against ``solve_ivp`` at
-        rtol 1e-12 (these sums: 3e-13), and the launch's airspeed follows it.
+        ``_STEEP_FORCE_SHARE`` of the roll's greatest; 16 nodes on the force node by node
+        where it is not quadratic. Against ``solve_ivp`` at rtol 1e-12 these sums are within
+        5e-13, CVODES at rtol 1e-11 was 2.4e-10 (2e-9 in the distance history) and a
+        four-point rule on the history's airspeeds alone 3e-6 in time.
         """
+        if self._histories is None:
+            self._histories = self._roll_histories()
+        return self._histories
+
+    def _roll_histories(self) -> tuple[Array, Array]:
         v_lo = self.liftoff_speed()
         pieces = self._roll_pieces()
         breaks = self._breaks(v_lo) if pieces is None else pieces[0]
@@ -580,15 +531,13 @@ class GroundRollRows(LevelFlightRows):
         least, most = self.force_range()
         with np.errstate(invalid="ignore"):
             steep = (least > 0.0) & (least < _STEEP_FORCE_SHARE * most)
-        if wanted is not None:
-            steep &= wanted
         # rows on one smooth piece from rest to lift-off, none steep: one shared grid
         smooth = np.zeros(self.size, dtype=bool) if pieces is None else ~steep & np.all(
             [k[:, 0] >= v_lo[:, 0] for k in kinks], axis=0)
         u, w = _HISTORY_GL
         parts = HISTORY_POINTS - 1
         time = np.zeros((self.size, HISTORY_POINTS))
-        length = np.zeros((self.size, HISTORY_POINTS)) if distance else None
+        length = np.zeros((self.size, HISTORY_POINTS))
         if smooth.any():
             rows = np.flatnonzero(smooth)
             _, width, c0, c1, c2 = (x[rows] for x in pieces[1][0])  # type: ignore[index]
@@ -603,34 +552,46 @@ class GroundRollRows(LevelFlightRows):
             scale = width * mass[rows] * (0.5 / parts)
             time[rows, 1:] = np.cumsum(np.einsum("rpk,k->rp", over.reshape(
                 rows.size, parts, -1), w), axis=1) * scale
-            if length is not None:
-                length[rows, 1:] = np.cumsum(np.einsum("rpk,k->rp", (
-                    over * (_HISTORY_S + 0.5)).reshape(rows.size, parts, -1), w),
-                    axis=1) * scale * width
-        rows = np.flatnonzero(~smooth)
-        if rows.size:
-            found = self._cut_histories(rows, v_lo, kinks, pieces, mass, most, steep)
-            time[rows] = found[0]
-            if length is not None:
-                length[rows] = found[1]
+            length[rows, 1:] = np.cumsum(np.einsum("rpk,pk->rp", over.reshape(
+                rows.size, parts, -1), _HISTORY_V), axis=1) * scale * width
+        # 4 nodes a part were 2.4e-10 off where the least force was 5.4 % of the greatest:
+        # 16 below a quarter of it
+        with np.errstate(invalid="ignore"):
+            near = least < _NEAR_FORCE_SHARE * most
+        for chosen, rule in ((~smooth & ~near, _HISTORY_GL), (~smooth & near, _FINE_GL)):
+            rows = np.flatnonzero(chosen)
+            if pieces is None and chosen.any():  # node by node: every row at once
+                rows, rule = np.arange(self.size), _FINE_GL
+            if rows.size:
+                time[rows], length[rows] = self._cut_histories(
+                    rows, v_lo, kinks, pieces, mass, most, steep, rule)
+            if pieces is None:
+                break
         return time, length
 
     def _cut_histories(self, rows: Array, v_lo: Array, kinks: list[Array], pieces: Any,
-                       mass: Array, most: Array, steep: Array) -> tuple[Array, Array]:
+                       mass: Array, most: Array, steep: Array, rule: tuple[Array, Array]
+                       ) -> tuple[Array, Array]:
         """:meth:`roll_histories` of ``rows`` (indices; all where ``pieces`` is None), the
-        intervals cut at the ``kinks`` [m/s], the ``steep`` rows' peaked parts by
-        :meth:`_parts_near_a_peak`."""
+        intervals cut at the ``kinks`` [m/s], each part by the Gauss-Legendre ``rule`` on
+        [-1, 1] (node by node: 16 nodes), the ``steep`` rows' peaked parts by
+        :meth:`_parts_near_a_peak` (node by node: 8 panels a part)."""
         v_lo = v_lo[rows]
         kinks = [k[rows] for k in kinks]
         nodes = v_lo * np.linspace(0.0, 1.0, HISTORY_POINTS)[None, :]
         cuts = np.sort(np.concatenate([nodes, *kinks], axis=1), axis=1)
         a, b = cuts[:, :-1, None], cuts[:, 1:, None]  # (rows, parts, 1)
-        u, w = _HISTORY_GL
-        speed = a + (b - a) * 0.5 * (u + 1.0)
         mass = mass[rows][:, :, None]
-        if pieces is None:
-            force = self.net_force(speed.reshape(self.size, -1)).reshape(speed.shape)
+        if pieces is None:  # the force may be any smooth function: 16 nodes a part
+            time, distance = self._sums_by_node(a, b, mass)
+            if steep.any():  # 1/F peaks where the force all but vanishes: 8 panels a part
+                fine = [self._sums_by_node(a + (b - a) * k / 8, a + (b - a) * (k + 1) / 8,
+                                           mass) for k in range(8)]
+                time = np.where(steep[:, None], sum(f[0] for f in fine), time)
+                distance = np.where(steep[:, None], sum(f[1] for f in fine), distance)
         else:
+            u, w = rule
+            speed = a + (b - a) * 0.5 * (u + 1.0)
             # each part on one piece: its middle against the kinks
             which = sum((0.5 * (a + b) > k[rows][:, :, None])
                         for k in pieces[0][1:3]).astype(np.intp)
@@ -640,15 +601,14 @@ class GroundRollRows(LevelFlightRows):
             low, width, c0, c1, c2 = part
             with np.errstate(divide="ignore", invalid="ignore"):
                 s = (speed - low) / width - 0.5
-            force = c0 + s * (c1 + s * c2)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            over = np.where(b > a, 0.5 * (b - a) * w * mass / force, 0.0)
+                over = np.where(b > a, 0.5 * (b - a) * w * mass / (c0 + s * (c1 + s * c2)),
+                                0.0)
             time, distance = np.sum(over, axis=2), np.sum(over * speed, axis=2)
-        peaked = steep[rows]
-        if pieces is not None and peaked.any():
-            time[peaked], distance[peaked] = self._parts_near_a_peak(
-                a[peaked, :, 0], b[peaked, :, 0], [x[peaked, :, 0] for x in part],
-                mass[peaked, :, 0], most[rows][peaked], time[peaked], distance[peaked])
+            peaked = steep[rows]
+            if peaked.any():
+                time[peaked], distance[peaked] = self._parts_near_a_peak(
+                    a[peaked, :, 0], b[peaked, :, 0], [x[peaked, :, 0] for x in part],
+                    mass[peaked, :, 0], most[rows][peaked], time[peaked], distance[peaked])
         # each history airspeed's place among the cuts: its own index and the kinks below it
         at = np.arange(HISTORY_POINTS)[None, :] + sum((k < nodes) for k in kinks)
         zero = np.zeros((rows.size, 1))
@@ -656,6 +616,15 @@ class GroundRollRows(LevelFlightRows):
                                    at, axis=1),
                 np.take_along_axis(np.concatenate([zero, np.cumsum(distance, axis=1)], axis=1),
                                    at, axis=1))
+
+    def _sums_by_node(self, a: Array, b: Array, mass: Array) -> tuple[Array, Array]:
+        """``integral m / F dV`` [s] and ``integral m V / F dV`` [m] over each part [a, b]
+        ``(B, parts, 1)`` of every row, 16 Gauss-Legendre nodes on the force node by node."""
+        speed = a + (b - a) * 0.5 * (_GL_NODES + 1.0)
+        force = self.net_force(speed.reshape(self.size, -1)).reshape(speed.shape)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            over = np.where(b > a, 0.5 * (b - a) * _GL_WEIGHTS * mass / force, 0.0)
+        return np.sum(over, axis=2), np.sum(over * speed, axis=2)
 
     @staticmethod
     def _parts_near_a_peak(a: Array, b: Array, piece: list[Array], mass: Array, most: Array,
@@ -687,5 +656,6 @@ class GroundRollRows(LevelFlightRows):
         return time, distance
 
     def roll_history(self, wanted: NDArray[np.bool_] | None = None) -> Array:
-        """Time [s] at the 101 history airspeeds per row (:meth:`roll_histories`)."""
-        return self.roll_histories(wanted, distance=False)[0]
+        """Time [s] at the 101 history airspeeds per row (:meth:`roll_histories`: every
+        row is summed, whatever rows are ``wanted``)."""
+        return self.roll_histories()[0]

@@ -282,7 +282,7 @@ def ground_roll_of(case: Case, packs: Any
     :func:`~tuflexperf.analysis.batch_takeoff_packs.roll_on_packs`)."""
     if packs is None:
         rows = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1)
-        time, distance = (h[0] for h in rows.roll_histories())  # type: ignore[index]
+        time, distance = (h[0] for h in rows.roll_histories())
         if rows.ground_roll()[3][0] < 0.5:
             distance = time = np.full(HISTORY_POINTS, np.nan)
         return distance, time, np.zeros((0, HISTORY_POINTS)), None
