@@ -106,6 +106,11 @@ class TakeoffPacks:
         """The ground roll and rotation on the packs (:func:`roll_on_packs`, one row)."""
         return roll_on_packs(self.model, self.side, self.rows)
 
+    def release(self) -> tuple[Array, Array, Array, Array]:
+        """A catapult's acceleration after the release on full packs
+        (:func:`release_on_packs`, one row)."""
+        return release_on_packs(self.model, self.side, self.rows)
+
 
 def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
     """The ground roll and rotation of each row on its sagging packs (see the module).

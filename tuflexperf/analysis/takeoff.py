@@ -35,7 +35,6 @@ from tuflexperf.analysis.ground_roll import (
     HISTORY_POINTS,
     GroundRollRows,
     net_force_n,
-    release_acceleration,
 )
 from tuflexperf.analysis.pack_limits import pack_side, sagging_packs, takeoff_beyond_battery
 from tuflexperf.errors import InputError, NotAttainable
@@ -45,7 +44,6 @@ from tuflexperf.models.aircraft import (
     TRANSITION_SPEED_OVER_STALL,
     catapult_energy_shortfall,
     ground_roll_resistance_n,
-    level_flight_drag_n,
     liftoff_speed_eas_m_s,
     liftoff_speed_m_s,
     stall_speed_eas_m_s,
@@ -148,22 +146,6 @@ class TakeoffResult:
         }
 
 
-def _release_forces(case: Case, packs: Any) -> Any:
-    """``forces`` of :func:`release_acceleration` for the case (on full packs where they
-    sag)."""
-    aircraft, rho = case.aircraft, case.density_kg_m3
-
-    def forces(v: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-        drag = np.asarray(level_flight_drag_n(aircraft, v, rho), dtype=float)
-        if packs is None:
-            thrust = np.asarray(total_thrust_n(case.propulsion, 1.0, v, rho), dtype=float)
-            return thrust - drag, None
-        thrust, current, _ = packs.point(np.zeros(packs.n), v.ravel())
-        return thrust.reshape(v.shape) - drag, current.reshape(packs.n, *v.shape)
-
-    return forces
-
-
 def _after_release(fields: dict[str, Any], accelerate_m: float) -> dict[str, Any]:
     """A catapult's airborne fields with its level acceleration before the arc [m]."""
     for key in ("airborne_distance_m", "distance_to_obstacle_m"):
@@ -200,14 +182,17 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
     packs = packs_of(case)
     if packs is not None:  # full packs give full throttle at all (else no voltage to fly on)
         _refuse_beyond_battery(case, np.array([release, v_tr]), 0.0, known)
-    accelerate, seconds, charge, accelerates = release_acceleration(
-        aircraft.mass_kg, release, v_tr, _release_forces(case, packs))
+    # the batch's release on one row (on full packs where they sag)
+    accelerate, seconds, charge, accelerates = (
+        GroundRollRows(aircraft, case.propulsion, rho, None, 1).release_run() if packs is None
+        else packs.release())
     if not accelerates[0]:
         raise NotAttainable(
             f"after the release at {release:.1f} m/s full throttle does not accelerate to the "
             f"transition speed {v_tr:.1f} m/s ({TRANSITION_SPEED_OVER_STALL:g} x stall): "
             "thrust below the level-flight drag on the way", known)
-    air = fly_airborne(case, height, packs, None if charge is None else charge[:, 0])
+    air = fly_airborne(case, height, packs, None if charge is None
+                       else np.broadcast_to(charge[:, 0], (packs.n,)))
     _refuse_beyond_battery(case, np.array([release, air.speed_m_s]),
                            float(seconds[0]) + (air.distance_m or 0.0) / air.speed_m_s, known)
     if air.beyond_battery:  # the packs give out in the climb, before the obstacle
