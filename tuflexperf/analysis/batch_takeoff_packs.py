@@ -33,9 +33,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis.airborne import BEYOND_THE_BATTERY_STATUS, rotation_charge, settle_airborne
+from tuflexperf.analysis.batch_kernels import fan_power_rows
 from tuflexperf.analysis.batch_sagging import SaggingFlight
 from tuflexperf.analysis.ground_roll import GroundRollRows
-from tuflexperf.analysis.pack_limits import PackRows, pack_rows
+from tuflexperf.analysis.pack_limits import PackRows, operating_point, pack_rows
 from tuflexperf.models.aircraft import (
     climb_gradient,
     ground_roll_net_force_n,
@@ -132,8 +133,23 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
     middle = 0.5 * (speeds[:, :-1] + speeds[:, 1:]) + h / 8.0 * (slope[:, :-1] - slope[:, 1:])
     force_middle = m.net_force(middle)
 
-    def rates(charge: Array, v: Array, reference_force: Array) -> tuple[Array, Array]:
-        thrust, _, current, _ = flight.point(1.0, v, charge)
+    # the packs' power and the fans' thrust at the reference voltage depend on the airspeed
+    # alone: once for all the stages' airspeeds (a stage then solves the packs' voltage only;
+    # SaggingFlight.point's sum, on one row 3x fewer evaluations)
+    stage_speeds = np.concatenate([speeds, middle], axis=1)
+    power = np.stack([np.asarray(fan_power_rows(packs, m, 1.0, stage_speeds, e), dtype=float)
+                      * np.ones_like(stage_speeds) for e in flight.engines])
+    thrusts = (m.thrust(1.0, stage_speeds)[None] if flight.engines == (None,) else np.stack(
+        [m.engine_thrust(j, 1.0, stage_speeds) for j in range(fans)])) \
+        * np.ones_like(stage_speeds)
+
+    def rates(charge: Array, column: int, reference_force: Array) -> tuple[Array, Array]:
+        v = stage_speeds[:, column]
+        _, per_pack, factor = operating_point(packs.params, charge, power[:, :, column],
+                                              rows.circuit_packs, rows.packs_per_engine,
+                                              flight.u_ref, flight.k)
+        thrust = np.sum(factor * thrusts[:, :, column], axis=0)
+        current = per_pack * rows.packs_per_engine
         loaded = np.asarray(ground_roll_net_force_n(m.aircraft, thrust.reshape(-1, 1),
                                                     v.reshape(-1, 1), m.density),
                             dtype=float).reshape(-1) * np.ones(m.size)
@@ -150,10 +166,11 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
             v0, vm, v1 = speeds[:, i], middle[:, i], speeds[:, i + 1]
             f0, fm, f1 = force_ref[:, i], force_middle[:, i], force_ref[:, i + 1]
             step = h[:, i]
-            k1, d1 = rates(q, v0, f0)
-            k2, d2 = rates(q + 0.5 * step * k1, vm, fm)
-            k3, d3 = rates(q + 0.5 * step * k2, vm, fm)
-            k4, d4 = rates(q + step * k3, v1, f1)
+            mid = speeds.shape[1] + i  # the middle's column among the stages' airspeeds
+            k1, d1 = rates(q, i, f0)
+            k2, d2 = rates(q + 0.5 * step * k1, mid, fm)
+            k3, d3 = rates(q + 0.5 * step * k2, mid, fm)
+            k4, d4 = rates(q + step * k3, i + 1, f1)
             q = q + step / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             t = t + step / 6.0 * (d1 + 2.0 * d2 + 2.0 * d3 + d4)
             s = s + step / 6.0 * (v0 * d1 + 2.0 * vm * (d2 + d3) + v1 * d4)
@@ -162,7 +179,7 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
             charges.append(q)
         # a row whose loaded force vanished at a stage went NaN: it never lifts off
         ok &= np.isfinite(t) & np.isfinite(s) & np.all(np.isfinite(q), axis=0)
-        ok &= rates(q, v_lo, force_ref[:, -1])[1] > 0.0  # and at lift-off itself
+        ok &= rates(q, speeds.shape[1] - 1, force_ref[:, -1])[1] > 0.0  # and at lift-off
         rotation = np.asarray(m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
             * np.ones(m.size)
         q = rotation_charge(lambda charge: flight.point(1.0, v_lo, charge)[2] / SECONDS_PER_HOUR,
