@@ -74,6 +74,29 @@ def _flight(m: Any, packs: Any, rows: PackRows) -> SaggingFlight:
                          tuple(m.propulsion.engines) if packs.own_surfaces else (None,))
 
 
+def _reference(flight: SaggingFlight, packs: Any, speeds: Array) -> tuple[Array, Array]:
+    """The packs' power [W] and the thrust [N] per fan flown at the reference voltage at
+    ``speeds`` [m/s] ``(B, K)``, ``(fans, B, K)`` each: they depend on the airspeed alone,
+    so a roll's stages or an arc's iterations take them once."""
+    m = flight.m
+    power = np.stack([np.asarray(fan_power_rows(packs, m, 1.0, speeds, e), dtype=float)
+                      * np.ones_like(speeds) for e in flight.engines])
+    thrusts = (m.thrust(1.0, speeds)[None] if flight.engines == (None,) else np.stack(
+        [m.engine_thrust(j, 1.0, speeds) for j in range(len(flight.engines))]))
+    return power, thrusts * np.ones_like(speeds)
+
+
+def _on_packs(flight: SaggingFlight, packs: Any, power: Array, thrusts: Array, charge: Array
+              ) -> tuple[Array, Array, Array]:
+    """:meth:`SaggingFlight.point` at full throttle from :func:`_reference`'s ``power`` and
+    ``thrusts``, after ``charge`` [Ah] per fan: the thrust [N], and per fan the loaded
+    voltage [V] and the current through its packs [A]."""
+    rows = flight.rows
+    u, per_pack, factor = operating_point(packs.params, charge, power, rows.circuit_packs,
+                                          rows.packs_per_engine, flight.u_ref, flight.k)
+    return np.sum(factor * thrusts, axis=0), u, per_pack * rows.packs_per_engine
+
+
 class TakeoffPacks:
     """One case's sagging packs for the take-off: its batch of one row
     (:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`), its packs ``side``
@@ -91,17 +114,23 @@ class TakeoffPacks:
         self.rows = pack_rows(side.battery, {k: np.array([v], dtype=float) for k, v in
                                              battery_key_values(side.battery).items()})
         self.flight = _flight(self.model, side, self.rows)
+        self._references: dict[bytes, tuple[Array, Array]] = {}
 
     def point(self, charge_ah: Array, speeds: Array) -> tuple[Array, Array, Array]:
         """Thrust [N] ``(K,)``, current [A] and loaded voltage [V] per engine ``(n, K)`` at
         the airspeeds ``speeds`` [m/s] ``(K,)`` after ``charge_ah`` ``(n,)`` or ``(n, K)``
         (a shared power surface: every engine draws the first one's)."""
-        v = np.atleast_1d(np.asarray(speeds, dtype=float)).reshape(-1)
+        v = np.atleast_1d(np.asarray(speeds, dtype=float)).reshape(1, -1)
+        key = v.tobytes()
+        if key not in self._references:  # the arc's settling asks one airspeed ~150 times
+            self._references[key] = _reference(self.flight, self.side, v)
+        fans = len(self.flight.engines)
         q = np.asarray(charge_ah, dtype=float).reshape(self.n, -1) * np.ones((1, v.size))
-        thrust, volts, current, _ = self.flight.point(1.0, v, q[:len(self.flight.engines)])
+        thrust, volts, current = _on_packs(self.flight, self.side, *self._references[key],
+                                           q[:fans, None, :])
         shape = (self.n, v.size)
-        return (np.asarray(thrust, dtype=float).reshape(-1),
-                np.broadcast_to(current, shape), np.broadcast_to(volts, shape))
+        return (thrust.reshape(-1), np.broadcast_to(current.reshape(fans, -1), shape),
+                np.broadcast_to(volts.reshape(fans, -1), shape))
 
     def roll(self) -> RollOnPacks:
         """The ground roll and rotation on the packs (:func:`roll_on_packs`, one row)."""
@@ -137,19 +166,12 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
     # alone: once for all the stages' airspeeds (a stage then solves the packs' voltage only;
     # SaggingFlight.point's sum, on one row 3x fewer evaluations)
     stage_speeds = np.concatenate([speeds, middle], axis=1)
-    power = np.stack([np.asarray(fan_power_rows(packs, m, 1.0, stage_speeds, e), dtype=float)
-                      * np.ones_like(stage_speeds) for e in flight.engines])
-    thrusts = (m.thrust(1.0, stage_speeds)[None] if flight.engines == (None,) else np.stack(
-        [m.engine_thrust(j, 1.0, stage_speeds) for j in range(fans)])) \
-        * np.ones_like(stage_speeds)
+    power, thrusts = _reference(flight, packs, stage_speeds)
 
     def rates(charge: Array, column: int, reference_force: Array) -> tuple[Array, Array]:
         v = stage_speeds[:, column]
-        _, per_pack, factor = operating_point(packs.params, charge, power[:, :, column],
-                                              rows.circuit_packs, rows.packs_per_engine,
-                                              flight.u_ref, flight.k)
-        thrust = np.sum(factor * thrusts[:, :, column], axis=0)
-        current = per_pack * rows.packs_per_engine
+        thrust, _, current = _on_packs(flight, packs, power[:, :, column],
+                                       thrusts[:, :, column], charge)
         loaded = np.asarray(ground_roll_net_force_n(m.aircraft, thrust.reshape(-1, 1),
                                                     v.reshape(-1, 1), m.density),
                             dtype=float).reshape(-1) * np.ones(m.size)
@@ -179,11 +201,13 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
             charges.append(q)
         # a row whose loaded force vanished at a stage went NaN: it never lifts off
         ok &= np.isfinite(t) & np.isfinite(s) & np.all(np.isfinite(q), axis=0)
-        ok &= rates(q, speeds.shape[1] - 1, force_ref[:, -1])[1] > 0.0  # and at lift-off
+        last = speeds.shape[1] - 1  # the lift-off speed's column
+        ok &= rates(q, last, force_ref[:, -1])[1] > 0.0  # and at lift-off itself
         rotation = np.asarray(m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
             * np.ones(m.size)
-        q = rotation_charge(lambda charge: flight.point(1.0, v_lo, charge)[2] / SECONDS_PER_HOUR,
-                            q, np.where(ok, rotation, 0.0))
+        q = rotation_charge(lambda charge: _on_packs(
+            flight, packs, power[:, :, last], thrusts[:, :, last], charge)[2] / SECONDS_PER_HOUR,
+            q, np.where(ok, rotation, 0.0))
     return RollOnPacks(
         distance=np.where(ok, s + v_lo * rotation, np.nan),
         time=np.where(ok, t + rotation, np.nan),
