@@ -548,13 +548,14 @@ class GroundRollRows(LevelFlightRows):
                 np.divide(1.0, over, out=over)
             scale = width * mass[rows] * (0.5 / parts)
             # per interval p: T_p = sum_k w_k / F_pk; its distance's V / V_LO = (p + x_k) / 100
-            # with x_k the node in the interval (matrix products: a 10,000-row batch's)
-            over = over.reshape(rows.size * parts, -1)
-            each = (over @ w).reshape(rows.size, parts)
+            # with x_k the node in the interval (einsum, not BLAS: its threads contend on a
+            # loaded machine, twice the time)
+            over = over.reshape(rows.size, parts, -1)
+            each = np.einsum("rpk,k->rp", over, w)
             time[rows, 1:] = np.cumsum(each, axis=1) * scale
             length[rows, 1:] = np.cumsum(
-                (over @ (0.5 * w * (u + 1.0))).reshape(rows.size, parts)
-                + each * np.arange(parts), axis=1) * (scale * width / parts)
+                np.einsum("rpk,k->rp", over, 0.5 * w * (u + 1.0)) + each * np.arange(parts),
+                axis=1) * (scale * width / parts)
         # 4 nodes a part were 2.4e-10 off where the least force was 5.4 % of the greatest:
         # 16 below a quarter of it
         with np.errstate(invalid="ignore"):
