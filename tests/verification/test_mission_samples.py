@@ -78,8 +78,8 @@ def test_an_airborne_mission_row_is_the_single_case_flown_with_its_values(tmp_pa
 
 
 def test_a_mission_with_a_takeoff_row_is_the_single_case_to_the_batch_takeoff(tmp_path) -> None:
-    """The take-off's airspeed history per row is the batch's closed form (held to CVODES at
-    1e-6 in test_batch_equals_deterministic), the rest the single case's function."""
+    """The take-off's airspeed history per row is the take-off analysis's (one code for one
+    row or many), the rest the single case's function."""
     batch, single = _batch_and_single(_case(tmp_path, SHIPPED_MISSION))
     assert np.all(np.isfinite(batch))
     assert batch == pytest.approx(single, rel=1e-7)
@@ -240,8 +240,8 @@ def test_a_catapult_launch_is_sampled_row_by_row(tmp_path) -> None:
 
 def test_a_takeoff_on_sagging_packs_is_sampled_row_by_row(tmp_path) -> None:
     """With a reference voltage the roll's airspeed history and the arc's and climb's
-    gradients are the batch's take-off on the packs (held to CVODES in
-    test_batch_equals_deterministic): each row the single case's to 1e-8."""
+    gradients are the take-off on the packs (one code for one row or many): each row the
+    single case's to 1e-8."""
     path = _variant(tmp_path, "propulsion", {"reference_voltage_v": 46.0,
                                              "voltage_exponent": 1.5})
     batch, single = _rows_and_single(path, {"aircraft.mass_kg": [26.7064, 29.0, 25.0],

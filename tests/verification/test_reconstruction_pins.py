@@ -88,7 +88,7 @@ def _reconstruction_script():
 def test_shipped_files_are_the_least_squares_optimum_and_its_analyses_are_the_tools():
     """The script's optimum renders the shipped files byte for byte, and the analyses inside
     the least squares (quadrature ground roll, grid-bounded least throttles) equal the landed
-    ones on those files (CVODES take-off, trim/oei grids)."""
+    ones on those files (the take-off's roll, trim/oei grids)."""
     from pathlib import Path
 
     script = _reconstruction_script()

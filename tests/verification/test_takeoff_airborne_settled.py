@@ -26,7 +26,7 @@ import pytest
 from tests.conftest import copy_shipped_case
 from tuflexperf.analysis import airborne as takeoff
 from tuflexperf.analysis.batch import BatchEvaluator
-from tuflexperf.analysis.takeoff import solve_takeoff
+from tuflexperf.analysis.takeoff import ground_roll_of, packs_of, solve_takeoff
 from tuflexperf.cli import load_case_with
 from tuflexperf.errors import NotAttainable
 from tuflexperf.models.aircraft import climb_gradient
@@ -113,12 +113,10 @@ def test_the_settled_charge_satisfies_its_own_equations(tmp_path, k) -> None:
     result = solve_takeoff(case)
     assert result.distance_to_obstacle_m is not None
     assert not result.obstacle_cleared_in_transition
-    packs = takeoff.packs_of(case)
+    packs = packs_of(case)
     aircraft, rho = case.aircraft, case.density_kg_m3
     v, radius = result.transition_speed_m_s, result.transition_radius_m
-    v_lo = result.liftoff_speed_m_s
-    start = packs.rotation(np.asarray(packs.roll(v_lo))[2:, -1], v_lo,
-                           aircraft.takeoff.rotation_time_s).reshape(-1, 1)
+    start = np.reshape(ground_roll_of(case, packs)[3], (-1, 1))  # after the rotation
 
     def current(q: np.ndarray) -> np.ndarray:
         return packs.point(q, np.array([v]))[1]

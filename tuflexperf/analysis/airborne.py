@@ -16,12 +16,7 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.analysis.attainable import BEYOND_THE_BATTERY
-from tuflexperf.analysis.cache import fingerprint
-from tuflexperf.analysis.ground_roll import HISTORY_POINTS, TAKEOFF_CACHE
 from tuflexperf.analysis.pack_limits import (
-    full_throttle_on_packs,
-    pack_side,
-    sagging_packs,
     within_limits,
 )
 from tuflexperf.io.case import Case
@@ -56,66 +51,6 @@ def rotation_charge(rate: Any, charge_ah: Any, seconds: Any) -> Any:
         k4 = rate(q + h * k3)
         q = q + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     return q
-
-
-class TakeoffPacks:
-    """The take-off on sagging packs (a battery and the propulsion's ``reference_voltage_v``).
-
-    Each fan makes ``T (U/U_ref)^k`` at its packs' loaded voltage ``U``, which falls as the
-    roll draws charge (:func:`tuflexperf.analysis.pack_limits.full_throttle_on_packs`): the
-    roll integrates the charge drawn per engine beside the distance and the time (CVODES,
-    ``dq/dV = I m / (3600 F)``), the rotation adds its own at the lift-off speed, and the
-    arc and climb to the obstacle fly at the packs' thrust on the way
-    (:func:`settle_airborne`).
-    """
-
-    def __init__(self, case: Case, side: Any) -> None:
-        import casadi as ca
-
-        aircraft, rho = case.aircraft, case.density_kg_m3
-        n = len(case.propulsion.engines)
-        self.n = n
-        self.cutoff_v = float(side.battery.cutoff_voltage_v)  # the packs' [V]
-        q, v = ca.SX.sym("q", n), ca.SX.sym("v")
-        thrust, currents, volts = full_throttle_on_packs(case, side, [q[j] for j in range(n)], v)
-        self.at = ca.Function("full_throttle_on_packs", [q, v],
-                              [thrust, ca.vertcat(*currents), ca.vertcat(*volts)])
-        self._maps: dict[int, Any] = {}
-        u, v_lo = ca.SX.sym("u"), ca.SX.sym("v_lo")
-        state = ca.SX.sym("state", 2 + n)  # distance m, time s, charge Ah per engine
-        speed = u * v_lo
-        thrust_u, current_u, _ = self.at(state[2:], speed)
-        dt_dv = aircraft.mass_kg / ground_roll_net_force_n(aircraft, thrust_u, speed, rho)
-        rhs = ca.vertcat(speed * dt_dv, dt_dv, current_u * dt_dv / SECONDS_PER_HOUR) * v_lo
-        grid = np.linspace(0.0, 1.0, HISTORY_POINTS)
-        integrator = ca.integrator(
-            "ground_roll_on_packs", "cvodes",
-            {"x": state, "p": v_lo, "t": u, "ode": rhs}, 0.0, grid[1:],
-            {"abstol": 1e-12, "reltol": 1e-11, "max_num_steps": 100000,
-             "disable_internal_warnings": True},
-        )
-        given = ca.MX.sym("v_lo_in")
-        self.roll = ca.Function("ground_roll_on_packs_history", [given],
-                                [integrator(x0=ca.DM.zeros(2 + n), p=given)["xf"]])
-
-    def point(self, charge_ah: np.ndarray, speeds: np.ndarray
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Thrust [N] ``(K,)``, current [A] and loaded voltage [V] per engine ``(n, K)`` at
-        the airspeeds ``speeds`` [m/s] ``(K,)`` after ``charge_ah`` ``(n,)`` or ``(n, K)``."""
-        v = np.atleast_1d(np.asarray(speeds, dtype=float)).reshape(1, -1)
-        q = np.asarray(charge_ah, dtype=float).reshape(self.n, -1) * np.ones((1, v.shape[1]))
-        size = v.shape[1]
-        if size not in self._maps:  # building a map costs more than calling it (the airborne
-            self._maps[size] = self.at.map(size)  # part's solve calls it some hundred times)
-        thrust, current, volts = self._maps[size](q, v)
-        return (np.asarray(thrust, dtype=float).reshape(-1), np.asarray(current, dtype=float),
-                np.asarray(volts, dtype=float))
-
-    def rotation(self, charge_ah: np.ndarray, v_lo: float, seconds: float) -> np.ndarray:
-        """The charge per engine [Ah] after ``seconds`` [s] at full throttle at ``v_lo``."""
-        return rotation_charge(
-            lambda q: self.point(q, np.array([v_lo]))[1][:, 0] / SECONDS_PER_HOUR,
-            np.asarray(charge_ah, dtype=float), seconds)
 
 
 # the airborne charge on sagging packs: a settled fixed point, or why not (settle_airborne)
@@ -457,9 +392,10 @@ def settle_airborne(radius_m: Any, speed_m_s: Any, height_m: Any, charge_ah: Any
 ON_PACKS = " at the packs' loaded voltage"
 
 
-def on_packs_force(case: Case, packs: TakeoffPacks, charge_ah: np.ndarray,
+def on_packs_force(case: Case, packs: Any, charge_ah: np.ndarray,
                     speeds: np.ndarray) -> np.ndarray:
-    """Full-throttle net force on the runway [N] at ``speeds`` on the sagging packs."""
+    """Full-throttle net force on the runway [N] at ``speeds`` on the sagging ``packs``
+    (:class:`~tuflexperf.analysis.batch_takeoff_packs.TakeoffPacks`)."""
     thrust = packs.point(charge_ah, speeds)[0]
     return np.asarray(ground_roll_net_force_n(case.aircraft, thrust, speeds,
                                               case.density_kg_m3), dtype=float)
@@ -477,22 +413,6 @@ def packs_note(case: Case, start_v: np.ndarray, liftoff_v: np.ndarray | None,
             + ("" if liftoff_v is None else f", {float(np.min(liftoff_v)):.1f} V at lift-off")
             + (f", {air.least_voltage_v:.1f} V at the obstacle" if air.distance_m is not None
                else ""))
-
-
-def packs_of(case: Case) -> TakeoffPacks | None:
-    """The sagging packs the take-off flies on, or None (no battery, or no reference
-    voltage: the thrust model's own thrust)."""
-    if not sagging_packs(case):
-        return None
-    side = pack_side(case)
-    if side is None:
-        return None
-    return TAKEOFF_CACHE.get(
-        fingerprint("packs", case.aircraft, case.propulsion, case.density_kg_m3,
-                    side.battery, side.params, side.power, side.own_surfaces,
-                    side.density_scale),
-        lambda: TakeoffPacks(case, side),
-    )
 
 
 def obstacle_height_of(case: Case) -> float:
@@ -546,7 +466,7 @@ class _Airborne:
         }
 
 
-def fly_airborne(case: Case, height: float, packs: TakeoffPacks | None = None,
+def fly_airborne(case: Case, height: float, packs: Any = None,
               charge_ah: np.ndarray | None = None) -> _Airborne:
     """Transition arc at 1.15 V_stall and n, then the full-throttle climb (Anderson 6.7.2);
     on sagging ``packs`` from ``charge_ah`` drawn per engine at the arc's start, each at the

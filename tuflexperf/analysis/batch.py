@@ -32,7 +32,7 @@ deterministic analyses.
 
 This module holds the requirements' registry of the batch and :class:`BatchEvaluator`;
 the rows' physics is :class:`~tuflexperf.analysis.batch_model.BatchModel`, its take-off
-:mod:`.batch_roll`, the helpers they share :mod:`.batch_kernels`.
+:mod:`.ground_roll`, the helpers they share :mod:`.batch_kernels`.
 
 References
 ----------

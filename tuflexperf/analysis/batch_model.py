@@ -2,8 +2,9 @@
 
 :class:`BatchModel` carries one row per sample or grid point and evaluates thrust and the
 packs' limits for every row at once; its level flight (the least throttle, trim, OEI) is
-:class:`tuflexperf.analysis.level_flight.LevelFlightRows`, the very code ``trim`` and ``oei``
-run on one row, and its take-off :class:`tuflexperf.analysis.batch_roll.GroundRollRows`.
+:class:`tuflexperf.analysis.level_flight.LevelFlightRows` and its take-off
+:class:`tuflexperf.analysis.ground_roll.GroundRollRows`, the very code ``trim``, ``oei`` and
+``takeoff`` run on one row.
 """
 
 from __future__ import annotations
@@ -17,23 +18,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis.batch_kernels import fan_power_rows
-from tuflexperf.analysis.batch_roll import GroundRollRows
-from tuflexperf.analysis.level_flight import LevelFlightRows
+from tuflexperf.analysis.ground_roll import GroundRollRows
 from tuflexperf.analysis.pack_limits import (
     least_throttle_where,
     operating_point,
     pack_rows,
     power_limit_w,
     within_limits,
-)
-from tuflexperf.models.aircraft import (
-    ground_roll_net_force_n,
-    liftoff_speed_m_s,
-    transition_speed_m_s,
-)
-from tuflexperf.models.thrust import (
-    density_ratio,
-    engine_thrust_n,
 )
 
 Array = NDArray[np.float64]
@@ -89,23 +80,12 @@ def _frozen(value: Any) -> Any:
 
 
 @dataclass
-class BatchModel(LevelFlightRows, GroundRollRows):
+class BatchModel(GroundRollRows):
     """The batch's physics: array-valued aircraft/engines through the model functions
     (fields as :class:`LevelFlightRows`: ``aircraft``, ``propulsion``, ``density``,
-    ``extrapolation_n``, ``size``, ``stall_margin``)."""
+    ``extrapolation_n``, ``size``, ``stall_margin``; the take-off's as
+    :class:`GroundRollRows`)."""
 
-    _uniform: Array | None = None
-    _pieces: Any = None  # memo of _roll_pieces (False: evaluate node by node)
-    _force_range: tuple[Array, Array] | None = None  # memo of force_range
-    # the take-off on sagging packs (batch_takeoff_packs.RollOnPacks), where one is flown
-    packs_roll: Any = None
-    # a catapult's level acceleration from release to the transition speed (distance [m],
-    # time [s], charge per fan [Ah] or None, accelerates): ground_roll.release_acceleration
-    release: Any = None
-    # the arc and climb to the obstacle on sagging packs [m] (batch_takeoff_packs)
-    packs_airborne: Array | None = None
-    # where those packs reach their cut-off in the climb, before the obstacle
-    packs_beyond: NDArray[np.bool_] | None = None
     # per row, the error model's factor on every fan's electrical power [-] (None: 1)
     power_scale: Array | None = None
     packs_air: Any = None  # that airborne part's settled path (airborne.AirborneOnPacks)
@@ -165,30 +145,6 @@ class BatchModel(LevelFlightRows, GroundRollRows):
     def roll_history(self, wanted: NDArray[np.bool_] | None = None) -> Array:
         return self._shared("live", "roll_history", (wanted,),
                             lambda: super(BatchModel, self).roll_history(wanted))
-
-    def transition_speed(self) -> Array:
-        """The take-off arc's true airspeed [m/s] per row ``(B,)``: 1.15 V_stall."""
-        return np.asarray(transition_speed_m_s(self.aircraft, self.density),
-                          dtype=float).reshape(-1) * np.ones(self.size)
-
-    def engine_thrust(self, index: int, throttle: Any, speed: Array) -> Array:
-        """One live engine's thrust [N], as :meth:`thrust` counts it in the total (its model
-        at the row's density, its extrapolation error beyond the tested range)."""
-        own = engine_thrust_n(self.propulsion.engines[index], throttle, speed,
-                              density_ratio(self.propulsion, self.density))
-        errors = self.extrapolation_errors_n(speed)
-        return self._per_row(own if errors is None else own + errors[index])
-
-    # -- take-off -----------------------------------------------------------------------------
-    def net_force(self, speed: Array) -> Array:
-        thrust = self.thrust(1.0, speed)
-        return np.asarray(
-            ground_roll_net_force_n(self.aircraft, thrust, speed, self.density), dtype=float
-        ) * np.ones((self.size, 1))
-
-    def liftoff_speed(self) -> Array:
-        return np.asarray(liftoff_speed_m_s(self.aircraft, self.density), dtype=float) \
-            * np.ones((self.size, 1))
 
     def packs_never_bind(self, grid: Array, packs: Any, battery: dict[str, Array],
                          top_throttle: Array) -> bool:

@@ -1,11 +1,11 @@
-"""The batch's take-off on sagging packs: the propulsion's ``reference_voltage_v``.
+"""The take-off on sagging packs, for one case or many: the propulsion's ``reference_voltage_v``.
 
-With a reference voltage and a battery the single case rolls, rotates and climbs to the
-obstacle with each fan's thrust ``T (U/U_ref)^k`` at its packs' loaded voltage ``U``
-(:func:`tuflexperf.analysis.takeoff.solve_takeoff`): CVODES over the airspeed with the
-charge drawn per engine beside the distance and the time. Here the same roll is flown per
-row, vectorised, in the reference roll's own time ``tau`` (the batch's exact quadrature of
-``m / F_ref``, :meth:`tuflexperf.analysis.batch_roll.GroundRollRows.roll_history`):
+With a reference voltage and a battery the take-off rolls, rotates and climbs to the
+obstacle with each fan's thrust ``T (U/U_ref)^k`` at its packs' loaded voltage ``U``, the
+charge drawn per engine beside the distance and the time. The roll is flown per row
+(``takeoff``: one row, :func:`tuflexperf.analysis.takeoff.solve_takeoff`), vectorised, in
+the reference roll's own time ``tau`` (the exact quadrature of ``m / F_ref``,
+:meth:`tuflexperf.analysis.ground_roll.GroundRollRows.roll_history`):
 
 ``dt/dtau = F_ref(V) / F(V, q)``, ``ds/dtau = V dt/dtau``, ``dq/dtau = I(V, q) / 3600 dt/dtau``,
 
@@ -33,8 +33,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tuflexperf.analysis.airborne import BEYOND_THE_BATTERY_STATUS, rotation_charge, settle_airborne
+from tuflexperf.analysis.batch_kernels import fan_power_rows
 from tuflexperf.analysis.batch_sagging import SaggingFlight
-from tuflexperf.analysis.pack_limits import PackRows
+from tuflexperf.analysis.ground_roll import GroundRollRows
+from tuflexperf.analysis.pack_limits import PackRows, operating_point, pack_rows
 from tuflexperf.models.aircraft import (
     climb_gradient,
     ground_roll_net_force_n,
@@ -49,8 +51,9 @@ Array = NDArray[np.float64]
 @dataclass(frozen=True)
 class RollOnPacks:
     """Per row: ground roll [m] and time [s] (rotation included), lift-off speed [m/s],
-    attainable (1/0), the acceleration's time [s] at the 101 history airspeeds ``(B, 101)``
-    and the charge per fan flown [Ah] after the rotation ``(fans, B)``."""
+    attainable (1/0), the acceleration's time [s] and distance [m] at the 101 history
+    airspeeds ``(B, 101)``, the charge per fan there [Ah] ``(fans, B, 101)`` and after the
+    rotation ``(fans, B)``."""
 
     distance: Array
     time: Array
@@ -58,6 +61,8 @@ class RollOnPacks:
     ok: Array
     history_time: Array
     charge_ah: Array
+    history_distance: Array | None = None
+    history_charge_ah: Array | None = None
 
     def as_roll(self) -> tuple[Array, Array, Array, Array]:
         """The batch's roll tuple (:meth:`.GroundRollRows.ground_roll`)."""
@@ -67,6 +72,74 @@ class RollOnPacks:
 def _flight(m: Any, packs: Any, rows: PackRows) -> SaggingFlight:
     return SaggingFlight(m, packs, rows,
                          tuple(m.propulsion.engines) if packs.own_surfaces else (None,))
+
+
+def _reference(flight: SaggingFlight, packs: Any, speeds: Array) -> tuple[Array, Array]:
+    """The packs' power [W] and the thrust [N] per fan flown at the reference voltage at
+    ``speeds`` [m/s] ``(B, K)``, ``(fans, B, K)`` each: they depend on the airspeed alone,
+    so a roll's stages or an arc's iterations take them once."""
+    m = flight.m
+    power = np.stack([np.asarray(fan_power_rows(packs, m, 1.0, speeds, e), dtype=float)
+                      * np.ones_like(speeds) for e in flight.engines])
+    thrusts = (m.thrust(1.0, speeds)[None] if flight.engines == (None,) else np.stack(
+        [m.engine_thrust(j, 1.0, speeds) for j in range(len(flight.engines))]))
+    return power, thrusts * np.ones_like(speeds)
+
+
+def _on_packs(flight: SaggingFlight, packs: Any, power: Array, thrusts: Array, charge: Array
+              ) -> tuple[Array, Array, Array]:
+    """:meth:`SaggingFlight.point` at full throttle from :func:`_reference`'s ``power`` and
+    ``thrusts``, after ``charge`` [Ah] per fan: the thrust [N], and per fan the loaded
+    voltage [V] and the current through its packs [A]."""
+    rows = flight.rows
+    u, per_pack, factor = operating_point(packs.params, charge, power, rows.circuit_packs,
+                                          rows.packs_per_engine, flight.u_ref, flight.k)
+    return np.sum(factor * thrusts, axis=0), u, per_pack * rows.packs_per_engine
+
+
+class TakeoffPacks:
+    """One case's sagging packs for the take-off: its batch of one row
+    (:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`), its packs ``side``
+    (:class:`~tuflexperf.analysis.pack_limits.PackSide`) and their rows, and the packs'
+    full-throttle operating point at any airspeeds (:meth:`point`, the batch's
+    :class:`~tuflexperf.analysis.batch_sagging.SaggingFlight`)."""
+
+    def __init__(self, case: Any, side: Any) -> None:
+        from tuflexperf.io.dotted import battery_key_values
+
+        self.n = len(case.propulsion.engines)
+        self.cutoff_v = float(side.battery.cutoff_voltage_v)  # the packs' [V]
+        self.side = side
+        self.model = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1)
+        self.rows = pack_rows(side.battery, {k: np.array([v], dtype=float) for k, v in
+                                             battery_key_values(side.battery).items()})
+        self.flight = _flight(self.model, side, self.rows)
+        self._references: dict[bytes, tuple[Array, Array]] = {}
+
+    def point(self, charge_ah: Array, speeds: Array) -> tuple[Array, Array, Array]:
+        """Thrust [N] ``(K,)``, current [A] and loaded voltage [V] per engine ``(n, K)`` at
+        the airspeeds ``speeds`` [m/s] ``(K,)`` after ``charge_ah`` ``(n,)`` or ``(n, K)``
+        (a shared power surface: every engine draws the first one's)."""
+        v = np.atleast_1d(np.asarray(speeds, dtype=float)).reshape(1, -1)
+        key = v.tobytes()
+        if key not in self._references:  # the arc's settling asks one airspeed ~150 times
+            self._references[key] = _reference(self.flight, self.side, v)
+        fans = len(self.flight.engines)
+        q = np.asarray(charge_ah, dtype=float).reshape(self.n, -1) * np.ones((1, v.size))
+        thrust, volts, current = _on_packs(self.flight, self.side, *self._references[key],
+                                           q[:fans, None, :])
+        shape = (self.n, v.size)
+        return (thrust.reshape(-1), np.broadcast_to(current.reshape(fans, -1), shape),
+                np.broadcast_to(volts.reshape(fans, -1), shape))
+
+    def roll(self) -> RollOnPacks:
+        """The ground roll and rotation on the packs (:func:`roll_on_packs`, one row)."""
+        return roll_on_packs(self.model, self.side, self.rows)
+
+    def release(self) -> tuple[Array, Array, Array, Array]:
+        """A catapult's acceleration after the release on full packs
+        (:func:`release_on_packs`, one row)."""
+        return release_on_packs(self.model, self.side, self.rows)
 
 
 def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
@@ -89,8 +162,16 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
     middle = 0.5 * (speeds[:, :-1] + speeds[:, 1:]) + h / 8.0 * (slope[:, :-1] - slope[:, 1:])
     force_middle = m.net_force(middle)
 
-    def rates(charge: Array, v: Array, reference_force: Array) -> tuple[Array, Array]:
-        thrust, _, current, _ = flight.point(1.0, v, charge)
+    # the packs' power and the fans' thrust at the reference voltage depend on the airspeed
+    # alone: once for all the stages' airspeeds (a stage then solves the packs' voltage only;
+    # SaggingFlight.point's sum, on one row 3x fewer evaluations)
+    stage_speeds = np.concatenate([speeds, middle], axis=1)
+    power, thrusts = _reference(flight, packs, stage_speeds)
+
+    def rates(charge: Array, column: int, reference_force: Array) -> tuple[Array, Array]:
+        v = stage_speeds[:, column]
+        thrust, _, current = _on_packs(flight, packs, power[:, :, column],
+                                       thrusts[:, :, column], charge)
         loaded = np.asarray(ground_roll_net_force_n(m.aircraft, thrust.reshape(-1, 1),
                                                     v.reshape(-1, 1), m.density),
                             dtype=float).reshape(-1) * np.ones(m.size)
@@ -101,27 +182,32 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
     q = np.zeros((fans, m.size))
     t = np.zeros(m.size)
     s = np.zeros(m.size)
-    times = [t]
+    times, lengths, charges = [t], [s], [q]
     with np.errstate(invalid="ignore", over="ignore"):
         for i in range(tau.shape[1] - 1):
             v0, vm, v1 = speeds[:, i], middle[:, i], speeds[:, i + 1]
             f0, fm, f1 = force_ref[:, i], force_middle[:, i], force_ref[:, i + 1]
             step = h[:, i]
-            k1, d1 = rates(q, v0, f0)
-            k2, d2 = rates(q + 0.5 * step * k1, vm, fm)
-            k3, d3 = rates(q + 0.5 * step * k2, vm, fm)
-            k4, d4 = rates(q + step * k3, v1, f1)
+            mid = speeds.shape[1] + i  # the middle's column among the stages' airspeeds
+            k1, d1 = rates(q, i, f0)
+            k2, d2 = rates(q + 0.5 * step * k1, mid, fm)
+            k3, d3 = rates(q + 0.5 * step * k2, mid, fm)
+            k4, d4 = rates(q + step * k3, i + 1, f1)
             q = q + step / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             t = t + step / 6.0 * (d1 + 2.0 * d2 + 2.0 * d3 + d4)
             s = s + step / 6.0 * (v0 * d1 + 2.0 * vm * (d2 + d3) + v1 * d4)
             times.append(t)
+            lengths.append(s)
+            charges.append(q)
         # a row whose loaded force vanished at a stage went NaN: it never lifts off
         ok &= np.isfinite(t) & np.isfinite(s) & np.all(np.isfinite(q), axis=0)
-        ok &= rates(q, v_lo, force_ref[:, -1])[1] > 0.0  # and at lift-off itself
+        last = speeds.shape[1] - 1  # the lift-off speed's column
+        ok &= rates(q, last, force_ref[:, -1])[1] > 0.0  # and at lift-off itself
         rotation = np.asarray(m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
             * np.ones(m.size)
-        q = rotation_charge(lambda charge: flight.point(1.0, v_lo, charge)[2] / SECONDS_PER_HOUR,
-                            q, np.where(ok, rotation, 0.0))
+        q = rotation_charge(lambda charge: _on_packs(
+            flight, packs, power[:, :, last], thrusts[:, :, last], charge)[2] / SECONDS_PER_HOUR,
+            q, np.where(ok, rotation, 0.0))
     return RollOnPacks(
         distance=np.where(ok, s + v_lo * rotation, np.nan),
         time=np.where(ok, t + rotation, np.nan),
@@ -129,6 +215,8 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
         ok=ok.astype(float),
         history_time=np.where(ok[:, None], np.stack(times, axis=1), np.nan),
         charge_ah=q,
+        history_distance=np.where(ok[:, None], np.stack(lengths, axis=1), np.nan),
+        history_charge_ah=np.where(ok[:, None], np.stack(charges, axis=-1), np.nan),
     )
 
 

@@ -2,21 +2,20 @@
 
 Equation of motion on the runway (Raymer, *Aircraft Design*, section 17.8.1):
 ``m dV/dt = T(1, V) - D_g(V) - mu max(W - L_g(V), 0)``. With the airspeed as the
-independent variable, ``ds/dV = m V / F(V)`` and ``dt/dV = m / F(V)``, integrated by
-CasADi's CVODES from 0 to the lift-off true airspeed (no wind, level runway). Rotation
-adds ``V_LO t_R`` (Raymer 17.8.2); the airborne part is an arc at ``1.15 V_stall`` and
-load factor ``n`` followed by the full-throttle straight climb (Anderson, *Aircraft
-Performance and Design*, 6.7.2).
+independent variable, ``ds/dV = m V / F(V)`` and ``dt/dV = m / F(V)``, integrated from 0
+to the lift-off true airspeed (no wind, level runway) by the batch's quadrature on one row
+(:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`); on sagging packs by CVODES
+with the charge drawn per engine beside them. Rotation adds ``V_LO t_R`` (Raymer 17.8.2);
+the airborne part is an arc at ``1.15 V_stall`` and load factor ``n`` followed by the
+full-throttle straight climb (Anderson, *Aircraft Performance and Design*, 6.7.2).
 
-The roll's force and integrator live in :mod:`.ground_roll`, the rotation and the arc (on
-sagging packs too) in :mod:`.airborne`; this module holds the result and the catapult and
-puts the three together in :func:`solve_takeoff`.
+The roll lives in :mod:`.ground_roll`, the rotation and the arc (on sagging packs too) in
+:mod:`.airborne`; this module holds the result and the catapult and puts the three
+together in :func:`solve_takeoff`.
 """
 
 from __future__ import annotations
 
-import contextlib
-import io
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -25,22 +24,19 @@ import numpy as np
 
 from tuflexperf.analysis.airborne import (
     ON_PACKS,
-    TakeoffPacks,
     fly_airborne,
     obstacle_height_of,
     on_packs_force,
     packs_note,
-    packs_of,
 )
 from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.analysis.ground_roll import (
     CHECK_POINTS,
     HISTORY_POINTS,
-    integrator_for,
+    GroundRollRows,
     net_force_n,
-    release_acceleration,
 )
-from tuflexperf.analysis.pack_limits import pack_side, takeoff_beyond_battery
+from tuflexperf.analysis.pack_limits import pack_side, sagging_packs, takeoff_beyond_battery
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
@@ -48,7 +44,6 @@ from tuflexperf.models.aircraft import (
     TRANSITION_SPEED_OVER_STALL,
     catapult_energy_shortfall,
     ground_roll_resistance_n,
-    level_flight_drag_n,
     liftoff_speed_eas_m_s,
     liftoff_speed_m_s,
     stall_speed_eas_m_s,
@@ -151,22 +146,6 @@ class TakeoffResult:
         }
 
 
-def _release_forces(case: Case, packs: TakeoffPacks | None) -> Any:
-    """``forces`` of :func:`release_acceleration` for the case (on full packs where they
-    sag)."""
-    aircraft, rho = case.aircraft, case.density_kg_m3
-
-    def forces(v: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-        drag = np.asarray(level_flight_drag_n(aircraft, v, rho), dtype=float)
-        if packs is None:
-            thrust = np.asarray(total_thrust_n(case.propulsion, 1.0, v, rho), dtype=float)
-            return thrust - drag, None
-        thrust, current, _ = packs.point(np.zeros(packs.n), v.ravel())
-        return thrust.reshape(v.shape) - drag, current.reshape(packs.n, *v.shape)
-
-    return forces
-
-
 def _after_release(fields: dict[str, Any], accelerate_m: float) -> dict[str, Any]:
     """A catapult's airborne fields with its level acceleration before the arc [m]."""
     for key in ("airborne_distance_m", "distance_to_obstacle_m"):
@@ -203,14 +182,17 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
     packs = packs_of(case)
     if packs is not None:  # full packs give full throttle at all (else no voltage to fly on)
         _refuse_beyond_battery(case, np.array([release, v_tr]), 0.0, known)
-    accelerate, seconds, charge, accelerates = release_acceleration(
-        aircraft.mass_kg, release, v_tr, _release_forces(case, packs))
+    # the batch's release on one row (on full packs where they sag)
+    accelerate, seconds, charge, accelerates = (
+        GroundRollRows(aircraft, case.propulsion, rho, None, 1).release_run() if packs is None
+        else packs.release())
     if not accelerates[0]:
         raise NotAttainable(
             f"after the release at {release:.1f} m/s full throttle does not accelerate to the "
             f"transition speed {v_tr:.1f} m/s ({TRANSITION_SPEED_OVER_STALL:g} x stall): "
             "thrust below the level-flight drag on the way", known)
-    air = fly_airborne(case, height, packs, None if charge is None else charge[:, 0])
+    air = fly_airborne(case, height, packs, None if charge is None
+                       else np.broadcast_to(charge[:, 0], (packs.n,)))
     _refuse_beyond_battery(case, np.array([release, air.speed_m_s]),
                            float(seconds[0]) + (air.distance_m or 0.0) / air.speed_m_s, known)
     if air.beyond_battery:  # the packs give out in the climb, before the obstacle
@@ -257,6 +239,43 @@ def _refuse_beyond_battery(case: Case, speeds: np.ndarray, seconds: float,
     why = None if side is None else takeoff_beyond_battery(case, side, speeds, seconds)
     if why is not None:
         raise NotAttainable(why, known)
+
+
+
+def packs_of(case: Case) -> Any:
+    """The sagging packs the take-off flies on
+    (:class:`~tuflexperf.analysis.batch_takeoff_packs.TakeoffPacks`), or None (no battery,
+    or no reference voltage: the thrust model's own thrust)."""
+    if not sagging_packs(case):
+        return None
+    side = pack_side(case)
+    if side is None:
+        return None
+    # the packs' flight module: only a case on sagging packs needs it
+    from tuflexperf.analysis.batch_takeoff_packs import TakeoffPacks
+
+    return TakeoffPacks(case, side)
+
+
+def ground_roll_of(case: Case, packs: Any
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    """The ground roll's distance [m] and time [s] at the :data:`HISTORY_POINTS` airspeeds
+    from rest to lift-off (NaN where it never lifts off), and on sagging ``packs``
+    (:func:`packs_of`) the charge per engine there [Ah] ``(engines, 101)`` and after the
+    rotation ``(engines,)`` (else empty and None): the batch's roll on one row
+    (:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`,
+    :func:`~tuflexperf.analysis.batch_takeoff_packs.roll_on_packs`)."""
+    if packs is None:
+        rows = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1)
+        time, distance = (h[0] for h in rows.roll_histories())
+        if rows.ground_roll()[3][0] < 0.5:
+            distance = time = np.full(HISTORY_POINTS, np.nan)
+        return distance, time, np.zeros((0, HISTORY_POINTS)), None
+    flown = packs.roll()
+    # a shared power surface: every engine draws the one fan's charge
+    return (flown.history_distance[0], flown.history_time[0],
+            np.broadcast_to(flown.history_charge_ah[:, 0, :], (packs.n, HISTORY_POINTS)),
+            np.broadcast_to(flown.charge_ah[:, 0], (packs.n,)))
 
 
 def flown_span_note(propulsion: Propulsion, slowest_m_s: float, fastest_m_s: float
@@ -343,25 +362,16 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
             f"{propulsion.tested_airspeed_m_s[0]:g}-{propulsion.tested_airspeed_m_s[1]:g} m/s)",
             known,
         )
-    rows = 2 if packs is None else 2 + packs.n
-    try:
-        # CasADi prints the failed call's inputs (8 lines per try) through Python's stderr:
-        # the reason below says what failed, in one line
-        with contextlib.redirect_stderr(io.StringIO()):
-            states = np.asarray(integrator_for(case)(v_lo) if packs is None
-                                else packs.roll(v_lo))
-    except RuntimeError:  # CVODES failed: the net force nearly vanishes between check points
-        states = np.full((rows, HISTORY_POINTS - 1), np.nan)
-    if not np.all(np.isfinite(states)):
+    distance, time, charge, rotated = ground_roll_of(case, packs)
+    if not (np.all(np.isfinite(distance)) and np.all(np.isfinite(time))):
         raise NotAttainable(
             f"never reaches lift-off: the net force all but vanishes below the lift-off speed "
             f"{v_lo:.2f} m/s (least {force.min():.3g} N{ON_PACKS if packs else ''})", known
         )
-    distance = np.concatenate([[0.0], states[0, :]])
-    time = np.concatenate([[0.0], states[1, :]])
     history_speed = np.linspace(0.0, v_lo, distance.size)
-    charge = np.zeros((0, distance.size)) if packs is None else np.concatenate(
-        [np.zeros((packs.n, 1)), states[2:, :]], axis=1)
+    rotation_m = v_lo * to.rotation_time_s  # Raymer 17.8.2: rotation at the lift-off speed
+    ground_roll = float(distance[-1]) + rotation_m
+    total_s = float(time[-1]) + to.rotation_time_s
     if packs is None:
         history_thrust = np.asarray(total_thrust_n(propulsion, 1.0, history_speed, rho),
                                     dtype=float)
@@ -380,16 +390,12 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         np.broadcast_to(np.asarray(f, dtype=float), history_speed.shape).copy()
         for f in ground_roll_resistance_n(aircraft, history_speed, rho)
     )
-    rotation_m = v_lo * to.rotation_time_s  # Raymer 17.8.2: rotation at the lift-off speed
-
-    air = fly_airborne(case, height, packs, None if packs is None else packs.rotation(
-        charge[:, -1], v_lo, to.rotation_time_s))
+    air = fly_airborne(case, height, packs, rotated)
     airborne_s = (air.distance_m or 0.0) / air.speed_m_s
     _refuse_beyond_battery(case, np.append(history_speed, air.speed_m_s),
-                           float(time[-1]) + to.rotation_time_s + airborne_s, known)
+                           total_s + airborne_s, known)
     if air.beyond_battery:  # the packs give out in the climb, before the obstacle
         raise NotAttainable(air.reason, known)
-    ground_roll = float(distance[-1]) + rotation_m
 
     # the roll flies every airspeed from rest up to the lift-off's, the arc its own
     extrapolated, warnings = flown_span_note(propulsion, 0.0, max(v_lo, air.speed_m_s))
@@ -431,7 +437,7 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
     return TakeoffResult(
         ground_roll_m=ground_roll,
         liftoff_speed_m_s=v_lo,
-        time_s=float(time[-1]) + to.rotation_time_s,
+        time_s=total_s,
         history_time_s=time,
         history_airspeed_m_s=history_speed,
         history_distance_m=distance,
