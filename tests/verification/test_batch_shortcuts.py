@@ -43,13 +43,7 @@ def _hostile_batch(seed: int) -> tuple[dict[str, np.ndarray], np.ndarray, np.nda
 
 
 def _model(evaluator: BatchEvaluator, values, coefficients, extrapolation) -> BatchModel:
-    return BatchModel(
-        aircraft=evaluator._aircraft(values, ROWS),
-        propulsion=evaluator._propulsion(coefficients),
-        density=evaluator._density(values, ROWS),
-        extrapolation_n=extrapolation,
-        size=ROWS,
-    )
+    return evaluator.model(values, ROWS, coefficients, extrapolation)
 
 
 @pytest.mark.parametrize(("seed", "own_bounds"), [(1, False), (2, False), (6, True)])
