@@ -70,7 +70,11 @@ from numpy.typing import NDArray
 from tuflexperf.io.case import Case
 from tuflexperf.io.schemas import RIG_UNCERTAINTY_DEFAULTS
 from tuflexperf.models.aircraft import true_airspeed_m_s
-from tuflexperf.models.thrust import POLY22_TERMS, extrapolation_error_per_m_s
+from tuflexperf.models.thrust import (
+    POLY22_TERMS,
+    extrapolation_error_per_m_s,
+    extrapolation_leave_out,
+)
 
 Array = NDArray[np.float64]
 
@@ -306,13 +310,13 @@ def _extrapolation(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
     sds, said = [], []
     for e in prop.engines:
         default = e.extrapolation_distance_m_s is None
-        worst = e.extrapolation_worst_n is not None
+        base, step = extrapolation_leave_out(e, (low, high))
         rate = extrapolation_error_per_m_s(e, (low, high))
-        base = float(e.extrapolation_worst_n if worst else (e.extrapolation_sd_n or 0.0))
         sds.append(rate)
         said.append(f"{e.name} {rate:.3g} N per m/s ({base:.3g} N "
-                    + ("at its worst throttle" if worst else "RMS (extrapolation_sd_n)")
-                    + (f" at {base / rate:.3g} m/s" if rate > 0.0 else "")
+                    + ("at its worst throttle" if e.extrapolation_worst_n is not None
+                       else "RMS (extrapolation_sd_n)")
+                    + (f" at {step:.3g} m/s" if rate > 0.0 else "")
                     + (" (default: tested span / 12)" if default else "")
                     + f"; {rate * far:.3g} N at the farthest)")
     parts["extrapolation_sd_n"] = np.asarray(sds)

@@ -200,24 +200,40 @@ SPAN_PER_LEFT_OUT_STEP = 12.0
 (the paper's 2.5 m/s top step of 0-30 m/s)."""
 
 
-def extrapolation_error_per_m_s(engine: Engine, tested_airspeed_m_s: tuple[float, float]
-                                ) -> float:
-    """The thrust's extrapolation error [N per m/s beyond the tested airspeeds]: the
-    leave-out error (``extrapolation_worst_n`` where the fit gave it, else
-    ``extrapolation_sd_n``) [N] over the distance it was measured at
-    (``extrapolation_distance_m_s``, else the tested span / :data:`SPAN_PER_LEFT_OUT_STEP`)
-    [m/s]; 0 for an engine that states neither error.
-
-    One rate for the samples' error (:mod:`tuflexperf.analysis.error_model`) and the
-    deterministic bound (:mod:`tuflexperf.analysis.extrapolation_reading`), so the two judge
-    the same extrapolation; the calibration study measured its coverage (docs/validation.md).
-    """
+def extrapolation_leave_out(engine: Engine, tested_airspeed_m_s: tuple[float, float]
+                            ) -> tuple[float, float]:
+    """The thrust's leave-out error [N] (``extrapolation_worst_n`` where the fit gave it,
+    else ``extrapolation_sd_n``; 0 for an engine that states neither) and the distance [m/s]
+    it was measured at (``extrapolation_distance_m_s``, else the tested span /
+    :data:`SPAN_PER_LEFT_OUT_STEP`)."""
     low, high = tested_airspeed_m_s
     step = engine.extrapolation_distance_m_s
     step = (high - low) / SPAN_PER_LEFT_OUT_STEP if step is None else float(step)
     base = engine.extrapolation_worst_n
     base = float(engine.extrapolation_sd_n or 0.0) if base is None else float(base)
+    return base, step
+
+
+def extrapolation_error_per_m_s(engine: Engine, tested_airspeed_m_s: tuple[float, float]
+                                ) -> float:
+    """The thrust's extrapolation error [N per m/s beyond the tested airspeeds]: its
+    :func:`extrapolation_leave_out` error over the distance it was measured at.
+
+    One rate for the samples' error (:mod:`tuflexperf.analysis.error_model`) and the
+    deterministic bound (:mod:`tuflexperf.analysis.extrapolation_reading`), so the two judge
+    the same extrapolation; the calibration study measured its coverage (docs/validation.md).
+    """
+    base, step = extrapolation_leave_out(engine, tested_airspeed_m_s)
     return base / step if step > 0.0 else 0.0
+
+
+def distance_beyond_m_s(tested_airspeed_m_s: tuple[float, float],
+                        airspeed_m_s: Vectorizable) -> Vectorizable:
+    """How far [m/s] airspeeds (a float, numpy array or CasADi expression) lie outside the
+    tested airspeeds ``(low, high)``: 0 inside them, the distance below ``low`` or above
+    ``high`` beyond them."""
+    low, high = tested_airspeed_m_s
+    return fmax(low - airspeed_m_s, 0.0) + fmax(airspeed_m_s - high, 0.0)
 
 
 def extrapolation_offset_n(engine: Engine, airspeed_m_s: Vectorizable) -> Vectorizable:
@@ -232,7 +248,7 @@ def extrapolation_offset_n(engine: Engine, airspeed_m_s: Vectorizable) -> Vector
     if engine.extrapolation_offset is None:
         return 0.0
     low, high, slope = engine.extrapolation_offset
-    return slope * (fmax(airspeed_m_s - high, 0.0) + fmax(low - airspeed_m_s, 0.0))
+    return slope * distance_beyond_m_s((low, high), airspeed_m_s)
 
 
 def windmilling_thrust_n(
@@ -314,17 +330,15 @@ def outside_tested_span(propulsion: Propulsion, slowest_m_s: Any, fastest_m_s: A
 
 
 def beyond_tested_m_s(propulsion: Propulsion, airspeed_m_s: Vectorizable) -> Vectorizable:
-    """How far [m/s] airspeeds (a float, numpy array or CasADi expression) lie outside the
-    model's tested airspeed range: 0 inside it, the distance below its low end or above its
-    high end beyond it (the samples' extrapolation error grows in proportion to it).
+    """How far [m/s] airspeeds lie outside the model's tested airspeed range
+    (:func:`distance_beyond_m_s`; the samples' extrapolation error grows in proportion to it).
 
     References
     ----------
     SPEC 3 (extrapolation is said); issue 44 (an extrapolation error that grows with the
     distance beyond the tested range).
     """
-    low, high = propulsion.tested_airspeed_m_s
-    return fmax(low - airspeed_m_s, 0.0) + fmax(airspeed_m_s - high, 0.0)
+    return distance_beyond_m_s(propulsion.tested_airspeed_m_s, airspeed_m_s)
 
 
 def is_extrapolated(propulsion: Propulsion, airspeed_m_s: float) -> bool:
