@@ -329,6 +329,8 @@ def _extrapolation(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
 def _power_sources(case: Case, switches: Any) -> tuple[tuple[Source, float],
                                                        tuple[Source, float]]:
     """The power model against the discharge runs, and the battery fit's own error."""
+    from tuflexperf.analysis.power_reading import measured_power_disputed
+
     power_origin, battery_origin = "battery fit.runs", "battery fit.cross_validation"
     uses_packs = any(getattr(case.requirements, name) is not None
                      for name in ("takeoff", "envelope", "oei", "endurance"))
@@ -345,7 +347,7 @@ def _power_sources(case: Case, switches: Any) -> tuple[tuple[Source, float],
         power = (Source("power_model", False, power_origin,
                         "no battery fit (no discharge runs to compare)" if uses_packs
                         else "no requirement flies on the packs"), 0.0)
-    elif _measured_power_flown(case):
+    elif measured_power_disputed(case):
         # the reading is the disagreement taken whole: a spread of its size on top of it
         # would count it twice (the shipped endurance band, p05-p95, 9x as wide)
         power = (Source("power_model", False, "battery fit.power_correction",
@@ -369,14 +371,6 @@ def _power_sources(case: Case, switches: Any) -> tuple[tuple[Source, float],
                           f"{100 * sd:.3g} % rms ({listed}): a lognormal scale on the power "
                           f"the packs deliver{mission}"), sd)
     return power, battery
-
-
-def _measured_power_flown(case: Case) -> bool:
-    """Whether the case is also flown on the discharge runs' measured power (a reading:
-    :mod:`tuflexperf.analysis.power_reading`)."""
-    from tuflexperf.analysis.power_reading import measured_power_readings
-
-    return bool(measured_power_readings(case))
 
 
 def _power_disagreement(case: Case, fitted: Any, mission: str) -> tuple[Source, float]:

@@ -135,9 +135,17 @@ def flown_point(case: Case) -> tuple[float, float] | None:
     return float(requirement.throttle), speed
 
 
+def measured_power_disputed(case: Case) -> bool:
+    """Whether ``case`` is flown on the measured power too: the battery file has a power
+    correction and a run's power disagrees with the model by more than
+    :data:`RUN_POWER_TOLERANCE` (:func:`measured_power_readings` then has its reading)."""
+    measured = case_measured_power(case)
+    return measured is not None and measured.disagrees
+
+
 def measured_power_readings(case: Case) -> tuple[Reading, ...]:
-    """The case flown on the measured power correction law, when the battery file has one
-    and a run's power disagrees with the model by more than :data:`RUN_POWER_TOLERANCE`."""
+    """The case flown on the measured power correction law, when
+    :func:`measured_power_disputed`."""
     measured = case_measured_power(case)
     if measured is None or not measured.disagrees:
         return ()
