@@ -20,7 +20,7 @@ from scipy.integrate import solve_ivp
 
 from tests.conftest import copy_shipped_case
 from tuflexperf.analysis.batch import BatchEvaluator
-from tuflexperf.analysis.pack_limits import full_throttle_on_packs, pack_side
+from tuflexperf.analysis.pack_limits import fan_power_w, operating_point, pack_side
 from tuflexperf.analysis.requirements import check_case
 from tuflexperf.analysis.takeoff import solve_takeoff
 from tuflexperf.cli import load_case_with
@@ -31,6 +31,7 @@ from tuflexperf.models.aircraft import (
     transition_radius_m,
     transition_speed_m_s,
 )
+from tuflexperf.models.thrust import density_ratio, engine_thrust_n
 
 
 def _case(folder: Path, reference_v: float = 50.4, sets: tuple[str, ...] = (),
@@ -48,6 +49,25 @@ def _case(folder: Path, reference_v: float = 50.4, sets: tuple[str, ...] = (),
     return load_case_with(case, list(sets))
 
 
+def full_throttle_on_packs(case, side, charge_ah, airspeed_m_s):
+    """Full throttle at the packs' loaded voltage, point by point: the total thrust [N] and
+    per engine the current through its packs [A] after ``charge_ah[j]`` [Ah] drawn from
+    engine ``j``'s packs. Each fan draws ``P (U/U_ref)^(1.5 k)`` and makes ``T (U/U_ref)^k``
+    at the loaded voltage ``U`` of its packs (SPEC 3), from the model functions alone (the
+    analyses fly the rows' code)."""
+    prop = case.propulsion
+    scale = density_ratio(prop, case.density_kg_m3)
+    thrust, currents = 0.0, []
+    for j, engine in enumerate(prop.engines):
+        power = fan_power_w(side, case, j, 1.0, airspeed_m_s)
+        _, current, factor = operating_point(side.params, charge_ah[j], power,
+                                             side.battery.circuit_packs, 1,
+                                             prop.reference_voltage_v, prop.voltage_exponent)
+        thrust = thrust + factor * engine_thrust_n(engine, 1.0, airspeed_m_s, scale)
+        currents.append(current)
+    return thrust, currents
+
+
 def _independent(case) -> tuple[float, float, float, np.ndarray]:
     """Ground roll and distance to the 15 m obstacle [m], the time there [s] and the charge
     drawn per engine by then [Ah], by SciPy in time, with the charge per engine a state
@@ -57,7 +77,7 @@ def _independent(case) -> tuple[float, float, float, np.ndarray]:
     n = len(case.propulsion.engines)
 
     def point(q, v):
-        thrust, current, _ = full_throttle_on_packs(case, side, list(q), v)
+        thrust, current = full_throttle_on_packs(case, side, list(q), v)
         return float(thrust), np.array([float(c) for c in current])
 
     v_lo = float(liftoff_speed_m_s(ac, rho))

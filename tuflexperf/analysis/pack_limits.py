@@ -114,36 +114,6 @@ def fan_power_w(side: PackSide, case: Case, engine: int, throttle: Any, airspeed
     return fmax(power if is_symbolic(power) else np.asarray(power, dtype=float), 0.0)
 
 
-def full_throttle_on_packs(case: Case, side: PackSide, charge_ah: Any, airspeed_m_s: Any
-                           ) -> tuple[Any, list[Any], list[Any]]:
-    """Full throttle at the packs' loaded voltage: the total thrust [N], and per engine the
-    current through its packs [A] and their loaded voltage [V] (NaN: beyond their power),
-    after ``charge_ah[j]`` [Ah] drawn from engine ``j``'s packs; floats, numpy or CasADi.
-
-    Each fan draws ``P (U/U_ref)^(1.5 k)`` and makes ``T (U/U_ref)^k`` at the loaded
-    voltage ``U`` of its packs (:func:`operating_point`'s rule, SPEC 3); without a
-    reference voltage the thrust is the model's and the voltage the fixed-power root.
-
-    References
-    ----------
-    SPEC 3 (thrust and pack voltage); Tremblay & Dessaint (2009) (the circuit).
-    """
-    prop = case.propulsion
-    scale = density_ratio(prop, case.density_kg_m3)
-    thrust: Any = 0.0
-    currents, voltages = [], []
-    for j, engine in enumerate(prop.engines):
-        power = fan_power_w(side, case, j, 1.0, airspeed_m_s)
-        # the engine's packs together (one "pack per engine"): their whole current
-        u, current, factor = operating_point(side.params, charge_ah[j], power,
-                                             side.battery.circuit_packs, 1,
-                                             prop.reference_voltage_v, prop.voltage_exponent)
-        thrust = thrust + factor * engine_thrust_n(engine, 1.0, airspeed_m_s, scale)
-        currents.append(current)
-        voltages.append(u)
-    return thrust, currents, voltages
-
-
 def operating_point(params: Any, charge_ah: Any, power_w: Any, circuit_packs: Any,
                     packs_per_engine: int, reference_voltage_v: float | None,
                     voltage_exponent: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
