@@ -160,26 +160,24 @@ def flown_power_readings(case: Case) -> tuple[Reading, ...]:
     """The case flown on its validation flights' power, where it disagrees with the model."""
     if not case.validation_flights:
         return ()
+    flights = flown_flights(case)
+    # the ratio check prints beside the endurance, and its tolerance: one rule for both
+    said = flown_power_ratio(flights)
+    if said is None or said["within_tolerance"]:
+        return ()
     rows, names = [], []
-    for flight in flown_flights(case):
+    for flight in flights:
         names.append(flight.path.name)
         for k in range(flight.time_s.size):
             at = SimpleNamespace(throttle_setting=float(flight.model_throttle[k]),
                                  airspeed_setting_m_s=float(flight.true_airspeed_m_s[k]),
                                  mean_power_w=float(flight.flown_power_w[k]), path=flight.path)
-            rows.append((at, float(flight.model_power_w[k]), float(flight.time_s[k]),
-                         float(flight.summary_power_w[k]), flight.log))
-    flown = np.array([r[0].mean_power_w for r in rows])
+            rows.append((at, float(flight.model_power_w[k]), flight.log))
+    mean_ratio = said["ratio"]
     model = np.array([r[1] for r in rows])
-    weights = np.array([r[2] for r in rows])
-    if not np.all(model > 0):
-        return ()
-    mean_ratio = float(np.sum(weights * flown) / np.sum(weights * model))
-    if abs(1.0 / mean_ratio - 1.0) <= RUN_POWER_TOLERANCE:
-        return ()
     law = fit_power_correction([r[0] for r in rows], model)
     worst = max(rows, key=lambda r: abs(np.log(r[0].mean_power_w / r[1])))
-    stale = any(abs(r[1] / r[3] - 1.0) > 1e-6 for r in rows)
+    stale = any(f.stale for f in flights)
     point = flown_point(case)
     flown_text = ""
     settle = "another flight over the same airspeeds"
@@ -194,7 +192,7 @@ def flown_power_readings(case: Case) -> tuple[Reading, ...]:
     files = ", ".join(names)
     evidence = (
         f"validation.flights ({files}; {correction_form(law)} over {len(rows)} airspeed bins"
-        f"{', the model recomputed since the summary' if stale else ''}): {worst[4]} flew "
+        f"{', the model recomputed since the summary' if stale else ''}): {worst[2]} flew "
         f"{worst[0].mean_power_w:.0f} W at {worst[0].airspeed_setting_m_s:.1f} m/s where the "
         f"model gives {worst[1]:.0f} W; time-weighted flown/model x{mean_ratio:.3f}{flown_text}"
     )
