@@ -1,7 +1,8 @@
 """A fit rendered: the result, the summary, the propulsion file's text, the table rows, the writing.
 
 Everything is rendered in memory first; the propulsion file is validated against the
-schema ``check`` uses before :func:`write_files` writes anything, atomically.
+schema ``check`` uses before anything is written, atomically
+(:func:`tuflexperf.io.files.write_files_atomically`).
 """
 
 from __future__ import annotations
@@ -227,10 +228,3 @@ def _plain(value: Any) -> Any:
         return int(value)
     return value
 
-
-# --- writing --------------------------------------------------------------------------------
-def write_files(files: dict[Path, str]) -> None:
-    """Write several files all-or-nothing with the user's umask (the tool's one writer)."""
-    from tuflexperf.io.files import write_files_atomically
-
-    write_files_atomically(dict(files))
