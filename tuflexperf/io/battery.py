@@ -36,7 +36,7 @@ from typing import Annotated, Any, ClassVar, Literal
 from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.files import same_file, why_not_a_file
+from tuflexperf.io.files import listed_file
 from tuflexperf.io.yamlio import FileName, Name, StrictModel, load_model
 
 Positive = Annotated[float, Field(gt=0)]
@@ -308,15 +308,10 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
     schema = load_model(path, BatterySchema)
     runs = []
     for index, run in enumerate(schema.runs):
-        target = (path.parent / run.file).resolve()
-        if not target.is_file():
-            raise InputError(f"{path}: runs[{index}].file: {why_not_a_file(target)}: {run.file}")
+        target = listed_file(path, f"runs[{index}].file", run.file, [r.path for r in runs])
         if not target.name.lower().endswith((".csv", ".csv.gz", ".mat")):
             raise InputError(f"{path}: runs[{index}].file: expected a .csv, .csv.gz or .mat "
                              f"run file, got {run.file}")
-        # it would count twice, under a second name (a hard link) too
-        if any(target == earlier.path or same_file(target, earlier.path) for earlier in runs):
-            raise InputError(f"{path}: runs[{index}].file: {run.file} is listed twice")
         runs.append(DischargeRunRef(path=target, engine=run.engine))
     if schema.fit is not None and not refitting:
         again = f"fit it again (tuflexperf fit {path.name} --out ...)"

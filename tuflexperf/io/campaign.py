@@ -38,7 +38,7 @@ from typing import Annotated, ClassVar, Literal
 from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.files import same_file, why_not_a_file
+from tuflexperf.io.files import listed_file
 from tuflexperf.io.schemas import RigUncertaintySchema
 from tuflexperf.io.vendor import VendorSettings
 from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, load_model
@@ -199,16 +199,10 @@ def load_campaign(path: Path | str) -> Campaign:
         if entry.kind == "endurance":
             ignored.append(run)  # battery runs belong to the endurance model, not the fit
             continue
-        if not resolved.is_file():
-            raise InputError(f"{path}: runs[{index}].file: {why_not_a_file(resolved)}: "
-                             f"{entry.file}")
-        # one file under two names (a hard link) is the same run too
-        if any(earlier.kind == run.kind and (earlier.path == resolved
-                                             or same_file(earlier.path, resolved))
-               for earlier in used):
-            # its points would count twice in the fit (and shrink the covariance)
-            raise InputError(f"{path}: runs[{index}].file: {entry.file} is listed twice as "
-                             f"{entry.kind}")
+        # a run listed twice would count its points twice (and shrink the covariance)
+        listed_file(path, f"runs[{index}].file", entry.file,
+                    [earlier.path for earlier in used if earlier.kind == run.kind],
+                    f" as {entry.kind}")
         used.append(run)
     if not any(run.kind == "throttle_steps" for run in used):
         raise InputError(f"{path}: runs: no throttle_steps run, nothing to fit")
