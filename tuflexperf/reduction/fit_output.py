@@ -179,11 +179,12 @@ def render_propulsion(
     except Exception as exc:  # noqa: BLE001 - the fit must never write a file check refuses
         from pydantic import ValidationError
 
-        from tuflexperf.io.yamlio import validation_message
+        from tuflexperf.io.yamlio import validation_problems
 
-        problem = (validation_message(source.get("input", "the fit"), exc, PropulsionSchema)
-                   if isinstance(exc, ValidationError) else str(exc).splitlines()[0])
-        raise InputError(f"the fitted propulsion file would not be valid: {problem}") from None
+        problems = (validation_problems(source.get("input", "the fit"), exc, PropulsionSchema)
+                    if isinstance(exc, ValidationError) else [str(exc).splitlines()[0]])
+        raise InputError.of([f"the fitted propulsion file would not be valid: {problem}"
+                             for problem in problems]) from None
     return text
 
 

@@ -326,11 +326,6 @@ def takeoff_profile(case: Case, analyses: Analyses) -> Any:
 
 
 # --- report --compare: the verdicts side by side -------------------------------------------
-def verdict_word(verdict: Any) -> str:
-    """PASS / FAIL (and UNPROVEN where the verdict carries it)."""
-    return str(getattr(verdict, "verdict", None) or ("PASS" if verdict.passed else "FAIL"))
-
-
 def compare_verdicts(case: Case, analyses: Analyses) -> Any:
     """Every requirement of every configuration side by side: value and verdict per
     configuration, and for each after the first what changed against the first (value and
@@ -361,13 +356,13 @@ def compare_verdicts(case: Case, analyses: Analyses) -> Any:
                 row[1] = f"{'<=' if v.kind == 'max' else '>='} {v.limit:g}{_unit(v)}"
             value = "not stated" if v is None else (
                 "not attainable" if v.value is None else f"{v.value:.4g}{_unit(v)}")
-            word = "" if v is None else verdict_word(v)
+            word = "" if v is None else v.verdict
             row += [value, word]
             fill += ["white", PASS_FILL if word == "PASS" else FAIL_FILL if word == "FAIL"
                      else "#ffe0b2" if word else "white"]
             if k:
                 row += list(_change(first, v))
-                changed = word != ("" if first is None else verdict_word(first))
+                changed = word != ("" if first is None else first.verdict)
                 fill += ["#fff3c4" if changed else "white"] * 2
         rows.append(row)
         fills.append(fill)
