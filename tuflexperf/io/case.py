@@ -6,7 +6,6 @@ here too, where every reader has imported them from.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -173,8 +172,6 @@ def load_case(path: Path | str | None = None,
         replaced=tuple(key for key in FILE_KEYS if key in replace),
         validation_flights=tuple(flights),
     )
-    if not math.isfinite(case.density_kg_m3) or case.density_kg_m3 <= 0:
-        raise InputError(f"{case_path}: atmosphere: gives no valid density")
     try:
         refuse_absurd_propulsion(case)
     except InputError as exc:
