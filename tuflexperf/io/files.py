@@ -401,12 +401,6 @@ def _read_marker_data(folder: Path) -> dict[str, Any]:
     return data if isinstance(data, dict) else {}
 
 
-def read_marker(folder: Path) -> str | None:
-    """The command that wrote ``folder`` (its marker), or ``None``."""
-    command = _read_marker_data(folder).get("command")
-    return command if isinstance(command, str) else None
-
-
 class _Terminated(KeyboardInterrupt):
     """SIGTERM (or SIGHUP), delivered as an interrupt so every cleanup path runs (exit 130)."""
 
