@@ -188,6 +188,29 @@ MADE_UP_AIRCRAFT: dict[str, Any] = {
     "cl_max": 1.4,
     "takeoff": {"cl_ground": 0.4, "rolling_friction": 0.05},
 }
+
+
+def model_from_propulsion_file(path: Path | str) -> Any:
+    """An export model straight from a propulsion file (no case)."""
+    from tuflexperf.export.model import ExportModel, SourceFile
+    from tuflexperf.io.case import PropulsionSchema, propulsion_from_schema
+    from tuflexperf.io.files import sha256_of
+    from tuflexperf.io.yamlio import load_model
+
+    path = Path(path).resolve()
+    schema = load_model(path, PropulsionSchema)
+    return ExportModel(propulsion=propulsion_from_schema(schema), schema=schema,
+                       files=(SourceFile("propulsion", path, sha256_of(path), path.name),))
+
+
+def title_lines(case: Any, measured: Any, analyses: Any) -> list[str]:
+    """The report's first page as plain text (its colours dropped)."""
+    from tuflexperf.report.first_page import page_lines, plain_text, timestamp
+
+    top, left, right = page_lines(case, measured, analyses, 150, timestamp())
+    return plain_text(top) + plain_text(left) + plain_text(right)
+
+
 # Unequal engines; thrust falls with airspeed, drag at idle.
 MADE_UP_PROPULSION: dict[str, Any] = {
     "name": "Made-up fans",

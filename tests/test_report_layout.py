@@ -40,9 +40,9 @@ def _report(case: Path | None, out: Path) -> dict:
 
 
 def test_every_page_is_a4_and_the_first_page_carries_every_verdict(shipped_report) -> None:
+    from tests.conftest import title_lines
     from tuflexperf.analysis.requirements import check_case
     from tuflexperf.io.case import load_case
-    from tuflexperf.report.build import title_lines
     from tuflexperf.report.data import load_measured, run_analyses
 
     data = shipped_report.data
@@ -217,8 +217,8 @@ def test_the_figures_dynamic_model_is_the_exported_step(tmp_path: Path, delay_s:
     import numpy as np
     import yaml
 
-    from tests.conftest import MADE_UP_PROPULSION
-    from tuflexperf.export.model import model_from_propulsion_file, thrust_step_function
+    from tests.conftest import MADE_UP_PROPULSION, model_from_propulsion_file
+    from tuflexperf.export.model import thrust_step_function
     from tuflexperf.models.thrust import engine_thrust_n
     from tuflexperf.report.figures import dynamic_thrust_n
 

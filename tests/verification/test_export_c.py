@@ -16,7 +16,7 @@ import pytest
 import yaml
 
 from tests.c_model import CThrustModel, compile_shared, throttle_for_thrust
-from tests.conftest import MADE_UP_PROPULSION
+from tests.conftest import MADE_UP_PROPULSION, model_from_propulsion_file
 from tuflexperf.export.c_code import (
     DELAY_CAPACITY,
     RETURN_BAD_ARGUMENT,
@@ -26,7 +26,7 @@ from tuflexperf.export.c_code import (
     source_text,
 )
 from tuflexperf.export.cbuild import find_compiler
-from tuflexperf.export.model import ExportModel, model_from_propulsion_file
+from tuflexperf.export.model import ExportModel
 from tuflexperf.models.thrust import (
     density_ratio,
     engine_thrust_n,

@@ -20,7 +20,7 @@ import pytest
 import yaml
 
 from tests.c_model import CThrustModel, compile_shared
-from tests.conftest import MADE_UP_PROPULSION
+from tests.conftest import MADE_UP_PROPULSION, model_from_propulsion_file
 from tuflexperf.export.c_code import (
     RETURN_AIRSPEED_BEYOND_MODEL,
     RETURN_BAD_ARGUMENT,
@@ -31,7 +31,6 @@ from tuflexperf.export.c_code import (
     source_text,
 )
 from tuflexperf.export.cbuild import find_compiler
-from tuflexperf.export.model import model_from_propulsion_file
 from tuflexperf.models.thrust import max_model_airspeed_m_s
 
 pytestmark = pytest.mark.skipif(find_compiler() is None, reason="no C compiler (gcc) installed")

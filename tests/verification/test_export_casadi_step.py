@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 import yaml
 
-from tests.conftest import MADE_UP_PROPULSION
-from tuflexperf.export.model import model_from_propulsion_file, thrust_step_function
+from tests.conftest import MADE_UP_PROPULSION, model_from_propulsion_file
+from tuflexperf.export.model import thrust_step_function
 
 
 def _static(engine: dict, x: float, v: float) -> float:

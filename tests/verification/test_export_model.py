@@ -13,11 +13,10 @@ import pytest
 import yaml
 
 from tests.c_model import throttle_for_thrust
-from tests.conftest import MADE_UP_PROPULSION
+from tests.conftest import MADE_UP_PROPULSION, model_from_propulsion_file
 from tuflexperf.export.model import (
     inverse_function,
     least_throttle_reaching,
-    model_from_propulsion_file,
     quadratic_coefficients,
     thrust_function,
 )

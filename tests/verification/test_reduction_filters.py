@@ -8,7 +8,6 @@ import pytest
 from tuflexperf.reduction.filters import (
     block_mean,
     filloutliers_movmean,
-    isoutlier_movmean,
     movmean,
     movmedian,
     movstd,
@@ -84,8 +83,8 @@ def test_isoutlier_mean_matlab_doc_example() -> None:
     # MATLAB isoutlier doc, "Outliers Using Mean Detection": only 300 is 3 std from the mean.
     # A moving window covering the whole vector reduces to that global method.
     b = np.array([57, 59, 60, 100, 59, 58, 57, 58, 300, 61, 62, 60, 62, 58, 57], dtype=float)
-    flagged = isoutlier_movmean(b, k=2 * b.size + 1, threshold=3.0)
-    assert list(np.flatnonzero(flagged)) == [8]
+    filled, count = filloutliers_movmean(b, k=2 * b.size + 1, threshold=3.0)
+    assert count == 1 and list(np.flatnonzero(filled != b)) == [8]
 
 
 def test_filloutliers_center_replaces_with_local_mean() -> None:
@@ -112,8 +111,8 @@ def test_threshold_is_strict() -> None:
     # [0 0 1 0 0] whole window: mean 0.2, std sqrt(0.2) ~ 0.447; |1 - 0.2| = 0.8 = 1.789 std
     x = np.array([0.0, 0.0, 1.0, 0.0, 0.0])
     ratio = 0.8 / np.sqrt(0.2)
-    assert isoutlier_movmean(x, 11, threshold=ratio * (1 - 1e-9))[2]
-    assert not isoutlier_movmean(x, 11, threshold=ratio * (1 + 1e-9))[2]
+    assert filloutliers_movmean(x, 11, threshold=ratio * (1 - 1e-9))[1] == 1
+    assert filloutliers_movmean(x, 11, threshold=ratio * (1 + 1e-9))[1] == 0
 
 
 def test_window_samples_from_seconds() -> None:

@@ -1,21 +1,20 @@
 """``tuflexperf flightlog``: the flown side of a PX4 or ArduPilot log, and the case beside it.
 
-The body of the command; :mod:`tuflexperf.cli` registers it. Of the CLI it imports only the
-number format (bad input is an :class:`InputError`, which the CLI's guard turns into exit 2),
-and pyulog, pymavlink and matplotlib only when it runs.
+The body of the command; :mod:`tuflexperf.cli` registers it. Bad input is an
+:class:`InputError`, which the CLI's guard turns into exit 2; pyulog, pymavlink and
+matplotlib are imported only when it runs.
 """
 
 from __future__ import annotations
 
-import json
 import math
-import sys
 from pathlib import Path
 from typing import Any
 
 import typer
 
-from tuflexperf.cli.render import fmt
+from tuflexperf.cli.inputs import output_file
+from tuflexperf.cli.render import emit_json, fmt
 from tuflexperf.errors import InputError
 
 
@@ -50,8 +49,8 @@ def flightlog_command(
     from tuflexperf.analysis.flown import reduce_flight
     from tuflexperf.io.flightlog import read_flight_log
 
-    csv_out, plot = _output(csv_text, "--csv"), _output(plot_text, "--plot")
-    summary_out = _output(summary_text, "--summary")
+    csv_out, plot = output_file(csv_text, "--csv"), output_file(plot_text, "--plot")
+    summary_out = output_file(summary_text, "--summary")
     if summary_out is not None and case_file is None:
         raise InputError("--summary: needs --case (the summary sets the flown power beside "
                          "the case's model)")
@@ -121,7 +120,7 @@ def flightlog_command(
         payload["comparison"] = comparison.to_dict()
         payload["notes"] = payload["notes"] + list(comparison.notes)
     if as_json:
-        sys.stdout.write(json.dumps(_clean(payload), indent=2) + "\n")
+        emit_json(payload)
         return
     _print_text(payload, [p for p in (csv_out, plot, summary_out) if p is not None])
 
@@ -137,17 +136,6 @@ def _default_threshold(case: Any) -> float:
     return 1.1 * float(stall_speed_eas_m_s(case.aircraft))
 
 
-def _output(value: str | None, flag: str) -> Path | None:
-    if value is None:
-        return None
-    if value == "-" or value.startswith("-"):
-        raise InputError(f"{flag}: {value!r} is no file name (an option, or stdout); give a "
-                         "path")
-    if value.endswith(("/", "\\")) or value in ("", ".", ".."):
-        raise InputError(f"{flag}: {value!r} names a folder; give a file name")
-    return Path(value)
-
-
 def _sources(log: Any) -> dict[str, Any]:
     def src(stream: Any) -> str | None:
         return None if stream is None else stream.source
@@ -155,19 +143,6 @@ def _sources(log: Any) -> dict[str, Any]:
     return {"batteries": [b.source for b in log.batteries], "airspeed": src(log.airspeed),
             "baro": src(log.baro), "climb": src(log.climb), "throttle": src(log.throttle),
             "land_detector": src(log.landed)}
-
-
-def _clean(value: Any) -> Any:
-    """NaN/inf as null (standard JSON), numpy scalars as Python numbers."""
-    if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    if hasattr(value, "item") and not hasattr(value, "__len__"):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 def _print_text(p: dict[str, Any], written: list[Path]) -> None:

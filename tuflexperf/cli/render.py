@@ -28,8 +28,10 @@ def _json_default(value: Any) -> Any:
 
 
 def _clean(value: Any) -> Any:
-    """NaN/inf become null and a file name's bytes that are no UTF-8 ``\\xfc``, so the JSON
-    stays standard (a lone surrogate is no Unicode text)."""
+    """NaN/inf become null, numpy scalars Python numbers and a file name's bytes that are no
+    UTF-8 ``\\xfc``, so the JSON stays standard (a lone surrogate is no Unicode text)."""
+    if hasattr(value, "item") and not hasattr(value, "__len__"):  # a float32 NaN too
+        value = value.item()
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, str):

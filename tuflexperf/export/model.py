@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tuflexperf.io.case import Case, PropulsionSchema, load_case, propulsion_from_schema
+from tuflexperf.io.case import Case, PropulsionSchema, load_case
 from tuflexperf.io.files import sha256_of
 from tuflexperf.io.yamlio import load_model
 from tuflexperf.models.thrust import (
@@ -144,17 +144,6 @@ def load_export_model(case_path: Case | Path | str | None = None) -> ExportModel
         ),
     )
     return ExportModel(propulsion=case.propulsion, schema=schema, files=files)
-
-
-def model_from_propulsion_file(path: Path | str) -> ExportModel:
-    """An :class:`ExportModel` straight from a propulsion file (no case), for tests and scripts."""
-    path = Path(path).resolve()
-    schema = load_model(path, PropulsionSchema)
-    return ExportModel(
-        propulsion=propulsion_from_schema(schema),
-        schema=schema,
-        files=(SourceFile("propulsion", path, sha256_of(path), path.name),),
-    )
 
 
 # --- CasADi functions from the physics code ---------------------------------------------------

@@ -1,27 +1,8 @@
 """Battery file (SPEC 4, "Battery file"): the pack, its discharge runs and the mission budget.
 
-The keys are this project's design (the SPEC leaves them open)::
-
-    name: SLS Quantum 5000mAh 12S1P 44.4V 40C
-    cells_in_series: 12
-    capacity_ah: 5.0                   # rated capacity of one pack
-    nominal_voltage_v: 44.4            # optional; checked against 3.7 V x cells
-    max_discharge_c: 40                # optional; continuous C rating
-    packs_in_parallel_per_engine: 2
-    cutoff_voltage_per_cell_v: 3.4     # under load (the ESC's low-voltage cut-off)
-    runs:                              # discharge runs, paths relative to this file
-      - {file: endurance/edf1_endurance_50.csv, engine: EDF1}
-    fan_power:                         # published fan data (paper Table 1)
-      published_power_range_w: [2400, 4100]
-      published_static_thrust_range_n: [41, 59]
-      jet_velocity_m_s: 90
-    mission:
-      pattern_altitude_m: 100          # launch = full-throttle ground roll + climb to this
-      landing_reserve_fraction: 0.2    # of each pack's rated capacity, kept for landing
-
-Run files use the SPEC's run format (``time_s, force_n, airspeed_m_s, throttle,
-voltage_v, current_a``); they are only checked to exist here, and are read when
-the discharge model is fitted (:mod:`tuflexperf.models.battery`).
+Its keys (this project's design; the SPEC leaves them open) and an example: docs/formats.md,
+"Battery file". The run files use the SPEC's run format; they are only checked to exist here,
+and are read when the discharge model is fitted (:mod:`tuflexperf.reduction.battery`).
 """
 
 from __future__ import annotations
@@ -36,7 +17,7 @@ from typing import Annotated, Any, ClassVar, Literal
 from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.files import same_file, why_not_a_file
+from tuflexperf.io.files import listed_file
 from tuflexperf.io.yamlio import FileName, Name, StrictModel, load_model
 
 Positive = Annotated[float, Field(gt=0)]
@@ -308,15 +289,10 @@ def load_battery(path: Path | str, refitting: bool = False) -> Battery:
     schema = load_model(path, BatterySchema)
     runs = []
     for index, run in enumerate(schema.runs):
-        target = (path.parent / run.file).resolve()
-        if not target.is_file():
-            raise InputError(f"{path}: runs[{index}].file: {why_not_a_file(target)}: {run.file}")
+        target = listed_file(path, f"runs[{index}].file", run.file, [r.path for r in runs])
         if not target.name.lower().endswith((".csv", ".csv.gz", ".mat")):
             raise InputError(f"{path}: runs[{index}].file: expected a .csv, .csv.gz or .mat "
                              f"run file, got {run.file}")
-        # it would count twice, under a second name (a hard link) too
-        if any(target == earlier.path or same_file(target, earlier.path) for earlier in runs):
-            raise InputError(f"{path}: runs[{index}].file: {run.file} is listed twice")
         runs.append(DischargeRunRef(path=target, engine=run.engine))
     if schema.fit is not None and not refitting:
         again = f"fit it again (tuflexperf fit {path.name} --out ...)"

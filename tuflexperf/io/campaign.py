@@ -1,32 +1,7 @@
 """The test-campaign manifest (``campaign.yaml``, SPEC 4), the input of ``tuflexperf fit``.
 
-```yaml
-name: ...
-fan_area_m2: 0.0068          # the fan's disk area A (Glauert check, momentum theory, windmilling)
-tunnel_area_m2: 0.16         # tunnel cross-section C (leave out for a static stand)
-air_density_kg_m3: 1.19      # optional: test-day density (default 1.225, ISA sea level)
-filters:                     # optional: the paper's filter settings (section 4)
-  outlier_window_s: 2.0
-  outlier_threshold: 1.5
-  median_window_s: 0.1
-runs:
-  - {file: runs/edf1_v00.csv, engine: EDF1, kind: throttle_steps}
-  - {file: runs/edf1_sweep_v30.mat, engine: EDF1, kind: sine_sweep}
-  - {file: runs/structure_drag.csv, kind: drag_sweep}
-  - {file: runs/edf1_endurance_50.csv, engine: EDF1, kind: endurance}   # ignored by fit
-  - {file: runs/stand_v10.csv, engine: EDF1, kind: throttle_steps, format: rcbenchmark,
-     esc_pulse_us: [1000, 2000], thrust_sign: -1, airspeed_m_s: 10}
-rig_uncertainty:             # optional: the rig's systematic errors (standard deviations)
-  airspeed_bias_sd_m_s: 0.2  # tunnel speed calibration [m/s]
-  thrust_scale_sd: 0.01      # balance scale, a fraction of the thrust
-  balance_zero_sd_n: 0.05    # balance zero between tare and run [N]
-  voltage_sd_v: 0.1          # pack voltage reading [V]
-```
-
-``format`` (``run`` or ``rcbenchmark``), ``esc_pulse_us``, ``thrust_sign`` and ``airspeed_m_s``
-may also be given once at the top level for every run; a run's own keys win.
-
-Paths are relative to the manifest. Unknown keys are errors.
+Its keys, the run kinds and a full example: docs/formats.md, "Campaign manifest". Paths are
+relative to the manifest; unknown keys are errors.
 """
 
 from __future__ import annotations
@@ -38,7 +13,7 @@ from typing import Annotated, ClassVar, Literal
 from pydantic import Field, model_validator
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.files import same_file, why_not_a_file
+from tuflexperf.io.files import listed_file
 from tuflexperf.io.schemas import RigUncertaintySchema
 from tuflexperf.io.vendor import VendorSettings
 from tuflexperf.io.yamlio import EngineName, FileName, Name, StrictModel, load_model
@@ -199,16 +174,10 @@ def load_campaign(path: Path | str) -> Campaign:
         if entry.kind == "endurance":
             ignored.append(run)  # battery runs belong to the endurance model, not the fit
             continue
-        if not resolved.is_file():
-            raise InputError(f"{path}: runs[{index}].file: {why_not_a_file(resolved)}: "
-                             f"{entry.file}")
-        # one file under two names (a hard link) is the same run too
-        if any(earlier.kind == run.kind and (earlier.path == resolved
-                                             or same_file(earlier.path, resolved))
-               for earlier in used):
-            # its points would count twice in the fit (and shrink the covariance)
-            raise InputError(f"{path}: runs[{index}].file: {entry.file} is listed twice as "
-                             f"{entry.kind}")
+        # a run listed twice would count its points twice (and shrink the covariance)
+        listed_file(path, f"runs[{index}].file", entry.file,
+                    [earlier.path for earlier in used if earlier.kind == run.kind],
+                    f" as {entry.kind}")
         used.append(run)
     if not any(run.kind == "throttle_steps" for run in used):
         raise InputError(f"{path}: runs: no throttle_steps run, nothing to fit")

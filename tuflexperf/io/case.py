@@ -6,12 +6,12 @@ here too, where every reader has imported them from.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tuflexperf.errors import InputError
+from tuflexperf.io.files import listed_file
 from tuflexperf.io.schemas import (
     ABSURD_THRUST_TO_WEIGHT,
     MAX_SAMPLES,
@@ -52,16 +52,6 @@ def load_aircraft(path: Path) -> Aircraft:
 def load_propulsion(path: Path) -> Propulsion:
     """Load and validate a propulsion file."""
     return propulsion_from_schema(load_model(Path(path), PropulsionSchema))
-
-
-def _resolve(case_path: Path, key: str, value: str) -> Path:
-    target = (case_path.parent / value).resolve()
-    if not target.is_file():
-        from tuflexperf.io.files import why_not_a_file
-
-        raise InputError(f"{case_path}: {key}: {why_not_a_file(target)}: {value} (resolved to "
-                         f"{target})")
-    return target
 
 
 def shipped_case_path() -> Path:
@@ -140,7 +130,7 @@ def load_case(path: Path | str | None = None,
             if key in replace:
                 paths[key] = _given(replace[key], f"--{key}")
             elif key in named:
-                paths[key] = _resolve(case_path, key, named[key])
+                paths[key] = listed_file(case_path, key, named[key], shown=True)
         except InputError as exc:
             problems.extend(exc.problems)
     loaders = {"battery": _validate_battery, "aircraft": load_aircraft,
@@ -158,7 +148,8 @@ def load_case(path: Path | str | None = None,
 
         for index, name in enumerate(schema.validation.flights):
             try:
-                target = _resolve(case_path, f"validation.flights[{index}]", name)
+                target = listed_file(case_path, f"validation.flights[{index}]", name,
+                                     shown=True)
                 load_flight_summary(target)  # validate now: bad keys fail early
                 flights.append(target)
             except InputError as exc:
@@ -181,8 +172,6 @@ def load_case(path: Path | str | None = None,
         replaced=tuple(key for key in FILE_KEYS if key in replace),
         validation_flights=tuple(flights),
     )
-    if not math.isfinite(case.density_kg_m3) or case.density_kg_m3 <= 0:
-        raise InputError(f"{case_path}: atmosphere: gives no valid density")
     try:
         refuse_absurd_propulsion(case)
     except InputError as exc:

@@ -114,8 +114,6 @@ def read_discharge_run(path: Path | str) -> DischargeRun:
     )
 
 
-
-
 @dataclass(frozen=True)
 class RunSummary:
     """What the analyses need of a discharge run, as ``fit`` stores it in the battery file.
@@ -133,30 +131,3 @@ class RunSummary:
     start_charge_ah: float
     time_to_cutoff_s: float
     charge_drawn_ah: float
-
-    def to_dict(self, relative_to: Path) -> dict[str, object]:
-        import os
-
-        return {
-            "file": os.path.relpath(self.path, relative_to),
-            "sha256": self.sha256,
-            "throttle": self.throttle_setting,
-            "airspeed_m_s": self.airspeed_setting_m_s,
-            "mean_power_w": self.mean_power_w,
-            "mean_force_n": self.mean_force_n,
-            "start_charge_ah": self.start_charge_ah,
-            "time_to_cutoff_s": self.time_to_cutoff_s,
-            "charge_drawn_ah": self.charge_drawn_ah,
-        }
-
-
-def summarise_run(run: DischargeRun) -> RunSummary:
-    """The stored summary of a discharge run (with its file's sha256)."""
-    from tuflexperf.io.files import sha256_of
-
-    return RunSummary(
-        path=run.path, sha256=sha256_of(run.path), throttle_setting=run.throttle_setting,
-        airspeed_setting_m_s=run.airspeed_setting_m_s, mean_power_w=run.mean_power_w,
-        mean_force_n=run.mean_force_n, start_charge_ah=run.start_charge_ah,
-        time_to_cutoff_s=run.time_to_cutoff_s, charge_drawn_ah=float(run.charge_ah[-1]),
-    )

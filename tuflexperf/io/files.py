@@ -187,6 +187,23 @@ def same_file(a: Path, b: Path) -> bool:
         return False
 
 
+def listed_file(listing: Path, key: str, name: str, earlier: Iterable[Path] = (),
+                twice: str = "", shown: bool = False) -> Path:
+    """The file ``name`` that the file ``listing`` names under ``key``, resolved beside it.
+
+    Bad input naming ``listing`` and ``key`` when it is no regular file (``shown``: where it
+    was looked for too), or is one of ``earlier`` (a hard link of one too: it would count
+    twice; ``twice`` ends that message).
+    """
+    target = (Path(listing).parent / name).resolve()
+    if not target.is_file():
+        where = f" (resolved to {target})" if shown else ""
+        raise InputError(f"{listing}: {key}: {why_not_a_file(target)}: {name}{where}")
+    if any(target == e or same_file(target, e) for e in earlier):
+        raise InputError(f"{listing}: {key}: {name} is listed twice{twice}")
+    return target
+
+
 _guarded: dict[Path, tuple[str, Path, tuple[int, int, int] | None]] = {}
 """What :func:`guard_outputs` saw at each output it allowed: flag, path as given, state."""
 
@@ -382,12 +399,6 @@ def _read_marker_data(folder: Path) -> dict[str, Any]:
     except (OSError, ValueError, RecursionError):
         return {}
     return data if isinstance(data, dict) else {}
-
-
-def read_marker(folder: Path) -> str | None:
-    """The command that wrote ``folder`` (its marker), or ``None``."""
-    command = _read_marker_data(folder).get("command")
-    return command if isinstance(command, str) else None
 
 
 class _Terminated(KeyboardInterrupt):

@@ -2,20 +2,7 @@
 
 ``tuflexperf flightlog LOG --case CASE --summary FILE`` writes it; a case names it under
 ``validation: {flights: [FILE]}``, and ``check`` reads it (parameters only: the log itself is
-never opened again)::
-
-    log: flight.ulg                   # the log reduced (its name) and its sha256
-    log_sha256: 3f...
-    power_model: the propulsion file's power surfaces, summed over the engines
-    density_kg_m3: 1.19               # the log's air density the model was flown at
-    mass_kg: 18.0
-    airborne_s: 612.4
-    energy_wh: 98.1
-    bins_kind: level-flight           # level-flight bins where any holds 10 s, else all-flight
-    bins:                             # 1 m/s airspeed bins
-      - {airspeed_m_s: 18, true_airspeed_m_s: 18.3, time_s: 42.0, flown_power_w: 980,
-         predicted_power_w: 850, predicted_throttle: 0.41, flown_throttle: 0.45,
-         flown_current_a: 22.1}
+never opened again). Its keys: docs/formats.md, "Flight summary".
 """
 
 from __future__ import annotations

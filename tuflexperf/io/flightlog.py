@@ -15,7 +15,7 @@ import io
 import os
 import re
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -425,12 +425,3 @@ def _short(exc: BaseException) -> str:
     text = str(exc).replace("\n", " ").strip() or type(exc).__name__
     return text if len(text) <= 120 else text[:117] + "..."
 
-
-def stream_names(log: FlightLog) -> Iterable[str]:
-    """Where each stream came from, for the output's ``sources``."""
-    for name in ("airspeed", "baro", "climb", "throttle", "landed", "armed"):
-        stream = getattr(log, name)
-        if stream is not None:
-            yield f"{name}: {stream.source}"
-    for battery in log.batteries:
-        yield f"battery: {battery.source}"

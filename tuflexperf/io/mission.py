@@ -143,12 +143,6 @@ def load_mission(path: Path | str) -> MissionFile:
 def mission_path(case: Any) -> Path:
     """The case's mission file (a :class:`tuflexperf.io.case.Case`'s ``requirements.mission.file``),
     resolved relative to the case file (SPEC 4)."""
-    from tuflexperf.errors import InputError
+    from tuflexperf.io.files import listed_file
 
-    target = (Path(case.path).parent / case.requirements.mission.file).resolve()
-    if not target.is_file():
-        from tuflexperf.io.files import why_not_a_file
-
-        raise InputError(f"{case.path}: requirements.mission.file: {why_not_a_file(target)}: "
-                         f"{case.requirements.mission.file}")
-    return target
+    return listed_file(case.path, "requirements.mission.file", case.requirements.mission.file)

@@ -1,27 +1,10 @@
 """Published propeller tables as thrust tables: UIUC Propeller Data Site and APC PER3 files.
 
-A propeller-table manifest (YAML with a ``tables:`` list) is an input of ``tuflexperf fit``
-like a thrust table (SPEC 4); each file is converted to ``engine, throttle, airspeed_m_s,
-thrust_n`` points with ``throttle = rpm / max_rpm`` (the engine's largest tabulated rpm unless
-the manifest gives ``max_rpm``), which a poly22 then fits as it fits measured data:
-
-```yaml
-name: APC 10x7E and a UIUC run
-air_density_kg_m3: 1.225          # for the UIUC coefficients (default: ISA sea level)
-tables:
-  - {file: PER3_10x7E.dat, format: apc_per3, engine: P1}          # every "PROP RPM =" block
-  - {file: apcsf_9x4.7_kt1033_4008.txt, format: uiuc, engine: P2,
-     diameter_m: 0.2286, rpm: 4008}                                # one rpm per file
-  - {file: apcsf_9x4.7_kt1033_5010.txt, format: uiuc, engine: P2, diameter_m: 0.2286, rpm: 5010}
-max_rpm: {P2: 6000}               # optional, per engine
-```
-
-``uiuc``: columns ``J CT CP eta`` (advance ratio ``J = V / (n D)``, ``CT = T / (rho n^2 D^4)``),
-``n = rpm / 60``; so ``V = J n D`` and ``T = CT rho n^2 D^4``. ``apc_per3``: blocks headed
-``PROP RPM = <rpm>``, rows ``V (mph) J Pe Ct Cp PWR(Hp) Torque(In-Lbf) Thrust(Lbf) ...``; the
-newer 15-column files add ``Thrust (N)`` (column 11), used when present, else column 8 in lbf.
-A propeller's thrust is not an EDF's: this is for models of propeller-driven aircraft through
-the same poly22 (rpm fraction as "throttle").
+A propeller-table manifest (docs/formats.md, "Propeller tables") is an input of
+``tuflexperf fit`` like a thrust table (SPEC 4): each file becomes ``engine, throttle,
+airspeed_m_s, thrust_n`` points with ``throttle = rpm / max_rpm``, which a poly22 then fits
+as it fits measured data. A propeller's thrust is not an EDF's: this is for models of
+propeller-driven aircraft through the same poly22 (rpm fraction as "throttle").
 """
 
 from __future__ import annotations

@@ -1,17 +1,9 @@
 """Reading wind-tunnel run files (CSV or MATLAB .mat) and thrust tables (SPEC 4).
 
-A run file holds one 1-D column per name: ``time_s``, ``force_n``,
-``airspeed_m_s``, ``throttle`` (a fraction); endurance runs add ``voltage_v``
-and ``current_a``. CSV files have a header row and may be gzip-compressed
-(``.csv.gz``, read transparently). ``.mat`` files are MATLAB v5/v7 (read with
-``scipy.io.loadmat``); a file whose variables sit in one struct is accepted too.
-
-Every problem is an :class:`~tuflexperf.errors.InputError` naming the file and
-the column: missing columns, unreadable or empty files, non-numeric values,
-non-increasing time, too many NaN samples. A few NaN samples (at most
-:data:`MAX_NAN_FRACTION` of a column) are tolerated: in ``time_s`` their rows
-are dropped, elsewhere they are linearly interpolated in time; both are
-reported.
+Their columns: docs/formats.md, "Run files" and "Thrust table". Every problem is an
+:class:`~tuflexperf.errors.InputError` naming the file and the column. A few NaN samples (at
+most :data:`MAX_NAN_FRACTION` of a column) are tolerated: in ``time_s`` their rows are
+dropped, elsewhere they are linearly interpolated in time; both are reported.
 """
 
 from __future__ import annotations

@@ -1,22 +1,11 @@
 """Thrust-stand exports in their vendor's own format, converted to the project's run columns.
 
-A campaign manifest names the format of a run with ``format:`` (SPEC 4). Supported:
-
-``rcbenchmark``
-    The CSV written by Tyto Robotics' RCbenchmark / Flight Stand software (Series 1520, 1580,
-    1585, 1780): a header row of ``Name (unit)`` cells such as ``Time (s)``,
-    ``ESC signal (µs)``, ``Thrust (kgf)`` (or ``N``, ``lbf``, ``gf``, ``ozf``), ``Voltage (V)``,
-    ``Current (A)``, ``Motor Electrical Speed (RPM)``, ``Electrical Power (W)``, text columns
-    (``App message``) and whatever the stand logs besides; plus, for a stand in a wind tunnel, an
-    airspeed column the user adds by hand (``Airspeed (m/s)``, ``km/h``, ``kt``, ``mph``,
-    ``ft/s``).
-
-Units come from the header, never assumed. Throttle is the ESC pulse mapped linearly by the
-manifest's ``esc_pulse_us: [idle, full]``; the force is ``thrust_sign`` times the logged thrust
-(stands are mounted both ways round); a run without an airspeed column takes the manifest's
-``airspeed_m_s``. The result holds the columns :func:`tuflexperf.io.runs.read_run` validates:
-``time_s``, ``force_n``, ``airspeed_m_s``, ``throttle`` and, when logged, ``voltage_v``,
-``current_a``, ``rpm``.
+A campaign manifest names the format of a run with ``format:`` (SPEC 4); supported:
+``rcbenchmark`` (docs/formats.md, "Thrust-stand CSV": its columns and units). Units come from
+the header, never assumed. Throttle is the ESC pulse mapped linearly by the manifest's
+``esc_pulse_us: [idle, full]``; the force is ``thrust_sign`` times the logged thrust (stands
+are mounted both ways round); a run without an airspeed column takes the manifest's
+``airspeed_m_s``. The result holds the columns :func:`tuflexperf.io.runs.read_run` validates.
 """
 
 from __future__ import annotations

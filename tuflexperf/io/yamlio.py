@@ -310,20 +310,6 @@ def _valid_keys(model: type[BaseModel] | None, loc: tuple[Any, ...]) -> list[str
     return list(model.model_fields) if model is not None else []
 
 
-def validation_message(
-    path: Path | str, error: ValidationError, model: type[BaseModel] | None = None
-) -> str:
-    """One line naming the file, the first offending key and what is wrong with it.
-
-    An unknown key (a misspelt one) is reported before anything else, with the closest
-    valid key at that place: a misspelt requirement must never pass silently.
-    """
-    problems = validation_problems(path, error, model)
-    more = len(problems) - 1
-    tail = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
-    return problems[0] + tail
-
-
 def validation_problems(
     path: Path | str, error: ValidationError, model: type[BaseModel] | None = None
 ) -> list[str]:

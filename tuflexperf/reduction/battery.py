@@ -477,8 +477,11 @@ def fit_battery_block(battery: Any, relative_to: Any,
     relative to ``relative_to`` (the folder of the file written). A capacity the runs
     contradict (a run drew more than the pack holds) is bad input.
     """
+    import os
+
     from tuflexperf.io.battery import refuse_contradicted_capacity, refuse_label_beyond_fitted
-    from tuflexperf.io.discharge import read_discharge_run, summarise_run
+    from tuflexperf.io.discharge import read_discharge_run
+    from tuflexperf.io.files import sha256_of
 
     runs = [read_discharge_run(r.path) for r in battery.runs]
     refuse_runs_short_of_the_cutoff(battery, runs)
@@ -500,7 +503,14 @@ def fit_battery_block(battery: Any, relative_to: Any,
         "rms_v": float(fit.rms_v),
         "max_abs_v": float(fit.max_abs_v),
         "n_points": int(fit.n_points),
-        "runs": [summarise_run(run).to_dict(relative_to) for run in runs],
+        # what the analyses need of each run (io.discharge.RunSummary), so that a fitted
+        # battery file serves check without reading its runs
+        "runs": [{"file": os.path.relpath(run.path, relative_to), "sha256": sha256_of(run.path),
+                  "throttle": run.throttle_setting, "airspeed_m_s": run.airspeed_setting_m_s,
+                  "mean_power_w": run.mean_power_w, "mean_force_n": run.mean_force_n,
+                  "start_charge_ah": run.start_charge_ah,
+                  "time_to_cutoff_s": run.time_to_cutoff_s,
+                  "charge_drawn_ah": float(run.charge_ah[-1])} for run in runs],
         "cross_validation": _cross_validation(runs, battery.cells_in_series,
                                               battery.capacity_ah, battery.cutoff_voltage_v)
         if len(runs) > 1 else [],

@@ -253,23 +253,14 @@ def _growing_window_medians_by_heaps(head: Array, first: int) -> Array:
     return np.asarray(medians, dtype=float)
 
 
-def isoutlier_movmean(x: ArrayLike, k: int, threshold: float = 3.0) -> NDArray[np.bool_]:
-    """Samples more than ``threshold`` local standard deviations from the local mean.
-
-    MATLAB ``isoutlier(x, 'movmean', k, 'ThresholdFactor', threshold)``: the local
-    mean and standard deviation are :func:`movmean` and :func:`movstd` over the
-    same window (which includes the sample itself); the test is strict (``>``).
-    """
-    values = np.asarray(x, dtype=float)
-    centre, spread = _moving_mean_std(values, k)
-    return np.abs(values - centre) > threshold * spread
-
-
 def filloutliers_movmean(x: ArrayLike, k: int, threshold: float = 3.0) -> tuple[Array, int]:
     """Replace moving-mean outliers by the window's centre value (the local mean).
 
-    MATLAB ``filloutliers(x, 'center', 'movmean', k, 'ThresholdFactor', threshold)``;
-    the paper uses a 2 s window and ``threshold = 1.5`` (section 4).
+    MATLAB ``filloutliers(x, 'center', 'movmean', k, 'ThresholdFactor', threshold)``: a
+    sample is an outlier when it lies more than ``threshold`` local standard deviations
+    from the local mean (strictly), both :func:`movmean` and :func:`movstd` over the same
+    window (which includes the sample itself). The paper uses a 2 s window and
+    ``threshold = 1.5`` (section 4).
 
     Returns
     -------

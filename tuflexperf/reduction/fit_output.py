@@ -1,7 +1,8 @@
 """A fit rendered: the result, the summary, the propulsion file's text, the table rows, the writing.
 
 Everything is rendered in memory first; the propulsion file is validated against the
-schema ``check`` uses before :func:`write_files` writes anything, atomically.
+schema ``check`` uses before anything is written, atomically
+(:func:`tuflexperf.io.files.write_files_atomically`).
 """
 
 from __future__ import annotations
@@ -178,11 +179,12 @@ def render_propulsion(
     except Exception as exc:  # noqa: BLE001 - the fit must never write a file check refuses
         from pydantic import ValidationError
 
-        from tuflexperf.io.yamlio import validation_message
+        from tuflexperf.io.yamlio import validation_problems
 
-        problem = (validation_message(source.get("input", "the fit"), exc, PropulsionSchema)
-                   if isinstance(exc, ValidationError) else str(exc).splitlines()[0])
-        raise InputError(f"the fitted propulsion file would not be valid: {problem}") from None
+        problems = (validation_problems(source.get("input", "the fit"), exc, PropulsionSchema)
+                    if isinstance(exc, ValidationError) else [str(exc).splitlines()[0]])
+        raise InputError.of([f"the fitted propulsion file would not be valid: {problem}"
+                             for problem in problems]) from None
     return text
 
 
@@ -227,10 +229,3 @@ def _plain(value: Any) -> Any:
         return int(value)
     return value
 
-
-# --- writing --------------------------------------------------------------------------------
-def write_files(files: dict[Path, str]) -> None:
-    """Write several files all-or-nothing with the user's umask (the tool's one writer)."""
-    from tuflexperf.io.files import write_files_atomically
-
-    write_files_atomically(dict(files))

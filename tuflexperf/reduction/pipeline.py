@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from tuflexperf.errors import InputError
-from tuflexperf.io.files import sealed, sha256_of
+from tuflexperf.io.files import sealed, sha256_of, write_files_atomically
 from tuflexperf.io.inputs import path_text
 from tuflexperf.io.runs import (
     REFIT_TABLE_EXTRA_COLUMNS,
@@ -50,7 +50,7 @@ from tuflexperf.reduction.fit_checks import (
     set_point,
     speeds_by_engine,
 )
-from tuflexperf.reduction.fit_output import FitResult, fit_summary, render_propulsion, write_files
+from tuflexperf.reduction.fit_output import FitResult, fit_summary, render_propulsion
 from tuflexperf.reduction.lack_of_fit import engine_lack_of_fit, lack_of_fit_note
 from tuflexperf.reduction.poly22fit import fit_poly22
 from tuflexperf.reduction.step_runs import Progress
@@ -172,7 +172,7 @@ def _fit_battery(path: Path, out: Path, table: Path | None, glauert: bool,
 
         raise InputError(f"--propulsion: {why_not_a_file(Path(propulsion))}: {propulsion}")
     text, block = fitted_battery_text(path, out, propulsion)
-    write_files({out: sealed(text)})
+    write_files_atomically({out: sealed(text)})
     return {"kind": "battery", "input": str(path), "out": str(out), "table": None,
             "battery_fit": block}
 
@@ -258,7 +258,7 @@ def run_fit(
                       {"--out": "propulsion file", "--table": "thrust table"})
         if result.table_text is not None:
             files[table] = result.table_text
-    write_files(files)
+    write_files_atomically(files)
     summary = result.summary
     summary["out"] = str(out)
     summary["table"] = str(table) if table is not None else None

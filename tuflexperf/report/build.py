@@ -596,15 +596,6 @@ def _hash_page(case: Any, measured: Any, hashed: list[tuple[str, str, str]]) -> 
     return fg.text_page("Inputs of this report (sha256)", hash_lines(case, measured, hashed))
 
 
-def title_lines(case: Any, measured: Any, analyses: Any) -> list[str]:
-    """The first page's text (:mod:`tuflexperf.report.first_page`) without its colours:
-    verdicts with value, limit, margin, reason and caveats, key figures, provenance, tool."""
-    from tuflexperf.report.first_page import page_lines, plain_text, timestamp
-
-    top, left, right = page_lines(case, measured, analyses, 150, timestamp())
-    return plain_text(top) + plain_text(left) + plain_text(right)
-
-
 def input_hashes(case: Any, measured: Any,
                  compared: list[Any] | None = None) -> list[tuple[str, str, str]]:
     """(sha256, role, path as shown) of every input of the report, in the last page's order

@@ -12,25 +12,14 @@ from typing import Any
 
 import numpy as np
 
-from tuflexperf.report.style import (
-    EXTRAPOLATED_FILL,
-    FAIL_FILL,
-    PASS_FILL,
-    STYLE,
-    legend_outside,
-)
+from tuflexperf.report.style import STYLE
 
 LANDSCAPE_IN = (11.69, 8.27)  # A4 landscape (297 x 210 mm)
 
 TEXT_PAGE_MARGIN_IN = 0.6  # about 15 mm: a printer's unprintable edge plus room to staple
 
 
-# the earlier names of the style's colours, for pages built on them (style.py is the source)
-PASS_COLOUR, FAIL_COLOUR = PASS_FILL, FAIL_FILL
-
 LIMIT_COLOUR = STYLE["limit"]["color"]
-
-EXTRAPOLATED_COLOUR = EXTRAPOLATED_FILL
 
 ACCURACY_GOAL_N = 0.5  # paper section 1 and 2.1: model accuracy aimed for +-0.5 N
 
@@ -77,11 +66,6 @@ def page_margins(fig: Any) -> None:
 def style_of(meaning: str, **override: Any) -> dict[str, Any]:
     """``STYLE[meaning]`` with a few keys changed (a second curve of the same meaning)."""
     return {**STYLE[meaning], **override}
-
-
-def page_legend(ax: Any, **kwargs: Any) -> Any:
-    """The report's legend: right of the axes (:func:`legend_outside`), never over data."""
-    return legend_outside(ax, **kwargs)
 
 
 def note_box(ax: Any, text: str) -> None:

@@ -4,17 +4,11 @@ The requirement table is drawn here; the measurement's pages live in
 :mod:`.measured_figures`, the flight analyses' in :mod:`.flight_figures`, the page frame
 (A4 canvas, notes, legends, text pages) in :mod:`.canvas`: this module names them all.
 
-Every function returns a :class:`matplotlib.figure.Figure` built without pyplot
-(no global figure state; the Agg canvas renders it headless). Axes carry SI units,
-titles say what is shown and which of the paper's figures it corresponds to,
-requirement limits are drawn where one applies, and the thrust model's
-extrapolated airspeeds (beyond ``tested_airspeed_m_s``) are shaded.
-
-One meaning, one look (:mod:`tuflexperf.report.style`): a red dashed line is a
-requirement's limit on every page, grey dashes the envelope's edges, a black dotted
-line the stall speed, blue the all-engine analysis or the measurement, orange one
-engine out, purple a fitted model. Legends sit outside the axes, so they never cover
-data; long time series are drawn through :func:`tuflexperf.report.decimate.envelope`.
+Every function returns a :class:`matplotlib.figure.Figure` built without pyplot (the Agg
+canvas renders it headless). Axes carry SI units, requirement limits are drawn where one
+applies, the thrust model's extrapolated airspeeds are shaded, one meaning has one look
+(:mod:`tuflexperf.report.style`), legends sit outside the axes, and long time series are
+drawn through :func:`tuflexperf.report.decimate.envelope`.
 """
 
 from __future__ import annotations

@@ -52,17 +52,6 @@ def fmt(value: float | None, digits: int = 3) -> str:
     return f"{value:.{digits}f}"
 
 
-def verdict_word(verdict: Any) -> str:
-    """PASS, FAIL or UNPROVEN as the verdict says (its own ``status`` where it has one)."""
-    status = getattr(verdict, "status", None)
-    if isinstance(status, str) and status:
-        return status.upper()
-    word = getattr(verdict, "verdict", None)
-    if isinstance(word, str) and word:
-        return word
-    return "PASS" if verdict.passed else "FAIL"
-
-
 def _word_colour(word: str) -> str:
     return {"PASS": PASS_COLOUR, "FAIL": FAIL_COLOUR}.get(word, CAVEAT_COLOUR)
 
@@ -89,7 +78,7 @@ def verdict_lines(verdicts: list[Any], width: int,
     for k, v in enumerate(verdicts):
         if k:
             lines.append(())
-        word = verdict_word(v)
+        word = v.verdict
         p = (probabilities or {}).get(v.name)
         chance = "-" if p is None else f"{p.probability:.4f}"
         failed = word == "FAIL"
@@ -130,7 +119,7 @@ def _cell(text: str, width: int = 10) -> str:
 
 def headline(verdicts: list[Any], caveats: int) -> list[Line]:
     """The overall verdict in one line, red when any requirement is not met."""
-    words = [verdict_word(v) for v in verdicts]
+    words = [v.verdict for v in verdicts]
     failed = sum(w == "FAIL" for w in words)
     other = sum(w not in ("PASS", "FAIL") for w in words)
     if not verdicts:

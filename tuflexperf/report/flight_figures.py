@@ -29,7 +29,6 @@ from tuflexperf.report.canvas import (
     flight_label,
     label_line_ends,
     new_figure,
-    page_legend,
     style_of,
     wrap_text,
 )
@@ -41,6 +40,7 @@ from tuflexperf.report.style import (
     FAIL_FILL,
     POINT,
     STYLE,
+    legend_outside,
     unit,
 )
 
@@ -169,34 +169,30 @@ def thrust_required_available(case: Case, analyses: Analyses) -> Any:
     drag = np.asarray(level_flight_drag_n(aircraft, vd, rho), dtype=float)
     ax.plot(vd, drag, **STYLE["required"], label="required (level-flight drag)")
     ax.axvline(stall, **STYLE["stall"], label=f"stall speed {stall:.1f} m/s")
+
+    def least(meaning: str, result: Any, label: str, *dead: Any) -> None:
+        """The thrust at ``result``'s least throttle, its point on the drag curve a dot."""
+        x, va = result.min_throttle, result.airspeed_at_min_throttle_m_s
+        engines = "" if dead else ", all engines"
+        ax.plot(v, np.asarray(total_thrust_n(propulsion, x, v, rho, *dead), dtype=float),
+                **style_of(meaning, linestyle="-."),
+                label=f"{label} {100 * x:.1f} %{engines} (dot: {va:.1f} m/s)")
+        ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], **POINT["least"],
+                markerfacecolor=STYLE[meaning]["color"])
+
     trim = analyses.trim
     if trim is not None and trim.min_throttle is not None:
-        x = trim.min_throttle
-        t = np.asarray(total_thrust_n(propulsion, x, v, rho), dtype=float)
-        va = trim.airspeed_at_min_throttle_m_s
-        ax.plot(v, t, **style_of("trim", linestyle="-."),
-                label=f"least trim throttle {100 * x:.1f} %, all engines (dot: {va:.1f} m/s)")
-        ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], **POINT["least"],
-                markerfacecolor=STYLE["trim"]["color"])
+        least("trim", trim, "least trim throttle")
     oei = analyses.oei
     if oei is not None:
         worst = oei.critical
-        index = [e.name for e in propulsion.engines].index(worst.dead_engine)
-        one = np.asarray(
-            total_thrust_n(propulsion, 1.0, v, rho, index, oei.dead_engine_mode), dtype=float
-        )
+        dead = ([e.name for e in propulsion.engines].index(worst.dead_engine),
+                oei.dead_engine_mode)
+        one = np.asarray(total_thrust_n(propulsion, 1.0, v, rho, *dead), dtype=float)
         ax.plot(v, one, **STYLE["oei"],
                 label=f"OEI: {worst.dead_engine} dead ({oei.dead_engine_mode}), others 100 %")
         if worst.min_throttle is not None:
-            x = worst.min_throttle
-            t = np.asarray(
-                total_thrust_n(propulsion, x, v, rho, index, oei.dead_engine_mode), dtype=float
-            )
-            va = worst.airspeed_at_min_throttle_m_s
-            ax.plot(v, t, **style_of("oei", linestyle="-."),
-                    label=f"OEI least throttle {100 * x:.1f} % (dot: {va:.1f} m/s)")
-            ax.plot([va], [float(level_flight_drag_n(aircraft, va, rho))], **POINT["least"],
-                    markerfacecolor=STYLE["oei"]["color"])
+            least("oei", worst, "OEI least throttle", *dead)
     _envelope_lines(ax, case)
     ax.set_xlim(0, right)
     top = 1.08 * float(np.max(full))
@@ -247,7 +243,7 @@ def _takeoff_not_attainable(case: Case, analyses: Analyses) -> Any:
     ad.set_ylabel(flight_label("net force T - D - friction", rho))
     ad.set_title("why: the net force on the runway", fontsize=10)
     ad.grid(alpha=0.3)
-    page_legend(ad)
+    legend_outside(ad)
     fig.suptitle(f"Take-off of {case.name}: not attainable")
     return fig
 
@@ -347,8 +343,8 @@ def takeoff_history(case: Case, analyses: Analyses) -> Any:
         af.text(0.5, 0.5, "catapult launch: no ground run (the catapult's energy, not the "
                 "battery's, brings the aircraft to its release speed)", transform=af.transAxes,
                 ha="center", va="center", fontsize=10)
-    page_legend(av)
-    page_legend(af)
+    legend_outside(av)
+    legend_outside(af)
     start = (f"catapult release at {v_lo:.1f} m/s, no ground roll" if catapult else
              f"ground roll {roll:.1f} m to lift-off at {v_lo:.1f} m/s")
     # the obstacle's reason may be long (never cleared, and why): wrapped, not cut at the edges
@@ -463,7 +459,7 @@ def trim_oei_throttle(case: Case, analyses: Analyses) -> Any:
     fig.suptitle(f"Trim and one-engine-inoperative throttle over the envelope, {case.name}"
                  + (" (A), compared" if analyses.compare else ""))
     ax.grid(alpha=0.3)
-    page_legend(ax)
+    legend_outside(ax)
     return fig
 
 
@@ -540,7 +536,7 @@ def endurance(case: Case, analyses: Analyses) -> Any:
     av.set_ylabel("pack terminal voltage U (V)")
     av.set_title(f"discharge runs, one pack; model rms error {ch.fit.rms_v:.3f} V", fontsize=10)
     av.grid(alpha=0.3)
-    page_legend(av)
+    legend_outside(av)
     curve = analyses.endurance_curve
     if curve:
         x = np.array([c[0] for c in curve])
@@ -606,6 +602,6 @@ def endurance(case: Case, analyses: Analyses) -> Any:
     af.set_title("level flight: endurance against throttle", fontsize=10)
     af.set_ylim(bottom=0)
     af.grid(alpha=0.3)
-    page_legend(af)
+    legend_outside(af)
     fig.suptitle(f"Endurance of {case.name} with {flown.title}")
     return fig

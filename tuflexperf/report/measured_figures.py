@@ -20,7 +20,6 @@ from tuflexperf.report.canvas import (
     basis_text,
     new_figure,
     note_box,
-    page_legend,
     style_of,
     thrust_label,
     wrap_text,
@@ -32,9 +31,7 @@ from tuflexperf.report.data import (
     model_force_n,
 )
 from tuflexperf.report.decimate import envelope as decimated
-from tuflexperf.report.style import (
-    STYLE,
-)
+from tuflexperf.report.style import STYLE, legend_outside
 
 
 # --- 4. thrust surfaces (paper Figs. 11-12) -----------------------------------------------------
@@ -112,7 +109,7 @@ def thrust_surface(case: Case, measured: Measured, engine_index: int) -> Any:
     ax_r.grid(alpha=0.3)
     span = max(float(np.max(np.abs(residual))), ACCURACY_GOAL_N)
     ax_r.set_ylim(-1.15 * span, 1.15 * span)
-    page_legend(ax_r)
+    legend_outside(ax_r)
     source = measured.source.name if measured.source is not None else "?"
     fig.suptitle(f"{title} with the measured points from {source} (paper Figs. 11-12)\n"
                  f"{basis_note(measured)}", fontsize=11)
@@ -158,7 +155,7 @@ def run_processing(run: ProcessedRun) -> Any:
                    label="detected change point" if k == 0 else None)
     ax.set_ylabel(thrust_label("balance force F = T - D", run.reference_density_kg_m3))
     ax.grid(alpha=0.3)
-    page_legend(ax)
+    legend_outside(ax)
     ax.tick_params(labelbottom=False)
     ts, x = decimated(t, run.throttle)
     axt.plot(ts, x, **STYLE["command"], label="throttle command")

@@ -25,16 +25,10 @@ from tuflexperf.report.canvas import (
     basis_text,
     new_figure,
     note_box,
-    page_legend,
     wrap_text,
 )
 from tuflexperf.report.data import Analyses, Measured, views
-from tuflexperf.report.style import (
-    CONFIG_COLOURS,
-    EXTRAPOLATED_FILL,
-    POINT,
-    STYLE,
-)
+from tuflexperf.report.style import CONFIG_COLOURS, EXTRAPOLATED_FILL, POINT, STYLE, legend_outside
 
 
 def configurations(case: Case, analyses: Analyses) -> list[tuple[str, Case, Analyses, str]]:
@@ -217,7 +211,7 @@ def flight_envelope(case: Case, analyses: Analyses) -> Any:
                   + (f" {case.atmosphere.temperature_offset_k:+g} K" if
                      case.atmosphere.temperature_offset_k else "") + ")")
     ax.grid(alpha=0.3)
-    page_legend(ax)
+    legend_outside(ax)
     ax.set_title("\n".join(texts), fontsize=8, loc="left")
     fig.suptitle("Altitude-airspeed envelope: level flight at full throttle, all engines and "
                  "one engine out (thrust x \u03c1/\u03c1ref)", fontsize=12)
@@ -324,7 +318,7 @@ def takeoff_profile(case: Case, analyses: Analyses) -> Any:
     ax.set_xlabel("distance from brake release s (m)")
     ax.set_ylabel("height above the runway h (m)")
     ax.grid(alpha=0.3)
-    page_legend(ax)
+    legend_outside(ax)
     ax.set_title("\n".join(titles), fontsize=9)
     fig.suptitle("Take-off height profile to the obstacle at full throttle: ground roll, "
                  "transition arc, straight climb", fontsize=12)
@@ -332,11 +326,6 @@ def takeoff_profile(case: Case, analyses: Analyses) -> Any:
 
 
 # --- report --compare: the verdicts side by side -------------------------------------------
-def verdict_word(verdict: Any) -> str:
-    """PASS / FAIL (and UNPROVEN where the verdict carries it)."""
-    return str(getattr(verdict, "verdict", None) or ("PASS" if verdict.passed else "FAIL"))
-
-
 def compare_verdicts(case: Case, analyses: Analyses) -> Any:
     """Every requirement of every configuration side by side: value and verdict per
     configuration, and for each after the first what changed against the first (value and
@@ -367,13 +356,13 @@ def compare_verdicts(case: Case, analyses: Analyses) -> Any:
                 row[1] = f"{'<=' if v.kind == 'max' else '>='} {v.limit:g}{_unit(v)}"
             value = "not stated" if v is None else (
                 "not attainable" if v.value is None else f"{v.value:.4g}{_unit(v)}")
-            word = "" if v is None else verdict_word(v)
+            word = "" if v is None else v.verdict
             row += [value, word]
             fill += ["white", PASS_FILL if word == "PASS" else FAIL_FILL if word == "FAIL"
                      else "#ffe0b2" if word else "white"]
             if k:
                 row += list(_change(first, v))
-                changed = word != ("" if first is None else verdict_word(first))
+                changed = word != ("" if first is None else first.verdict)
                 fill += ["#fff3c4" if changed else "white"] * 2
         rows.append(row)
         fills.append(fill)
