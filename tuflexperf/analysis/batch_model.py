@@ -105,6 +105,14 @@ class BatchModel(GroundRollRows):
             found = self.shared.memo[key] = _frozen(compute())
         return found
 
+    def shared_rows(self, name: str, arguments: tuple[Any, ...],
+                    compute: Callable[[], Any]) -> Any:
+        """``compute()``, a result of these rows that reads only the thrust of every engine
+        running, the aircraft and the air (never a fan's power), or the one another reading
+        of the batch made with equal ``arguments`` (:class:`SharedRows`); its arrays
+        read-only."""
+        return self._shared("live", name, arguments, compute)
+
     # -- the thrust-only results, shared between readings (SharedRows) ----------------------
     def thrust(self, throttle: Any, speed: Array, dead: int | None = None,
                mode: str = "windmilling") -> Array:
