@@ -176,7 +176,9 @@ def _launch_path(m: Any, roll: tuple[Array, Array, Array, Array], stall: Array,
     used[:, -1] = climb_speed
     for rows, steps in groups:
         stage_t = 0.5 * (roll_only[rows] / steps)[:, None] * np.arange(2 * steps + 1)[None, :]
-        used[rows, :2 * steps + 1] = interp_rows(stage_t, t_hist[rows], v_hist[rows])
+        every = rows.size == m.size  # one group: its histories as they are, not copied
+        used[rows, :2 * steps + 1] = interp_rows(stage_t, t_hist if every else t_hist[rows],
+                                                 v_hist if every else v_hist[rows])
     return ok, climb_time, roll_time, rotation, roll_only, groups, widest, used
 
 
