@@ -27,7 +27,7 @@ def plan(case):
 
 def _samples(case, plan, monkeypatch, split: bool):
     monkeypatch.setattr(uncertainty, "SPLIT_ROWS", 1000 if split else 10**9)
-    monkeypatch.setattr(uncertainty, "_second_core_idle", lambda: split)
+    monkeypatch.setattr(uncertainty, "second_core_idle", lambda: split)
     return run_samples(case, plan)
 
 

@@ -240,7 +240,7 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range,
     errors = plan.errors if plan.errors is not None else _legacy_errors(case, plan)
     evaluator = readings_evaluator(case, drawn=plan.extrapolation,
                                    drawn_model_form=errors.model_form_maps is not None)
-    if two_cores and draw.size >= SPLIT_ROWS and _second_core_idle():
+    if two_cores and draw.size >= SPLIT_ROWS and second_core_idle():
         result = _on_two_cores(evaluator, draw)
     else:
         result = evaluator.evaluate(draw.values, draw.size, draw.coefficients,
@@ -301,7 +301,7 @@ SPLIT_ROWS = 2 * CHUNK_SIZE
 with a second core): the fork's ~20 ms against half of ~30 us a row."""
 
 
-def _second_core_idle() -> bool:
+def second_core_idle() -> bool:
     """True where this process may run on two cores or more and the last minute's load
     (this process's own included) leaves one idle: on a machine busy with others the
     helper only adds the fork and its rows' fixed costs (~50 ms of CPU) to wait for."""
