@@ -91,7 +91,8 @@ class BatchModel(GroundRollRows):
     packs_air: Any = None  # that airborne part's settled path (airborne.AirborneOnPacks)
     # the results of the batch's other readings that this one may take (SharedRows)
     shared: SharedRows | None = None
-    _making: int = 0  # shared results being made (thrusts within them are not kept)
+    # shared results being made (the thrusts within them are not kept)
+    _making: int = dataclasses.field(default=0, init=False, repr=False, compare=False)
 
     def _shared(self, kind: str, name: str, arguments: tuple[Any, ...],
                 compute: Callable[[], Any]) -> Any:
