@@ -12,7 +12,8 @@
 * ``--workers 2`` (whole process, 40,000 samples) vs in-process, for the record
   (``--full``);
 * the load average before and after, and so whether a batch's second half runs in a helper
-  process (in process, only where a second core is idle).
+  process (in process, only where a second core is idle); in process, the helper against
+  one process whatever the load.
 
 Run: ``python bench/bench_uncertainty.py [PAIRS] [--full] [--whole]`` (``--whole``: the
 paired whole processes alone)
@@ -81,6 +82,27 @@ def cores_line() -> str:
             f"second half {where}")
 
 
+def two_cores_line(case: object, plan: SamplingPlan, rounds: int = 5) -> str:
+    """In process, a batch's second half in a helper process against all of it here, taking
+    turns whatever the load (medians of ``rounds``; the helper gains only on an idle core)."""
+    from tuflexperf.analysis import uncertainty
+
+    gate = uncertainty.second_core_idle
+    times: dict[bool, list[float]] = {True: [], False: []}
+    try:
+        for _ in range(rounds):
+            for split in (False, True):
+                uncertainty.second_core_idle = lambda split=split: split
+                start = time.perf_counter()
+                run_samples(case, plan)  # type: ignore[arg-type]
+                times[split].append(time.perf_counter() - start)
+    finally:
+        uncertainty.second_core_idle = gate
+    one, two = (statistics.median(times[k]) for k in (False, True))
+    return (f"in process, 10,000 samples: one process {one:.3f} s, half the rows in a helper "
+            f"{two:.3f} s ({one / two:.2f}x, medians of {rounds} taking turns)")
+
+
 def in_process() -> None:
     """Samples per second in process, and against the per-sample loop."""
     case = load_case()
@@ -94,6 +116,7 @@ def in_process() -> None:
         run_samples(case, plan)
         batched.append(time.perf_counter() - start)
     t_batch = statistics.median(batched)
+    print(two_cores_line(case, plan))
 
     # the naive way: one single-case analysis per sample (same draws)
     loop_n = 200
