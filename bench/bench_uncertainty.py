@@ -116,7 +116,7 @@ def in_process() -> None:
         run_samples(case, plan)
         batched.append(time.perf_counter() - start)
     t_batch = statistics.median(batched)
-    print(two_cores_line(case, plan))
+    split = two_cores_line(case, plan)
 
     # the naive way: one single-case analysis per sample (same draws)
     loop_n = 200
@@ -138,6 +138,7 @@ def in_process() -> None:
     print(f"in process: {plan.samples:,} samples x {len(evaluator_for(case).requirements)} "
           f"requirements in {t_batch:.3f} s (median of 5) = {plan.samples / t_batch:,.0f} "
           "samples/s (target >= 20,000/s)")
+    print(split)
     print(f"per-sample loop of single-case analyses: {t_loop:.1f} s for 10,000 "
           f"(measured on {loop_n}); batched is {t_loop / t_batch:.0f}x faster (target >= 100x)")
 
