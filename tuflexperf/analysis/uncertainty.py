@@ -29,6 +29,7 @@ requirements verification", NASA/TP-2010-216447; O'Neill (2015), "PCG" / numpy
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -304,18 +305,14 @@ with a second core): the fork's ~20 ms against half of ~30 us a row."""
 def second_core_idle() -> bool:
     """True where this process may run on two cores or more and the last minute's load
     (this process's own included) leaves one idle: on a machine busy with others the
-    helper only adds the fork and its rows' fixed costs (~50 ms of CPU) to wait for."""
+    helper only adds the fork and its rows' fixed costs (~50 ms of CPU) to wait for. Linux
+    only (a fork of a process holding CasADi and BLAS is not safe on macOS; Windows has none)."""
     import os
 
-    try:
-        usable = len(os.sched_getaffinity(0))
-    except AttributeError:  # not Linux
-        usable = os.cpu_count() or 1
-    try:
-        load = os.getloadavg()[0]
-    except (AttributeError, OSError):  # no load average: the cores alone
-        load = 0.0
-    return usable >= 2 and load < usable - 0.5
+    if not sys.platform.startswith("linux"):
+        return False
+    usable = len(os.sched_getaffinity(0))
+    return usable >= 2 and os.getloadavg()[0] < usable - 0.5
 
 
 def _draw_rows(draw: ChunkDraw, rows: slice) -> tuple[Any, ...]:
