@@ -10,7 +10,10 @@
   ``check`` taking turns (A B A B ...), the median of the pairs' ratios (target <= 1.5x);
   on a shared machine only the ratio of neighbouring runs means much;
 * ``--workers 2`` (whole process, 40,000 samples) vs in-process, for the record
-  (``--full``).
+  (``--full``);
+* the load average before and after, and so whether a batch's second half runs in a helper
+  process (in process, only where a second core is idle); in process, the helper against
+  one process whatever the load.
 
 Run: ``python bench/bench_uncertainty.py [PAIRS] [--full] [--whole]`` (``--whole``: the
 paired whole processes alone)
@@ -19,6 +22,7 @@ paired whole processes alone)
 from __future__ import annotations
 
 import dataclasses
+import os
 import statistics
 import subprocess
 import sys
@@ -34,6 +38,7 @@ from tuflexperf.analysis.uncertainty import (
     draw_chunk,
     evaluator_for,
     run_samples,
+    second_core_idle,
 )
 from tuflexperf.io.case import load_case
 from tuflexperf.io.dotted import with_values
@@ -50,6 +55,7 @@ TUFLEXPERF = str(Path(sys.executable).with_name("tuflexperf"))
 
 def main() -> None:
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    print(cores_line())
     if "--whole" not in sys.argv[1:]:
         in_process()
     pairs = int(args[0]) if args else 7
@@ -59,11 +65,42 @@ def main() -> None:
           f"check --samples 10000 {statistics.median(mc):.2f} s (medians); ratio median "
           f"{statistics.median(ratios):.2f}x, range {min(ratios):.2f}-{max(ratios):.2f}x "
           "(target <= 1.5x)")
+    print(cores_line())
     if "--full" in sys.argv[1:]:
         t_mc40 = wall([TUFLEXPERF, "check", "--samples", "40000"], 3)
         t_mc40_w2 = wall([TUFLEXPERF, "check", "--samples", "40000", "--workers", "2"], 3)
         print(f"whole process, 40,000 samples: in-process {t_mc40:.2f} s, --workers 2 "
               f"{t_mc40_w2:.2f} s ({t_mc40 / t_mc40_w2:.2f}x; 2 cores shared with others)")
+
+
+def cores_line() -> str:
+    """The load now, and so where a batch's second half runs (uncertainty.second_core_idle)."""
+    load = os.getloadavg()[0]
+    where = ("in a helper process" if second_core_idle()
+             else "here too (no idle second core)")
+    return (f"load average {load:.2f} on {len(os.sched_getaffinity(0))} usable cores: a batch's "
+            f"second half {where}")
+
+
+def two_cores_line(case: object, plan: SamplingPlan, rounds: int = 5) -> str:
+    """In process, a batch's second half in a helper process against all of it here, taking
+    turns whatever the load (medians of ``rounds``; the helper gains only on an idle core)."""
+    from tuflexperf.analysis import uncertainty
+
+    gate = uncertainty.second_core_idle
+    times: dict[bool, list[float]] = {True: [], False: []}
+    try:
+        for _ in range(rounds):
+            for split in (False, True):
+                uncertainty.second_core_idle = lambda split=split: split
+                start = time.perf_counter()
+                run_samples(case, plan)  # type: ignore[arg-type]
+                times[split].append(time.perf_counter() - start)
+    finally:
+        uncertainty.second_core_idle = gate
+    one, two = (statistics.median(times[k]) for k in (False, True))
+    return (f"in process, 10,000 samples: one process {one:.3f} s, half the rows in a helper "
+            f"{two:.3f} s ({one / two:.2f}x, medians of {rounds} taking turns)")
 
 
 def in_process() -> None:
@@ -79,6 +116,7 @@ def in_process() -> None:
         run_samples(case, plan)
         batched.append(time.perf_counter() - start)
     t_batch = statistics.median(batched)
+    split = two_cores_line(case, plan)
 
     # the naive way: one single-case analysis per sample (same draws)
     loop_n = 200
@@ -100,6 +138,7 @@ def in_process() -> None:
     print(f"in process: {plan.samples:,} samples x {len(evaluator_for(case).requirements)} "
           f"requirements in {t_batch:.3f} s (median of 5) = {plan.samples / t_batch:,.0f} "
           "samples/s (target >= 20,000/s)")
+    print(split)
     print(f"per-sample loop of single-case analyses: {t_loop:.1f} s for 10,000 "
           f"(measured on {loop_n}); batched is {t_loop / t_batch:.0f}x faster (target >= 100x)")
 

@@ -69,9 +69,12 @@ def test_the_power_reading_takes_the_nominal_thrust_results(case, rows) -> None:
     power = _reading(case, "measured_power")
     other = evaluator_for(power.case).evaluate(values, size, shared=shared)
     added = {key[1] for key in set(shared) - made}
-    # the roll, trim, OEI and every thrust the endurance asks for were the nominal's
-    assert not added & {"ground_roll", "trim", "oei", "thrust", "roll_history",
-                        "force_range"}
+    # the roll, trim, OEI and every thrust the endurance asks for (its level-flight airspeed
+    # and the launch's airspeeds whole) were the nominal's
+    taken = {"ground_roll", "trim", "oei", "thrust", "roll_history", "force_range",
+             "level_airspeed", "launch_path"}
+    assert {"level_airspeed", "launch_path"} <= {key[1] for key in made}
+    assert not added & taken
     np.testing.assert_array_equal(other.values["trim_throttle_max"],
                                   nominal.values["trim_throttle_max"])
     assert not np.allclose(other.values["flight_endurance"],

@@ -264,6 +264,8 @@ def test_a_scheduler_without_workers_is_said_not_waited_on(monkeypatch) -> None:
 
 
 def test_check_with_samples_imports_no_scipy_pandas_or_matplotlib() -> None:
+    """Nor rich off a terminal: its progress bar is never drawn there."""
+    import os
     import subprocess
     import sys
 
@@ -272,10 +274,13 @@ def test_check_with_samples_imports_no_scipy_pandas_or_matplotlib() -> None:
         "from tuflexperf.cli import main\n"
         "try:\n    main(['check', '--json', '--samples', '500'])\n"
         "except SystemExit:\n    pass\n"
-        "bad = [m for m in ('matplotlib', 'pandas', 'scipy', 'dask') if m in sys.modules]\n"
+        "bad = [m for m in ('matplotlib', 'pandas', 'scipy', 'dask', 'rich')\n"
+        "       if m in sys.modules]\n"
         "sys.stderr.write(','.join(bad))\n"
     )
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    env = {k: v for k, v in os.environ.items() if k not in ("FORCE_COLOR", "TTY_COMPATIBLE")}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=env)
     assert done.stderr == "", f"check --samples imported: {done.stderr}"
 
 

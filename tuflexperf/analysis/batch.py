@@ -54,6 +54,7 @@ from tuflexperf.analysis.airborne import obstacle_height_of
 from tuflexperf.analysis.attainable import stall_margin_of
 from tuflexperf.analysis.batch_kernels import fan_power_rows
 from tuflexperf.analysis.batch_model import BatchModel, SharedRows
+from tuflexperf.analysis.cache import ByObject
 from tuflexperf.analysis.level_flight import airspeed_grid, airspeed_grids
 from tuflexperf.analysis.pack_limits import (
     pack_rows,
@@ -144,6 +145,17 @@ class BatchResult:
         return requirement_met(self.values[name], self.limits[name], self.kinds[name])
 
 
+_IMPLAUSIBLE: ByObject[Any] = ByObject()
+
+
+def _implausible(case: Case) -> Any:
+    """:func:`~tuflexperf.analysis.plausibility.implausible` of ``case``, once per case object
+    (a case's evaluators for other blocks, e.g. its endurance's batch of one, ask again)."""
+    from tuflexperf.analysis.plausibility import implausible
+
+    return _IMPLAUSIBLE.get(case, lambda: implausible(case))
+
+
 def _column(values: Mapping[str, Array], key: str, nominal: Any, size: int) -> Any:
     """The batch's values of ``key`` as ``(B, 1)``, or the nominal when it does not vary."""
     if key in values:
@@ -161,14 +173,12 @@ class BatchEvaluator:
     """
 
     def __init__(self, case: Case, blocks: frozenset[str] | None = None) -> None:
-        from tuflexperf.analysis.plausibility import implausible
-
         self.case = case
         # ``blocks``: only these requirement blocks (a reading's case evaluates the ones it
         # bears on; analysis.batch_readings)
         self.requirements = [r for r in present_requirements(case)
                              if blocks is None or r.block in blocks]
-        self.implausible = implausible(case)
+        self.implausible = _implausible(case)
         self._side: Any = None
         if case.battery_path is not None:
             self._side = pack_side(case)  # the plausibility rule's packs (cached fit)
@@ -225,10 +235,12 @@ class BatchEvaluator:
         base = self.case.propulsion
         if coefficients is None:
             return base
+        # each term's rows contiguous (not a view striding the (E, B, 6) draws): every thrust
+        # of the batch reads them, ~40 % quicker so
         engines = tuple(
             dataclasses.replace(
                 engine,
-                coefficients={t: coefficients[j, :, i][:, None]
+                coefficients={t: np.ascontiguousarray(coefficients[j, :, i])[:, None]
                               for i, t in enumerate(POLY22_TERMS)},
             )
             for j, engine in enumerate(base.engines)

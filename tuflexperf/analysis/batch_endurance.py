@@ -64,6 +64,13 @@ Array = NDArray[np.float64]
 IMPOSSIBLE_FIGURE_OF_MERIT = 2.0
 
 
+def _shared(m: Any, name: str, arguments: tuple[Any, ...], compute: Any) -> Any:
+    """``compute()``, or the same thrust-only result of another reading of the batch's rows
+    (:meth:`.batch_model.BatchModel.shared_rows`; rows without it compute their own)."""
+    share = getattr(m, "shared_rows", None)
+    return compute() if share is None else share(name, arguments, compute)
+
+
 def battery_side(case: Any) -> Any:
     """What the endurance flight takes from the case's battery: the battery, its fitted pack
     model (``params``) and the fan power model (:func:`.pack_limits.pack_side`, cached).
@@ -130,14 +137,12 @@ def _rk4_phase(params: Any, q: Array, h: Array, active: Array,
     return q, peak, above
 
 
-def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
-                   stall: Array, height: Array, packs: Array, cutoff_v: Array,
-                   engines: tuple[Any, ...] = (None,)) -> _Launch:
-    """Charge [Ah] per fan drawn by roll + climb to ``height`` [m] on ``packs`` measured packs
-    in parallel per fan, one row per fan of ``engines`` (each with its own power surface;
-    ``None``: the largest fan's power), the climb time [s] and the rest of
-    :class:`_Launch`; NaN if impossible, the packs' cut-off ``cutoff_v`` [V] reached on the
-    way included. The fans are integrated together, as ``(fans, rows)`` arrays."""
+def _launch_path(m: Any, roll: tuple[Array, Array, Array, Array], stall: Array,
+                 height: Array) -> tuple[Any, ...]:
+    """What of the launch reads only the thrust, the aircraft and the air (the power
+    model never): where it is flown, its climb time [s], roll time [s], rotation [s], roll
+    before the rotation [s], the roll's row groups with their RK4 steps, the widest group's
+    stage count, and every airspeed [m/s] the launch takes power at (:class:`_Launch`)."""
     _, roll_time, v_lo, ok = roll
     climb_speed, climb_rate = best_climb(m, v_lo, stall)
     ok = (ok > 0.5) & ~((height > 0) & (climb_rate <= 0))
@@ -147,17 +152,11 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     with np.errstate(divide="ignore", invalid="ignore"):
         climb_time = np.where(ok, np.where(height > 0, height / climb_rate, 0.0), np.nan)
     roll_time = np.where(ok, roll_time, 0.0)
-    climb_time_safe = np.where(ok, climb_time, 0.0)
     # a catapult launch has no roll: its history is never looked up (the roll time is 0)
     t_hist = (np.zeros((m.size, 2)) if m.aircraft.launch == "catapult"
               else m.roll_history(ok))
     v_hist = v_lo[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
     t_hist = np.where(ok[:, None], t_hist, 0.0)
-    params = model.params
-
-    def power(throttle: float, speed: Array) -> Array:
-        return np.stack([fan_power_rows(model, m, throttle, speed, engine) for engine in engines])
-
     # the roll along its airspeed history, as many steps for a roll of hours as of seconds
     # (steps of 0.5 s made one such row stall a whole chunk; outside audit): the mission's 64
     # where the net force all but vanishes (the airspeed dwells, 16 were 5e-5 off), else 16
@@ -168,6 +167,39 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
     least, most = m.force_range() if not catapult else (np.ones(m.size), np.ones(m.size))
     with np.errstate(invalid="ignore"):
         dwelling = least < _DWELL_FORCE_SHARE * most
+    groups = [(rows, steps) for rows, steps in ((np.flatnonzero(~dwelling), _ROLL_STEPS),
+                                                (np.flatnonzero(dwelling), _DWELL_ROLL_STEPS))
+              if rows.size]
+    widest = 2 * max((steps for _, steps in groups), default=_ROLL_STEPS) + 1
+    # every airspeed of the roll's stages (padded with V_LO), then V_LO and the climb's
+    used = np.repeat(v_lo[:, None], widest + 1, axis=1)
+    used[:, -1] = climb_speed
+    for rows, steps in groups:
+        stage_t = 0.5 * (roll_only[rows] / steps)[:, None] * np.arange(2 * steps + 1)[None, :]
+        every = rows.size == m.size  # one group: its histories as they are, not copied
+        used[rows, :2 * steps + 1] = interp_rows(stage_t, t_hist if every else t_hist[rows],
+                                                 v_hist if every else v_hist[rows])
+    return ok, climb_time, roll_time, rotation, roll_only, groups, widest, used
+
+
+def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
+                   stall: Array, height: Array, packs: Array, cutoff_v: Array,
+                   engines: tuple[Any, ...] = (None,)) -> _Launch:
+    """Charge [Ah] per fan drawn by roll + climb to ``height`` [m] on ``packs`` measured packs
+    in parallel per fan, one row per fan of ``engines`` (each with its own power surface;
+    ``None``: the largest fan's power), the climb time [s] and the rest of
+    :class:`_Launch`; NaN if impossible, the packs' cut-off ``cutoff_v`` [V] reached on the
+    way included. The fans are integrated together, as ``(fans, rows)`` arrays."""
+    # the roll's and the climb's airspeeds read only the thrust: one reading's for them all
+    ok, climb_time, roll_time, rotation, roll_only, groups, widest, used = _shared(
+        m, "launch_path", (roll, stall, height), lambda: _launch_path(m, roll, stall, height))
+    v_lo, climb_speed = roll[2], used[:, -1]
+    climb_time_safe = np.where(ok, climb_time, 0.0)
+    params = model.params
+
+    def power(throttle: float, speed: Array) -> Array:
+        return np.stack([fan_power_rows(model, m, throttle, speed, engine) for engine in engines])
+
     fans = len(engines)
     q, peak = np.zeros((fans, m.size)), np.zeros((fans, m.size))
     above = np.ones((fans, m.size), dtype=bool)
@@ -180,16 +212,6 @@ def _launch_charge(m: Any, model: Any, roll: tuple[Array, Array, Array, Array],
         peak[:, rows] = np.maximum(peak[:, rows], group_peak)
         above[:, rows] &= held
 
-    groups = [(rows, steps) for rows, steps in ((np.flatnonzero(~dwelling), _ROLL_STEPS),
-                                                (np.flatnonzero(dwelling), _DWELL_ROLL_STEPS))
-              if rows.size]
-    widest = 2 * max((steps for _, steps in groups), default=_ROLL_STEPS) + 1
-    # every airspeed of the roll's stages (padded with V_LO), then V_LO and the climb's
-    used = np.repeat(v_lo[:, None], widest + 1, axis=1)
-    used[:, -1] = climb_speed
-    for rows, steps in groups:
-        stage_t = 0.5 * (roll_only[rows] / steps)[:, None] * np.arange(2 * steps + 1)[None, :]
-        used[rows, :2 * steps + 1] = interp_rows(stage_t, t_hist[rows], v_hist[rows])
     rolling = power(1.0, used[:, :widest])
     for rows, steps in groups:
         rk4_rows(rows, roll_only[rows] / steps, roll_only[rows] > 0.0,
@@ -314,6 +336,13 @@ def level_airspeed(m: Any, throttle: Array, stall: Array) -> tuple[Array, NDArra
     """The fast level-flight airspeed [m/s] per row at ``throttle`` [-] (all engines, the
     reference voltage) and where the throttle holds level flight at or above the least
     level-flight airspeed (``stall`` [m/s] x the envelope's margin)."""
+    # thrust only: one reading's for them all (its flags copied, the caller narrows them)
+    speed, ok = _shared(m, "level_airspeed", (throttle, stall),
+                        lambda: _level_airspeed(m, throttle, stall))
+    return speed, ok.copy()
+
+
+def _level_airspeed(m: Any, throttle: Array, stall: Array) -> tuple[Array, NDArray[np.bool_]]:
     most, least_speed = _most_excess(m, throttle, m.least_airspeed(), stall)
     # a throttle down to the least one less 1e-9 holds it (EnduranceModel.check_throttle)
     ok = (most >= 0.0) | (_excess(m, throttle + 1e-9, least_speed) >= 0.0)

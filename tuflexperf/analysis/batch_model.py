@@ -91,6 +91,8 @@ class BatchModel(GroundRollRows):
     packs_air: Any = None  # that airborne part's settled path (airborne.AirborneOnPacks)
     # the results of the batch's other readings that this one may take (SharedRows)
     shared: SharedRows | None = None
+    # shared results being made (the thrusts within them are not kept)
+    _making: int = dataclasses.field(default=0, init=False, repr=False, compare=False)
 
     def _shared(self, kind: str, name: str, arguments: tuple[Any, ...],
                 compute: Callable[[], Any]) -> Any:
@@ -102,12 +104,28 @@ class BatchModel(GroundRollRows):
         key = (identity, name, _digest(arguments))
         found = self.shared.memo.get(key, _MISSING)
         if found is _MISSING:
-            found = self.shared.memo[key] = _frozen(compute())
+            self._making += 1
+            try:
+                found = self.shared.memo[key] = _frozen(compute())
+            finally:
+                self._making -= 1
         return found
+
+    def shared_rows(self, name: str, arguments: tuple[Any, ...],
+                    compute: Callable[[], Any]) -> Any:
+        """``compute()``, a result of these rows that reads only the thrust of every engine
+        running, the aircraft and the air (never a fan's power), or the one another reading
+        of the batch made with equal ``arguments`` (:class:`SharedRows`); its arrays
+        read-only."""
+        return self._shared("live", name, arguments, compute)
 
     # -- the thrust-only results, shared between readings (SharedRows) ----------------------
     def thrust(self, throttle: Any, speed: Array, dead: int | None = None,
                mode: str = "windmilling") -> Array:
+        if self._making:
+            # within a shared result another reading takes whole: its thrusts are asked
+            # for again by nobody (keeping them cost their hashing and their memory)
+            return super().thrust(throttle, speed, dead, mode)
         kind = "dead" if dead is not None and mode == "windmilling" else "live"
         return self._shared(kind, "thrust", (throttle, speed, dead, mode),
                             lambda: super(BatchModel, self).thrust(throttle, speed, dead, mode))

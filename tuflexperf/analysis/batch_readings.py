@@ -14,7 +14,7 @@ drag) takes the nominal's thrust-only results of the same rows instead of making
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -117,16 +117,27 @@ class ReadingsEvaluator:
                  extrapolation_n: Array | None = None,
                  power_scale: Array | None = None) -> BatchResult:
         """As :meth:`BatchEvaluator.evaluate`, on every reading too."""
+        return self.combined(*self.readings_rows(values, size, coefficients, extrapolation_n,
+                                                 power_scale))
+
+    def readings_rows(self, values: Mapping[str, Array] | None = None, size: int | None = None,
+                      coefficients: Array | None = None,
+                      extrapolation_n: Array | None = None,
+                      power_scale: Array | None = None
+                      ) -> tuple[BatchResult, dict[str, dict[str, Array]]]:
+        """The nominal batch's result and, by reading key, each reading's values where it
+        is flown, before :meth:`combined` judges the rows on them (arguments as
+        :meth:`evaluate`)."""
         # the results that read only the thrust: made once for every reading that flies it
         shared: dict[Any, Any] | None = {} if self.sharing else None
         result = self.nominal.evaluate(values, size, coefficients, extrapolation_n, power_scale,
                                        shared)
+        theirs: dict[str, dict[str, Array]] = {}
         if not self.readings:
-            return result
+            return result, theirs
         from tuflexperf.analysis.evaluators import evaluator_for
 
         rows = next(iter(result.values.values())).shape[0] if result.values else size
-        theirs = []
         for reading, blocks in self.readings:
             if reading.beyond_tested_only:
                 # the bound moves thrust beyond the tested airspeeds only: a block no row of
@@ -136,13 +147,52 @@ class ReadingsEvaluator:
                                    and result.extrapolated[r.name].any())
             if blocks:
                 evaluator = evaluator_for(reading.case, blocks)
-                theirs.append((reading, evaluator.evaluate(
+                theirs[reading.key] = evaluator.evaluate(
                     values, rows, coefficients, extrapolation_n, power_scale,
-                    shared if reading.key in self.sharing else None).values))
+                    shared if reading.key in self.sharing else None).values
+        return result, theirs
+
+    def combined(self, result: BatchResult, theirs: Mapping[str, Mapping[str, Array]]
+                 ) -> BatchResult:
+        """The nominal ``result`` with each requirement's rows judged on every reading in
+        ``theirs`` (:meth:`readings_rows`): the worse reading's values, ``disputed`` and
+        ``reading_values`` as :func:`combine_rows`."""
+        if not self.readings:
+            return result
+        flown = [(r, theirs[r.key]) for r, _ in self.readings if r.key in theirs]
         worse, disputed, by_reading = combine_rows(result.values, result.limits,
-                                                   result.kinds, theirs)
+                                                   result.kinds, flown)
         return dataclasses.replace(result, values=worse, disputed=disputed,
                                    reading_values=by_reading)
+
+
+def joined_rows(parts: Sequence[tuple[BatchResult, Mapping[str, Mapping[str, Array]]]]
+                ) -> tuple[BatchResult, dict[str, dict[str, Array]]]:
+    """Consecutive rows' :meth:`ReadingsEvaluator.readings_rows` as those of one batch (each
+    row's results are its own, whatever rows share its batch). A reading not flown on some
+    part's rows (a bound beyond the tested airspeeds, where none of them flies) has the
+    nominal's values there, as one batch gives them."""
+    results = [result for result, _ in parts]
+
+    def rows(arrays: list[Any]) -> Any:
+        return None if arrays[0] is None else np.concatenate(arrays)
+
+    def by_name(field: str) -> dict[str, Array]:
+        first = getattr(results[0], field)
+        return {n: np.concatenate([getattr(r, field)[n] for r in results]) for n in first}
+
+    joined = dataclasses.replace(
+        results[0], values=by_name("values"), limits=by_name("limits"),
+        refused=rows([r.refused for r in results]),
+        without_envelope=rows([r.without_envelope for r in results]),
+        extrapolated=by_name("extrapolated"), airspeeds=by_name("airspeeds"))
+    keys = list(dict.fromkeys(key for _, theirs in parts for key in theirs))
+    theirs: dict[str, dict[str, Array]] = {}
+    for key in keys:
+        names = dict.fromkeys(n for _, t in parts for n in t.get(key, {}))
+        theirs[key] = {n: np.concatenate([t.get(key, {}).get(n, result.values[n])
+                                          for result, t in parts]) for n in names}
+    return joined, theirs
 
 
 def readings_evaluator(case: Case, drawn: bool = False, drawn_model_form: bool = False

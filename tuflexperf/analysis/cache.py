@@ -88,3 +88,22 @@ class BoundedCache(Generic[T]):
 
     def __len__(self) -> int:
         return len(self._items)
+
+
+class ByObject(Generic[T]):
+    """What was found for each of the last ``size`` objects asked about, by identity (each
+    held, so its id stays); for frozen objects only (the same object, the same answer)."""
+
+    def __init__(self, size: int = 8) -> None:
+        self.size = size
+        self._items: list[tuple[Any, T]] = []
+
+    def get(self, obj: Any, build: Callable[[], T]) -> T:
+        """The answer for ``obj``, built by ``build()`` the first time it is asked about."""
+        for held, value in self._items:
+            if held is obj:
+                return value
+        value = build()
+        self._items.insert(0, (obj, value))
+        del self._items[self.size:]
+        return value

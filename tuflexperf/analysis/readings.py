@@ -18,7 +18,7 @@ import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from tuflexperf.analysis.cache import file_key, fingerprint
+from tuflexperf.analysis.cache import ByObject, file_key, fingerprint
 from tuflexperf.io.case import Case
 from tuflexperf.models.thrust import thrust_part
 
@@ -64,12 +64,19 @@ class Reading:
 Provider = Callable[[Case], tuple[Reading, ...]]
 
 
+_IDENTITIES: ByObject[tuple[str, str]] = ByObject()
+
+
 def thrust_identity(case: Case) -> tuple[str, str]:
     """Fingerprints of what ``case``'s thrust reads: every engine running (the power
     correction of a reading left out, and the dead engines' windmilling drag), then with
     that drag. Two readings of a case with equal fingerprints fly the same thrust, so a
     batch's results that read only the thrust serve both
-    (:class:`tuflexperf.analysis.batch_model.SharedRows`)."""
+    (:class:`tuflexperf.analysis.batch_model.SharedRows`). Kept per case object."""
+    return _IDENTITIES.get(case, lambda: _thrust_identity(case))
+
+
+def _thrust_identity(case: Case) -> tuple[str, str]:
     battery = case.battery_path
     parts = (case.aircraft, case.atmosphere, case.requirements, case.overrides, str(battery),
              file_key(battery) if battery is not None and battery.exists() else None)

@@ -29,6 +29,7 @@ requirements verification", NASA/TP-2010-216447; O'Neill (2015), "PCG" / numpy
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -223,12 +224,14 @@ def evaluate_chunk(case: Case, plan: SamplingPlan, index: int) -> dict[str, Arra
     return evaluate_batch(case, plan, range(index, index + 1))
 
 
-def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range) -> dict[str, Array]:
+def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range,
+                   two_cores: bool = False) -> dict[str, Array]:
     """Draw ``chunks`` and evaluate them as one batch: per requirement its values (NaN = not
     attainable), in chunk order, and per kind the samples counted as not met.
 
     A module-level function of picklable arguments, so local processes and Dask workers
-    run it as they are.
+    run it as they are. ``two_cores``: half the rows in a helper process where a second
+    core is there (:func:`_on_two_cores`; the same numbers).
     """
     from tuflexperf.analysis.batch_readings import combine_rows, readings_evaluator
 
@@ -238,8 +241,11 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range) -> dict[str, A
     errors = plan.errors if plan.errors is not None else _legacy_errors(case, plan)
     evaluator = readings_evaluator(case, drawn=plan.extrapolation,
                                    drawn_model_form=errors.model_form_maps is not None)
-    result = evaluator.evaluate(draw.values, draw.size, draw.coefficients,
-                                draw.extrapolation_n, draw.power_scale)
+    if two_cores and draw.size >= SPLIT_ROWS and second_core_idle():
+        result = _on_two_cores(evaluator, draw)
+    else:
+        result = evaluator.evaluate(draw.values, draw.size, draw.coefficients,
+                                    draw.extrapolation_n, draw.power_scale)
     # a sample outside a key's schema bounds (a negative cd0 from a wide normal) is no
     # aircraft: every requirement counts it as not met, and it is reported
     outside = np.zeros(draw.size, dtype=bool)
@@ -289,6 +295,96 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range) -> dict[str, A
         for name, value in by_name.items():
             out[f"reading:{key}:{name}"] = np.where(outside, np.nan, value)
     return out
+
+
+SPLIT_ROWS = 2 * CHUNK_SIZE
+"""A batch of this many rows or more runs half its rows in a helper process (in process,
+with a second core): the fork's ~20 ms against half of ~30 us a row."""
+
+
+def second_core_idle() -> bool:
+    """True where this process may run on two cores or more and the last minute's load
+    (this process's own included) leaves one idle: on a machine busy with others the
+    helper only adds the fork and its rows' fixed costs (~50 ms of CPU) to wait for. Linux
+    only (a fork of a process holding CasADi and BLAS is not safe on macOS; Windows has none)."""
+    import os
+
+    if not sys.platform.startswith("linux"):
+        return False
+    usable = len(os.sched_getaffinity(0))
+    return usable >= 2 and os.getloadavg()[0] < usable - 0.5
+
+
+def _draw_rows(draw: ChunkDraw, rows: slice) -> tuple[Any, ...]:
+    """:meth:`ReadingsEvaluator.evaluate`'s arguments for ``rows`` of ``draw``."""
+    def part(array: Array | None, axis: int = 0) -> Array | None:
+        if array is None:
+            return None
+        return np.ascontiguousarray(array[(slice(None),) * axis + (rows,)])
+
+    size = len(range(draw.size)[rows])
+    return ({key: part(v) for key, v in draw.values.items()}, size,
+            part(draw.coefficients, 1), part(draw.extrapolation_n, 1), part(draw.power_scale))
+
+
+def _on_two_cores(evaluator: Any, draw: ChunkDraw) -> Any:
+    """``evaluator.evaluate`` of ``draw``'s rows, the second half of them in a forked helper
+    process while this one does the first; the readings are judged over all rows at once.
+
+    A row's results are its own whatever rows share its batch (each solver stops a row at
+    its own convergence), so the numbers are those of one batch. A helper that cannot be
+    forked, or that dies, leaves its half to be done here; an error in it is raised here.
+    """
+    import multiprocessing
+
+    from tuflexperf.analysis.batch_readings import joined_rows
+    from tuflexperf.io.files import raise_if_interrupted, start_helper, stop_helpers
+
+    if "fork" not in multiprocessing.get_all_start_methods():  # it would pickle the models
+        return evaluator.evaluate(draw.values, draw.size, draw.coefficients,
+                                  draw.extrapolation_n, draw.power_scale)
+    half = draw.size // 2
+    first, second = _draw_rows(draw, slice(0, half)), _draw_rows(draw, slice(half, None))
+    reader, writer = multiprocessing.Pipe(duplex=False)
+    helpers: list[Any] = []
+    finished = False
+    try:
+        try:
+            start_helper(_rows_beside, (evaluator, second, writer), helpers)
+        except OSError:  # no process to be had: its half here (EOF below)
+            pass
+        writer.close()  # the helper's end: the pipe ends here when the helper does
+        mine = evaluator.readings_rows(*first)
+        try:
+            theirs: Any = reader.recv()
+        except EOFError:  # no helper, or it died (killed from outside): its half here
+            raise_if_interrupted()
+            theirs = evaluator.readings_rows(*second)
+        if isinstance(theirs, BaseException):
+            raise theirs
+        finished = True
+    finally:
+        if not finished:
+            stop_helpers(helpers)
+        writer.close()
+        reader.close()
+        for helper in helpers:
+            helper.join()
+    return evaluator.combined(*joined_rows([mine, theirs]))
+
+
+def _rows_beside(evaluator: Any, arguments: tuple[Any, ...], writer: Any) -> None:
+    """The helper of :func:`_on_two_cores`: its rows' readings_rows (or the error they
+    raised) sent on ``writer``."""
+    try:
+        outcome: Any = evaluator.readings_rows(*arguments)
+    except Exception as exc:  # raised again in the parent, as if the rows ran there
+        outcome = exc
+    try:
+        writer.send(outcome)
+    except OSError:  # the parent is gone: nobody to tell
+        return
+    writer.close()
 
 
 MISSION_KINDS = {"mission_landing_charge": "min", "mission_solved_time": "min"}
@@ -523,10 +619,12 @@ def run_samples(
     ----------
     Hanson & Beard (2010), NASA/TP-2010-216447 (Monte Carlo requirement verification).
     """
+    # in process (no --workers, no Dask): a batch's rows on two cores where one is idle
+    here = not dask_address and workers is None
     with earlier_objects_frozen(), freed_arrays_kept(), one_blas_thread():
         parts = run_chunks(
             evaluate_batch,
-            [(case, plan, chunks) for chunks in batches(plan)],
+            [(case, plan, chunks, here) for chunks in batches(plan)],
             workers,
             dask_address,
             progress,

@@ -7,10 +7,24 @@ has run :data:`DELAY_S`; a quicker command never flashes one.
 
 from __future__ import annotations
 
+import os
+import sys
 import threading
 from typing import Any
 
 DELAY_S = 1.0  # work quicker than this shows no bar
+
+
+def _maybe_terminal() -> bool:
+    """False where rich's ``Console(stderr=True).is_terminal`` is surely False: stderr no
+    terminal, and neither ``TTY_COMPATIBLE=1`` nor ``FORCE_COLOR`` says otherwise."""
+    if os.environ.get("TTY_COMPATIBLE", "") == "1" or "FORCE_COLOR" in os.environ:
+        return True
+    isatty = getattr(sys.stderr, "isatty", None)
+    try:
+        return bool(isatty is not None and isatty())
+    except ValueError:  # a closed stream, as rich takes it
+        return False
 
 
 class TerminalProgress:
@@ -18,11 +32,18 @@ class TerminalProgress:
     label)`` is the callback. Rich's transient bar on stderr when it is a terminal."""
 
     def __init__(self, what: str, console: Any = None, delay_s: float = DELAY_S) -> None:
-        from rich.console import Console
-
         self.what = what
-        self.console = console if console is not None else Console(stderr=True)
-        self.enabled = bool(self.console.is_terminal)
+        if console is None and not _maybe_terminal():
+            # rich's import (~15 ms, more than all else `check --samples` adds but the batch)
+            # for its own answer, "no terminal", known here already
+            self.console, self.enabled = None, False
+        else:
+            if console is None:
+                from rich.console import Console
+
+                console = Console(stderr=True)
+            self.console = console
+            self.enabled = bool(console.is_terminal)
         self.delay_s = delay_s
         self._lock = threading.Lock()
         self._state: tuple[int, int | None, str] = (0, None, "")

@@ -102,8 +102,10 @@ def interp_rows(t: Array, t_hist: Array, v_hist: Array) -> Array:
     as long as the rest of the launch).
     """
     rows, width = t_hist.shape
-    low_t = min(float(t_hist.min()), float(t.min()))
-    high_t = max(float(t_hist.max()), float(t.max()))
+    # a non-decreasing row's least and greatest are its ends (a pass over two columns, not
+    # over every history)
+    low_t = min(float(t_hist[:, 0].min()), float(t.min()))
+    high_t = max(float(t_hist[:, -1].max()), float(t.max()))
     offset = (np.arange(rows, dtype=float) * (high_t - low_t + 1.0))[:, None]
     flat = (t_hist + offset).ravel()
     at = np.searchsorted(flat, (t + offset).ravel(), side="right").reshape(t.shape) - 1
