@@ -229,29 +229,6 @@ def test_the_batch_flies_trim_and_oei_on_the_packs_as_the_single_case(tmp_path, 
                 assert got == pytest.approx(expected, abs=1e-9), (name, row)
 
 
-@pytest.mark.parametrize(("reference_v", "c_rate"), [(None, None), (None, 4.7), (47.3, None)])
-def test_the_batch_takes_off_on_the_packs_as_the_single_case(tmp_path, reference_v, c_rate):
-    """Full throttle at the brake release and after the take-off's charge: the rows' packs
-    decide as the single case's (a batch that took off where the case could not)."""
-    capacities = [0.7, 0.9, 1.1, 1.3, 1.45, 1.55, 1.7, 2.0, 5.0, 8.0]
-    nominal = _case(tmp_path / "nominal", reference_v, c_rate)
-    batch = BatchEvaluator(nominal).evaluate({"battery.capacity_ah": np.array(capacities)})
-    verdicts = []
-    for i, capacity in enumerate(capacities):
-        single = _case(tmp_path / f"row{i}", reference_v, c_rate,
-                       (f"battery.capacity_ah={capacity}",))
-        got = float(batch.values["takeoff_ground_roll"][i])
-        try:
-            expected = solve_takeoff(single).ground_roll_m
-        except NotAttainable:
-            assert np.isnan(got), capacity
-            verdicts.append(False)
-            continue
-        assert got == pytest.approx(expected, rel=1e-6), capacity
-        verdicts.append(True)
-    assert True in verdicts and False in verdicts  # the rows straddle the packs' limit
-
-
 def test_sampled_cruises_cross_the_tested_range_on_sagging_packs(tmp_path) -> None:
     """The samples' extrapolation error steps the thrust at the tested range's end; a cruise
     whose airspeed falls through it as the packs sag still flies (168 of 300 samples were
@@ -331,7 +308,8 @@ def test_beyond_the_battery_only_in_the_bound_says_so(tmp_path) -> None:
     airspeed before the last, the reason says that point has the charge only in the bound
     and that the last airspeed holds: EDF2 sags more at 16.7 m/s than at rest, so listed
     as [16.7, 0] with a cut-off between its two voltages only the first fails."""
-    from tuflexperf.analysis.pack_limits import on_packs, takeoff_beyond_battery
+    from tuflexperf.analysis.pack_limits import on_packs
+    from tuflexperf.analysis.takeoff import takeoff_beyond_battery
 
     nominal = _case(tmp_path / "nominal", 44.0)
     side = pack_side(nominal)

@@ -32,7 +32,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tuflexperf.analysis.airborne import BEYOND_THE_BATTERY_STATUS, rotation_charge, settle_airborne
+from tuflexperf.analysis.airborne import (
+    BEYOND_THE_BATTERY_STATUS,
+    ObstaclePath,
+    obstacle_path,
+    rotation_charge,
+    settle_airborne,
+)
 from tuflexperf.analysis.batch_kernels import fan_power_rows
 from tuflexperf.analysis.batch_sagging import SaggingFlight
 from tuflexperf.analysis.ground_roll import GroundRollRows
@@ -40,7 +46,6 @@ from tuflexperf.analysis.pack_limits import PackRows, operating_point, pack_rows
 from tuflexperf.models.aircraft import (
     climb_gradient,
     ground_roll_net_force_n,
-    obstacle_distances_m,
     transition_radius_m,
 )
 from tuflexperf.models.battery import SECONDS_PER_HOUR
@@ -131,6 +136,14 @@ class TakeoffPacks:
         shape = (self.n, v.size)
         return (thrust.reshape(-1), np.broadcast_to(current.reshape(fans, -1), shape),
                 np.broadcast_to(volts.reshape(fans, -1), shape))
+
+    def obstacle_path(self, charge_ah: Array | None, height: float) -> ObstaclePath:
+        """The arc and climb to the obstacle ``height`` [m] from ``charge_ah`` drawn per
+        engine ``(n,)`` (None: full packs) (:func:`path_on_packs`, one row)."""
+        fans = len(self.flight.engines)
+        start = np.zeros((fans, 1)) if charge_ah is None else \
+            np.reshape(charge_ah, (self.n, 1))[:fans]
+        return path_on_packs(self.model, self.side, self.rows, start, height)
 
     def roll(self) -> RollOnPacks:
         """The ground roll and rotation on the packs (:func:`roll_on_packs`, one row)."""
@@ -234,23 +247,23 @@ def release_on_packs(m: Any, packs: Any, rows: PackRows) -> tuple[Array, Array, 
     return m.release_run(thrust_and_current)
 
 
-def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
-                      height: Any) -> tuple[Array, NDArray[np.bool_], Any]:
-    """Transition arc + climb to the obstacle [m] per row on the sagging packs from the
-    charge after the roll and rotation (a catapult's release acceleration), as
-    :func:`tuflexperf.analysis.takeoff.solve_takeoff`; ``inf`` where never cleared. And per
-    row whether the packs reach their cut-off in the climb before the obstacle (the
-    take-off is then not attainable, as the single case's), and the settled path
-    (:class:`~tuflexperf.analysis.airborne.AirborneOnPacks`: the mission flies its gradients)."""
+def path_on_packs(m: Any, packs: Any, rows: PackRows, start: Array, height: Any
+                  ) -> ObstaclePath:
+    """Transition arc + climb to the obstacle ``height`` [m] per row on the sagging packs from
+    ``start`` [Ah] drawn per fan ``(fans, B)`` after the roll and rotation (a catapult's
+    release acceleration): :func:`~tuflexperf.analysis.airborne.settle_airborne` at the
+    transition speed, whose power and reference thrust (:func:`_reference`) are taken once
+    for its ~150 iterations. ``takeoff`` flies one row (:meth:`TakeoffPacks.obstacle_path`)."""
     flight = _flight(m, packs, rows)
     v_tr = m.transition_speed()
     radius = np.asarray(transition_radius_m(v_tr.reshape(-1, 1),
                                             m.aircraft.takeoff.transition_load_factor),
                         dtype=float).reshape(-1) * np.ones(m.size)
     tall = np.asarray(height, dtype=float).reshape(-1) * np.ones(m.size)
+    power, thrusts = (x[:, :, 0] for x in _reference(flight, packs, v_tr.reshape(-1, 1)))
 
     def point(charge: Array) -> tuple[Array, Array, Array]:
-        thrust, volts, current, _ = flight.point(1.0, v_tr, charge)
+        thrust, volts, current = _on_packs(flight, packs, power, thrusts, charge)
         return thrust, current, volts
 
     def gradient_of(thrust: Any) -> Any:
@@ -258,9 +271,20 @@ def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
                                          v_tr.reshape(-1, 1), m.density),
                           dtype=float).reshape(-1)
 
-    start = np.where(roll.ok > 0.5, roll.charge_ah, 0.0)
     air = settle_airborne(radius, v_tr, tall, start, point, gradient_of, rows.cutoff_v)
     # the climb's gradient is NaN where the obstacle is not reached: an infinite climb
-    arc, climb, _ = obstacle_distances_m(radius, air.arc_gradient, tall, air.climb_gradient)
-    return (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float),
-            air.status == BEYOND_THE_BATTERY_STATUS, air)
+    return obstacle_path(v_tr, radius, tall, air.arc_gradient, air.climb_gradient, air,
+                         np.min(point(air.charge_ah)[2], axis=0))
+
+
+def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
+                      height: Any) -> tuple[Array, NDArray[np.bool_], Any]:
+    """Transition arc + climb to the obstacle [m] per row on the sagging packs from the
+    charge after the roll and rotation (:func:`path_on_packs`); ``inf`` where never
+    cleared. And per row whether the packs reach their cut-off in the climb before the
+    obstacle (the take-off is then not attainable, as the single case's), and the settled
+    path (:class:`~tuflexperf.analysis.airborne.AirborneOnPacks`: the mission flies its
+    gradients)."""
+    path = path_on_packs(m, packs, rows, np.where(roll.ok > 0.5, roll.charge_ah, 0.0), height)
+    air = path.settled
+    return path.distance_m, air.status == BEYOND_THE_BATTERY_STATUS, air

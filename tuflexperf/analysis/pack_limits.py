@@ -39,7 +39,6 @@ from tuflexperf.analysis.attainable import (
     BEYOND_THE_BATTERY,
     AttainableRange,
 )
-from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
 from tuflexperf.io.case import Case
 from tuflexperf.models._math import fmax, is_symbolic
 from tuflexperf.models.aircraft import level_flight_drag_n
@@ -315,63 +314,6 @@ def beyond_note(what: str, side: PackSide, speeds: np.ndarray, on: LevelOnPacks)
     span = f"{v.min():g}" if v.min() == v.max() else f"{v.min():g}-{v.max():g}"
     return (f"{what}: {BEYOND_THE_BATTERY} at {span} m/s at the landing reserve "
             f"({side.battery.landing_reserve_fraction:.0%} of the charge left): {first}")
-
-
-def takeoff_beyond_battery(case: Case, side: PackSide, speeds: np.ndarray,
-                           seconds: float) -> str | None:
-    """Why full packs cannot give full throttle over these take-off airspeeds [m/s] for
-    ``seconds`` [s] (None: they can): the loaded voltage at or above the cut-off and the
-    current within the burst rating, on full packs and again after the charge the most
-    current drawn for the whole take-off would take (an upper bound: the packs sag as
-    they give it; a pack that held at the brake release reached its cut-off 2.7 s into
-    the mission's roll).
-
-    The reason names the point that fails, the earliest in the take-off first: on full
-    packs (the brake release's) the first failing airspeed of ``speeds`` [m/s]; after the
-    charge, which the aircraft has drawn by the take-off's end at the last of ``speeds``
-    (the climb's airspeed), an engine failing there, else the last airspeed that fails,
-    said to be the bound's (there the charge is drawn only in the bound). It once named
-    "full throttle at 0.0 m/s after the take-off's ... Ah", the brake release with the
-    whole take-off's charge drawn.
-
-    References
-    ----------
-    SPEC 3 (thrust and pack voltage); SPEC 5 (not attainable, with the reason)."""
-    rating = side.rating_a
-    burst = None if rating is None else BURST_OVER_CONTINUOUS * rating
-    v = np.asarray(speeds, dtype=float)
-    per_engine = side.battery.packs_in_parallel_per_engine
-    engines = case.propulsion.engines
-    powers = [fan_power_w(side, case, j, np.ones_like(v), v) for j in range(len(engines))]
-    charges = [0.0] * len(engines)
-    for after in (False, True):
-        failing = []  # (engine, failing airspeeds' indices, voltage, current)
-        for j, power in enumerate(powers):
-            u, current, _ = on_packs(side, case, power, charges[j])
-            beyond = np.flatnonzero(~within_limits(u, current, side.battery.cutoff_voltage_v,
-                                                   burst))
-            if beyond.size:
-                failing.append((j, beyond, u, current))
-            if not after:  # the most current for the whole take-off: the bound's charge
-                charges[j] = float(np.max(current)) * per_engine * seconds / SECONDS_PER_HOUR
-        if not failing:
-            continue
-        at_end = [f for f in failing if f[1][-1] == v.size - 1]
-        j, beyond, u, current = at_end[0] if after and at_end else failing[0]
-        n = int(beyond[-1] if after else beyond[0])
-        why = limit_reason(side, float(u[n]), float(current[n]), float(powers[j][n]), burst,
-                           "burst")
-        if not after:
-            when = "on full packs"
-        elif n == v.size - 1:
-            when = f"after the take-off's {charges[j]:.3f} Ah"
-        else:
-            when = (f"with the take-off's {charges[j]:.3f} Ah drawn (an upper bound: the most "
-                    f"current for its {seconds:.1f} s; at the last airspeed {v[-1]:.1f} m/s "
-                    "the packs hold)")
-        return (f"full throttle at {v[n]:.1f} m/s {when}: {engines[j].name}: {why}: "
-                f"not attainable, {BEYOND_THE_BATTERY}")
-    return None
 
 
 def with_packs(case: Case, what: str, speeds: np.ndarray, throttle: np.ndarray,
