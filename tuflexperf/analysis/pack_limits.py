@@ -41,13 +41,7 @@ from tuflexperf.analysis.attainable import (
 )
 from tuflexperf.io.case import Case
 from tuflexperf.models._math import fmax, is_symbolic
-from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import loaded_voltage_at_power_v
-from tuflexperf.models.thrust import (
-    density_ratio,
-    engine_thrust_n,
-    windmilling_thrust_n,
-)
 
 _CUTOFF_TOLERANCE = 1e-12  # relative: a loaded voltage at the cut-off is within it
 _RATING_TOLERANCE = 1e-9  # relative, as the mission's rating rule
@@ -133,15 +127,6 @@ def operating_point(params: Any, charge_ah: Any, power_w: Any, circuit_packs: An
             factor = (u / u_ref) ** k
         current = power_w * factor ** 1.5 / u / packs_per_engine
     return u, current, factor
-
-
-def on_packs(side: PackSide, case: Case, power_w: Any, charge_ah: float
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`operating_point` of one engine of the case's packs."""
-    b = side.battery
-    return operating_point(side.params, charge_ah, power_w, b.circuit_packs,
-                           b.packs_in_parallel_per_engine, case.propulsion.reference_voltage_v,
-                           case.propulsion.voltage_exponent)
 
 
 def within_limits(voltage_v: Any, current_a: Any, cutoff_v: Any, rating_a: Any) -> Any:
@@ -244,64 +229,125 @@ def least_throttle_where(excess: Any, shape: tuple[int, ...]) -> np.ndarray:
     return np.where(found, high, np.nan)
 
 
-def level_flight_on_packs(case: Case, side: PackSide, speeds: np.ndarray,
-                          throttle: np.ndarray, flyable: np.ndarray | None = None,
-                          dead: int | None = None, mode: str = "windmilling") -> LevelOnPacks:
-    """The least level-flight throttle on the packs at the landing reserve (module docstring).
+@dataclass(frozen=True)
+class LevelRowsOnPacks:
+    """Level flight at the landing reserve on the rows' packs over their grids ``(B, K)``
+    (:func:`level_rows_on_packs`): the least throttle before the packs' limits (NaN where
+    none reaches), the live engines, and per live engine its loaded voltage [V], current per
+    pack [A], power [W] at the reference voltage and where its packs fly the point."""
+
+    throttle: np.ndarray
+    live: list[int]
+    points: list[tuple[np.ndarray, np.ndarray, np.ndarray]]
+    within: list[np.ndarray]
+
+    @property
+    def flown(self) -> np.ndarray:
+        """The least throttle where every live engine's packs fly it (NaN elsewhere)."""
+        ok = np.isfinite(self.throttle) & np.all(self.within, axis=0)
+        return np.where(ok, self.throttle, np.nan)
+
+
+def level_rows_on_packs(m: Any, grid: np.ndarray, dead: int | None, mode: str,
+                        packs: PackSide, rows: PackRows, throttle: np.ndarray | None = None,
+                        flyable: np.ndarray | None = None) -> LevelRowsOnPacks:
+    """The least level-flight throttle on the rows' packs at the landing reserve (module
+    docstring), one row for ``trim`` and ``oei``, many for the batch.
 
     Parameters
     ----------
-    speeds : array
+    m : LevelFlightRows
+        The rows' physics (:class:`~tuflexperf.analysis.level_flight.LevelFlightRows`).
+    grid : ndarray ``(B, K)`` or ``(1, K)``
         True airspeeds [m/s].
-    throttle : array
-        The least throttle at the reference voltage [fraction], NaN where not attainable.
-    flyable : array of bool, optional
-        Where level flight may be attainable at all (above stall, short of the jet
-        velocity); with a reference voltage the throttle is solved again there.
-    dead : int, optional
-        The inoperative engine (OEI), ``mode`` its drag (``windmilling`` or ``zero``).
+    dead, mode
+        The inoperative engine (OEI) and its drag (``windmilling`` or ``zero``).
+    packs, rows
+        The case's packs and the rows' (:func:`pack_rows`).
+    throttle : ndarray, optional
+        The least throttle at the reference voltage [fraction] (default ``m``'s).
+    flyable : ndarray of bool, optional
+        Where level flight may be attainable at all (default ``m``'s: above stall, short
+        of the jet velocity); with a reference voltage the throttle is solved again there.
     """
-    prop, rho = case.propulsion, case.density_kg_m3
-    v = np.asarray(speeds, dtype=float)
-    q = side.reserve_charge_ah
+    from tuflexperf.analysis.batch_kernels import fan_power_rows
+
+    prop = m.propulsion
+    terms = m._grid_terms(grid)
     live = [j for j in range(len(prop.engines)) if j != dead]
-    x = np.asarray(throttle, dtype=float).copy()
-    flyable = np.isfinite(x) if flyable is None else np.asarray(flyable, dtype=bool)
-    beyond: list[str | None] = [None] * v.size
-    rating = side.rating_a
+    idle = m._excess_quadratic(grid, dead, mode, terms)[2]  # its shape is every row's grid
+    shape = idle.shape
+    flyable = np.broadcast_to(m._flyable(grid) if flyable is None else flyable, shape)
+    charge, circuit = rows.reserve_charge_ah[:, None], rows.circuit_packs[:, None]
+    rating = None if rows.rating_a is None else rows.rating_a[:, None]
+    engines = [prop.engines[j] if packs.own_surfaces else None for j in live]
 
-    def mark(n: int, engine: int, why: str | None) -> None:
-        if why is not None and beyond[n] is None:
-            beyond[n] = f"{prop.engines[engine].name}: {why}"
+    def on_rows(x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """Per live engine at throttles ``x``: voltage [V], current per pack [A], power [W]."""
+        out = []
+        for engine in engines:
+            power = np.maximum(fan_power_rows(packs, m, x, grid, engine), 0.0) * np.ones(shape)
+            u, current, _ = operating_point(packs.params, charge, power, circuit,
+                                            rows.packs_per_engine, prop.reference_voltage_v,
+                                            prop.voltage_exponent)
+            out.append((u, current, power))
+        return out
 
-    if prop.reference_voltage_v is not None:
-        scale = density_ratio(prop, rho)
-        other = -np.asarray(level_flight_drag_n(case.aircraft, v, rho), dtype=float)
-        if dead is not None and mode == "windmilling":
-            other = other + np.asarray(windmilling_thrust_n(
-                prop.engines[dead], v, scale, rho, prop.fan_area_m2), dtype=float)
+    if prop.reference_voltage_v is None:
+        if throttle is None:
+            throttle = m.least_throttle(grid, dead, mode, terms)
+        x = np.where(flyable, throttle, np.nan)
+    else:  # the thrust follows the sagging pack: no closed form
+        # the excess without the live engines: the dead one's drag less the airframe's
+        other = idle - sum(terms[0][j][2] for j in live)
 
         def excess(xs: np.ndarray) -> np.ndarray:
-            total = other.copy()
-            for j in live:
-                factor = on_packs(side, case, fan_power_w(side, case, j, xs, v), q)[2]
-                total = total + factor * engine_thrust_n(prop.engines[j], xs, v, scale)
+            total = np.broadcast_to(other, shape)
+            for j, engine in zip(live, engines, strict=True):
+                power = np.maximum(fan_power_rows(packs, m, xs, grid, engine), 0.0)
+                factor = operating_point(packs.params, charge, power, circuit,
+                                         rows.packs_per_engine, prop.reference_voltage_v,
+                                         prop.voltage_exponent)[2]
+                a_j, b_j, c_j = terms[0][j]
+                total = total + factor * ((a_j * xs + b_j) * xs + c_j)
             return total
 
-        x = np.where(flyable, least_throttle_where(excess, v.shape), np.nan)
+        x = np.where(flyable, least_throttle_where(excess, shape), np.nan)
+    points = on_rows(np.nan_to_num(x))
+    within = [within_limits(u, current, rows.cutoff_v[:, None], rating)
+              for u, current, _ in points]
+    return LevelRowsOnPacks(x, live, points, within)
+
+
+def level_flight_on_packs(case: Case, side: PackSide, m: Any, grid: np.ndarray,
+                          throttle: np.ndarray, flyable: np.ndarray,
+                          dead: int | None = None, mode: str = "windmilling") -> LevelOnPacks:
+    """The single case's level flight on its packs: :func:`level_rows_on_packs` on its one
+    row ``m`` over ``grid`` ``(1, K)`` [m/s], with the reason per airspeed where the packs
+    cannot fly it (``throttle`` and ``flyable`` as there)."""
+    from tuflexperf.io.dotted import battery_key_values
+
+    prop = case.propulsion
+    rows = pack_rows(side.battery, {k: np.array([x], dtype=float)
+                                    for k, x in battery_key_values(side.battery).items()})
+    on = level_rows_on_packs(m, grid, dead, mode, side, rows, np.asarray(throttle)[None, :],
+                             np.asarray(flyable, dtype=bool)[None, :])
+    x = on.throttle[0]
+    beyond: list[str | None] = [None] * x.size
+    if prop.reference_voltage_v is not None:
         for n in np.flatnonzero(flyable & ~np.isfinite(x)):
             beyond[n] = ("needs more than full throttle at the packs' loaded voltage "
                          f"(thrust x (U/{prop.reference_voltage_v:g} V)^"
                          f"{prop.voltage_exponent:g}), or more power than they give")
-    least_u = np.full(v.shape, np.inf)
-    for j in live:
-        power = fan_power_w(side, case, j, np.nan_to_num(x), v)
-        u, current, _ = on_packs(side, case, power, q)
+    least_u = np.full(x.shape, np.inf)
+    for j, (u, current, power), within in zip(on.live, on.points, on.within, strict=True):
+        u, current, power = u[0], current[0], power[0]
         least_u = np.where(np.isfinite(x), np.fmin(least_u, u), least_u)
-        cutoff = side.battery.cutoff_voltage_v
-        for n in np.flatnonzero(np.isfinite(x) & ~within_limits(u, current, cutoff, rating)):
-            mark(int(n), j, limit_reason(side, float(u[n]), float(current[n]),
-                                         float(power[n]), rating, "continuous"))
+        for n in np.flatnonzero(np.isfinite(x) & ~within[0]):
+            why = limit_reason(side, float(u[n]), float(current[n]), float(power[n]),
+                               side.rating_a, "continuous")
+            if why is not None and beyond[n] is None:
+                beyond[n] = f"{prop.engines[j].name}: {why}"
     x = np.where([b is None for b in beyond], x, np.nan)
     return LevelOnPacks(x, tuple(beyond), least_u)
 
@@ -316,12 +362,13 @@ def beyond_note(what: str, side: PackSide, speeds: np.ndarray, on: LevelOnPacks)
             f"({side.battery.landing_reserve_fraction:.0%} of the charge left): {first}")
 
 
-def with_packs(case: Case, what: str, speeds: np.ndarray, throttle: np.ndarray,
+def with_packs(case: Case, what: str, m: Any, grid: np.ndarray, throttle: np.ndarray,
                reasons: tuple[str | None, ...], attainable: AttainableRange,
                dead: int | None = None, mode: str = "windmilling"
                ) -> tuple[np.ndarray, tuple[str | None, ...], AttainableRange, list[str]]:
-    """Trim's or OEI's grid flown on the case's packs (unchanged without a battery file):
-    the throttles, each airspeed's reason, the attainable range and the notes.
+    """Trim's or OEI's grid ``(1, K)`` [m/s] flown on the case's packs (unchanged without a
+    battery file) by its one row ``m`` (``LevelFlightRows``): the throttles, each airspeed's
+    reason, the attainable range and the notes.
 
     The range stays the exact one of full throttle at the reference voltage where the packs
     change nothing; otherwise it is the grid's (0.5 m/s steps), as the note says.
@@ -334,7 +381,8 @@ def with_packs(case: Case, what: str, speeds: np.ndarray, throttle: np.ndarray,
         return throttle, reasons, attainable, [note] if note else []
 
     flyable = np.array([r not in (BELOW_STALL, BEYOND_JET_VELOCITY) for r in reasons])
-    on = level_flight_on_packs(case, side, speeds, throttle, flyable, dead, mode)
+    speeds = grid[0]
+    on = level_flight_on_packs(case, side, m, grid, throttle, flyable, dead, mode)
     notes = []
     if case.propulsion.reference_voltage_v is not None:
         least = float(np.min(on.voltage_v))
