@@ -55,6 +55,7 @@ _NEAR_STEP = 0.05  # a guess this near a tested end (relative) looks for the ste
 _STEP_BELOW, _STEP_ABOVE = 0.5e-9, 2e-9
 _MAX_CRUISE_STEPS = 16 * STEPS  # a sag that lengthens the cruise 16-fold is no cruise here
 _END_STEPS = 40  # Illinois steps on the cut-off within the last cruise step
+_CUTOFF_SLACK_V = 1e-9  # a node this near its cut-off [V] holds (the mission integrator's)
 
 
 @dataclass(frozen=True)
@@ -105,6 +106,12 @@ class SaggingFlight:
         self.cut_first = np.zeros(m.size, dtype=bool)  # the cut-off before the reserve
 
     # -- one point --------------------------------------------------------------------------
+    def _above_cutoff(self, u: Array) -> NDArray[np.bool_]:
+        """Per row: every fan's loaded voltage ``u`` [V] ``(fans, rows)`` at or above its
+        cut-off, within the mission's slack (NaN: beyond the packs' power, not above)."""
+        with np.errstate(invalid="ignore"):
+            return np.all(u >= self.rows.cutoff_v - _CUTOFF_SLACK_V, axis=0)
+
     def _thrusts(self, throttle: Any, speed: Array) -> Array:
         """Thrust [N] per fan flown ``(fans, rows)`` at the reference voltage (for ``(None,)``
         the total of all engines)."""
@@ -260,7 +267,7 @@ class SaggingFlight:
         def check(u: Array, current: Array, charge: Array) -> None:
             nonlocal held
             with np.errstate(invalid="ignore"):
-                held &= np.all(u >= self.rows.cutoff_v - 1e-9, axis=0)
+                held &= self._above_cutoff(u)
                 held &= np.all(np.isfinite(charge) & (charge < self.pole), axis=0)
                 held &= np.all(np.isfinite(current) & (current >= 0.0), axis=0)
 
@@ -276,21 +283,17 @@ class SaggingFlight:
             speeds = interp_rows(stage_t, t_hist, v_hist)
             step = roll_only / STEPS
 
-            def rolling(charge: Array, v: Array) -> tuple[Array, Array, Array]:
+            def full_throttle(charge: Array, v: Array) -> tuple[Array, Array, Array]:
+                """The roll's and the rotation's rates in time: dq/dt [Ah/s], dt/dt, U [V]."""
                 _, u, current, _ = self.point(1.0, v, charge)
                 return current / SECONDS_PER_HOUR, np.ones(m.size), u
 
             q, t = self._rk4(q, t, step, [speeds[:, 2 * j:2 * j + 3].T for j in range(STEPS)],
-                             rolling, nodes, check, first_speed=speeds[:, 0])
+                             full_throttle, nodes, check, first_speed=speeds[:, 0])
             # the rotation at the lift-off speed, in time
             constant = [np.stack([v_lo] * 3)] * ROTATION_STEPS
-
-            def rotating(charge: Array, v: Array) -> tuple[Array, Array, Array]:
-                _, u, current, _ = self.point(1.0, v, charge)
-                return current / SECONDS_PER_HOUR, np.ones(m.size), u
-
             q, t = self._rk4(q, t, np.where(ok, rotation, 0.0) / ROTATION_STEPS, constant,
-                             rotating, nodes, check, first_speed=v_lo)
+                             full_throttle, nodes, check, first_speed=v_lo)
         # the climb over height at the full-throttle rate of the loaded packs
         climbing_rows = ok & (height > 0)
         dh = np.where(climbing_rows, height, 0.0) / STEPS
@@ -359,7 +362,7 @@ class SaggingFlight:
 
         self.active = ok
         v, level, u, current, thrust = state(q, v)
-        held &= flyable(v, level, thrust) & np.all(u >= rows.cutoff_v - 1e-9, axis=0)
+        held &= flyable(v, level, thrust) & self._above_cutoff(u)
         going &= held
         end_s = np.full(m.size, np.nan)
         # per row, the last step's two nodes (charge, rate) for the end's interpolation
@@ -384,7 +387,7 @@ class SaggingFlight:
             k_next = current / SECONDS_PER_HOUR
             with np.errstate(invalid="ignore"):
                 at_reserve = np.any(q_next >= rows.reserve_charge_ah, axis=0)
-                cut = ~np.all(u >= rows.cutoff_v - 1e-9, axis=0)
+                cut = ~self._above_cutoff(u)
                 emptied = ~np.all(np.isfinite(q_next) & (q_next < self.pole), axis=0)
             finishing = going & (at_reserve | cut | emptied)
             # a node before the end that the single case cannot fly ends the row unflown
@@ -436,7 +439,7 @@ class SaggingFlight:
             v_here = self.level_speed(throttle, charge, va)[0]
             u = self.point(throttle, v_here, charge)[1]
             return (np.min(reserve - charge, axis=0),
-                    np.min(u, axis=0) - (cutoff - 1e-9))
+                    np.min(u, axis=0) - (cutoff - _CUTOFF_SLACK_V))
 
         def illinois(which: int) -> Array:
             low, high = np.zeros_like(h), h.copy()
