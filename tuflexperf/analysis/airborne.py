@@ -1,9 +1,11 @@
 """The take-off's airborne part: rotation, the transition arc to the obstacle, on sagging packs.
 
 After lift-off the aircraft rotates (:func:`rotation_charge`) and flies the transition arc
-at full throttle to the obstacle height (:func:`obstacle_height_of`). With a reference
-voltage the thrust follows the packs' loaded voltage along the way: :func:`settle_airborne`
-iterates the charge drawn until the arc and the packs agree.
+at full throttle to the obstacle height (:func:`obstacle_height_of`), per row an
+:class:`ObstaclePath` (one row for ``takeoff``, whose reasons :func:`airborne_result`
+words; many for the batch). With a reference voltage the thrust follows the packs' loaded
+voltage along the way: :func:`settle_airborne` iterates the charge drawn until the arc and
+the packs agree.
 """
 
 from __future__ import annotations
@@ -462,25 +464,12 @@ class _Airborne:
 
 @dataclass(frozen=True)
 class ObstaclePath:
-    """From lift-off to the obstacle per row ``(rows,)``: one row for ``takeoff``, many for
-    the batch (:meth:`tuflexperf.analysis.ground_roll.GroundRollRows.obstacle_path` at the
-    model's thrust, :func:`tuflexperf.analysis.batch_takeoff_packs.path_on_packs` on sagging
-    packs).
-
-    Attributes
-    ----------
-    speed_m_s, radius_m : ndarray
-        Transition (and climb) true airspeed [m/s] and the arc's radius [m].
-    arc_gradient, climb_gradient : ndarray
-        Full-throttle gradient [-] at the arc's end and along the straight climb (the same
-        at the model's thrust; on sagging packs NaN where the obstacle is not reached).
-    arc_m, climb_m, top_m : ndarray
-        Horizontal arc and climb [m] (climb ``inf``: never cleared) and the arc's top [m].
-    settled : AirborneOnPacks or None
-        On sagging packs: the settled charge, status and apex (:func:`settle_airborne`).
-    least_voltage_v : ndarray or None
-        On sagging packs: the least loaded voltage at the obstacle's charge [V].
-    """
+    """From lift-off to the obstacle per row ``(rows,)`` (one row for ``takeoff``, many for
+    the batch): the transition speed [m/s], the arc's radius [m], the full-throttle gradient
+    [-] at the arc's end and along the straight climb (on sagging packs NaN where the
+    obstacle is not reached), the horizontal arc and climb [m] (climb ``inf``: never
+    cleared) and the arc's top [m]; on sagging packs the settled path
+    (:func:`settle_airborne`) and the least loaded voltage at the obstacle [V]."""
 
     speed_m_s: np.ndarray
     radius_m: np.ndarray
@@ -504,15 +493,11 @@ def obstacle_path(speed_m_s: Any, radius_m: Any, height_m: Any, arc_gradient: An
     """:class:`ObstaclePath` of rows flying the arc at ``arc_gradient`` and the straight
     climb at ``climb_gradient_`` (None: the arc's) to ``height_m`` [m]
     (:func:`~tuflexperf.models.aircraft.obstacle_distances_m`; Anderson 6.7.2)."""
-    arc, climb, top = (np.asarray(x, dtype=float).reshape(-1) for x in obstacle_distances_m(
-        radius_m, arc_gradient, height_m, climb_gradient_))
-    rows = arc.size
-    speed, radius, g_arc = (np.asarray(x, dtype=float).reshape(-1) * np.ones(rows)
-                            for x in (speed_m_s, radius_m, arc_gradient))
-    g_climb = g_arc if climb_gradient_ is None else \
-        np.asarray(climb_gradient_, dtype=float).reshape(-1) * np.ones(rows)
-    return ObstaclePath(speed, radius, g_arc, g_climb, arc, climb * np.ones(rows),
-                        top * np.ones(rows), settled, least_voltage_v)
+    straight = arc_gradient if climb_gradient_ is None else climb_gradient_
+    distances = obstacle_distances_m(radius_m, arc_gradient, height_m, climb_gradient_)
+    columns = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (
+        speed_m_s, radius_m, arc_gradient, straight, *distances)))
+    return ObstaclePath(*(c.reshape(-1) for c in columns), settled, least_voltage_v)
 
 
 def airborne_result(case: Case, height: float, path: ObstaclePath,

@@ -110,14 +110,11 @@ class TakeoffPacks:
     :class:`~tuflexperf.analysis.batch_sagging.SaggingFlight`)."""
 
     def __init__(self, case: Any, side: Any) -> None:
-        from tuflexperf.io.dotted import battery_key_values
-
         self.n = len(case.propulsion.engines)
         self.cutoff_v = float(side.battery.cutoff_voltage_v)  # the packs' [V]
         self.side = side
         self.model = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1)
-        self.rows = pack_rows(side.battery, {k: np.array([v], dtype=float) for k, v in
-                                             battery_key_values(side.battery).items()})
+        self.rows = pack_rows(side.battery)
         self.flight = _flight(self.model, side, self.rows)
         self._references: dict[bytes, tuple[Array, Array]] = {}
 

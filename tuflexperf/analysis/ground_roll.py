@@ -206,12 +206,11 @@ def _running_sum(parts: Array) -> Array:
 
 @dataclass(frozen=True)
 class LaunchOnPacks:
-    """Full throttle on the packs over a take-off (:meth:`GroundRollRows.launch_on_packs`):
-    per engine flown (one for a shared power model) its power [W] at the reference voltage
-    ``(B, K)``; per engine, on full packs then after the take-off's charge (``2 j`` and
-    ``2 j + 1``), the loaded voltage [V] and current per pack [A] and where they are within
-    the limits ``(B, K)``; per engine
-    that charge [Ah] ``(B,)``; the burst rating per pack [A] ``(B,)`` (None: no rating)."""
+    """Full throttle on the packs over a take-off (:meth:`GroundRollRows.launch_on_packs`), per
+    engine flown ``j`` (one for a shared power model): its power [W] at the reference voltage
+    ``(B, K)``; on full packs (``2 j``) and after the take-off's charge (``2 j + 1``) the
+    loaded voltage [V], current per pack [A] and where they are within the limits; that
+    charge [Ah] ``(B,)``; the burst rating per pack [A] ``(B,)`` (None: no rating)."""
 
     power_w: list[Array]
     points: list[tuple[Array, Array]]

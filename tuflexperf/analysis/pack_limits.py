@@ -170,10 +170,15 @@ class PackRows:
     rating_a: np.ndarray | None  # continuous, per pack
 
 
-def pack_rows(battery: Any, values: dict[str, np.ndarray]) -> PackRows:
+def pack_rows(battery: Any, values: dict[str, np.ndarray] | None = None) -> PackRows:
     """:class:`PackRows` of ``battery`` (a :class:`~tuflexperf.io.battery.Battery`) with the
-    rows' ``values`` of its varying keys."""
+    rows' ``values`` of its varying keys (None: one row, the battery as given)."""
     from tuflexperf.models.battery import equivalent_packs
+
+    if values is None:
+        from tuflexperf.io.dotted import battery_key_values
+
+        values = {k: np.array([x], dtype=float) for k, x in battery_key_values(battery).items()}
 
     per_engine = battery.packs_in_parallel_per_engine
     capacity = np.asarray(values["battery.capacity_ah"], dtype=float)
@@ -282,16 +287,13 @@ def level_rows_on_packs(m: Any, grid: np.ndarray, dead: int | None, mode: str,
     rating = None if rows.rating_a is None else rows.rating_a[:, None]
     engines = [prop.engines[j] if packs.own_surfaces else None for j in live]
 
-    def on_rows(x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        """Per live engine at throttles ``x``: voltage [V], current per pack [A], power [W]."""
-        out = []
-        for engine in engines:
-            power = np.maximum(fan_power_rows(packs, m, x, grid, engine), 0.0) * np.ones(shape)
-            u, current, _ = operating_point(packs.params, charge, power, circuit,
-                                            rows.packs_per_engine, prop.reference_voltage_v,
-                                            prop.voltage_exponent)
-            out.append((u, current, power))
-        return out
+    def on_rows(x: np.ndarray) -> list[tuple[np.ndarray, ...]]:
+        """Per live engine at throttles ``x``: voltage [V], current per pack [A], thrust
+        factor [-] and power [W] at the reference voltage."""
+        return [(*operating_point(packs.params, charge, power, circuit, rows.packs_per_engine,
+                                  prop.reference_voltage_v, prop.voltage_exponent), power)
+                for power in (np.maximum(fan_power_rows(packs, m, x, grid, e), 0.0)
+                              * np.ones(shape) for e in engines)]
 
     if prop.reference_voltage_v is None:
         if throttle is None:
@@ -303,17 +305,13 @@ def level_rows_on_packs(m: Any, grid: np.ndarray, dead: int | None, mode: str,
 
         def excess(xs: np.ndarray) -> np.ndarray:
             total = np.broadcast_to(other, shape)
-            for j, engine in zip(live, engines, strict=True):
-                power = np.maximum(fan_power_rows(packs, m, xs, grid, engine), 0.0)
-                factor = operating_point(packs.params, charge, power, circuit,
-                                         rows.packs_per_engine, prop.reference_voltage_v,
-                                         prop.voltage_exponent)[2]
+            for j, point in zip(live, on_rows(xs), strict=True):
                 a_j, b_j, c_j = terms[0][j]
-                total = total + factor * ((a_j * xs + b_j) * xs + c_j)
+                total = total + point[2] * ((a_j * xs + b_j) * xs + c_j)
             return total
 
         x = np.where(flyable, least_throttle_where(excess, shape), np.nan)
-    points = on_rows(np.nan_to_num(x))
+    points = [(u, current, power) for u, current, _, power in on_rows(np.nan_to_num(x))]
     within = [within_limits(u, current, rows.cutoff_v[:, None], rating)
               for u, current, _ in points]
     return LevelRowsOnPacks(x, live, points, within)
@@ -325,12 +323,9 @@ def level_flight_on_packs(case: Case, side: PackSide, m: Any, grid: np.ndarray,
     """The single case's level flight on its packs: :func:`level_rows_on_packs` on its one
     row ``m`` over ``grid`` ``(1, K)`` [m/s], with the reason per airspeed where the packs
     cannot fly it (``throttle`` and ``flyable`` as there)."""
-    from tuflexperf.io.dotted import battery_key_values
-
     prop = case.propulsion
-    rows = pack_rows(side.battery, {k: np.array([x], dtype=float)
-                                    for k, x in battery_key_values(side.battery).items()})
-    on = level_rows_on_packs(m, grid, dead, mode, side, rows, np.asarray(throttle)[None, :],
+    on = level_rows_on_packs(m, grid, dead, mode, side, pack_rows(side.battery),
+                             np.asarray(throttle)[None, :],
                              np.asarray(flyable, dtype=bool)[None, :])
     x = on.throttle[0]
     beyond: list[str | None] = [None] * x.size

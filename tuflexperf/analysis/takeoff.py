@@ -4,8 +4,9 @@ Equation of motion on the runway (Raymer, *Aircraft Design*, section 17.8.1):
 ``m dV/dt = T(1, V) - D_g(V) - mu max(W - L_g(V), 0)``. With the airspeed as the
 independent variable, ``ds/dV = m V / F(V)`` and ``dt/dV = m / F(V)``, integrated from 0
 to the lift-off true airspeed (no wind, level runway) by the batch's quadrature on one row
-(:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`); on sagging packs by CVODES
-with the charge drawn per engine beside them. Rotation adds ``V_LO t_R`` (Raymer 17.8.2);
+(:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`); on sagging packs by the batch's
+RK4 with the charge drawn per engine beside them (:mod:`.batch_takeoff_packs`, one row).
+Rotation adds ``V_LO t_R`` (Raymer 17.8.2);
 the airborne part is an arc at ``1.15 V_stall`` and load factor ``n`` followed by the
 full-throttle straight climb (Anderson, *Aircraft Performance and Design*, 6.7.2).
 
@@ -257,14 +258,10 @@ def takeoff_beyond_battery(case: Case, side: Any, speeds: np.ndarray,
     References
     ----------
     SPEC 3 (thrust and pack voltage); SPEC 5 (not attainable, with the reason)."""
-    from tuflexperf.io.dotted import battery_key_values
-
     v = np.asarray(speeds, dtype=float)
-    rows = pack_rows(side.battery, {k: np.array([x], dtype=float)
-                                    for k, x in battery_key_values(side.battery).items()})
-    launch = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None,
-                            1).launch_on_packs(side, rows, v[None, :], np.array([seconds]),
-                                               each_point=True)
+    launch = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1
+                            ).launch_on_packs(side, pack_rows(side.battery), v[None, :],
+                                              np.array([seconds]), each_point=True)
     burst = None if launch.burst_a is None else float(launch.burst_a[0])
     engines = case.propulsion.engines
     for after in (False, True):
