@@ -8,8 +8,8 @@ falls as the packs sag. The constant-power batch (:mod:`.batch_endurance`) took 
 reference voltage's figures throughout, so its endurance differed from the single case's
 (18.5 against 16.2 min for a reference of 44 V; P(met) 1.0 where the case FAILed).
 
-Here the same flight is flown per row, vectorised: the roll (64 RK4 steps in time along
-the airspeed history of :mod:`.batch_takeoff_packs`), the rotation (8 steps), the climb
+Here the same flight is flown per row, vectorised: the roll (the take-off's on the packs,
+:mod:`.batch_takeoff_packs`, its 101 nodes), the rotation (8 RK4 steps), the climb
 (64 steps over height) and the cruise (RK4 in time, steps of 1/64 of the constant-power
 estimate, until the first fan's packs reach the landing reserve or the cut-off, the end
 between two nodes by cubic Hermite interpolation of the charges). Every stage solves each
@@ -38,7 +38,6 @@ from tuflexperf.analysis.airborne import ROTATION_STEPS
 from tuflexperf.analysis.batch_kernels import best_climb, fan_power_rows, illinois
 from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S, STEPS
 from tuflexperf.analysis.pack_limits import PackRows, operating_point
-from tuflexperf.models._math import interp_rows
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import SECONDS_PER_HOUR, first_window_beyond
 from tuflexperf.models.powertrain import beyond_jet_velocity
@@ -274,22 +273,24 @@ class SaggingFlight:
         if not catapult:
             rotation = np.asarray(m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
                 * np.ones(m.size)
-            roll_only = np.where(ok, np.maximum(np.nan_to_num(roll_time) - rotation, 0.0), 0.0)
-            # the roll's airspeed history on the sagging packs (batch_takeoff_packs), flown
-            # in time as the mission flies the take-off analysis's
-            t_hist = np.where(ok[:, None], np.nan_to_num(m.packs_roll.history_time), 0.0)
+            # the roll as the take-off flew it on the sagging packs (batch_takeoff_packs: its
+            # charge within 1e-13 of solve_ivp's, where 64 RK4 steps in time along its airspeed
+            # history were 3e-8 off): its 101 nodes, each node's current at its airspeed
+            flown = m.packs_roll
+            t_hist = np.where(ok[:, None], np.nan_to_num(flown.history_time), 0.0)
+            q_hist = np.where(ok[None, :, None], np.nan_to_num(flown.history_charge_ah), 0.0)
             v_hist = v_lo[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
-            stage_t = (roll_only / (2 * STEPS))[:, None] * np.arange(2 * STEPS + 1)[None, :]
-            speeds = interp_rows(stage_t, t_hist, v_hist)
-            step = roll_only / STEPS
+            for k in range(t_hist.shape[1]):
+                _, u, current, _ = self.point(1.0, v_hist[:, k], q_hist[:, :, k])
+                nodes.add(t_hist[:, k], q_hist[:, :, k], current)
+                check(u, current, q_hist[:, :, k])
+            q, t = q_hist[:, :, -1], t_hist[:, -1]
 
             def full_throttle(charge: Array, v: Array) -> tuple[Array, Array, Array]:
-                """The roll's and the rotation's rates in time: dq/dt [Ah/s], dt/dt, U [V]."""
+                """The rotation's rates in time: dq/dt [Ah/s], dt/dt, U [V]."""
                 _, u, current, _ = self.point(1.0, v, charge)
                 return current / SECONDS_PER_HOUR, np.ones(m.size), u
 
-            q, t = self._rk4(q, t, step, [speeds[:, 2 * j:2 * j + 3].T for j in range(STEPS)],
-                             full_throttle, nodes, check, first_speed=speeds[:, 0])
             # the rotation at the lift-off speed, in time
             constant = [np.stack([v_lo] * 3)] * ROTATION_STEPS
             q, t = self._rk4(q, t, np.where(ok, rotation, 0.0) / ROTATION_STEPS, constant,
