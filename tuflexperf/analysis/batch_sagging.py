@@ -111,31 +111,40 @@ class SaggingFlight:
         with np.errstate(invalid="ignore"):
             return np.all(u >= self.rows.cutoff_v - _CUTOFF_SLACK_V, axis=0)
 
-    def _thrusts(self, throttle: Any, speed: Array) -> Array:
-        """Thrust [N] per fan flown ``(fans, rows)`` at the reference voltage (for ``(None,)``
-        the total of all engines)."""
-        m, v = self.m, speed.reshape(-1, 1)
-        if np.ndim(throttle):  # one throttle per row: a column against the rows' airspeeds
-            throttle = np.reshape(throttle, (-1, 1))
-        if self.engines == (None,):
-            return m.thrust(throttle, v)[:, 0][None, :]
-        # each fan's own (the total less the others' took three totals for two fans)
-        return np.stack([m.engine_thrust(j, throttle, v)[:, 0]
-                         for j in range(len(self.engines))])
+    def reference(self, throttle: Any, speeds: Array) -> tuple[Array, Array]:
+        """The packs' power [W] and the thrust [N] per fan flown (for ``(None,)`` the total
+        of all engines) at the reference voltage at ``throttle`` [-] and ``speeds`` [m/s]
+        ``(B, K)``, ``(fans, B, K)`` each: they depend on the airspeed alone, so a roll's
+        stages or an arc's iterations take them once (:meth:`loaded`)."""
+        m = self.m
+        power = np.stack([np.asarray(fan_power_rows(self.model, m, throttle, speeds, e),
+                                     dtype=float) * np.ones_like(speeds) for e in self.engines])
+        # each fan's own thrust (the total less the others' took three totals for two fans)
+        thrusts = (m.thrust(throttle, speeds)[None] if self.engines == (None,) else np.stack(
+            [m.engine_thrust(j, throttle, speeds) for j in range(len(self.engines))]))
+        return power, thrusts * np.ones_like(speeds)
+
+    def loaded(self, power: Array, thrusts: Array, charge: Array
+               ) -> tuple[Array, Array, Array, Array]:
+        """At :meth:`reference`'s ``power`` and ``thrusts`` after ``charge`` [Ah] drawn per
+        fan: the live thrust [N], and per fan the loaded voltage [V], the current through its
+        packs [A] and the thrust factor ``(U/U_ref)^k`` [-]."""
+        rows = self.rows
+        u, per_pack, factor = operating_point(self.model.params, charge, power,
+                                              rows.circuit_packs, rows.packs_per_engine,
+                                              self.u_ref, self.k)
+        return np.sum(factor * thrusts, axis=0), u, per_pack * rows.packs_per_engine, factor
 
     def point(self, throttle: Any, speed: Array, charge: Array
               ) -> tuple[Array, Array, Array, Array]:
         """At ``throttle`` [-] and true airspeed ``speed`` [m/s] per row with ``charge`` [Ah]
         drawn per fan ``(fans, rows)``: the live thrust [N] per row, and per fan the loaded
         voltage [V], the current through its packs [A] and the electrical power [W]."""
-        power = np.stack([np.asarray(fan_power_rows(self.model, self.m, throttle, speed, e),
-                                     dtype=float) * np.ones(self.m.size) for e in self.engines])
-        rows = self.rows
-        u, per_pack, factor = operating_point(self.model.params, charge, power,
-                                              rows.circuit_packs, rows.packs_per_engine,
-                                              self.u_ref, self.k)
-        thrust = np.sum(factor * self._thrusts(throttle, speed), axis=0)
-        return thrust, u, per_pack * rows.packs_per_engine, power * factor ** 1.5
+        # one throttle per row: a column against the rows' airspeeds
+        x = np.reshape(throttle, (-1, 1)) if np.ndim(throttle) else throttle
+        power, thrusts = (a[..., 0] for a in self.reference(x, speed.reshape(-1, 1)))
+        thrust, u, current, factor = self.loaded(power, thrusts, charge)
+        return thrust, u, current, power * factor ** 1.5
 
     def _drag(self, speed: Array) -> Array:
         return np.asarray(level_flight_drag_n(self.m.aircraft, speed.reshape(-1, 1),

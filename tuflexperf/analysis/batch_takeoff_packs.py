@@ -39,10 +39,9 @@ from tuflexperf.analysis.airborne import (
     rotation_charge,
     settle_airborne,
 )
-from tuflexperf.analysis.batch_kernels import fan_power_rows
 from tuflexperf.analysis.batch_sagging import SaggingFlight
 from tuflexperf.analysis.ground_roll import GroundRollRows
-from tuflexperf.analysis.pack_limits import PackRows, operating_point, pack_rows
+from tuflexperf.analysis.pack_limits import PackRows, pack_rows
 from tuflexperf.models.aircraft import (
     climb_gradient,
     ground_roll_net_force_n,
@@ -79,29 +78,6 @@ def _flight(m: Any, packs: Any, rows: PackRows) -> SaggingFlight:
                          tuple(m.propulsion.engines) if packs.own_surfaces else (None,))
 
 
-def _reference(flight: SaggingFlight, packs: Any, speeds: Array) -> tuple[Array, Array]:
-    """The packs' power [W] and the thrust [N] per fan flown at the reference voltage at
-    ``speeds`` [m/s] ``(B, K)``, ``(fans, B, K)`` each: they depend on the airspeed alone,
-    so a roll's stages or an arc's iterations take them once."""
-    m = flight.m
-    power = np.stack([np.asarray(fan_power_rows(packs, m, 1.0, speeds, e), dtype=float)
-                      * np.ones_like(speeds) for e in flight.engines])
-    thrusts = (m.thrust(1.0, speeds)[None] if flight.engines == (None,) else np.stack(
-        [m.engine_thrust(j, 1.0, speeds) for j in range(len(flight.engines))]))
-    return power, thrusts * np.ones_like(speeds)
-
-
-def _on_packs(flight: SaggingFlight, packs: Any, power: Array, thrusts: Array, charge: Array
-              ) -> tuple[Array, Array, Array]:
-    """:meth:`SaggingFlight.point` at full throttle from :func:`_reference`'s ``power`` and
-    ``thrusts``, after ``charge`` [Ah] per fan: the thrust [N], and per fan the loaded
-    voltage [V] and the current through its packs [A]."""
-    rows = flight.rows
-    u, per_pack, factor = operating_point(packs.params, charge, power, rows.circuit_packs,
-                                          rows.packs_per_engine, flight.u_ref, flight.k)
-    return np.sum(factor * thrusts, axis=0), u, per_pack * rows.packs_per_engine
-
-
 class TakeoffPacks:
     """One case's sagging packs for the take-off: its batch of one row
     (:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`), its packs ``side``
@@ -125,11 +101,11 @@ class TakeoffPacks:
         v = np.atleast_1d(np.asarray(speeds, dtype=float)).reshape(1, -1)
         key = v.tobytes()
         if key not in self._references:  # the arc's settling asks one airspeed ~150 times
-            self._references[key] = _reference(self.flight, self.side, v)
+            self._references[key] = self.flight.reference(1.0, v)
         fans = len(self.flight.engines)
         q = np.asarray(charge_ah, dtype=float).reshape(self.n, -1) * np.ones((1, v.size))
-        thrust, volts, current = _on_packs(self.flight, self.side, *self._references[key],
-                                           q[:fans, None, :])
+        thrust, volts, current, _ = self.flight.loaded(*self._references[key],
+                                                       q[:fans, None, :])
         shape = (self.n, v.size)
         return (thrust.reshape(-1), np.broadcast_to(current.reshape(fans, -1), shape),
                 np.broadcast_to(volts.reshape(fans, -1), shape))
@@ -176,12 +152,12 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
     # alone: once for all the stages' airspeeds (a stage then solves the packs' voltage only;
     # SaggingFlight.point's sum, on one row 3x fewer evaluations)
     stage_speeds = np.concatenate([speeds, middle], axis=1)
-    power, thrusts = _reference(flight, packs, stage_speeds)
+    power, thrusts = flight.reference(1.0, stage_speeds)
 
     def rates(charge: Array, column: int, reference_force: Array) -> tuple[Array, Array]:
         v = stage_speeds[:, column]
-        thrust, _, current = _on_packs(flight, packs, power[:, :, column],
-                                       thrusts[:, :, column], charge)
+        thrust, _, current, _ = flight.loaded(power[:, :, column], thrusts[:, :, column],
+                                              charge)
         loaded = np.asarray(ground_roll_net_force_n(m.aircraft, thrust.reshape(-1, 1),
                                                     v.reshape(-1, 1), m.density),
                             dtype=float).reshape(-1) * np.ones(m.size)
@@ -215,8 +191,8 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
         ok &= rates(q, last, force_ref[:, -1])[1] > 0.0  # and at lift-off itself
         rotation = np.asarray(m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
             * np.ones(m.size)
-        q = rotation_charge(lambda charge: _on_packs(
-            flight, packs, power[:, :, last], thrusts[:, :, last], charge)[2] / SECONDS_PER_HOUR,
+        q = rotation_charge(lambda charge: flight.loaded(
+            power[:, :, last], thrusts[:, :, last], charge)[2] / SECONDS_PER_HOUR,
             q, np.where(ok, rotation, 0.0))
     return RollOnPacks(
         distance=np.where(ok, s + v_lo * rotation, np.nan),
@@ -249,18 +225,19 @@ def path_on_packs(m: Any, packs: Any, rows: PackRows, start: Array, height: Any
     """Transition arc + climb to the obstacle ``height`` [m] per row on the sagging packs from
     ``start`` [Ah] drawn per fan ``(fans, B)`` after the roll and rotation (a catapult's
     release acceleration): :func:`~tuflexperf.analysis.airborne.settle_airborne` at the
-    transition speed, whose power and reference thrust (:func:`_reference`) are taken once
-    for its ~150 iterations. ``takeoff`` flies one row (:meth:`TakeoffPacks.obstacle_path`)."""
+    transition speed, its power and reference thrust taken once for its ~150 iterations
+    (``SaggingFlight.reference``). ``takeoff`` flies one row
+    (:meth:`TakeoffPacks.obstacle_path`)."""
     flight = _flight(m, packs, rows)
     v_tr = m.transition_speed()
     radius = np.asarray(transition_radius_m(v_tr.reshape(-1, 1),
                                             m.aircraft.takeoff.transition_load_factor),
                         dtype=float).reshape(-1) * np.ones(m.size)
     tall = np.asarray(height, dtype=float).reshape(-1) * np.ones(m.size)
-    power, thrusts = (x[:, :, 0] for x in _reference(flight, packs, v_tr.reshape(-1, 1)))
+    power, thrusts = (x[:, :, 0] for x in flight.reference(1.0, v_tr.reshape(-1, 1)))
 
     def point(charge: Array) -> tuple[Array, Array, Array]:
-        thrust, volts, current = _on_packs(flight, packs, power, thrusts, charge)
+        thrust, volts, current, _ = flight.loaded(power, thrusts, charge)
         return thrust, current, volts
 
     def gradient_of(thrust: Any) -> Any:

@@ -480,10 +480,8 @@ class GroundRollRows(LevelFlightRows):
         ``seconds`` [s] ``(B,)``: on full packs, and after the charge the most current for
         the whole take-off would draw (an upper bound: the packs sag as they give it), each
         engine's loaded voltage at or above the cut-off and each pack within its burst
-        rating (:class:`LaunchOnPacks`; ``takeoff`` asks one row, the batch many).
-
-        Without a reference voltage a row's most power decides (the voltage falls and the
-        current rises with the power), so only it is solved unless ``each_point``."""
+        rating (:class:`LaunchOnPacks`; ``takeoff`` asks one row, every point solved
+        (``each_point``), the batch many)."""
         prop = self.propulsion
         circuit, cutoff = rows.circuit_packs[:, None], rows.cutoff_v[:, None]
         burst = (None if rows.rating_a is None
@@ -496,6 +494,8 @@ class GroundRollRows(LevelFlightRows):
             power = power * np.ones_like(speeds)
             if not each_point and prop.reference_voltage_v is None \
                     and packs.params.resistance_ohm > 0.0 and np.all(circuit > 0.0):
+                # at a fixed power the loaded voltage falls and the current rises with the
+                # power (each rounded step monotone too): a row's most power decides both
                 power = np.max(power, axis=1, keepdims=True)
             powers.append(power)
             charge = np.zeros((self.size, 1))
