@@ -39,6 +39,7 @@ from tuflexperf.analysis.attainable import (
     BEYOND_THE_BATTERY,
     AttainableRange,
 )
+from tuflexperf.analysis.batch_kernels import fan_power_rows
 from tuflexperf.io.case import Case
 from tuflexperf.models._math import fmax, is_symbolic
 from tuflexperf.models.battery import loaded_voltage_at_power_v
@@ -275,8 +276,6 @@ def level_rows_on_packs(m: Any, grid: np.ndarray, dead: int | None, mode: str,
         Where level flight may be attainable at all (default ``m``'s: above stall, short
         of the jet velocity); with a reference voltage the throttle is solved again there.
     """
-    from tuflexperf.analysis.batch_kernels import fan_power_rows
-
     prop = m.propulsion
     terms = m._grid_terms(grid)
     live = [j for j in range(len(prop.engines)) if j != dead]
