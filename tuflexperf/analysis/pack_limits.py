@@ -282,7 +282,10 @@ def level_rows_on_packs(m: Any, grid: np.ndarray, dead: int | None, mode: str,
     idle = m._excess_quadratic(grid, dead, mode, terms)[2]  # its shape is every row's grid
     shape = idle.shape
     flyable = np.broadcast_to(m._flyable(grid) if flyable is None else flyable, shape)
-    charge, circuit = rows.reserve_charge_ah[:, None], rows.circuit_packs[:, None]
+    # one row's values as floats: the loaded voltage's Newton steps on (1, 1) columns took
+    # a fifth longer (the same numbers)
+    charge, circuit = (float(a[0]) if a.size == 1 else a[:, None]
+                       for a in (rows.reserve_charge_ah, rows.circuit_packs))
     rating = None if rows.rating_a is None else rows.rating_a[:, None]
     engines = [prop.engines[j] if packs.own_surfaces else None for j in live]
 
