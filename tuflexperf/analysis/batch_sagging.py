@@ -128,11 +128,11 @@ class SaggingFlight:
                ) -> tuple[Array, Array, Array, Array]:
         """At :meth:`reference`'s ``power`` and ``thrusts`` after ``charge`` [Ah] drawn per
         fan: the live thrust [N], and per fan the loaded voltage [V], the current through its
-        packs [A] and the thrust factor ``(U/U_ref)^k`` [-]."""
+        packs [A] and the thrust factor ``(U/U_ref)^k`` [-] (``(fans, B)`` or ``(fans, B, K)``)."""
         rows = self.rows
-        u, per_pack, factor = operating_point(self.model.params, charge, power,
-                                              rows.circuit_packs, rows.packs_per_engine,
-                                              self.u_ref, self.k)
+        circuit = rows.circuit_packs.reshape(-1, *([1] * (np.ndim(power) - 2)))  # per row
+        u, per_pack, factor = operating_point(self.model.params, charge, power, circuit,
+                                              rows.packs_per_engine, self.u_ref, self.k)
         return np.sum(factor * thrusts, axis=0), u, per_pack * rows.packs_per_engine, factor
 
     def point(self, throttle: Any, speed: Array, charge: Array

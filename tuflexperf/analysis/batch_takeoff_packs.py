@@ -210,12 +210,11 @@ def release_on_packs(m: Any, packs: Any, rows: PackRows) -> tuple[Array, Array, 
     """A catapult's acceleration after the release on full packs, per row
     (:meth:`.GroundRollRows.release_run`; the charge per fan flown)."""
     flight = _flight(m, packs, rows)
-    full = np.zeros((len(flight.engines), m.size))
+    full = np.zeros((len(flight.engines), m.size, 1))
 
     def thrust_and_current(speed: Array) -> tuple[Array, Array]:
-        points = [flight.point(1.0, speed[:, k], full) for k in range(speed.shape[1])]
-        return (np.stack([p[0] for p in points], axis=1),
-                np.stack([p[2] for p in points], axis=-1))
+        thrust, _, current, _ = flight.loaded(*flight.reference(1.0, speed), full)
+        return thrust, current
 
     return m.release_run(thrust_and_current)
 
