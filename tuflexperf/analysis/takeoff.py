@@ -251,9 +251,8 @@ def takeoff_beyond_battery(case: Case, side: Any, speeds: np.ndarray,
     packs (the brake release's) the first failing airspeed of ``speeds`` [m/s]; after the
     charge, which the aircraft has drawn by the take-off's end at the last of ``speeds``
     (the climb's airspeed), an engine failing there, else the last airspeed that fails,
-    said to be the bound's (there the charge is drawn only in the bound). It once named
-    "full throttle at 0.0 m/s after the take-off's ... Ah", the brake release with the
-    whole take-off's charge drawn.
+    said to be the bound's (there the charge is drawn only in the bound), never the brake
+    release with the whole take-off's charge drawn.
 
     References
     ----------
