@@ -2,7 +2,7 @@
 
 Each figure is checked against an independent SciPy solution of the same equations (the
 fitted circuit ``U = OCV(q/n) - (R/n) I``, ``P = U I``, thrust ``T (U/U_ref)^k`` and power
-``P (U/U_ref)^(1.5 k)``), and the batch against the single case row by row. The outside
+``P (U/U_ref)^(1.5 k)``); the single case is the batch's code on one row. The outside
 audit's cases are here: a 1.2 Ah pack that PASSed a full-throttle take-off it sags below
 its cut-off for, a 8 C pack that PASSed trim at 45 m/s beyond its rating, and a propulsion
 file with the test's reference voltage (as ``fit`` writes it) that PASSed trim at 45 m/s at
@@ -22,7 +22,6 @@ from tests.conftest import copy_shipped_case
 from tuflexperf.analysis.batch import BatchEvaluator
 from tuflexperf.analysis.oei import solve_oei
 from tuflexperf.analysis.pack_limits import fan_power_w, pack_side
-from tuflexperf.analysis.plausibility import implausible
 from tuflexperf.analysis.requirements import check_case
 from tuflexperf.analysis.takeoff import solve_takeoff
 from tuflexperf.analysis.trim import solve_trim
@@ -194,64 +193,6 @@ def test_trim_and_oei_at_the_loaded_voltage_equal_an_independent_solve(tmp_path)
             _independent_level_throttle(case, side, v, dead), abs=1e-9)
 
 
-@pytest.mark.parametrize(("reference_v", "c_rate"), [(None, None), (None, 8), (47.3, None)])
-def test_the_batch_flies_trim_and_oei_on_the_packs_as_the_single_case(tmp_path, reference_v,
-                                                                       c_rate):
-    rows = [
-        {"battery.capacity_ah": 5.0, "battery.cutoff_voltage_per_cell_v": 3.4,
-         "requirements.envelope.max_airspeed_m_s": 40.0},
-        {"battery.capacity_ah": 2.5, "battery.cutoff_voltage_per_cell_v": 3.3,
-         "requirements.envelope.max_airspeed_m_s": 38.0},
-        {"battery.capacity_ah": 3.5, "battery.cutoff_voltage_per_cell_v": 3.55,
-         "requirements.envelope.max_airspeed_m_s": 33.0},
-        {"battery.capacity_ah": 8.0, "battery.cutoff_voltage_per_cell_v": 3.5,
-         "requirements.envelope.max_airspeed_m_s": 30.0},
-        {"battery.capacity_ah": 1.5, "battery.cutoff_voltage_per_cell_v": 3.2,
-         "requirements.envelope.max_airspeed_m_s": 26.0},
-    ]
-    nominal = _case(tmp_path / "nominal", reference_v, c_rate)
-    values = {k: np.array([r[k] for r in rows]) for k in rows[0]}
-    batch = BatchEvaluator(nominal).evaluate(values)
-    for i, row in enumerate(rows):
-        single = _case(tmp_path / f"row{i}", reference_v, c_rate,
-                       tuple(f"{k}={v}" for k, v in row.items()))
-        trim = solve_trim(single).max_throttle
-        oei = solve_oei(single).critical.min_throttle
-        if implausible(single):
-            # packs whose burst rating cannot give the full-throttle power: the registry
-            # FAILs every requirement, the batch gives no value (issue 43 item 3)
-            trim = oei = None
-        for name, expected in (("trim_throttle_max", trim), ("oei_min_throttle", oei)):
-            got = float(batch.values[name][i])
-            if expected is None:
-                assert np.isnan(got), (name, row, got)
-            else:
-                assert got == pytest.approx(expected, abs=1e-9), (name, row)
-
-
-@pytest.mark.parametrize(("reference_v", "c_rate"), [(None, None), (None, 4.7), (47.3, None)])
-def test_the_batch_takes_off_on_the_packs_as_the_single_case(tmp_path, reference_v, c_rate):
-    """Full throttle at the brake release and after the take-off's charge: the rows' packs
-    decide as the single case's (a batch that took off where the case could not)."""
-    capacities = [0.7, 0.9, 1.1, 1.3, 1.45, 1.55, 1.7, 2.0, 5.0, 8.0]
-    nominal = _case(tmp_path / "nominal", reference_v, c_rate)
-    batch = BatchEvaluator(nominal).evaluate({"battery.capacity_ah": np.array(capacities)})
-    verdicts = []
-    for i, capacity in enumerate(capacities):
-        single = _case(tmp_path / f"row{i}", reference_v, c_rate,
-                       (f"battery.capacity_ah={capacity}",))
-        got = float(batch.values["takeoff_ground_roll"][i])
-        try:
-            expected = solve_takeoff(single).ground_roll_m
-        except NotAttainable:
-            assert np.isnan(got), capacity
-            verdicts.append(False)
-            continue
-        assert got == pytest.approx(expected, rel=1e-6), capacity
-        verdicts.append(True)
-    assert True in verdicts and False in verdicts  # the rows straddle the packs' limit
-
-
 def test_sampled_cruises_cross_the_tested_range_on_sagging_packs(tmp_path) -> None:
     """The samples' extrapolation error steps the thrust at the tested range's end; a cruise
     whose airspeed falls through it as the packs sag still flies (168 of 300 samples were
@@ -299,7 +240,6 @@ def test_no_voltage_past_the_circuits_pole(exponent: float) -> None:
 def test_a_take_off_that_drains_the_packs_is_not_attainable() -> None:
     """k 0.2576: 456 s at full throttle to the obstacle draw 11.35 Ah of two 5 Ah packs;
     it passed between two failures (k 0.2574 and 0.2584), in check and the batch alike."""
-    from tuflexperf.analysis.batch import BatchEvaluator
     from tuflexperf.io.case import load_case
     from tuflexperf.io.dotted import with_values
 
@@ -331,18 +271,26 @@ def test_beyond_the_battery_only_in_the_bound_says_so(tmp_path) -> None:
     airspeed before the last, the reason says that point has the charge only in the bound
     and that the last airspeed holds: EDF2 sags more at 16.7 m/s than at rest, so listed
     as [16.7, 0] with a cut-off between its two voltages only the first fails."""
-    from tuflexperf.analysis.pack_limits import on_packs, takeoff_beyond_battery
+    from tuflexperf.analysis.pack_limits import operating_point
+    from tuflexperf.analysis.takeoff import takeoff_beyond_battery
 
     nominal = _case(tmp_path / "nominal", 44.0)
     side = pack_side(nominal)
     speeds, seconds = np.array([16.7, 0.0]), 5.0
+    b, prop = side.battery, nominal.propulsion
+
+    def on_packs(power: np.ndarray, charge: float) -> tuple[np.ndarray, ...]:
+        return operating_point(side.params, charge, power, b.circuit_packs,
+                               b.packs_in_parallel_per_engine, prop.reference_voltage_v,
+                               prop.voltage_exponent)
+
     volts = []
     for j in range(2):
         power = fan_power_w(side, nominal, j, np.ones(2), speeds)
-        current = on_packs(side, nominal, power, 0.0)[1]
+        current = on_packs(power, 0.0)[1]
         charge = float(np.max(current)) * side.battery.packs_in_parallel_per_engine * seconds \
             / 3600.0
-        volts.append(on_packs(side, nominal, power, charge)[0])
+        volts.append(on_packs(power, charge)[0])
     cutoff = 0.5 * (volts[1][0] + volts[1][1])  # EDF2: below it at 16.7 m/s, above at rest
     assert volts[1][0] < cutoff < volts[1][1] and np.all(volts[0] > cutoff)
     cells = cutoff / side.battery.cutoff_voltage_v * side.battery.cutoff_voltage_per_cell_v

@@ -1,9 +1,11 @@
 """The take-off's airborne part: rotation, the transition arc to the obstacle, on sagging packs.
 
 After lift-off the aircraft rotates (:func:`rotation_charge`) and flies the transition arc
-at full throttle to the obstacle height (:func:`obstacle_height_of`). With a reference
-voltage the thrust follows the packs' loaded voltage along the way: :func:`settle_airborne`
-iterates the charge drawn until the arc and the packs agree.
+at full throttle to the obstacle height (:func:`obstacle_height_of`), per row an
+:class:`ObstaclePath` (one row for ``takeoff``, whose reasons :func:`airborne_result`
+words; many for the batch). With a reference voltage the thrust follows the packs' loaded
+voltage along the way: :func:`settle_airborne` iterates the charge drawn until the arc and
+the packs agree.
 """
 
 from __future__ import annotations
@@ -23,17 +25,11 @@ from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
     DEFAULT_OBSTACLE_HEIGHT_M,
     TRANSITION_SPEED_OVER_STALL,
-    climb_gradient,
     ground_roll_net_force_n,
     obstacle_distances_m,
     transition_beyond_cl_max,
-    transition_radius_m,
-    transition_speed_m_s,
 )
 from tuflexperf.models.battery import SECONDS_PER_HOUR
-from tuflexperf.models.thrust import (
-    total_thrust_n,
-)
 
 ROTATION_STEPS = 8  # RK4 steps of the rotation's charge at the lift-off speed (the mission's)
 
@@ -466,35 +462,63 @@ class _Airborne:
         }
 
 
-def fly_airborne(case: Case, height: float, packs: Any = None,
-              charge_ah: np.ndarray | None = None) -> _Airborne:
-    """Transition arc at 1.15 V_stall and n, then the full-throttle climb (Anderson 6.7.2);
-    on sagging ``packs`` from ``charge_ah`` drawn per engine at the arc's start, each at the
-    packs' thrust on the way (:func:`settle_airborne`)."""
-    aircraft, propulsion, rho = case.aircraft, case.propulsion, case.density_kg_m3
-    v_tr = float(transition_speed_m_s(aircraft, rho))
-    radius = float(transition_radius_m(v_tr, aircraft.takeoff.transition_load_factor))
-    least_voltage = math.nan
-    why, beyond = "", False
-    if packs is None:
-        thrust_tr = total_thrust_n(propulsion, 1.0, v_tr, rho)
-        gradient = straight = reported = float(climb_gradient(aircraft, thrust_tr, v_tr, rho))
-    else:
-        start = np.zeros((packs.n, 1)) if charge_ah is None else np.reshape(charge_ah, (-1, 1))
-        air = settle_airborne(
-            radius, v_tr, height, start, lambda q: packs.point(q, np.array([v_tr])),
-            lambda thrust: np.asarray(climb_gradient(aircraft, thrust, v_tr, rho), dtype=float),
-            packs.cutoff_v)
-        gradient, straight = float(air.arc_gradient[0]), float(air.climb_gradient[0])
-        # where the obstacle is not reached the climb's gradient is NaN (an infinite climb):
-        # the result reports the gradient the climb starts at
-        reported = straight if math.isfinite(straight) else gradient
-        least_voltage = float(np.min(packs.point(air.charge_ah, np.array([v_tr]))[2]))
+@dataclass(frozen=True)
+class ObstaclePath:
+    """From lift-off to the obstacle per row ``(rows,)`` (one row for ``takeoff``, many for
+    the batch): the transition speed [m/s], the arc's radius [m], the full-throttle gradient
+    [-] at the arc's end and along the straight climb (on sagging packs NaN where the
+    obstacle is not reached), the horizontal arc and climb [m] (climb ``inf``: never
+    cleared) and the arc's top [m]; on sagging packs the settled path
+    (:func:`settle_airborne`) and the least loaded voltage at the obstacle [V]."""
+
+    speed_m_s: np.ndarray
+    radius_m: np.ndarray
+    arc_gradient: np.ndarray
+    climb_gradient: np.ndarray
+    arc_m: np.ndarray
+    climb_m: np.ndarray
+    top_m: np.ndarray
+    settled: AirborneOnPacks | None = None
+    least_voltage_v: np.ndarray | None = None
+
+    @property
+    def distance_m(self) -> np.ndarray:
+        """Arc + climb to the obstacle [m] (``inf`` where never cleared)."""
+        return self.arc_m + self.climb_m
+
+
+def obstacle_path(speed_m_s: Any, radius_m: Any, height_m: Any, arc_gradient: Any,
+                  climb_gradient_: Any = None, settled: AirborneOnPacks | None = None,
+                  least_voltage_v: Any = None) -> ObstaclePath:
+    """:class:`ObstaclePath` of rows flying the arc at ``arc_gradient`` and the straight
+    climb at ``climb_gradient_`` (None: the arc's) to ``height_m`` [m]
+    (:func:`~tuflexperf.models.aircraft.obstacle_distances_m`; Anderson 6.7.2)."""
+    straight = arc_gradient if climb_gradient_ is None else climb_gradient_
+    distances = obstacle_distances_m(radius_m, arc_gradient, height_m, climb_gradient_)
+    columns = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (
+        speed_m_s, radius_m, arc_gradient, straight, *distances)))
+    return ObstaclePath(*(c.reshape(-1) for c in columns), settled, least_voltage_v)
+
+
+def airborne_result(case: Case, height: float, path: ObstaclePath,
+                    cutoff_v: float = math.nan) -> _Airborne:
+    """The single case's airborne part from its one-row ``path`` (the batch's, at the
+    model's thrust or on sagging packs of cut-off ``cutoff_v`` [V]), with the reason where
+    the obstacle is not reached."""
+    aircraft = case.aircraft
+    v_tr, radius = float(path.speed_m_s[0]), float(path.radius_m[0])
+    gradient, straight = float(path.arc_gradient[0]), float(path.climb_gradient[0])
+    # where the obstacle is not reached on the packs the climb's gradient is NaN (an infinite
+    # climb): the result reports the gradient the climb starts at
+    reported = straight if math.isfinite(straight) else gradient
+    air = path.settled
+    why, beyond, least_voltage = "", False, math.nan
+    if air is not None:
+        least_voltage = float(path.least_voltage_v[0])
         beyond = bool(air.status[0] == BEYOND_THE_BATTERY_STATUS)
         why = _not_reached(int(air.status[0]), height, v_tr, gradient, float(air.apex_m[0]),
-                           packs.cutoff_v)
-    arc_m, climb_m, arc_top_m = (float(x) for x in obstacle_distances_m(
-        radius, gradient, height, straight))
+                           cutoff_v)
+    arc_m, climb_m, arc_top_m = (float(x[0]) for x in (path.arc_m, path.climb_m, path.top_m))
     reason = "" if math.isfinite(arc_m + climb_m) else why or (
         f"the {height:g} m obstacle is never cleared: the arc tops out at {arc_top_m:.1f} m "
         f"and the full-throttle climb gradient sin(gamma) at {v_tr:.1f} m/s is {reported:.3f} "

@@ -426,7 +426,7 @@ class BatchEvaluator:
         ``battery`` the rows' battery keys (:meth:`_battery_rows`)."""
         catapult = self.case.aircraft.launch == "catapult"
         # a catapult's "roll" is its release: no runway (SPEC 4), as solve_takeoff; the
-        # packs give full throttle over it (pack_limits.takeoff_beyond_battery)
+        # packs give full throttle over it (GroundRollRows.launch_on_packs)
         found = model.catapult_release() if catapult else model.ground_roll()
         if self._packs is not None and sagging_packs(self.case):
             # rolled on the packs' loaded voltage, as solve_takeoff rolls

@@ -87,7 +87,10 @@ def golden_section_max(
 
 
 def best_climb(m: Any, v_lo: Array, stall: Array) -> tuple[Array, Array]:
-    """Best-rate airspeed and rate per row on the 4001-point grid of ``endurance.best_climb``.
+    """Best-rate airspeed [m/s] and rate ``(T - D) V / W`` [m/s] (small angle, ``L = W``:
+    Anderson, *Aircraft Performance and Design*, 5.10) per row on the 4001-point grid from
+    ``v_lo`` to 8 x ``stall`` [m/s], short of the jet velocity (one row for the endurance's
+    mission plan, ``endurance_plan._best_climb``).
 
     The rate ``(T - D) V / W`` is unimodal in airspeed: a golden-section search over the
     grid index, then the grid points beside it, pick the same grid point as the full scan.

@@ -20,11 +20,9 @@ from numpy.typing import NDArray
 from tuflexperf.analysis.batch_kernels import fan_power_rows
 from tuflexperf.analysis.ground_roll import GroundRollRows
 from tuflexperf.analysis.pack_limits import (
-    least_throttle_where,
-    operating_point,
+    level_rows_on_packs,
     pack_rows,
     power_limit_w,
-    within_limits,
 )
 
 Array = NDArray[np.float64]
@@ -229,49 +227,16 @@ class BatchModel(GroundRollRows):
     def over_grid_on_packs(self, grid: Array, dead: int | None, mode: str, packs: Any,
                            battery: dict[str, Array]) -> Array:
         """Trim's highest (``dead`` None) or one dead engine's least throttle over the grid,
-        flown on the packs at the landing reserve as the single case flies it
-        (:func:`tuflexperf.analysis.pack_limits.level_flight_on_packs`); NaN where not
-        attainable (trim: at some airspeed; OEI: at every one).
+        flown on the packs at the landing reserve
+        (:func:`tuflexperf.analysis.pack_limits.level_rows_on_packs`, the single case's on
+        one row); NaN where not attainable (trim: at some airspeed; OEI: at every one).
 
         Every airspeed of every row is solved (no candidates): where the packs bind depends
         on the power, not only on the throttle.
         """
-        prop = self.propulsion
-        terms = self._grid_terms(grid)
-        live = [j for j in range(len(prop.engines)) if j != dead]
-        # the level-flight excess at idle; its shape is every row's grid
-        idle = self._excess_quadratic(grid, dead, mode, terms)[2]
-        shape = idle.shape
-        flyable = np.broadcast_to(self._flyable(grid), shape)
-        rows = pack_rows(packs.battery, battery)
-        charge, circuit = rows.reserve_charge_ah[:, None], rows.circuit_packs[:, None]
-        rating = None if rows.rating_a is None else rows.rating_a[:, None]
-
-        def on_packs(x: Array) -> list[tuple[Array, Array, Array]]:
-            engines = [prop.engines[j] if packs.own_surfaces else None for j in live]
-            return [operating_point(packs.params, charge,
-                                    np.maximum(fan_power_rows(packs, self, x, grid, engine), 0.0),
-                                    circuit, rows.packs_per_engine, prop.reference_voltage_v,
-                                    prop.voltage_exponent) for engine in engines]
-
-        if prop.reference_voltage_v is None:
-            x = np.where(flyable, self.least_throttle(grid, dead, mode, terms), np.nan)
-        else:  # the thrust follows the sagging pack: no closed form (pack_limits)
-            # the excess without the live engines: the dead one's drag less the airframe's
-            other = idle - sum(terms[0][j][2] for j in live)
-
-            def excess(xs: Array) -> Array:
-                total = np.broadcast_to(other, shape)
-                for j, (_, _, factor) in zip(live, on_packs(xs), strict=True):
-                    a_j, b_j, c_j = terms[0][j]
-                    total = total + factor * ((a_j * xs + b_j) * xs + c_j)
-                return total
-
-            x = np.where(flyable, least_throttle_where(excess, shape), np.nan)
+        x = level_rows_on_packs(self, grid, dead, mode, packs,
+                                pack_rows(packs.battery, battery)).flown
         ok = np.isfinite(x)
-        for u, current, _ in on_packs(np.nan_to_num(x)):
-            ok &= within_limits(u, current, rows.cutoff_v[:, None], rating)
-        x = np.where(ok, x, np.nan)
         if dead is None:
             return np.where(np.all(ok, axis=1), np.max(x, axis=1), np.nan)
         least = np.min(np.where(ok, x, np.inf), axis=1)

@@ -8,8 +8,8 @@ falls as the packs sag. The constant-power batch (:mod:`.batch_endurance`) took 
 reference voltage's figures throughout, so its endurance differed from the single case's
 (18.5 against 16.2 min for a reference of 44 V; P(met) 1.0 where the case FAILed).
 
-Here the same flight is flown per row, vectorised: the roll (64 RK4 steps in time along
-the airspeed history of :mod:`.batch_takeoff_packs`), the rotation (8 steps), the climb
+Here the same flight is flown per row, vectorised: the roll (the take-off's on the packs,
+:mod:`.batch_takeoff_packs`, its 101 nodes), the rotation (8 RK4 steps), the climb
 (64 steps over height) and the cruise (RK4 in time, steps of 1/64 of the constant-power
 estimate, until the first fan's packs reach the landing reserve or the cut-off, the end
 between two nodes by cubic Hermite interpolation of the charges). Every stage solves each
@@ -38,7 +38,6 @@ from tuflexperf.analysis.airborne import ROTATION_STEPS
 from tuflexperf.analysis.batch_kernels import best_climb, fan_power_rows, illinois
 from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, RATING_SEGMENT_S, STEPS
 from tuflexperf.analysis.pack_limits import PackRows, operating_point
-from tuflexperf.models._math import interp_rows
 from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import SECONDS_PER_HOUR, first_window_beyond
 from tuflexperf.models.powertrain import beyond_jet_velocity
@@ -55,6 +54,7 @@ _NEAR_STEP = 0.05  # a guess this near a tested end (relative) looks for the ste
 _STEP_BELOW, _STEP_ABOVE = 0.5e-9, 2e-9
 _MAX_CRUISE_STEPS = 16 * STEPS  # a sag that lengthens the cruise 16-fold is no cruise here
 _END_STEPS = 40  # Illinois steps on the cut-off within the last cruise step
+_CUTOFF_SLACK_V = 1e-9  # a node this near its cut-off [V] holds (the mission integrator's)
 
 
 @dataclass(frozen=True)
@@ -105,31 +105,46 @@ class SaggingFlight:
         self.cut_first = np.zeros(m.size, dtype=bool)  # the cut-off before the reserve
 
     # -- one point --------------------------------------------------------------------------
-    def _thrusts(self, throttle: Any, speed: Array) -> Array:
-        """Thrust [N] per fan flown ``(fans, rows)`` at the reference voltage (for ``(None,)``
-        the total of all engines)."""
-        m, v = self.m, speed.reshape(-1, 1)
-        if np.ndim(throttle):  # one throttle per row: a column against the rows' airspeeds
-            throttle = np.reshape(throttle, (-1, 1))
-        if self.engines == (None,):
-            return m.thrust(throttle, v)[:, 0][None, :]
-        # each fan's own (the total less the others' took three totals for two fans)
-        return np.stack([m.engine_thrust(j, throttle, v)[:, 0]
-                         for j in range(len(self.engines))])
+    def _above_cutoff(self, u: Array) -> NDArray[np.bool_]:
+        """Per row: every fan's loaded voltage ``u`` [V] ``(fans, rows)`` at or above its
+        cut-off, within the mission's slack (NaN: beyond the packs' power, not above)."""
+        with np.errstate(invalid="ignore"):
+            return np.all(u >= self.rows.cutoff_v - _CUTOFF_SLACK_V, axis=0)
+
+    def reference(self, throttle: Any, speeds: Array) -> tuple[Array, Array]:
+        """The packs' power [W] and the thrust [N] per fan flown (for ``(None,)`` the total
+        of all engines) at the reference voltage at ``throttle`` [-] and ``speeds`` [m/s]
+        ``(B, K)``, ``(fans, B, K)`` each: they depend on the airspeed alone, so a roll's
+        stages or an arc's iterations take them once (:meth:`loaded`)."""
+        m = self.m
+        power = np.stack([np.asarray(fan_power_rows(self.model, m, throttle, speeds, e),
+                                     dtype=float) * np.ones_like(speeds) for e in self.engines])
+        # each fan's own thrust (the total less the others' took three totals for two fans)
+        thrusts = (m.thrust(throttle, speeds)[None] if self.engines == (None,) else np.stack(
+            [m.engine_thrust(j, throttle, speeds) for j in range(len(self.engines))]))
+        return power, thrusts * np.ones_like(speeds)
+
+    def loaded(self, power: Array, thrusts: Array, charge: Array
+               ) -> tuple[Array, Array, Array, Array]:
+        """At :meth:`reference`'s ``power`` and ``thrusts`` after ``charge`` [Ah] drawn per
+        fan: the live thrust [N], and per fan the loaded voltage [V], the current through its
+        packs [A] and the thrust factor ``(U/U_ref)^k`` [-] (``(fans, B)`` or ``(fans, B, K)``)."""
+        rows = self.rows
+        circuit = rows.circuit_packs.reshape(-1, *([1] * (np.ndim(power) - 2)))  # per row
+        u, per_pack, factor = operating_point(self.model.params, charge, power, circuit,
+                                              rows.packs_per_engine, self.u_ref, self.k)
+        return np.sum(factor * thrusts, axis=0), u, per_pack * rows.packs_per_engine, factor
 
     def point(self, throttle: Any, speed: Array, charge: Array
               ) -> tuple[Array, Array, Array, Array]:
         """At ``throttle`` [-] and true airspeed ``speed`` [m/s] per row with ``charge`` [Ah]
         drawn per fan ``(fans, rows)``: the live thrust [N] per row, and per fan the loaded
         voltage [V], the current through its packs [A] and the electrical power [W]."""
-        power = np.stack([np.asarray(fan_power_rows(self.model, self.m, throttle, speed, e),
-                                     dtype=float) * np.ones(self.m.size) for e in self.engines])
-        rows = self.rows
-        u, per_pack, factor = operating_point(self.model.params, charge, power,
-                                              rows.circuit_packs, rows.packs_per_engine,
-                                              self.u_ref, self.k)
-        thrust = np.sum(factor * self._thrusts(throttle, speed), axis=0)
-        return thrust, u, per_pack * rows.packs_per_engine, power * factor ** 1.5
+        # one throttle per row: a column against the rows' airspeeds
+        x = np.reshape(throttle, (-1, 1)) if np.ndim(throttle) else throttle
+        power, thrusts = (a[..., 0] for a in self.reference(x, speed.reshape(-1, 1)))
+        thrust, u, current, factor = self.loaded(power, thrusts, charge)
+        return thrust, u, current, power * factor ** 1.5
 
     def _drag(self, speed: Array) -> Array:
         return np.asarray(level_flight_drag_n(self.m.aircraft, speed.reshape(-1, 1),
@@ -260,37 +275,35 @@ class SaggingFlight:
         def check(u: Array, current: Array, charge: Array) -> None:
             nonlocal held
             with np.errstate(invalid="ignore"):
-                held &= np.all(u >= self.rows.cutoff_v - 1e-9, axis=0)
+                held &= self._above_cutoff(u)
                 held &= np.all(np.isfinite(charge) & (charge < self.pole), axis=0)
                 held &= np.all(np.isfinite(current) & (current >= 0.0), axis=0)
 
         if not catapult:
             rotation = np.asarray(m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
                 * np.ones(m.size)
-            roll_only = np.where(ok, np.maximum(np.nan_to_num(roll_time) - rotation, 0.0), 0.0)
-            # the roll's airspeed history on the sagging packs (batch_takeoff_packs), flown
-            # in time as the mission flies the take-off analysis's
-            t_hist = np.where(ok[:, None], np.nan_to_num(m.packs_roll.history_time), 0.0)
+            # the roll as the take-off flew it on the sagging packs (batch_takeoff_packs: its
+            # charge within 1e-13 of solve_ivp's, where 64 RK4 steps in time along its airspeed
+            # history were 3e-8 off): its 101 nodes, each node's current at its airspeed
+            flown = m.packs_roll
+            t_hist = np.where(ok[:, None], np.nan_to_num(flown.history_time), 0.0)
+            q_hist = np.where(ok[None, :, None], np.nan_to_num(flown.history_charge_ah), 0.0)
             v_hist = v_lo[:, None] * np.linspace(0.0, 1.0, t_hist.shape[1])[None, :]
-            stage_t = (roll_only / (2 * STEPS))[:, None] * np.arange(2 * STEPS + 1)[None, :]
-            speeds = interp_rows(stage_t, t_hist, v_hist)
-            step = roll_only / STEPS
+            for k in range(t_hist.shape[1]):
+                _, u, current, _ = self.point(1.0, v_hist[:, k], q_hist[:, :, k])
+                nodes.add(t_hist[:, k], q_hist[:, :, k], current)
+                check(u, current, q_hist[:, :, k])
+            q, t = q_hist[:, :, -1], t_hist[:, -1]
 
-            def rolling(charge: Array, v: Array) -> tuple[Array, Array, Array]:
+            def full_throttle(charge: Array, v: Array) -> tuple[Array, Array, Array]:
+                """The rotation's rates in time: dq/dt [Ah/s], dt/dt, U [V]."""
                 _, u, current, _ = self.point(1.0, v, charge)
                 return current / SECONDS_PER_HOUR, np.ones(m.size), u
 
-            q, t = self._rk4(q, t, step, [speeds[:, 2 * j:2 * j + 3].T for j in range(STEPS)],
-                             rolling, nodes, check, first_speed=speeds[:, 0])
             # the rotation at the lift-off speed, in time
             constant = [np.stack([v_lo] * 3)] * ROTATION_STEPS
-
-            def rotating(charge: Array, v: Array) -> tuple[Array, Array, Array]:
-                _, u, current, _ = self.point(1.0, v, charge)
-                return current / SECONDS_PER_HOUR, np.ones(m.size), u
-
             q, t = self._rk4(q, t, np.where(ok, rotation, 0.0) / ROTATION_STEPS, constant,
-                             rotating, nodes, check, first_speed=v_lo)
+                             full_throttle, nodes, check, first_speed=v_lo)
         # the climb over height at the full-throttle rate of the loaded packs
         climbing_rows = ok & (height > 0)
         dh = np.where(climbing_rows, height, 0.0) / STEPS
@@ -359,7 +372,7 @@ class SaggingFlight:
 
         self.active = ok
         v, level, u, current, thrust = state(q, v)
-        held &= flyable(v, level, thrust) & np.all(u >= rows.cutoff_v - 1e-9, axis=0)
+        held &= flyable(v, level, thrust) & self._above_cutoff(u)
         going &= held
         end_s = np.full(m.size, np.nan)
         # per row, the last step's two nodes (charge, rate) for the end's interpolation
@@ -384,7 +397,7 @@ class SaggingFlight:
             k_next = current / SECONDS_PER_HOUR
             with np.errstate(invalid="ignore"):
                 at_reserve = np.any(q_next >= rows.reserve_charge_ah, axis=0)
-                cut = ~np.all(u >= rows.cutoff_v - 1e-9, axis=0)
+                cut = ~self._above_cutoff(u)
                 emptied = ~np.all(np.isfinite(q_next) & (q_next < self.pole), axis=0)
             finishing = going & (at_reserve | cut | emptied)
             # a node before the end that the single case cannot fly ends the row unflown
@@ -436,7 +449,7 @@ class SaggingFlight:
             v_here = self.level_speed(throttle, charge, va)[0]
             u = self.point(throttle, v_here, charge)[1]
             return (np.min(reserve - charge, axis=0),
-                    np.min(u, axis=0) - (cutoff - 1e-9))
+                    np.min(u, axis=0) - (cutoff - _CUTOFF_SLACK_V))
 
         def illinois(which: int) -> Array:
             low, high = np.zeros_like(h), h.copy()

@@ -32,15 +32,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tuflexperf.analysis.airborne import BEYOND_THE_BATTERY_STATUS, rotation_charge, settle_airborne
-from tuflexperf.analysis.batch_kernels import fan_power_rows
+from tuflexperf.analysis.airborne import (
+    BEYOND_THE_BATTERY_STATUS,
+    ObstaclePath,
+    obstacle_path,
+    rotation_charge,
+    settle_airborne,
+)
 from tuflexperf.analysis.batch_sagging import SaggingFlight
 from tuflexperf.analysis.ground_roll import GroundRollRows
-from tuflexperf.analysis.pack_limits import PackRows, operating_point, pack_rows
+from tuflexperf.analysis.pack_limits import PackRows, pack_rows
 from tuflexperf.models.aircraft import (
     climb_gradient,
     ground_roll_net_force_n,
-    obstacle_distances_m,
     transition_radius_m,
 )
 from tuflexperf.models.battery import SECONDS_PER_HOUR
@@ -74,29 +78,6 @@ def _flight(m: Any, packs: Any, rows: PackRows) -> SaggingFlight:
                          tuple(m.propulsion.engines) if packs.own_surfaces else (None,))
 
 
-def _reference(flight: SaggingFlight, packs: Any, speeds: Array) -> tuple[Array, Array]:
-    """The packs' power [W] and the thrust [N] per fan flown at the reference voltage at
-    ``speeds`` [m/s] ``(B, K)``, ``(fans, B, K)`` each: they depend on the airspeed alone,
-    so a roll's stages or an arc's iterations take them once."""
-    m = flight.m
-    power = np.stack([np.asarray(fan_power_rows(packs, m, 1.0, speeds, e), dtype=float)
-                      * np.ones_like(speeds) for e in flight.engines])
-    thrusts = (m.thrust(1.0, speeds)[None] if flight.engines == (None,) else np.stack(
-        [m.engine_thrust(j, 1.0, speeds) for j in range(len(flight.engines))]))
-    return power, thrusts * np.ones_like(speeds)
-
-
-def _on_packs(flight: SaggingFlight, packs: Any, power: Array, thrusts: Array, charge: Array
-              ) -> tuple[Array, Array, Array]:
-    """:meth:`SaggingFlight.point` at full throttle from :func:`_reference`'s ``power`` and
-    ``thrusts``, after ``charge`` [Ah] per fan: the thrust [N], and per fan the loaded
-    voltage [V] and the current through its packs [A]."""
-    rows = flight.rows
-    u, per_pack, factor = operating_point(packs.params, charge, power, rows.circuit_packs,
-                                          rows.packs_per_engine, flight.u_ref, flight.k)
-    return np.sum(factor * thrusts, axis=0), u, per_pack * rows.packs_per_engine
-
-
 class TakeoffPacks:
     """One case's sagging packs for the take-off: its batch of one row
     (:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`), its packs ``side``
@@ -105,14 +86,11 @@ class TakeoffPacks:
     :class:`~tuflexperf.analysis.batch_sagging.SaggingFlight`)."""
 
     def __init__(self, case: Any, side: Any) -> None:
-        from tuflexperf.io.dotted import battery_key_values
-
         self.n = len(case.propulsion.engines)
         self.cutoff_v = float(side.battery.cutoff_voltage_v)  # the packs' [V]
         self.side = side
         self.model = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1)
-        self.rows = pack_rows(side.battery, {k: np.array([v], dtype=float) for k, v in
-                                             battery_key_values(side.battery).items()})
+        self.rows = pack_rows(side.battery)
         self.flight = _flight(self.model, side, self.rows)
         self._references: dict[bytes, tuple[Array, Array]] = {}
 
@@ -123,14 +101,22 @@ class TakeoffPacks:
         v = np.atleast_1d(np.asarray(speeds, dtype=float)).reshape(1, -1)
         key = v.tobytes()
         if key not in self._references:  # the arc's settling asks one airspeed ~150 times
-            self._references[key] = _reference(self.flight, self.side, v)
+            self._references[key] = self.flight.reference(1.0, v)
         fans = len(self.flight.engines)
         q = np.asarray(charge_ah, dtype=float).reshape(self.n, -1) * np.ones((1, v.size))
-        thrust, volts, current = _on_packs(self.flight, self.side, *self._references[key],
-                                           q[:fans, None, :])
+        thrust, volts, current, _ = self.flight.loaded(*self._references[key],
+                                                       q[:fans, None, :])
         shape = (self.n, v.size)
         return (thrust.reshape(-1), np.broadcast_to(current.reshape(fans, -1), shape),
                 np.broadcast_to(volts.reshape(fans, -1), shape))
+
+    def obstacle_path(self, charge_ah: Array | None, height: float) -> ObstaclePath:
+        """The arc and climb to the obstacle ``height`` [m] from ``charge_ah`` drawn per
+        engine ``(n,)`` (None: full packs) (:func:`path_on_packs`, one row)."""
+        fans = len(self.flight.engines)
+        start = np.zeros((fans, 1)) if charge_ah is None else \
+            np.reshape(charge_ah, (self.n, 1))[:fans]
+        return path_on_packs(self.model, self.side, self.rows, start, height)
 
     def roll(self) -> RollOnPacks:
         """The ground roll and rotation on the packs (:func:`roll_on_packs`, one row)."""
@@ -166,12 +152,12 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
     # alone: once for all the stages' airspeeds (a stage then solves the packs' voltage only;
     # SaggingFlight.point's sum, on one row 3x fewer evaluations)
     stage_speeds = np.concatenate([speeds, middle], axis=1)
-    power, thrusts = _reference(flight, packs, stage_speeds)
+    power, thrusts = flight.reference(1.0, stage_speeds)
 
     def rates(charge: Array, column: int, reference_force: Array) -> tuple[Array, Array]:
         v = stage_speeds[:, column]
-        thrust, _, current = _on_packs(flight, packs, power[:, :, column],
-                                       thrusts[:, :, column], charge)
+        thrust, _, current, _ = flight.loaded(power[:, :, column], thrusts[:, :, column],
+                                              charge)
         loaded = np.asarray(ground_roll_net_force_n(m.aircraft, thrust.reshape(-1, 1),
                                                     v.reshape(-1, 1), m.density),
                             dtype=float).reshape(-1) * np.ones(m.size)
@@ -205,8 +191,8 @@ def roll_on_packs(m: Any, packs: Any, rows: PackRows) -> RollOnPacks:
         ok &= rates(q, last, force_ref[:, -1])[1] > 0.0  # and at lift-off itself
         rotation = np.asarray(m.aircraft.takeoff.rotation_time_s, dtype=float).reshape(-1) \
             * np.ones(m.size)
-        q = rotation_charge(lambda charge: _on_packs(
-            flight, packs, power[:, :, last], thrusts[:, :, last], charge)[2] / SECONDS_PER_HOUR,
+        q = rotation_charge(lambda charge: flight.loaded(
+            power[:, :, last], thrusts[:, :, last], charge)[2] / SECONDS_PER_HOUR,
             q, np.where(ok, rotation, 0.0))
     return RollOnPacks(
         distance=np.where(ok, s + v_lo * rotation, np.nan),
@@ -224,33 +210,33 @@ def release_on_packs(m: Any, packs: Any, rows: PackRows) -> tuple[Array, Array, 
     """A catapult's acceleration after the release on full packs, per row
     (:meth:`.GroundRollRows.release_run`; the charge per fan flown)."""
     flight = _flight(m, packs, rows)
-    full = np.zeros((len(flight.engines), m.size))
+    full = np.zeros((len(flight.engines), m.size, 1))
 
     def thrust_and_current(speed: Array) -> tuple[Array, Array]:
-        points = [flight.point(1.0, speed[:, k], full) for k in range(speed.shape[1])]
-        return (np.stack([p[0] for p in points], axis=1),
-                np.stack([p[2] for p in points], axis=-1))
+        thrust, _, current, _ = flight.loaded(*flight.reference(1.0, speed), full)
+        return thrust, current
 
     return m.release_run(thrust_and_current)
 
 
-def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
-                      height: Any) -> tuple[Array, NDArray[np.bool_], Any]:
-    """Transition arc + climb to the obstacle [m] per row on the sagging packs from the
-    charge after the roll and rotation (a catapult's release acceleration), as
-    :func:`tuflexperf.analysis.takeoff.solve_takeoff`; ``inf`` where never cleared. And per
-    row whether the packs reach their cut-off in the climb before the obstacle (the
-    take-off is then not attainable, as the single case's), and the settled path
-    (:class:`~tuflexperf.analysis.airborne.AirborneOnPacks`: the mission flies its gradients)."""
+def path_on_packs(m: Any, packs: Any, rows: PackRows, start: Array, height: Any
+                  ) -> ObstaclePath:
+    """Transition arc + climb to the obstacle ``height`` [m] per row on the sagging packs from
+    ``start`` [Ah] drawn per fan ``(fans, B)`` after the roll and rotation (a catapult's
+    release acceleration): :func:`~tuflexperf.analysis.airborne.settle_airborne` at the
+    transition speed, its power and reference thrust taken once for its ~150 iterations
+    (``SaggingFlight.reference``). ``takeoff`` flies one row
+    (:meth:`TakeoffPacks.obstacle_path`)."""
     flight = _flight(m, packs, rows)
     v_tr = m.transition_speed()
     radius = np.asarray(transition_radius_m(v_tr.reshape(-1, 1),
                                             m.aircraft.takeoff.transition_load_factor),
                         dtype=float).reshape(-1) * np.ones(m.size)
     tall = np.asarray(height, dtype=float).reshape(-1) * np.ones(m.size)
+    power, thrusts = (x[:, :, 0] for x in flight.reference(1.0, v_tr.reshape(-1, 1)))
 
     def point(charge: Array) -> tuple[Array, Array, Array]:
-        thrust, volts, current, _ = flight.point(1.0, v_tr, charge)
+        thrust, volts, current, _ = flight.loaded(power, thrusts, charge)
         return thrust, current, volts
 
     def gradient_of(thrust: Any) -> Any:
@@ -258,9 +244,20 @@ def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
                                          v_tr.reshape(-1, 1), m.density),
                           dtype=float).reshape(-1)
 
-    start = np.where(roll.ok > 0.5, roll.charge_ah, 0.0)
     air = settle_airborne(radius, v_tr, tall, start, point, gradient_of, rows.cutoff_v)
     # the climb's gradient is NaN where the obstacle is not reached: an infinite climb
-    arc, climb, _ = obstacle_distances_m(radius, air.arc_gradient, tall, air.climb_gradient)
-    return (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float),
-            air.status == BEYOND_THE_BATTERY_STATUS, air)
+    return obstacle_path(v_tr, radius, tall, air.arc_gradient, air.climb_gradient, air,
+                         np.min(point(air.charge_ah)[2], axis=0))
+
+
+def airborne_on_packs(m: Any, packs: Any, rows: PackRows, roll: RollOnPacks,
+                      height: Any) -> tuple[Array, NDArray[np.bool_], Any]:
+    """Transition arc + climb to the obstacle [m] per row on the sagging packs from the
+    charge after the roll and rotation (:func:`path_on_packs`); ``inf`` where never
+    cleared. And per row whether the packs reach their cut-off in the climb before the
+    obstacle (the take-off is then not attainable, as the single case's), and the settled
+    path (:class:`~tuflexperf.analysis.airborne.AirborneOnPacks`: the mission flies its
+    gradients)."""
+    path = path_on_packs(m, packs, rows, np.where(roll.ok > 0.5, roll.charge_ah, 0.0), height)
+    air = path.settled
+    return path.distance_m, air.status == BEYOND_THE_BATTERY_STATUS, air

@@ -13,16 +13,12 @@ from typing import Any
 
 import numpy as np
 
-from tuflexperf.analysis.constants import MAX_SPEED_OVER_STALL, SPEED_GRID_POINTS
 from tuflexperf.errors import NotAttainable
 from tuflexperf.io.battery import (
     Battery,
 )
 from tuflexperf.io.case import Case
-from tuflexperf.models.aircraft import climb_sine, level_flight_drag_n, stall_speed_m_s
-from tuflexperf.models.thrust import (
-    total_thrust_n,
-)
+from tuflexperf.models.aircraft import stall_speed_m_s
 
 
 # --- launch: ground roll + climb at full throttle -------------------------------------------
@@ -44,33 +40,21 @@ class LaunchBudget:
 
 
 def _best_climb(case: Case) -> tuple[float, float]:
-    """Airspeed (m/s) and rate (m/s) of the best full-throttle climb, ``(T - D) V / W``
-    (at most ``V``: a vertical climb, :func:`~tuflexperf.models.aircraft.climb_sine`).
-
-    Small-angle climb with ``L = W`` (Anderson, *Aircraft Performance and Design*, 5.10).
-    Searched from the lift-off speed to 8 x stall, short of the fans' jet velocity (beyond
-    it a fan makes no thrust, :func:`jet_velocity_ceiling_m_s`).
-    """
-    from tuflexperf.models.aircraft import liftoff_speed_m_s
-    from tuflexperf.models.powertrain import jet_velocity_ceiling_m_s
+    """Airspeed (m/s) and rate (m/s) of the best full-throttle climb from the lift-off (a
+    catapult's release) speed: the batch's
+    :func:`~tuflexperf.analysis.batch_kernels.best_climb` on the case's one row, so the
+    mission's record climbs where the endurance's rows do."""
+    from tuflexperf.analysis.batch_kernels import best_climb
+    from tuflexperf.analysis.level_flight import LevelFlightRows
+    from tuflexperf.models.aircraft import liftoff_speed_m_s, true_airspeed_m_s
 
     aircraft, rho = case.aircraft, case.density_kg_m3
-    low = float(liftoff_speed_m_s(aircraft, rho))
-    if aircraft.launch == "catapult":  # the climb starts from the release speed
-        from tuflexperf.models.aircraft import true_airspeed_m_s
-
-        low = float(true_airspeed_m_s(aircraft.launch_speed_m_s, rho))
-    speeds = np.linspace(low, MAX_SPEED_OVER_STALL * float(stall_speed_m_s(aircraft, rho)),
-                         SPEED_GRID_POINTS)
-    thrust = total_thrust_n(case.propulsion, 1.0, speeds, rho)
-    excess = np.asarray(thrust - level_flight_drag_n(aircraft, speeds, rho), dtype=float)
-    rate = np.asarray(climb_sine(excess / aircraft.weight_n), dtype=float) * speeds
-    # at or beyond the jet velocity no climb (the first grid point stays: a lift-off there
-    # is refused by the take-off)
-    beyond = speeds[1:] >= float(jet_velocity_ceiling_m_s(case.propulsion, rho))
-    rate[1:] = np.where(beyond, -np.inf, rate[1:])
-    best = int(np.argmax(rate))
-    return float(speeds[best]), float(rate[best])
+    low = (true_airspeed_m_s(aircraft.launch_speed_m_s, rho) if aircraft.launch == "catapult"
+           else liftoff_speed_m_s(aircraft, rho))
+    speed, rate = best_climb(LevelFlightRows(aircraft, case.propulsion, rho, None, 1),
+                             np.array([float(low)]),
+                             np.array([float(stall_speed_m_s(aircraft, rho))]))
+    return float(speed[0]), float(rate[0])
 
 
 def endurance_mission(case: Case, battery: Battery, throttle: float = 0.5) -> Any:

@@ -20,10 +20,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from tuflexperf.analysis.airborne import ObstaclePath, obstacle_path
 from tuflexperf.analysis.batch_kernels import fan_power_rows, stall_speed
 from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
 from tuflexperf.analysis.level_flight import LevelFlightRows
 from tuflexperf.analysis.pack_limits import (
+    PackRows,
     operating_point,
     pack_rows,
     within_limits,
@@ -35,7 +37,6 @@ from tuflexperf.models.aircraft import (
     ground_roll_net_force_n,
     level_flight_drag_n,
     liftoff_speed_m_s,
-    obstacle_distances_m,
     transition_beyond_cl_max,
     transition_radius_m,
     transition_speed_m_s,
@@ -201,6 +202,21 @@ def _running_sum(parts: Array) -> Array:
     for column in range(1, parts.shape[1]):
         parts[:, column] += parts[:, column - 1]
     return parts
+
+
+@dataclass(frozen=True)
+class LaunchOnPacks:
+    """Full throttle on the packs over a take-off (:meth:`GroundRollRows.launch_on_packs`), per
+    engine flown ``j`` (one for a shared power model): its power [W] at the reference voltage
+    ``(B, K)``; on full packs (``2 j``) and after the take-off's charge (``2 j + 1``) the
+    loaded voltage [V], current per pack [A] and where they are within the limits; that
+    charge [Ah] ``(B,)``; the burst rating per pack [A] ``(B,)`` (None: no rating)."""
+
+    power_w: list[Array]
+    points: list[tuple[Array, Array]]
+    within: list[NDArray[np.bool_]]
+    charge_ah: list[Array]
+    burst_a: Array | None
 
 
 @dataclass
@@ -435,15 +451,11 @@ class GroundRollRows(LevelFlightRows):
     def launch_within_packs(self, roll: tuple[Array, Array, Array, Array], height: Any,
                             catapult: bool, packs: Any, battery: dict[str, Array]
                             ) -> NDArray[np.bool_]:
-        """Per row: the packs give full throttle over the take-off, as the single case
-        checks it (:func:`tuflexperf.analysis.pack_limits.takeoff_beyond_battery`): over the
-        roll's 101 history airspeeds (a catapult: its release) and the transition speed, on
-        full packs and after the charge the most current for the whole take-off (roll,
-        rotation, and the arc and climb to the obstacle at the transition speed) would draw,
-        the loaded voltage at or above the cut-off and each pack within its burst rating;
-        and, on sagging packs, the climb reaching the obstacle before their cut-off
-        (:attr:`packs_beyond`)."""
-        prop = self.propulsion
+        """Per row: the packs give full throttle over the take-off (:meth:`launch_on_packs`)
+        over the roll's 101 history airspeeds (a catapult: its release) and the transition
+        speed, for the roll's, rotation's, and the arc and climb's seconds to the obstacle
+        at the transition speed; and, on sagging packs, the climb reaching the obstacle
+        before their cut-off (:attr:`packs_beyond`)."""
         v_tr = self.transition_speed()[:, None]
         airborne = self.airborne_m(height)
         airborne = np.where(np.isfinite(airborne), airborne, 0.0)
@@ -454,42 +466,69 @@ class GroundRollRows(LevelFlightRows):
         along = (v_lo if catapult else
                  v_lo * np.linspace(0.0, 1.0, HISTORY_POINTS)[None, :])
         speeds = np.concatenate([along * np.ones((self.size, 1)), v_tr], axis=1)
-        rows = pack_rows(packs.battery, battery)
-        circuit, cutoff = rows.circuit_packs[:, None], rows.cutoff_v[:, None]
-        burst = (None if rows.rating_a is None
-                 else BURST_OVER_CONTINUOUS * rows.rating_a[:, None])
-        ok = np.ones(self.size, dtype=bool)
-        for engine in prop.engines if packs.own_surfaces else (None,):
-            power = np.maximum(fan_power_rows(packs, self, 1.0, speeds, engine), 0.0)
-            power = power * np.ones_like(speeds)
-            if prop.reference_voltage_v is None and packs.params.resistance_ohm > 0.0 \
-                    and np.all(circuit > 0.0):
-                # at a fixed power the loaded voltage falls and the current rises with the
-                # power (each rounded step monotone too): a row's most power decides both
-                power = np.max(power, axis=1, keepdims=True)
-            charge = np.zeros((self.size, 1))
-            for _ in range(2):
-                _, current, _ = point = operating_point(
-                    packs.params, charge, power, circuit, rows.packs_per_engine,
-                    prop.reference_voltage_v, prop.voltage_exponent)
-                ok &= np.all(within_limits(point[0], current, cutoff, burst), axis=1)
-                charge = (np.max(current, axis=1) * rows.packs_per_engine * seconds
-                          / SECONDS_PER_HOUR)[:, None]
+        launch = self.launch_on_packs(packs, pack_rows(packs.battery, battery), speeds,
+                                      seconds)
+        ok = np.all([np.all(within, axis=1) for within in launch.within], axis=0)
         if self.packs_beyond is not None:  # the packs give out in the climb (solve_takeoff)
             ok &= ~self.packs_beyond
         return ok
 
+    def launch_on_packs(self, packs: Any, rows: PackRows, speeds: Array, seconds: Array,
+                        each_point: bool = False) -> LaunchOnPacks:
+        """Full throttle on the packs ``packs`` (a :class:`~.pack_limits.PackSide`) of
+        ``rows`` at the airspeeds ``speeds`` [m/s] ``(B, K)`` of a take-off lasting
+        ``seconds`` [s] ``(B,)``: on full packs, and after the charge the most current for
+        the whole take-off would draw (an upper bound: the packs sag as they give it), each
+        engine's loaded voltage at or above the cut-off and each pack within its burst
+        rating (:class:`LaunchOnPacks`; ``takeoff`` asks one row, every point solved
+        (``each_point``), the batch many)."""
+        prop = self.propulsion
+        circuit, cutoff = rows.circuit_packs[:, None], rows.cutoff_v[:, None]
+        burst = (None if rows.rating_a is None
+                 else BURST_OVER_CONTINUOUS * rows.rating_a[:, None])
+        seconds = np.asarray(seconds, dtype=float).reshape(-1)
+        fans = prop.engines if packs.own_surfaces else (None,)
+        powers, points, within, charges = [], [], [], []
+        for engine in fans:
+            power = np.maximum(fan_power_rows(packs, self, 1.0, speeds, engine), 0.0)
+            power = power * np.ones_like(speeds)
+            if not each_point and prop.reference_voltage_v is None \
+                    and packs.params.resistance_ohm > 0.0 and np.all(circuit > 0.0):
+                # at a fixed power the loaded voltage falls and the current rises with the
+                # power (each rounded step monotone too): a row's most power decides both
+                power = np.max(power, axis=1, keepdims=True)
+            powers.append(power)
+            charge = np.zeros((self.size, 1))
+            for after in (False, True):  # on full packs, then after the take-off's charge
+                u, current, _ = operating_point(
+                    packs.params, charge, power, circuit, rows.packs_per_engine,
+                    prop.reference_voltage_v, prop.voltage_exponent)
+                points.append((u, current))
+                within.append(within_limits(u, current, cutoff, burst))
+                if not after:
+                    charge = (np.max(current, axis=1) * rows.packs_per_engine * seconds
+                              / SECONDS_PER_HOUR)[:, None]
+                    charges.append(charge[:, 0])
+        return LaunchOnPacks(powers, points, within, charges,
+                             None if burst is None else burst[:, 0])
+
     def airborne_m(self, height: Any) -> Array:
         """Transition arc + climb to the obstacle [m] per row (``inf`` where never cleared):
         on the sagging packs where they were flown (:attr:`packs_airborne`), else at the
-        model's thrust (as :func:`solve_takeoff`)."""
+        model's thrust (:meth:`obstacle_path`)."""
         if self.packs_airborne is not None:
             return self.packs_airborne
+        return self.obstacle_path(height).distance_m
+
+    def obstacle_path(self, height: Any) -> ObstaclePath:
+        """The arc at 1.15 V_stall and the full-throttle climb to the obstacle ``height``
+        [m] per row at the model's thrust (Anderson 6.7.2; ``takeoff`` flies one row)."""
         v_tr = self.transition_speed()[:, None]
         radius = transition_radius_m(v_tr, self.aircraft.takeoff.transition_load_factor)
         gradient = climb_gradient(self.aircraft, self.thrust(1.0, v_tr), v_tr, self.density)
-        arc, climb, _ = obstacle_distances_m(radius, gradient, height)
-        return (np.asarray(arc, dtype=float) + np.asarray(climb, dtype=float))[:, 0]
+        # a height per row, (B,) or (B, 1), is a column against the rows' (B, 1)
+        column = np.reshape(height, (-1, 1)) if np.ndim(height) else height
+        return obstacle_path(v_tr, radius, column, gradient)
 
     def distance_to_obstacle(self, roll: tuple[Array, Array, Array, Array],
                              height: Any) -> Array:

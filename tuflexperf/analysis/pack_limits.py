@@ -39,16 +39,10 @@ from tuflexperf.analysis.attainable import (
     BEYOND_THE_BATTERY,
     AttainableRange,
 )
-from tuflexperf.analysis.constants import BURST_OVER_CONTINUOUS, SECONDS_PER_HOUR
+from tuflexperf.analysis.batch_kernels import fan_power_rows
 from tuflexperf.io.case import Case
 from tuflexperf.models._math import fmax, is_symbolic
-from tuflexperf.models.aircraft import level_flight_drag_n
 from tuflexperf.models.battery import loaded_voltage_at_power_v
-from tuflexperf.models.thrust import (
-    density_ratio,
-    engine_thrust_n,
-    windmilling_thrust_n,
-)
 
 _CUTOFF_TOLERANCE = 1e-12  # relative: a loaded voltage at the cut-off is within it
 _RATING_TOLERANCE = 1e-9  # relative, as the mission's rating rule
@@ -136,15 +130,6 @@ def operating_point(params: Any, charge_ah: Any, power_w: Any, circuit_packs: An
     return u, current, factor
 
 
-def on_packs(side: PackSide, case: Case, power_w: Any, charge_ah: float
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`operating_point` of one engine of the case's packs."""
-    b = side.battery
-    return operating_point(side.params, charge_ah, power_w, b.circuit_packs,
-                           b.packs_in_parallel_per_engine, case.propulsion.reference_voltage_v,
-                           case.propulsion.voltage_exponent)
-
-
 def within_limits(voltage_v: Any, current_a: Any, cutoff_v: Any, rating_a: Any) -> Any:
     """Where the packs fly a point: a voltage (NaN: none) at or above the cut-off [V] and a
     current per pack [A] within the rating (``None``: no rating)."""
@@ -186,10 +171,15 @@ class PackRows:
     rating_a: np.ndarray | None  # continuous, per pack
 
 
-def pack_rows(battery: Any, values: dict[str, np.ndarray]) -> PackRows:
+def pack_rows(battery: Any, values: dict[str, np.ndarray] | None = None) -> PackRows:
     """:class:`PackRows` of ``battery`` (a :class:`~tuflexperf.io.battery.Battery`) with the
-    rows' ``values`` of its varying keys."""
+    rows' ``values`` of its varying keys (None: one row, the battery as given)."""
     from tuflexperf.models.battery import equivalent_packs
+
+    if values is None:
+        from tuflexperf.io.dotted import battery_key_values
+
+        values = {k: np.array([x], dtype=float) for k, x in battery_key_values(battery).items()}
 
     per_engine = battery.packs_in_parallel_per_engine
     capacity = np.asarray(values["battery.capacity_ah"], dtype=float)
@@ -245,64 +235,116 @@ def least_throttle_where(excess: Any, shape: tuple[int, ...]) -> np.ndarray:
     return np.where(found, high, np.nan)
 
 
-def level_flight_on_packs(case: Case, side: PackSide, speeds: np.ndarray,
-                          throttle: np.ndarray, flyable: np.ndarray | None = None,
-                          dead: int | None = None, mode: str = "windmilling") -> LevelOnPacks:
-    """The least level-flight throttle on the packs at the landing reserve (module docstring).
+@dataclass(frozen=True)
+class LevelRowsOnPacks:
+    """Level flight at the landing reserve on the rows' packs over their grids ``(B, K)``
+    (:func:`level_rows_on_packs`): the least throttle before the packs' limits (NaN where
+    none reaches), the live engines, and per live engine its loaded voltage [V], current per
+    pack [A], power [W] at the reference voltage and where its packs fly the point."""
+
+    throttle: np.ndarray
+    live: list[int]
+    points: list[tuple[np.ndarray, np.ndarray, np.ndarray]]
+    within: list[np.ndarray]
+
+    @property
+    def flown(self) -> np.ndarray:
+        """The least throttle where every live engine's packs fly it (NaN elsewhere)."""
+        ok = np.isfinite(self.throttle) & np.all(self.within, axis=0)
+        return np.where(ok, self.throttle, np.nan)
+
+
+def level_rows_on_packs(m: Any, grid: np.ndarray, dead: int | None, mode: str,
+                        packs: PackSide, rows: PackRows, throttle: np.ndarray | None = None,
+                        flyable: np.ndarray | None = None) -> LevelRowsOnPacks:
+    """The least level-flight throttle on the rows' packs at the landing reserve (module
+    docstring), one row for ``trim`` and ``oei``, many for the batch.
 
     Parameters
     ----------
-    speeds : array
+    m : LevelFlightRows
+        The rows' physics (:class:`~tuflexperf.analysis.level_flight.LevelFlightRows`).
+    grid : ndarray ``(B, K)`` or ``(1, K)``
         True airspeeds [m/s].
-    throttle : array
-        The least throttle at the reference voltage [fraction], NaN where not attainable.
-    flyable : array of bool, optional
-        Where level flight may be attainable at all (above stall, short of the jet
-        velocity); with a reference voltage the throttle is solved again there.
-    dead : int, optional
-        The inoperative engine (OEI), ``mode`` its drag (``windmilling`` or ``zero``).
+    dead, mode
+        The inoperative engine (OEI) and its drag (``windmilling`` or ``zero``).
+    packs, rows
+        The case's packs and the rows' (:func:`pack_rows`).
+    throttle : ndarray, optional
+        The least throttle at the reference voltage [fraction] (default ``m``'s).
+    flyable : ndarray of bool, optional
+        Where level flight may be attainable at all (default ``m``'s: above stall, short
+        of the jet velocity); with a reference voltage the throttle is solved again there.
     """
-    prop, rho = case.propulsion, case.density_kg_m3
-    v = np.asarray(speeds, dtype=float)
-    q = side.reserve_charge_ah
+    prop = m.propulsion
+    terms = m._grid_terms(grid)
     live = [j for j in range(len(prop.engines)) if j != dead]
-    x = np.asarray(throttle, dtype=float).copy()
-    flyable = np.isfinite(x) if flyable is None else np.asarray(flyable, dtype=bool)
-    beyond: list[str | None] = [None] * v.size
-    rating = side.rating_a
+    idle = m._excess_quadratic(grid, dead, mode, terms)[2]  # its shape is every row's grid
+    shape = idle.shape
+    flyable = np.broadcast_to(m._flyable(grid) if flyable is None else flyable, shape)
+    # one row's values as floats: the loaded voltage's Newton steps on (1, 1) columns took
+    # a fifth longer (the same numbers)
+    charge, circuit = (float(a[0]) if a.size == 1 else a[:, None]
+                       for a in (rows.reserve_charge_ah, rows.circuit_packs))
+    rating = None if rows.rating_a is None else rows.rating_a[:, None]
+    engines = [prop.engines[j] if packs.own_surfaces else None for j in live]
 
-    def mark(n: int, engine: int, why: str | None) -> None:
-        if why is not None and beyond[n] is None:
-            beyond[n] = f"{prop.engines[engine].name}: {why}"
+    def on_rows(x: np.ndarray) -> list[tuple[np.ndarray, ...]]:
+        """Per live engine at throttles ``x``: voltage [V], current per pack [A], thrust
+        factor [-] and power [W] at the reference voltage."""
+        return [(*operating_point(packs.params, charge, power, circuit, rows.packs_per_engine,
+                                  prop.reference_voltage_v, prop.voltage_exponent), power)
+                for power in (np.maximum(fan_power_rows(packs, m, x, grid, e), 0.0)
+                              * np.ones(shape) for e in engines)]
 
-    if prop.reference_voltage_v is not None:
-        scale = density_ratio(prop, rho)
-        other = -np.asarray(level_flight_drag_n(case.aircraft, v, rho), dtype=float)
-        if dead is not None and mode == "windmilling":
-            other = other + np.asarray(windmilling_thrust_n(
-                prop.engines[dead], v, scale, rho, prop.fan_area_m2), dtype=float)
+    if prop.reference_voltage_v is None:
+        if throttle is None:
+            throttle = m.least_throttle(grid, dead, mode, terms)
+        x = np.where(flyable, throttle, np.nan)
+    else:  # the thrust follows the sagging pack: no closed form
+        # the excess without the live engines: the dead one's drag less the airframe's
+        other = idle - sum(terms[0][j][2] for j in live)
 
         def excess(xs: np.ndarray) -> np.ndarray:
-            total = other.copy()
-            for j in live:
-                factor = on_packs(side, case, fan_power_w(side, case, j, xs, v), q)[2]
-                total = total + factor * engine_thrust_n(prop.engines[j], xs, v, scale)
+            total = np.broadcast_to(other, shape)
+            for j, point in zip(live, on_rows(xs), strict=True):
+                a_j, b_j, c_j = terms[0][j]
+                total = total + point[2] * ((a_j * xs + b_j) * xs + c_j)
             return total
 
-        x = np.where(flyable, least_throttle_where(excess, v.shape), np.nan)
+        x = np.where(flyable, least_throttle_where(excess, shape), np.nan)
+    points = [(u, current, power) for u, current, _, power in on_rows(np.nan_to_num(x))]
+    within = [within_limits(u, current, rows.cutoff_v[:, None], rating)
+              for u, current, _ in points]
+    return LevelRowsOnPacks(x, live, points, within)
+
+
+def level_flight_on_packs(case: Case, side: PackSide, m: Any, grid: np.ndarray,
+                          throttle: np.ndarray, flyable: np.ndarray,
+                          dead: int | None = None, mode: str = "windmilling") -> LevelOnPacks:
+    """The single case's level flight on its packs: :func:`level_rows_on_packs` on its one
+    row ``m`` over ``grid`` ``(1, K)`` [m/s], with the reason per airspeed where the packs
+    cannot fly it (``throttle`` and ``flyable`` as there)."""
+    prop = case.propulsion
+    on = level_rows_on_packs(m, grid, dead, mode, side, pack_rows(side.battery),
+                             np.asarray(throttle)[None, :],
+                             np.asarray(flyable, dtype=bool)[None, :])
+    x = on.throttle[0]
+    beyond: list[str | None] = [None] * x.size
+    if prop.reference_voltage_v is not None:
         for n in np.flatnonzero(flyable & ~np.isfinite(x)):
             beyond[n] = ("needs more than full throttle at the packs' loaded voltage "
                          f"(thrust x (U/{prop.reference_voltage_v:g} V)^"
                          f"{prop.voltage_exponent:g}), or more power than they give")
-    least_u = np.full(v.shape, np.inf)
-    for j in live:
-        power = fan_power_w(side, case, j, np.nan_to_num(x), v)
-        u, current, _ = on_packs(side, case, power, q)
+    least_u = np.full(x.shape, np.inf)
+    for j, (u, current, power), within in zip(on.live, on.points, on.within, strict=True):
+        u, current, power = u[0], current[0], power[0]
         least_u = np.where(np.isfinite(x), np.fmin(least_u, u), least_u)
-        cutoff = side.battery.cutoff_voltage_v
-        for n in np.flatnonzero(np.isfinite(x) & ~within_limits(u, current, cutoff, rating)):
-            mark(int(n), j, limit_reason(side, float(u[n]), float(current[n]),
-                                         float(power[n]), rating, "continuous"))
+        for n in np.flatnonzero(np.isfinite(x) & ~within[0]):
+            why = limit_reason(side, float(u[n]), float(current[n]), float(power[n]),
+                               side.rating_a, "continuous")
+            if why is not None and beyond[n] is None:
+                beyond[n] = f"{prop.engines[j].name}: {why}"
     x = np.where([b is None for b in beyond], x, np.nan)
     return LevelOnPacks(x, tuple(beyond), least_u)
 
@@ -317,69 +359,13 @@ def beyond_note(what: str, side: PackSide, speeds: np.ndarray, on: LevelOnPacks)
             f"({side.battery.landing_reserve_fraction:.0%} of the charge left): {first}")
 
 
-def takeoff_beyond_battery(case: Case, side: PackSide, speeds: np.ndarray,
-                           seconds: float) -> str | None:
-    """Why full packs cannot give full throttle over these take-off airspeeds [m/s] for
-    ``seconds`` [s] (None: they can): the loaded voltage at or above the cut-off and the
-    current within the burst rating, on full packs and again after the charge the most
-    current drawn for the whole take-off would take (an upper bound: the packs sag as
-    they give it; a pack that held at the brake release reached its cut-off 2.7 s into
-    the mission's roll).
-
-    The reason names the point that fails, the earliest in the take-off first: on full
-    packs (the brake release's) the first failing airspeed of ``speeds`` [m/s]; after the
-    charge, which the aircraft has drawn by the take-off's end at the last of ``speeds``
-    (the climb's airspeed), an engine failing there, else the last airspeed that fails,
-    said to be the bound's (there the charge is drawn only in the bound). It once named
-    "full throttle at 0.0 m/s after the take-off's ... Ah", the brake release with the
-    whole take-off's charge drawn.
-
-    References
-    ----------
-    SPEC 3 (thrust and pack voltage); SPEC 5 (not attainable, with the reason)."""
-    rating = side.rating_a
-    burst = None if rating is None else BURST_OVER_CONTINUOUS * rating
-    v = np.asarray(speeds, dtype=float)
-    per_engine = side.battery.packs_in_parallel_per_engine
-    engines = case.propulsion.engines
-    powers = [fan_power_w(side, case, j, np.ones_like(v), v) for j in range(len(engines))]
-    charges = [0.0] * len(engines)
-    for after in (False, True):
-        failing = []  # (engine, failing airspeeds' indices, voltage, current)
-        for j, power in enumerate(powers):
-            u, current, _ = on_packs(side, case, power, charges[j])
-            beyond = np.flatnonzero(~within_limits(u, current, side.battery.cutoff_voltage_v,
-                                                   burst))
-            if beyond.size:
-                failing.append((j, beyond, u, current))
-            if not after:  # the most current for the whole take-off: the bound's charge
-                charges[j] = float(np.max(current)) * per_engine * seconds / SECONDS_PER_HOUR
-        if not failing:
-            continue
-        at_end = [f for f in failing if f[1][-1] == v.size - 1]
-        j, beyond, u, current = at_end[0] if after and at_end else failing[0]
-        n = int(beyond[-1] if after else beyond[0])
-        why = limit_reason(side, float(u[n]), float(current[n]), float(powers[j][n]), burst,
-                           "burst")
-        if not after:
-            when = "on full packs"
-        elif n == v.size - 1:
-            when = f"after the take-off's {charges[j]:.3f} Ah"
-        else:
-            when = (f"with the take-off's {charges[j]:.3f} Ah drawn (an upper bound: the most "
-                    f"current for its {seconds:.1f} s; at the last airspeed {v[-1]:.1f} m/s "
-                    "the packs hold)")
-        return (f"full throttle at {v[n]:.1f} m/s {when}: {engines[j].name}: {why}: "
-                f"not attainable, {BEYOND_THE_BATTERY}")
-    return None
-
-
-def with_packs(case: Case, what: str, speeds: np.ndarray, throttle: np.ndarray,
+def with_packs(case: Case, what: str, m: Any, grid: np.ndarray, throttle: np.ndarray,
                reasons: tuple[str | None, ...], attainable: AttainableRange,
                dead: int | None = None, mode: str = "windmilling"
                ) -> tuple[np.ndarray, tuple[str | None, ...], AttainableRange, list[str]]:
-    """Trim's or OEI's grid flown on the case's packs (unchanged without a battery file):
-    the throttles, each airspeed's reason, the attainable range and the notes.
+    """Trim's or OEI's grid ``(1, K)`` [m/s] flown on the case's packs (unchanged without a
+    battery file) by its one row ``m`` (``LevelFlightRows``): the throttles, each airspeed's
+    reason, the attainable range and the notes.
 
     The range stays the exact one of full throttle at the reference voltage where the packs
     change nothing; otherwise it is the grid's (0.5 m/s steps), as the note says.
@@ -392,7 +378,8 @@ def with_packs(case: Case, what: str, speeds: np.ndarray, throttle: np.ndarray,
         return throttle, reasons, attainable, [note] if note else []
 
     flyable = np.array([r not in (BELOW_STALL, BEYOND_JET_VELOCITY) for r in reasons])
-    on = level_flight_on_packs(case, side, speeds, throttle, flyable, dead, mode)
+    speeds = grid[0]
+    on = level_flight_on_packs(case, side, m, grid, throttle, flyable, dead, mode)
     notes = []
     if case.propulsion.reference_voltage_v is not None:
         least = float(np.min(on.voltage_v))

@@ -4,8 +4,9 @@ Equation of motion on the runway (Raymer, *Aircraft Design*, section 17.8.1):
 ``m dV/dt = T(1, V) - D_g(V) - mu max(W - L_g(V), 0)``. With the airspeed as the
 independent variable, ``ds/dV = m V / F(V)`` and ``dt/dV = m / F(V)``, integrated from 0
 to the lift-off true airspeed (no wind, level runway) by the batch's quadrature on one row
-(:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`); on sagging packs by CVODES
-with the charge drawn per engine beside them. Rotation adds ``V_LO t_R`` (Raymer 17.8.2);
+(:class:`~tuflexperf.analysis.ground_roll.GroundRollRows`); on sagging packs by the batch's
+RK4 with the charge drawn per engine beside them (:mod:`.batch_takeoff_packs`, one row).
+Rotation adds ``V_LO t_R`` (Raymer 17.8.2);
 the airborne part is an arc at ``1.15 V_stall`` and load factor ``n`` followed by the
 full-throttle straight climb (Anderson, *Aircraft Performance and Design*, 6.7.2).
 
@@ -24,19 +25,19 @@ import numpy as np
 
 from tuflexperf.analysis.airborne import (
     ON_PACKS,
-    fly_airborne,
+    airborne_result,
     obstacle_height_of,
     on_packs_force,
     packs_note,
 )
-from tuflexperf.analysis.attainable import stall_margin_of
+from tuflexperf.analysis.attainable import BEYOND_THE_BATTERY, stall_margin_of
 from tuflexperf.analysis.ground_roll import (
     CHECK_POINTS,
     HISTORY_POINTS,
     GroundRollRows,
     net_force_n,
 )
-from tuflexperf.analysis.pack_limits import pack_side, sagging_packs, takeoff_beyond_battery
+from tuflexperf.analysis.pack_limits import limit_reason, pack_rows, pack_side, sagging_packs
 from tuflexperf.errors import InputError, NotAttainable
 from tuflexperf.io.case import Case
 from tuflexperf.models.aircraft import (
@@ -191,8 +192,8 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
             f"after the release at {release:.1f} m/s full throttle does not accelerate to the "
             f"transition speed {v_tr:.1f} m/s ({TRANSITION_SPEED_OVER_STALL:g} x stall): "
             "thrust below the level-flight drag on the way", known)
-    air = fly_airborne(case, height, packs, None if charge is None
-                       else np.broadcast_to(charge[:, 0], (packs.n,)))
+    air = _airborne(case, height, packs, None if charge is None
+                    else np.broadcast_to(charge[:, 0], (packs.n,)))
     _refuse_beyond_battery(case, np.array([release, air.speed_m_s]),
                            float(seconds[0]) + (air.distance_m or 0.0) / air.speed_m_s, known)
     if air.beyond_battery:  # the packs give out in the climb, before the obstacle
@@ -230,10 +231,70 @@ def _catapult_launch(case: Case, height: float) -> TakeoffResult:
     )
 
 
+def _airborne(case: Case, height: float, packs: Any, charge_ah: np.ndarray | None) -> Any:
+    """The arc and climb to the obstacle ``height`` [m]: the batch's path on one row, at the
+    model's thrust or on the sagging ``packs`` from ``charge_ah`` per engine [Ah]."""
+    if packs is None:
+        path = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None,
+                              1).obstacle_path(height)
+        return airborne_result(case, height, path)
+    return airborne_result(case, height, packs.obstacle_path(charge_ah, height), packs.cutoff_v)
+
+
+def takeoff_beyond_battery(case: Case, side: Any, speeds: np.ndarray,
+                           seconds: float) -> str | None:
+    """Why full packs (``side``, a :class:`~.pack_limits.PackSide`) cannot give full throttle
+    over these take-off airspeeds [m/s] for ``seconds`` [s] (None: they can): the batch's
+    :meth:`~.ground_roll.GroundRollRows.launch_on_packs` on one row, every point solved.
+
+    The reason names the point that fails, the earliest in the take-off first: on full
+    packs (the brake release's) the first failing airspeed of ``speeds`` [m/s]; after the
+    charge, which the aircraft has drawn by the take-off's end at the last of ``speeds``
+    (the climb's airspeed), an engine failing there, else the last airspeed that fails,
+    said to be the bound's (there the charge is drawn only in the bound), never the brake
+    release with the whole take-off's charge drawn.
+
+    References
+    ----------
+    SPEC 3 (thrust and pack voltage); SPEC 5 (not attainable, with the reason)."""
+    v = np.asarray(speeds, dtype=float)
+    launch = GroundRollRows(case.aircraft, case.propulsion, case.density_kg_m3, None, 1
+                            ).launch_on_packs(side, pack_rows(side.battery), v[None, :],
+                                              np.array([seconds]), each_point=True)
+    burst = None if launch.burst_a is None else float(launch.burst_a[0])
+    engines = case.propulsion.engines
+    for after in (False, True):
+        failing = []  # (engine, failing airspeeds' indices, voltage, current)
+        for j in range(len(launch.power_w)):
+            u, current = (x[0] for x in launch.points[2 * j + after])
+            beyond = np.flatnonzero(~launch.within[2 * j + after][0])
+            if beyond.size:
+                failing.append((j, beyond, u, current))
+        if not failing:
+            continue
+        at_end = [f for f in failing if f[1][-1] == v.size - 1]
+        j, beyond, u, current = at_end[0] if after and at_end else failing[0]
+        n = int(beyond[-1] if after else beyond[0])
+        why = limit_reason(side, float(u[n]), float(current[n]),
+                           float(launch.power_w[j][0, n]), burst, "burst")
+        charge = float(launch.charge_ah[j][0])
+        if not after:
+            when = "on full packs"
+        elif n == v.size - 1:
+            when = f"after the take-off's {charge:.3f} Ah"
+        else:
+            when = (f"with the take-off's {charge:.3f} Ah drawn (an upper bound: the most "
+                    f"current for its {seconds:.1f} s; at the last airspeed {v[-1]:.1f} m/s "
+                    "the packs hold)")
+        return (f"full throttle at {v[n]:.1f} m/s {when}: {engines[j].name}: {why}: "
+                f"not attainable, {BEYOND_THE_BATTERY}")
+    return None
+
+
 def _refuse_beyond_battery(case: Case, speeds: np.ndarray, seconds: float,
                            known: dict[str, Any]) -> None:
     """Full throttle on the packs over these airspeeds [m/s] for ``seconds``, or not
-    attainable (:func:`tuflexperf.analysis.pack_limits.takeoff_beyond_battery`; no battery:
+    attainable (:func:`takeoff_beyond_battery`; no battery:
     nothing)."""
     side = pack_side(case)
     why = None if side is None else takeoff_beyond_battery(case, side, speeds, seconds)
@@ -390,7 +451,7 @@ def solve_takeoff(case: Case, obstacle_height_m: float | None = None) -> Takeoff
         np.broadcast_to(np.asarray(f, dtype=float), history_speed.shape).copy()
         for f in ground_roll_resistance_n(aircraft, history_speed, rho)
     )
-    air = fly_airborne(case, height, packs, rotated)
+    air = _airborne(case, height, packs, rotated)
     airborne_s = (air.distance_m or 0.0) / air.speed_m_s
     _refuse_beyond_battery(case, np.append(history_speed, air.speed_m_s),
                            total_s + airborne_s, known)

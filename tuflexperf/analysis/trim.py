@@ -159,7 +159,7 @@ def level_flight_over(case: Case, rows: LevelFlightRows, grid: np.ndarray, what:
     # the grid's ends are the envelope's bounds exactly (airspeed_grid)
     attainable = attainable_range(full_throttle_excess, least, float(speeds[0]),
                                   min(float(speeds[-1]), jet_ceiling_m_s(case)))
-    return with_packs(case, what, speeds, throttle, reasons, attainable, dead, mode)
+    return with_packs(case, what, rows, grid, throttle, reasons, attainable, dead, mode)
 
 
 def solve_trim(case: Case) -> TrimResult:
