@@ -1,0 +1,321 @@
+"""A mission flown for a batch of rows in numpy: the chained CasADi function's equations, once.
+
+The same :meth:`~tuflexperf.analysis.mission_equations.SegmentEquations._algebra` that builds
+the single case's CasADi step functions evaluates numpy rows here (its kernels dispatch on
+the operands, :mod:`tuflexperf.models._math`), vectorised over the batch: a Python loop over
+segments and steps, never over rows. Classic RK4 as the chained function flies it, with the
+same nodes and aux outputs (:func:`fly_rows`), so the flight's checks after it are the
+chained function's (``mission_samples._flown``).
+
+Without a reference voltage the flight (throttle, airspeed, height rate, power) does not
+depend on the packs' charge: per segment it is evaluated once at every RK4 stage point of
+all rows (the heights of the stages are known before the packs are flown), and only the
+packs' charge is stepped (:func:`_decoupled_phase`; RK4 on a system whose flight part does
+not read the charge takes the very same stages). With one the loaded voltage couples them:
+every stage is solved as the CasADi instant function solves it, Newton on the loaded
+voltages (and a fixed throttle's airspeed) with a central-difference Jacobian
+(:func:`instant_rows`), to rounding.
+
+References
+----------
+Butcher, *Numerical Methods for Ordinary Differential Equations*, 2nd ed., 2.3 (classic
+RK4); Press et al., *Numerical Recipes*, 3rd ed., 9.6 (Newton for systems), 5.7 (numerical
+derivatives).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tuflexperf.analysis.mission_equations import _P_SIZE, NEWTON, SECONDS_PER_HOUR
+from tuflexperf.models.aircraft import true_airspeed_m_s
+from tuflexperf.models.battery import current_at_power_a, open_circuit_voltage_v
+
+Array = NDArray[np.float64]
+_FD_STEP = 1e-6  # relative step of the Jacobian's central differences: error ~1e-12
+
+
+def aux_size(n: int) -> int:
+    """Rows of the aux output per node: throttle, airspeed, rate, reached, idle excess,
+    level residual, per engine current, voltage and power, thrust."""
+    return 7 + 3 * n
+
+
+def _phases(model: Any, plan: Any, durations: Array, theta: Array, tk: Array,
+            layout: list[tuple[str, int]], steps: int) -> list[tuple[str, Any, list[Any]]]:
+    """A segment's phases: kind (time, height), step per row and step (``(B, S)``, or one
+    for all) and the ten step parameters of :meth:`SegmentEquations._step_functions`
+    (numbers, ``(B, 1)`` per row or ``(B, S)`` per row and step)."""
+    if plan.kind == "takeoff":
+        out, first = [], 0
+        for _, cols in layout:
+            block = tk[:, :, first:first + cols]
+            out.append(("time", block[:, _P_SIZE], [block[:, j] for j in range(_P_SIZE)]))
+            first += cols
+        return out
+    j = 3 * plan.index
+    p = [1.0 if plan.solve_x else 0.0, theta[j][:, None], float(plan.rate),
+         1.0 if plan.rate_from_excess else 0.0, theta[j + 1][:, None], 0.0, 0.0, 0.0, 0.0,
+         theta[j + 2][:, None]]
+    size = durations.shape[1]
+    if plan.kind == "time":
+        step = np.repeat((durations[plan.index] / steps)[:, None], steps, axis=1)
+        return [("time", step, p)]
+    return [("height", np.full((size, steps), (plan.end_h - plan.start_h) / steps), p)]
+
+
+def instant_rows(model: Any, dead: int | None, solve_v: bool, q: list[Array], v_in: Array,
+                 rho: Array, p: list[Any], par: Any) -> dict[str, Any]:
+    """The CasADi instant function (:meth:`SegmentEquations._build_instant_function`) on
+    rows: the loaded voltages (with a reference voltage) and a fixed throttle's airspeed
+    solved by Newton from the open-circuit voltages and ``v_in``, the Jacobian by central
+    differences (5 steps with the voltages, as the CasADi function: to rounding; one
+    polishing step for the airspeed alone, whose guess is the root already)."""
+    n = model.n
+    voltage_unknown = model.case.propulsion.reference_voltage_v is not None
+    packs = par[model.n_par - 1]
+    ocv = [open_circuit_voltage_v(model.params, q[i], packs) for i in range(n)]
+    m = (n if voltage_unknown else 0) + (1 if solve_v else 0)
+
+    def split(z: Array) -> tuple[list[Any], Any]:
+        u = [z[i] for i in range(n)] if voltage_unknown else ocv
+        return u, (z[m - 1] if solve_v else v_in)
+
+    def equations(z: Array) -> Array:
+        u, v = split(z)
+        alg = model._algebra(u, v, q, rho, p, dead, par)
+        parts = list(alg["u_residual"]) if voltage_unknown else []
+        if solve_v:
+            parts.append(alg["level_residual"])
+        return np.stack([np.broadcast_to(x, np.shape(v)) for x in parts])
+
+    u, v = ocv, v_in
+    if m:
+        z = np.stack([*(ocv if voltage_unknown else []), *([v_in] if solve_v else [])])
+        z = np.broadcast_to(z, (m, *np.broadcast_shapes(*(np.shape(x) for x in z)))).copy()
+        for _ in range(NEWTON if voltage_unknown else 1):
+            res = equations(z)
+            jac = np.empty((m, m, *z.shape[1:]))
+            for j in range(m):
+                h = _FD_STEP * np.maximum(np.abs(z[j]), 1.0)
+                up, down = z.copy(), z.copy()
+                up[j] += h
+                down[j] -= h
+                jac[:, j] = (equations(up) - equations(down)) / (2.0 * h)
+            delta = np.linalg.solve(np.moveaxis(jac, (0, 1), (-2, -1)),
+                                    np.moveaxis(res, 0, -1)[..., None])[..., 0]
+            z = z - np.moveaxis(delta, -1, 0)
+        u, v = split(z)
+    return model._algebra(u, v, q, rho, p, dead, par)
+
+
+def _aux_rows(alg: dict[str, Any], n: int, shape: tuple[int, ...]) -> Array:
+    """The aux output's rows (:func:`aux_size`) from :meth:`_algebra`'s dict."""
+    parts = [alg["x"], alg["v"], alg["rate"], alg["reached"], alg["idle_excess"],
+             alg["level_residual"], *alg["current"], *alg["voltage"], *alg["power"],
+             alg["thrust"]]
+    return np.stack([np.broadcast_to(np.asarray(x, dtype=float), shape) for x in parts])
+
+
+def _coupled_phase(model: Any, plan: Any, kind: str, step: Array, p: list[Any], state: Array,
+                   par: Any) -> tuple[Array, Array]:
+    """One phase flown with the flight read from the packs' loaded voltage: every RK4 stage
+    solved (:func:`instant_rows`), as the chained function flies it. Returns the nodes'
+    states ``(2n + 3, B, S + 1)`` and aux ``(aux, B, S + 1)``."""
+    n, size, steps = model.n, state.shape[1], step.shape[1]
+    forced = not isinstance(p[5], float)  # the take-off's rows: airspeed and rate given
+
+    def at(column: Any, k: int) -> Any:  # a step's parameter per row (or one for all)
+        if np.ndim(column) < 2:
+            return column
+        return column[:, k if column.shape[1] > 1 else 0]
+
+    def evaluate(s: Array, k: int, which: int) -> Array:
+        rho = model._rho(s[2 * n], par)
+        pk = [at(c, k) for c in p]
+        if forced:
+            v_in = pk[which]
+        else:
+            v_in = pk[9] if plan.solve_v else true_airspeed_m_s(pk[4], rho)
+        alg = instant_rows(model, plan.dead, plan.solve_v, list(s[:n]), v_in, rho, pk[:4], par)
+        if forced:
+            alg["rate"] = pk[2]
+        return _aux_rows(alg, n, (size,))
+
+    def derivative(s: Array, k: int, which: int) -> Array:
+        a = evaluate(s, k, which)
+        d = np.concatenate([a[6:6 + n] / SECONDS_PER_HOUR, a[6 + 2 * n:6 + 3 * n]
+                            / SECONDS_PER_HOUR, a[2:3], a[1:2], np.ones((1, size))])
+        if kind == "height":
+            rate = a[2]
+            safe = np.where(step[:, k] > 0, np.maximum(rate, 1e-6), np.minimum(rate, -1e-6))
+            d = d / safe
+        return d
+
+    states, auxes = [state], [evaluate(state, 0, 6)]
+    for k in range(steps):
+        dt = step[:, k]
+        k1 = derivative(state, k, 6)
+        k2 = derivative(state + 0.5 * dt * k1, k, 7)
+        k3 = derivative(state + 0.5 * dt * k2, k, 7)
+        k4 = derivative(state + dt * k3, k, 8)
+        state = state + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        states.append(state)
+        auxes.append(evaluate(state, k, 8))
+    return np.stack(states, axis=2), np.stack(auxes, axis=2)
+
+
+def fly_rows(model: Any, durations: Array, theta: Array, par: Array, tk: Array,
+             layout: list[tuple[str, int]], steps: int, start: Array | None = None,
+             first: int = 0) -> tuple[Array, Array, list[tuple[int, int]]]:
+    """The chained function's ``(states, aux)`` at every node for a batch of rows, from
+    segment ``first`` on (from ``start``, ``(2n + 3, B)``, else full packs on the field),
+    each segment in ``steps`` RK4 steps (the take-off in its rows' own, ``tk``), and each
+    segment's node range.
+
+    ``durations`` ``(segments, B)`` [s], ``theta`` ``(3 segments, B)``, ``par``
+    ``(n_par, B)`` (:meth:`SegmentEquations.parameters`), ``tk`` ``(B, P + 1, columns)``
+    the take-off's step rows of the phases ``layout``. Returns ``states``
+    ``(2n + 3, B, nodes)`` and ``aux`` ``(aux_size(n), B, nodes)``.
+    """
+    n = model.n
+    size = par.shape[1]
+    state = np.zeros((2 * n + 3, size)) if start is None else np.asarray(start, dtype=float)
+    coupled = model.case.propulsion.reference_voltage_v is not None
+    states: list[Array] = []
+    auxes: list[Array] = []
+    bounds: list[tuple[int, int]] = []
+    nodes = 0
+    with np.errstate(all="ignore"):
+        for plan in model.plans[first:]:
+            if plan.kind == "event":
+                bounds.append((nodes, 0))
+                continue
+            begin = nodes
+            for kind, step, p in _phases(model, plan, durations, theta, tk, layout, steps):
+                if coupled or (kind == "time" and isinstance(p[3], float) and p[3] > 0.5):
+                    s, a = _coupled_phase(model, plan, kind, step, p, state, par)
+                else:
+                    s, a = _decoupled_phase(model, plan, kind, step, p, state, par)
+                states.append(s)
+                auxes.append(a)
+                state = s[:, :, -1]
+                nodes += s.shape[2]
+            bounds.append((begin, nodes))
+    return np.concatenate(states, axis=2), np.concatenate(auxes, axis=2), bounds
+
+
+def _decoupled_phase(model: Any, plan: Any, kind: str, step: Array, p: list[Any],
+                     state: Array, par: Array) -> tuple[Array, Array]:
+    """One phase flown where the flight does not read the packs (no reference voltage):
+    the flight at every stage point of every row at once, then RK4 on the packs' charge.
+    As :func:`_coupled_phase` returns."""
+    n, steps = model.n, step.shape[1]
+    forced = not isinstance(p[5], float)  # the take-off's rows: airspeed and rate given
+    h0 = state[2 * n][:, None]
+    if kind == "height":
+        rise = step  # dh/dh = 1: the stages' heights are the grid's
+    else:
+        rise = step * (p[2] if forced else float(p[2]))
+    h = np.concatenate([h0, h0 + np.cumsum(rise, axis=1)], axis=1)  # at the nodes
+    mid = h[:, :-1] + 0.5 * rise
+    live = [i for i in range(n) if i != plan.dead]
+    parb = par[:, :, None]
+    if forced:  # starts, middles, ends: the take-off's airspeeds differ at each
+        points = np.concatenate([h[:, :-1], mid, h[:, 1:]], axis=1)
+        v_in = np.concatenate([p[6], p[7], p[8]], axis=1)
+        pk = [np.concatenate([c, c, c], axis=1) for c in p[:4]]
+        rho = model._rho(points, parb)
+        flight = model._flight(None, v_in, rho, pk, plan.dead, parb)
+        flight["rate"] = pk[2]
+        start, middle, end = (slice(0, steps), slice(steps, 2 * steps),
+                              slice(2 * steps, 3 * steps))
+        node_cols = np.r_[0, 2 * steps:3 * steps]
+    else:  # nodes then middles: a node ends one step and starts the next
+        points = np.concatenate([h, mid], axis=1)
+        rho = model._rho(points, parb)
+        if plan.solve_v:
+            q0 = [np.broadcast_to(state[i][:, None], points.shape) for i in range(n)]
+            v_guess = np.broadcast_to(p[9], points.shape)
+            flight = instant_rows(model, plan.dead, True, q0, v_guess, rho, p[:4], parb)
+        else:
+            flight = model._flight(None, true_airspeed_m_s(p[4], rho), rho, p[:4], plan.dead,
+                                   parb)
+        start, middle, end = (slice(0, steps), slice(steps + 1, 2 * steps + 1),
+                              slice(1, steps + 1))
+        node_cols = np.arange(steps + 1)
+    shape = points.shape
+    power = np.stack([np.broadcast_to(flight["power"][i], shape) for i in live])
+    rate = np.broadcast_to(flight["rate"], shape)
+    v = np.broadcast_to(flight["v"], shape)
+    if kind == "height":
+        div = np.where(step[:, :1] > 0, np.maximum(rate, 1e-6), np.minimum(rate, -1e-6))
+        wrong = np.any(div != rate, axis=1)  # a stage that stops climbing (descending)
+    else:
+        div = np.ones(shape)
+        wrong = np.zeros(shape[0], dtype=bool)
+    packs = par[model.n_par - 1]
+    q = state[live]
+    charge = [q]
+    inv = [1.0 / (SECONDS_PER_HOUR * div[:, c]) for c in (start, middle, end)]
+    for k in range(steps):  # the packs' charge: the one state the flight does not give
+        dt = step[:, k]
+        k1 = current_at_power_a(model.params, q, power[:, :, start][:, :, k], packs) * inv[0][:, k]
+        k2 = current_at_power_a(model.params, q + 0.5 * dt * k1, power[:, :, middle][:, :, k],
+                                packs) * inv[1][:, k]
+        k3 = current_at_power_a(model.params, q + 0.5 * dt * k2, power[:, :, middle][:, :, k],
+                                packs) * inv[1][:, k]
+        k4 = current_at_power_a(model.params, q + dt * k3, power[:, :, end][:, :, k],
+                                packs) * inv[2][:, k]
+        q = q + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        charge.append(q)
+
+    def integral(values: Array) -> Array:  # RK4 of a rate the state does not change
+        rk = step / 6.0 * (values[..., start] + 4.0 * values[..., middle] + values[..., end])
+        return np.concatenate([np.zeros(rk.shape[:-1] + (1,)), np.cumsum(rk, axis=-1)],
+                              axis=-1)
+
+    states = np.empty((2 * n + 3, shape[0], steps + 1))
+    states[:] = state[:, :, None]
+    states[live] = np.stack(charge, axis=2)
+    states[[n + i for i in live]] += integral(power / (SECONDS_PER_HOUR * div))
+    states[2 * n] = h if kind == "height" else h0 + integral(rate / div)
+    states[2 * n + 1] += integral(v / div)
+    states[2 * n + 2] += integral(1.0 / div)
+    states[:, wrong, 1:] = np.nan
+    # the aux at the nodes: the flight there and the packs at the nodes' charge
+    alg = {key: (np.broadcast_to(value, shape)[:, node_cols] if key != "power" else
+                 [np.broadcast_to(x, shape)[:, node_cols] for x in value])
+           for key, value in flight.items() if key in ("x", "rate", "reached", "idle_excess",
+                                                      "power", "v", "level_residual",
+                                                      "thrust")}
+    alg.update(model._packs(None, list(states[:n]), alg["power"], plan.dead, parb))
+    return states, _aux_rows(alg, n, (shape[0], steps + 1))
+
+
+def suffix_rows(model: Any, k: int, steps: int) -> Any:
+    """``(start, durations, theta, par) -> (landing state, aux at segment k's end, most
+    charge per pack, least loaded voltage of a live engine [V])`` on rows: the mission from
+    where segment ``k`` begins, as :meth:`SolveFor._suffix_function` gives it (the least
+    voltage segment ``k``'s at its end and every later segment's at each of its nodes)."""
+    n = model.n
+
+    def flown(start: Array, durations: Array, theta: Array, par: Array
+              ) -> tuple[Array, Array, Array, Array]:
+        size = start.shape[1]
+        states, aux, bounds = fly_rows(model, durations, theta, par,
+                                       np.zeros((size, _P_SIZE + 1, 0)), [], steps, start, k)
+        least = np.full(size, np.inf)
+        for plan, (a, b) in zip(model.plans[k:], bounds, strict=True):
+            if plan.kind == "event":
+                continue
+            live = [6 + n + i for i in range(n) if i != plan.dead]
+            nodes = slice(b - 1, b) if plan.index == k else slice(a, b)
+            least = np.minimum(least, np.min(aux[live, :, nodes], axis=(0, 2)))
+        at_k = aux[:, :, bounds[0][1] - 1]
+        return states[:, :, -1], at_k, np.max(states[:n], axis=2), least
+
+    return flown
