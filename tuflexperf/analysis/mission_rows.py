@@ -53,7 +53,11 @@ def _phases(model: Any, plan: Any, durations: Array, theta: Array, tk: Array,
         out, first = [], 0
         for _, cols in layout:
             block = tk[:, :, first:first + cols]
-            out.append(("time", block[:, _P_SIZE], [block[:, j] for j in range(_P_SIZE)]))
+            # a parameter the same for every row and step is a number: the equations take
+            # its branch alone (full throttle: no throttle to solve for)
+            out.append(("time", block[:, _P_SIZE], [
+                float(block[0, j, 0]) if np.all(block[:, j] == block[0, j, 0]) else block[:, j]
+                for j in range(_P_SIZE)]))
             first += cols
         return out
     j = 3 * plan.index
@@ -90,7 +94,7 @@ def instant_rows(model: Any, dead: int | None, solve_v: bool, q: list[Array], v_
         parts = list(alg["u_residual"]) if voltage_unknown else []
         if solve_v:
             parts.append(alg["level_residual"])
-        return np.stack([np.broadcast_to(x, np.shape(v)) for x in parts])
+        return np.stack([np.broadcast_to(x, z.shape[1:]) for x in parts])
 
     u, v = ocv, v_in
     if m:
@@ -126,7 +130,7 @@ def _coupled_phase(model: Any, plan: Any, kind: str, step: Array, p: list[Any], 
     solved (:func:`instant_rows`), as the chained function flies it. Returns the nodes'
     states ``(2n + 3, B, S + 1)`` and aux ``(aux, B, S + 1)``."""
     n, size, steps = model.n, state.shape[1], step.shape[1]
-    forced = not isinstance(p[5], float)  # the take-off's rows: airspeed and rate given
+    forced = plan.kind == "takeoff"  # the take-off's rows: airspeed and rate given
 
     def at(column: Any, k: int) -> Any:  # a step's parameter per row (or one for all)
         if np.ndim(column) < 2:
@@ -208,92 +212,122 @@ def fly_rows(model: Any, durations: Array, theta: Array, par: Array, tk: Array,
     return np.concatenate(states, axis=2), np.concatenate(auxes, axis=2), bounds
 
 
+_FLIGHT_KEYS = ("x", "v", "rate", "reached", "idle_excess", "level_residual", "thrust")
+
+
 def _decoupled_phase(model: Any, plan: Any, kind: str, step: Array, p: list[Any],
                      state: Array, par: Array) -> tuple[Array, Array]:
     """One phase flown where the flight does not read the packs (no reference voltage):
     the flight at every stage point of every row at once, then RK4 on the packs' charge.
     As :func:`_coupled_phase` returns."""
-    n, steps = model.n, step.shape[1]
-    forced = not isinstance(p[5], float)  # the take-off's rows: airspeed and rate given
+    n, size, steps = model.n, state.shape[1], step.shape[1]
+    forced = plan.kind == "takeoff"  # the take-off's rows: airspeed and height rate given
     h0 = state[2 * n][:, None]
-    if kind == "height":
-        rise = step  # dh/dh = 1: the stages' heights are the grid's
-    else:
-        rise = step * (p[2] if forced else float(p[2]))
+    rise = step if kind == "height" else step * p[2]  # dh/dh = 1 over height
     h = np.concatenate([h0, h0 + np.cumsum(rise, axis=1)], axis=1)  # at the nodes
     mid = h[:, :-1] + 0.5 * rise
-    live = [i for i in range(n) if i != plan.dead]
-    parb = par[:, :, None]
-    if forced:  # starts, middles, ends: the take-off's airspeeds differ at each
-        points = np.concatenate([h[:, :-1], mid, h[:, 1:]], axis=1)
-        v_in = np.concatenate([p[6], p[7], p[8]], axis=1)
-        pk = [np.concatenate([c, c, c], axis=1) for c in p[:4]]
-        rho = model._rho(points, parb)
-        flight = model._flight(None, v_in, rho, pk, plan.dead, parb)
-        flight["rate"] = pk[2]
-        start, middle, end = (slice(0, steps), slice(steps, 2 * steps),
-                              slice(2 * steps, 3 * steps))
-        node_cols = np.r_[0, 2 * steps:3 * steps]
-    else:  # nodes then middles: a node ends one step and starts the next
+    # the throttle is given in the take-off: its rate is not read (nor any row's fixed
+    # throttle that stays along the steps)
+    pk = [p[0], p[1], 0.0, p[3]] if forced else p[:4]
+    steady = [c if np.ndim(c) < 2 else c[:, :1] for c in pk]
+    given = [np.broadcast_to(c, (size, steps)) for c in p[6:9]] if forced else []
+    joined = not forced or (np.array_equal(given[2][:, :-1], given[0][:, 1:]) and all(
+        np.ndim(c) < 2 or np.array_equal(c[:, :-1], c[:, 1:]) for c in pk))
+    if joined:  # nodes then middles: a node ends one step and starts the next
         points = np.concatenate([h, mid], axis=1)
-        rho = model._rho(points, parb)
-        if plan.solve_v:
-            q0 = [np.broadcast_to(state[i][:, None], points.shape) for i in range(n)]
-            v_guess = np.broadcast_to(p[9], points.shape)
-            flight = instant_rows(model, plan.dead, True, q0, v_guess, rho, p[:4], parb)
-        else:
-            flight = model._flight(None, true_airspeed_m_s(p[4], rho), rho, p[:4], plan.dead,
-                                   parb)
+        v_in = (np.concatenate([given[0][:, :1], given[2], given[1]], axis=1) if forced
+                else None)
+        pk = steady
         start, middle, end = (slice(0, steps), slice(steps + 1, 2 * steps + 1),
                               slice(1, steps + 1))
-        node_cols = np.arange(steps + 1)
+        nodes = slice(0, steps + 1)
+    else:  # starts, middles, ends: a take-off's airspeed jumps between its steps
+        points = np.concatenate([h[:, :-1], mid, h[:, 1:]], axis=1)
+        v_in = np.concatenate(given, axis=1)
+        pk = [c if np.ndim(c) < 2 else np.concatenate([c, c, c], axis=1) for c in pk]
+        start, middle, end = (slice(0, steps), slice(steps, 2 * steps),
+                              slice(2 * steps, 3 * steps))
+        nodes = np.r_[0, 2 * steps:3 * steps]
     shape = points.shape
-    power = np.stack([np.broadcast_to(flight["power"][i], shape) for i in live])
-    rate = np.broadcast_to(flight["rate"], shape)
-    v = np.broadcast_to(flight["v"], shape)
-    if kind == "height":
-        div = np.where(step[:, :1] > 0, np.maximum(rate, 1e-6), np.minimum(rate, -1e-6))
-        wrong = np.any(div != rate, axis=1)  # a stage that stops climbing (descending)
+    # a level segment (a rotation) flies one point: its flight is evaluated there once
+    if all(np.ndim(c) < 2 or np.all(c == c[:, :1]) for c in (points, v_in, *pk)):
+        points = points[:, :1]
+        v_in = None if v_in is None else v_in[:, :1]
+        pk = [c if np.ndim(c) < 2 else c[:, :1] for c in pk]
+    parb = par[:, :, None]
+    rho = model._rho(points, parb)
+    if forced:
+        flight = model._flight(None, v_in, rho, pk, plan.dead, parb)
+    elif plan.solve_v:
+        q0 = [np.broadcast_to(state[i][:, None], points.shape) for i in range(n)]
+        v_guess = np.broadcast_to(p[9], points.shape)
+        flight = instant_rows(model, plan.dead, True, q0, v_guess, rho, pk, parb)
     else:
-        div = np.ones(shape)
-        wrong = np.zeros(shape[0], dtype=bool)
+        flight = model._flight(None, true_airspeed_m_s(p[4], rho), rho, pk, plan.dead, parb)
+    live = [i for i in range(n) if i != plan.dead]
+    power = np.stack([np.broadcast_to(flight["power"][i], shape) for i in live])
+    v = np.broadcast_to(flight["v"], shape)
+    if forced:  # each step's given rate, at its start, middle and end
+        rates = [np.broadcast_to(p[2], (size, steps))] * 3
+        node_rate = np.concatenate([rates[0][:, :1], rates[2]], axis=1)
+    else:
+        rate = np.broadcast_to(flight["rate"], shape)
+        rates = [rate[:, start], rate[:, middle], rate[:, end]]
+        node_rate = rate[:, nodes]
+    if kind == "height":
+        div = [np.where(step[:, :1] > 0, np.maximum(r, 1e-6), np.minimum(r, -1e-6))
+               for r in rates]
+        # a stage that stops climbing (descending): the step's heights are not its own
+        wrong = np.any([np.any(d != r, axis=1) for d, r in zip(div, rates, strict=True)],
+                       axis=0)
+        inv = [1.0 / (SECONDS_PER_HOUR * d) for d in div]
+    else:
+        div = [1.0, 1.0, 1.0]
+        wrong = np.zeros(size, dtype=bool)
+        inv = [np.full((size, steps), 1.0 / SECONDS_PER_HOUR)] * 3
+    stage_power = [power[:, :, start], power[:, :, middle], power[:, :, end]]
     packs = par[model.n_par - 1]
     q = state[live]
     charge = [q]
-    inv = [1.0 / (SECONDS_PER_HOUR * div[:, c]) for c in (start, middle, end)]
     for k in range(steps):  # the packs' charge: the one state the flight does not give
         dt = step[:, k]
-        k1 = current_at_power_a(model.params, q, power[:, :, start][:, :, k], packs) * inv[0][:, k]
-        k2 = current_at_power_a(model.params, q + 0.5 * dt * k1, power[:, :, middle][:, :, k],
+        k1 = current_at_power_a(model.params, q, stage_power[0][:, :, k], packs) * inv[0][:, k]
+        k2 = current_at_power_a(model.params, q + 0.5 * dt * k1, stage_power[1][:, :, k],
                                 packs) * inv[1][:, k]
-        k3 = current_at_power_a(model.params, q + 0.5 * dt * k2, power[:, :, middle][:, :, k],
+        k3 = current_at_power_a(model.params, q + 0.5 * dt * k2, stage_power[1][:, :, k],
                                 packs) * inv[1][:, k]
-        k4 = current_at_power_a(model.params, q + dt * k3, power[:, :, end][:, :, k],
+        k4 = current_at_power_a(model.params, q + dt * k3, stage_power[2][:, :, k],
                                 packs) * inv[2][:, k]
         q = q + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
         charge.append(q)
 
-    def integral(values: Array) -> Array:  # RK4 of a rate the state does not change
-        rk = step / 6.0 * (values[..., start] + 4.0 * values[..., middle] + values[..., end])
+    def integral(values: list[Array]) -> Array:  # RK4 of a rate the state does not change
+        rk = step / 6.0 * (values[0] + 4.0 * values[1] + values[2])
         return np.concatenate([np.zeros(rk.shape[:-1] + (1,)), np.cumsum(rk, axis=-1)],
                               axis=-1)
 
-    states = np.empty((2 * n + 3, shape[0], steps + 1))
+    states = np.empty((2 * n + 3, size, steps + 1))
     states[:] = state[:, :, None]
     states[live] = np.stack(charge, axis=2)
-    states[[n + i for i in live]] += integral(power / (SECONDS_PER_HOUR * div))
-    states[2 * n] = h if kind == "height" else h0 + integral(rate / div)
-    states[2 * n + 1] += integral(v / div)
-    states[2 * n + 2] += integral(1.0 / div)
+    states[[n + i for i in live]] += integral([w * d for w, d in zip(stage_power, inv,
+                                                                     strict=True)])
+    v_stages = [v[:, start], v[:, middle], v[:, end]]
+    if kind == "height":
+        states[2 * n] = h
+        states[2 * n + 1] += integral([x / d for x, d in zip(v_stages, div, strict=True)])
+        states[2 * n + 2] += integral([1.0 / d for d in div])
+    else:
+        states[2 * n] += integral(rates)
+        states[2 * n + 1] += integral(v_stages)
+        states[2 * n + 2] += np.concatenate([np.zeros((size, 1)), np.cumsum(step, axis=1)],
+                                            axis=1)
     states[:, wrong, 1:] = np.nan
     # the aux at the nodes: the flight there and the packs at the nodes' charge
-    alg = {key: (np.broadcast_to(value, shape)[:, node_cols] if key != "power" else
-                 [np.broadcast_to(x, shape)[:, node_cols] for x in value])
-           for key, value in flight.items() if key in ("x", "rate", "reached", "idle_excess",
-                                                      "power", "v", "level_residual",
-                                                      "thrust")}
+    alg = {key: np.broadcast_to(flight[key], shape)[:, nodes] for key in _FLIGHT_KEYS}
+    alg["rate"] = node_rate
+    alg["power"] = [np.broadcast_to(x, shape)[:, nodes] for x in flight["power"]]
     alg.update(model._packs(None, list(states[:n]), alg["power"], plan.dead, parb))
-    return states, _aux_rows(alg, n, (shape[0], steps + 1))
+    return states, _aux_rows(alg, n, (size, steps + 1))
 
 
 def suffix_rows(model: Any, k: int, steps: int) -> Any:
