@@ -173,6 +173,27 @@ class SegmentEquations:
             self.n, self.n_par)
         return self._known_key
 
+    def _flight_key(self, dead: int | None) -> str:
+        """What a phase with engine ``dead`` out reads besides ``par`` and its inputs
+        (:meth:`_equations_key`); with every engine alive not how a dead one would drag, so
+        a reading that changes only that flies the same phases before its engine failure."""
+        import dataclasses
+
+        if dead is not None:
+            return self._equations_key()
+        known = getattr(self, "_alive_key", None)
+        if known is None:
+            prop = thrust_part(self.case.propulsion)
+            prop = dataclasses.replace(prop, engines=tuple(
+                dataclasses.replace(e, windmilling_drag_coefficient=None) for e in prop.engines))
+            fan = self.fan_power
+            if dataclasses.is_dataclass(fan) and hasattr(fan, "power_correction"):
+                fan = dataclasses.replace(fan, power_correction=None)
+            known = self._alive_key = fingerprint(
+                "mission-alive", self.case.aircraft, prop, self.params, fan, self.fixed_density,
+                self.field_m, self.dt_k, self.own_power, self.n, self.n_par)
+        return known
+
     def _rho(self, h: Any, par: Any = None) -> Any:
         """ISA density [kg/m^3] at ``h`` [m] above the field (the sampled field height and
         temperature offset of ``par`` where given)."""
@@ -218,13 +239,15 @@ class SegmentEquations:
         (:mod:`tuflexperf.analysis.mission_rows`).
         """
         flight = self._flight(u, v, rho, plan_p, dead, par)
+        flight["power"] = self._powers(u, flight["x"], v, rho, dead, par)
         return {**flight, **self._packs(u, q, flight["power"], dead, par)}
 
     def _flight(self, u: Any, v: Any, rho: Any, plan_p: Any, dead: int | None,
                 par: Any) -> dict[str, Any]:
-        """Throttle, thrust [N], height rate [m/s] and each engine's electrical power [W]
-        at loaded voltages ``u`` [V] (ignored without a reference voltage: None will do)
-        and true airspeed ``v`` [m/s]; a dead engine's power is 0. Each engine's
+        """Throttle, thrust [N] and height rate [m/s] at loaded voltages ``u`` [V] (ignored
+        without a reference voltage: None will do) and true airspeed ``v`` [m/s]; the
+        power is :meth:`_powers`' (a reading of the measured power flies the same flight
+        on other powers). Each engine's
         extrapolation error [N per m/s] adds to its thrust, times the distance beyond the
         tested airspeeds. A flag of ``plan_p`` given as a number takes its branch alone
         (numpy rows: the other is not computed)."""
@@ -260,6 +283,20 @@ class SegmentEquations:
             # steep
             idle_excess = where(solve_x > 0.5, t[0] - needed, 0.0)
         thrust = a * x * x + b * x + t[0] + dead_t
+        if _known(from_excess):
+            rate = climb_sine((thrust - drag) / weight) * v if from_excess > 0.5 else rate_cmd
+        else:
+            rate = where(from_excess > 0.5, climb_sine((thrust - drag) / weight) * v, rate_cmd)
+        return {"x": x, "rate": rate, "reached": ok, "idle_excess": idle_excess,
+                "v": v, "level_residual": (thrust - drag) / weight, "thrust": thrust}
+
+    def _powers(self, u: Any, x: Any, v: Any, rho: Any, dead: int | None,
+                par: Any) -> list[Any]:
+        """Each engine's electrical power [W] at throttle ``x`` and true airspeed ``v``
+        [m/s] (times ``(U/U_ref)^(1.5 k)`` at loaded voltages ``u`` [V] with a reference
+        voltage), with ``par``'s power corrections; a dead engine's is 0."""
+        _, prop, _, fan = self._symbolic_models(par)
+        u_ref, k_exp = prop.reference_voltage_v, prop.voltage_exponent
         power = []
         for i in range(self.n):
             if i == dead:
@@ -270,13 +307,7 @@ class SegmentEquations:
                 # fan laws: power ~ rpm^3 while thrust ~ rpm^2 (SPEC 3 voltage effect)
                 p_i = p_i * (u[i] / u_ref) ** (1.5 * k_exp)
             power.append(p_i)
-        if _known(from_excess):
-            rate = climb_sine((thrust - drag) / weight) * v if from_excess > 0.5 else rate_cmd
-        else:
-            rate = where(from_excess > 0.5, climb_sine((thrust - drag) / weight) * v, rate_cmd)
-        return {"x": x, "rate": rate, "reached": ok, "idle_excess": idle_excess,
-                "power": power, "v": v, "level_residual": (thrust - drag) / weight,
-                "thrust": thrust}
+        return power
 
     def _packs(self, u: Any, q: Any, power: list[Any], dead: int | None,
                par: Any) -> dict[str, Any]:

@@ -47,7 +47,7 @@ from tuflexperf.analysis.mission import (
     takeoff_matrix,
 )
 from tuflexperf.analysis.mission_plan import best_endurance_eas_rows, level_speeds_at_throttle
-from tuflexperf.analysis.mission_rows import aux_size, fly_rows, suffix_rows
+from tuflexperf.analysis.mission_rows import Memo, aux_size, fly_rows, suffix_rows
 from tuflexperf.analysis.mission_solve import longest_rows
 
 Array = NDArray[np.float64]
@@ -168,8 +168,8 @@ def pack_rows_of(model: MissionModel, values: Mapping[str, Array], size: int
 
 def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Array],
                     size: int, coefficients: Array | None,
-                    extrapolation_n: Array | None, steps: int = SAMPLED_STEPS
-                    ) -> dict[str, tuple[Array, Array]]:
+                    extrapolation_n: Array | None, steps: int = SAMPLED_STEPS,
+                    memo: Memo | None = None) -> dict[str, tuple[Array, Array]]:
     """Per requirement its values and limits per row: ``mission_landing_charge`` (the least
     landing charge fraction, NaN where the mission is not attainable; the reserve) and with
     ``solve_for`` ``mission_solved_time`` (the longest time of that segment [min], solved
@@ -178,7 +178,9 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     ``evaluator`` the case's :class:`tuflexperf.analysis.batch.BatchEvaluator` (its rows'
     aircraft, propulsion and density); ``values`` dotted key -> ``(B,)``; thrust
     ``coefficients`` ``(E, B, 6)`` and ``extrapolation_n`` ``(E, B)`` [N per m/s] as drawn;
-    ``steps`` the RK4 steps of each segment (:func:`tuflexperf.analysis.mission_rows.fly_rows`).
+    ``steps`` the RK4 steps of each segment (:func:`tuflexperf.analysis.mission_rows.fly_rows`);
+    ``memo`` shared by the nominal case and its readings for one batch (what a reading does
+    not change is flown once).
     """
     from tuflexperf.analysis.airborne import obstacle_height_of
     from tuflexperf.analysis.attainable import stall_margin_of
@@ -264,7 +266,8 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
         for first in range(0, size, count):
             rows = slice(first, min(first + count, size))
             states, aux, bounds = fly_rows(model, durations[:, rows], theta[:, rows],
-                                           par[:, rows], tk[rows], layout, steps)
+                                           par[:, rows], tk[rows], layout, steps,
+                                           memo=memo)
             propulsion = evaluator._propulsion(None if coefficients is None
                                                else coefficients[:, rows, :])
             flown = _flown(model, bounds, states, aux, propulsion, field_m[rows], dt_k[rows],
