@@ -12,9 +12,9 @@ depend on the packs' charge: per segment it is evaluated once at every RK4 stage
 all rows (the heights of the stages are known before the packs are flown), and only the
 packs' charge is stepped (:func:`_decoupled_phase`; RK4 on a system whose flight part does
 not read the charge takes the very same stages). With one the loaded voltage couples them:
-every stage is solved as the CasADi instant function solves it, Newton on the loaded
-voltages (and a fixed throttle's airspeed) with a central-difference Jacobian
-(:func:`instant_rows`), to rounding.
+every stage is solved to rounding as the CasADi instant function solves it (Newton's chord
+method on the loaded voltages and a fixed throttle's airspeed, a forward-difference
+Jacobian: :func:`instant_rows`).
 
 References
 ----------
@@ -34,7 +34,6 @@ from numpy.typing import NDArray
 
 from tuflexperf.analysis.mission_equations import (
     _P_SIZE,
-    NEWTON,
     SAMPLED_AIRCRAFT,
     SECONDS_PER_HOUR,
 )
@@ -42,7 +41,8 @@ from tuflexperf.models.aircraft import true_airspeed_m_s
 from tuflexperf.models.battery import current_at_power_a, open_circuit_voltage_v
 
 Array = NDArray[np.float64]
-_FD_STEP = 1e-6  # relative step of the Jacobian's central differences: error ~1e-12
+_FD_STEP = 1e-7  # relative step of the Jacobian's forward differences: error ~1e-7
+_CHORD_STEPS = 30  # from a few % off each chord step gains ~4 digits, from a stage nearby ~7
 
 
 class Memo:
@@ -108,48 +108,48 @@ def _phases(model: Any, plan: Any, durations: Array, theta: Array, tk: Array,
 
 
 def instant_rows(model: Any, dead: int | None, solve_v: bool, q: list[Array], v_in: Array,
-                 rho: Array, p: list[Any], par: Any) -> dict[str, Any]:
+                 rho: Array, p: list[Any], par: Any, guess: Array | None = None
+                 ) -> dict[str, Any]:
     """The CasADi instant function (:meth:`SegmentEquations._build_instant_function`) on
     rows: the loaded voltages (with a reference voltage) and a fixed throttle's airspeed
-    solved by Newton from the open-circuit voltages and ``v_in``, the Jacobian by central
-    differences (5 steps with the voltages, as the CasADi function: to rounding; one
-    polishing step for the airspeed alone, whose guess is the root already)."""
+    solved from the open-circuit voltages and ``v_in`` (or ``guess``, the unknowns of a
+    stage nearby), to rounding as the CasADi function's Newton steps: Newton's chord
+    method, its Jacobian once by forward differences, until a step moves the unknowns by
+    less than 1e-13 (relative)."""
     n = model.n
     voltage_unknown = model.case.propulsion.reference_voltage_v is not None
     packs = par[model.n_par - 1]
     ocv = [open_circuit_voltage_v(model.params, q[i], packs) for i in range(n)]
     m = (n if voltage_unknown else 0) + (1 if solve_v else 0)
+    if not m:
+        return model._algebra(ocv, v_in, q, rho, p, dead, par)
 
-    def split(z: Array) -> tuple[list[Any], Any]:
+    def equations(z: Array) -> tuple[Array, dict[str, Any]]:
         u = [z[i] for i in range(n)] if voltage_unknown else ocv
-        return u, (z[m - 1] if solve_v else v_in)
-
-    def equations(z: Array) -> Array:
-        u, v = split(z)
-        alg = model._algebra(u, v, q, rho, p, dead, par)
+        alg = model._algebra(u, z[m - 1] if solve_v else v_in, q, rho, p, dead, par)
         parts = list(alg["u_residual"]) if voltage_unknown else []
         if solve_v:
             parts.append(alg["level_residual"])
-        return np.stack([np.broadcast_to(x, z.shape[1:]) for x in parts])
+        return np.stack([np.broadcast_to(x, z.shape[1:]) for x in parts]), alg
 
-    u, v = ocv, v_in
-    if m:
-        z = np.stack([*(ocv if voltage_unknown else []), *([v_in] if solve_v else [])])
-        z = np.broadcast_to(z, (m, *np.broadcast_shapes(*(np.shape(x) for x in z)))).copy()
-        for _ in range(NEWTON if voltage_unknown else 1):
-            res = equations(z)
-            jac = np.empty((m, m, *z.shape[1:]))
-            for j in range(m):
-                h = _FD_STEP * np.maximum(np.abs(z[j]), 1.0)
-                up, down = z.copy(), z.copy()
-                up[j] += h
-                down[j] -= h
-                jac[:, j] = (equations(up) - equations(down)) / (2.0 * h)
-            delta = np.linalg.solve(np.moveaxis(jac, (0, 1), (-2, -1)),
-                                    np.moveaxis(res, 0, -1)[..., None])[..., 0]
-            z = z - np.moveaxis(delta, -1, 0)
-        u, v = split(z)
-    return model._algebra(u, v, q, rho, p, dead, par)
+    if guess is None:
+        guess = np.stack([*(ocv if voltage_unknown else []), *([v_in] if solve_v else [])])
+    z = np.broadcast_to(guess, (m, *np.broadcast_shapes(*(np.shape(x) for x in guess)))).copy()
+    res, alg = equations(z)
+    jac = np.empty((m, m, *z.shape[1:]))
+    for j in range(m):
+        h = _FD_STEP * np.maximum(np.abs(z[j]), 1.0)
+        moved = z.copy()
+        moved[j] += h
+        jac[:, j] = (equations(moved)[0] - res) / h
+    inverse = np.linalg.inv(np.moveaxis(jac, (0, 1), (-2, -1)))
+    for _ in range(_CHORD_STEPS):
+        delta = np.einsum("...ij,j...->i...", inverse, res)
+        z = z - delta
+        res, alg = equations(z)
+        if not (np.abs(delta) > 1e-13 * np.maximum(np.abs(z), 1.0)).any():
+            break
+    return alg
 
 
 def _aux_rows(alg: dict[str, Any], n: int, shape: tuple[int, ...]) -> Array:
@@ -173,6 +173,9 @@ def _coupled_phase(model: Any, plan: Any, kind: str, step: Array, p: list[Any], 
             return column
         return column[k if column.shape[0] > 1 else 0]
 
+    voltage_unknown = model.case.propulsion.reference_voltage_v is not None
+    last: list[Array] = []  # the unknowns of the stage before: the next one starts there
+
     def evaluate(s: Array, k: int, which: int) -> Array:
         rho = model._rho(s[2 * n], par)
         pk = [at(c, k) for c in p]
@@ -180,13 +183,16 @@ def _coupled_phase(model: Any, plan: Any, kind: str, step: Array, p: list[Any], 
             v_in = pk[which]
         else:
             v_in = pk[9] if plan.solve_v else true_airspeed_m_s(pk[4], rho)
-        alg = instant_rows(model, plan.dead, plan.solve_v, list(s[:n]), v_in, rho, pk[:4], par)
+        alg = instant_rows(model, plan.dead, plan.solve_v, list(s[:n]), v_in, rho, pk[:4], par,
+                           last[-1] if last else None)
         if forced:
             alg["rate"] = pk[2]
-        return _aux_rows(alg, n, (size,))
+        a = _aux_rows(alg, n, (size,))
+        last[:] = [np.concatenate([a[6 + n:6 + 2 * n] if voltage_unknown else a[:0],
+                                   a[1:2] if plan.solve_v else a[:0]])]
+        return a
 
-    def derivative(s: Array, k: int, which: int) -> Array:
-        a = evaluate(s, k, which)
+    def derivative(a: Array, k: int) -> Array:
         d = np.concatenate([a[6:6 + n] / SECONDS_PER_HOUR, a[6 + 2 * n:6 + 3 * n]
                             / SECONDS_PER_HOUR, a[2:3], a[1:2], np.ones((1, size))])
         if kind == "height":
@@ -195,13 +201,17 @@ def _coupled_phase(model: Any, plan: Any, kind: str, step: Array, p: list[Any], 
             d = d / safe
         return d
 
+    # a node's aux is the next step's first stage where that step starts as this one ends
+    joined = not forced or all(np.ndim(c) < 2 or np.array_equal(c[:-1], c[1:])
+                               for c in p[:6]) and np.array_equal(
+        np.broadcast_to(p[8], step.shape)[:-1], np.broadcast_to(p[6], step.shape)[1:])
     states, auxes = [state], [evaluate(state, 0, 6)]
     for k in range(steps):
         dt = step[k]
-        k1 = derivative(state, k, 6)
-        k2 = derivative(state + 0.5 * dt * k1, k, 7)
-        k3 = derivative(state + 0.5 * dt * k2, k, 7)
-        k4 = derivative(state + dt * k3, k, 8)
+        k1 = derivative(auxes[-1] if joined or k == 0 else evaluate(state, k, 6), k)
+        k2 = derivative(evaluate(state + 0.5 * dt * k1, k, 7), k)
+        k3 = derivative(evaluate(state + 0.5 * dt * k2, k, 7), k)
+        k4 = derivative(evaluate(state + dt * k3, k, 8), k)
         state = state + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
         states.append(state)
         auxes.append(evaluate(state, k, 8))
