@@ -354,3 +354,34 @@ def test_sampled_steps_move_the_landing_far_less_than_the_monte_carlo_error(tmp_
     assert np.count_nonzero(np.isfinite(fine)) > 300
     assert coarse == pytest.approx(fine, rel=1e-6, nan_ok=True)
     assert not np.array_equal(coarse, fine)  # the steps are flown, not ignored
+
+
+def test_the_readings_sharing_a_batchs_flights_fly_what_each_flies_alone(tmp_path) -> None:
+    """The nominal case and its readings (the measured power, the dead engine's drag)
+    share one Memo in a batch: each reading's landing is the one it flies alone, bit for
+    bit, and the readings differ from the nominal (they were flown, not copied)."""
+    from tuflexperf.analysis.batch_readings import readings_evaluator
+    from tuflexperf.analysis.mission_rows import Memo
+    from tuflexperf.analysis.uncertainty import draw_chunk, plan_for
+
+    case = load_case(_case(tmp_path, SHIPPED_MISSION))
+    plan = plan_for(case, samples=300, seed=3)
+    draw = draw_chunk(case, plan, 0)
+    readings = [r for r in readings_evaluator(case, drawn=plan.extrapolation).all_readings
+                if "mission" in r.affects]
+    assert {r.key for r in readings} >= {"measured_power", "windmilling_model_drag"}
+    cases = [case] + [r.case for r in readings]
+    memo = Memo()
+
+    def landing(on, shared) -> np.ndarray:
+        return sampled_landing(mission_for(on, list(draw.values)), evaluator_for(on),
+                               draw.values, draw.size, draw.coefficients,
+                               draw.extrapolation_n, memo=shared)["mission_landing_charge"][0]
+
+    together = [landing(on, memo) for on in cases]
+    alone = [landing(on, None) for on in cases]
+    for shared, own in zip(together, alone, strict=True):
+        assert np.array_equal(shared, own, equal_nan=True)
+    assert np.count_nonzero(np.isfinite(together[0])) > 200
+    for other in together[1:]:
+        assert not np.array_equal(other, together[0], equal_nan=True)

@@ -49,10 +49,12 @@ class Memo:
     """Phases flown for one batch, keyed on all they read (:func:`fly_rows`): the nominal
     case and its readings fly the same rows, and a reading differs from the nominal in one
     thing (the fans' power, a dead engine's drag), so most of its flight is the nominal's.
-    Kept for one batch only (a batch's flights are ~100 MB at 10,000 rows)."""
+    Kept for one batch only (a batch's flights are ~100 MB at 10,000 rows). ``rows`` the
+    take-offs' thrust-only results (:class:`tuflexperf.analysis.batch_model.SharedRows`)."""
 
     def __init__(self) -> None:
         self._items: dict[Any, Any] = {}
+        self.rows: dict[Any, Any] = {}
 
     def get(self, key: Any, build: Any) -> Any:
         """The entry for ``key``, built by ``build()`` on first use."""

@@ -186,6 +186,7 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     from tuflexperf.analysis.airborne import obstacle_height_of
     from tuflexperf.analysis.attainable import stall_margin_of
     from tuflexperf.analysis.batch_model import BatchModel as _Model
+    from tuflexperf.analysis.batch_model import SharedRows
     from tuflexperf.models.aircraft import stall_speed_eas_m_s, true_airspeed_m_s
     from tuflexperf.models.atmosphere import isa_density_kg_m3
 
@@ -204,9 +205,12 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     ok = np.ones(size, dtype=bool)
     stall = margin * np.asarray(stall_speed_eas_m_s(aircraft), dtype=float).reshape(-1)
     durations = np.repeat(model.durations[:, None], size, axis=1)
+    # the readings' take-offs on the nominal's thrust take its thrust-only results
     m = _Model(aircraft=aircraft, propulsion=evaluator._propulsion(coefficients),
                density=evaluator._density(values, size), extrapolation_n=extrapolation_n,
-               size=size, stall_margin=margin)
+               size=size, stall_margin=margin,
+               shared=None if memo is None else SharedRows(memo.rows,
+                                                           *evaluator.thrust_identity))
     theta = np.repeat(model.theta[:, None], size, axis=1)
     for plan, segment in zip(model.plans, model.mission.segments, strict=True):
         eas: Any = plan.eas
