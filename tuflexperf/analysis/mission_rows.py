@@ -240,6 +240,8 @@ def fly_rows(model: Any, durations: Array, theta: Array, par: Array, tk: Array,
     size = par.shape[1]
     state = np.zeros((2 * n + 3, size)) if start is None else np.asarray(start, dtype=float)
     coupled = model.case.propulsion.reference_voltage_v is not None
+    height_key: Any = None
+    state_key: Any = None
     if memo is not None:  # the flight reads par's rows before the power corrections
         flight_par = digest(par[:len(SAMPLED_AIRCRAFT) + 2 + 7 * n])
         whole_par = digest(flight_par, par[len(SAMPLED_AIRCRAFT) + 2 + 7 * n:])
@@ -256,14 +258,21 @@ def fly_rows(model: Any, durations: Array, theta: Array, par: Array, tk: Array,
             for kind, step, p in _phases(model, plan, durations, theta, tk, layout, steps):
                 if coupled or (kind == "time" and isinstance(p[3], float) and p[3] > 0.5):
                     s, a = _coupled_phase(model, plan, kind, step, p, state, par)
+                    height_key = state_key = None
                 elif memo is None:
                     s, a = _decoupled_phase(model, plan, kind, step, p, state, par)
                 else:
+                    # a phase's end is known by its key: the next one's start need not be
+                    # read again (its height by the flight's key: the power does not move it)
+                    height_key = height_key or digest(state[2 * n])
+                    state_key = state_key or digest(state)
                     inputs = (model._flight_key(plan.dead), plan, kind, digest(step, *p))
-                    aero_key = (*inputs, digest(state[2 * n]), flight_par, "aero")
-                    s, a = memo.get((*inputs, digest(state), whole_par), functools.partial(
+                    aero_key = (*inputs, height_key, flight_par, "aero")
+                    full_key = (*inputs, state_key, whole_par)
+                    s, a = memo.get(full_key, functools.partial(
                         _decoupled_phase, model, plan, kind, step, p, state, par, memo,
                         aero_key))
+                    height_key, state_key = aero_key, full_key
                 states.append(s)
                 auxes.append(a)
                 state = s[:, -1]

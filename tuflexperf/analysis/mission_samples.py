@@ -47,7 +47,7 @@ from tuflexperf.analysis.mission import (
     takeoff_matrix,
 )
 from tuflexperf.analysis.mission_plan import best_endurance_eas_rows, level_speeds_at_throttle
-from tuflexperf.analysis.mission_rows import Memo, aux_size, fly_rows, suffix_rows
+from tuflexperf.analysis.mission_rows import Memo, aux_size, digest, fly_rows, suffix_rows
 from tuflexperf.analysis.mission_solve import longest_rows
 
 Array = NDArray[np.float64]
@@ -258,7 +258,14 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
         roll = evaluator.launch(m, size, height[:, None], battery)
         ok &= roll[3] > 0.5
         if layout:
-            tk, launched = _takeoff_rows(model, m, roll, height, layout)
+            def rows() -> tuple[Array, NDArray[np.bool_]]:
+                return _takeoff_rows(model, m, roll, height, layout)
+
+            # the rows read the thrust alone but on sagging packs: a reading on the same
+            # thrust, from the same launch, takes the nominal's
+            tk, launched = (rows() if memo is None or m.packs_roll is not None else memo.get(
+                ("takeoff rows", evaluator.thrust_identity[0], model.takeoff_to_obstacle,
+                 tuple(layout), digest(*roll, height)), rows))
             ok &= launched
     k = model.mission.solve_for
     nodes = sum((sum(c + 1 for _, c in layout) if plan.kind == "takeoff" else steps + 1)
