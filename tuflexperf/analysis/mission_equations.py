@@ -1,13 +1,14 @@
-"""A mission's equations at one instant and over one RK4 step, built on CasADi symbols.
+"""A mission's equations at one instant and over one RK4 step, on backend-neutral kernels.
 
 The physics of :mod:`tuflexperf.analysis.mission` (see its docstring for the equations):
 thrust, power and the packs' loaded voltage at one instant (:meth:`SegmentEquations._algebra`,
 :meth:`~SegmentEquations._instant_function`), the RK4 step over time or height
 (:meth:`~SegmentEquations._step_functions`) and one segment's graph of steps
 (:meth:`~SegmentEquations._segment_graph`). The sampled parameters (aircraft, field,
-thrust coefficients, extrapolation error) are symbols, inputs of every function, so one
-case and a batch of samples run the same functions; the take-off's step rows too
-(:func:`takeoff_matrix`).
+thrust coefficients, extrapolation error, power corrections, packs) are inputs of every
+function (:meth:`SegmentEquations.parameters`); the take-off's step rows too
+(:func:`takeoff_matrix`). The same equations build the single case's CasADi functions and
+fly a batch's numpy rows (:mod:`tuflexperf.analysis.mission_rows`).
 
 References
 ----------
