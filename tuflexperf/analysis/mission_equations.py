@@ -562,14 +562,16 @@ def takeoff_layout(rotation: bool, airborne: bool, straight: bool, steps: int = 
                    ) -> list[tuple[str, int]]:
     """The take-off's phases and their steps: roll, rotation (when it takes time), arc (to
     the obstacle) and straight climb (when the arc does not clear the obstacle); the roll
-    and the arc in ``steps`` (the single case's :data:`STEPS` and :data:`ARC_STEPS`)."""
+    and the arc in ``steps``, the rotation and the straight climb (a few seconds at one
+    airspeed) in as many fewer (the single case's :data:`STEPS`: :data:`ARC_STEPS`,
+    ``ROTATION_STEPS``, :data:`STRAIGHT_STEPS`)."""
     layout = [("roll", steps)]
     if rotation:
-        layout.append(("rotation", ROTATION_STEPS))
+        layout.append(("rotation", max(1, ROTATION_STEPS * steps // STEPS)))
     if airborne:
         layout.append(("arc", steps * ARC_STEPS // STEPS))
         if straight:
-            layout.append(("straight", STRAIGHT_STEPS))
+            layout.append(("straight", max(1, STRAIGHT_STEPS * steps // STEPS)))
     return layout
 
 
@@ -596,7 +598,7 @@ def takeoff_matrix(layout: list[tuple[str, int]], stages: np.ndarray, roll_s: np
             block[:, _P_SIZE, :] = (roll_s / cols)[:, None]
         elif name == "rotation":
             block[:, 6:9, :] = v_lo[:, None, None]
-            block[:, _P_SIZE, :] = (rotation_s / ROTATION_STEPS)[:, None]
+            block[:, _P_SIZE, :] = (rotation_s / cols)[:, None]
         elif name == "arc" and air is not None:
             block[:, 6:9, :] = air.speed[:, None, None]
             block[:, 2, :] = air.arc_rates
@@ -604,6 +606,6 @@ def takeoff_matrix(layout: list[tuple[str, int]], stages: np.ndarray, roll_s: np
         elif air is not None:
             block[:, 6:9, :] = air.speed[:, None, None]
             block[:, 2, :] = (air.speed * air.sine)[:, None]
-            block[:, _P_SIZE, :] = (air.straight_s / STRAIGHT_STEPS)[:, None]
+            block[:, _P_SIZE, :] = (air.straight_s / cols)[:, None]
         blocks.append(block)
     return np.concatenate(blocks, axis=2) if blocks else np.zeros((size, _P_SIZE + 1, 0))
