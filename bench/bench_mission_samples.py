@@ -1,5 +1,6 @@
 """Samples per second over every requirement of the shipped case with a 7-segment mission,
-the batch's map against a numpy-free loop of the same function, and `check --samples 10000`
+the sampled mission's rows (numpy, at the sampled and at the single case's steps) against a
+call per row of the single case's chained CasADi function, and `check --samples 10000`
 against the deterministic `check` (whole processes, taking turns).
 
 Run as `python bench/bench_mission_samples.py [SAMPLES]`. Figures, not verdicts.
@@ -12,9 +13,13 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 import yaml
 from timing import walls  # noqa: E402
 
+from tuflexperf.analysis.mission import STEPS, takeoff_layout
+from tuflexperf.analysis.mission_rows import fly_rows
+from tuflexperf.analysis.mission_samples import SAMPLED_STEPS
 from tuflexperf.analysis.uncertainty import evaluate_batch, mission_for, plan_for
 from tuflexperf.io.case import load_case
 
@@ -42,8 +47,7 @@ def main() -> None:
         plan = plan_for(case, samples=samples, seed=1)
         start = time.perf_counter()
         model = mission_for(case, [key for key, _, _ in plan.parameters])
-        model.sampled_chain()  # expanded once per process
-        print(f"mission build + SX expansion: {time.perf_counter() - start:.2f} s")
+        print(f"mission build: {time.perf_counter() - start:.2f} s")
         evaluate_batch(case, plan, range(0, 1))  # the evaluator and its caches
         start = time.perf_counter()
         for chunks in [range(i, min(i + 4, len(plan.chunks)))
@@ -52,24 +56,24 @@ def main() -> None:
         elapsed = time.perf_counter() - start
         print(f"in process, every requirement incl. endurance and the mission: "
               f"{samples / elapsed:,.0f} samples/s ({samples} in {elapsed:.2f} s)")
-        # the map against one call per row of the same expanded function
-        history = model.sampled_chain()[0]
-        rows = 200
-        import numpy as np
-
-        args = [np.repeat(model.durations[:, None], rows, 1),
-                np.repeat(model.theta[:, None], rows, 1), np.repeat(model.par, rows, 1)]
-        width = sum(c for _, c in model.sampled_chain()[2])
-        tk = np.zeros((model.tk.shape[0], width * rows))
-        for name, f in (("map serial", history.map(rows)),
-                        ("map thread 2", history.map(rows, "thread", 2))):
+        # the mission's flight alone: numpy rows against one CasADi call a row (the rows'
+        # take-off phases of no time: the same arithmetic as flown ones)
+        rows = 2500
+        for steps in (SAMPLED_STEPS, STEPS):
+            shape = takeoff_layout(True, True, True, steps)
+            width = sum(c for _, c in shape)
+            tk = np.zeros((rows, model.tk.shape[0], width))
             start = time.perf_counter()
-            f(*args, tk)
-            print(f"{name}: {(time.perf_counter() - start) / rows * 1e3:.2f} ms a row")
+            fly_rows(model, np.repeat(model.durations[:, None], rows, 1),
+                     np.repeat(model.theta[:, None], rows, 1), np.repeat(model.par, rows, 1),
+                     tk, shape, steps)
+            print(f"numpy rows, {steps} steps a segment: "
+                  f"{(time.perf_counter() - start) / rows * 1e3:.3f} ms a row")
         start = time.perf_counter()
         for _ in range(20):
-            history(model.durations, model.theta, model.par, tk[:, :width])
-        print(f"one call a row: {(time.perf_counter() - start) / 20 * 1e3:.2f} ms a row")
+            model._history(model.durations, model.theta, model.par, model.tk)
+        print(f"single case's CasADi function, one call: "
+              f"{(time.perf_counter() - start) / 20 * 1e3:.2f} ms a row")
         cli = [str(Path(sys.executable).parent / "tuflexperf")]
         times = walls({"check": [*cli, "check", str(path), "--json"],
                        "samples": [*cli, "check", str(path), "--json", "--samples", "10000"]},

@@ -11,7 +11,7 @@ import yaml
 from typer.testing import CliRunner
 
 from tests.conftest import SHIPPED_CASE
-from tuflexperf.analysis.mission import solve_mission
+from tuflexperf.analysis.mission import STEPS, solve_mission
 from tuflexperf.analysis.mission_samples import sampled_landing
 from tuflexperf.analysis.uncertainty import evaluator_for, mission_for
 from tuflexperf.cli import app
@@ -56,7 +56,7 @@ def _batch_and_single(case_path: Path, name: str = "mission_landing_charge"
     values = {k: np.array(v) for k, v in DRAWS.items()}
     model = mission_for(case, list(values))
     assert model is not None
-    batch = sampled_landing(model, evaluator_for(case), values, 3, None, None)[name][0]
+    batch = sampled_landing(model, evaluator_for(case), values, 3, None, None, STEPS)[name][0]
     single = []
     for row in range(3):
         # the --set mechanism: the same dotted keys, validated as the files are
@@ -91,7 +91,7 @@ def test_a_sample_that_cannot_fly_the_mission_is_not_met_never_dropped(tmp_path)
     values = {"aircraft.mass_kg": np.array([22.2, 60.0]),
               "aircraft.cd0": np.array([0.021, 0.021])}
     model = mission_for(case, list(values))
-    out = sampled_landing(model, evaluator_for(case), values, 2, None, None)
+    out = sampled_landing(model, evaluator_for(case), values, 2, None, None, STEPS)
     landing = out["mission_landing_charge"][0]
     assert np.isfinite(landing[0]) and np.isnan(landing[1])
 
@@ -110,7 +110,7 @@ def test_solve_for_per_row_is_the_single_cases_longest_segment(tmp_path) -> None
     case = load_case(path)
     values = {"aircraft.mass_kg": np.array([22.2, 60.0])}
     out = sampled_landing(mission_for(case, list(values)), evaluator_for(case), values, 2,
-                          None, None)
+                          None, None, STEPS)
     assert np.isfinite(out["mission_solved_time"][0][0])
     assert np.isnan(out["mission_solved_time"][0][1])
 
@@ -158,7 +158,7 @@ def test_solve_for_per_row_ends_at_the_cut_off_where_the_packs_cut_off_first(tmp
     cutoffs = [3.4, 3.7, 3.8]
     values = {"battery.cutoff_voltage_per_cell_v": np.array(cutoffs)}
     out = sampled_landing(mission_for(case, list(values)), evaluator_for(case), values, 3,
-                          None, None)
+                          None, None, STEPS)
     for row, cutoff in enumerate(cutoffs):
         one = with_values(case, {"battery.cutoff_voltage_per_cell_v": cutoff})
         flown = solve_mission(one, load_mission(mission), 0.2)
@@ -212,7 +212,7 @@ def _rows_and_single(path: Path, draws: dict[str, list[float]]) -> tuple[np.ndar
     model = mission_for(case, list(values))
     assert model is not None  # sampled, not refused
     size = len(next(iter(draws.values())))
-    batch = sampled_landing(model, evaluator_for(case), values, size, None, None)[
+    batch = sampled_landing(model, evaluator_for(case), values, size, None, None, STEPS)[
         "mission_landing_charge"][0]
     single: list[float] = []
     for row in range(size):
@@ -279,7 +279,7 @@ def test_a_drawn_capacity_is_flown_row_by_row(tmp_path) -> None:
     case = load_case(_case(tmp_path, mission))
     values = {"battery.capacity_ah": np.array([4.0, 6.0])}
     out = sampled_landing(mission_for(case, list(values)), evaluator_for(case), values, 2,
-                          None, None)["mission_solved_time"][0]
+                          None, None, STEPS)["mission_solved_time"][0]
     for row, capacity in enumerate([4.0, 6.0]):
         one = with_values(case, {"battery.capacity_ah": capacity})
         flown = solve_mission(one, load_mission(mission), 0.2)
@@ -297,3 +297,91 @@ def test_a_fixed_throttle_cruise_on_a_braking_fan_is_not_met(tmp_path) -> None:
         "aircraft.cd0": [0.04307, 0.003], "aircraft.wing_area_m2": [0.36, 0.36]})
     assert np.isfinite(batch[0]) and np.isnan(batch[1]) and np.isnan(single[1])
     assert batch[0] == pytest.approx(single[0], rel=1e-9)
+
+
+@pytest.mark.parametrize("variant", ["shipped", "airborne", "sagging packs", "fixed throttle"])
+def test_numpy_rows_are_the_single_cases_casadi_flight_node_by_node(tmp_path, variant) -> None:
+    """The rows (numpy) and the single case's chained CasADi function, at the same 64 steps:
+    every node's state and aux output to 1e-9 relative (the flight read from the packs where
+    a reference voltage couples them, Newton on the loaded voltages)."""
+    from tuflexperf.analysis.mission_rows import fly_rows
+
+    mission = SHIPPED_MISSION
+    if variant == "airborne":
+        mission = tmp_path / "airborne.yaml"
+        mission.write_text(AIRBORNE)
+    if variant == "fixed throttle":
+        mission = tmp_path / "fixed.yaml"
+        mission.write_text(SHIPPED_MISSION.read_text().replace(
+            "{type: cruise, airspeed_m_s: 26, time_min: 8}", "{type: cruise, throttle: 0.6, "
+            "time_min: 8}"))
+    path = (_variant(tmp_path, "propulsion", {"reference_voltage_v": 46.0,
+                                              "voltage_exponent": 1.5})
+            if variant == "sagging packs" else _case(tmp_path, mission))
+    model = mission_for(load_case(path), [])
+    single = [np.asarray(x, dtype=float)
+              for x in model._history(model.durations, model.theta, model.par, model.tk)]
+    states, aux, bounds = fly_rows(model, model.durations[:, None], model.theta[:, None],
+                                   model.par, model.tk[None], model.tk_layout, STEPS)
+    assert bounds == model.bounds
+    for rows, reference in ((states[:, 0], single[0]), (aux[:, 0], single[1])):
+        finite = np.isfinite(reference)
+        assert np.array_equal(np.isfinite(rows), finite) and finite.mean() > 0.9
+        scale = np.maximum(np.abs(reference[finite]), 1e-3)
+        assert np.max(np.abs(rows[finite] - reference[finite]) / scale) < 1e-9
+
+
+def test_sampled_steps_move_the_landing_far_less_than_the_monte_carlo_error(tmp_path) -> None:
+    """The sampled mission flies SAMPLED_STEPS a segment, not the single case's 64: on 400
+    draws of the shipped case the landing charge moves by at most 1e-6 (relative), the same
+    rows not met."""
+    from tuflexperf.analysis.mission_samples import SAMPLED_STEPS
+    from tuflexperf.analysis.uncertainty import draw_chunk, plan_for
+
+    case = load_case(_case(tmp_path, SHIPPED_MISSION))
+    plan = plan_for(case, samples=400, seed=2)
+    draw = draw_chunk(case, plan, 0)
+    model = mission_for(case, list(draw.values))
+
+    def landing(steps: int) -> np.ndarray:
+        return sampled_landing(model, evaluator_for(case), draw.values, draw.size,
+                               draw.coefficients, draw.extrapolation_n, steps)[
+            "mission_landing_charge"][0]
+
+    fine, coarse = landing(STEPS), landing(SAMPLED_STEPS)
+    assert SAMPLED_STEPS < STEPS
+    assert np.array_equal(np.isfinite(fine), np.isfinite(coarse))
+    assert np.count_nonzero(np.isfinite(fine)) > 300
+    assert coarse == pytest.approx(fine, rel=1e-6, nan_ok=True)
+    assert not np.array_equal(coarse, fine)  # the steps are flown, not ignored
+
+
+def test_the_readings_sharing_a_batchs_flights_fly_what_each_flies_alone(tmp_path) -> None:
+    """The nominal case and its readings (the measured power, the dead engine's drag)
+    share one Memo in a batch: each reading's landing is the one it flies alone, bit for
+    bit, and the readings differ from the nominal (they were flown, not copied)."""
+    from tuflexperf.analysis.batch_readings import readings_evaluator
+    from tuflexperf.analysis.mission_rows import Memo
+    from tuflexperf.analysis.uncertainty import draw_chunk, plan_for
+
+    case = load_case(_case(tmp_path, SHIPPED_MISSION))
+    plan = plan_for(case, samples=300, seed=3)
+    draw = draw_chunk(case, plan, 0)
+    readings = [r for r in readings_evaluator(case, drawn=plan.extrapolation).all_readings
+                if "mission" in r.affects]
+    assert {r.key for r in readings} >= {"measured_power", "windmilling_model_drag"}
+    cases = [case] + [r.case for r in readings]
+    memo = Memo()
+
+    def landing(on, shared) -> np.ndarray:
+        return sampled_landing(mission_for(on, list(draw.values)), evaluator_for(on),
+                               draw.values, draw.size, draw.coefficients,
+                               draw.extrapolation_n, memo=shared)["mission_landing_charge"][0]
+
+    together = [landing(on, memo) for on in cases]
+    alone = [landing(on, None) for on in cases]
+    for shared, own in zip(together, alone, strict=True):
+        assert np.array_equal(shared, own, equal_nan=True)
+    assert np.count_nonzero(np.isfinite(together[0])) > 200
+    for other in together[1:]:
+        assert not np.array_equal(other, together[0], equal_nan=True)

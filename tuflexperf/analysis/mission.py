@@ -193,22 +193,6 @@ class MissionModel(SegmentEquations, MissionPlanning, FlightChecks, SolveFor):
         return (ca.MX.sym("durations", m), ca.MX.sym("theta", 3 * m),
                 ca.MX.sym("par", self.n_par), ca.MX.sym("tk", _P_SIZE + 1, self.tk.shape[1]))
 
-    def sampled_chain(self) -> tuple[Any, list[tuple[int, int]], list[tuple[str, int]]]:
-        """The chained function for a batch, expanded to SX (as fast again under ``map``,
-        the same numbers), its node ranges and its take-off's phases: every phase a row may
-        fly (a rotation, a straight climb), each of no time where a row does not."""
-        if getattr(self, "_sampled", None) is None:
-            kept = self.tk_layout, self.tk
-            if self.tk_layout:
-                self.tk_layout = takeoff_layout(True, self.takeoff_to_obstacle, True)
-                self.tk = np.zeros((_P_SIZE + 1, sum(c for _, c in self.tk_layout)))
-            try:
-                history, bounds = self._chain()
-                self._sampled = (history.expand(), bounds, self.tk_layout)
-            finally:
-                self.tk_layout, self.tk = kept
-        return self._sampled
-
     def _chain(self) -> tuple[Any, list[tuple[int, int]]]:
         """``(durations, theta, par, tk) -> (states, aux)`` at every node of every segment,
         and each segment's node range: the whole mission as ONE function."""

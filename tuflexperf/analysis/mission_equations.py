@@ -1,13 +1,14 @@
-"""A mission's equations at one instant and over one RK4 step, built on CasADi symbols.
+"""A mission's equations at one instant and over one RK4 step, on backend-neutral kernels.
 
 The physics of :mod:`tuflexperf.analysis.mission` (see its docstring for the equations):
 thrust, power and the packs' loaded voltage at one instant (:meth:`SegmentEquations._algebra`,
 :meth:`~SegmentEquations._instant_function`), the RK4 step over time or height
 (:meth:`~SegmentEquations._step_functions`) and one segment's graph of steps
 (:meth:`~SegmentEquations._segment_graph`). The sampled parameters (aircraft, field,
-thrust coefficients, extrapolation error) are symbols, inputs of every function, so one
-case and a batch of samples run the same functions; the take-off's step rows too
-(:func:`takeoff_matrix`).
+thrust coefficients, extrapolation error, power corrections, packs) are inputs of every
+function (:meth:`SegmentEquations.parameters`); the take-off's step rows too
+(:func:`takeoff_matrix`). The same equations build the single case's CasADi functions and
+fly a batch's numpy rows (:mod:`tuflexperf.analysis.mission_rows`).
 
 References
 ----------
@@ -72,6 +73,11 @@ STEP_FUNCTIONS: BoundedCache[Any] = BoundedCache(64)
 """The step functions of every mission model of the process, keyed on what they read
 (:meth:`SegmentEquations._equations_key`): a reading of the case that moves only the fans'
 power (a parameter) flies the nominal's functions, not a new build."""
+
+
+def _known(flag: Any) -> bool:
+    """Whether a flag of the plan is a plain number (numpy rows), not a CasADi symbol."""
+    return isinstance(flag, (int, float))
 
 
 def _law_entries(law: PowerCorrection | None) -> tuple[float, ...]:
@@ -168,6 +174,27 @@ class SegmentEquations:
             self.n, self.n_par)
         return self._known_key
 
+    def _flight_key(self, dead: int | None) -> str:
+        """What a phase with engine ``dead`` out reads besides ``par`` and its inputs
+        (:meth:`_equations_key`); with every engine alive not how a dead one would drag, so
+        a reading that changes only that flies the same phases before its engine failure."""
+        import dataclasses
+
+        if dead is not None:
+            return self._equations_key()
+        known = getattr(self, "_alive_key", None)
+        if known is None:
+            prop = thrust_part(self.case.propulsion)
+            prop = dataclasses.replace(prop, engines=tuple(
+                dataclasses.replace(e, windmilling_drag_coefficient=None) for e in prop.engines))
+            fan = self.fan_power
+            if dataclasses.is_dataclass(fan) and hasattr(fan, "power_correction"):
+                fan = dataclasses.replace(fan, power_correction=None)
+            known = self._alive_key = fingerprint(
+                "mission-alive", self.case.aircraft, prop, self.params, fan, self.fixed_density,
+                self.field_m, self.dt_k, self.own_power, self.n, self.n_par)
+        return known
+
     def _rho(self, h: Any, par: Any = None) -> Any:
         """ISA density [kg/m^3] at ``h`` [m] above the field (the sampled field height and
         temperature offset of ``par`` where given)."""
@@ -203,15 +230,29 @@ class SegmentEquations:
 
     def _algebra(self, u: list[Any], v: Any, q: Any, rho: Any, plan_p: Any,
                  dead: int | None, par: Any) -> dict[str, Any]:
-        """Everything at loaded pack voltages ``u`` [V] and true airspeed ``v`` [m/s].
+        """Everything at loaded pack voltages ``u`` [V] and true airspeed ``v`` [m/s]: the
+        flight (:meth:`_flight`) and the packs (:meth:`_packs`).
 
         ``plan_p = [solve_x, throttle, rate, rate_from_excess]``. Without a reference
         voltage ``u`` is ignored and the current is the closed-form constant-power root.
-        ``par`` holds the sampled parameters (:meth:`parameters`); each engine's
-        extrapolation error [N per m/s] adds to its thrust, times the distance beyond
-        the tested airspeeds.
+        ``par`` holds the sampled parameters (:meth:`parameters`). Backend-neutral: CasADi
+        symbols build the step functions, numpy rows fly a batch
+        (:mod:`tuflexperf.analysis.mission_rows`).
         """
-        import casadi as ca
+        flight = self._flight(u, v, rho, plan_p, dead, par)
+        flight["power"] = self._powers(u, flight["x"], v, rho, dead, par)
+        return {**flight, **self._packs(u, q, flight["power"], dead, par)}
+
+    def _flight(self, u: Any, v: Any, rho: Any, plan_p: Any, dead: int | None,
+                par: Any) -> dict[str, Any]:
+        """Throttle, thrust [N] and height rate [m/s] at loaded voltages ``u`` [V] (ignored
+        without a reference voltage: None will do) and true airspeed ``v`` [m/s]; the
+        power is :meth:`_powers`' (a reading of the measured power flies the same flight
+        on other powers). Each engine's
+        extrapolation error [N per m/s] adds to its thrust, times the distance beyond the
+        tested airspeeds. A flag of ``plan_p`` given as a number takes its branch alone
+        (numpy rows: the other is not computed)."""
+        from tuflexperf.models._math import where
 
         aircraft, prop, errors, fan = self._symbolic_models(par)
         solve_x, x_fixed, rate_cmd, from_excess = plan_p[0], plan_p[1], plan_p[2], plan_p[3]
@@ -233,40 +274,67 @@ class SegmentEquations:
         a = 2.0 * (t[2] - 2.0 * t[1] + t[0])
         b = t[2] - t[0] - a
         needed = drag + weight * rate_cmd / v - dead_t
-        x_solved, reached = least_throttle_reaching(a, b, t[0] - needed)
-        x = ca.if_else(solve_x > 0.5, x_solved, x_fixed)
+        if _known(solve_x) and solve_x <= 0.5:  # a fixed throttle: no root to find
+            x, ok, idle_excess = x_fixed, 1.0, 0.0 * v
+        else:
+            x_solved, reached = least_throttle_reaching(a, b, t[0] - needed)
+            x = where(solve_x > 0.5, x_solved, x_fixed)
+            ok = where(solve_x > 0.5, reached, 1.0)
+            # thrust at idle beyond what a commanded descent needs: it cannot be flown that
+            # steep
+            idle_excess = where(solve_x > 0.5, t[0] - needed, 0.0)
         thrust = a * x * x + b * x + t[0] + dead_t
+        if _known(from_excess):
+            rate = climb_sine((thrust - drag) / weight) * v if from_excess > 0.5 else rate_cmd
+        else:
+            rate = where(from_excess > 0.5, climb_sine((thrust - drag) / weight) * v, rate_cmd)
+        return {"x": x, "rate": rate, "reached": ok, "idle_excess": idle_excess,
+                "v": v, "level_residual": (thrust - drag) / weight, "thrust": thrust}
+
+    def _powers(self, u: Any, x: Any, v: Any, rho: Any, dead: int | None,
+                par: Any) -> list[Any]:
+        """Each engine's electrical power [W] at throttle ``x`` and true airspeed ``v``
+        [m/s] (times ``(U/U_ref)^(1.5 k)`` at loaded voltages ``u`` [V] with a reference
+        voltage), with ``par``'s power corrections; a dead engine's is 0."""
+        _, prop, _, fan = self._symbolic_models(par)
+        u_ref, k_exp = prop.reference_voltage_v, prop.voltage_exponent
+        power = []
+        for i in range(self.n):
+            if i == dead:
+                power.append(0.0 * x)
+                continue
+            p_i = self._engine_power(i, x, v, rho, prop, fan)
+            if u_ref is not None:
+                # fan laws: power ~ rpm^3 while thrust ~ rpm^2 (SPEC 3 voltage effect)
+                p_i = p_i * (u[i] / u_ref) ** (1.5 * k_exp)
+            power.append(p_i)
+        return power
+
+    def _packs(self, u: Any, q: Any, power: list[Any], dead: int | None,
+               par: Any) -> dict[str, Any]:
+        """Each engine's current [A] and loaded voltage [V] drawing ``power`` [W] with
+        charges ``q`` [Ah] drawn, and the residuals of the loaded voltages ``u`` [V] (with a
+        reference voltage the power follows them: :meth:`_instant_function` solves them)."""
         packs = par[self.n_par - 1]
         r = self.params.resistance_ohm / packs
-        power, current, volt, residual = [], [], [], []
+        u_ref = self.case.propulsion.reference_voltage_v
+        current, volt, residual = [], [], []
         for i in range(self.n):
             ocv = open_circuit_voltage_v(self.params, q[i], packs)
             if i == dead:
-                power.append(0.0 * x)
-                current.append(0.0 * x)
+                current.append(0.0 * power[i])
                 volt.append(ocv)
-                residual.append(u[i] - ocv)
+                residual.append(u[i] - ocv if u is not None else 0.0 * ocv)
                 continue
-            p_i = self._engine_power(i, x, v, rho, prop, fan)
             if u_ref is None:
-                i_i = current_at_power_a(self.params, q[i], p_i, packs)
-                residual.append(u[i] - (ocv - r * i_i))
+                i_i = current_at_power_a(self.params, q[i], power[i], packs)
+                residual.append(u[i] - (ocv - r * i_i) if u is not None else 0.0 * ocv)
             else:
-                # fan laws: power ~ rpm^3 while thrust ~ rpm^2 (SPEC 3 voltage effect)
-                p_i = p_i * (u[i] / u_ref) ** (1.5 * k_exp)
-                i_i = p_i / u[i]
+                i_i = power[i] / u[i]
                 residual.append(ocv - r * i_i - u[i])
-            power.append(p_i)
             current.append(i_i)
             volt.append(ocv - r * i_i)
-        rate = ca.if_else(from_excess > 0.5, climb_sine((thrust - drag) / weight) * v, rate_cmd)
-        ok = ca.if_else(solve_x > 0.5, reached, 1.0)
-        # thrust at idle beyond what a commanded descent needs: it cannot be flown that steep
-        idle_excess = ca.if_else(solve_x > 0.5, t[0] - needed, 0.0)
-        return {"x": x, "rate": rate, "reached": ok, "idle_excess": idle_excess,
-                "power": power, "current": current, "voltage": volt, "v": v,
-                "u_residual": residual, "level_residual": (thrust - drag) / weight,
-                "thrust": thrust}
+        return {"current": current, "voltage": volt, "u_residual": residual}
 
     def _instant_function(self, dead: int | None, solve_v: bool) -> Any:
         """``(q, v_in, rho, p, par) -> aux`` with the loaded voltages (and airspeed) solved.
@@ -462,14 +530,15 @@ class AirbornePath:
 
 def airborne_path(v_tr: np.ndarray, radius: np.ndarray, height: np.ndarray,
                   gradient: np.ndarray, arc_gradient: np.ndarray,
-                  cleared: np.ndarray) -> AirbornePath:
+                  cleared: np.ndarray, steps: int = ARC_STEPS) -> AirbornePath:
     """The take-off's airborne part flown along its path at the transition speed.
 
     The arc of radius ``R`` [m] at ``V_tr`` [m/s] (height ``R (1 - cos(V_tr t / R))``) up to
     the climb angle ``asin(G)`` of the arc's gradient, or up to the obstacle ``height`` [m]
     if the arc clears it, then the straight climb at ``V_tr G`` [m/s] to the obstacle height
     (Anderson, *Aircraft Performance and Design*, 6.7): times from the path's length, not its
-    horizontal distance. Each arc step climbs its exact height difference. Arrays ``(B,)``.
+    horizontal distance. Each of the arc's ``steps`` climbs its exact height difference.
+    Arrays ``(B,)``.
     """
     with np.errstate(invalid="ignore", divide="ignore"):
         sine = np.minimum(gradient, 1.0)  # a gradient of 1 or more climbs vertically
@@ -481,24 +550,28 @@ def airborne_path(v_tr: np.ndarray, radius: np.ndarray, height: np.ndarray,
         arc_s = radius * angle / v_tr
         # each step climbs its chord at a constant rate: the height inside a step (and so the
         # density the fans see) is off by ~ (dt^2/8) V^2/R; 64 steps keep the charge to 1e-8
-        step = arc_s / ARC_STEPS
-        t = np.arange(ARC_STEPS + 1)[None, :] * step[:, None]
+        step = arc_s / steps
+        t = np.arange(steps + 1)[None, :] * step[:, None]
         t[:, -1] = arc_s
         h = radius[:, None] * (1.0 - np.cos(v_tr[:, None] * t / radius[:, None]))
         rates = np.diff(h, axis=1) / step[:, None]
     return AirbornePath(v_tr, arc_s, rates, straight_s, sine)
 
 
-def takeoff_layout(rotation: bool, airborne: bool, straight: bool) -> list[tuple[str, int]]:
+def takeoff_layout(rotation: bool, airborne: bool, straight: bool, steps: int = STEPS
+                   ) -> list[tuple[str, int]]:
     """The take-off's phases and their steps: roll, rotation (when it takes time), arc (to
-    the obstacle) and straight climb (when the arc does not clear the obstacle)."""
-    layout = [("roll", STEPS)]
+    the obstacle) and straight climb (when the arc does not clear the obstacle); the roll
+    and the arc in ``steps``, the rotation and the straight climb (a few seconds at one
+    airspeed) in as many fewer (the single case's :data:`STEPS`: :data:`ARC_STEPS`,
+    ``ROTATION_STEPS``, :data:`STRAIGHT_STEPS`)."""
+    layout = [("roll", steps)]
     if rotation:
-        layout.append(("rotation", ROTATION_STEPS))
+        layout.append(("rotation", max(1, ROTATION_STEPS * steps // STEPS)))
     if airborne:
-        layout.append(("arc", ARC_STEPS))
+        layout.append(("arc", steps * ARC_STEPS // STEPS))
         if straight:
-            layout.append(("straight", STRAIGHT_STEPS))
+            layout.append(("straight", max(1, STRAIGHT_STEPS * steps // STEPS)))
     return layout
 
 
@@ -509,9 +582,9 @@ def takeoff_matrix(layout: list[tuple[str, int]], stages: np.ndarray, roll_s: np
     parameters of :meth:`MissionModel._step_functions` (full throttle, airspeed given at the
     step's start, middle and end, height rate) and, last, the step [s].
 
-    ``stages`` ``(B, 2 STEPS + 1)`` the roll's airspeeds [m/s] at each step's start, middle
-    and end; ``roll_s``, ``rotation_s`` [s], ``v_lo`` [m/s] per row. A phase a row does not
-    fly has steps of no time.
+    ``stages`` ``(B, 2 S + 1)`` the roll's airspeeds [m/s] at each of its ``S`` steps'
+    start, middle and end; ``roll_s``, ``rotation_s`` [s], ``v_lo`` [m/s] per row. A phase
+    a row does not fly has steps of no time.
     """
     size = stages.shape[0]
     blocks = []
@@ -522,17 +595,17 @@ def takeoff_matrix(layout: list[tuple[str, int]], stages: np.ndarray, roll_s: np
         if name == "roll":
             block[:, 6, :], block[:, 7, :] = stages[:, 0:-1:2], stages[:, 1::2]
             block[:, 8, :] = stages[:, 2::2]
-            block[:, _P_SIZE, :] = (roll_s / STEPS)[:, None]
+            block[:, _P_SIZE, :] = (roll_s / cols)[:, None]
         elif name == "rotation":
             block[:, 6:9, :] = v_lo[:, None, None]
-            block[:, _P_SIZE, :] = (rotation_s / ROTATION_STEPS)[:, None]
+            block[:, _P_SIZE, :] = (rotation_s / cols)[:, None]
         elif name == "arc" and air is not None:
             block[:, 6:9, :] = air.speed[:, None, None]
             block[:, 2, :] = air.arc_rates
-            block[:, _P_SIZE, :] = (air.arc_s / ARC_STEPS)[:, None]
+            block[:, _P_SIZE, :] = (air.arc_s / cols)[:, None]
         elif air is not None:
             block[:, 6:9, :] = air.speed[:, None, None]
             block[:, 2, :] = (air.speed * air.sine)[:, None]
-            block[:, _P_SIZE, :] = (air.straight_s / STRAIGHT_STEPS)[:, None]
+            block[:, _P_SIZE, :] = (air.straight_s / cols)[:, None]
         blocks.append(block)
     return np.concatenate(blocks, axis=2) if blocks else np.zeros((size, _P_SIZE + 1, 0))

@@ -106,11 +106,18 @@ class SolveFor:
         guess = d.copy()
         if guess_s is not None:  # Newton from it (else from the segment's own duration)
             guess[k] = guess_s
+        suffix = self._suffix_function(k)
+        zeros = np.zeros(self.tk.shape)  # the suffix flies no take-off
+
+        def flown(start: Array, d: Array, theta: Array, par: Array) -> tuple[Array, ...]:
+            return tuple(np.asarray(x, dtype=float)
+                         for x in suffix(start, d, theta, par, zeros))
+
         found, cut = longest_rows(
             self, k, np.asarray(x0, dtype=float).reshape(-1, 1), guess[:, None], th[:, None],
             np.asarray(self.par, dtype=float).reshape(-1, 1), np.array([self.reserve]),
             np.array([self.cutoff_v]), np.array([self.capacity_ah]),
-            np.array([self.packs * self.params.max_capacity_ah]), self._suffix_function(k))
+            np.array([self.packs * self.params.max_capacity_ah]), flown)
         tau = float(found[0])
         ends = "cut-off" if cut[0] else "landing reserve"
         if not math.isfinite(tau):
@@ -155,16 +162,19 @@ class SolveFor:
 
 def longest_rows(model: Any, k: int, start: Array, durations: Array, theta: Array,
                  par: Array, reserve: Array, cutoff: Array, capacity_ah: Array, pole_ah: Array,
-                 suffix: Any = None) -> tuple[Array, NDArray[np.bool_]]:
+                 suffix: Any) -> tuple[Array, NDArray[np.bool_]]:
     """Per row the longest duration [s] of segment ``k`` that lands on the reserve without a
     cut-off (NaN where none does), and where the cut-off ends it: from where segment ``k``
     begins (``start``, ``(state, B)``), per row the ``reserve`` [-], the packs' ``cutoff``
     [V], the charge per engine the landing fraction counts and the pole of the circuit's
-    knee [Ah]. ``suffix`` the mission from segment ``k`` on (default: expanded to SX, for
-    many rows); the single case is a batch of one (:meth:`SolveFor.longest`).
+    knee [Ah]. ``suffix(start, durations, theta, par)`` flies the mission from segment ``k``
+    on for columns of rows, as :meth:`SolveFor._suffix_function` (landing state, aux at
+    segment ``k``'s end, most charge per pack, least loaded voltage): the single case's
+    CasADi function (a batch of one, :meth:`SolveFor.longest`) or the numpy rows
+    (:func:`tuflexperf.analysis.mission_rows.suffix_rows`).
 
     Vectorised over the rows, never a loop of them: each step evaluates the rows not yet
-    converged at once (the mission from segment ``k`` on, mapped). Newton with the state
+    converged at once. Newton with the state
     equations' slope ``-i_j / (3600 Q)`` (exact for the last segment, a close guess before
     it) from the file's duration, safeguarded by the bracket it keeps (regula falsi,
     Illinois, where a step leaves it); then, where the packs cut off first, regula falsi on
@@ -175,22 +185,15 @@ def longest_rows(model: Any, k: int, start: Array, durations: Array, theta: Arra
     Press et al., *Numerical Recipes*, 3rd ed., 9.2 (Illinois), 9.4 (safeguarded Newton).
     """
     size = start.shape[1]
-    if suffix is None:
-        if not hasattr(model, "_suffix_sx"):
-            model._suffix_sx = {}
-        if k not in model._suffix_sx:
-            model._suffix_sx[k] = model._suffix_function(k).expand()
-        suffix = model._suffix_sx[k]
-    n, width = model.n, model.tk.shape[1]
+    n = model.n
 
     def at(rows: Array, tau: Array) -> tuple[Array, Array, Array]:
         if not rows.size:  # no row left to fly
             return np.zeros(0), np.zeros(0), np.zeros(0)
         d = durations[:, rows].copy()
         d[k] = tau
-        end, aux, most, least = (np.asarray(x, dtype=float) for x in mapped(suffix, rows.size)(
-            start[:, rows], d, theta[:, rows], par[:, rows],
-            np.zeros((model.tk.shape[0], width * rows.size))))
+        end, aux, most, least = suffix(start[:, rows], d, theta[:, rows], par[:, rows])
+        least = np.reshape(least, (1, -1))
         with np.errstate(invalid="ignore"):
             valid = (np.all(np.isfinite(end), axis=0) & np.all(most <= end[:n] + 1e-12, axis=0)
                      & np.all(most < pole_ah[rows], axis=0))
@@ -278,20 +281,3 @@ def _root(f: Any, rows: Array, at_zero: Array, guess: Array, tolerance: float,
                                   0.5 * (low[active] + top[active])), unbracketed))
         x[active] = step
     return answer[rows]
-
-
-_MAPS: dict[tuple[int, int], Any] = {}
-
-
-def mapped(function: Any, count: int) -> Any:
-    """``function.map(count, "thread", 2)``, built once per function and count (a map of the
-    expanded mission takes ~0.4 s to build, as long as flying 100 rows); one row is the
-    function itself."""
-    if count == 1:
-        return function
-    key = (id(function), count)
-    if key not in _MAPS:
-        if len(_MAPS) > 16:  # a process flies one case's mission at a time
-            _MAPS.clear()
-        _MAPS[key] = (function, function.map(count, "thread", 2))
-    return _MAPS[key][1]

@@ -270,11 +270,15 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range,
     readings = {key: dict(by_name) for key, by_name in result.reading_values.items()}
     model = mission_for(case, list(draw.values))
     if model is not None:
-        from tuflexperf.analysis.mission_samples import sampled_landing
+        from tuflexperf.analysis.mission_rows import Memo
+        from tuflexperf.analysis.mission_samples import SAMPLED_STEPS, sampled_landing
+
+        memo = Memo()  # the readings fly the nominal's rows: what they do not change, once
 
         def fly(mission: Any, on: Case) -> dict[str, tuple[Array, Array]]:
             return sampled_landing(mission, evaluator_for(on), draw.values, draw.size,
-                                   draw.coefficients, draw.extrapolation_n)
+                                   draw.coefficients, draw.extrapolation_n, SAMPLED_STEPS,
+                                   memo)
 
         flown = fly(model, case)
         theirs = []
