@@ -29,7 +29,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import fdtrc  # stats.f.sf's kernel; scipy.stats takes ~1 s to import
 
 # p below this: the surface does not fit its data (issue 43 item 4)
 LACK_OF_FIT_P = 0.01
@@ -183,6 +182,10 @@ def model_form_shares(throttle: ArrayLike, airspeed_m_s: ArrayLike, residual_n: 
 
 
 def _p_value(f: float, dof1: int, dof2: float) -> float:
+    # stats.f.sf's kernel (scipy.stats takes ~1 s to import), here only: the sampler reads
+    # this module's model-form shapes and imports no scipy
+    from scipy.special import fdtrc
+
     return float(fdtrc(dof1, dof2, f)) if math.isfinite(f) else math.nan
 
 
