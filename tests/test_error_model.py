@@ -170,10 +170,11 @@ def test_each_rig_error_moves_the_probability_as_phi_says(tmp_path, key, sd, shi
 
 def test_the_model_form_surface_is_correlated_over_the_operating_points(tmp_path) -> None:
     """The lack of fit's RMS is the error's RMS over the tested domain, shared equally (no
-    shares in the file) by an offset, two slopes and a quadratic in throttle, each of mean
-    square 1: variance ``RMS^2 / 4 (1 + 3 u^2 + 3 t^2 + 5 P2(u)^2)``, sd ``0.75`` x RMS at
-    the centre (not zero: a one-engine throttle near it erred 2x beyond a band without the
-    offset), ``1.5`` x RMS at the throttle edges' middles, ``sqrt 3`` x RMS at the corners;
+    shares in the file) by an offset, two slopes, their product and a quadratic in airspeed,
+    each of mean square 1: variance ``RMS^2 / 5 (1 + 3 u^2 + 3 t^2 + 9 u^2 t^2 + 5
+    P2(t)^2)``, sd ``sqrt 0.45`` x RMS at the centre (not zero: a one-engine throttle near
+    it erred 2x beyond a band without the offset), ``sqrt 1.05`` x RMS at the throttle
+    edges' middles, ``sqrt(21/5)`` x RMS at the corners;
     the same sign along the roll's airspeeds (it does not average away), correlated 0.5
     between the engines; without a lack_of_fit, ``residual_sd_n`` in its place (said: an
     upper bound)."""
@@ -193,15 +194,16 @@ def test_the_model_form_surface_is_correlated_over_the_operating_points(tmp_path
     delta = draw.coefficients - nominal[:, None, :]
     top = case.propulsion.tested_airspeed_m_s[1]
 
-    def error(x, v):  # (E, B) [N]: the surface's terms are p00, p10 x, p01 v, p20 x^2
-        return delta[..., 0] + delta[..., 1] * x + delta[..., 2] * v + delta[..., 3] * x * x
+    def error(x, v):  # (E, B) [N]: the surface's terms are p00, p10 x, p01 v, p11 x v, p02 v^2
+        return (delta[..., 0] + delta[..., 1] * x + delta[..., 2] * v + delta[..., 4] * x * v
+                + delta[..., 5] * v * v)
 
-    assert np.allclose(delta[..., 4:], 0.0)
+    assert np.allclose(delta[..., 3], 0.0)  # no quadratic in throttle
     for j, rms in enumerate((0.4, 0.8)):
         for corner in ((1.0, 0.0), (1.0, top), (0.0, 0.0)):
-            assert error(*corner)[j].std() == pytest.approx(math.sqrt(3) * rms, rel=0.05)
-        assert error(1.0, top / 2)[j].std() == pytest.approx(1.5 * rms, rel=0.05)
-        assert error(0.5, top / 2)[j].std() == pytest.approx(0.75 * rms, rel=0.05)
+            assert error(*corner)[j].std() == pytest.approx(math.sqrt(21 / 5) * rms, rel=0.05)
+        assert error(1.0, top / 2)[j].std() == pytest.approx(math.sqrt(1.05) * rms, rel=0.05)
+        assert error(0.5, top / 2)[j].std() == pytest.approx(math.sqrt(0.45) * rms, rel=0.05)
         mid = (np.arange(40) + 0.5) / 40  # the domain's mean square by the midpoint rule
         grid = [error(x, v)[j] for x in mid for v in top * mid]
         assert np.mean(np.square(grid)) == pytest.approx(rms * rms, rel=0.1)
@@ -219,7 +221,7 @@ def test_the_model_form_surface_is_correlated_over_the_operating_points(tmp_path
     assert "an upper bound" in upper.errors.sources[1].detail
     corner = draw_chunk(only, upper, 0).coefficients[0] - nominal[0]
     static = corner[:, 0] + corner[:, 1] + corner[:, 3]  # at full throttle, 0 m/s
-    assert static.std() == pytest.approx(math.sqrt(3) * 0.5, rel=0.05)
+    assert static.std() == pytest.approx(math.sqrt(21 / 5) * 0.5, rel=0.05)
     # and the batch flies those coefficients: its roll of a row is the single case's
     values = run_samples(case, plan).values["takeoff_ground_roll"]
     for row in (0, 1):
