@@ -13,18 +13,16 @@ c6 x (v / 30)^3`` [N], ``c3`` ~ U(-4, 4), ``c5`` ~ U(-3, 3), ``c6`` ~ N(-1, 1) (
 fans whose thrust falls faster at speed, one sign for most); ``momentum``, a family the
 error model was not tuned to (:func:`momentum_thrust`: momentum theory on an rpm-throttle
 map, a drop-off at speed and the duct's drag at low rpm). The deterministic check takes
-poly22 only: for each
-requirement the true law is replaced by its least-squares poly22 over the requirement's own
-operating region (:data:`REGIONS`, the whole domain joining at a small weight), and that
-surrogate's largest error in the region is recorded.
+poly22 only: for each requirement the true law is replaced by its least-squares poly22 over
+the requirement's own operating region (:data:`REGIONS`, the whole domain joining at a
+small weight), and that surrogate's largest error in the region is recorded.
 
 Rigs: ``clean`` (no systematic error; ``rig_uncertainty`` declares zeros) and ``biased``
 (an airspeed bias ~ N(0, 0.3 m/s) and a thrust scale ~ N(0, 2 %) per campaign, declared as
 ``airspeed_bias_sd_m_s: 0.3, thrust_scale_sd: 0.02``), each declared in the campaign
 manifest's ``rig_uncertainty``, which ``fit`` copies into the propulsion file. The
-aircraft, battery and power
-surfaces are the same in truth and estimate (only the thrust model is uncertain), so the
-power-model and battery-fit sources are off in the study's case.
+aircraft, battery and power surfaces are the same in truth and estimate (only the thrust
+model is uncertain), so the power-model and battery-fit sources are off in the study's case.
 
 Per requirement (ground roll, trim, OEI, endurance, the test-flight mission's landing
 charge): coverage of p05-p95 with its Clopper-Pearson 95 % interval, RMS z and mean z
@@ -34,8 +32,7 @@ whether the truth met them: the 5-bin reliability diagram.
 
 Run: ``python bench/calibration_study.py [--truths 40] [--samples 4000] [--out FILE]
 [--cache DIR] [--generator momentum]``. ``--cache`` keeps each truth's fit and true values
-outside the
-repository, so a second run with another error model samples only; ``--resume`` goes on
+outside the repository, so a second run with another error model samples only; ``--resume`` goes on
 where a stopped run left ``--out``; ``--merge`` joins result files (e.g. one per rig, run
 side by side) and, with ``--cache``, adds the clean rig's :func:`diagnose` table;
 ``--diagnose`` prints it alone. The result JSON (default ``docs/calibration_study.json``) is
