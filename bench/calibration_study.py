@@ -7,19 +7,22 @@ rig noise, with the thrust law and the rig's systematic errors replaced), fitted
 (:func:`tuflexperf.analysis.uncertainty.run_samples`, in this process). The truth of each
 requirement is the tool's own deterministic ``check`` on the TRUE thrust law.
 
-Thrust laws: the generator's shipped poly22 per fan with each coefficient off by N(0, 4 %),
-plus terms no poly22 holds: ``c3 x^3 + c5 x^2 (v / 30) + c6 x (v / 30)^3`` [N], ``c3`` ~
-U(-4, 4), ``c5`` ~ U(-3, 3), ``c6`` ~ N(-1, 1) (a family of fans whose thrust falls faster
-at speed, one sign for most). The deterministic check takes poly22 only: for each
-requirement the true law is replaced by its least-squares poly22 over the requirement's own
-operating region (:data:`REGIONS`, the whole domain joining at a small weight), and that
-surrogate's largest error in the region is recorded.
+Thrust laws (``--generator``): ``poly22-cubic``, the generator's shipped poly22 per fan with
+each coefficient off by N(0, 4 %), plus terms no poly22 holds: ``c3 x^3 + c5 x^2 (v / 30) +
+c6 x (v / 30)^3`` [N], ``c3`` ~ U(-4, 4), ``c5`` ~ U(-3, 3), ``c6`` ~ N(-1, 1) (a family of
+fans whose thrust falls faster at speed, one sign for most); ``momentum``, a family the
+error model was not tuned to (:func:`momentum_thrust`: momentum theory on an rpm-throttle
+map, a drop-off at speed and the duct's drag at low rpm). The deterministic check takes
+poly22 only: for each requirement the true law is replaced by its least-squares poly22 over
+the requirement's own operating region (:data:`REGIONS`, the whole domain joining at a
+small weight), and that surrogate's largest error in the region is recorded.
 
 Rigs: ``clean`` (no systematic error; ``rig_uncertainty`` declares zeros) and ``biased``
 (an airspeed bias ~ N(0, 0.3 m/s) and a thrust scale ~ N(0, 2 %) per campaign, declared as
-``airspeed_bias_sd_m_s: 0.3, thrust_scale_sd: 0.02``). The aircraft, battery and power
-surfaces are the same in truth and estimate (only the thrust model is uncertain), so the
-power-model and battery-fit sources are off in the study's case.
+``airspeed_bias_sd_m_s: 0.3, thrust_scale_sd: 0.02``), each declared in the campaign
+manifest's ``rig_uncertainty``, which ``fit`` copies into the propulsion file. The
+aircraft, battery and power surfaces are the same in truth and estimate (only the thrust
+model is uncertain), so the power-model and battery-fit sources are off in the study's case.
 
 Per requirement (ground roll, trim, OEI, endurance, the test-flight mission's landing
 charge): coverage of p05-p95 with its Clopper-Pearson 95 % interval, RMS z and mean z
@@ -28,8 +31,8 @@ sampled median (p50 + u (p95 - p05) / 3.29, u = -1.65, -0.75, 0, 0.75, 1.65) aga
 whether the truth met them: the 5-bin reliability diagram.
 
 Run: ``python bench/calibration_study.py [--truths 40] [--samples 4000] [--out FILE]
-[--cache DIR]``. ``--cache`` keeps each truth's fit and true values outside the
-repository, so a second run with another error model samples only; ``--resume`` goes on
+[--cache DIR] [--generator momentum]``. ``--cache`` keeps each truth's fit and true values
+outside the repository, so a second run with another error model samples only; ``--resume`` goes on
 where a stopped run left ``--out``; ``--merge`` joins result files (e.g. one per rig, run
 side by side) and, with ``--cache``, adds the clean rig's :func:`diagnose` table;
 ``--diagnose`` prints it alone. The result JSON (default ``docs/calibration_study.json``) is
@@ -69,9 +72,12 @@ RIGS: dict[str, dict[str, float]] = {
     "biased": {"airspeed_bias_sd_m_s": 0.3, "thrust_scale_sd": 0.02, "balance_zero_sd_n": 0.0,
                "voltage_sd_v": 0.0},
 }
+GENERATORS = ("poly22-cubic", "momentum")
+"""The truths' thrust-law families: the first the error model was studied on, the second
+(:func:`momentum_thrust`) one it was not tuned to."""
 LIMIT_OFFSETS = (-1.65, -0.75, 0.0, 0.75, 1.65)
 ANCHOR_WEIGHT = 1e-3  # per point of the whole domain in a truth's surrogate, against 1 inside
-TRUTH_VERSION = 2  # of the true values kept in a cache (1: surrogates without the anchor)
+TRUTH_VERSION = 3  # of a cached truth (2: fits without the extrapolation bias; 1: no anchor)
 ENVELOPE_TOP_M_S = 40.0  # beyond the tested 30 m/s (extrapolated), within what the fans fly
 # each requirement's operating region: boxes of (throttle, airspeed [m/s]) the surrogate fits
 # (a dead engine windmills at throttle 0; the mission's phases: the roll and climb at full
@@ -102,14 +108,46 @@ BASE_POLY22 = GEN.poly22
 
 
 def true_thrust(x: Any, v: Any, c: dict[str, float]) -> Any:
-    """The truth's thrust [N] at throttle ``x`` [-] and airspeed ``v`` [m/s]."""
+    """The truth's thrust [N] at throttle ``x`` [-] and airspeed ``v`` [m/s] (the
+    :func:`momentum_thrust` family where the law names an exit velocity ``v0``)."""
+    if "v0" in c:
+        return momentum_thrust(x, v, c)
     s = np.asarray(v, dtype=float) / 30.0
     return (BASE_POLY22(x, v, c) + c["c3"] * x ** 3 + c["c5"] * x * x * s
             + c["c6"] * x * s ** 3)
 
 
-def draw_truth(rng: np.random.Generator) -> dict[str, dict[str, float]]:
-    """Per fan: the shipped poly22 off by N(0, 4 %) per coefficient, and the extra terms."""
+def momentum_thrust(x: Any, v: Any, c: dict[str, float]) -> Any:
+    """A thrust law of another family than the error model was studied on [N]: momentum
+    theory on an exit velocity ``v0 n`` set by the rpm fraction ``n = x^gamma`` (the ESC's
+    map), ``rho A_e v0 n (v0 n - V)``, with a drop-off at speed ``1 - k (V / 40)^2`` (the
+    inlet's losses) and the duct's drag ``0.5 rho A Cd V^2 (1 - n)^2`` as the fan slows."""
+    x = np.maximum(np.asarray(x, dtype=float), 0.0)
+    v = np.asarray(v, dtype=float)
+    rho = GEN.AIR_DENSITY_KG_M3
+    n = x ** c["gamma"]
+    jet = c["v0"] * n
+    thrust = rho * c["exit_area_m2"] * jet * (jet - v) * (1.0 - c["k"] * (v / 40.0) ** 2)
+    return thrust - 0.5 * rho * GEN.FAN_AREA_M2 * c["cd"] * v * v * (1.0 - n) ** 2
+
+
+def draw_truth(rng: np.random.Generator, generator: str = "poly22-cubic"
+               ) -> dict[str, dict[str, float]]:
+    """Per fan: the shipped poly22 off by N(0, 4 %) per coefficient, and the extra terms;
+    for the ``momentum`` generator a :func:`momentum_thrust` law whose static full thrust is
+    the shipped poly22's off by N(0, 4 %), exit velocity ~ U(85, 105) m/s, ``gamma`` ~
+    U(0.5, 0.75), ``k`` ~ U(0, 0.15), ``Cd`` ~ U(0.2, 0.8)."""
+    if generator == "momentum":
+        laws = {}
+        for engine, base in GEN.BASE_COEFFICIENTS.items():
+            static = (base["p00"] + base["p10"] + base["p20"]) * (1.0 + rng.normal(0.0, 0.04))
+            v0 = float(rng.uniform(85.0, 105.0))
+            laws[engine] = {"v0": v0, "exit_area_m2": float(static / (GEN.AIR_DENSITY_KG_M3
+                                                                       * v0 * v0)),
+                            "gamma": float(rng.uniform(0.5, 0.75)),
+                            "k": float(rng.uniform(0.0, 0.15)),
+                            "cd": float(rng.uniform(0.2, 0.8))}
+        return laws
     laws = {}
     for engine, base in GEN.BASE_COEFFICIENTS.items():
         law = {t: float(base[t] * (1.0 + rng.normal(0.0, 0.04))) for t in POLY22_TERMS}
@@ -120,9 +158,10 @@ def draw_truth(rng: np.random.Generator) -> dict[str, dict[str, float]]:
 
 
 def generate(folder: Path, laws: dict[str, dict[str, float]], bias_m_s: float, scale: float,
-             seed: int) -> Path:
+             seed: int, declared: dict[str, float] | None = None) -> Path:
     """The campaign of ``laws`` on a rig whose tunnel reads ``bias_m_s`` high and whose
-    balance reads ``1 + scale`` times the force."""
+    balance reads ``1 + scale`` times the force; its manifest declares the rig's errors
+    ``declared`` as ``rig_uncertainty`` (``fit`` copies them into the propulsion file)."""
     if folder.resolve().is_relative_to(ROOT):
         raise ValueError(f"{folder}: a study's campaign is written outside the repository")
     quantise = GEN.quantise
@@ -142,7 +181,11 @@ def generate(folder: Path, laws: dict[str, dict[str, float]], bias_m_s: float, s
             GEN.main(out=folder, seed=seed)
     finally:
         GEN.OUT, GEN.SEED, GEN.poly22, GEN.truth_coefficients, GEN.quantise = saved
-    return folder / "campaign.yaml"
+    manifest = folder / "campaign.yaml"
+    if declared is not None:
+        with manifest.open("a", encoding="utf-8") as out:
+            out.write(yaml.safe_dump({"rig_uncertainty": dict(declared)}, sort_keys=False))
+    return manifest
 
 
 def fit(campaign: Path, out: Path) -> None:
@@ -165,11 +208,14 @@ def study_propulsion(fitted: Path, rig: dict[str, float]) -> dict[str, Any]:
         if engine.get("covariance") is not None:
             engine["covariance"] = [[c * factor * factor for c in row]
                                     for row in engine["covariance"]]
-        for key in ("residual_sd_n", "extrapolation_sd_n", "extrapolation_worst_n", "rmse_n"):
+        for key in ("residual_sd_n", "extrapolation_sd_n", "extrapolation_worst_n", "rmse_n",
+                    "extrapolation_bias_n_per_m_s", "extrapolation_bias_se_n_per_m_s"):
             if engine.get(key) is not None:
                 engine[key] = engine[key] * factor
         engine.pop("standard_errors", None)
-    doc["rig_uncertainty"] = dict(rig)
+    if doc.get("rig_uncertainty") != dict(rig):  # the manifest's, copied by fit
+        raise RuntimeError(f"{fitted}: rig_uncertainty {doc.get('rig_uncertainty')} is not "
+                           f"the manifest's {rig}")
     return doc
 
 
@@ -256,7 +302,8 @@ def truth_values(folder: Path, doc: dict[str, Any], laws: dict[str, dict[str, fl
             engine["coefficients"], error = surrogate(laws[engine["name"]], boxes)
             worst = max(worst, error)
             for key in ("covariance", "residual_sd_n", "extrapolation_sd_n",
-                        "extrapolation_distance_m_s", "extrapolation_worst_n", "lack_of_fit"):
+                        "extrapolation_distance_m_s", "extrapolation_worst_n", "lack_of_fit",
+                        "extrapolation_bias_n_per_m_s", "extrapolation_bias_se_n_per_m_s"):
                 engine.pop(key, None)
         path = folder / f"truth_{name}.yaml"
         path.write_text(yaml.safe_dump(truth, sort_keys=False), encoding="utf-8")
@@ -271,32 +318,59 @@ def truth_values(folder: Path, doc: dict[str, Any], laws: dict[str, dict[str, fl
     return values, errors
 
 
-def draw_campaign(rig_name: str, index: int) -> tuple[dict[str, dict[str, float]], float, float]:
-    """The truth's thrust laws, airspeed bias [m/s] and thrust scale [-] (seeded by rig and
-    index: a truth is the same in every run)."""
+def draw_campaign(rig_name: str, index: int, generator: str = GENERATORS[0]
+                  ) -> tuple[dict[str, dict[str, float]], float, float]:
+    """The truth's thrust laws, airspeed bias [m/s] and thrust scale [-] (seeded by
+    generator, rig and index: a truth is the same in every run)."""
     rig = RIGS[rig_name]
-    rng = np.random.default_rng([SEED, list(RIGS).index(rig_name), index])
-    laws = draw_truth(rng)
+    stream = [SEED, list(RIGS).index(rig_name), index]
+    if generator != GENERATORS[0]:
+        stream.append(GENERATORS.index(generator))
+    rng = np.random.default_rng(stream)
+    laws = draw_truth(rng, generator)
     bias = float(rng.normal(0.0, rig["airspeed_bias_sd_m_s"])) if rig["airspeed_bias_sd_m_s"] \
         else 0.0
     scale = float(rng.normal(0.0, rig["thrust_scale_sd"])) if rig["thrust_scale_sd"] else 0.0
     return laws, bias, scale
 
 
-def prepare(rig_name: str, index: int, folder: Path) -> dict[str, Any]:
+def truth_folder(cache: Path, rig_name: str, index: int, generator: str = GENERATORS[0]
+                 ) -> Path:
+    """Where a truth's campaign is kept (the first generator's as the study always kept it)."""
+    prefix = "" if generator == GENERATORS[0] else f"{generator}_"
+    return cache / f"{prefix}{rig_name}_{index}"
+
+
+def _fit_is_current(fitted: Path) -> bool:
+    """Whether a kept fit holds what this study's fit writes (the extrapolation bias and the
+    manifest's rig errors): an older one is fitted again."""
+    if not fitted.exists():
+        return False
+    doc = yaml.safe_load(fitted.read_text(encoding="utf-8"))
+    from tuflexperf.reduction.lack_of_fit import MODEL_FORM_TERMS
+
+    return "rig_uncertainty" in doc and all(
+        "extrapolation_bias_n_per_m_s" in e
+        and len((e.get("lack_of_fit") or {}).get("model_form_shares") or MODEL_FORM_TERMS)
+        == len(MODEL_FORM_TERMS) for e in doc["engines"])
+
+
+def prepare(rig_name: str, index: int, folder: Path, generator: str = GENERATORS[0]
+            ) -> dict[str, Any]:
     """Generate and fit the truth's campaign into ``folder`` (its propulsion file and the
     requirements' true values); kept there, a second study with another error model reuses
     it (the fit and the truths do not depend on the error model)."""
     done = folder / "truth.json"
     if done.exists():
         kept = json.loads(done.read_text(encoding="utf-8"))
-        if kept.get("version") == TRUTH_VERSION:
+        if kept.get("version") == TRUTH_VERSION and _fit_is_current(folder / "fitted.yaml"):
             return kept
     folder.mkdir(parents=True, exist_ok=True)
-    laws, bias, scale = draw_campaign(rig_name, index)
-    if not (folder / "fitted.yaml").exists():
+    laws, bias, scale = draw_campaign(rig_name, index, generator)
+    if not _fit_is_current(folder / "fitted.yaml"):
         with tempfile.TemporaryDirectory(prefix="calibration_") as tmp:
-            campaign = generate(Path(tmp) / "campaign", laws, bias, scale, 1000 * index + 7)
+            campaign = generate(Path(tmp) / "campaign", laws, bias, scale, 1000 * index + 7,
+                                RIGS[rig_name])
             fit(campaign, folder / "fitted.yaml")
     doc = study_propulsion(folder / "fitted.yaml", RIGS[rig_name])
     (folder / "propulsion.yaml").write_text(yaml.safe_dump(doc, sort_keys=False),
@@ -308,20 +382,21 @@ def prepare(rig_name: str, index: int, folder: Path) -> dict[str, Any]:
     return result
 
 
-def one_truth(rig_name: str, index: int, samples: int, cache: Path | None = None
-              ) -> dict[str, Any]:
+def one_truth(rig_name: str, index: int, samples: int, cache: Path | None = None,
+              generator: str = GENERATORS[0]) -> dict[str, Any]:
     from tuflexperf.analysis.uncertainty import plan_for, quantiles, run_samples
     from tuflexperf.io.case import load_case
 
     with tempfile.TemporaryDirectory(prefix="calibration_") as tmp:
-        folder = Path(tmp) if cache is None else cache / f"{rig_name}_{index}"
-        prepared = prepare(rig_name, index, folder)
+        folder = Path(tmp) if cache is None else truth_folder(cache, rig_name, index, generator)
+        prepared = prepare(rig_name, index, folder, generator)
         bias, scale = prepared["bias_m_s"], prepared["scale"]
         truth, surrogate_error = prepared["truth"], prepared["surrogate_error_n"]
         case = load_case(write_case(folder, folder / "propulsion.yaml", samples, index + 1))
         plan = plan_for(case)
         drawn = run_samples(case, plan)
-    out: dict[str, Any] = {"rig": rig_name, "index": index, "bias_m_s": bias, "scale": scale,
+    out: dict[str, Any] = {"rig": rig_name, "index": index, "generator": generator,
+                           "bias_m_s": bias, "scale": scale,
                            "sampled": plan.errors.sampled if plan.errors else [],
                            "requirements": {}}
     for name, kind in KINDS.items():
@@ -350,20 +425,24 @@ OPERATING_POINTS = {"roll": (1.0, 10.0), "climb": (1.0, 20.0), "OEI and loiter":
                     "descent": (0.1, 20.0)}
 
 
-def diagnose(cache: Path, rig_name: str, indices: Any) -> dict[str, Any]:
+def diagnose(cache: Path, rig_name: str, indices: Any, generator: str = GENERATORS[0]
+             ) -> dict[str, Any]:
     """At :data:`OPERATING_POINTS`: the fitted surface's true error and the error model's
     model-form sd there, both in the lack of fit's RMS, over the cached truths' engines, and
-    the correlation of the true errors between the points (the model's, beside it)."""
+    the correlation of the true errors between the points (the model's, averaged over the
+    engines, beside it)."""
     from tuflexperf.analysis.error_model import error_model_for
     from tuflexperf.io.case import load_case
 
     names = list(OPERATING_POINTS)
     errors: list[list[float]] = [[] for _ in names]
     sds: list[list[float]] = [[] for _ in names]
-    model_corr = None
+    correlations = []
     for index in indices:
-        folder = cache / f"{rig_name}_{index}"
-        laws = draw_campaign(rig_name, index)[0]
+        folder = truth_folder(cache, rig_name, index, generator)
+        if not (folder / "propulsion.yaml").exists():
+            continue
+        laws = draw_campaign(rig_name, index, generator)[0]
         case = load_case(write_case(folder, folder / "propulsion.yaml", 1, 1))
         maps = error_model_for(case, case.uncertainty.propulsion).model_form_maps
         if maps is None:
@@ -379,7 +458,8 @@ def diagnose(cache: Path, rig_name: str, indices: Any) -> dict[str, Any]:
                 sds[k].append(float(np.linalg.norm(maps[j] @ b)) / rms)
                 basis.append(maps[j] @ b)
             cov = np.array(basis) @ np.array(basis).T
-            model_corr = cov / np.sqrt(np.outer(np.diag(cov), np.diag(cov)))
+            correlations.append(cov / np.sqrt(np.outer(np.diag(cov), np.diag(cov))))
+    model_corr = np.mean(correlations, axis=0) if correlations else None
     table = np.array(errors)
     return {"points": OPERATING_POINTS,
             "true_error_rms": dict(zip(names, np.sqrt(np.mean(table ** 2, axis=1)).tolist(),
@@ -391,10 +471,20 @@ def diagnose(cache: Path, rig_name: str, indices: Any) -> dict[str, Any]:
             "engines": table.shape[1]}
 
 
+def study_key(record: dict[str, Any]) -> str:
+    """A record's rig, prefixed ``generator:`` for a truth family other than the first."""
+    generator = record.get("generator", GENERATORS[0])
+    return record["rig"] if generator == GENERATORS[0] else f"{generator}:{record['rig']}"
+
+
+def _study_keys() -> list[str]:
+    return [rig if g == GENERATORS[0] else f"{g}:{rig}" for g in GENERATORS for rig in RIGS]
+
+
 def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
     summary: dict[str, Any] = {}
-    for rig in RIGS:
-        mine = [r for r in records if r["rig"] == rig]
+    for rig in _study_keys():
+        mine = [r for r in records if study_key(r) == rig]
         if not mine:
             continue
         table = {}
@@ -402,10 +492,17 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
         for name in KINDS:
             rows = [r["requirements"][name] for r in mine if name in r["requirements"]]
 
-            def column(key: str, rows: list[dict[str, Any]] = rows) -> list[float]:
-                return [math.nan if row[key] is None else row[key] for row in rows]
+            def column(key: str, rows: list[dict[str, Any]] = rows,
+                       missing: float = math.nan) -> list[float]:
+                return [missing if row[key] is None else row[key] for row in rows]
 
-            result = coverage(column("truth"), column("p05"), column("p50"), column("p95"))
+            # a bound not attainable lies on the requirement's bad side: above for a "max"
+            # requirement, below for a "min" one (the band still bounds the truth there)
+            worst = math.inf if KINDS[name] == "max" else -math.inf
+            result = coverage(column("truth"),
+                              column("p05", missing=worst if worst < 0 else math.nan),
+                              column("p50"),
+                              column("p95", missing=worst if worst > 0 else math.nan))
             table[name] = {**result.to_dict(), "truths": len(rows),
                            "largest_surrogate_error_n": max(column("surrogate_error_n"),
                                                             default=math.nan)}
@@ -423,6 +520,9 @@ def main() -> None:
     parser.add_argument("--truths", type=int, default=40)
     parser.add_argument("--samples", type=int, default=4000)
     parser.add_argument("--rigs", default=",".join(RIGS))
+    parser.add_argument("--generator", choices=GENERATORS, default=GENERATORS[0],
+                        help="the truths' thrust-law family (momentum: one the error model "
+                        "was not tuned to)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     parser.add_argument("--first", type=int, default=0,
                         help="first truth's index; with --more, the records already in --out "
@@ -446,8 +546,8 @@ def main() -> None:
     if args.diagnose:
         if args.cache is None:
             parser.error("--diagnose needs --cache")
-        found = {rig: diagnose(args.cache, rig, range(args.first, args.first + args.truths))
-                 for rig in args.rigs.split(",")}
+        found = {rig: diagnose(args.cache, rig, range(args.first, args.first + args.truths),
+                               args.generator) for rig in args.rigs.split(",")}
         print(json.dumps(found, indent=1))
         return
     if args.merge:
@@ -457,13 +557,14 @@ def main() -> None:
             done = json.loads(path.read_text(encoding="utf-8"))
             samples.add(done["samples"])
             seconds += done["seconds_this_run"]
-            merged.update({(r["rig"], r["index"]): r for r in done["records"]})
+            merged.update({(study_key(r), r["index"]): r for r in done["records"]})
         if len(samples) != 1:
             parser.error(f"--merge: the files drew different sample counts {sorted(samples)}")
-        records = sorted(merged.values(), key=lambda r: (r["index"], list(RIGS).index(r["rig"])))
+        records = sorted(merged.values(),
+                         key=lambda r: (r["index"], _study_keys().index(study_key(r))))
         diagnosis = None
         if args.cache is not None:  # the clean rig: the model form alone makes its bands
-            indices = sorted(r["index"] for r in records if r["rig"] == "clean")
+            indices = sorted(r["index"] for r in records if study_key(r) == "clean")
             diagnosis = diagnose(args.cache, "clean", indices)
         _write(args.out, records, samples.pop(), seconds, diagnosis)
         return
@@ -475,24 +576,26 @@ def main() -> None:
         for index in range(args.first, args.first + args.truths):
             for rig in args.rigs.split(","):
                 t0 = time.perf_counter()
-                prepare(rig, index, args.cache / f"{rig}_{index}")
+                prepare(rig, index, truth_folder(args.cache, rig, index, args.generator),
+                        args.generator)
                 print(f"prepared {rig} {index}: {time.perf_counter() - t0:.1f} s",
                       file=sys.stderr, flush=True)
         return
     records: list[dict[str, Any]] = []
     if (args.more or args.resume) and args.out.exists():
         records = json.loads(args.out.read_text(encoding="utf-8"))["records"]
-    done = {(r["rig"], r["index"]) for r in records} if args.resume else set()
+    done = {(study_key(r), r["index"]) for r in records} if args.resume else set()
     started = time.perf_counter()
     # truth by truth, both rigs each time: a study stopped early holds as many of each
     for index in range(args.first, args.first + args.truths):
         for rig in args.rigs.split(","):
-            if (rig, index) in done:
+            key = study_key({"rig": rig, "generator": args.generator})
+            if (key, index) in done:
                 continue
             t0 = time.perf_counter()
-            records = [r for r in records if (r["rig"], r["index"]) != (rig, index)]
-            records.append(one_truth(rig, index, args.samples, args.cache))
-            print(f"{rig} {index}: {time.perf_counter() - t0:.1f} s", file=sys.stderr,
+            records = [r for r in records if (study_key(r), r["index"]) != (key, index)]
+            records.append(one_truth(rig, index, args.samples, args.cache, args.generator))
+            print(f"{key} {index}: {time.perf_counter() - t0:.1f} s", file=sys.stderr,
                   flush=True)
             _write(args.out, records, args.samples, time.perf_counter() - started)
     print(json.dumps(summarise(records), indent=1))
@@ -501,10 +604,13 @@ def main() -> None:
 def _write(out: Path, records: list[dict[str, Any]], samples: int, seconds: float,
            diagnosis: dict[str, Any] | None = None) -> None:
     """The result so far (rewritten after each truth: a stopped study keeps what it did)."""
-    rigs = sorted({r["rig"] for r in records}, key=list(RIGS).index)
+    rigs = sorted({study_key(r) for r in records}, key=_study_keys().index)
     result = {"study": "bench/calibration_study.py", "seed": SEED, "samples": samples,
-              "truths_per_rig": {rig: sum(r["rig"] == rig for r in records) for rig in rigs},
-              "rigs": {rig: RIGS[rig] for rig in rigs}, "seconds_this_run": round(seconds, 1),
+              "generators": list(GENERATORS),
+              "truths_per_rig": {rig: sum(study_key(r) == rig for r in records)
+                                 for rig in rigs},
+              "rigs": {rig: RIGS[rig.split(":")[-1]] for rig in rigs},
+              "seconds_this_run": round(seconds, 1),
               "summary": summarise(records),
               **({"diagnosis": diagnosis} if diagnosis is not None else {}),
               "records": records}

@@ -148,10 +148,13 @@ def _study() -> dict[str, Any]:
 
 def _rig_label(study: dict[str, Any], rig: str) -> str:
     declared = study["rigs"][rig]
+    # "generator:rig": truths of another thrust-law family than the study's first
+    generator, _, name = rig.rpartition(":")
+    law = f", {generator} thrust law" if generator else ""
     if not any(declared.values()):
-        return f"{rig} (no systematic error)"
-    return (f"{rig} (airspeed bias sd {declared['airspeed_bias_sd_m_s']:g} m/s, thrust scale sd "
-            f"{100 * declared['thrust_scale_sd']:g} %)")
+        return f"{name} (no systematic error{law})"
+    return (f"{name} (airspeed bias sd {declared['airspeed_bias_sd_m_s']:g} m/s, thrust scale "
+            f"sd {100 * declared['thrust_scale_sd']:g} %{law})")
 
 
 def calibration_table() -> str:

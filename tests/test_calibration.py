@@ -15,7 +15,12 @@ import pytest
 import yaml
 
 from tests.conftest import SHIPPED_CASE
-from tuflexperf.analysis.calibration import coverage, probability_met, reliability
+from tuflexperf.analysis.calibration import (
+    BAND_WIDTH_SD,
+    coverage,
+    probability_met,
+    reliability,
+)
 from tuflexperf.analysis.takeoff import solve_takeoff
 from tuflexperf.analysis.uncertainty import plan_for, quantiles, run_samples
 from tuflexperf.io.case import load_case
@@ -55,6 +60,17 @@ def test_a_band_too_narrow_off_centre_or_too_wide_is_found(width, shift, rms) ->
 def test_not_attainable_truths_and_bands_are_left_out() -> None:
     result = coverage([1.0, math.nan, 2.0], [0.0, 0.0, math.nan], [1.0, 1.0, 1.0], [2.0, 2.0, 3.0])
     assert result.n == 1 and result.covered == 1 and result.rms_z == 0.0
+
+
+def test_a_band_open_on_its_unattainable_side_still_bounds_the_truth() -> None:
+    """p95 not attainable (+inf for a "max" requirement): a truth above p05 is covered and
+    its z takes the lower half band, doubled, as the width; one below p05 is not covered."""
+    result = coverage([3.0, -1.0], [0.0, 0.0], [1.0, 1.0], [math.inf, math.inf])
+    assert result.n == 2 and result.covered == 1 and result.below == 1
+    half = 2 * 1.0 / BAND_WIDTH_SD
+    assert result.bias_z == pytest.approx(((3 - 1) / half + (-1 - 1) / half) / 2)
+    low = coverage([0.5], [-math.inf], [1.0], [2.0])  # p05 not attainable ("min")
+    assert low.covered == 1 and low.rms_z == pytest.approx(0.5 / (2.0 / BAND_WIDTH_SD))
 
 
 def test_reliability_bins_hold_their_forecasts() -> None:

@@ -169,12 +169,15 @@ def test_each_rig_error_moves_the_probability_as_phi_says(tmp_path, key, sd, shi
 
 
 def test_the_model_form_surface_is_correlated_over_the_operating_points(tmp_path) -> None:
-    """The lack of fit's RMS is the error's RMS over the tested domain, shared equally by an
-    offset and two slopes: sd ``RMS / sqrt 3`` at the centre (not zero: a one-engine throttle
-    near it erred 2x beyond a band without the offset), ``sqrt(4/3)`` x RMS at the edges'
-    middles, ``sqrt(7/3)`` x RMS at the corners; the same sign along the roll's airspeeds (it
-    does not average away), correlated 0.5 between the engines; without a lack_of_fit,
-    ``residual_sd_n`` in its place (said: an upper bound)."""
+    """The lack of fit's RMS is the error's RMS over the tested domain, shared equally (no
+    shares in the file) by an offset, two slopes, their product and a quadratic in airspeed,
+    each of mean square 1: variance ``RMS^2 / 5 (1 + 3 u^2 + 3 t^2 + 9 u^2 t^2 + 5
+    P2(t)^2)``, sd ``sqrt 0.45`` x RMS at the centre (not zero: a one-engine throttle near
+    it erred 2x beyond a band without the offset), ``sqrt 1.05`` x RMS at the throttle
+    edges' middles, ``sqrt(21/5)`` x RMS at the corners;
+    the same sign along the roll's airspeeds (it does not average away), correlated 0.5
+    between the engines; without a lack_of_fit, ``residual_sd_n`` in its place (said: an
+    upper bound)."""
     def lack(prop):
         for engine, rms in zip(prop["engines"], (0.4, 0.8), strict=True):
             engine["lack_of_fit"] = {"model_form_rms_n": rms,
@@ -191,15 +194,18 @@ def test_the_model_form_surface_is_correlated_over_the_operating_points(tmp_path
     delta = draw.coefficients - nominal[:, None, :]
     top = case.propulsion.tested_airspeed_m_s[1]
 
-    def error(x, v):  # (E, B) [N]: the plane's terms are p00, p10 x, p01 v
-        return delta[..., 0] + delta[..., 1] * x + delta[..., 2] * v
+    def error(x, v):  # (E, B) [N]: the surface's terms are p00, p10 x, p01 v, p11 x v, p02 v^2
+        return (delta[..., 0] + delta[..., 1] * x + delta[..., 2] * v + delta[..., 4] * x * v
+                + delta[..., 5] * v * v)
 
+    assert np.allclose(delta[..., 3], 0.0)  # no quadratic in throttle
     for j, rms in enumerate((0.4, 0.8)):
         for corner in ((1.0, 0.0), (1.0, top), (0.0, 0.0)):
-            assert error(*corner)[j].std() == pytest.approx(math.sqrt(7 / 3) * rms, rel=0.05)
-        assert error(1.0, top / 2)[j].std() == pytest.approx(math.sqrt(4 / 3) * rms, rel=0.05)
-        assert error(0.5, top / 2)[j].std() == pytest.approx(rms / math.sqrt(3), rel=0.05)
-        grid = [error(x, v)[j] for x in np.linspace(0, 1, 21) for v in np.linspace(0, top, 21)]
+            assert error(*corner)[j].std() == pytest.approx(math.sqrt(21 / 5) * rms, rel=0.05)
+        assert error(1.0, top / 2)[j].std() == pytest.approx(math.sqrt(1.05) * rms, rel=0.05)
+        assert error(0.5, top / 2)[j].std() == pytest.approx(math.sqrt(0.45) * rms, rel=0.05)
+        mid = (np.arange(40) + 0.5) / 40  # the domain's mean square by the midpoint rule
+        grid = [error(x, v)[j] for x in mid for v in top * mid]
         assert np.mean(np.square(grid)) == pytest.approx(rms * rms, rel=0.1)
         # over the roll's airspeeds (0-17 m/s at full throttle) the error keeps its size: the
         # independent noise of a point would average away to a sixth of it
@@ -214,8 +220,8 @@ def test_the_model_form_surface_is_correlated_over_the_operating_points(tmp_path
     upper = plan_for(only)
     assert "an upper bound" in upper.errors.sources[1].detail
     corner = draw_chunk(only, upper, 0).coefficients[0] - nominal[0]
-    static = corner[:, 0] + corner[:, 1]  # at full throttle, 0 m/s
-    assert static.std() == pytest.approx(math.sqrt(7 / 3) * 0.5, rel=0.05)
+    static = corner[:, 0] + corner[:, 1] + corner[:, 3]  # at full throttle, 0 m/s
+    assert static.std() == pytest.approx(math.sqrt(21 / 5) * 0.5, rel=0.05)
     # and the batch flies those coefficients: its roll of a row is the single case's
     values = run_samples(case, plan).values["takeoff_ground_roll"]
     for row in (0, 1):
@@ -320,3 +326,106 @@ def test_a_negative_model_form_error_exits_2_naming_the_key(tmp_path) -> None:
     result = runner.invoke(app, ["check", str(_case(tmp_path / "neg", lack))])
     assert result.exit_code == 2 and "lack_of_fit.model_form_rms_n" in result.stderr, \
         result.stderr
+
+
+def test_the_extrapolation_mean_is_drawn_shrunk_by_its_error_and_read_alike(tmp_path) -> None:
+    """A fit's mean leave-out error per m/s ``m`` with standard error ``se`` is drawn shrunk
+    to ``m (1 - se^2 / m^2)``; the size (worst error over the distance) is kept: the sd about
+    it is ``sqrt(size^2 - mean^2 + se^2 (1 - se^2 / m^2))``. A mean within its error is not
+    drawn at all; the deterministic bound reads the same rate (its slope is the draws'
+    quantile at the required probability)."""
+    from tuflexperf.analysis.extrapolation_reading import (
+        extrapolation_readings,
+        required_probability,
+    )
+    from tuflexperf.models.thrust import extrapolation_error_per_m_s
+
+    def biased(m, se):
+        def change(prop):
+            for engine in prop["engines"]:
+                engine["extrapolation_bias_n_per_m_s"] = m
+                engine["extrapolation_bias_se_n_per_m_s"] = se
+        return change
+
+    for folder, m, se in (("firm", -0.2, 0.1), ("noisy", -0.05, 0.08)):
+        case = load_case(_case(tmp_path / folder, biased(m, se), uncertainty={
+            "samples": 40000, "propulsion": {**ALL_OFF, "extrapolation": True}}))
+        plan = plan_for(case)
+        every = np.concatenate([draw_chunk(case, plan, i).extrapolation_n
+                                for i in range(len(plan.chunks))], axis=1)
+        keep = max(1 - se * se / (m * m), 0.0)
+        p = required_probability(case)
+        reading = extrapolation_readings(case)[0].case.propulsion.engines
+        for j, engine in enumerate(case.propulsion.engines):
+            size = engine.extrapolation_sd_n / 2.5
+            mean = m * keep
+            sd = math.sqrt(size * size - mean * mean + se * se * keep)
+            drawn = every[j]
+            assert drawn.mean() == pytest.approx(mean, abs=0.02 * sd)
+            assert drawn.std() == pytest.approx(sd, rel=0.03)
+            rate = extrapolation_error_per_m_s(engine, case.propulsion.tested_airspeed_m_s)
+            assert (rate.mean_n_per_m_s, rate.sd_n_per_m_s) == pytest.approx((mean, sd))
+            slope = reading[j].extrapolation_offset[2]
+            assert slope == pytest.approx(np.quantile(drawn, 1 - p), abs=0.03 * sd)
+        detail = next(s for s in plan.errors.sources if s.name == "extrapolation").detail
+        assert f"the fit's {m:+.3g}" in detail
+    # a range tested from 5 m/s: the mean measured at its top is not carried below its foot
+    def from_five(prop):
+        biased(-0.2, 0.1)(prop)
+        prop["tested_airspeed_m_s"] = [5.0, 30.0]
+    case = load_case(_case(tmp_path / "five", from_five))
+    rate = extrapolation_error_per_m_s(case.propulsion.engines[0], (5.0, 30.0))
+    assert rate.mean_n_per_m_s == 0.0
+
+
+def test_the_model_form_shares_shape_the_drawn_surface(tmp_path) -> None:
+    """Each shape's coefficients are its Legendre polynomial over the tested domain, scaled
+    by ``RMS sqrt(share)``: a file's shares on the throttle slope alone draw nothing at
+    mid-throttle and ``sqrt 3`` x RMS at its ends; on the airspeed quadratic alone, an
+    error that changes sign along the airspeed (zero where ``t^2 = 1/3``)."""
+    from tuflexperf.analysis.error_model import error_model_for
+    from tuflexperf.reduction.lack_of_fit import MODEL_FORM_TERMS, model_form_basis
+
+    def shares(values):
+        def change(prop):
+            for engine in prop["engines"]:
+                engine["lack_of_fit"] = {"model_form_rms_n": 0.4, "dof_lack_of_fit": 64,
+                                         "dof_pure_error": 140, "model_form_shares": values}
+        return change
+
+    x = np.array([0.0, 0.3, 0.5, 0.8, 1.0])
+    v = np.array([0.0, 9.0, 17.0, 26.0, 30.0])
+    for k, _ in enumerate(MODEL_FORM_TERMS):
+        one = [0.0] * len(MODEL_FORM_TERMS)
+        one[k] = 1.0
+        case = load_case(_case(tmp_path / f"s{k}", shares(one), uncertainty={
+            "samples": 10, "propulsion": {**ALL_OFF, "model_form": True}}))
+        maps = error_model_for(case, case.uncertainty.propulsion).model_form_maps
+        design = np.stack([np.ones_like(x), x, v, x * x, x * v, v * v], axis=1)
+        expected = 0.4 * model_form_basis(x, v, case.propulsion.tested_airspeed_m_s)
+        np.testing.assert_allclose(design @ maps[0].T, expected * np.array(one), atol=1e-12)
+
+
+@pytest.mark.parametrize("change, named", [
+    ({"model_form_shares": [0.5, 0.5, 0.5, 0.0, 0.0]}, "lack_of_fit.model_form_shares"),
+    ({"model_form_shares": [0.5, 0.5]}, "lack_of_fit.model_form_shares"),
+    ({"model_form_shares": [-0.5, 0.5, 0.5, 0.5, 0.0]}, "lack_of_fit.model_form_shares"),
+    ({"extrapolation_bias_se_n_per_m_s": -0.1, "extrapolation_bias_n_per_m_s": 0.1},
+     "extrapolation_bias_se_n_per_m_s"),
+    ({"extrapolation_bias_se_n_per_m_s": 0.1}, "extrapolation_bias_se_n_per_m_s"),
+    ({"extrapolation_bias_n_per_m_s": "fast"}, "extrapolation_bias_n_per_m_s"),
+])
+def test_bad_extrapolation_means_and_shares_exit_2_naming_the_key(tmp_path, change,
+                                                                   named) -> None:
+    def bad(prop):
+        engine = prop["engines"][0]
+        for key, value in change.items():
+            if key == "model_form_shares":
+                engine["lack_of_fit"] = {"model_form_rms_n": 0.3, "dof_lack_of_fit": 64,
+                                         "dof_pure_error": 140, key: value}
+            else:
+                engine[key] = value
+
+    result = runner.invoke(app, ["check", str(_case(tmp_path / "bad", bad)), "--samples", "10"])
+    assert result.exit_code == 2, result.output
+    assert named in result.stderr and "Traceback" not in result.stderr, result.stderr

@@ -165,3 +165,30 @@ def test_holds_without_scatter_show_nothing_and_are_not_flagged() -> None:
     result = engine_lack_of_fit(x, v, y, v, np.zeros_like(var), 150)
     assert result is not None and math.isnan(result.poly22.p_value)
     assert result.poly22.fits and result.best_alternative is None
+
+
+def test_the_model_form_shares_follow_where_the_residuals_are_large(seed: int = 3) -> None:
+    """A misfit cubic in throttle (``P3(u)``, small at mid-throttle, large at its ends) puts
+    its share on the throttle slope, whose square has that profile, and none on airspeed; a
+    surface that fits gets none (no structure to place)."""
+    from tuflexperf.reduction.lack_of_fit import MODEL_FORM_TERMS
+
+    def cubic_throttle(x, v):
+        u = 2 * x - 1
+        return poly22(x, v, COEFFICIENTS) + 0.5 * (5 * u**3 - 3 * u) / 2
+
+    x, v, y, var = _grid(cubic_throttle, 0.015, seed)
+    result = engine_lack_of_fit(x, v, y, v, var, 150)
+    shares = dict(zip(MODEL_FORM_TERMS, result.poly22.model_form_shares, strict=True))
+    assert sum(shares.values()) == pytest.approx(1.0, abs=1e-3)
+    # the drawn variance at the throttle's ends against mid-throttle: P3's squares average
+    # 1 at the grid's ends, 0.12 over its inner throttles
+    ends = shares["offset"] + 3 * shares["throttle"]
+    assert ends > 2.5 * shares["offset"] and shares["throttle"] > 0.3, shares
+    assert shares["airspeed"] + shares["airspeed_squared"] + shares["throttle_airspeed"] \
+        < 0.05, shares
+
+    x, v, y, var = _grid(lambda x, v: poly22(x, v, COEFFICIENTS), 0.015, seed)
+    fine = engine_lack_of_fit(x, v, y, v, var, 150)
+    assert fine.poly22.model_form_shares is None
+    assert "model_form_shares" not in fine.as_dict()

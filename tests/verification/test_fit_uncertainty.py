@@ -143,3 +143,33 @@ def test_fit_writes_covariance_residual_and_extrapolation_error(tmp_path) -> Non
     assert engine.extrapolation_sd_n == pytest.approx(
         leave_one_airspeed_out(x, v, y).extrapolation_sd_n
     )
+
+
+def test_the_leave_out_mean_keeps_the_sign_of_a_fan_that_loses_thrust_at_speed() -> None:
+    """A fan whose thrust falls as ``-x (v/30)^3`` beyond the poly22 the rest of the grid
+    gives: the mean of measured minus extrapolated at the left-out 30 m/s (throttles >= 0.5),
+    per the 2.5 m/s it lies beyond 27.5, is negative by three standard errors; a true poly22
+    gives a mean within its standard error's reach, the standard error the noise's
+    ``sqrt(g^T C g + s^2 / n)``, checked against the spread of repeated campaigns."""
+    x, v = paper_grid()
+    rng = np.random.default_rng(11)
+    upper = x >= 0.5
+
+    def falling(x, v):
+        return poly22(x, v, KNOWN) - 1.5 * x * (v / 30.0) ** 3
+
+    left = leave_one_airspeed_out(x, v, falling(x, v) + rng.normal(0.0, 0.05, x.size))
+    top = v == 30.0
+    refit = fit_poly22(x[~top], v[~top], falling(x, v)[~top])
+    exact = np.mean(falling(x, v)[top & upper] - refit.predict(x[top & upper], v[top & upper]))
+    assert left.extrapolation_bias_n_per_m_s == pytest.approx(exact / 2.5, rel=0.1)
+    assert left.extrapolation_bias_n_per_m_s < -3 * left.extrapolation_bias_se_n_per_m_s
+
+    means, errors = [], []
+    for _ in range(200):
+        y = poly22(x, v, KNOWN) + rng.normal(0.0, 0.3, x.size)
+        out = leave_one_airspeed_out(x, v, y)
+        means.append(out.extrapolation_bias_n_per_m_s)
+        errors.append(out.extrapolation_bias_se_n_per_m_s)
+    assert abs(np.mean(means)) < 3 * np.std(means) / np.sqrt(len(means))
+    assert np.mean(errors) == pytest.approx(np.std(means), rel=0.15)

@@ -55,17 +55,23 @@ def coverage(truth: Sequence[float], p05: Sequence[float], p50: Sequence[float],
              p95: Sequence[float], confidence: float = 0.95) -> Coverage:
     """Coverage of ``[p05, p95]``, its Clopper-Pearson interval, RMS z and mean z.
 
-    A truth or band that is not finite (not attainable) is left out of every statistic.
-    A band of zero width gives an infinite z unless the truth is on it.
+    A truth or median that is not finite (not attainable), or a band bound that is NaN, is
+    left out of every statistic. A bound at infinity (more than 5 % of the samples not
+    attainable on that side) still bounds the band: a finite truth beyond the other bound
+    is covered, and z takes the finite half of the band, doubled, as its width. A band of
+    zero width gives an infinite z unless the truth is on it.
     """
     t, lo, mid, hi = (np.asarray(a, dtype=float) for a in (truth, p05, p50, p95))
-    ok = np.isfinite(t) & np.isfinite(lo) & np.isfinite(mid) & np.isfinite(hi)
+    ok = np.isfinite(t) & np.isfinite(mid) & ~np.isnan(lo) & ~np.isnan(hi) \
+        & (np.isfinite(lo) | np.isfinite(hi))
     t, lo, mid, hi = t[ok], lo[ok], mid[ok], hi[ok]
     n = int(t.size)
     inside = (t >= lo) & (t <= hi)
     covered = int(np.count_nonzero(inside))
+    width = np.where(np.isfinite(hi) & np.isfinite(lo), hi - lo,
+                     2.0 * np.where(np.isfinite(lo), mid - lo, hi - mid))
     with np.errstate(divide="ignore", invalid="ignore"):
-        z = np.where(t == mid, 0.0, (t - mid) / ((hi - lo) / BAND_WIDTH_SD))
+        z = np.where(t == mid, 0.0, (t - mid) / (width / BAND_WIDTH_SD))
     rms = float(np.sqrt(np.mean(z * z))) if n else math.nan
     bias = float(np.mean(z)) if n else math.nan
     return Coverage(n, covered, covered / n if n else math.nan,

@@ -8,21 +8,21 @@ a place in a file where it is stated, and a default:
   (``engines[].covariance``); ``N(p, C)`` per engine. Default: none (not sampled, said).
 - ``model_form``: the poly22's own shape error (``engines[].lack_of_fit.model_form_rms_n``,
   the fit's lack of fit; without it the fit's ``residual_sd_n``, an upper bound, said).
-  Drawn as a random plane over the tested domain, ``a + b (2x - 1) + c (2t - 1)`` with
-  ``x`` the throttle and ``t`` the airspeed's place in the tested range, its mean square
-  over the domain the lack of fit's RMS squared, shared equally by the three terms
-  (:data:`MODEL_FORM_VARIANCES`): sd ``RMS / sqrt 3`` at the domain's centre, ``sqrt(7/3)``
-  x RMS at its corners, where a fit errs most, growing on beyond the tested airspeeds. The
-  RMS, not the largest residual: the largest of some 70 holds' residuals is mostly their
-  noise (a study on the shipped generator gave bands twice too wide with it;
-  docs/validation.md). The offset: a plane without it is zero at the domain's centre, where
-  a one-engine throttle flies, and its bands measured twice too narrow there. One
-  draw holds over every operating point of a requirement, so it does not average away
+  Drawn as a random surface over the tested domain, ``sum_k z_k RMS sqrt(s_k) phi_k`` over
+  the five shapes of :data:`~tuflexperf.reduction.lack_of_fit.MODEL_FORM_TERMS` (an offset,
+  slopes in throttle ``u = 2x - 1`` and in airspeed ``t``, its place in the tested range on
+  [-1, 1], their product, which changes sign along the throttle, and the Legendre quadratic
+  ``(3t^2 - 1) / 2`` in airspeed, which changes sign twice along it), each scaled to a mean
+  square of 1 over the domain, so the surface's mean square there is the lack of fit's RMS
+  squared. The shares ``s_k`` say where the surface errs: ``fit`` estimates them from the
+  size of its residuals along throttle and airspeed where the lack-of-fit test finds
+  structure (``lack_of_fit.model_form_shares``); else a fifth each
+  (:data:`MODEL_FORM_SHARES`). The RMS, not the largest residual: the largest of some 70
+  holds' residuals is mostly their noise (bands twice too wide with it; docs/validation.md).
+  One draw holds over every operating point of a requirement, so it does not average away
   across them (a constant offset on ``p00`` alone did, across the roll's airspeeds: issue
   44); correlated :data:`ENGINE_CORRELATION` between engines (fans of one design err alike).
-  A poly22 perturbation cannot change sign between nearby throttles as a least-squares
-  residual does: a requirement flown at several throttles (the mission) gets a band wider
-  than its error (docs/validation.md).
+  A poly22 perturbation holds no cubic: it follows a misfit's size, not its every sign.
 - ``rig``: the test rig's systematic errors (top-level ``rig_uncertainty``, the campaign
   manifest's, copied by ``fit``): the tunnel's airspeed bias ``b`` (thrust read at ``v + b``),
   the balance's scale ``s`` (thrust x ``1 + s``) and zero (added), the pack voltage's error
@@ -30,8 +30,11 @@ a place in a file where it is stated, and a default:
   same for every engine. A key not stated takes :data:`RIG_DEFAULTS` (said, never zero).
 - ``extrapolation``: beyond the tested airspeeds, a refit without the top tested airspeed
   errs there by ``extrapolation_worst_n`` at its worst throttle (else ``extrapolation_sd_n``,
-  the RMS over its throttles), ``extrapolation_distance_m_s`` beyond the rest: an error of
-  that sd per that distance, drawn once per sample and engine (correlated
+  the RMS over its throttles), ``extrapolation_distance_m_s`` beyond the rest, by
+  ``extrapolation_bias_n_per_m_s`` per m/s on average over its upper throttles (with its
+  standard error): an error per m/s about that mean, shrunk by its standard error, with the
+  rest of the size its sd (:func:`~tuflexperf.models.thrust.extrapolation_error_per_m_s`,
+  the deterministic bound's too), drawn once per sample and engine (correlated
   :data:`ENGINE_CORRELATION` between engines) and added at each airspeed in proportion to
   its distance beyond the tested range (0 at its ends: a cruise 1 m/s beyond them carries a
   tenth of the error of a trim 10 m/s beyond).
@@ -75,6 +78,7 @@ from tuflexperf.models.thrust import (
     extrapolation_error_per_m_s,
     extrapolation_leave_out,
 )
+from tuflexperf.reduction.lack_of_fit import MODEL_FORM_TERMS
 
 Array = NDArray[np.float64]
 
@@ -87,13 +91,9 @@ RIG_LABELS = {"airspeed_bias_sd_m_s": ("airspeed bias", "m/s"),
               "thrust_scale_sd": ("thrust scale", ""),
               "balance_zero_sd_n": ("balance zero", "N"),
               "voltage_sd_v": ("voltage", "V")}
-MODEL_FORM_VARIANCES = (1.0 / 7.0, 3.0 / 7.0, 3.0 / 7.0)
-"""Shares of the corners' variance of the model-form plane's constant, throttle and
-airspeed terms: each term a third of the mean square over the tested domain (``u^2`` of a
-term ``b u`` averages 1/3 over ``u`` in [-1, 1]), none favoured: the lack of fit says how
-large the error is, not where."""
-EDGE_PER_RMS = (7.0 / 3.0) ** 0.5
-"""The corners' sd per RMS over the tested domain: ``sqrt(1/3 + 1 + 1)``."""
+MODEL_FORM_SHARES = (0.2, 0.2, 0.2, 0.2, 0.2)
+"""The model-form mean square's shares along :data:`MODEL_FORM_TERMS` where the fit found no
+structure to place it (or the file says none): none favoured."""
 ENGINE_CORRELATION = 0.5
 """Correlation of the model-form error between engines (one design, not one fan)."""
 NOMINAL_CELL_V = 3.7  # a LiPo cell's nominal voltage [V], where the battery gives none
@@ -118,9 +118,9 @@ class ErrorModel:
     """What :func:`draw_thrust` and :func:`draw_power_scale` draw, and the sources' account.
 
     ``covariance_roots`` per engine ``L`` with ``L L^T = C`` (None: not drawn);
-    ``model_form_maps`` ``(E, 3, 6)``: the plane's three standard normals to coefficient
-    changes [file units]; ``extrapolation_sd_n`` ``(E,)`` [N per m/s beyond the tested
-    range]; ``rig_sd`` ``(4,)`` in
+    ``model_form_maps`` ``(E, 5, 6)``: the surface's five standard normals to coefficient
+    changes [file units]; ``extrapolation_sd_n`` and ``extrapolation_mean_n`` ``(E,)`` [N
+    per m/s beyond the tested range]; ``rig_sd`` ``(4,)`` in
     :data:`RIG_KEYS` order and ``rig_root`` its correlation's root; ``volt_fraction`` the
     thrust fraction per volt; ``power_sds`` the lognormal power scales' sds [-].
     """
@@ -129,6 +129,7 @@ class ErrorModel:
     covariance_roots: tuple[Array | None, ...] | None = None
     model_form_maps: Array | None = None
     extrapolation_sd_n: Array | None = None
+    extrapolation_mean_n: Array | None = None
     rig_sd: Array | None = None
     rig_root: Array | None = None
     volt_fraction: float = 0.0
@@ -201,7 +202,7 @@ def error_model_for(case: Case, switches: Any) -> ErrorModel:
 
 def _model_form(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
     prop = case.propulsion
-    origin = "propulsion engines[].lack_of_fit.model_form_rms_n"
+    origin = "propulsion engines[].lack_of_fit.model_form_rms_n, model_form_shares"
     if not (switches.model_form and switches.residual):
         which = "model_form" if not switches.model_form else "residual"
         return _off("model_form", origin, which)
@@ -212,29 +213,42 @@ def _model_form(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
             sds.append(0.0)
             said.append(f"{e.name}: none (no lack_of_fit, no residual_sd_n)")
             continue
-        corner = EDGE_PER_RMS * float(rms)
-        how = (f"sqrt(7/3) x the lack of fit's RMS {rms:.3g} N" if e.model_form_sd_n is not None
-               else f"sqrt(7/3) x residual_sd_n {rms:.3g} N: no lack_of_fit, an upper bound; "
-               "refit to split it")
-        sds.append(corner)
-        said.append(f"{e.name} {corner:.3g} N ({how})")
+        how = (f"the lack of fit's RMS {rms:.3g} N" if e.model_form_sd_n is not None
+               else f"residual_sd_n {rms:.3g} N: no lack_of_fit, an upper bound; refit to "
+               "split it")
+        shares = e.model_form_shares or MODEL_FORM_SHARES
+        where = ("shares " + ", ".join(f"{n} {c:.2f}" for n, c in zip(MODEL_FORM_TERMS, shares,
+                                                                     strict=True))
+                 + (" (the fit's residuals)" if e.model_form_shares else " (equal: none "
+                    "estimated)"))
+        sds.append(float(rms))
+        said.append(f"{e.name} {how}, {where}")
     if not any(sds):
         return Source("model_form", False, origin, "; ".join(said))
     low, high = prop.tested_airspeed_m_s
-    weights = np.sqrt(MODEL_FORM_VARIANCES)
-    maps = np.zeros((len(prop.engines), 3, len(POLY22_TERMS)))
-    for j, (engine, sd) in enumerate(zip(prop.engines, sds, strict=True)):
-        # s (a + b (2x - 1) + c (2 (v - low) / (high - low) - 1)), x_file = k x
-        maps[j, 0, 0] = sd * weights[0]
-        maps[j, 1, 0], maps[j, 1, 1] = -sd * weights[1], 2.0 * sd * weights[1] / \
-            engine.throttle_scale
-        maps[j, 2, 0] = -sd * weights[2] * (high + low) / (high - low)
-        maps[j, 2, 2] = 2.0 * sd * weights[2] / (high - low)
+    span = high - low
+    maps = np.zeros((len(prop.engines), len(MODEL_FORM_TERMS), len(POLY22_TERMS)))
+    r3, r5 = math.sqrt(3.0), math.sqrt(5.0)
+    a, b = 2.0 / span, -(high + low) / span  # t = a v + b
+    for j, (engine, rms) in enumerate(zip(prop.engines, sds, strict=True)):
+        k = engine.throttle_scale  # x = x_file / k, u = 2x - 1
+        w = rms * np.sqrt(np.asarray(engine.model_form_shares or MODEL_FORM_SHARES))
+        # columns p00, p10, p01, p20, p11, p02 of each shape (file units)
+        maps[j, 0, 0] = w[0]  # 1
+        maps[j, 1, [0, 1]] = r3 * w[1] * np.array([-1.0, 2.0 / k])  # sqrt3 u
+        maps[j, 2, [0, 2]] = r3 * w[2] * np.array([b, a])  # sqrt3 t
+        # 3 u t = 3 (2x/k - 1)(a v + b)
+        maps[j, 3, [0, 1, 2, 4]] = 3.0 * w[3] * np.array([-b, 2.0 * b / k, -a, 2.0 * a / k])
+        # sqrt5 (3 t^2 - 1) / 2
+        maps[j, 4, [0, 2, 5]] = 0.5 * r5 * w[4] * np.array([3.0 * b * b - 1.0, 6.0 * a * b,
+                                                            3.0 * a * a])
     parts["model_form_maps"] = maps
     return Source("model_form", True, origin,
-                  "; ".join(said) + ": the sd at the tested corners of a random plane over "
-                  "throttle and airspeed (an offset and two slopes, each a third of the "
-                  f"mean square), correlated {ENGINE_CORRELATION:g} between engines")
+                  "; ".join(said) + ": a random surface over throttle and airspeed (an offset, "
+                  "slopes in throttle and airspeed, their product and a quadratic in airspeed, "
+                  "each its share of the RMS's square, their mean square over the tested "
+                  "domain the RMS's), "
+                  f"correlated {ENGINE_CORRELATION:g} between engines")
 
 
 def _rig(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
@@ -300,30 +314,48 @@ def _extrapolation(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
     origin = "propulsion engines[].extrapolation_sd_n, extrapolation_distance_m_s"
     if not switches.extrapolation:
         return _off("extrapolation", origin, "extrapolation")
-    if not any(e.extrapolation_sd_n or e.extrapolation_worst_n for e in prop.engines):
+    if not any(e.extrapolation_sd_n or e.extrapolation_worst_n
+               or e.extrapolation_bias_n_per_m_s for e in prop.engines):
         return Source("extrapolation", False, origin, "no engine has an extrapolation_sd_n")
     far = farthest_beyond_m_s(case)
     if far <= 0.0:
         return Source("extrapolation", False, origin,
                       "the case flies no airspeed beyond the tested range")
     low, high = prop.tested_airspeed_m_s
-    sds, said = [], []
+    sds, means, said = [], [], []
     for e in prop.engines:
         default = e.extrapolation_distance_m_s is None
         base, step = extrapolation_leave_out(e, (low, high))
         rate = extrapolation_error_per_m_s(e, (low, high))
-        sds.append(rate)
-        said.append(f"{e.name} {rate:.3g} N per m/s ({base:.3g} N "
+        sds.append(rate.sd_n_per_m_s)
+        means.append(rate.mean_n_per_m_s)
+        said.append(f"{e.name} {rate.sd_n_per_m_s:.3g} N per m/s sd ({base:.3g} N "
                     + ("at its worst throttle" if e.extrapolation_worst_n is not None
                        else "RMS (extrapolation_sd_n)")
-                    + (f" at {step:.3g} m/s" if rate > 0.0 else "")
+                    + (f" at {step:.3g} m/s" if base > 0.0 else "")
                     + (" (default: tested span / 12)" if default else "")
-                    + f"; {rate * far:.3g} N at the farthest)")
+                    + ")" + _bias_said(e, rate.mean_n_per_m_s, low)
+                    + f"; {rate.sd_n_per_m_s * far:.3g} N sd at the farthest)")
     parts["extrapolation_sd_n"] = np.asarray(sds)
+    if any(means):
+        parts["extrapolation_mean_n"] = np.asarray(means)
     return Source("extrapolation", True, origin,
                   f"up to {far:.3g} m/s beyond the tested {low:g}-{high:g} m/s: "
                   + "; ".join(said) + ", grown in proportion to each airspeed's distance "
                   "beyond the range")
+
+
+def _bias_said(engine: Any, mean: float, low: float) -> str:
+    """The extrapolation mean as drawn, or why none (the fit's, shrunk by its error)."""
+    m = engine.extrapolation_bias_n_per_m_s
+    if m is None:
+        return ", zero mean (no extrapolation_bias_n_per_m_s)"
+    if low > 0.0:
+        return (f", zero mean: the fit's {m:+.3g} N per m/s was measured at the top of "
+                f"the tested range, which starts at {low:g} m/s")
+    se = engine.extrapolation_bias_se_n_per_m_s or 0.0
+    return (f", mean {mean:+.3g} N per m/s (the fit's {m:+.3g} +- {se:.2g}, shrunk by its "
+            "standard error)")
 
 
 def _power_sources(case: Case, switches: Any) -> tuple[tuple[Source, float],
@@ -426,6 +458,8 @@ def draw_thrust(rng: np.random.Generator, model: ErrorModel, nominal: Array,
     if model.extrapolation_sd_n is not None:
         z = _between_engines(rng, (count, size))
         extrapolation = z * model.extrapolation_sd_n[:, None]
+        if model.extrapolation_mean_n is not None:
+            extrapolation += model.extrapolation_mean_n[:, None]
     if model.model_form_maps is not None:
         z = _between_engines(rng, (count, size, model.model_form_maps.shape[1]))
         coefficients()[...] += np.einsum("ebk,ekt->ebt", z, model.model_form_maps)

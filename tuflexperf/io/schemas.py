@@ -63,6 +63,8 @@ MAX_REFERENCE_VOLTAGE_V = 1000.0
 # altitude's lower speed of sound, so not MAX_AIRSPEED_M_S)
 MAX_TESTED_AIRSPEED_M_S = 1000.0
 MAX_THRUST_SD_N = 1.0e5
+# a lack of fit's model_form_shares: offset, throttle, airspeed, throttle x airspeed, airspeed^2
+MODEL_FORM_SHARE_COUNT = 5
 """The largest thrust error [N] (1 sd) a file may state: ten tonnes, no ducted fan's."""
 # Largest exponent of thrust on the voltage ratio, either sign (2 by rpm ~ U; fit searches
 # -2..6)
@@ -189,6 +191,18 @@ class LackOfFitSchema(StrictModel):
     worst_residual_n: float | None = None
     pure_error_basis: Literal["replicate_holds", "within_hold"] = "within_hold"
     best_alternative: BestAlternativeSchema | None = None
+    # where the surface errs (offset, throttle, airspeed, throttle x airspeed, airspeed
+    # squared): shares of its mean square, written by `fit` where the test finds structure
+    model_form_shares: list[Probability] | None = None
+
+    @field_validator("model_form_shares")
+    @classmethod
+    def _check_shares(cls, shares: list[float] | None) -> list[float] | None:
+        if shares is not None and (len(shares) != MODEL_FORM_SHARE_COUNT
+                                   or abs(sum(shares) - 1.0) > 1e-3):
+            raise ValueError(f"must be {MODEL_FORM_SHARE_COUNT} shares (offset, throttle, "
+                             "airspeed, throttle x airspeed, airspeed squared) summing to 1")
+        return shares
 
 
 class EngineSchema(StrictModel):
@@ -207,6 +221,20 @@ class EngineSchema(StrictModel):
         None = None
     # the largest of those errors over the left-out airspeed's throttles [N]
     extrapolation_worst_n: Annotated[float, Field(ge=0, le=MAX_THRUST_SD_N)] | None = None
+    # the signed mean of those errors (measured minus extrapolated) per m/s of that distance
+    # [N per m/s] and its standard error: the thrust a fan loses faster (or slower) at speed
+    extrapolation_bias_n_per_m_s: Annotated[float, Field(ge=-MAX_THRUST_SD_N,
+                                                         le=MAX_THRUST_SD_N)] | None = None
+    extrapolation_bias_se_n_per_m_s: Annotated[float, Field(ge=0, le=MAX_THRUST_SD_N)] | \
+        None = None
+
+    @model_validator(mode="after")
+    def _check_bias(self) -> EngineSchema:
+        if self.extrapolation_bias_se_n_per_m_s is not None \
+                and self.extrapolation_bias_n_per_m_s is None:
+            raise ValueError("extrapolation_bias_se_n_per_m_s: given without "
+                             "extrapolation_bias_n_per_m_s, the mean it is the error of")
+        return self
 
     @model_validator(mode="after")
     def _check_covariance(self) -> EngineSchema:
@@ -683,6 +711,10 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
             extrapolation_sd_n=e.extrapolation_sd_n,
             extrapolation_distance_m_s=e.extrapolation_distance_m_s,
             extrapolation_worst_n=e.extrapolation_worst_n,
+            extrapolation_bias_n_per_m_s=e.extrapolation_bias_n_per_m_s,
+            extrapolation_bias_se_n_per_m_s=e.extrapolation_bias_se_n_per_m_s,
+            model_form_shares=None if e.lack_of_fit is None or e.lack_of_fit.model_form_shares
+            is None else tuple(float(c) for c in e.lack_of_fit.model_form_shares),
             model_form_sd_n=None if e.lack_of_fit is None else e.lack_of_fit.model_form_rms_n,
             windmilling_drag_coefficient=e.windmilling_drag_coefficient,
             power_coefficients=None if e.power is None else e.power.coefficients.model_dump(),

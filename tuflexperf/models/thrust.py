@@ -64,7 +64,14 @@ class Engine:
     # extrapolation_sd_n is the error at), and the poly22's shape error [N] (lack of fit)
     extrapolation_distance_m_s: float | None = None
     extrapolation_worst_n: float | None = None  # the largest of those errors [N]
+    # the signed mean of those errors (measured minus extrapolated) per m/s and its standard
+    # error [N per m/s]; None: zero-mean (the fit gave none)
+    extrapolation_bias_n_per_m_s: float | None = None
+    extrapolation_bias_se_n_per_m_s: float | None = None
     model_form_sd_n: float | None = None
+    # the lack of fit's shares of its mean square (offset, throttle, airspeed, throttle x
+    # airspeed, airspeed squared; analysis.error_model); None: equal shares
+    model_form_shares: tuple[float, ...] | None = None
     # C_d,wm on the propulsion's fan_area_m2, the disk (SPEC 3); None: min(T(0, V), 0)
     windmilling_drag_coefficient: float | None = None
     # poly22 electrical power surface in W (throttle fraction, airspeed m/s); None if unknown
@@ -214,17 +221,54 @@ def extrapolation_leave_out(engine: Engine, tested_airspeed_m_s: tuple[float, fl
     return base, step
 
 
+@dataclass(frozen=True)
+class ExtrapolationRate:
+    """An engine's thrust error beyond its tested airspeeds, per m/s beyond them: its mean
+    (the thrust the extrapolated surface misses, negative for a fan that loses thrust faster
+    at speed) and its sd about that mean [N per m/s]."""
+
+    mean_n_per_m_s: float
+    sd_n_per_m_s: float
+
+    def bound_n_per_m_s(self, z: float) -> float:
+        """The rate at ``z`` sds below the mean [N per m/s] (the ``z`` lower bound)."""
+        return self.mean_n_per_m_s - z * self.sd_n_per_m_s
+
+
 def extrapolation_error_per_m_s(engine: Engine, tested_airspeed_m_s: tuple[float, float]
-                                ) -> float:
-    """The thrust's extrapolation error [N per m/s beyond the tested airspeeds]: its
-    :func:`extrapolation_leave_out` error over the distance it was measured at.
+                                ) -> ExtrapolationRate:
+    """The thrust's extrapolation error [N per m/s beyond the tested airspeeds].
+
+    Its size is the :func:`extrapolation_leave_out` error over the distance it was measured
+    at. Of that size the mean the fit measured (``extrapolation_bias_n_per_m_s``, measured
+    minus extrapolated) counts only as far as its standard error supports it: shrunk to
+    ``m (1 - se^2 / m^2)`` (0 where ``|m| <= se``: the positive-part James-Stein estimate of
+    a mean measured once with error ``se``), the rest of the size is the sd about it, with
+    the shrunk mean's own uncertainty ``se^2 (1 - se^2 / m^2)`` added. The mean was measured
+    at the top of the tested range: where that range starts above 0 the same scalar would
+    move the thrust below it too, so there it is not used (zero mean, the whole size sd).
 
     One rate for the samples' error (:mod:`tuflexperf.analysis.error_model`) and the
     deterministic bound (:mod:`tuflexperf.analysis.extrapolation_reading`), so the two judge
     the same extrapolation; the calibration study measured its coverage (docs/validation.md).
     """
     base, step = extrapolation_leave_out(engine, tested_airspeed_m_s)
-    return base / step if step > 0.0 else 0.0
+    size = base / step if step > 0.0 else 0.0
+    mean, extra = shrunk_extrapolation_bias(engine, tested_airspeed_m_s)
+    return ExtrapolationRate(mean, math.sqrt(max(size * size - mean * mean, 0.0) + extra))
+
+
+def shrunk_extrapolation_bias(engine: Engine, tested_airspeed_m_s: tuple[float, float]
+                              ) -> tuple[float, float]:
+    """The fit's extrapolation mean shrunk by its standard error [N per m/s] and the shrunk
+    mean's variance [(N per m/s)^2] (:func:`extrapolation_error_per_m_s`); (0, 0) without a
+    mean or where the tested airspeeds start above 0."""
+    m = engine.extrapolation_bias_n_per_m_s
+    if m is None or m == 0.0 or tested_airspeed_m_s[0] > 0.0:
+        return 0.0, 0.0
+    se = float(engine.extrapolation_bias_se_n_per_m_s or 0.0)
+    keep = max(1.0 - se * se / (m * m), 0.0)
+    return float(m) * keep, se * se * keep
 
 
 def distance_beyond_m_s(tested_airspeed_m_s: tuple[float, float],

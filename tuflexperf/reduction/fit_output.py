@@ -207,6 +207,11 @@ def _uncertainty_entry(fit: Poly22Fit) -> dict[str, Any]:
             worst = left_out.extrapolation_worst_n
             if worst is not None and math.isfinite(worst):
                 entry["extrapolation_worst_n"] = worst
+            bias = left_out.extrapolation_bias_n_per_m_s
+            se = left_out.extrapolation_bias_se_n_per_m_s
+            if bias is not None and se is not None and math.isfinite(bias + se):
+                entry["extrapolation_bias_n_per_m_s"] = bias
+                entry["extrapolation_bias_se_n_per_m_s"] = se
     return entry
 
 

@@ -24,12 +24,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import fdtrc  # stats.f.sf's kernel; scipy.stats takes ~1 s to import
 
 # p below this: the surface does not fit its data (issue 43 item 4)
 LACK_OF_FIT_P = 0.01
@@ -59,6 +58,9 @@ class LackOfFit:
     worst_residual_n: float  # measured minus surface at the worst hold (condition)
     basis: str  # "replicate_holds" or "within_hold"
     terms: int
+    # where the surface errs: the shares of its mean square along MODEL_FORM_TERMS (None:
+    # no structure found, or not estimated)
+    model_form_shares: tuple[float, ...] | None = None
 
     @property
     def fits(self) -> bool:
@@ -78,6 +80,8 @@ class LackOfFit:
             "worst_airspeed_m_s": self.worst_airspeed_m_s,
             "worst_residual_n": self.worst_residual_n,
             "pure_error_basis": self.basis,
+            **({} if self.model_form_shares is None
+               else {"model_form_shares": list(self.model_form_shares)}),
         }
 
 
@@ -119,7 +123,69 @@ def _least_squares(design: NDArray[np.float64], y: NDArray[np.float64]) -> tuple
     return y - u @ (u.T @ y), np.einsum("ij,ij->i", u, u)
 
 
+MODEL_FORM_TERMS = ("offset", "throttle", "airspeed", "throttle_airspeed", "airspeed_squared")
+"""The model-form error's shapes over the tested domain (``u = 2 x - 1`` the throttle,
+``t`` the airspeed's place in the tested range mapped to [-1, 1]), Legendre polynomials each
+scaled to a mean square of 1 there: ``1``, ``sqrt 3 u``, ``sqrt 3 t``, ``3 u t``,
+``sqrt 5 (3 t^2 - 1) / 2``. The poly22's sixth, the quadratic in throttle, is not among
+them: the surface is itself quadratic in throttle, so its misfit along the throttle is a
+cubic or higher, small at mid-throttle and large at the ends as the slope's square is,
+while the quadratic's square is large at mid-throttle too (with it, the calibration study's
+bands at the mid-throttle cruises came out twice as wide as the truth's error; its
+airspeed quadratic changes sign between a loiter and a cruise as their true errors do)."""
+
+
+def model_form_basis(throttle: ArrayLike, airspeed_m_s: ArrayLike,
+                     tested_airspeed_m_s: tuple[float, float]) -> NDArray[np.float64]:
+    """The :data:`MODEL_FORM_TERMS` at the points ``(n, 5)`` [-]: throttle a fraction."""
+    u = 2.0 * np.asarray(throttle, dtype=float) - 1.0
+    low, high = tested_airspeed_m_s
+    span = high - low if high > low else 1.0
+    t = 2.0 * (np.asarray(airspeed_m_s, dtype=float) - low) / span - 1.0
+    return np.column_stack([np.ones_like(u), math.sqrt(3.0) * u, math.sqrt(3.0) * t,
+                            3.0 * u * t, math.sqrt(5.0) * 0.5 * (3.0 * t * t - 1.0)])
+
+
+def model_form_shares(throttle: ArrayLike, airspeed_m_s: ArrayLike, residual_n: ArrayLike,
+                      noise_n2: ArrayLike) -> tuple[float, ...] | None:
+    """Where the surface errs: the shares of its mean square along :data:`MODEL_FORM_TERMS`.
+
+    Each hold's squared residual less its noise's expectation [N^2] is fitted by
+    ``sum_k w_k phi_k^2`` with ``w >= 0`` (the variance profile of a random sum of the
+    terms; every subset of the five tried, the best non-negative kept), the shares
+    ``w / sum w``. The residuals of a least-squares poly22 hold no poly22 shape, so it is
+    their size along throttle and airspeed that says which of the terms' profiles the
+    error follows, not their sign. None where nothing is left above the noise.
+    """
+    x = np.asarray(throttle, dtype=float)
+    v = np.asarray(airspeed_m_s, dtype=float)
+    target = np.asarray(residual_n, dtype=float) ** 2 - np.asarray(noise_n2, dtype=float)
+    if x.size < 8 or not np.all(np.isfinite(target)):
+        return None
+    scale = 100.0 if float(np.max(x)) > 1.5 else 1.0  # a throttle in percent
+    profile = model_form_basis(x / scale, v, (float(v.min()), float(v.max()))) ** 2
+    count = profile.shape[1]
+    best, best_sse = None, math.inf
+    for mask in range(1, 2 ** count):
+        keep = [k for k in range(count) if mask >> k & 1]
+        w = np.linalg.lstsq(profile[:, keep], target, rcond=None)[0]
+        if np.any(w < 0.0):
+            continue
+        sse = float(np.sum((profile[:, keep] @ w - target) ** 2))
+        if sse < best_sse:
+            best, best_sse = np.zeros(count), sse
+            best[keep] = w
+    if best is None or best.sum() <= 0.0:
+        return None
+    shares = best / best.sum()
+    return tuple(float(round(c, 4)) for c in shares)
+
+
 def _p_value(f: float, dof1: int, dof2: float) -> float:
+    # stats.f.sf's kernel (scipy.stats takes ~1 s to import), here only: the sampler reads
+    # this module's model-form shapes and imports no scipy
+    from scipy.special import fdtrc
+
     return float(fdtrc(dof1, dof2, f)) if math.isfinite(f) else math.nan
 
 
@@ -270,6 +336,15 @@ def engine_lack_of_fit(
     base = test("poly22", (2, 2))
     if base is None:
         return None
+    if not base.fits:
+        # the structure the test found: where along throttle and airspeed it lies
+        design = polynomial_design(x, v, polynomial_terms(2, 2))
+        residual, hat = _least_squares(design, y)
+        if replicated:
+            noise = np.full(y.size, base.pure_error_rms_n ** 2) * (1.0 - hat)
+        else:
+            noise = (1.0 - hat) * np.asarray(hold_variance_n2, dtype=float)
+        base = replace(base, model_form_shares=model_form_shares(x, v, residual, noise))
     others = tuple(t for t in (test(f, d) for f, d in ALTERNATIVE_FORMS.items())
                    if t is not None and t.dof_lack_of_fit > 0)
     return EngineLackOfFit(base, others, float(np.max(np.abs(y))))

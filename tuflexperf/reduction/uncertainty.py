@@ -10,7 +10,11 @@ Three numbers per engine go into the propulsion file (SPEC 4):
 - ``extrapolation_sd_n``: each tested airspeed in turn is left out, the surface refitted
   on the others and its error measured at the left-out points; the RMS error at the
   highest tested airspeed is what a model extrapolated beyond its tunnel carries
-  (:func:`leave_one_airspeed_out`).
+  (:func:`leave_one_airspeed_out`);
+- ``extrapolation_bias_n_per_m_s`` and its standard error: the signed mean of that left-out
+  error (measured minus extrapolated) over the top airspeed's upper throttles, per m/s of
+  the distance it was extrapolated (a fan family that loses thrust faster at speed errs
+  with one sign; :attr:`LeaveOneAirspeedOut.extrapolation_bias_n_per_m_s`).
 
 References
 ----------
@@ -22,12 +26,13 @@ Paper section 4: test airspeeds 0-30 m/s, throttle 10-100 % in 10 % steps, +-0.5
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tuflexperf.reduction.poly22fit import N_TERMS, fit_poly22, poly22_design
+from tuflexperf.reduction.poly22fit import N_TERMS, Poly22Fit, fit_poly22, poly22_design
 
 # Points whose airspeeds differ by less than this belong to one tunnel set point [m/s].
 AIRSPEED_GROUP_GAP_M_S = 1.0
@@ -88,6 +93,10 @@ class LeaveOneAirspeedOut:
     rms_error_n: tuple[float | None, ...]  # None where the rest cannot determine a surface
     # the largest |error| among each left-out airspeed's points [N] (its worst throttle)
     worst_error_n: tuple[float | None, ...] = ()
+    # at the top airspeed: the mean of measured minus extrapolated over its upper throttles
+    # [N] and that mean's standard error [N] (the holds' scatter and the refit's own error)
+    top_mean_error_n: float | None = None
+    top_mean_error_se_n: float | None = None
 
     @property
     def extrapolation_sd_n(self) -> float | None:
@@ -107,6 +116,23 @@ class LeaveOneAirspeedOut:
         if len(self.airspeed_m_s) < 2:
             return None
         return float(self.airspeed_m_s[-1] - self.airspeed_m_s[-2])
+
+    @property
+    def extrapolation_bias_n_per_m_s(self) -> float | None:
+        """The thrust the extrapolated surface misses per m/s beyond the rest [N per m/s]:
+        measured minus extrapolated at the left-out top airspeed, over the distance."""
+        distance = self.extrapolation_distance_m_s
+        if self.top_mean_error_n is None or not distance or distance <= 0.0:
+            return None
+        return self.top_mean_error_n / distance
+
+    @property
+    def extrapolation_bias_se_n_per_m_s(self) -> float | None:
+        """The standard error of :attr:`extrapolation_bias_n_per_m_s` [N per m/s]."""
+        distance = self.extrapolation_distance_m_s
+        if self.top_mean_error_se_n is None or not distance or distance <= 0.0:
+            return None
+        return self.top_mean_error_se_n / distance
 
 
 def leave_one_airspeed_out(
@@ -139,8 +165,10 @@ def leave_one_airspeed_out(
     speeds: list[float] = []
     errors: list[float | None] = []
     worst: list[float | None] = []
+    mean_se: tuple[float | None, float | None] = (None, None)
     for mask in airspeed_groups(v):
         speeds.append(float(v[mask].mean()))
+        mean_se = (None, None)  # the top airspeed's (the last group's) is kept
         rest = ~mask
         if rest.sum() <= N_TERMS or np.unique(np.round(v[rest])).size < 3:
             errors.append(None)
@@ -155,7 +183,24 @@ def leave_one_airspeed_out(
         error = refit.predict(x[mask], v[mask]) - y[mask]
         errors.append(float(np.sqrt(np.mean(error**2))))
         worst.append(float(np.max(np.abs(error))))
-    return LeaveOneAirspeedOut(tuple(speeds), tuple(errors), tuple(worst))
+        mean_se = _upper_mean_error(refit, x[mask], v[mask], y[mask])
+    return LeaveOneAirspeedOut(tuple(speeds), tuple(errors), tuple(worst), *mean_se)
+
+
+def _upper_mean_error(refit: Poly22Fit, x: NDArray[np.float64], v: NDArray[np.float64],
+                      y: NDArray[np.float64]) -> tuple[float | None, float | None]:
+    """Measured minus ``refit`` [N] averaged over the left-out points at throttles of at least
+    half their largest (beyond the tested airspeeds a flight flies a high throttle, where a
+    fan's misfit is largest), and its standard error [N]: ``sqrt(g^T C g + s^2 / n)``, ``g``
+    their mean design row, ``C`` the refit's covariance and ``s`` its residual scatter (the
+    lack of fit counted as noise: an upper bound)."""
+    upper = x >= 0.5 * float(np.max(x)) if x.size else x.astype(bool)
+    if not upper.any() or not np.all(np.isfinite(refit.covariance)):
+        return None, None
+    mean = float(np.mean(y[upper] - refit.predict(x[upper], v[upper])))
+    g = poly22_design(x[upper], v[upper]).mean(axis=0)
+    variance = float(g @ refit.covariance @ g) + refit.residual_sd_n**2 / int(upper.sum())
+    return mean, math.sqrt(max(variance, 0.0))
 
 
 def expected_extrapolation_sd_n(
