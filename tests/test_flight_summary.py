@@ -120,6 +120,35 @@ def test_a_missing_or_bad_summary_is_bad_input(tmp_path: Path) -> None:
         load_case(case_file)
 
 
+def test_check_parses_each_summary_once_and_a_changed_one_again(tmp_path: Path) -> None:
+    import json
+    import os
+
+    case = load_case(Path(__file__).resolve().parent.parent / "requirements" / "tuflex.yaml")
+    case_file = _case_listing(tmp_path, _summary(tmp_path / "s.yaml", case, 1.3))
+    listed = case_file.parent / "flight.yaml"
+    with files_opened() as opened:
+        done = runner.invoke(app, ["check", "--case", str(case_file), "--json"])
+    # the case's load, the flown-power reading and the endurance note: one parse
+    assert [name for name in opened if name.endswith("flight.yaml")] == [str(listed)]
+    (said,) = [r["flown_power"] for r in json.loads(done.stdout)["results"]
+               if r["name"] == "flight_endurance"]
+    assert said["ratio"] == pytest.approx(1.3, rel=1e-9)
+
+    def rewrite(text: str) -> None:  # a later time: the change is seen on any clock
+        later = listed.stat().st_mtime_ns + 2_000_000_000
+        listed.write_text(text)
+        os.utime(listed, ns=(later, later))
+
+    rewrite(_summary(tmp_path / "t.yaml", case, 1.05).read_text())
+    again = json.loads(runner.invoke(app, ["check", "--case", str(case_file), "--json"]).stdout)
+    (said,) = [r["flown_power"] for r in again["results"] if r["name"] == "flight_endurance"]
+    assert said["ratio"] == pytest.approx(1.05, rel=1e-9)
+    # a bad summary is still refused when the case is loaded, one line naming file and key
+    rewrite(listed.read_text().replace("mass_kg:", "mass_kgs:"))
+    bad = runner.invoke(app, ["check", "--case", str(case_file)])
+    assert bad.exit_code == 2
+    assert any("flight.yaml" in line and "mass_kgs" in line for line in bad.output.splitlines())
 
 
 def test_the_reading_opens_no_log(tmp_path: Path) -> None:

@@ -88,7 +88,7 @@ def flown(tmp_path_factory: pytest.TempPathFactory) -> dict:
     assert report.exit_code == 0, report.output
     check = runner.invoke(app, ["check", "--case", str(case_file), "--json"])
     text = runner.invoke(app, ["check", "--case", str(case_file)])
-    return {"log": log, "flightlog": json.loads(done.stdout),
+    return {"case": case_file, "log": log, "flightlog": json.loads(done.stdout),
             "summary": yaml.safe_load(summary.read_text()),
             "report": json.loads(report.stdout), "pages": _pdf_pages(
                 Path(json.loads(report.stdout)["pdf"])),
@@ -174,6 +174,36 @@ def test_check_prints_the_flown_power_beside_the_endurance_verdict(flown: dict) 
     # the two power readings share their nominal: the power model is named once
     (reason,) = [line for line in block if line.lstrip().startswith("UNPROVEN:")]
     assert reason.count("on the power model") == 1, reason
+
+
+def test_endurance_says_the_flown_power_as_check_does(flown: dict) -> None:
+    """At the requirement's throttle its verdict is check's, flown power and note alike; at
+    any other throttle the flights' ratio is still said (it is the flown bins')."""
+    (judged,) = [r for r in flown["check"]["results"] if r["name"] == "flight_endurance"]
+    said = judged["flown_power"]
+    case = str(flown["case"])
+    throttle = yaml.safe_load(flown["case"].read_text())["requirements"]["endurance"]["throttle"]
+    at = json.loads(runner.invoke(app, ["endurance", "--case", case, "--throttle",
+                                        str(throttle), "--json"]).stdout)
+    assert at["flown_power"] == said
+    assert at["result"] == judged
+    other = runner.invoke(app, ["endurance", "--case", case, "--throttle",
+                                str(throttle + 0.1), "--json"])
+    assert "result" not in json.loads(other.stdout)  # not the requirement's throttle
+    assert json.loads(other.stdout)["flown_power"] == said
+    text = runner.invoke(app, ["endurance", "--case", case, "--throttle",
+                               str(throttle + 0.1)]).stdout
+    notes = [line for line in text.splitlines() if "flown/predicted power" in line]
+    checks = [line for line in flown["check_text"].splitlines() if "flown/predicted" in line]
+    assert len(checks) == 1 and notes == checks, text
+    assert f"x{said['ratio']:.3f} time-weighted over {said['bins']} airspeed bins" in notes[0]
+
+
+def test_endurance_without_flights_says_no_flown_power() -> None:
+    done = runner.invoke(app, ["endurance", "--throttle", "0.6", "--json"])
+    assert "flown_power" not in json.loads(done.stdout)
+    text = runner.invoke(app, ["endurance", "--throttle", "0.6"]).stdout
+    assert "flown/predicted" not in text and "validation flights" not in text
 
 
 def test_without_flights_page_one_says_so_and_there_is_no_flown_page(shipped_report) -> None:

@@ -190,12 +190,13 @@ def _endurance(study: Study) -> Verdict:
         )
     else:
         verdict = endurance_verdict(requirement, result)
-    return _with_flown_power(study.case, verdict)
+    return with_flown_power(study.case, verdict)
 
 
-def _with_flown_power(case: Case, verdict: Verdict) -> Verdict:
+def with_flown_power(case: Case, verdict: Verdict) -> Verdict:
     """The validation flights' flown/predicted power beside the endurance verdict (its JSON's
-    ``flown_power``, and a note), within the tolerance or not (issue 45 item 3)."""
+    ``flown_power``, and a note), within the tolerance or not (issue 45 item 3); ``check``'s
+    and the ``endurance`` command's verdict alike."""
     from tuflexperf.analysis.flown_reading import (
         flown_flights,
         flown_power_note,

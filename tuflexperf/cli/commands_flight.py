@@ -101,7 +101,12 @@ def endurance(
 ) -> None:
     """Level-flight airspeed, electrical power, pack and flight endurance at a throttle."""
     from tuflexperf.analysis.endurance import solve_best, solve_endurance
-    from tuflexperf.analysis.requirements import endurance_verdict, judged_block
+    from tuflexperf.analysis.flown_reading import flown_flights, flown_power_ratio
+    from tuflexperf.analysis.requirements import (
+        endurance_verdict,
+        judged_block,
+        with_flown_power,
+    )
 
     if throttle is None and not best:
         fail_input("--throttle: required (a fraction in [0, 1]), or use --best")
@@ -119,8 +124,11 @@ def endurance(
     requirement = case.requirements.endurance
     judged = requirement is not None and abs(requirement.throttle - result.throttle) < 1e-12
     # the one verdict rule, on every reading of disputed evidence as check judges it
-    verdict = (judged_block(case, "endurance", lambda: [endurance_verdict(requirement, result)])[0]
-               if judged else None)
+    verdict = (judged_block(case, "endurance", lambda: [
+        with_flown_power(case, endurance_verdict(requirement, result))])[0] if judged else None)
     met = verdict is None or verdict.passed
-    render.show_endurance(case, result, best_result, requirement, verdict, as_json)
+    # the flights' flown/predicted power, as check prints it beside the endurance verdict (at
+    # any throttle: it is the flown bins', not the throttle asked for)
+    flown = flown_power_ratio(flown_flights(case)) if case.validation_flights else None
+    render.show_endurance(case, result, best_result, requirement, verdict, as_json, flown)
     raise typer.Exit(0 if met else 1)

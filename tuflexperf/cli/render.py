@@ -448,12 +448,15 @@ def show_mission(case: Any, result: Any, verdicts: list[Any], csv: Path | None,
 
 
 def show_endurance(case: Any, result: Any, best_result: Any, requirement: Any,
-                   verdict: Any, as_json: bool) -> None:
+                   verdict: Any, as_json: bool, flown: dict[str, Any] | None = None) -> None:
     """``endurance``: airspeed, power, pack and flight endurance, and the best throttles
-    (``verdict`` None: the throttle asked for is not the requirement's, nothing judged)."""
+    (``verdict`` None: the throttle asked for is not the requirement's, nothing judged);
+    ``flown`` the validation flights' flown/predicted power (``check``'s ``flown_power``)."""
     data = result.to_dict()
     if as_json:
         payload = dict(data)
+        if flown is not None:
+            payload["flown_power"] = flown
         if best_result is not None:
             payload["best"] = best_result.to_dict()
         if verdict is not None:
@@ -497,6 +500,10 @@ def show_endurance(case: Any, result: Any, best_result: Any, requirement: Any,
             f"{verdict_word(verdict.verdict)}"
         )
         print_disputed(verdict)
+    if flown is not None:
+        from tuflexperf.analysis.flown_reading import flown_power_note
+
+        print_warnings([flown_power_note(flown)])
     if best_result is not None:
         b = best_result.to_dict()
         e, r = b["best_endurance"], b["best_range"]

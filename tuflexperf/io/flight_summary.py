@@ -53,10 +53,34 @@ class FlightSummary:
     schema: FlightSummarySchema
 
 
+# (resolved path, mtime [ns], size [B]) -> the summary parsed: ``check`` validates each at the
+# case's load and reads it again for its readings and the endurance note; one parse serves all
+_LOADED: dict[tuple[Path, int, int], FlightSummary] = {}
+_MOST_KEPT = 64
+
+
 def load_flight_summary(path: Path | str) -> FlightSummary:
-    """Load and validate a flight summary; :class:`InputError` names the file and key."""
+    """Load and validate a flight summary; :class:`InputError` names the file and key.
+
+    A file read before, unchanged since (its modification time and size), is not parsed
+    again: its schema is frozen, so the one parse is shared. A bad file is never kept.
+    """
     path = Path(path)
-    return FlightSummary(path.resolve(), load_model(path, FlightSummarySchema))
+    resolved = path.resolve()
+    try:
+        stat = resolved.stat()
+    except OSError:  # missing or unreadable: load_model says which, in its words
+        key = None
+    else:  # stat before the read: a file changed meanwhile is read again next time
+        key = (resolved, stat.st_mtime_ns, stat.st_size)
+        if key in _LOADED:
+            return _LOADED[key]
+    summary = FlightSummary(resolved, load_model(path, FlightSummarySchema))
+    if key is not None:
+        if len(_LOADED) >= _MOST_KEPT:
+            _LOADED.pop(next(iter(_LOADED)))  # the oldest first
+        _LOADED[key] = summary
+    return summary
 
 
 def log_digest(path: Path) -> str:

@@ -286,7 +286,8 @@ def _render_pages(case: Any, folder: Path, campaign: Path | None, step: StepCoun
     analysis_pages["08c_flight_envelope"] = lambda: rf.flight_envelope(case, analyses)
     if case.battery_path is not None:
         analysis_pages["09b_mass_trade"] = lambda: rf.mass_trade(case, analyses)
-    if analyses.flights:  # issue 45 item 3; without flights page 1 says none is given
+    # issue 45 item 3; without flights page 1 says none is given (--compare: any configuration's)
+    if analyses.flights or any(flights for _, flights in analyses.compared_flights):
         from tuflexperf.report.flown_figures import predicted_vs_flown
 
         analysis_pages["06d_predicted_flown"] = lambda: predicted_vs_flown(case, analyses)

@@ -529,6 +529,19 @@ class Analyses:
     # the case's validation flights (analysis.flown_reading.flown_flights), read once
     flights: tuple[Any, ...] = ()
     _others: list[tuple[str, Any, Any]] | None = field(default=None, repr=False)
+    _compared_flights: list[tuple[str, tuple[Any, ...]]] | None = field(default=None,
+                                                                        repr=False)
+
+    @property
+    def compared_flights(self) -> list[tuple[str, tuple[Any, ...]]]:
+        """(label, validation flights) of each ``--compare`` configuration: summaries beside
+        its model only, nothing solved (so cheap in whichever process draws the page)."""
+        if self._compared_flights is None:
+            from tuflexperf.analysis.flown_reading import flown_flights
+
+            self._compared_flights = [(label, flown_flights(other))
+                                      for label, other in self.compare]
+        return self._compared_flights
 
     @property
     def others(self) -> list[tuple[str, Any, Any]]:

@@ -65,49 +65,73 @@ def draw_flown_against_model(ax: Any, flights: tuple[Any, ...], tolerance: float
                  fontsize=8, color=STYLE["limit"]["color"] if judged else "black")
 
 
+def flown_configurations(case: Any, analyses: Any) -> list[tuple[str | None, tuple[Any, ...]]]:
+    """(label, validation flights) of each configuration drawn: this case's, then each
+    ``--compare`` configuration's (label None: no comparison, the case alone)."""
+    if not analyses.compare:
+        return [(None, tuple(analyses.flights))]
+    return [(f"A: {case.name}", tuple(analyses.flights)), *analyses.compared_flights]
+
+
+def _drawn(case: Any, analyses: Any) -> list[tuple[str, str, str, Any]]:
+    """(legend name, short name, colour, flight) of every flight drawn: coloured by flight
+    for the case alone, by configuration (its colour on every compared page) otherwise."""
+    groups = flown_configurations(case, analyses)
+    several = sum(len(flights) for _, flights in groups) > 1
+    out = []
+    for k, (label, flights) in enumerate(groups):
+        for f in flights:
+            if label is None:
+                name = f.log if several else "flown"
+                out.append((name, name, _colour(len(out)), f))
+            else:
+                out.append((f"{label}, {f.log}", f"{label.split(':')[0]}, {f.log}",
+                            _colour(k), f))
+    return out
+
+
 def predicted_vs_flown(case: Any, analyses: Any) -> Any:
     """The page "predicted vs flown": power, ratio and throttle against airspeed per bin, and
-    per flight the endurance on its energy and the autopilot hand-off in words."""
+    per flight the endurance on its energy and the autopilot hand-off in words; with
+    ``--compare`` every configuration's flights, each labelled by its configuration."""
     from tuflexperf.analysis.battery_fit import RUN_POWER_TOLERANCE
 
-    flights = analyses.flights
+    drawn = _drawn(case, analyses)
     fig = new_figure()
     grid = fig.add_gridspec(2, 3, width_ratios=[1.0, 1.0, 1.05], height_ratios=[1.15, 1.0])
     ap = fig.add_subplot(grid[0, 0:2])
     ar = fig.add_subplot(grid[1, 0])
     ax = fig.add_subplot(grid[1, 1])
     at = fig.add_subplot(grid[:, 2])
-    if not flights:  # the page is drawn only with flights; a direct call says why it is empty
+    if not drawn:  # the page is drawn only with flights; a direct call says why it is empty
         note_box(ap, "no flight log is given (the case lists no validation.flights)")
         return fig
-    for k, f in enumerate(flights):
-        colour, marker = _colour(k), MARKERS[k % 4]
+    one = len(drawn) == 1
+    for k, (name, short, colour, f) in enumerate(drawn):
+        marker = MARKERS[k % 4]
         order = np.argsort(f.airspeed_m_s)
         v = f.airspeed_m_s[order]
-        name = f.log if len(flights) > 1 else "flown"
         ap.plot(v, f.flown_power_w[order], marker, color=colour, markersize=6,
-                    label=f"{name}: mean U I per 1 m/s bin ({f.bins_kind or 'bins'})")
+                label=f"{name}: mean U I per 1 m/s bin ({f.bins_kind or 'bins'})")
         # several flights: each its own model line (its density and mass), in its colour
-        model = {**STYLE["model"], "marker": "x"} if len(flights) == 1 else {
+        model = {**STYLE["model"], "marker": "x"} if one else {
             "color": colour, "linestyle": "--", "linewidth": 1.2, "marker": "x"}
         ap.plot(v, f.model_power_w[order], **model,
-                label=f"model at the bins ({f.log}: \u03c1 {f.density_kg_m3:.3f} kg/m\u00b3, "
-                f"{f.mass_kg:g} kg)")
-        if len(flights) == 1:  # several flights' labels would sit on each other (the table)
+                label=f"model at the bins ({short if not one else f.log}: \u03c1 "
+                f"{f.density_kg_m3:.3f} kg/m\u00b3, {f.mass_kg:g} kg)")
+        if one:  # several flights' labels would sit on each other (the table)
             for vi, p, t in zip(v, f.flown_power_w[order], f.time_s[order], strict=True):
                 ap.annotate(f"{t:.0f} s", (vi, p), textcoords="offset points", xytext=(0, 7),
                             ha="center", fontsize=6.5, color="0.35")
         ar.plot(v, f.ratio[order], marker, color=colour, markersize=6, linestyle="-",
-                linewidth=0.8, label=f"{name}: x{f.mean_ratio:.3f} time-weighted")
+                linewidth=0.8, label=f"{short}: x{f.mean_ratio:.3f} time-weighted")
         ax.plot(v, f.model_throttle[order], **model,
-                label="throttle the model needs (level flight)"
-                + (f", {f.log}" if len(flights) > 1 else ""))
+                label="throttle the model needs (level flight)" + ("" if one else f", {short}"))
         if np.any(np.isfinite(f.flown_throttle)):
             ax.plot(v, f.flown_throttle[order], marker, color=colour, markersize=6,
-                    linestyle="none", label=f"{name}: throttle flown (bin mean)")
+                    linestyle="none", label=f"{short}: throttle flown (bin mean)")
     ap.set_ylabel("electrical power P (W), all packs")
-    ap.set_xlabel("calibrated airspeed (m/s), 1 m/s bins"
-                  + (" (label: time flown)" if len(flights) == 1 else ""))
+    ap.set_xlabel("calibrated airspeed (m/s), 1 m/s bins" + (" (label: time flown)" if one else ""))
     ap.set_ylim(bottom=0.0, top=1.15 * ap.get_ylim()[1])
     ap.grid(alpha=0.3)
     ap.legend(loc="lower right", fontsize=7)
@@ -130,44 +154,57 @@ def predicted_vs_flown(case: Any, analyses: Any) -> Any:
     ax.grid(alpha=0.3)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), fontsize=7)
     ax.set_title("throttle: the model's against the flown"
-                 + ("" if any(np.any(np.isfinite(f.flown_throttle)) for f in flights)
+                 + ("" if any(np.any(np.isfinite(d[3].flown_throttle)) for d in drawn)
                     else "\n(no flight logged its throttle)"), fontsize=9)
     at.axis("off")
     at.text(0.0, 1.0, "\n".join(flight_lines(case, analyses)), transform=at.transAxes,
             va="top", ha="left", fontsize=7, family="monospace")
-    fig.suptitle(f"{case.name}: predicted vs flown (validation.flights: "
-                 f"{', '.join(f.path.name for f in flights)})", fontsize=11)
+    files = "; ".join(
+        (f"{label.split(':')[0]} " if label else "")
+        + (", ".join(f.path.name for f in flights) if flights else "none")
+        for label, flights in flown_configurations(case, analyses))
+    fig.suptitle(f"{case.name}: predicted vs flown (validation.flights: {files})", fontsize=11)
     return fig
 
 
 def flight_lines(case: Any, analyses: Any, width: int = 54) -> list[str]:
     """Per flight its numbers in words (airborne time, energy, endurance predicted on its
-    energy against the time flown), then the autopilot hand-off, wrapped to ``width``."""
+    energy against the time flown), then the autopilot hand-off, wrapped to ``width``; with
+    ``--compare`` under each configuration's label, a configuration without flights said."""
     lines: list[str] = []
 
     def say(text: str, indent: str = "") -> None:
         lines.extend(indent + part for part in wrap_text(text, width - len(indent)).split("\n"))
 
-    for f in analyses.flights:
-        lines.append(f"{f.path.name}: log {f.log}")
-        say(f"sha256 {f.log_sha256[:16]}...", "  ")
-        say(f"\u03c1 {f.density_kg_m3:.4f} kg/m\u00b3, mass {f.mass_kg:g} kg, "
-            f"{f.time_s.size} {f.bins_kind or ''} bins over {f.time_s.sum():.0f} s", "  ")
-        energy = ("energy not logged" if f.energy_wh is None else
-                  f"{f.energy_wh:.1f} Wh, mean {f.mean_power_w:.0f} W")
-        say(f"airborne {f.airborne_s:.0f} s, {energy}", "  ")
-        say(f"flown/predicted power x{f.mean_ratio:.3f} (time-weighted; x"
-            f"{float(np.min(f.ratio)):.2f} to x{float(np.max(f.ratio)):.2f} per bin)", "  ")
-        predicted = f.predicted_endurance_s
-        if predicted is not None:
-            say(f"endurance on the flown {f.energy_wh:.1f} Wh at the model's power: "
-                f"{predicted:.0f} s predicted, {f.airborne_s:.0f} s flown "
-                f"({100 * (predicted / f.airborne_s - 1):+.0f} %)", "  ")
-        if f.stale:
-            say("the case's model gives other power than when the summary was written: "
-                "drawn as it is today", "  ")
-        lines += [""] + bin_table(f) + [""]
+    groups = flown_configurations(case, analyses)
+    for label, flights in groups:
+        if label is not None:
+            say(label if flights else f"{label}: lists no validation.flights")
+            if not flights:
+                lines.append("")
+        for f in flights:
+            lines.append(f"{f.path.name}: log {f.log}")
+            say(f"sha256 {f.log_sha256[:16]}...", "  ")
+            say(f"\u03c1 {f.density_kg_m3:.4f} kg/m\u00b3, mass {f.mass_kg:g} kg, "
+                f"{f.time_s.size} {f.bins_kind or ''} bins over {f.time_s.sum():.0f} s", "  ")
+            energy = ("energy not logged" if f.energy_wh is None else
+                      f"{f.energy_wh:.1f} Wh, mean {f.mean_power_w:.0f} W")
+            say(f"airborne {f.airborne_s:.0f} s, {energy}", "  ")
+            say(f"flown/predicted power x{f.mean_ratio:.3f} (time-weighted; x"
+                f"{float(np.min(f.ratio)):.2f} to x{float(np.max(f.ratio)):.2f} per bin)", "  ")
+            predicted = f.predicted_endurance_s
+            if predicted is not None:
+                say(f"endurance on the flown {f.energy_wh:.1f} Wh at the model's power: "
+                    f"{predicted:.0f} s predicted, {f.airborne_s:.0f} s flown "
+                    f"({100 * (predicted / f.airborne_s - 1):+.0f} %)", "  ")
+            if f.stale:
+                say("the case's model gives other power than when the summary was written: "
+                    "drawn as it is today", "  ")
+            lines += [""] + bin_table(f) + [""]
     lines.append("AUTOPILOT HAND-OFF (cruise at best endurance)")
+    if len(groups) > 1:  # each configuration's best endurance is its own report's
+        say(f"of {groups[0][0]} only: each compared configuration's is on its own report",
+            "  ")
     for text in handoff_lines(case, analyses):
         say(text, "  ")
     return lines
