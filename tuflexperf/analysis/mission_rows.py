@@ -51,11 +51,12 @@ class Memo:
     case and its readings fly the same rows, and a reading differs from the nominal in one
     thing (the fans' power, a dead engine's drag), so most of its flight is the nominal's.
     Kept for one batch only (a batch's flights are ~100 MB at 10,000 rows). ``rows`` the
-    take-offs' thrust-only results (:class:`tuflexperf.analysis.batch_model.SharedRows`)."""
+    take-offs' thrust-only results (:class:`tuflexperf.analysis.batch_model.SharedRows`):
+    the batch's own where it evaluated the same rows."""
 
-    def __init__(self) -> None:
+    def __init__(self, rows: dict[Any, Any] | None = None) -> None:
         self._items: dict[Any, Any] = {}
-        self.rows: dict[Any, Any] = {}
+        self.rows: dict[Any, Any] = {} if rows is None else rows
 
     def get(self, key: Any, build: Any) -> Any:
         """The entry for ``key``, built by ``build()`` on first use."""
@@ -259,13 +260,14 @@ def fly_rows(model: Any, durations: Array, theta: Array, par: Array, tk: Array,
 
 def flight_phases(model: Any, durations: Array, theta: Array, par: Array, tk: Array,
                   layout: list[tuple[str, int]], steps: int, start: Array | None = None,
-                  first: int = 0, memo: Memo | None = None
+                  first: int = 0, memo: Memo | None = None, tk_key: str | None = None
                   ) -> Iterator[tuple[Any, list[tuple[Array, Any]]]]:
     """:func:`fly_rows`'s flight segment by segment (arguments as it takes): each plan and
     its phases' ``(states, aux)``, node-major as flown (``(2n + 3, S + 1, B)``, and
     :func:`aux_size` rows ``(S + 1, B)``, an array or a list of them; a node's rows
     contiguous; an event has none). A phase's
-    first node is the one before's last."""
+    first node is the one before's last. ``tk_key``: a digest of ``tk`` known already (a
+    memo's key: ``tk`` need not be read to tell one flight's from another's)."""
     n = model.n
     size = par.shape[1]
     state = np.zeros((2 * n + 3, size)) if start is None else np.asarray(start, dtype=float)
@@ -275,12 +277,15 @@ def flight_phases(model: Any, durations: Array, theta: Array, par: Array, tk: Ar
     if memo is not None:  # the flight reads par's rows before the power corrections
         flight_par = digest(par[:len(SAMPLED_AIRCRAFT) + 2 + 7 * n])
         whole_par = digest(flight_par, par[len(SAMPLED_AIRCRAFT) + 2 + 7 * n:])
+        # what the phases' steps and parameters are made of (_phases): read once
+        made_of = (digest(durations, theta, tk_key or tk), steps, tuple(layout))
     for plan in model.plans[first:]:
         if plan.kind == "event":
             yield plan, []
             continue
         phases = []
-        for kind, step, p in _phases(model, plan, durations, theta, tk, layout, steps):
+        for number, (kind, step, p) in enumerate(_phases(model, plan, durations, theta, tk,
+                                                          layout, steps)):
             with np.errstate(all="ignore"):
                 if coupled or (kind == "time" and isinstance(p[3], float) and p[3] > 0.5):
                     s, a = _coupled_phase(model, plan, kind, step, p, state, par)
@@ -292,7 +297,7 @@ def flight_phases(model: Any, durations: Array, theta: Array, par: Array, tk: Ar
                     # read again (its height by the flight's key: the power does not move it)
                     height_key = height_key or digest(state[2 * n])
                     state_key = state_key or digest(state)
-                    inputs = (model._flight_key(plan.dead), plan, kind, digest(step, *p))
+                    inputs = (model._flight_key(plan.dead), plan, kind, number, made_of)
                     aero_key = (*inputs, height_key, flight_par, "aero")
                     full_key = (*inputs, state_key, whole_par)
                     s, a = memo.get(full_key, functools.partial(

@@ -251,6 +251,7 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     par = model.parameters(aircraft, (field_m, dt_k), coefficients, extrapolation_n, size,
                            cells.packs)
     tk = np.zeros((size, model.tk.shape[0], 0))
+    tk_key: str | None = None  # the take-off rows' memo key (a digest of them)
     for plan in model.plans:
         if plan.solve_v:  # level at a fixed throttle: each row's own airspeed to start from
             guess = level_speeds_at_throttle(model, plan.start_h, plan.throttle, plan.dead, m,
@@ -271,9 +272,13 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
 
             # the rows read the thrust alone but on sagging packs: a reading on the same
             # thrust, from the same launch, takes the nominal's
-            tk, launched = (rows() if memo is None or m.packs_roll is not None else memo.get(
-                ("takeoff rows", evaluator.thrust_identity[0], model.takeoff_to_obstacle,
-                 tuple(layout), digest(*roll, height)), rows))
+            if memo is not None and m.packs_roll is None:
+                tk_key = digest("takeoff rows", evaluator.thrust_identity[0],
+                                str(model.takeoff_to_obstacle), str(layout),
+                                digest(*roll, height))
+                tk, launched = memo.get(tk_key, rows)
+            else:
+                tk, launched = rows()
             ok &= launched
     k = model.mission.solve_for
     nodes = sum((sum(c + 1 for _, c in layout) if plan.kind == "takeoff" else steps + 1)
@@ -290,7 +295,9 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
                                                else coefficients[:, rows, :])
             flown, end, entry = _flown(
                 model, flight_phases(model, durations[:, rows], theta[:, rows], par[:, rows],
-                                     tk[rows], layout, steps, memo=memo),
+                                     tk[rows], layout, steps, memo=memo,
+                                     tk_key=None if tk_key is None
+                                     else f"{tk_key}:{rows.start}:{rows.stop}"),
                 propulsion, field_m[rows], dt_k[rows], cutoff[rows], stall[rows], cells, rows,
                 k)
             with np.errstate(invalid="ignore"):

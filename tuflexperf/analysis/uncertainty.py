@@ -241,11 +241,15 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range,
     errors = plan.errors if plan.errors is not None else _legacy_errors(case, plan)
     evaluator = readings_evaluator(case, drawn=plan.extrapolation,
                                    drawn_model_form=errors.model_form_maps is not None)
+    # the thrust-only results of these rows (the take-off's roll, ...): the mission's take-off
+    # reads them too (batch_model.SharedRows), where the batch ran in this process
+    rows: dict[Any, Any] | None = None
     if two_cores and draw.size >= SPLIT_ROWS and second_core_idle():
         result = _on_two_cores(evaluator, draw)
     else:
+        rows = {}
         result = evaluator.evaluate(draw.values, draw.size, draw.coefficients,
-                                    draw.extrapolation_n, draw.power_scale)
+                                    draw.extrapolation_n, draw.power_scale, rows)
     # a sample outside a key's schema bounds (a negative cd0 from a wide normal) is no
     # aircraft: every requirement counts it as not met, and it is reported
     outside = np.zeros(draw.size, dtype=bool)
@@ -273,7 +277,7 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range,
         from tuflexperf.analysis.mission_rows import Memo
         from tuflexperf.analysis.mission_samples import SAMPLED_STEPS, sampled_landing
 
-        memo = Memo()  # the readings fly the nominal's rows: what they do not change, once
+        memo = Memo(rows)  # the readings fly the nominal's rows: what they do not change, once
 
         def fly(mission: Any, on: Case) -> dict[str, tuple[Array, Array]]:
             return sampled_landing(mission, evaluator_for(on), draw.values, draw.size,
