@@ -147,6 +147,33 @@ def _takeoff_rows(model: MissionModel, m: Any, roll: tuple[Array, Array, Array, 
     return np.where(ok[:, None, None], rows, 0.0), ok
 
 
+_LAUNCH_STATE = ("packs_roll", "packs_airborne", "packs_beyond", "packs_air", "release")
+"""What :meth:`BatchEvaluator.launch` leaves on the model besides its roll tuple."""
+
+
+def _launch(evaluator: Any, m: Any, size: int, height: Array, battery: dict[str, Array],
+            memo: Memo | None) -> tuple[Array, Array, Array, Array]:
+    """The rows' take-off (:meth:`BatchEvaluator.launch`), or with a ``memo`` the one a
+    flight of the batch on the same thrust and power made (a reading that moves only a dead
+    engine's drag), its state set on ``m`` as the launch sets it."""
+    from tuflexperf.analysis.readings import launch_identity
+
+    def launched() -> tuple[tuple[Array, Array, Array, Array], dict[str, Any]]:
+        # a column, as the batch's own take-off passes it: a (B,) height broadcast the
+        # launch's airborne part to (B, B) and judged every row at the first row's height
+        roll = evaluator.launch(m, size, height[:, None], battery)
+        return roll, {name: getattr(m, name) for name in _LAUNCH_STATE}
+
+    if memo is None:
+        return launched()[0]
+    roll, state = memo.get(digest("launch", launch_identity(evaluator.case), height,
+                                  str(sorted(battery)), *(battery[k] for k in sorted(battery))),
+                           launched)
+    for name, value in state.items():
+        setattr(m, name, value)
+    return roll
+
+
 @dataclass(frozen=True)
 class PackRowsOfMission:
     """Per row the packs a drawn ``battery.capacity_ah`` makes: charge per engine [Ah] the
@@ -262,9 +289,7 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
         # a runway's roll or a catapult's release, per row as the batch's take-off flies it
         height = _column(values, "requirements.takeoff.obstacle_height_m",
                          obstacle_height_of(case), size)
-        # a column, as the batch's own take-off passes it: a (B,) height broadcast the
-        # launch's airborne part to (B, B) and judged every row at the first row's height
-        roll = evaluator.launch(m, size, height[:, None], battery)
+        roll = _launch(evaluator, m, size, height, battery, memo)
         ok &= roll[3] > 0.5
         if layout:
             def rows() -> tuple[Array, NDArray[np.bool_]]:
