@@ -118,8 +118,8 @@ def instant_rows(model: Any, dead: int | None, solve_v: bool, q: list[Array], v_
     rows: the loaded voltages (with a reference voltage) and a fixed throttle's airspeed
     solved from the open-circuit voltages and ``v_in`` (or ``guess``, the unknowns of a
     stage nearby), to rounding as the CasADi function's Newton steps: Newton's chord
-    method, its Jacobian once by forward differences, until a step moves the unknowns by
-    less than 1e-13 (relative)."""
+    method, its Jacobian once by forward differences, each row until a step moves its
+    unknowns by less than 1e-13 (relative)."""
     n = model.n
     voltage_unknown = model.case.propulsion.reference_voltage_v is not None
     packs = par[model.n_par - 1]
@@ -147,11 +147,15 @@ def instant_rows(model: Any, dead: int | None, solve_v: bool, q: list[Array], v_
         moved[j] += h
         jac[:, j] = (equations(moved)[0] - res) / h
     inverse = np.linalg.inv(np.moveaxis(jac, (0, 1), (-2, -1)))
+    # each row (point) stops at its own convergence: its numbers are its own, whatever rows
+    # it is solved beside (the batches, the two cores' halves)
+    active = np.ones(z.shape[1:], dtype=bool)
     for _ in range(_CHORD_STEPS):
         delta = np.einsum("...ij,j...->i...", inverse, res)
-        z = z - delta
+        z = z - np.where(active, delta, 0.0)
         res, alg = equations(z)
-        if not (np.abs(delta) > 1e-13 * np.maximum(np.abs(z), 1.0)).any():
+        active &= np.any(np.abs(delta) > 1e-13 * np.maximum(np.abs(z), 1.0), axis=0)
+        if not active.any():
             break
     return alg
 
