@@ -450,7 +450,7 @@ def mission_for(case: Case, keys: list[str]) -> Any:
     and process, as :func:`evaluator_for`."""
     if case.requirements.mission is None:
         return None
-    from tuflexperf.analysis.mission import MissionModel
+    from tuflexperf.analysis.mission import mission_model
     from tuflexperf.analysis.mission_samples import why_not_sampled
     from tuflexperf.errors import NotAttainable
     from tuflexperf.io.mission import load_mission, mission_path
@@ -462,8 +462,8 @@ def mission_for(case: Case, keys: list[str]) -> Any:
         if len(_missions) >= EVALUATORS_KEPT:  # one case and its readings at a time
             _missions.clear()
         try:
-            _missions[key] = MissionModel(case, load_mission(path),
-                                          case.requirements.mission.min_landing_charge_fraction)
+            _missions[key] = mission_model(
+                case, load_mission(path), case.requirements.mission.min_landing_charge_fraction)
         except NotAttainable:  # the nominal plan cannot be flown: said by the nominal verdict
             _missions[key] = None
     model = _missions[key]
