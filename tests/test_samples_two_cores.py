@@ -1,12 +1,15 @@
 """A batch of samples on two cores (issue 42, speed): half its rows in a forked helper give
-the numbers of one batch, the readings judged over all rows at once; a helper that cannot
-start leaves its half to the parent, and an error in its half is raised in the parent."""
+the numbers of one batch, the readings judged over all rows at once, a mission flown half
+there too; a helper that cannot start leaves its half to the parent, and an error in its
+half is raised in the parent."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+import yaml
 
+from tests.conftest import SHIPPED_CASE
 from tuflexperf.analysis import uncertainty
 from tuflexperf.analysis.batch_readings import ReadingsEvaluator, readings_evaluator
 from tuflexperf.analysis.uncertainty import plan_for, run_samples
@@ -87,3 +90,33 @@ def test_an_error_in_the_helpers_half_is_raised_here(case, plan, monkeypatch) ->
                                    drawn_model_form=errors.model_form_maps is not None)
     with pytest.raises(ValueError, match="the helper's rows failed"):
         uncertainty._on_two_cores(evaluator, draw)
+
+
+def test_a_mission_flown_on_two_halves_gives_the_numbers_of_one_batch(tmp_path, monkeypatch
+                                                                      ) -> None:
+    """The shipped case with its test flight as a mission requirement: the helper flies the
+    mission for its half of the rows too (the parent flies only its own half)."""
+    shipped = SHIPPED_CASE
+    data = yaml.safe_load(shipped.read_text())
+    for key in ("aircraft", "propulsion", "battery"):
+        data[key] = str((shipped.parent / data[key]).resolve())
+    flight = shipped.parent.parent / "data" / "tuflex" / "missions" / "test_flight.yaml"
+    data["requirements"]["mission"] = {"file": str(flight), "min_landing_charge_fraction": 0.2}
+    path = tmp_path / "case.yaml"
+    path.write_text(yaml.safe_dump(data))
+    case = load_case(path)
+    plan = plan_for(case, samples=SAMPLES, seed=11)
+    one = _samples(case, plan, monkeypatch, split=False)
+    flown = []
+    original = uncertainty.fly_missions
+
+    def counted(case, evaluator, arguments, rows):
+        flown.append(arguments[1])
+        return original(case, evaluator, arguments, rows)
+
+    monkeypatch.setattr(uncertainty, "fly_missions", counted)
+    two = _samples(case, plan, monkeypatch, split=True)
+    assert flown == [600]  # the parent's half here; the other half in the helper
+    assert np.count_nonzero(np.isfinite(one.values["mission_landing_charge"])) > 500
+    assert "mission_landing_charge" in one.reading_values["measured_power"]
+    _assert_same(one, two)

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from tests.conftest import SHIPPED_CASE
 from tuflexperf.analysis.mission import STEPS, solve_mission
-from tuflexperf.analysis.mission_samples import sampled_landing
+from tuflexperf.analysis.mission_samples import SAMPLED_STEPS, sampled_landing
 from tuflexperf.analysis.uncertainty import evaluator_for, mission_for
 from tuflexperf.cli import app
 from tuflexperf.errors import NotAttainable
@@ -335,7 +335,6 @@ def test_sampled_steps_move_the_landing_far_less_than_the_monte_carlo_error(tmp_
     """The sampled mission flies SAMPLED_STEPS a segment, not the single case's 64: on 400
     draws of the shipped case the landing charge moves by at most 1e-6 (relative), the same
     rows not met."""
-    from tuflexperf.analysis.mission_samples import SAMPLED_STEPS
     from tuflexperf.analysis.uncertainty import draw_chunk, plan_for
 
     case = load_case(_case(tmp_path, SHIPPED_MISSION))
@@ -385,3 +384,30 @@ def test_the_readings_sharing_a_batchs_flights_fly_what_each_flies_alone(tmp_pat
     assert np.count_nonzero(np.isfinite(together[0])) > 200
     for other in together[1:]:
         assert not np.array_equal(other, together[0], equal_nan=True)
+
+
+@pytest.mark.parametrize("variant", ["sagging packs", "fixed throttle"])
+def test_a_rows_landing_is_its_own_whatever_rows_fly_beside_it(tmp_path, variant) -> None:
+    """Where the stages are solved (the loaded voltage, a fixed throttle's airspeed) each row
+    stops at its own convergence: three rows flown together land bit for bit as each flown
+    alone (the batches, the two cores' halves split rows anywhere)."""
+    (tmp_path / "fixed.yaml").write_text(SHIPPED_MISSION.read_text().replace(
+        "{type: cruise, airspeed_m_s: 26, time_min: 8}",
+        "{type: cruise, throttle: 0.6, time_min: 8}"))
+    path = (_variant(tmp_path, "propulsion", {"reference_voltage_v": 46.0,
+                                              "voltage_exponent": 1.5})
+            if variant == "sagging packs" else _case(tmp_path, tmp_path / "fixed.yaml"))
+    case = load_case(path)
+    draws = {k: np.array(v) for k, v in DRAWS.items()}
+    model = mission_for(case, list(draws))
+
+    def landing(rows: list[int]) -> np.ndarray:
+        values = {k: v[rows] for k, v in draws.items()}
+        return sampled_landing(model, evaluator_for(case), values, len(rows), None, None,
+                               SAMPLED_STEPS)["mission_landing_charge"][0]
+
+    together = landing([0, 1, 2])
+    alone = np.concatenate([landing([i]) for i in range(3)])
+    assert np.count_nonzero(np.isfinite(together)) >= 2
+    assert np.array_equal(together, alone, equal_nan=True)
+

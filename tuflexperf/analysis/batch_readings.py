@@ -115,21 +115,26 @@ class ReadingsEvaluator:
     def evaluate(self, values: Mapping[str, Array] | None = None, size: int | None = None,
                  coefficients: Array | None = None,
                  extrapolation_n: Array | None = None,
-                 power_scale: Array | None = None) -> BatchResult:
-        """As :meth:`BatchEvaluator.evaluate`, on every reading too."""
+                 power_scale: Array | None = None,
+                 shared: dict[Any, Any] | None = None) -> BatchResult:
+        """As :meth:`BatchEvaluator.evaluate`, on every reading too (``shared`` as
+        :meth:`readings_rows`)."""
         return self.combined(*self.readings_rows(values, size, coefficients, extrapolation_n,
-                                                 power_scale))
+                                                 power_scale, shared))
 
     def readings_rows(self, values: Mapping[str, Array] | None = None, size: int | None = None,
                       coefficients: Array | None = None,
                       extrapolation_n: Array | None = None,
-                      power_scale: Array | None = None
+                      power_scale: Array | None = None,
+                      shared: dict[Any, Any] | None = None
                       ) -> tuple[BatchResult, dict[str, dict[str, Array]]]:
         """The nominal batch's result and, by reading key, each reading's values where it
         is flown, before :meth:`combined` judges the rows on them (arguments as
-        :meth:`evaluate`)."""
+        :meth:`evaluate`; ``shared`` the caller's dict of these rows' thrust-only results,
+        :class:`~tuflexperf.analysis.batch_model.SharedRows`, for what else flies them)."""
         # the results that read only the thrust: made once for every reading that flies it
-        shared: dict[Any, Any] | None = {} if self.sharing else None
+        if shared is None and self.sharing:
+            shared = {}
         result = self.nominal.evaluate(values, size, coefficients, extrapolation_n, power_scale,
                                        shared)
         theirs: dict[str, dict[str, Array]] = {}

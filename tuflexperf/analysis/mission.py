@@ -57,6 +57,7 @@ from typing import Any
 
 import numpy as np
 
+from tuflexperf.analysis.cache import BoundedCache, file_key, fingerprint
 from tuflexperf.analysis.mission_equations import (
     _P_SIZE,
     ARC_STEPS,
@@ -89,7 +90,7 @@ from tuflexperf.io.mission import MissionFile
 __all__ = ["AIRBORNE_AT_END_M", "ARC_STEPS", "BURST_OVER_CONTINUOUS", "NEWTON",
            "RATING_SEGMENT_S", "SAMPLED_AIRCRAFT", "SECONDS_PER_HOUR", "STEPS",
            "AirbornePath", "MissionModel", "MissionResult", "SegmentResult", "airborne_path",
-           "solve_mission", "takeoff_layout", "takeoff_matrix"]
+           "mission_model", "solve_mission", "takeoff_layout", "takeoff_matrix"]
 
 
 class MissionModel(SegmentEquations, MissionPlanning, FlightChecks, SolveFor):
@@ -271,6 +272,22 @@ class MissionModel(SegmentEquations, MissionPlanning, FlightChecks, SolveFor):
         return self._result(states, aux, solved, th, d)
 
 
+_MODELS: BoundedCache[MissionModel] = BoundedCache(8)  # a case and its readings, twice
+
+
+def mission_model(case: Case, mission: MissionFile,
+                  min_landing_fraction: float | None = None) -> MissionModel:
+    """``MissionModel(case, mission, min_landing_fraction)``, built once per process for
+    equal inputs: ``check`` flies it and ``--samples`` flies its rows (a model is not changed
+    once built). Raises :class:`NotAttainable` as the model does (nothing kept then)."""
+    battery = case.battery_path
+    key = fingerprint(str(case.path), case.aircraft, case.propulsion, case.atmosphere,
+                      case.requirements, case.overrides, str(battery),
+                      file_key(battery) if battery is not None and battery.exists() else None,
+                      repr(mission), min_landing_fraction)
+    return _MODELS.get(key, lambda: MissionModel(case, mission, min_landing_fraction))
+
+
 def solve_mission(case: Case, mission: MissionFile,
                   min_landing_fraction: float | None = None) -> MissionResult:
     """Fly ``mission`` for ``case`` (solving its ``solve_for`` segment if it names one).
@@ -284,7 +301,7 @@ def solve_mission(case: Case, mission: MissionFile,
     SPEC 4 ("Mission file"), SPEC 5 (``mission`` command and JSON keys).
     """
     try:
-        model = MissionModel(case, mission, min_landing_fraction)
+        model = mission_model(case, mission, min_landing_fraction)
     except NotAttainable as exc:
         flown = _flown_up_to(case, mission, min_landing_fraction, exc)
         if flown is None:

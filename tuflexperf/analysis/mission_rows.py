@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -50,11 +51,12 @@ class Memo:
     case and its readings fly the same rows, and a reading differs from the nominal in one
     thing (the fans' power, a dead engine's drag), so most of its flight is the nominal's.
     Kept for one batch only (a batch's flights are ~100 MB at 10,000 rows). ``rows`` the
-    take-offs' thrust-only results (:class:`tuflexperf.analysis.batch_model.SharedRows`)."""
+    take-offs' thrust-only results (:class:`tuflexperf.analysis.batch_model.SharedRows`):
+    the batch's own where it evaluated the same rows."""
 
-    def __init__(self) -> None:
+    def __init__(self, rows: dict[Any, Any] | None = None) -> None:
         self._items: dict[Any, Any] = {}
-        self.rows: dict[Any, Any] = {}
+        self.rows: dict[Any, Any] = {} if rows is None else rows
 
     def get(self, key: Any, build: Any) -> Any:
         """The entry for ``key``, built by ``build()`` on first use."""
@@ -116,8 +118,8 @@ def instant_rows(model: Any, dead: int | None, solve_v: bool, q: list[Array], v_
     rows: the loaded voltages (with a reference voltage) and a fixed throttle's airspeed
     solved from the open-circuit voltages and ``v_in`` (or ``guess``, the unknowns of a
     stage nearby), to rounding as the CasADi function's Newton steps: Newton's chord
-    method, its Jacobian once by forward differences, until a step moves the unknowns by
-    less than 1e-13 (relative)."""
+    method, its Jacobian once by forward differences, each row until a step moves its
+    unknowns by less than 1e-13 (relative)."""
     n = model.n
     voltage_unknown = model.case.propulsion.reference_voltage_v is not None
     packs = par[model.n_par - 1]
@@ -145,21 +147,26 @@ def instant_rows(model: Any, dead: int | None, solve_v: bool, q: list[Array], v_
         moved[j] += h
         jac[:, j] = (equations(moved)[0] - res) / h
     inverse = np.linalg.inv(np.moveaxis(jac, (0, 1), (-2, -1)))
+    # each row (point) stops at its own convergence: its numbers are its own, whatever rows
+    # it is solved beside (the batches, the two cores' halves)
+    active = np.ones(z.shape[1:], dtype=bool)
     for _ in range(_CHORD_STEPS):
         delta = np.einsum("...ij,j...->i...", inverse, res)
-        z = z - delta
+        z = z - np.where(active, delta, 0.0)
         res, alg = equations(z)
-        if not (np.abs(delta) > 1e-13 * np.maximum(np.abs(z), 1.0)).any():
+        active &= np.any(np.abs(delta) > 1e-13 * np.maximum(np.abs(z), 1.0), axis=0)
+        if not active.any():
             break
     return alg
 
 
-def _aux_rows(alg: dict[str, Any], n: int, shape: tuple[int, ...]) -> Array:
-    """The aux output's rows (:func:`aux_size`) from :meth:`_algebra`'s dict."""
+def _aux_rows(alg: dict[str, Any], n: int, shape: tuple[int, ...]) -> list[Array]:
+    """The aux output's rows (:func:`aux_size`) from :meth:`_algebra`'s dict, each
+    ``shape`` (views where they can be: a phase's aux is read, never written)."""
     parts = [alg["x"], alg["v"], alg["rate"], alg["reached"], alg["idle_excess"],
              alg["level_residual"], *alg["current"], *alg["voltage"], *alg["power"],
              alg["thrust"]]
-    return np.stack([np.broadcast_to(np.asarray(x, dtype=float), shape) for x in parts])
+    return [np.broadcast_to(np.asarray(x, dtype=float), shape) for x in parts]
 
 
 def _coupled_phase(model: Any, plan: Any, kind: str, step: Array, p: list[Any], state: Array,
@@ -189,7 +196,7 @@ def _coupled_phase(model: Any, plan: Any, kind: str, step: Array, p: list[Any], 
                            last[-1] if last else None)
         if forced:
             alg["rate"] = pk[2]
-        a = _aux_rows(alg, n, (size,))
+        a = np.stack(_aux_rows(alg, n, (size,)))
         last[:] = [np.concatenate([a[6 + n:6 + 2 * n] if voltage_unknown else a[:0],
                                    a[1:2] if plan.solve_v else a[:0]])]
         return a
@@ -236,6 +243,35 @@ def fly_rows(model: Any, durations: Array, theta: Array, par: Array, tk: Array,
     by the readings of one batch, a phase flown already from the same inputs is not flown
     again (nor its flight where only the fans' power differs).
     """
+    states: list[Array] = []
+    auxes: list[Array] = []
+    bounds: list[tuple[int, int]] = []
+    nodes = 0
+    for plan, phases in flight_phases(model, durations, theta, par, tk, layout, steps, start,
+                                      first, memo):
+        if plan.kind == "event":
+            bounds.append((nodes, 0))
+            continue
+        begin = nodes
+        for s, a in phases:
+            states.append(s)
+            auxes.append(np.asarray(a))
+            nodes += s.shape[1]
+        bounds.append((begin, nodes))
+    return (np.concatenate(states, axis=1).transpose(0, 2, 1),
+            np.concatenate(auxes, axis=1).transpose(0, 2, 1), bounds)
+
+
+def flight_phases(model: Any, durations: Array, theta: Array, par: Array, tk: Array,
+                  layout: list[tuple[str, int]], steps: int, start: Array | None = None,
+                  first: int = 0, memo: Memo | None = None, tk_key: str | None = None
+                  ) -> Iterator[tuple[Any, list[tuple[Array, Any]]]]:
+    """:func:`fly_rows`'s flight segment by segment (arguments as it takes): each plan and
+    its phases' ``(states, aux)``, node-major as flown (``(2n + 3, S + 1, B)``, and
+    :func:`aux_size` rows ``(S + 1, B)``, an array or a list of them; a node's rows
+    contiguous; an event has none). A phase's
+    first node is the one before's last. ``tk_key``: a digest of ``tk`` known already (a
+    memo's key: ``tk`` need not be read to tell one flight's from another's)."""
     n = model.n
     size = par.shape[1]
     state = np.zeros((2 * n + 3, size)) if start is None else np.asarray(start, dtype=float)
@@ -245,17 +281,16 @@ def fly_rows(model: Any, durations: Array, theta: Array, par: Array, tk: Array,
     if memo is not None:  # the flight reads par's rows before the power corrections
         flight_par = digest(par[:len(SAMPLED_AIRCRAFT) + 2 + 7 * n])
         whole_par = digest(flight_par, par[len(SAMPLED_AIRCRAFT) + 2 + 7 * n:])
-    states: list[Array] = []
-    auxes: list[Array] = []
-    bounds: list[tuple[int, int]] = []
-    nodes = 0
-    with np.errstate(all="ignore"):
-        for plan in model.plans[first:]:
-            if plan.kind == "event":
-                bounds.append((nodes, 0))
-                continue
-            begin = nodes
-            for kind, step, p in _phases(model, plan, durations, theta, tk, layout, steps):
+        # what the phases' steps and parameters are made of (_phases): read once
+        made_of = (digest(durations, theta, tk_key or tk), steps, tuple(layout))
+    for plan in model.plans[first:]:
+        if plan.kind == "event":
+            yield plan, []
+            continue
+        phases = []
+        for number, (kind, step, p) in enumerate(_phases(model, plan, durations, theta, tk,
+                                                          layout, steps)):
+            with np.errstate(all="ignore"):
                 if coupled or (kind == "time" and isinstance(p[3], float) and p[3] > 0.5):
                     s, a = _coupled_phase(model, plan, kind, step, p, state, par)
                     height_key = state_key = None
@@ -266,21 +301,16 @@ def fly_rows(model: Any, durations: Array, theta: Array, par: Array, tk: Array,
                     # read again (its height by the flight's key: the power does not move it)
                     height_key = height_key or digest(state[2 * n])
                     state_key = state_key or digest(state)
-                    inputs = (model._flight_key(plan.dead), plan, kind, digest(step, *p))
+                    inputs = (model._flight_key(plan.dead), plan, kind, number, made_of)
                     aero_key = (*inputs, height_key, flight_par, "aero")
                     full_key = (*inputs, state_key, whole_par)
                     s, a = memo.get(full_key, functools.partial(
                         _decoupled_phase, model, plan, kind, step, p, state, par, memo,
                         aero_key))
                     height_key, state_key = aero_key, full_key
-                states.append(s)
-                auxes.append(a)
-                state = s[:, -1]
-                nodes += s.shape[1]
-            bounds.append((begin, nodes))
-    # flown node by node (a node's rows contiguous), returned as the chained function's
-    return (np.concatenate(states, axis=1).transpose(0, 2, 1),
-            np.concatenate(auxes, axis=1).transpose(0, 2, 1), bounds)
+            phases.append((s, a))
+            state = s[:, -1]
+        yield plan, phases
 
 
 def _accumulate(first: Array, increments: Array) -> Array:
@@ -299,10 +329,11 @@ _FLIGHT_KEYS = ("x", "v", "rate", "reached", "idle_excess", "level_residual", "t
 
 def _decoupled_phase(model: Any, plan: Any, kind: str, step: Array, p: list[Any],
                      state: Array, par: Array, memo: Any = None,
-                     memo_key: Any = None) -> tuple[Array, Array]:
+                     memo_key: Any = None) -> tuple[Array, list[Array]]:
     """One phase flown where the flight does not read the packs (no reference voltage):
     the flight at every stage point of every row at once, then RK4 on the packs' charge.
-    As :func:`_coupled_phase` returns. ``memo`` (:class:`Memo`) keeps the flight before its
+    As :func:`_coupled_phase` returns, the aux a list of rows (views of the flight's: not
+    copied into one array). ``memo`` (:class:`Memo`) keeps the flight before its
     power under ``memo_key``: a reading that changes only the fans' power reuses it."""
     n, size, steps = model.n, state.shape[1], step.shape[0]
     forced = plan.kind == "takeoff"  # the take-off's rows: airspeed and height rate given

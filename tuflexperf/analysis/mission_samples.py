@@ -30,7 +30,8 @@ Differential Equations*, 2nd ed., 2.3 (classic RK4, its error as the step's four
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import functools
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -47,8 +48,15 @@ from tuflexperf.analysis.mission import (
     takeoff_matrix,
 )
 from tuflexperf.analysis.mission_plan import best_endurance_eas_rows, level_speeds_at_throttle
-from tuflexperf.analysis.mission_rows import Memo, aux_size, digest, fly_rows, suffix_rows
+from tuflexperf.analysis.mission_rows import (
+    Memo,
+    aux_size,
+    digest,
+    flight_phases,
+    suffix_rows,
+)
 from tuflexperf.analysis.mission_solve import longest_rows
+from tuflexperf.models.battery import first_window_beyond
 
 Array = NDArray[np.float64]
 FLOWN_KEYS = ("aircraft.mass_kg", "aircraft.wing_area_m2", "aircraft.cd0", "aircraft.k",
@@ -137,6 +145,33 @@ def _takeoff_rows(model: MissionModel, m: Any, roll: tuple[Array, Array, Array, 
         ok &= np.isfinite(arc + climb) & ~np.asarray(transition_beyond_cl_max(load), dtype=bool)
     rows = takeoff_matrix(layout, stages, roll_s, rotation, np.where(ok, v_lo, 0.0), air)
     return np.where(ok[:, None, None], rows, 0.0), ok
+
+
+_LAUNCH_STATE = ("packs_roll", "packs_airborne", "packs_beyond", "packs_air", "release")
+"""What :meth:`BatchEvaluator.launch` leaves on the model besides its roll tuple."""
+
+
+def _launch(evaluator: Any, m: Any, size: int, height: Array, battery: dict[str, Array],
+            memo: Memo | None) -> tuple[Array, Array, Array, Array]:
+    """The rows' take-off (:meth:`BatchEvaluator.launch`), or with a ``memo`` the one a
+    flight of the batch on the same thrust and power made (a reading that moves only a dead
+    engine's drag), its state set on ``m`` as the launch sets it."""
+    from tuflexperf.analysis.readings import launch_identity
+
+    def launched() -> tuple[tuple[Array, Array, Array, Array], dict[str, Any]]:
+        # a column, as the batch's own take-off passes it: a (B,) height broadcast the
+        # launch's airborne part to (B, B) and judged every row at the first row's height
+        roll = evaluator.launch(m, size, height[:, None], battery)
+        return roll, {name: getattr(m, name) for name in _LAUNCH_STATE}
+
+    if memo is None:
+        return launched()[0]
+    roll, state = memo.get(digest("launch", launch_identity(evaluator.case), height,
+                                  str(sorted(battery)), *(battery[k] for k in sorted(battery))),
+                           launched)
+    for name, value in state.items():
+        setattr(m, name, value)
+    return roll
 
 
 @dataclass(frozen=True)
@@ -243,6 +278,7 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     par = model.parameters(aircraft, (field_m, dt_k), coefficients, extrapolation_n, size,
                            cells.packs)
     tk = np.zeros((size, model.tk.shape[0], 0))
+    tk_key: str | None = None  # the take-off rows' memo key (a digest of them)
     for plan in model.plans:
         if plan.solve_v:  # level at a fixed throttle: each row's own airspeed to start from
             guess = level_speeds_at_throttle(model, plan.start_h, plan.throttle, plan.dead, m,
@@ -253,9 +289,7 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
         # a runway's roll or a catapult's release, per row as the batch's take-off flies it
         height = _column(values, "requirements.takeoff.obstacle_height_m",
                          obstacle_height_of(case), size)
-        # a column, as the batch's own take-off passes it: a (B,) height broadcast the
-        # launch's airborne part to (B, B) and judged every row at the first row's height
-        roll = evaluator.launch(m, size, height[:, None], battery)
+        roll = _launch(evaluator, m, size, height, battery, memo)
         ok &= roll[3] > 0.5
         if layout:
             def rows() -> tuple[Array, NDArray[np.bool_]]:
@@ -263,9 +297,13 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
 
             # the rows read the thrust alone but on sagging packs: a reading on the same
             # thrust, from the same launch, takes the nominal's
-            tk, launched = (rows() if memo is None or m.packs_roll is not None else memo.get(
-                ("takeoff rows", evaluator.thrust_identity[0], model.takeoff_to_obstacle,
-                 tuple(layout), digest(*roll, height)), rows))
+            if memo is not None and m.packs_roll is None:
+                tk_key = digest("takeoff rows", evaluator.thrust_identity[0],
+                                str(model.takeoff_to_obstacle), str(layout),
+                                digest(*roll, height))
+                tk, launched = memo.get(tk_key, rows)
+            else:
+                tk, launched = rows()
             ok &= launched
     k = model.mission.solve_for
     nodes = sum((sum(c + 1 for _, c in layout) if plan.kind == "takeoff" else steps + 1)
@@ -278,19 +316,20 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
             start = np.full((2 * model.n + 3, size), np.nan)
         for first in range(0, size, count):
             rows = slice(first, min(first + count, size))
-            states, aux, bounds = fly_rows(model, durations[:, rows], theta[:, rows],
-                                           par[:, rows], tk[rows], layout, steps,
-                                           memo=memo)
             propulsion = evaluator._propulsion(None if coefficients is None
                                                else coefficients[:, rows, :])
-            flown = _flown(model, bounds, states, aux, propulsion, field_m[rows], dt_k[rows],
-                           cutoff[rows], stall[rows], cells, rows)
+            flown, end, entry = _flown(
+                model, flight_phases(model, durations[:, rows], theta[:, rows], par[:, rows],
+                                     tk[rows], layout, steps, memo=memo,
+                                     tk_key=None if tk_key is None
+                                     else f"{tk_key}:{rows.start}:{rows.stop}"),
+                propulsion, field_m[rows], dt_k[rows], cutoff[rows], stall[rows], cells, rows,
+                k)
             with np.errstate(invalid="ignore"):
-                value = np.min(1.0 - states[:model.n, :, -1] / cells.capacity_ah[rows],
-                               axis=0)
+                value = np.min(1.0 - end[:model.n] / cells.capacity_ah[rows], axis=0)
             landing[rows] = np.where(flown & ok[rows], value, np.nan)
             if start is not None:
-                start[:, rows] = states[:, :, bounds[k][0]]
+                start[:, rows] = entry
         return landing, start
 
     landing, start = fly(durations)
@@ -306,82 +345,102 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     return {MISSION_LANDING: (landing, reserve), MISSION_SOLVED: (solved, written)}
 
 
-def _flown(model: MissionModel, bounds: list[tuple[int, int]], states: Array, aux: Array,
+def _flown(model: MissionModel, flight: Iterator[tuple[Any, list[tuple[Array, Any]]]],
            propulsion: Any, field_m: Array, dt_k: Array, cutoff: Array, stall: Array,
-           cells: PackRowsOfMission, rows: slice) -> NDArray[np.bool_]:
-    """Per row: the whole flight is attainable by :meth:`MissionModel._result`'s rules (the
-    cut-off, full throttle, the pack's burst and continuous ratings, the fans' jet velocity,
-    climbs that climb and descents that descend, a fixed throttle's airspeed above stall).
-    ``states``/``aux`` ``(k, B, nodes)``; per row the field [m], temperature offset [K],
-    the packs' cut-off [V] and the least EAS of level flight [m/s]; the ``rows`` of
-    ``cells``' packs (:func:`pack_rows_of`)."""
+           cells: PackRowsOfMission, rows: slice, entered: int | None = None
+           ) -> tuple[NDArray[np.bool_], Array, Array | None]:
+    """Per row: the whole ``flight`` (:func:`~tuflexperf.analysis.mission_rows.flight_phases`)
+    is attainable by :meth:`MissionModel._result`'s rules (the cut-off, full throttle, the
+    pack's burst and continuous ratings, the fans' jet velocity, climbs that climb and
+    descents that descend, a fixed throttle's airspeed above stall), judged phase by phase
+    as it is flown; and the states at the landing and where segment ``entered`` begins
+    (``(2n + 3, B)``, None without). Per row the field [m], temperature offset [K], the
+    packs' cut-off [V] and the least EAS of level flight [m/s]; the ``rows`` of ``cells``'
+    packs (:func:`pack_rows_of`)."""
+    n = model.n
+    pole = cells.pole_ah[rows]
+    rating = None if cells.rating_a is None else cells.rating_a[rows]
+    per_pack = model.battery.packs_in_parallel_per_engine
+    ok = np.ones(field_m.shape[0], dtype=bool)
+    heavy = np.zeros_like(ok)  # rows with a step beyond the continuous rating
+    histories: list[tuple[Array, Array]] = []  # each phase's time and charges
+    end: Array = np.empty(0)
+    entry = None
+    with np.errstate(invalid="ignore", over="ignore"):
+        for plan, phases in flight:
+            if entered is not None and plan.index == entered:
+                entry = phases[0][0][:, 0] if phases else end
+            for states, aux in phases:
+                ok &= _phase_ok(model, plan, states, aux, propulsion, field_m, dt_k, cutoff,
+                                stall, pole, rating, per_pack)
+                q, t = states[:n], states[2 * n + 2]
+                histories.append((t, q))
+                if rating is not None:
+                    # a stretch's mean current is a mean of the steps' (charge linear between
+                    # nodes): only rows with a step beyond the rating can have a stretch
+                    # beyond it (a phase's first node is the one before's last: no step)
+                    dt = np.broadcast_to(np.diff(t, axis=0), q[:, 1:].shape)
+                    dq = np.diff(q, axis=1) * SECONDS_PER_HOUR / per_pack
+                    step = np.divide(dq, dt, out=np.where(dq == 0.0, 0.0, np.inf),
+                                     where=dt > 0)
+                    heavy |= np.any(~(step <= rating[None, None, :]), axis=(0, 1))
+                end = states[:, -1]
+        index = np.flatnonzero(heavy)
+        if index.size and len(histories) > 0 and sum(t.shape[0] for t, _ in histories) > 1:
+            t = np.concatenate([t[:, index] for t, _ in histories]).T
+            q = np.concatenate([q[:, :, index] for _, q in histories], axis=1)
+            last = first_window_beyond(t, q.transpose(2, 0, 1) / per_pack, rating[index],
+                                       RATING_SEGMENT_S)[0]
+            ok[index] &= ~np.isfinite(last)
+    return ok, end, entry
+
+
+def _phase_ok(model: MissionModel, plan: Any, states: Array, aux: Any, propulsion: Any,
+              field_m: Array, dt_k: Array, cutoff: Array, stall: Array, pole: Array,
+              rating: Array | None, per_pack: int) -> NDArray[np.bool_]:
+    """Per row: one phase of segment ``plan`` (``states``/``aux`` ``(k, S + 1, B)``) breaks
+    none of :func:`_flown`'s rules but the continuous rating (``aux`` a sequence of
+    :func:`~tuflexperf.analysis.mission_rows.aux_size` rows)."""
     from tuflexperf.models.atmosphere import isa_density_kg_m3
-    from tuflexperf.models.battery import first_window_beyond
     from tuflexperf.models.powertrain import beyond_jet_velocity
     from tuflexperf.models.thrust import density_ratio, engine_thrust_n
 
     n = model.n
-    q, h, t = states[:n], states[2 * n], states[2 * n + 2]
-    v, rate, reached, idle = aux[1], aux[2], aux[3], aux[4]
-    current, voltage, thrust = aux[6:6 + n], aux[6 + n:6 + 2 * n], aux[6 + 3 * n]
-    size = q.shape[1]
-    ok = np.ones(size, dtype=bool)
-    pole = cells.pole_ah[rows]
-    rating = None if cells.rating_a is None else cells.rating_a[rows]
-    per_pack = model.battery.packs_in_parallel_per_engine
-    with np.errstate(invalid="ignore", over="ignore"):
-        rising = np.all(np.diff(q, axis=2) >= -1e-12, axis=(0, 2))
-        ok &= rising & np.all(np.isfinite(q) & (q < pole[None, :, None]), axis=(0, 2))
-        ok &= np.all(np.isfinite(current) & (current >= 0.0), axis=(0, 2))
-        if rating is not None and t.shape[1] > 1:
-            # a stretch's mean current is a mean of the steps' (charge linear between nodes):
-            # only rows with a step beyond the rating can have a stretch beyond it
-            # (a segment's first node is the last one's end: no time between them, no step)
-            dt = np.broadcast_to(np.diff(t, axis=1), q[:, :, 1:].shape)
-            dq = np.diff(q, axis=2) * SECONDS_PER_HOUR / per_pack
-            steps = np.divide(dq, dt, out=np.where(dq == 0.0, 0.0, np.inf), where=dt > 0)
-            heavy = np.flatnonzero(np.any(~(steps <= rating[None, :, None]), axis=(0, 2)))
-            if heavy.size:
-                end = first_window_beyond(t[heavy], q[:, heavy].transpose(1, 0, 2) / per_pack,
-                                          rating[heavy], RATING_SEGMENT_S)[0]
-                ok[heavy] &= ~np.isfinite(end)
-        for plan, (a, b) in zip(model.plans, bounds, strict=True):
-            if plan.kind == "event":
-                continue
-            live = [i for i in range(n) if i != plan.dead]
-            sl = slice(a, b)
-            ok &= np.all(np.min(voltage[live, :, sl], axis=0) >= cutoff[:, None] - 1e-9, axis=1)
-            ok &= np.all(reached[:, sl] >= 0.5, axis=1)
-            if rating is not None and live:
-                peak = np.max(current[live, :, sl], axis=0) / per_pack
-                ok &= ~np.any(peak > (BURST_OVER_CONTINUOUS * (1.0 + 1e-9) * rating)[:, None],
-                              axis=1)
-            if plan.kind != "takeoff":
-                rho = (np.full(h[:, sl].shape, model.fixed_density)
-                       if model.fixed_density is not None
-                       else isa_density_kg_m3(field_m[:, None] + h[:, sl], dt_k[:, None]))
-                if plan.solve_v:  # the airspeed is an outcome here: stall bounds it; the
-                    # throttle must hold level flight all along
-                    ok &= np.all(np.abs(aux[5][:, sl]) < 1e-9, axis=1)
-                    slow = v[:, sl] < stall[:, None] * np.sqrt(1.225 / rho) * (1 - 1e-12)
-                    ok &= ~np.any(slow, axis=1)
-                    # a live fan whose models give no thrust, or thrust on no power, flies
-                    # no cruise (MissionModel._braking_engine)
-                    sigma = density_ratio(propulsion, rho)
-                    for i in live:
-                        pull = engine_thrust_n(propulsion.engines[i], plan.throttle, v[:, sl],
-                                               sigma)
-                        power = model._modelled_power(i, plan.throttle, v[:, sl], rho)
-                        ok &= ~np.any((np.asarray(pull) <= 0.0) | (np.asarray(power) <= 0.0),
-                                      axis=1)
-                fast = np.asarray(beyond_jet_velocity(propulsion, v[:, sl], rho), dtype=bool)
-                ok &= ~np.any(fast & (thrust[:, sl] > 0.0), axis=1)
-            if plan.kind == "height":
-                climbing = plan.end_h > plan.start_h
-                wrong = (rate[:, sl] <= 0) if climbing else (rate[:, sl] >= 0)
-                ok &= ~np.any(wrong, axis=1)
-                if plan.solve_x:
-                    ok &= ~np.any(abs(plan.rate) >= v[:, sl], axis=1)
-                    if not climbing:
-                        ok &= ~np.any(idle[:, sl] > 1e-9, axis=1)
+    q, h = states[:n], states[2 * n]
+    v, rate, reached, idle, thrust = aux[1], aux[2], aux[3], aux[4], aux[6 + 3 * n]
+    rising = np.all(np.diff(q, axis=1) >= -1e-12, axis=(0, 1))
+    ok = rising & np.all(np.isfinite(q) & (q < pole), axis=(0, 1))
+    for i in range(n):
+        ok &= np.all(np.isfinite(aux[6 + i]) & (aux[6 + i] >= 0.0), axis=0)
+    live = [i for i in range(n) if i != plan.dead]
+    least = functools.reduce(np.minimum, [aux[6 + n + i] for i in live])
+    ok &= np.all(least >= cutoff - 1e-9, axis=0)
+    ok &= np.all(reached >= 0.5, axis=0)
+    if rating is not None and live:
+        peak = np.max([np.max(aux[6 + i], axis=0) for i in live], axis=0) / per_pack
+        ok &= ~(peak > BURST_OVER_CONTINUOUS * (1.0 + 1e-9) * rating)
+    if plan.kind != "takeoff":
+        rho = (np.full(h.shape, model.fixed_density) if model.fixed_density is not None
+               else isa_density_kg_m3(field_m + h, dt_k))
+        if plan.solve_v:  # the airspeed is an outcome here: stall bounds it; the throttle
+            # must hold level flight all along
+            ok &= np.all(np.abs(aux[5]) < 1e-9, axis=0)
+            ok &= ~np.any(v < stall * np.sqrt(1.225 / rho) * (1 - 1e-12), axis=0)
+            # a live fan whose models give no thrust, or thrust on no power, flies no cruise
+            # (MissionModel._braking_engine)
+            # (row-major: a drawn thrust's coefficients are columns, one a row)
+            sigma = density_ratio(propulsion, rho.T)
+            for i in live:
+                pull = engine_thrust_n(propulsion.engines[i], plan.throttle, v.T, sigma)
+                power = model._modelled_power(i, plan.throttle, v.T, rho.T)
+                ok &= ~np.any((np.asarray(pull) <= 0.0) | (np.asarray(power) <= 0.0), axis=1)
+        fast = np.asarray(beyond_jet_velocity(propulsion, v.T, rho.T), dtype=bool)
+        ok &= ~np.any(fast & (thrust.T > 0.0), axis=1)
+    if plan.kind == "height":
+        climbing = plan.end_h > plan.start_h
+        ok &= ~np.any((rate <= 0) if climbing else (rate >= 0), axis=0)
+        if plan.solve_x:
+            ok &= ~np.any(abs(plan.rate) >= v, axis=0)
+            if not climbing:
+                ok &= ~np.any(idle > 1e-9, axis=0)
     return ok

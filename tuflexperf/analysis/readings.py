@@ -65,6 +65,7 @@ Provider = Callable[[Case], tuple[Reading, ...]]
 
 
 _IDENTITIES: ByObject[tuple[str, str]] = ByObject()
+_LAUNCHES: ByObject[str] = ByObject()
 
 
 def thrust_identity(case: Case) -> tuple[str, str]:
@@ -76,10 +77,24 @@ def thrust_identity(case: Case) -> tuple[str, str]:
     return _IDENTITIES.get(case, lambda: _thrust_identity(case))
 
 
-def _thrust_identity(case: Case) -> tuple[str, str]:
+def launch_identity(case: Case) -> str:
+    """A fingerprint of what ``case``'s take-off reads with every engine running: its thrust
+    and its fans' power, never a dead engine's windmilling drag (a reading that moves only
+    that flies the same take-off). Kept per case object."""
+    return _LAUNCHES.get(case, lambda: fingerprint(*_case_parts(case), dataclasses.replace(
+        case.propulsion, engines=tuple(dataclasses.replace(e, windmilling_drag_coefficient=None)
+                                       for e in case.propulsion.engines))))
+
+
+def _case_parts(case: Case) -> tuple[object, ...]:
+    """What every fingerprint of ``case`` reads beside its propulsion."""
     battery = case.battery_path
-    parts = (case.aircraft, case.atmosphere, case.requirements, case.overrides, str(battery),
-             file_key(battery) if battery is not None and battery.exists() else None)
+    return (case.aircraft, case.atmosphere, case.requirements, case.overrides, str(battery),
+            file_key(battery) if battery is not None and battery.exists() else None)
+
+
+def _thrust_identity(case: Case) -> tuple[str, str]:
+    parts = _case_parts(case)
 
     def engines(**cleared: None) -> object:
         thrust = thrust_part(case.propulsion)

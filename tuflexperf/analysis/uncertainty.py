@@ -242,10 +242,14 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range,
     evaluator = readings_evaluator(case, drawn=plan.extrapolation,
                                    drawn_model_form=errors.model_form_maps is not None)
     if two_cores and draw.size >= SPLIT_ROWS and second_core_idle():
-        result = _on_two_cores(evaluator, draw)
+        result, mission = _on_two_cores(evaluator, draw, case)
     else:
+        # the thrust-only results of these rows (the take-off's roll, ...): the mission's
+        # take-off reads them too (batch_model.SharedRows)
+        rows: dict[Any, Any] = {}
         result = evaluator.evaluate(draw.values, draw.size, draw.coefficients,
-                                    draw.extrapolation_n, draw.power_scale)
+                                    draw.extrapolation_n, draw.power_scale, rows)
+        mission = fly_missions(case, evaluator, _draw_rows(draw, slice(None)), rows)
     # a sample outside a key's schema bounds (a negative cd0 from a wide normal) is no
     # aircraft: every requirement counts it as not met, and it is reported
     outside = np.zeros(draw.size, dtype=bool)
@@ -268,25 +272,9 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range,
     out.update({f"value:{k}": np.where(outside, np.nan, v) for k, v in result.values.items()})
     out.update({f"limit:{k}": v for k, v in result.limits.items()})
     readings = {key: dict(by_name) for key, by_name in result.reading_values.items()}
-    model = mission_for(case, list(draw.values))
-    if model is not None:
-        from tuflexperf.analysis.mission_rows import Memo
-        from tuflexperf.analysis.mission_samples import SAMPLED_STEPS, sampled_landing
-
-        memo = Memo()  # the readings fly the nominal's rows: what they do not change, once
-
-        def fly(mission: Any, on: Case) -> dict[str, tuple[Array, Array]]:
-            return sampled_landing(mission, evaluator_for(on), draw.values, draw.size,
-                                   draw.coefficients, draw.extrapolation_n, SAMPLED_STEPS,
-                                   memo)
-
-        flown = fly(model, case)
-        theirs = []
-        for reading in evaluator.all_readings:
-            other = (mission_for(reading.case, list(draw.values))
-                     if "mission" in reading.affects else None)
-            if other is not None:
-                theirs.append((reading, {n: v for n, (v, _) in fly(other, reading.case).items()}))
+    if mission is not None:
+        flown, by_key = mission
+        theirs = [(r, by_key[r.key]) for r in evaluator.all_readings if r.key in by_key]
         values = {n: v for n, (v, _) in flown.items()}
         limits = {n: lim for n, (_, lim) in flown.items()}
         worse, _, by_reading = combine_rows(values, limits, MISSION_KINDS, theirs)
@@ -299,6 +287,52 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range,
         for name, value in by_name.items():
             out[f"reading:{key}:{name}"] = np.where(outside, np.nan, value)
     return out
+
+
+MissionRows = tuple[dict[str, tuple[Array, Array]], dict[str, dict[str, Array]]]
+"""A mission flown for a batch's rows: per requirement its values and limits, and by reading
+key each reading's values (:func:`fly_missions`)."""
+
+
+def fly_missions(case: Case, evaluator: Any, arguments: tuple[Any, ...],
+                 rows: dict[Any, Any] | None) -> MissionRows | None:
+    """The case's mission flown for the rows ``arguments`` (:func:`_draw_rows`'s) on the
+    nominal case and on every reading of ``evaluator`` that bears on it; None where the
+    batch flies no mission. ``rows`` the batch's thrust-only results of the same rows
+    (:class:`~tuflexperf.analysis.batch_model.SharedRows`), or None."""
+    values, size, coefficients, extrapolation_n, _ = arguments
+    model = mission_for(case, list(values))
+    if model is None:
+        return None
+    from tuflexperf.analysis.mission_rows import Memo
+    from tuflexperf.analysis.mission_samples import SAMPLED_STEPS, sampled_landing
+
+    memo = Memo(rows)  # the readings fly the nominal's rows: what they do not change, once
+
+    def fly(mission: Any, on: Case) -> dict[str, tuple[Array, Array]]:
+        return sampled_landing(mission, evaluator_for(on), values, size, coefficients,
+                               extrapolation_n, SAMPLED_STEPS, memo)
+
+    flown = fly(model, case)
+    theirs: dict[str, dict[str, Array]] = {}
+    for reading in evaluator.all_readings:
+        other = (mission_for(reading.case, list(values))
+                 if "mission" in reading.affects else None)
+        if other is not None:
+            theirs[reading.key] = {n: v for n, (v, _) in fly(other, reading.case).items()}
+    return flown, theirs
+
+
+def _joined_missions(parts: list[MissionRows | None]) -> MissionRows | None:
+    """Consecutive rows' :func:`fly_missions` as those of one batch."""
+    if parts[0] is None:
+        return None
+    done = [p for p in parts if p is not None]
+    flown = {n: (np.concatenate([p[0][n][0] for p in done]),
+                 np.concatenate([p[0][n][1] for p in done])) for n in done[0][0]}
+    theirs = {k: {n: np.concatenate([p[1][k][n] for p in done]) for n in by_name}
+              for k, by_name in done[0][1].items()}
+    return flown, theirs
 
 
 SPLIT_ROWS = 2 * CHUNK_SIZE
@@ -331,9 +365,12 @@ def _draw_rows(draw: ChunkDraw, rows: slice) -> tuple[Any, ...]:
             part(draw.coefficients, 1), part(draw.extrapolation_n, 1), part(draw.power_scale))
 
 
-def _on_two_cores(evaluator: Any, draw: ChunkDraw) -> Any:
-    """``evaluator.evaluate`` of ``draw``'s rows, the second half of them in a forked helper
-    process while this one does the first; the readings are judged over all rows at once.
+def _on_two_cores(evaluator: Any, draw: ChunkDraw, case: Case | None = None
+                  ) -> tuple[Any, MissionRows | None]:
+    """``evaluator.evaluate`` of ``draw``'s rows and ``case``'s mission flown for them
+    (:func:`fly_missions`; None without a case), the second half of the rows in a forked
+    helper process while this one does the first; the readings are judged over all rows
+    at once.
 
     A row's results are its own whatever rows share its batch (each solver stops a row at
     its own convergence), so the numbers are those of one batch. A helper that cannot be
@@ -345,8 +382,7 @@ def _on_two_cores(evaluator: Any, draw: ChunkDraw) -> Any:
     from tuflexperf.io.files import raise_if_interrupted, start_helper, stop_helpers
 
     if "fork" not in multiprocessing.get_all_start_methods():  # it would pickle the models
-        return evaluator.evaluate(draw.values, draw.size, draw.coefficients,
-                                  draw.extrapolation_n, draw.power_scale)
+        return _rows_and_mission(evaluator, _draw_rows(draw, slice(None)), case)
     half = draw.size // 2
     first, second = _draw_rows(draw, slice(0, half)), _draw_rows(draw, slice(half, None))
     reader, writer = multiprocessing.Pipe(duplex=False)
@@ -354,16 +390,16 @@ def _on_two_cores(evaluator: Any, draw: ChunkDraw) -> Any:
     finished = False
     try:
         try:
-            start_helper(_rows_beside, (evaluator, second, writer), helpers)
+            start_helper(_rows_beside, (evaluator, second, writer, case), helpers)
         except OSError:  # no process to be had: its half here (EOF below)
             pass
         writer.close()  # the helper's end: the pipe ends here when the helper does
-        mine = evaluator.readings_rows(*first)
+        mine = _rows_and_mission(evaluator, first, case, combine=False)
         try:
             theirs: Any = reader.recv()
         except EOFError:  # no helper, or it died (killed from outside): its half here
             raise_if_interrupted()
-            theirs = evaluator.readings_rows(*second)
+            theirs = _rows_and_mission(evaluator, second, case, combine=False)
         if isinstance(theirs, BaseException):
             raise theirs
         finished = True
@@ -374,14 +410,27 @@ def _on_two_cores(evaluator: Any, draw: ChunkDraw) -> Any:
         reader.close()
         for helper in helpers:
             helper.join()
-    return evaluator.combined(*joined_rows([mine, theirs]))
+    return (evaluator.combined(*joined_rows([mine[0], theirs[0]])),
+            _joined_missions([mine[1], theirs[1]]))
 
 
-def _rows_beside(evaluator: Any, arguments: tuple[Any, ...], writer: Any) -> None:
-    """The helper of :func:`_on_two_cores`: its rows' readings_rows (or the error they
-    raised) sent on ``writer``."""
+def _rows_and_mission(evaluator: Any, arguments: tuple[Any, ...], case: Case | None,
+                      combine: bool = True) -> tuple[Any, MissionRows | None]:
+    """The rows ``arguments`` (:func:`_draw_rows`'s): their ``readings_rows`` (judged on the
+    readings where ``combine``) and ``case``'s mission flown for them, sharing their
+    thrust-only results."""
+    rows: dict[Any, Any] = {}
+    result = evaluator.readings_rows(*arguments, rows)
+    mission = None if case is None else fly_missions(case, evaluator, arguments, rows)
+    return (evaluator.combined(*result) if combine else result), mission
+
+
+def _rows_beside(evaluator: Any, arguments: tuple[Any, ...], writer: Any,
+                 case: Case | None = None) -> None:
+    """The helper of :func:`_on_two_cores`: its rows' readings_rows and mission (or the
+    error they raised) sent on ``writer``."""
     try:
-        outcome: Any = evaluator.readings_rows(*arguments)
+        outcome: Any = _rows_and_mission(evaluator, arguments, case, combine=False)
     except Exception as exc:  # raised again in the parent, as if the rows ran there
         outcome = exc
     try:
@@ -401,7 +450,7 @@ def mission_for(case: Case, keys: list[str]) -> Any:
     and process, as :func:`evaluator_for`."""
     if case.requirements.mission is None:
         return None
-    from tuflexperf.analysis.mission import MissionModel
+    from tuflexperf.analysis.mission import mission_model
     from tuflexperf.analysis.mission_samples import why_not_sampled
     from tuflexperf.errors import NotAttainable
     from tuflexperf.io.mission import load_mission, mission_path
@@ -413,8 +462,8 @@ def mission_for(case: Case, keys: list[str]) -> Any:
         if len(_missions) >= EVALUATORS_KEPT:  # one case and its readings at a time
             _missions.clear()
         try:
-            _missions[key] = MissionModel(case, load_mission(path),
-                                          case.requirements.mission.min_landing_charge_fraction)
+            _missions[key] = mission_model(
+                case, load_mission(path), case.requirements.mission.min_landing_charge_fraction)
         except NotAttainable:  # the nominal plan cannot be flown: said by the nominal verdict
             _missions[key] = None
     model = _missions[key]
