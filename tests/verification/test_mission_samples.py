@@ -411,3 +411,44 @@ def test_a_rows_landing_is_its_own_whatever_rows_fly_beside_it(tmp_path, variant
     assert np.count_nonzero(np.isfinite(together)) >= 2
     assert np.array_equal(together, alone, equal_nan=True)
 
+
+
+def test_a_drawn_power_scale_is_flown_as_the_correction_law_that_scales_every_fan(
+        tmp_path) -> None:
+    """The drawn power scale (the power model's and the battery fit's errors) reaches the
+    sampled mission: a row at scale 1 is the unscaled row exactly, more power lands with less
+    charge (the take-off's packs too), and an airborne row at scale s is the mission flown with
+    a measured-power law r = s on every fan (the reading's path, held to the single case by
+    the measured-power tests)."""
+    import copy
+    import dataclasses
+
+    from tuflexperf.models.power_correction import PowerCorrection
+
+    name = "mission_landing_charge"
+    scale = np.array([1.0, 1.08, 0.93])
+    values = {"aircraft.mass_kg": np.array([22.0, 22.0, 22.0])}
+    case = load_case(_case(tmp_path, SHIPPED_MISSION))
+    model = mission_for(case, list(values))
+    plain = sampled_landing(model, evaluator_for(case), values, 3, None, None, STEPS)[name][0]
+    scaled = sampled_landing(model, evaluator_for(case), values, 3, None, None, STEPS,
+                             power_scale=scale)[name][0]
+    assert scaled[0] == plain[0]
+    assert scaled[1] < plain[0] < scaled[2]
+
+    mission = tmp_path / "airborne.yaml"
+    mission.write_text(AIRBORNE)
+    case = load_case(_case(tmp_path, mission))
+    model = mission_for(case, list(values))
+    scaled = sampled_landing(model, evaluator_for(case), values, 3, None, None, STEPS,
+                             power_scale=scale)[name][0]
+    for row, s in enumerate(scale):
+        law = PowerCorrection(float(s), 0.0, 0.0, (0.0, 1.0), (0.0, 1e3))
+        with_law = copy.copy(model)  # the process's model stays as it is
+        with_law.fan_power = dataclasses.replace(model.fan_power, power_correction=law)
+        with_law.case = dataclasses.replace(case, propulsion=dataclasses.replace(
+            case.propulsion, engines=tuple(dataclasses.replace(e, power_correction=law)
+                                           for e in case.propulsion.engines)))
+        one = {"aircraft.mass_kg": np.array([22.0])}
+        flown = sampled_landing(with_law, evaluator_for(case), one, 1, None, None, STEPS)
+        assert flown[name][0][0] == pytest.approx(scaled[row], rel=1e-12)

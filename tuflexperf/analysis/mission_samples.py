@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 
 from tuflexperf.analysis.mission import (
     BURST_OVER_CONTINUOUS,
+    CORRECTION_SIZE,
     RATING_SEGMENT_S,
     SECONDS_PER_HOUR,
     MissionModel,
@@ -79,6 +80,15 @@ the landing charge is within 2.4e-7 (relative) of 64 steps' (the single case's
 cruise of 40 min moves by 6.6e-7 (relative)."""
 MISSION_LANDING = "mission_landing_charge"
 MISSION_SOLVED = "mission_solved_time"
+
+
+def scale_power_laws(model: MissionModel, par: Array, scale: Array) -> None:
+    """``par``'s power correction laws times ``scale`` ``(B,)`` [-] per row, in place: the
+    law's ``c0``, ``c_x`` and ``c_V`` scale its ratio, so every fan's power (engines' and the
+    fan-power law's) is the drawn multiple of the row's model (:data:`CORRECTION_SIZE`)."""
+    first = model.n_par - 1 - CORRECTION_SIZE * (model.n + 1)
+    for law in range(first, model.n_par - 1, CORRECTION_SIZE):
+        par[law:law + 3] *= scale
 
 
 def why_not_sampled(model: MissionModel, keys: list[str]) -> str | None:
@@ -206,7 +216,8 @@ def pack_rows_of(model: MissionModel, values: Mapping[str, Array], size: int
 def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Array],
                     size: int, coefficients: Array | None,
                     extrapolation_n: Array | None, steps: int = SAMPLED_STEPS,
-                    memo: Memo | None = None) -> dict[str, tuple[Array, Array]]:
+                    memo: Memo | None = None, power_scale: Array | None = None
+                    ) -> dict[str, tuple[Array, Array]]:
     """Per requirement its values and limits per row: ``mission_landing_charge`` (the least
     landing charge fraction, NaN where the mission is not attainable; the reserve) and with
     ``solve_for`` ``mission_solved_time`` (the longest time of that segment [min], solved
@@ -217,7 +228,9 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     ``coefficients`` ``(E, B, 6)`` and ``extrapolation_n`` ``(E, B)`` [N per m/s] as drawn;
     ``steps`` the RK4 steps of each segment (:func:`tuflexperf.analysis.mission_rows.fly_rows`);
     ``memo`` shared by the nominal case and its readings for one batch (what a reading does
-    not change is flown once).
+    not change is flown once); ``power_scale`` ``(B,)`` [-] the drawn scale on every fan's
+    electrical power (the power model's and the battery fit's errors), as the batch's
+    endurance flies it: on the launch and on each correction law of ``par``.
     """
     from tuflexperf.analysis.airborne import obstacle_height_of
     from tuflexperf.analysis.attainable import stall_margin_of
@@ -244,7 +257,7 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
     # the readings' take-offs on the nominal's thrust take its thrust-only results
     m = _Model(aircraft=aircraft, propulsion=evaluator._propulsion(coefficients),
                density=evaluator._density(values, size), extrapolation_n=extrapolation_n,
-               size=size, stall_margin=margin,
+               size=size, stall_margin=margin, power_scale=power_scale,
                shared=None if memo is None else SharedRows(memo.rows,
                                                            *evaluator.thrust_identity))
     theta = np.repeat(model.theta[:, None], size, axis=1)
@@ -277,6 +290,8 @@ def sampled_landing(model: MissionModel, evaluator: Any, values: Mapping[str, Ar
         ok &= ~rating_rows(case, evaluator._side, battery["battery.capacity_ah"]).reshape(-1)
     par = model.parameters(aircraft, (field_m, dt_k), coefficients, extrapolation_n, size,
                            cells.packs)
+    if power_scale is not None:
+        scale_power_laws(model, par, np.asarray(power_scale, dtype=float))
     tk = np.zeros((size, model.tk.shape[0], 0))
     tk_key: str | None = None  # the take-off rows' memo key (a digest of them)
     for plan in model.plans:

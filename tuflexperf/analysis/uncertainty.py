@@ -300,7 +300,7 @@ def fly_missions(case: Case, evaluator: Any, arguments: tuple[Any, ...],
     nominal case and on every reading of ``evaluator`` that bears on it; None where the
     batch flies no mission. ``rows`` the batch's thrust-only results of the same rows
     (:class:`~tuflexperf.analysis.batch_model.SharedRows`), or None."""
-    values, size, coefficients, extrapolation_n, _ = arguments
+    values, size, coefficients, extrapolation_n, power_scale = arguments
     model = mission_for(case, list(values))
     if model is None:
         return None
@@ -311,7 +311,7 @@ def fly_missions(case: Case, evaluator: Any, arguments: tuple[Any, ...],
 
     def fly(mission: Any, on: Case) -> dict[str, tuple[Array, Array]]:
         return sampled_landing(mission, evaluator_for(on), values, size, coefficients,
-                               extrapolation_n, SAMPLED_STEPS, memo)
+                               extrapolation_n, SAMPLED_STEPS, memo, power_scale)
 
     flown = fly(model, case)
     theirs: dict[str, dict[str, Array]] = {}
