@@ -65,6 +65,7 @@ MAX_TESTED_AIRSPEED_M_S = 1000.0
 MAX_THRUST_SD_N = 1.0e5
 # a lack of fit's model_form_shares: offset, throttle, airspeed, throttle x airspeed, airspeed^2
 MODEL_FORM_SHARE_COUNT = 5
+MIN_RESIDUAL_ROWS = 7  # a lack of fit's residual surface: more set points than poly22's terms
 """The largest thrust error [N] (1 sd) a file may state: ten tonnes, no ducted fan's."""
 # Largest exponent of thrust on the voltage ratio, either sign (2 by rpm ~ U; fit searches
 # -2..6)
@@ -194,6 +195,29 @@ class LackOfFitSchema(StrictModel):
     # where the surface errs (offset, throttle, airspeed, throttle x airspeed, airspeed
     # squared): shares of its mean square, written by `fit` where the test finds structure
     model_form_shares: list[Probability] | None = None
+    # the residual surface where the test finds structure, per set point: throttle (file
+    # units), airspeed [m/s], mean residual measured minus surface [N], count of holds
+    residuals: list[list[float]] | None = None
+
+    @field_validator("residuals")
+    @classmethod
+    def _check_residuals(cls, rows: list[list[float]] | None) -> list[list[float]] | None:
+        if rows is None:
+            return rows
+        if len(rows) < MIN_RESIDUAL_ROWS:
+            raise ValueError(f"must list at least {MIN_RESIDUAL_ROWS} set points (throttle, "
+                             "airspeed_m_s, residual_n, count): a surface of six "
+                             "coefficients leaves fewer nothing to show")
+        for i, row in enumerate(rows):
+            if len(row) != 4 or not all(math.isfinite(c) for c in row):
+                raise ValueError(f"row {i}: must be 4 finite numbers (throttle, airspeed_m_s, "
+                                 f"residual_n, count), got {row}")
+            x, v, _, n = row
+            if x < 0 or abs(v) > MAX_AIRSPEED_M_S or n < 1 or n != int(n):
+                raise ValueError(f"row {i}: throttle must be >= 0, |airspeed_m_s| <= "
+                                 f"{MAX_AIRSPEED_M_S:g} and count a whole number >= 1, got "
+                                 f"{row}")
+        return rows
 
     @field_validator("model_form_shares")
     @classmethod
@@ -716,6 +740,11 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
             model_form_shares=None if e.lack_of_fit is None or e.lack_of_fit.model_form_shares
             is None else tuple(float(c) for c in e.lack_of_fit.model_form_shares),
             model_form_sd_n=None if e.lack_of_fit is None else e.lack_of_fit.model_form_rms_n,
+            model_form_residuals=None if e.lack_of_fit is None or e.lack_of_fit.residuals
+            is None else tuple((float(x), float(v), float(r), int(n))
+                               for x, v, r, n in e.lack_of_fit.residuals),
+            model_form_noise_n=None if e.lack_of_fit is None
+            else e.lack_of_fit.pure_error_rms_n,
             windmilling_drag_coefficient=e.windmilling_drag_coefficient,
             power_coefficients=None if e.power is None else e.power.coefficients.model_dump(),
         )
