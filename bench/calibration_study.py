@@ -462,9 +462,9 @@ def diagnose(cache: Path, rig_name: str, indices: Any, generator: str = GENERATO
              ) -> dict[str, Any]:
     """At :data:`OPERATING_POINTS`: the fitted surface's true error less the mean the samples
     centre on there (the residual surface's posterior, where the file holds one) and the
-    error model's model-form sd there, both in the lack of fit's RMS, over the cached truths' engines, and
-    the correlation of the true errors between the points (the model's, averaged over the
-    engines, beside it)."""
+    error model's model-form sd there, both in the lack of fit's RMS, over the cached truths'
+    engines, and the correlation of the true errors between the points (the model's,
+    averaged over the engines, beside it)."""
     from tuflexperf.analysis.error_model import error_model_for
     from tuflexperf.analysis.model_form_mean import residual_surfaces
     from tuflexperf.io.case import load_case

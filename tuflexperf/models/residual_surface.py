@@ -40,7 +40,7 @@ LENGTH_FRACTIONS = (0.15, 0.25, 0.4)
 NUGGET_FRACTIONS = (0.0, 1e-3, 1e-2, 3e-2, 0.1, 0.3)
 """The hold-to-hold noise tried, as fractions of the signal variance."""
 THROTTLE_NODES = 41
-AIRSPEED_NODES = 61
+AIRSPEED_NODES = 31
 BEYOND_LENGTHS = 3.0  # the grid's reach past the holds [length scales]: the mean is ~0 there
 
 
@@ -67,9 +67,17 @@ class ResidualSurface:
     def __call__(self, throttle: Any, airspeed_m_s: Any) -> Array:
         """The mean [N] at ``throttle`` [fraction] and ``airspeed_m_s`` (broadcast together);
         0 beyond the grid."""
+        gx, gv = self.throttle, self.airspeed
+        if np.ndim(throttle) == 0:  # one throttle (the roll's, a node): its column, 1-D
+            fx = min(max((float(throttle) - gx[0]) / (gx[1] - gx[0]), 0.0), gx.size - 1.0)
+            if float(throttle) < gx[0] or float(throttle) > gx[-1]:
+                return np.zeros(np.shape(airspeed_m_s))
+            i = min(int(fx), gx.size - 2)
+            column = (1.0 - (fx - i)) * self.mean[i] + (fx - i) * self.mean[i + 1]
+            return np.interp(np.asarray(airspeed_m_s, dtype=float), gv, column, left=0.0,
+                             right=0.0)
         x, v = np.broadcast_arrays(np.asarray(throttle, dtype=float),
                                    np.asarray(airspeed_m_s, dtype=float))
-        gx, gv = self.throttle, self.airspeed
         fx = (x - gx[0]) / (gx[1] - gx[0])
         fv = (v - gv[0]) / (gv[1] - gv[0])
         inside = (fx >= 0.0) & (fx <= gx.size - 1) & (fv >= 0.0) & (fv <= gv.size - 1)
