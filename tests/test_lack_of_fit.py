@@ -135,6 +135,12 @@ def test_a_table_with_repeated_rows_is_tested_on_them(tmp_path: Path) -> None:
     assert lof["p_value"] < 0.01 and lof["best_alternative"]["form"].startswith("poly")
     assert any("does not fit its data" in w for w in json.loads(result.stdout)["warnings"])
     assert "lack_of_fit:" in out.read_text(encoding="utf-8")
+    # the residual surface, per set point (40, two holds each), read back by the sampler
+    assert len(lof["residuals"]) == 40 and {r[3] for r in lof["residuals"]} == {2}
+    from tuflexperf.io.case import load_propulsion
+
+    engine = load_propulsion(out).engines[0]
+    assert engine.model_form_residuals is not None and len(engine.model_form_residuals) == 40
     # one row per condition: nothing to test against, said in the table
     single = runner.invoke(app, ["fit", str(_table(tmp_path / "s.csv", 1, 0.75)), "--out",
                                  str(tmp_path / "s.yaml")])
