@@ -202,21 +202,12 @@ class LackOfFitSchema(StrictModel):
     @field_validator("residuals")
     @classmethod
     def _check_residuals(cls, rows: list[list[float]] | None) -> list[list[float]] | None:
-        if rows is None:
-            return rows
-        if len(rows) < MIN_RESIDUAL_ROWS:
-            raise ValueError(f"must list at least {MIN_RESIDUAL_ROWS} set points (throttle, "
-                             "airspeed_m_s, residual_n, count): a surface of six "
-                             "coefficients leaves fewer nothing to show")
-        for i, row in enumerate(rows):
-            if len(row) != 4 or not all(math.isfinite(c) for c in row):
-                raise ValueError(f"row {i}: must be 4 finite numbers (throttle, airspeed_m_s, "
-                                 f"residual_n, count), got {row}")
-            x, v, _, n = row
-            if x < 0 or abs(v) > MAX_AIRSPEED_M_S or n < 1 or n != int(n):
-                raise ValueError(f"row {i}: throttle must be >= 0, |airspeed_m_s| <= "
-                                 f"{MAX_AIRSPEED_M_S:g} and count a whole number >= 1, got "
-                                 f"{row}")
+        bad = [i for i, r in enumerate(rows or []) if len(r) != 4
+               or not all(map(math.isfinite, r)) or r[0] < 0 or abs(r[1]) > MAX_AIRSPEED_M_S
+               or r[3] < 1 or r[3] != int(r[3])]
+        if rows is not None and (len(rows) < MIN_RESIDUAL_ROWS or bad):
+            raise ValueError(f"must be at least {MIN_RESIDUAL_ROWS} rows [throttle >= 0, "
+                             f"airspeed_m_s, residual_n, count >= 1 whole], finite; rows {bad}")
         return rows
 
     @field_validator("model_form_shares")
