@@ -63,6 +63,7 @@ sys.path.insert(0, str(ROOT))
 
 from tuflexperf.analysis.calibration import coverage, probability_met, reliability  # noqa: E402
 from tuflexperf.models.thrust import POLY22_TERMS  # noqa: E402
+from tuflexperf.reduction.lack_of_fit import LACK_OF_FIT_P  # noqa: E402
 
 SEED = 44
 DEFAULT_OUT = ROOT / "docs" / "calibration_study.json"
@@ -213,10 +214,38 @@ def study_propulsion(fitted: Path, rig: dict[str, float]) -> dict[str, Any]:
             if engine.get(key) is not None:
                 engine[key] = engine[key] * factor
         engine.pop("standard_errors", None)
+        lack = engine.get("lack_of_fit") or {}
+        if "residuals" not in lack and (lack.get("p_value") or 1.0) < LACK_OF_FIT_P:
+            lack["residuals"] = _residuals_from_table(fitted.parent, engine["name"])
+        if lack.get("residuals"):
+            lack["residuals"] = [[x, v, r * factor, n] for x, v, r, n in lack["residuals"]]
     if doc.get("rig_uncertainty") != dict(rig):  # the manifest's, copied by fit
         raise RuntimeError(f"{fitted}: rig_uncertainty {doc.get('rig_uncertainty')} is not "
                            f"the manifest's {rig}")
     return doc
+
+
+def _residuals_from_table(folder: Path, engine: str) -> list[list[float]]:
+    """The residual surface ``fit`` writes (``lack_of_fit.residuals``), from a fit kept
+    before it wrote one: its holds' table, the same set points and least squares."""
+    import csv
+
+    from tuflexperf.reduction.fit_checks import set_point
+    from tuflexperf.reduction.lack_of_fit import (
+        hold_residuals,
+        polynomial_design,
+        polynomial_terms,
+        set_point_groups,
+    )
+
+    with (folder / "fitted_thrust_table.csv").open(encoding="utf-8") as handle:
+        rows = [r for r in csv.DictReader(handle) if r["engine"] == engine]
+    x, v, y, measured = (np.array([float(r[k]) for r in rows]) for k in (
+        "throttle", "airspeed_m_s", "thrust_n", "airspeed_measured_m_s"))
+    design = polynomial_design(x, v, polynomial_terms(2, 2))
+    residual = y - design @ np.linalg.lstsq(design, y, rcond=None)[0]
+    groups = set_point_groups(x, np.array([set_point(a) for a in measured]))
+    return [list(row) for row in hold_residuals(x, v, residual, groups)]
 
 
 def surrogate(law: dict[str, float], boxes: list[Any]) -> tuple[dict[str, float], float]:
@@ -390,6 +419,10 @@ def one_truth(rig_name: str, index: int, samples: int, cache: Path | None = None
     with tempfile.TemporaryDirectory(prefix="calibration_") as tmp:
         folder = Path(tmp) if cache is None else truth_folder(cache, rig_name, index, generator)
         prepared = prepare(rig_name, index, folder, generator)
+        # the propulsion file as this study's fit writes it (a kept fit's without the
+        # residual surface gets it from its table)
+        (folder / "propulsion.yaml").write_text(yaml.safe_dump(study_propulsion(
+            folder / "fitted.yaml", RIGS[rig_name]), sort_keys=False), encoding="utf-8")
         bias, scale = prepared["bias_m_s"], prepared["scale"]
         truth, surrogate_error = prepared["truth"], prepared["surrogate_error_n"]
         case = load_case(write_case(folder, folder / "propulsion.yaml", samples, index + 1))
@@ -427,11 +460,13 @@ OPERATING_POINTS = {"roll": (1.0, 10.0), "climb": (1.0, 20.0), "OEI and loiter":
 
 def diagnose(cache: Path, rig_name: str, indices: Any, generator: str = GENERATORS[0]
              ) -> dict[str, Any]:
-    """At :data:`OPERATING_POINTS`: the fitted surface's true error and the error model's
-    model-form sd there, both in the lack of fit's RMS, over the cached truths' engines, and
-    the correlation of the true errors between the points (the model's, averaged over the
-    engines, beside it)."""
+    """At :data:`OPERATING_POINTS`: the fitted surface's true error less the mean the samples
+    centre on there (the residual surface's posterior, where the file holds one) and the
+    error model's model-form sd there, both in the lack of fit's RMS, over the cached truths'
+    engines, and the correlation of the true errors between the points (the model's,
+    averaged over the engines, beside it)."""
     from tuflexperf.analysis.error_model import error_model_for
+    from tuflexperf.analysis.model_form_mean import residual_surfaces
     from tuflexperf.io.case import load_case
 
     names = list(OPERATING_POINTS)
@@ -447,14 +482,18 @@ def diagnose(cache: Path, rig_name: str, indices: Any, generator: str = GENERATO
         maps = error_model_for(case, case.uncertainty.propulsion).model_form_maps
         if maps is None:
             continue
+        surfaces = residual_surfaces(case.propulsion)
         for j, engine in enumerate(case.propulsion.engines):
             rms = engine.model_form_sd_n
+            surface = surfaces[j]
             basis = []
             for k, (x, v) in enumerate(OPERATING_POINTS.values()):
                 b = np.array([1.0, x, v, x * x, x * v, v * v])
                 fitted = sum(engine.coefficients[t] * bt for t, bt in zip(POLY22_TERMS, b,
                                                                          strict=True))
-                errors[k].append(float((true_thrust(x, v, laws[engine.name]) - fitted) / rms))
+                centre = 0.0 if surface is None else float(surface(x, v))
+                errors[k].append(float((true_thrust(x, v, laws[engine.name]) - fitted - centre)
+                                       / rms))
                 sds[k].append(float(np.linalg.norm(maps[j] @ b)) / rms)
                 basis.append(maps[j] @ b)
             cov = np.array(basis) @ np.array(basis).T

@@ -429,3 +429,88 @@ def test_bad_extrapolation_means_and_shares_exit_2_naming_the_key(tmp_path, chan
     result = runner.invoke(app, ["check", str(_case(tmp_path / "bad", bad)), "--samples", "10"])
     assert result.exit_code == 2, result.output
     assert named in result.stderr and "Traceback" not in result.stderr, result.stderr
+
+
+def _with_residuals(offset_n: float | None, rms: float = 0.3, raise_n: float = 0.0):
+    """Every engine's lack of fit with a residual surface of ``offset_n`` at every set point
+    of an 11 x 7 grid over the tested domain (None: no surface), its p00 raised by
+    ``raise_n``."""
+    def change(prop):
+        low, high = prop["tested_airspeed_m_s"]
+        rows = [[float(x), float(v), offset_n, 1] for x in np.linspace(0.0, 1.0, 11)
+                for v in np.linspace(low, high, 7)]
+        for engine in prop["engines"]:
+            engine["lack_of_fit"] = {"model_form_rms_n": rms, "pure_error_rms_n": 0.01,
+                                     "dof_lack_of_fit": 71, "dof_pure_error": 150,
+                                     **({} if offset_n is None else {"residuals": rows})}
+            engine["coefficients"]["p00"] += raise_n
+    return change
+
+
+def test_the_residual_surface_posterior_follows_the_holds_and_fades_beyond() -> None:
+    """The posterior mean at set points between the holds is the smooth residual they show;
+    three length scales beyond the grid it is 0; its sd over the domain is what the holds
+    leave open, well below the prior's."""
+    from tuflexperf.models.residual_surface import residual_surface
+
+    def law(x, v):
+        return 0.4 * np.sin(3.0 * x) * np.cos(v / 12.0)
+    x, v = (a.ravel() for a in np.meshgrid(np.linspace(0, 1, 11), np.linspace(0, 30, 7)))
+    rows = np.column_stack([x, v, law(x, v), np.ones_like(x)])
+    surface = residual_surface(rows, 1.0, (0.0, 30.0), 0.4, 0.005)
+    assert surface is not None
+    xs, vs = np.array([0.35, 0.65, 0.85]), np.array([7.0, 18.0, 27.0])
+    np.testing.assert_allclose(surface(xs, vs), law(xs, vs), atol=0.02)
+    assert float(surface(0.5, 80.0)) == 0.0
+    assert surface.sd_n < 0.25 * 0.4
+    # percent throttle: the same surface on the file's units
+    percent = residual_surface(rows * [100.0, 1, 1, 1], 100.0, (0.0, 30.0), 0.4, 0.005)
+    np.testing.assert_allclose(percent(xs, vs), surface(xs, vs), atol=1e-9)
+
+
+def test_samples_centre_on_the_residual_surface_and_the_check_does_not(tmp_path) -> None:
+    """Residuals of +0.3 N at every set point: the sampled medians move as the deterministic
+    check of a surface 0.3 N higher does (the posterior mean), the deterministic check itself
+    and samples with the model form switched off take none."""
+    on = {"samples": 400, "propulsion": {**ALL_OFF, "model_form": True}}
+    off = {"samples": 400, "propulsion": {**ALL_OFF, "covariance": True}}
+    centred = load_case(_case(tmp_path / "on", _with_residuals(0.3), uncertainty=on))
+    plain = load_case(_case(tmp_path / "off", _with_residuals(0.3), uncertainty=off))
+    higher = load_case(_case(tmp_path / "up", _with_residuals(None, raise_n=0.3)))
+    nominal = load_case(_case(tmp_path / "nominal", _with_residuals(None)))
+    drawn = run_samples(centred, plan_for(centred)).values
+    from tuflexperf.analysis.model_form_mean import centres_model_form
+
+    assert centres_model_form(centred) and not centres_model_form(plain)
+    from tuflexperf.analysis.requirements import check_case
+
+    def values(case):  # the worse reading but the model-form bound, as the samples judge
+        return {v.name: max(r.value for r in v.readings if r.key != "model_form_bound")
+                for v in check_case(case) if v.name in ("takeoff_ground_roll",
+                                                        "oei_min_throttle")}
+    base, up, same = values(nominal), values(higher), values(centred)
+    assert same == base  # the deterministic check takes no mean
+    moved = 0
+    for name in ("takeoff_ground_roll", "oei_min_throttle"):
+        if name not in drawn or name not in up:
+            continue
+        shift = up[name] - base[name]
+        assert abs(shift) > 0
+        assert abs(float(np.median(drawn[name])) - up[name]) < 0.25 * abs(shift), name
+        moved += 1
+    assert moved == 2
+
+
+@pytest.mark.parametrize("rows, named", [
+    ([[0.5, 10.0, 0.1, 1]] * 3, "lack_of_fit.residuals"),
+    ([[0.5, 10.0, 0.1]] * 8, "lack_of_fit.residuals"),
+    ([[-0.5, 10.0, 0.1, 1]] * 8, "lack_of_fit.residuals"),
+    ([[0.5, 10.0, 0.1, 0]] * 8, "lack_of_fit.residuals"),
+])
+def test_bad_residual_surfaces_exit_2_naming_the_key(tmp_path, rows, named) -> None:
+    def bad(prop):
+        prop["engines"][0]["lack_of_fit"] = {"model_form_rms_n": 0.3, "dof_lack_of_fit": 64,
+                                             "dof_pure_error": 140, "residuals": rows}
+    result = runner.invoke(app, ["check", str(_case(tmp_path / "bad", bad)), "--samples", "10"])
+    assert result.exit_code == 2, result.output
+    assert named in result.stderr and "Traceback" not in result.stderr, result.stderr

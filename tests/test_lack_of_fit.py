@@ -135,6 +135,12 @@ def test_a_table_with_repeated_rows_is_tested_on_them(tmp_path: Path) -> None:
     assert lof["p_value"] < 0.01 and lof["best_alternative"]["form"].startswith("poly")
     assert any("does not fit its data" in w for w in json.loads(result.stdout)["warnings"])
     assert "lack_of_fit:" in out.read_text(encoding="utf-8")
+    # the residual surface, per set point (40, two holds each), read back by the sampler
+    assert len(lof["residuals"]) == 40 and {r[3] for r in lof["residuals"]} == {2}
+    from tuflexperf.io.case import load_propulsion
+
+    engine = load_propulsion(out).engines[0]
+    assert engine.model_form_residuals is not None and len(engine.model_form_residuals) == 40
     # one row per condition: nothing to test against, said in the table
     single = runner.invoke(app, ["fit", str(_table(tmp_path / "s.csv", 1, 0.75)), "--out",
                                  str(tmp_path / "s.yaml")])
@@ -192,3 +198,28 @@ def test_the_model_form_shares_follow_where_the_residuals_are_large(seed: int = 
     fine = engine_lack_of_fit(x, v, y, v, var, 150)
     assert fine.poly22.model_form_shares is None
     assert "model_form_shares" not in fine.as_dict()
+
+
+def test_the_residual_surface_is_written_where_the_test_finds_structure(seed: int = 2) -> None:
+    """Per set point its throttle, airspeed, mean residual (measured minus the least-squares
+    poly22) and count: the bent law's residuals, none for a true poly22."""
+    def bent(x, v):
+        return poly22(x**0.8, v, COEFFICIENTS)
+    x, v, y, var = _grid(bent, 0.015, seed)
+    result = engine_lack_of_fit(x, v, y, v, var, 150)
+    assert result is not None and result.poly22.residuals is not None
+    rows = np.array(result.poly22.residuals)
+    design = poly22_design(x, v)
+    residual = y - design @ np.linalg.lstsq(design, y, rcond=None)[0]
+    assert rows.shape == (x.size, 4) and np.all(rows[:, 3] == 1)
+    expected = np.column_stack([x, v, residual])
+    order = np.lexsort((rows[:, 1], rows[:, 0]))  # set points, in the test's order
+    np.testing.assert_allclose(rows[order, :3], expected[np.lexsort((v, x))], atol=1e-3)
+    assert "residuals" in result.as_dict()
+
+    def law(x, v):
+        return poly22(x, v, COEFFICIENTS)
+    x, v, y, var = _grid(law, 0.015, seed)
+    fine = engine_lack_of_fit(x, v, y, v, var, 150)
+    assert fine is not None and fine.poly22.residuals is None
+    assert "residuals" not in fine.poly22.as_dict()

@@ -56,6 +56,7 @@ from tuflexperf.analysis.batch_kernels import fan_power_rows
 from tuflexperf.analysis.batch_model import BatchModel, SharedRows
 from tuflexperf.analysis.cache import ByObject
 from tuflexperf.analysis.level_flight import airspeed_grid, airspeed_grids
+from tuflexperf.analysis.model_form_mean import centres_model_form, residual_surfaces
 from tuflexperf.analysis.pack_limits import (
     pack_rows,
     pack_side,
@@ -237,11 +238,15 @@ class BatchEvaluator:
             return base
         # each term's rows contiguous (not a view striding the (E, B, 6) draws): every thrust
         # of the batch reads them, ~40 % quicker so
+        # drawn about the fit's residual surface: each row adds its mean (error_model)
+        surfaces = (residual_surfaces(base) if centres_model_form(self.case)
+                    else (None,) * len(base.engines))
         engines = tuple(
             dataclasses.replace(
                 engine,
                 coefficients={t: np.ascontiguousarray(coefficients[j, :, i])[:, None]
                               for i, t in enumerate(POLY22_TERMS)},
+                thrust_offset=surfaces[j],
             )
             for j, engine in enumerate(base.engines)
         )

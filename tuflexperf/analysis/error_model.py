@@ -23,6 +23,12 @@ a place in a file where it is stated, and a default:
   across them (a constant offset on ``p00`` alone did, across the roll's airspeeds: issue
   44); correlated :data:`ENGINE_CORRELATION` between engines (fans of one design err alike).
   A poly22 perturbation holds no cubic: it follows a misfit's size, not its every sign.
+  Where the file holds the fit's residual surface (``lack_of_fit.residuals``), the draw is
+  centred on it instead: every sampled row's thrust adds the posterior mean of a Gaussian
+  process over the set points' residuals (:mod:`tuflexperf.models.residual_surface`; at an
+  operating point among the holds the error they show there, 0 far from them), and the
+  five shapes' RMS is the posterior sd's RMS over the tested domain (what the holds leave
+  open), not the lack of fit's. The deterministic check takes no mean (samples only).
 - ``rig``: the test rig's systematic errors (top-level ``rig_uncertainty``, the campaign
   manifest's, copied by ``fit``): the tunnel's airspeed bias ``b`` (thrust read at ``v + b``),
   the balance's scale ``s`` (thrust x ``1 + s``) and zero (added), the pack voltage's error
@@ -70,6 +76,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from tuflexperf.analysis.model_form_mean import residual_surfaces
 from tuflexperf.io.case import Case
 from tuflexperf.io.schemas import RIG_UNCERTAINTY_DEFAULTS
 from tuflexperf.models.aircraft import true_airspeed_m_s
@@ -207,7 +214,17 @@ def _model_form(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
         which = "model_form" if not switches.model_form else "residual"
         return _off("model_form", origin, which)
     sds, said = [], []
-    for e in prop.engines:
+    surfaces = residual_surfaces(prop)
+    for e, surface in zip(prop.engines, surfaces, strict=True):
+        if surface is not None:
+            sds.append(surface.sd_n)
+            said.append(f"{e.name} centred on the posterior mean of its {surface.points} "
+                        f"set points' residuals (lack_of_fit.residuals; length scales "
+                        f"{surface.length_fraction:g} of the tested span, hold-to-hold noise "
+                        f"{surface.nugget_fraction:g} of the lack of fit's {e.model_form_sd_n:.3g} "
+                        f"N squared, by marginal likelihood), spread its posterior sd's RMS "
+                        f"{surface.sd_n:.3g} N")
+            continue
         rms = e.model_form_sd_n if e.model_form_sd_n is not None else e.residual_sd_n
         if rms is None:
             sds.append(0.0)
@@ -232,7 +249,8 @@ def _model_form(case: Case, switches: Any, parts: dict[str, Any]) -> Source:
     a, b = 2.0 / span, -(high + low) / span  # t = a v + b
     for j, (engine, rms) in enumerate(zip(prop.engines, sds, strict=True)):
         k = engine.throttle_scale  # x = x_file / k, u = 2x - 1
-        w = rms * np.sqrt(np.asarray(engine.model_form_shares or MODEL_FORM_SHARES))
+        w = rms * np.sqrt(np.asarray(
+            (engine.model_form_shares if surfaces[j] is None else None) or MODEL_FORM_SHARES))
         # columns p00, p10, p01, p20, p11, p02 of each shape (file units)
         maps[j, 0, 0] = w[0]  # 1
         maps[j, 1, [0, 1]] = r3 * w[1] * np.array([-1.0, 2.0 / k])  # sqrt3 u

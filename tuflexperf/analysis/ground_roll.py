@@ -274,7 +274,15 @@ class GroundRollRows(LevelFlightRows):
         edge = np.full_like(v_lo, self.propulsion.tested_airspeed_m_s[1])
         first = np.minimum(np.minimum(clamp, edge), v_lo)
         second = np.minimum(np.maximum(clamp, edge), v_lo)
-        return [np.zeros_like(v_lo), first, second, v_lo]
+        # a sampled mean model-form error is linear between its grid's airspeeds: each a kink
+        nodes = sorted({float(g) for e in self.propulsion.engines if e.thrust_offset is not None
+                        for g in getattr(e.thrust_offset, "airspeed", ())
+                        if 0.0 < g < float(np.max(v_lo))})
+        if not nodes:
+            return [np.zeros_like(v_lo), first, second, v_lo]
+        inner = np.sort(np.stack([first, second, *(np.minimum(np.full_like(v_lo, g), v_lo)
+                                                   for g in nodes)]), axis=0)
+        return [np.zeros_like(v_lo), *inner, v_lo]
 
     def _roll_pieces(self) -> tuple[list[Array], list[tuple[Array, ...]]] | None:
         """The net force on each smooth piece of [0, V_LO] as a quadratic (memoised).
@@ -368,7 +376,7 @@ class GroundRollRows(LevelFlightRows):
                 edge = self.propulsion.tested_airspeed_m_s[1]
                 at = speeds[kinked]
                 index = sum((at > np.where(b[kinked] == edge, b[kinked] + 1e-9, b[kinked]))
-                            .astype(np.intp) for b in breaks[1:3])
+                            .astype(np.intp) for b in breaks[1:-1])
                 low, width, c0, c1, c2 = (np.take_along_axis(
                     np.concatenate([f[i][kinked] for f in fits], axis=1), index, axis=1)
                     for i in range(5))
@@ -568,7 +576,7 @@ class GroundRollRows(LevelFlightRows):
         v_lo = self.liftoff_speed()
         pieces = self._roll_pieces()
         breaks = self._breaks(v_lo) if pieces is None else pieces[0]
-        kinks = [np.minimum(b, v_lo) for b in breaks[1:3]]
+        kinks = [np.minimum(b, v_lo) for b in breaks[1:-1]]
         if pieces is None:  # a jump at the tested range's start lies inside the first piece
             kinks.append(np.minimum(self.propulsion.tested_airspeed_m_s[0], v_lo)
                          * np.ones_like(v_lo))
@@ -647,7 +655,7 @@ class GroundRollRows(LevelFlightRows):
             speed = a + (b - a) * 0.5 * (u + 1.0)
             # each part on one piece: its middle against the kinks
             which = sum((0.5 * (a + b) > k[rows][:, :, None])
-                        for k in pieces[0][1:3]).astype(np.intp)
+                        for k in pieces[0][1:-1]).astype(np.intp)
             part = [np.take_along_axis(np.concatenate(
                 [f[i][rows] for f in pieces[1]], axis=1)[:, None, :], which, axis=2)
                 for i in range(5)]

@@ -181,6 +181,11 @@ class LevelFlightRows:
                                  for basis in (basis_a, f1 - f0 - basis_a, f0))
                 # the offset beyond the tested range, as engine_thrust_n adds it
                 c_j = c_j + scale * extrapolation_offset_n(engine, speed)
+                if engine.thrust_offset is not None:  # the sampled mean model-form error
+                    o0, oh, o1 = (engine.thrust_offset(x, speed) for x in (0.0, 0.5, 1.0))
+                    o_a = 2.0 * (o1 - 2.0 * oh + o0)
+                    a_j, b_j, c_j = (a_j + scale * o_a, b_j + scale * (o1 - o0 - o_a),
+                                     c_j + scale * o0)
             else:
                 t0, th, t1 = (engine_thrust_n(engine, x, speed, scale) for x in (0.0, 0.5, 1.0))
                 a_j = 2.0 * (t1 - 2.0 * th + t0)
@@ -226,6 +231,36 @@ class LevelFlightRows:
             throttle, reached = least_throttle_reaching(a, b, c)
         return np.where(np.asarray(reached) > 0.5, np.asarray(throttle, dtype=float), np.nan)
 
+    def _offsets(self) -> bool:
+        """Whether a sampled engine's thrust adds a mean model-form error (not quadratic in
+        throttle: the quadratics' roots are refined by :meth:`_refined`)."""
+        return any(e.thrust_offset is not None for e in self.propulsion.engines)
+
+    def _refined(self, a: Array, b: Array, c: Array, speed: Array, rows: Array,
+                 dead: int | None) -> Array:
+        """:meth:`_roots`, then twice again with ``c`` moved by the live engines' mean
+        model-form error at the root less its quadratic through throttle 0, 1/2 and 1 (which
+        ``a, b, c`` hold): the error varies over a throttle's fraction, the quadratic does
+        not follow it there."""
+        throttle = self._roots(a, b, c)
+        if not self._offsets():
+            return throttle
+        scale = np.asarray(density_ratio(self.propulsion, self.density), dtype=float)
+        scale = scale[rows] if scale.ndim and scale.shape[0] == self.size else scale
+        v = speed if np.shape(speed)[0] == 1 else speed[rows]
+        for _ in range(2):
+            x = np.clip(np.nan_to_num(throttle, nan=0.5), 0.0, 1.0)
+            gap = 0.0
+            for j, engine in enumerate(self.propulsion.engines):
+                if j == dead or engine.thrust_offset is None:
+                    continue
+                o0, oh, o1 = (engine.thrust_offset(node, v) for node in (0.0, 0.5, 1.0))
+                o_a = 2.0 * (o1 - 2.0 * oh + o0)
+                quadratic = (o_a * x + (o1 - o0 - o_a)) * x + o0
+                gap = gap + scale * (engine.thrust_offset(x, v) - quadratic)
+            throttle = self._roots(a, b, c + gap)
+        return throttle
+
     def least_throttle(self, speed: Array, dead: int | None = None,
                        mode: str = "windmilling", terms: Terms | None = None) -> Array:
         """Least throttle [fraction] for level flight at each airspeed; NaN where none.
@@ -246,7 +281,8 @@ class LevelFlightRows:
             Not bounded by stall or the jet velocity (:meth:`_flyable` says where those hold).
         """
         terms = terms if terms is not None else self._engine_thrusts(speed)
-        return self._roots(*self._excess_quadratic(speed, dead, mode, terms))
+        return self._refined(*self._excess_quadratic(speed, dead, mode, terms), speed,
+                             np.arange(self.size), dead)
 
     def trim_max_throttle(self, grid: Array, candidates: Array | None = None) -> Array:
         """Highest least throttle over the envelope grid ``(1, K)`` or ``(B, K)`` [m/s]; NaN if
@@ -260,7 +296,8 @@ class LevelFlightRows:
         """
         above = self._flyable(grid)
         a, b, c = self._excess_quadratic(grid, None, "windmilling", self._grid_terms(grid))
-        candidates = _within(candidates, grid)
+        # the shortcut's test holds for quadratics only
+        candidates = None if self._offsets() else _within(candidates, grid)
         everywhere = np.all(above, axis=1)  # below stall somewhere: not attainable there
         if candidates is None:
             rows = np.arange(self.size)
@@ -275,7 +312,7 @@ class LevelFlightRows:
             result = np.where(np.isnan(m) | holds, m, np.nan)
             rows = np.flatnonzero(everywhere & ~np.isnan(m) & ~holds)
         if rows.size:
-            throttle = self._roots(a[rows], b[rows], c[rows])
+            throttle = self._refined(a[rows], b[rows], c[rows], grid, rows, None)
             result[rows] = np.where(np.all(np.isfinite(throttle), axis=1),
                                     np.max(throttle, axis=1), np.nan)
         return np.where(everywhere, result, np.nan)
@@ -295,7 +332,8 @@ class LevelFlightRows:
         above = self._flyable(grid)
         for dead in range(len(self.propulsion.engines)):
             a, b, c = self._excess_quadratic(grid, dead, mode, terms)
-            picked = None if candidates is None else _within(candidates.get(dead), grid)
+            picked = None if candidates is None or self._offsets() \
+                else _within(candidates.get(dead), grid)
             if picked is None:
                 rows = np.arange(self.size)
                 best = np.full(self.size, np.inf)
@@ -313,7 +351,7 @@ class LevelFlightRows:
                 best = np.where(holds, m, np.inf)
                 rows = np.flatnonzero(~holds)
             if rows.size:
-                throttle = self._roots(a[rows], b[rows], c[rows])
+                throttle = self._refined(a[rows], b[rows], c[rows], grid, rows, dead)
                 throttle = np.where(above[rows] & np.isfinite(throttle), throttle, np.inf)
                 best[rows] = np.min(throttle, axis=1)
             worst = np.maximum(worst, best)

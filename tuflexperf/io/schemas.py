@@ -65,6 +65,7 @@ MAX_TESTED_AIRSPEED_M_S = 1000.0
 MAX_THRUST_SD_N = 1.0e5
 # a lack of fit's model_form_shares: offset, throttle, airspeed, throttle x airspeed, airspeed^2
 MODEL_FORM_SHARE_COUNT = 5
+MIN_RESIDUAL_ROWS = 7  # a lack of fit's residual surface: more set points than poly22's terms
 """The largest thrust error [N] (1 sd) a file may state: ten tonnes, no ducted fan's."""
 # Largest exponent of thrust on the voltage ratio, either sign (2 by rpm ~ U; fit searches
 # -2..6)
@@ -194,6 +195,20 @@ class LackOfFitSchema(StrictModel):
     # where the surface errs (offset, throttle, airspeed, throttle x airspeed, airspeed
     # squared): shares of its mean square, written by `fit` where the test finds structure
     model_form_shares: list[Probability] | None = None
+    # the residual surface where the test finds structure, per set point: throttle (file
+    # units), airspeed [m/s], mean residual measured minus surface [N], count of holds
+    residuals: list[list[float]] | None = None
+
+    @field_validator("residuals")
+    @classmethod
+    def _check_residuals(cls, rows: list[list[float]] | None) -> list[list[float]] | None:
+        bad = [i for i, r in enumerate(rows or []) if len(r) != 4
+               or not all(map(math.isfinite, r)) or r[0] < 0 or abs(r[1]) > MAX_AIRSPEED_M_S
+               or r[3] < 1 or r[3] != int(r[3])]
+        if rows is not None and (len(rows) < MIN_RESIDUAL_ROWS or bad):
+            raise ValueError(f"must be at least {MIN_RESIDUAL_ROWS} rows [throttle >= 0, "
+                             f"airspeed_m_s, residual_n, count >= 1 whole], finite; rows {bad}")
+        return rows
 
     @field_validator("model_form_shares")
     @classmethod
@@ -716,6 +731,11 @@ def propulsion_from_schema(schema: PropulsionSchema) -> Propulsion:
             model_form_shares=None if e.lack_of_fit is None or e.lack_of_fit.model_form_shares
             is None else tuple(float(c) for c in e.lack_of_fit.model_form_shares),
             model_form_sd_n=None if e.lack_of_fit is None else e.lack_of_fit.model_form_rms_n,
+            model_form_residuals=None if e.lack_of_fit is None or e.lack_of_fit.residuals
+            is None else tuple((float(x), float(v), float(r), int(n))
+                               for x, v, r, n in e.lack_of_fit.residuals),
+            model_form_noise_n=None if e.lack_of_fit is None
+            else e.lack_of_fit.pure_error_rms_n,
             windmilling_drag_coefficient=e.windmilling_drag_coefficient,
             power_coefficients=None if e.power is None else e.power.coefficients.model_dump(),
         )

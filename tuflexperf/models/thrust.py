@@ -72,6 +72,13 @@ class Engine:
     # the lack of fit's shares of its mean square (offset, throttle, airspeed, throttle x
     # airspeed, airspeed squared; analysis.error_model); None: equal shares
     model_form_shares: tuple[float, ...] | None = None
+    # the lack of fit's residual surface (throttle [file units], airspeed [m/s], mean residual
+    # [N], holds) and one hold mean's pure error [N]; read by the sampler only
+    model_form_residuals: tuple[tuple[float, float, float, int], ...] | None = None
+    model_form_noise_n: float | None = None
+    # a thrust added to the surface [N] (throttle fraction, airspeed): the sampled rows' mean
+    # model-form error (analysis.error_model); None in the deterministic check
+    thrust_offset: Callable[[Any, Any], Any] | None = None
     # C_d,wm on the propulsion's fan_area_m2, the disk (SPEC 3); None: min(T(0, V), 0)
     windmilling_drag_coefficient: float | None = None
     # poly22 electrical power surface in W (throttle fraction, airspeed m/s); None if unknown
@@ -199,6 +206,8 @@ def engine_thrust_n(
     thrust = poly22(throttle * engine.throttle_scale, airspeed_m_s, engine.coefficients)
     if engine.extrapolation_offset is not None:
         thrust = thrust + extrapolation_offset_n(engine, airspeed_m_s)
+    if engine.thrust_offset is not None:
+        thrust = thrust + engine.thrust_offset(throttle, airspeed_m_s)
     return density_scale * thrust
 
 

@@ -61,6 +61,9 @@ class LackOfFit:
     # where the surface errs: the shares of its mean square along MODEL_FORM_TERMS (None:
     # no structure found, or not estimated)
     model_form_shares: tuple[float, ...] | None = None
+    # the residual surface where the test finds structure: per set point (throttle [file
+    # units], airspeed [m/s], mean residual [N], holds) (None: no structure found)
+    residuals: tuple[tuple[float, float, float, int], ...] | None = None
 
     @property
     def fits(self) -> bool:
@@ -82,6 +85,8 @@ class LackOfFit:
             "pure_error_basis": self.basis,
             **({} if self.model_form_shares is None
                else {"model_form_shares": list(self.model_form_shares)}),
+            **({} if self.residuals is None
+               else {"residuals": [list(row) for row in self.residuals]}),
         }
 
 
@@ -179,6 +184,20 @@ def model_form_shares(throttle: ArrayLike, airspeed_m_s: ArrayLike, residual_n: 
         return None
     shares = best / best.sum()
     return tuple(float(round(c, 4)) for c in shares)
+
+
+def hold_residuals(throttle: ArrayLike, airspeed_m_s: ArrayLike, residual_n: ArrayLike,
+                   groups: ArrayLike) -> tuple[tuple[float, float, float, int], ...]:
+    """The residual surface as the sampler reads it: per set point (``groups`` labels) the
+    mean throttle [file units], mean airspeed [m/s], mean residual [N] and its count of
+    holds, rounded to what a file needs (1e-4 throttle, 1e-3 m/s, 1e-4 N)."""
+    _, label = np.unique(np.asarray(groups), return_inverse=True)
+    label = label.ravel()
+    counts = np.bincount(label)
+    means = [np.bincount(label, np.asarray(a, dtype=float)) / counts
+             for a in (throttle, airspeed_m_s, residual_n)]
+    return tuple((round(float(x), 4), round(float(v), 3), round(float(r), 4), int(n))
+                 for x, v, r, n in zip(*means, counts, strict=True))
 
 
 def _p_value(f: float, dof1: int, dof2: float) -> float:
@@ -344,7 +363,8 @@ def engine_lack_of_fit(
             noise = np.full(y.size, base.pure_error_rms_n ** 2) * (1.0 - hat)
         else:
             noise = (1.0 - hat) * np.asarray(hold_variance_n2, dtype=float)
-        base = replace(base, model_form_shares=model_form_shares(x, v, residual, noise))
+        base = replace(base, model_form_shares=model_form_shares(x, v, residual, noise),
+                       residuals=hold_residuals(x, v, residual, groups))
     others = tuple(t for t in (test(f, d) for f, d in ALTERNATIVE_FORMS.items())
                    if t is not None and t.dof_lack_of_fit > 0)
     return EngineLackOfFit(base, others, float(np.max(np.abs(y))))
