@@ -74,7 +74,8 @@ def main() -> None:
 
 
 def cores_line() -> str:
-    """The load now, and so where a batch's second half runs (uncertainty.second_core_idle)."""
+    """The load now, and so where a batch's second half runs (uncertainty.second_core_idle:
+    the runnable tasks now, not the load average)."""
     load = os.getloadavg()[0]
     where = ("in a helper process" if second_core_idle()
              else "here too (no idle second core)")

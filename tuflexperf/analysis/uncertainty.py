@@ -341,16 +341,25 @@ with a second core): the fork's ~20 ms against half of ~30 us a row."""
 
 
 def second_core_idle() -> bool:
-    """True where this process may run on two cores or more and the last minute's load
-    (this process's own included) leaves one idle: on a machine busy with others the
-    helper only adds the fork and its rows' fixed costs (~50 ms of CPU) to wait for. Linux
-    only (a fork of a process holding CasADi and BLAS is not safe on macOS; Windows has none)."""
+    """True where this process may run on two cores or more and, right now, fewer tasks are
+    runnable than there are cores (this process included): on a machine busy with others the
+    helper only adds the fork and its rows' fixed costs (~50 ms of CPU) to wait for. The
+    runnable count of ``/proc/loadavg``, not the load average: a VM's load average also
+    counts tasks asleep in the kernel, and read 2-3 on an idle 2-core machine. Linux only (a
+    fork of a process holding CasADi and BLAS is not safe on macOS; Windows has none)."""
     import os
 
     if not sys.platform.startswith("linux"):
         return False
     usable = len(os.sched_getaffinity(0))
-    return usable >= 2 and os.getloadavg()[0] < usable - 0.5
+    if usable < 2:
+        return False
+    try:
+        with open("/proc/loadavg") as status:
+            runnable = int(status.read().split()[3].split("/")[0])
+    except (OSError, ValueError, IndexError):
+        return os.getloadavg()[0] < usable - 0.5
+    return runnable < usable
 
 
 def _draw_rows(draw: ChunkDraw, rows: slice) -> tuple[Any, ...]:
