@@ -383,14 +383,12 @@ def _power_sources(case: Case, switches: Any) -> tuple[tuple[Source, float],
 
     power_origin, battery_origin = "battery fit.runs", "battery fit.cross_validation"
     uses_packs = any(getattr(case.requirements, name) is not None
-                     for name in ("takeoff", "envelope", "oei", "endurance"))
+                     for name in ("takeoff", "envelope", "oei", "endurance", "mission"))
     fitted = None
     if case.battery_path is not None and uses_packs:
         from tuflexperf.io.battery import case_battery
 
         fitted = case_battery(case).as_read.fitted
-    mission = " (not the mission's flight: flown on the nominal power)" \
-        if case.requirements.mission is not None else ""
     if not switches.power_model:
         power = (_off("power_model", power_origin, "power_model"), 0.0)
     elif fitted is None:
@@ -405,7 +403,7 @@ def _power_sources(case: Case, switches: Any) -> tuple[tuple[Source, float],
                         "every sample is judged on the worse of it and the power model, so "
                         "their disagreement is not drawn again"), 0.0)
     else:
-        power = _power_disagreement(case, fitted, mission)
+        power = _power_disagreement(case, fitted)
     if not switches.battery_fit:
         battery = (_off("battery_fit", battery_origin, "battery_fit"), 0.0)
     elif fitted is None or not fitted.cross_validation:
@@ -419,11 +417,11 @@ def _power_sources(case: Case, switches: Any) -> tuple[tuple[Source, float],
         listed = ", ".join(f"{100 * r:+.1f} %" for r in errors)
         battery = (Source("battery_fit", True, battery_origin,
                           f"{100 * sd:.3g} % rms ({listed}): a lognormal scale on the power "
-                          f"the packs deliver{mission}"), sd)
+                          "the packs deliver"), sd)
     return power, battery
 
 
-def _power_disagreement(case: Case, fitted: Any, mission: str) -> tuple[Source, float]:
+def _power_disagreement(case: Case, fitted: Any) -> tuple[Source, float]:
     from tuflexperf.analysis.batch_endurance import battery_side
     from tuflexperf.models.powertrain import PowerSurfaces, engine_power_w
 
@@ -449,7 +447,7 @@ def _power_disagreement(case: Case, fitted: Any, mission: str) -> tuple[Source, 
     listed = ", ".join(f"{100 * r:+.0f} %" for r in ratios)
     return Source("power_model", True, "battery fit.runs",
                   f"{100 * sd:.3g} % rms (measured/modelled - 1: {listed}): a lognormal scale "
-                  f"on every fan's electrical power{mission}"), sd
+                  "on every fan's electrical power"), sd
 
 
 def draw_thrust(rng: np.random.Generator, model: ErrorModel, nominal: Array,
