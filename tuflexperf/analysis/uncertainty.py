@@ -244,12 +244,7 @@ def evaluate_batch(case: Case, plan: SamplingPlan, chunks: range,
     if two_cores and draw.size >= SPLIT_ROWS and second_core_idle():
         result, mission = _on_two_cores(evaluator, draw, case)
     else:
-        # the thrust-only results of these rows (the take-off's roll, ...): the mission's
-        # take-off reads them too (batch_model.SharedRows)
-        rows: dict[Any, Any] = {}
-        result = evaluator.evaluate(draw.values, draw.size, draw.coefficients,
-                                    draw.extrapolation_n, draw.power_scale, rows)
-        mission = fly_missions(case, evaluator, _draw_rows(draw, slice(None)), rows)
+        result, mission = _rows_and_mission(evaluator, _draw_rows(draw, slice(None)), case)
     # a sample outside a key's schema bounds (a negative cd0 from a wide normal) is no
     # aircraft: every requirement counts it as not met, and it is reported
     outside = np.zeros(draw.size, dtype=bool)
